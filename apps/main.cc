@@ -1,0 +1,30 @@
+// occgt: ground truth and datasets for occlusion-aware image matching.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+
+#include "apps/commands.h"
+#include "gt/core/version.h"
+#include "libgt/core/error.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"occgt: ground truth and datasets for occlusion-aware image matching"};
+  app.set_version_flag("--version", std::string("occgt ") + gt::kVersion);
+  app.require_subcommand(1);
+  occgt::AddScanCommand(app);
+  occgt::AddSynthCommand(app);
+  occgt::AddPairCommand(app);
+  occgt::AddOccupancyCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const gt::InputError& e) {
+    std::fprintf(stderr, "occgt: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "occgt: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,37 @@
+// Depth maps: planar z in metres, float32, row-major [height, width].
+// Readers store every invalid marker of their dataset (0, 65535 in 7-Scenes, NaN, inf) as
+// 0; IsValidDepth additionally applies the dataset's [min_depth_m, max_depth_m] range
+// (TartanAir's sky is ~1e4 m, Blender's background ~1e10 m).
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+namespace gt {
+
+struct DepthImage {
+  int width = 0;
+  int height = 0;
+  std::vector<float> values_m;  // size width * height, row-major: index v * width + u
+
+  DepthImage() = default;
+  DepthImage(int w, int h, float fill = 0.0f)
+      : width(w), height(h), values_m(static_cast<size_t>(w) * h, fill) {}
+  float at(int u, int v) const { return values_m[static_cast<size_t>(v) * width + u]; }
+  float& at(int u, int v) { return values_m[static_cast<size_t>(v) * width + u]; }
+  bool empty() const { return values_m.empty(); }
+};
+
+inline bool IsValidDepth(float d, double min_depth_m, double max_depth_m) {
+  return std::isfinite(d) && d > 0.0f && d >= min_depth_m && d <= max_depth_m;
+}
+
+// Nearest-neighbour resampling under the pixel-centre convention of camera.h: target
+// pixel u' takes source pixel floor((u' + 0.5) / sx), clamped to the image.
+DepthImage ResizeDepthNearest(const DepthImage& depth, int new_width, int new_height);
+
+// Fraction of pixels with IsValidDepth.
+double ValidDepthFraction(const DepthImage& depth, double min_depth_m, double max_depth_m);
+
+}  // namespace gt

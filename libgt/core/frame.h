@@ -1,0 +1,57 @@
+// Frames and scenes: what every dataset reader yields (docs/DATASETS.md).
+// A Frame holds metadata only; its depth is read on demand from `depth` by
+// gt::io::ReadDepth, so that a scene of thousands of frames stays small in memory.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "libgt/core/camera.h"
+#include "libgt/core/pose.h"
+
+namespace gt {
+
+enum class DepthFormat {
+  kNpyFloat32,  // .npy float32 metres, shape (H, W)
+  kPng16,       // 16-bit PNG (or PGM), metres = value * scale_m_per_unit; 0 invalid
+  kExr,         // OpenEXR, one channel (matched by suffix), metres
+};
+
+struct DepthSource {
+  std::string path;
+  DepthFormat format = DepthFormat::kNpyFloat32;
+  double scale_m_per_unit = 1.0;  // png16: 0.001 for millimetres, 1/5000 for TUM
+  std::string exr_channel;        // exr: channel name or suffix ("Z", "Depth.Z"); "" = auto
+  int invalid_value = -1;         // png16: a raw value that means "no depth" (7-Scenes: 65535)
+};
+
+struct Frame {
+  std::string id;      // stable id, unique within the scene ("000150", "0054")
+  int64_t number = 0;  // numeric order within the scene (frame number or index)
+  DepthSource depth;
+  Camera depth_camera;  // K at the depth map's resolution
+  Rigid3d world_from_cam = Rigid3d::Identity();
+  bool usable = true;
+  std::string unusable_reason;  // set when !usable (pose problem, missing depth, ...)
+  std::string color_path;       // may be empty when the dataset has no colour
+  Camera color_camera;          // K at the colour image's resolution (0x0 when unknown)
+  double timestamp_s = 0.0;     // TUM only
+};
+
+struct Scene {
+  std::string name;    // e.g. "scene0707_00", "hospital/Easy/P036", "seq-01"
+  std::string format;  // reader format name
+  std::string path;    // folder (or manifest) the scene was read from
+  double min_depth_m = 0.0;    // dataset default validity range (recipes may override)
+  double max_depth_m = 1000.0;
+  std::vector<Frame> frames;  // sorted by number
+
+  size_t NumUsable() const {
+    size_t n = 0;
+    for (const auto& f : frames) n += f.usable ? 1 : 0;
+    return n;
+  }
+};
+
+}  // namespace gt

@@ -1,0 +1,33 @@
+// File helpers shared by every reader and writer: whole-file reads with errors that name
+// the file, numbered text lines, and atomic publication (write X.tmp, fsync, rename).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace gt::io {
+
+// Whole file as bytes; throws InputError("<path>", "cannot open ...") when unreadable.
+std::string ReadFileBytes(const std::string& path);
+bool FileExists(const std::string& path);
+
+// Writes `bytes` to path + ".tmp", fsyncs, renames onto `path`. Creates missing parent
+// folders. Throws InputError naming the path on any failure (disk full, permissions) and
+// removes the temporary file, so a reader never sees a half-written output.
+void WriteFileAtomic(const std::string& path, std::string_view bytes);
+
+// Whitespace-separated doubles of one text line; accepts "inf", "-inf", "nan" (any case),
+// which ScanNet writes for lost tracking. Throws InputError("<path>:<line>", ...) on a
+// token that is not a number.
+std::vector<double> ParseNumbers(std::string_view line, const std::string& path, int line_no);
+
+// Lines of a text file (without '\n', '\r' stripped).
+std::vector<std::string> ReadLines(const std::string& path);
+
+// Lower-case hex MD5 of bytes / of a file.
+std::string Md5Hex(std::string_view bytes);
+std::string Md5HexOfFile(const std::string& path);
+
+}  // namespace gt::io

@@ -1,0 +1,60 @@
+// NumPy .npy and .npz, the exchange format of every array occgt writes (docs/FORMATS.md).
+//
+// Writer: format version 1.0 (2.0 only when the header exceeds 65535 bytes), little-endian
+// descr ('<f4', '<i4', '<u8', '|u1', ...), C order, header padded with spaces and ending in
+// '\n' so that the data starts at a multiple of 64 bytes.
+// Reader: rejects bad magic, unsupported versions, headers over 10000 bytes, object or
+// unknown dtypes, big-endian data, and shapes whose byte size overflows or exceeds the
+// file; every error names the file (or npz member) and the field.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace gt::io {
+
+struct NpyArray {
+  std::string descr;             // e.g. "<f4" (always little-endian or '|')
+  std::vector<int64_t> shape;    // C order
+  bool fortran_order = false;
+  std::string data;              // raw bytes, size = product(shape) * item size
+
+  int64_t NumElements() const;
+  size_t ItemSize() const;
+  // Typed view; throws InputError when T does not match descr.
+  template <typename T>
+  const T* As(const std::string& name_for_errors) const;
+};
+
+// descr of a C++ type: float "<f4", double "<f8", int32_t "<i4", int64_t "<i8",
+// uint8_t "|u1", uint16_t "<u2", uint32_t "<u4", uint64_t "<u8".
+template <typename T>
+const char* NpyDescr();
+
+// Parse .npy bytes; `name` is used in error messages (a path or "file.npz:member").
+NpyArray ParseNpy(std::string_view bytes, const std::string& name);
+NpyArray ReadNpy(const std::string& path);
+
+// Encode an array as .npy bytes (see rules above).
+std::string EncodeNpy(const std::string& descr, const std::vector<int64_t>& shape,
+                      const void* data, size_t nbytes);
+template <typename T>
+std::string EncodeNpy(const std::vector<int64_t>& shape, const std::vector<T>& values) {
+  return EncodeNpy(NpyDescr<T>(), shape, values.data(), values.size() * sizeof(T));
+}
+// Atomic write (files.h WriteFileAtomic) of EncodeNpy.
+template <typename T>
+void WriteNpy(const std::string& path, const std::vector<int64_t>& shape,
+              const std::vector<T>& values);
+
+// .npz: a zip of "<name>.npy" members (stored or deflated). Keys are member names without
+// the ".npy" suffix.
+std::map<std::string, NpyArray> ReadNpz(const std::string& path);
+// Writes a stored (uncompressed) .npz atomically; members in the map's (sorted) order,
+// fixed timestamps, so equal inputs give identical bytes.
+void WriteNpz(const std::string& path, const std::map<std::string, std::string>& npy_members);
+
+}  // namespace gt::io

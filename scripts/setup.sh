@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Install the Debian packages occgt needs (only the missing ones), then configure and
+# build a Release tree in build/. Idempotent: when everything is present it only runs
+# the (incremental) build. Works as root or through sudo.
+#
+#   scripts/setup.sh            runtime + build dependencies, then build
+#   scripts/setup.sh --test     also the test dependencies (python3-numpy, jsonschema, ...)
+#   scripts/setup.sh --no-build only install packages
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+
+want_tests=0
+do_build=1
+for arg in "$@"; do
+  case "$arg" in
+    --test) want_tests=1 ;;
+    --no-build) do_build=0 ;;
+    *) echo "setup.sh: unknown argument '$arg' (expected --test or --no-build)" >&2; exit 2 ;;
+  esac
+done
+
+packages=(
+  build-essential cmake ninja-build pkg-config ccache
+  libeigen3-dev libopencv-dev libopenexr-dev libpcl-dev liboctomap-dev
+  nlohmann-json3-dev libcli11-dev libyaml-cpp-dev libarchive-dev libzip-dev libtbb-dev
+  libgtest-dev libbenchmark-dev
+)
+if [[ $want_tests == 1 ]]; then
+  packages+=(python3 python3-numpy python3-jsonschema python3-yaml)
+fi
+if [[ -n "${OCCGT_EXTRA_PACKAGES:-}" ]]; then
+  read -r -a extra <<<"$OCCGT_EXTRA_PACKAGES"
+  packages+=("${extra[@]}")
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if ((${#missing[@]})); then
+  echo "setup.sh: installing ${missing[*]}" >&2
+  sudo_cmd=()
+  if [[ $(id -u) != 0 ]]; then
+    command -v sudo >/dev/null || { echo "setup.sh: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+    sudo_cmd=(sudo)
+  fi
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo_cmd[@]}" apt-get update -qq
+  "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+if [[ $do_build == 1 ]]; then
+  build_dir="${OCCGT_BUILD_DIR:-$here/build}"
+  if [[ ! -f "$build_dir/CMakeCache.txt" ]]; then
+    cmake -S "$here" -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+      -DCMAKE_CXX_COMPILER_LAUNCHER=ccache >&2
+  fi
+  cmake --build "$build_dir" -j "$(nproc)" >&2
+fi
