@@ -23,7 +23,7 @@ packages=(
   build-essential cmake ninja-build pkg-config ccache
   libeigen3-dev libopencv-dev libopenexr-dev libpcl-dev liboctomap-dev
   nlohmann-json3-dev libcli11-dev libyaml-cpp-dev libarchive-dev libzip-dev libtbb-dev
-  libgtest-dev libbenchmark-dev
+  libgtest-dev libbenchmark-dev libvalijson-dev
 )
 if [[ $want_tests == 1 ]]; then
   packages+=(python3 python3-numpy python3-jsonschema python3-yaml)
