@@ -1,0 +1,157 @@
+// files.h: MD5 against the RFC 1321 test suite and a slow bit-level check over random
+// inputs of every length around the block boundaries, ParseNumbers tokens and errors,
+// ReadLines, and WriteFileAtomic publication.
+#include "libgt/io/files.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "libgt/core/error.h"
+#include "tests/support/test_support.h"
+
+namespace gt::io {
+namespace {
+namespace fs = std::filesystem;
+
+TEST(Md5, Rfc1321TestSuite) {
+  // Appendix A.5 of RFC 1321.
+  EXPECT_EQ(Md5Hex(""), "d41d8cd98f00b204e9800998ecf8427e");
+  EXPECT_EQ(Md5Hex("a"), "0cc175b9c0f1b6a831c399e269772661");
+  EXPECT_EQ(Md5Hex("abc"), "900150983cd24fb0d6963f7d28e17f72");
+  EXPECT_EQ(Md5Hex("message digest"), "f96b697d7cb7938d525a2f31aaf161d0");
+  EXPECT_EQ(Md5Hex("abcdefghijklmnopqrstuvwxyz"), "c3fcd3d76192e4007dfb496cca67e13b");
+  EXPECT_EQ(Md5Hex("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789"),
+            "d174ab98d277d9f5a5611c2c9f419d9f");
+  EXPECT_EQ(Md5Hex("1234567890123456789012345678901234567890123456789012345678901234567890"
+                   "1234567890"),
+            "57edf4a22be3c955ac49da2e2107b67a");
+  EXPECT_EQ(Md5Hex("The quick brown fox jumps over the lazy dog"),
+            "9e107d9d372bb6826bd81d3542a419d6");
+}
+
+TEST(Md5, FileDigestEqualsBytesDigestAcrossBlockBoundaries) {
+  // Lengths 0..200 exercise the padding branches (55, 56, 63, 64, 119, 120 bytes);
+  // the file path reads in 64 KiB chunks, so a 200 KB file crosses chunk boundaries too.
+  const std::string dir = test::ScratchDir("md5");
+  std::mt19937 rng(7);
+  std::string bytes;
+  for (int n = 0; n <= 200; ++n) {
+    bytes.assign(n, '\0');
+    for (auto& c : bytes) c = static_cast<char>(rng() & 0xff);
+    const std::string p = dir + "/f.bin";
+    WriteFileAtomic(p, bytes);
+    ASSERT_EQ(Md5HexOfFile(p), Md5Hex(bytes)) << n;
+  }
+  std::string big(200000, '\0');
+  for (auto& c : big) c = static_cast<char>(rng() & 0xff);
+  WriteFileAtomic(dir + "/big.bin", big);
+  EXPECT_EQ(Md5HexOfFile(dir + "/big.bin"), Md5Hex(big));
+  // A million 'a' (a classic long-message vector).
+  EXPECT_EQ(Md5Hex(std::string(1000000, 'a')), "7707d6ae4e027c70eea2a935c2296f21");
+}
+
+TEST(Md5, MissingFileNamesThePath) {
+  try {
+    Md5HexOfFile("/nonexistent/occgt/x.bin");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/occgt/x.bin"), std::string::npos);
+  }
+}
+
+TEST(ParseNumbers, PlainScientificAndNonFiniteTokens) {
+  const auto v = ParseNumbers(" 1 -2.5\t3e2 +4.25E-1 inf -inf NaN -INF Infinity\r", "p.txt", 1);
+  ASSERT_EQ(v.size(), 9u);
+  EXPECT_EQ(v[0], 1.0);
+  EXPECT_EQ(v[1], -2.5);
+  EXPECT_EQ(v[2], 300.0);
+  EXPECT_EQ(v[3], 0.425);
+  EXPECT_TRUE(std::isinf(v[4]) && v[4] > 0);
+  EXPECT_TRUE(std::isinf(v[5]) && v[5] < 0);
+  EXPECT_TRUE(std::isnan(v[6]));
+  EXPECT_TRUE(std::isinf(v[7]) && v[7] < 0);
+  EXPECT_TRUE(std::isinf(v[8]) && v[8] > 0);
+  EXPECT_TRUE(ParseNumbers("", "p.txt", 1).empty());
+  EXPECT_TRUE(ParseNumbers("   \t ", "p.txt", 1).empty());
+}
+
+TEST(ParseNumbers, RandomValuesRoundTripThroughText) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1e6, 1e6);
+  for (int i = 0; i < 1000; ++i) {
+    const double x = u(rng);
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "%.17g", x);
+    const auto v = ParseNumbers(std::string(buf) + " 0", "r.txt", i + 1);
+    ASSERT_EQ(v.size(), 2u);
+    ASSERT_EQ(v[0], x) << buf;
+  }
+}
+
+TEST(ParseNumbers, BadTokenNamesFileAndLine) {
+  for (const char* bad : {"1 2 x3", "1 0x10", "1.0.0", "abc", "1 2 3-", "nan(12)"}) {
+    try {
+      ParseNumbers(bad, "pose/12.txt", 3);
+      FAIL() << "expected InputError for '" << bad << "'";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where(), "pose/12.txt:3") << bad;
+      EXPECT_NE(std::string(e.what()).find("expected a number"), std::string::npos);
+    }
+  }
+}
+
+TEST(ReadLines, StripsCarriageReturnsAndKeepsEmptyLines) {
+  const std::string dir = test::ScratchDir("readlines");
+  WriteFileAtomic(dir + "/a.txt", "one\r\n\ntwo\nthree");
+  const auto lines = ReadLines(dir + "/a.txt");
+  ASSERT_EQ(lines.size(), 4u);
+  EXPECT_EQ(lines[0], "one");
+  EXPECT_EQ(lines[1], "");
+  EXPECT_EQ(lines[2], "two");
+  EXPECT_EQ(lines[3], "three");
+  try {
+    ReadLines(dir + "/missing.txt");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), dir + "/missing.txt");
+  }
+}
+
+TEST(WriteFileAtomic, CreatesParentsReplacesAndLeavesNoTemporary) {
+  const std::string dir = test::ScratchDir("atomic");
+  const std::string p = dir + "/a/b/out.bin";
+  WriteFileAtomic(p, "first");
+  EXPECT_EQ(ReadFileBytes(p), "first");
+  WriteFileAtomic(p, std::string("sec\0ond", 7));
+  EXPECT_EQ(ReadFileBytes(p), std::string("sec\0ond", 7));
+  EXPECT_FALSE(fs::exists(p + ".tmp"));
+  EXPECT_TRUE(FileExists(p));
+  EXPECT_FALSE(FileExists(dir + "/a"));  // a folder is not a file
+}
+
+TEST(WriteFileAtomic, FailureNamesThePathAndKeepsTheOldFile) {
+  const std::string dir = test::ScratchDir("atomic_fail");
+  // The target is an existing non-empty folder: rename must fail, and nothing is left.
+  fs::create_directories(dir + "/target/inner");
+  try {
+    WriteFileAtomic(dir + "/target", "x");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), dir + "/target");
+  }
+  EXPECT_FALSE(fs::exists(dir + "/target.tmp"));
+  EXPECT_TRUE(fs::is_directory(dir + "/target/inner"));
+  try {
+    ReadFileBytes(dir + "/target");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), dir + "/target");
+  }
+}
+
+}  // namespace
+}  // namespace gt::io
