@@ -1,0 +1,132 @@
+// OctoMap fusion of posed depth maps (GROUND_TRUTH.md §5, "Fusion").
+//
+// Each frame's valid pixels (IsValidDepth with the frame's [min_depth_m, max_depth_m]) are
+// back-projected with the frame's Camera (planar depth z in metres, OpenCV axes, pixel
+// centres at integer coordinates) and moved to the world frame with world_from_cam.
+// Invalid pixels are dropped BEFORE any transform: a zero depth would land on the camera
+// centre and a NaN becomes the origin in PCL's transform. The cloud is optionally
+// downsampled to one centroid per voxel of the map resolution and filtered by statistical
+// outlier removal, then inserted into one OctoMap OcTree with the camera centre as the
+// sensor origin: the ray to every point marks free voxels, its end voxel is a hit, rays are
+// truncated at max_range_m (OctoMap's ray model, default hit/miss probabilities 0.7/0.4,
+// clamping 0.12/0.97, occupancy threshold 0.5).
+//
+// Key range: OctoMap keys are 16-bit per axis, so the map spans 2^16 * voxel_size_m per
+// axis centred on the world origin (3276.8 m at 5 cm). Points outside are dropped (and
+// counted) before insertion, because OctoMap's unchecked key conversion wraps around; a
+// frame whose camera centre lies outside is rejected with InputError.
+//
+// PCL and OctoMap types never appear here; OccupancyMap is an opaque handle.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "libgt/core/camera.h"
+#include "libgt/core/depth.h"
+#include "libgt/core/frame.h"
+#include "libgt/core/pose.h"
+
+namespace gt::occupancy {
+
+// Which frames are fused for a pair (GROUND_TRUTH.md §5).
+enum class FusionScope {
+  kPair,    // "pair": the two frames of the pair only (paper, default)
+  kWindow,  // "window:N": the pair plus the usable frames within N positions of either
+  kScene,   // "scene:S": every S-th usable frame of the scene; one map reused by all pairs
+};
+
+struct FusionOptions {
+  double voxel_size_m = 0.05;    // OctoMap resolution (metres), > 0
+  double max_range_m = 10.0;     // ray truncation (metres); <= 0 means unlimited. 10 m covers
+                                 // indoor depth sensors (ScanNet/7-Scenes read < 10 m).
+  bool downsample = true;        // one centroid per voxel (pcl::VoxelGrid, overflow-guarded)
+  bool remove_outliers = false;  // pcl::StatisticalOutlierRemoval after downsampling
+  int outlier_k = 20;            // neighbours for the mean distance, >= 1
+  double outlier_stddev = 2.0;   // reject mean distance > mean + stddev * sigma, > 0
+  FusionScope scope = FusionScope::kPair;
+  int window = 0;        // kWindow: neighbours on each side, >= 1
+  int scene_stride = 0;  // kScene: frame stride, >= 1
+
+  bool Check(std::string* error) const;
+};
+
+// "pair", "window:N", "scene:S" -> scope fields of *options; throws
+// InputError("--scope", ...) on anything else.
+void ParseFusionScope(const std::string& text, FusionOptions* options);
+// Indices into scene.frames of the frames to fuse for the pair (i0, i1), sorted, usable only:
+// kPair {i0, i1}; kWindow the usable frames within `window` positions (of scene.frames) of i0
+// or i1; kScene every frame i with i % scene_stride == 0 that is usable (independent of the
+// pair, so the map is shared by all pairs of the scene).
+std::vector<size_t> ScopeFrameIndices(const Scene& scene, size_t i0, size_t i1,
+                                      const FusionOptions& options);
+// Inverse of ParseFusionScope ("pair", "window:3", "scene:10").
+std::string FusionScopeName(const FusionOptions& options);
+
+// One posed depth map to fuse. `depth` is not owned and must outlive the call.
+struct FusionInput {
+  const DepthImage* depth = nullptr;
+  Camera camera;  // K at the depth map's resolution
+  Rigid3d world_from_cam = Rigid3d::Identity();
+  double min_depth_m = 0.0;  // validity range (depth.h IsValidDepth)
+  double max_depth_m = 1000.0;
+};
+
+// What happened to the points during fusion (summed over frames).
+struct FusionStats {
+  int64_t frames = 0;
+  int64_t pixels = 0;                // width * height summed
+  int64_t invalid_pixels = 0;        // dropped before back-projection
+  int64_t out_of_key_range = 0;      // dropped: outside the map's key range
+  int64_t after_downsample = 0;      // points after the voxel grid (== valid if off)
+  int64_t downsample_fallbacks = 0;  // frames whose VoxelGrid would overflow int32
+  int64_t outliers_removed = 0;
+  int64_t inserted_points = 0;
+};
+
+// Opaque fused map (an octomap::OcTree inside).
+class OccupancyMap {
+ public:
+  struct Impl;
+  OccupancyMap();
+  explicit OccupancyMap(std::unique_ptr<Impl> impl);
+  OccupancyMap(OccupancyMap&&) noexcept;
+  OccupancyMap& operator=(OccupancyMap&&) noexcept;
+  ~OccupancyMap();
+
+  double resolution_m() const;
+  // Leaf nodes of the (pruned) tree; a pruned leaf may cover many voxels.
+  int64_t NumLeafNodes() const;
+  // Known voxels at the finest resolution (pruned leaves expanded), occupied and free.
+  int64_t NumOccupiedVoxels() const;
+  int64_t NumFreeVoxels() const;
+  // Voxel state at a world point: 1 occupied, 0 free, -1 unknown or outside the key range.
+  int StateAt(const Eigen::Vector3d& p_in_world) const;
+  const FusionStats& stats() const;
+  // OctoMap binary (.bt, maximum-likelihood occupancy), which octovis opens; atomic write.
+  void SaveBinary(const std::string& path) const;
+
+  const Impl& impl() const { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+// Fuses the frames (in order) into one map. Throws InputError for a frame whose depth is
+// missing or does not match its camera size, or whose camera centre is outside the key
+// range. Options must pass Check (GT_ASSERT otherwise).
+OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionOptions& options);
+
+// Downsampling used by FuseOccupancy, exposed for tests: one centroid (float arithmetic as in
+// pcl::VoxelGrid) per voxel floor(p / leaf_m), output sorted by voxel index (x fastest is NOT
+// guaranteed; compare as sets). Uses pcl::VoxelGrid when its int32 leaf count does not
+// overflow, otherwise an own sort-based bucketing; *used_fallback says which.
+std::vector<Eigen::Vector3f> DownsampleVoxelCentroids(const std::vector<Eigen::Vector3f>& points,
+                                                      double leaf_m, bool* used_fallback);
+
+// Back-projects the valid pixels of one frame into the world frame (row-major pixel order).
+std::vector<Eigen::Vector3f> BackProjectValid(const FusionInput& frame);
+
+}  // namespace gt::occupancy
