@@ -1,0 +1,154 @@
+// Pixel labels and pair metrics for one direction A→B (GROUND_TRUTH.md §2–3).
+//
+// For each pixel u = (u, v) of image A with planar depth d_A(u) (metres):
+//   1. d_A invalid (0, NaN, inf, outside [min_depth_m, max_depth_m])       → kNoDepth
+//   2. p_in_a = d_A · K_A⁻¹ [u, v, 1]ᵀ,  p_in_b = b_from_a · p_in_a,  z = p_in_b.z
+//   3. cheirality: z <= min_depth_m                                         → kOutOfView
+//   4. x = K_B p_in_b / z (compat: / (z + projection_eps_m)); outside bounds → kOutOfView
+//   5. d_B = depth of B at the looked-up pixel (nearest: floor(x + 0.5); truncate: the
+//      integer part, like torch's .long()); d_B invalid → kUnknown (compat: d_B := 0)
+//   6. τ = max(abs_tol_m, rel_tol · z) (or rel_tol · d_B when relative_to = kObserved);
+//      |z − d_B| <= τ → kVisible; z > d_B + τ → kOccluded; z < d_B − τ → kInconsistent.
+// Codes are stable (uint8, stored in files): see PixelLabel.
+//
+// Conventions: libgt/core/camera.h (pixel centres at integer coordinates, OpenCV axes),
+// libgt/core/pose.h (b_from_a = inverse(world_from_b) * world_from_a). Depth maps and
+// cameras are at the working resolution (default 640×480; resize first with
+// ResizeDepthNearest and Camera::Resized).
+//
+// Arithmetic: double precision, with K_B · R · K_A⁻¹ and K_B · t folded into one affine map
+// (q = d · (a·u + b·v + c) + k, z = q.z, x = q.x / z). A slow step-by-step evaluation
+// agrees with it except when a value lands within ~1e-12 of a threshold (a tie); the
+// tests bound the number of such pixels. Same inputs → identical labels on any machine
+// that implements IEEE-754 double (no fast-math).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "libgt/core/camera.h"
+#include "libgt/core/depth.h"
+#include "libgt/core/pose.h"
+
+namespace gt {
+
+// Stable codes, stored as uint8 in label maps and cell maps (docs/GROUND_TRUTH.md).
+enum class PixelLabel : uint8_t {
+  kNoDepth = 0,       // source depth invalid
+  kOutOfView = 1,     // behind B's camera or projects outside B's image
+  kVisible = 2,       // B observes the same surface (within tolerance)
+  kOccluded = 3,      // a surface of B lies in front of the point
+  kInconsistent = 4,  // B sees past the point (depth/pose error, moving object)
+  kUnknown = 5,       // projects into B, but B has no valid depth there
+};
+inline constexpr int kNumPixelLabels = 6;
+// "NO_DEPTH", "OUT_OF_VIEW", "VISIBLE", "OCCLUDED", "INCONSISTENT", "UNKNOWN".
+const char* PixelLabelName(PixelLabel label);
+
+// Which depth the relative tolerance multiplies.
+enum class RelativeTo { kProjected, kObserved };  // z (projected into B) or d_B (B's depth)
+// Which continuous positions count as inside B's image.
+enum class Bounds {
+  kPixelArea,  // -0.5 <= x < W - 0.5, -0.5 <= y < H - 0.5 (every point a pixel covers)
+  kStrict,     // 0 < x < W - 1, 0 < y < H - 1 (LoFTR / Occ²Net code)
+};
+// How the target pixel is chosen from the continuous position x.
+enum class TargetLookup {
+  kNearest,   // floor(x + 0.5): the pixel whose area contains x
+  kTruncate,  // integer part (toward zero), as torch's .long() in LoFTR / Occ²Net
+};
+// What an invalid depth of B at the target pixel means.
+enum class MissingTarget {
+  kUnknown,      // label kUnknown (default)
+  kAsZeroDepth,  // compare as d_B = 0 (released Occ²Net code: OCCLUDED when z > tol)
+};
+
+// Names used on the command line and in meta.json: "projected"/"observed",
+// "pixel-area"/"strict", "nearest"/"truncate", "unknown"/"as-zero-depth".
+const char* RelativeToName(RelativeTo v);
+const char* BoundsName(Bounds v);
+const char* TargetLookupName(TargetLookup v);
+const char* MissingTargetName(MissingTarget v);
+// Parsers; throw InputError(field, "expected one of ...") on an unknown name.
+RelativeTo ParseRelativeTo(const std::string& name, const std::string& field = "--relative-to");
+Bounds ParseBounds(const std::string& name, const std::string& field = "--bounds");
+TargetLookup ParseTargetLookup(const std::string& name,
+                               const std::string& field = "--target-lookup");
+MissingTarget ParseMissingTarget(const std::string& name,
+                                 const std::string& field = "--missing-target");
+
+struct LabelOptions {
+  double min_depth_m = 0.0;     // depths below are invalid (core/depth.h IsValidDepth); also
+                                // the cheirality threshold: z <= min_depth_m is OUT_OF_VIEW
+  double max_depth_m = 1000.0;  // depths above are invalid (TartanAir sky is ~1e4 m)
+  double abs_tol_m = 0.1;       // absolute depth tolerance (metres)
+  double rel_tol = 0.05;        // relative tolerance (fraction of z or d_B)
+  RelativeTo relative_to = RelativeTo::kProjected;
+  Bounds bounds = Bounds::kPixelArea;
+  TargetLookup target_lookup = TargetLookup::kNearest;
+  MissingTarget missing_target = MissingTarget::kUnknown;
+  bool cheirality = true;         // test z > min_depth_m before dividing (off: compat only)
+  double projection_eps_m = 0.0;  // added to z before the division (compat: 1e-4)
+
+  // min <= max, tolerances finite and >= 0, eps finite and >= 0.
+  bool Check(std::string* error) const;
+};
+
+// Presets of GROUND_TRUTH.md §2 (options other than those in the table keep their
+// defaults: min/max depth come from the dataset):
+//   default         τ = max(0.1 m, 0.05·z), pixel area, nearest, missing → UNKNOWN
+//   occ2net         τ = 0.1 m, strict, truncate, missing → UNKNOWN
+//   occ2net-compat  as occ2net, missing compared as 0, no cheirality, z + 1e-4
+//   loftr           τ = 0.2·d_B (observed), strict, truncate, missing → UNKNOWN
+//   superglue       τ = 0.1·z (projected), pixel area, nearest, missing → UNKNOWN
+// Throws InputError("--preset", "expected one of ...") for another name.
+LabelOptions LabelPreset(const std::string& name);
+std::vector<std::string> PresetNames();
+
+// Labels of every pixel of A, and where each pixel lands in B.
+struct DirectionLabels {
+  int width = 0;                // of A
+  int height = 0;               // of A
+  std::vector<uint8_t> labels;  // [height * width], row-major, PixelLabel codes
+  // [height * width * 2] float32 (x, y) in B's pixel coordinates (working resolution):
+  // the continuous projection of the pixel. NaN for kNoDepth and for points that fail the
+  // cheirality test; finite (possibly outside B) for every other label.
+  std::vector<float> warped_xy;
+
+  PixelLabel at(int u, int v) const {
+    return static_cast<PixelLabel>(labels[static_cast<size_t>(v) * width + u]);
+  }
+};
+
+// Labels A→B. depth_a must match cam_a's size and depth_b cam_b's; throws InputError
+// ("depth_a"/"depth_b"/"cam_a"/"cam_b"/"options") otherwise.
+DirectionLabels LabelDirection(const DepthImage& depth_a, const Camera& cam_a,
+                               const DepthImage& depth_b, const Camera& cam_b,
+                               const Rigid3d& b_from_a, const LabelOptions& options);
+
+// Metrics of one direction (GROUND_TRUTH.md §3) over the sampled grid: pixels (u, v) with
+// u % score_stride == 0 and v % score_stride == 0 (stride 1 = every pixel).
+struct DirectionMetrics {
+  int64_t sampled = 0;  // pixels of the sampled grid
+  int64_t valid = 0;    // sampled pixels with valid depth (sampled - counts[kNoDepth])
+  std::array<int64_t, kNumPixelLabels> counts{};  // per PixelLabel code
+  double overlap = 0;  // (VISIBLE + OCCLUDED + INCONSISTENT + UNKNOWN) / valid (0 if none)
+  double consistent_overlap = 0;       // VISIBLE / sampled
+  double occlusion_ratio = 0;          // OCCLUDED / sampled (= W·H at stride 1): the paper's
+  double occlusion_ratio_visible = 0;  // OCCLUDED / (VISIBLE + OCCLUDED): the released
+                                       // code's (0 when both are 0)
+};
+
+// Fast path: labels only the sampled grid, allocates no label maps. Equal, field by
+// field, to MetricsFromLabels(LabelDirection(...), score_stride).
+DirectionMetrics ScoreDirection(const DepthImage& depth_a, const Camera& cam_a,
+                                const DepthImage& depth_b, const Camera& cam_b,
+                                const Rigid3d& b_from_a, const LabelOptions& options,
+                                int score_stride = 1);
+DirectionMetrics MetricsFromLabels(const DirectionLabels& labels, int score_stride = 1);
+// Fills the ratios from sampled and counts (used by both functions above).
+void FinishMetrics(DirectionMetrics* metrics);
+
+}  // namespace gt
