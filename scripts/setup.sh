@@ -23,10 +23,10 @@ packages=(
   build-essential cmake ninja-build pkg-config ccache
   libeigen3-dev libopencv-dev libopenexr-dev libpcl-dev liboctomap-dev
   nlohmann-json3-dev libcli11-dev libyaml-cpp-dev libarchive-dev libzip-dev libtbb-dev
-  libgtest-dev libbenchmark-dev libvalijson-dev
+  libgtest-dev libbenchmark-dev libvalijson-dev gnuplot-nox
 )
 if [[ $want_tests == 1 ]]; then
-  packages+=(python3 python3-numpy python3-jsonschema python3-yaml)
+  packages+=(python3 python3-numpy python3-jsonschema python3-yaml python3-pil chromium)
 fi
 if [[ -n "${OCCGT_EXTRA_PACKAGES:-}" ]]; then
   read -r -a extra <<<"$OCCGT_EXTRA_PACKAGES"
