@@ -1,0 +1,143 @@
+// The on-disk layout of one split and the steps that publish it: per-shard part records
+// written by `occgt build` tasks, and the merge / validate steps (SHARDS.md "Index files",
+// SCALE.md rules 2-4).
+//
+// Layout of an output folder DIR holding split S (names come from the input, never from a
+// task id, so any task layout gives the same files):
+//   DIR/parts/S.plan.json         written ONCE before shards are written (select stage or
+//                                 task 0): {"split": S, "nshards": N,
+//                                 "nsamples": [n_0, ..., n_{N-1}]}
+//   DIR/S-000000.tar ...          shard s = "S-{s:06d}.tar" (TarShardWriter)
+//   DIR/parts/S-000000.json       part record of shard s, written right after the shard is
+//                                 published; it is the shard's completion marker:
+//                                 {"split", "shard_index", "url", "nsamples", "md5sum",
+//                                  "filesize", "keys": [...], "pairs": [{...}, ...]}
+//   DIR/index.json                (merge) wids index: {"__kind__": "wids-shard-index-v1",
+//                                 "wids_version": 1, "name": S, "shardlist": [{"url":
+//                                 "S-000000.tar", "nsamples", "md5sum", "filesize"}, ...]}
+//   DIR/pairs.jsonl               (merge) one compact JSON object per sample, shards in
+//                                 order, samples in shard order; each line is the
+//                                 caller's pair line plus "shard" (url) and "key".
+//   DIR/summary.json              (occgt merge) MergeSummaryJson below.
+// URLs in index.json are relative to DIR. All JSON is written with sorted keys and
+// atomically (gt::io::WriteFileAtomic), so outputs are byte-deterministic.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "libgt/shards/sample.h"
+#include "libgt/shards/tar_shard.h"
+
+namespace gt::shards {
+
+// "S-{s:06d}.tar", "DIR/S-{s:06d}.tar", "DIR/parts/S-{s:06d}.json", "DIR/parts/S.plan.json".
+std::string ShardFileName(const std::string& split, int64_t shard_index);
+std::string ShardPath(const std::string& dir, const std::string& split, int64_t shard_index);
+std::string PartRecordPath(const std::string& dir, const std::string& split, int64_t shard_index);
+std::string PlanPath(const std::string& dir, const std::string& split);
+// "" when `split` is usable in file names ([A-Za-z0-9_-]+, not starting with "__").
+std::string CheckSplitName(const std::string& split);
+
+// How many shards a split has and how many samples each holds.
+struct SplitPlan {
+  std::string split;
+  std::vector<int64_t> shard_nsamples;  // one entry per shard, in shard order
+};
+// Equal cut of `total_samples` into shards of `samples_per_shard` (last one shorter).
+SplitPlan PlanEqualShards(const std::string& split, int64_t total_samples,
+                          int64_t samples_per_shard);
+void WritePlan(const std::string& dir, const SplitPlan& plan);         // atomic
+SplitPlan ReadPlan(const std::string& dir, const std::string& split);  // InputError if bad
+// Splits that have a plan in DIR/parts, sorted.
+std::vector<std::string> ListPlannedSplits(const std::string& dir);
+
+// Record of one finished shard (the parsed part record).
+struct PartRecord {
+  std::string split;
+  int64_t shard_index = 0;
+  std::string url;  // shard file name relative to DIR
+  ShardInfo info;
+  std::vector<std::string> keys;        // sample keys in tar order
+  std::vector<std::string> pair_lines;  // compact JSON objects, one per key, same order
+};
+PartRecord ReadPartRecord(const std::string& dir, const std::string& split, int64_t shard_index);
+
+// Writes shard s of a split and then its part record. Usage (one per shard, any thread):
+//   SplitShardWriter w(dir, split, s);
+//   for (...) w.Add(sample, pair_line_json);
+//   PartRecord r = w.Finish();
+// `pair_line_json` must be one JSON object (the pairs.jsonl line of this sample: scene,
+// frame ids, directional metrics); the writer sets its "shard" and "key" members.
+class SplitShardWriter {
+ public:
+  SplitShardWriter(const std::string& dir, const std::string& split, int64_t shard_index);
+  ~SplitShardWriter();
+  void Add(const Sample& sample, const std::string& pair_line_json);
+  PartRecord Finish();
+
+ private:
+  PartRecord record_;
+  std::string dir_;
+  std::unique_ptr<TarShardWriter> tar_;
+};
+
+// True when shard s was completed earlier: its part record parses and the tar exists
+// with the recorded size (and MD5 when `verify_md5`). `occgt build` uses it to skip work
+// on a re-run.
+bool IsShardComplete(const std::string& dir, const std::string& split, int64_t shard_index,
+                     bool verify_md5 = false);
+
+// wids index.json text (sorted keys, 2-space indent, trailing newline).
+std::string IndexJson(const std::string& name, const std::vector<PartRecord>& parts);
+// Writes lines (each without '\n') as a JSONL file atomically.
+void WriteJsonLines(const std::string& path, const std::vector<std::string>& lines);
+
+struct MergeOptions {
+  std::string split;        // "" = the only split planned in DIR/parts (error if several)
+  bool verify_md5 = true;   // recompute the MD5 of every shard
+  bool read_tars = true;    // read every tar: keys, member names, sample count
+  std::string schemas_dir;  // folder with sample.schema.json / pairs_line.schema.json;
+                            // "" = no JSON Schema checks of sample JSON and pair lines
+  bool Check(std::string* error) const;
+};
+
+struct MergeResult {
+  std::string split;
+  int64_t nshards = 0;
+  int64_t nsamples = 0;
+  int64_t total_bytes = 0;
+  std::vector<PartRecord> parts;
+};
+
+// Validates every shard of the plan (part record present, tar present, size, MD5,
+// sample count = plan = record, keys and member names as recorded, sample .json fields
+// against sample.schema.json when present) and then writes DIR/index.json and
+// DIR/pairs.jsonl atomically. The first missing or corrupt shard throws
+// InputError("<shard path>", reason); nothing is written then.
+MergeResult MergeSplit(const std::string& dir, const MergeOptions& options);
+// summary.json content of a merge: {"split", "nshards", "nsamples", "bytes",
+// "pairs_per_scene": {scene: n} (from the pair lines' "scene" field)}.
+std::string MergeSummaryJson(const MergeResult& result);
+
+struct ValidateOptions {
+  std::string schemas_dir;  // "" = skip JSON Schema checks (structure is still checked)
+  bool Check(std::string* error) const;
+};
+
+// Re-checks a published split from DIR/index.json: schema of index.json, every shard's
+// size and MD5, sample counts and member names read back from the tars, every .npy
+// member's header, every .json member parses (and matches sample.schema.json), pairs.jsonl
+// has one line per sample naming an existing shard/key. Returns one line per problem
+// ("<file>: <problem>"); empty = valid. Never throws for bad content.
+std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOptions& options);
+
+// Validates `document` (JSON text) against the JSON Schema file `schema_path` (valijson;
+// draft-7 keywords, which the draft 2020-12 schemas of schemas/ keep to). Returns one line
+// per violation, "" entries never; throws InputError when the schema itself is unreadable.
+std::vector<std::string> ValidateJsonAgainstSchema(const std::string& document,
+                                                   const std::string& schema_path);
+
+}  // namespace gt::shards

@@ -1,0 +1,84 @@
+// Deterministic WebDataset tar shards, written and read with libarchive (SHARDS.md).
+//
+// Format: POSIX ustar, one regular-file member per sample field, named "<key>.<field>",
+// in the order the samples and their fields are given (files of one sample contiguous).
+// Every header has mode 0644, mtime 0, uid/gid 0 and empty uname/gname, and the archive
+// ends right after the two zero end blocks (libarchive's bytes_in_last_block = 1), so the
+// file size is a multiple of 512, not of 10240. Same samples in, same bytes out.
+// Member data starts on a 512-byte boundary; .npy fields whose header pads the data to a
+// multiple of 64 bytes (gt::io::EncodeNpy does) therefore have 64-byte aligned array data
+// inside the uncompressed shard.
+//
+// Publication is atomic: data goes to "<path>.tmp"; Finish() fsyncs and renames it onto
+// <path>. A writer destroyed without Finish(), or one whose write failed, removes the
+// temporary file, so a reader never sees a partial shard. Errors (disk full, bad key,
+// over-long member path) throw gt::InputError naming the shard and the member.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "libgt/shards/sample.h"
+
+namespace gt::shards {
+
+// What a finished shard is, as index.json lists it.
+struct ShardInfo {
+  std::string path;      // file written (as given to the writer)
+  int64_t nsamples = 0;  // samples (keys) in the shard
+  std::string md5sum;    // lower-case hex MD5 of the whole file
+  int64_t filesize = 0;  // bytes
+};
+
+class TarShardWriter {
+ public:
+  // Opens "<path>.tmp" for writing (creating missing parent folders); throws InputError
+  // naming the shard when it cannot.
+  explicit TarShardWriter(std::string path);
+  ~TarShardWriter();  // without Finish(): closes and removes "<path>.tmp"
+  TarShardWriter(const TarShardWriter&) = delete;
+  TarShardWriter& operator=(const TarShardWriter&) = delete;
+
+  // Appends the sample's fields in order. Throws InputError("<path>: <key>...") when the
+  // sample fails CheckSample, when a key repeats within the shard, or when the write fails;
+  // after a throw the writer is dead (further calls throw) and nothing is published.
+  void Add(const Sample& sample);
+  // Closes the archive, fsyncs, renames onto the final path; returns its size and MD5.
+  ShardInfo Finish();
+
+  int64_t num_samples() const;
+  int64_t bytes_written() const;  // tar bytes so far (headers + padded data)
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Header fields of one tar member as read back.
+struct TarMemberInfo {
+  std::string path;         // member path
+  int64_t size = 0;         // data bytes
+  int64_t data_offset = 0;  // offset of the data in the tar file (multiple of 512)
+  int64_t mtime = 0;
+  int64_t uid = 0, gid = 0;
+  int mode = 0;  // permission bits, e.g. 0644
+  bool regular_file = false;
+};
+
+// Calls `visit` for every member in file order with its header and data. Throws
+// InputError naming the tar (and member) when it cannot be read or is truncated.
+void ForEachTarMember(
+    const std::string& tar_path,
+    const std::function<void(const TarMemberInfo&, std::string_view data)>& visit);
+
+// All samples of a shard, grouped by key the WebDataset way (consecutive members with the
+// same key form one sample; fields in member order). Reads the whole shard into memory.
+std::vector<Sample> ReadShardSamples(const std::string& tar_path);
+// One sample by key; throws InputError("<tar>", "no sample <key>") when absent.
+Sample ReadShardSample(const std::string& tar_path, const std::string& key);
+
+}  // namespace gt::shards
