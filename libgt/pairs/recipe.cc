@@ -1,0 +1,603 @@
+#include "libgt/pairs/recipe.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <valijson/adapters/nlohmann_json_adapter.hpp>
+#include <valijson/schema.hpp>
+#include <valijson/schema_parser.hpp>
+#include <valijson/validator.hpp>
+
+#include "libgt/core/error.h"
+#include "libgt/io/files.h"
+
+namespace gt::pairs {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const char kSchemaText[] =
+#include "gt/pairs/recipe_schema.inc"
+    ;
+
+// ---- YAML -> JSON -------------------------------------------------------------------
+
+bool ParseInt(const std::string& s, int64_t* out) {
+  if (s.empty()) return false;
+  size_t i = (s[0] == '-' || s[0] == '+') ? 1 : 0;
+  if (i == s.size()) return false;
+  for (size_t k = i; k < s.size(); ++k) {
+    if (s[k] < '0' || s[k] > '9') return false;
+  }
+  try {
+    *out = std::stoll(s);
+  } catch (...) {
+    return false;
+  }
+  return true;
+}
+
+bool ParseFloat(const std::string& s, double* out) {
+  if (s == ".inf" || s == ".Inf" || s == "+.inf") return *out = INFINITY, true;
+  if (s == "-.inf" || s == "-.Inf") return *out = -INFINITY, true;
+  if (s.empty()) return false;
+  // YAML 1.2 core: [-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?
+  size_t i = (s[0] == '-' || s[0] == '+') ? 1 : 0;
+  bool digits = false;
+  while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) ++i, digits = true;
+  if (i < s.size() && s[i] == '.') {
+    ++i;
+    while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) ++i, digits = true;
+  }
+  if (!digits) return false;
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    if (i < s.size() && (s[i] == '-' || s[i] == '+')) ++i;
+    bool exp_digits = false;
+    while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) ++i, exp_digits = true;
+    if (!exp_digits) return false;
+  }
+  if (i != s.size()) return false;
+  *out = std::strtod(s.c_str(), nullptr);
+  return true;
+}
+
+json NodeToJson(const YAML::Node& node, const std::string& file) {
+  switch (node.Type()) {
+    case YAML::NodeType::Null:
+    case YAML::NodeType::Undefined:
+      return nullptr;
+    case YAML::NodeType::Sequence: {
+      json a = json::array();
+      for (const auto& item : node) a.push_back(NodeToJson(item, file));
+      return a;
+    }
+    case YAML::NodeType::Map: {
+      json o = json::object();
+      for (const auto& kv : node) {
+        const std::string key = kv.first.as<std::string>();
+        if (o.contains(key)) {
+          throw InputError(file, "duplicate key '" + key + "' (line " +
+                                     std::to_string(kv.first.Mark().line + 1) + ")");
+        }
+        o[key] = NodeToJson(kv.second, file);
+      }
+      return o;
+    }
+    case YAML::NodeType::Scalar: {
+      const std::string s = node.Scalar();
+      if (node.Tag() == "!") return s;  // quoted: always a string
+      if (s == "~" || s == "null" || s == "Null" || s == "NULL") return nullptr;
+      if (s == "true" || s == "True" || s == "TRUE") return true;
+      if (s == "false" || s == "False" || s == "FALSE") return false;
+      int64_t i = 0;
+      if (ParseInt(s, &i)) return i;
+      double d = 0;
+      if (ParseFloat(s, &d)) return d;
+      return s;
+    }
+  }
+  return nullptr;
+}
+
+// ---- schema validation ------------------------------------------------------------
+
+// Dotted path of a valijson context: ["<root>", "[selection]", "[overlap]", "[0]"] ->
+// "selection.overlap[0]".
+std::string DottedPath(const std::vector<std::string>& context) {
+  std::string out;
+  for (const auto& c : context) {
+    if (c == "<root>") continue;
+    std::string part = c;
+    if (part.size() >= 2 && part.front() == '[' && part.back() == ']') {
+      part = part.substr(1, part.size() - 2);
+    }
+    bool index = !part.empty() && std::all_of(part.begin(), part.end(), ::isdigit);
+    if (index) {
+      out += "[" + part + "]";
+    } else {
+      if (part.size() >= 2 && part.front() == '"' && part.back() == '"') {
+        part = part.substr(1, part.size() - 2);
+      }
+      out += (out.empty() ? "" : ".") + part;
+    }
+  }
+  return out;
+}
+
+// The subschema of the recipe schema at a dotted path (following $ref and items), or null.
+const json* SubschemaAt(const json& schema, const std::vector<std::string>& context) {
+  const json* node = &schema;
+  auto deref = [&](const json* n) {
+    while (n && n->is_object() && n->contains("$ref")) {
+      std::string ref = (*n)["$ref"].get<std::string>();
+      if (ref.rfind("#/", 0) != 0) return static_cast<const json*>(nullptr);
+      n = &schema.at(json::json_pointer(ref.substr(1)));
+    }
+    return n;
+  };
+  for (const auto& c : context) {
+    if (c == "<root>") continue;
+    node = deref(node);
+    if (!node) return nullptr;
+    std::string part = c;
+    if (part.size() >= 2 && part.front() == '[') part = part.substr(1, part.size() - 2);
+    if (part.size() >= 2 && part.front() == '"') part = part.substr(1, part.size() - 2);
+    bool index = !part.empty() && std::all_of(part.begin(), part.end(), ::isdigit);
+    if (index) {
+      if (!node->contains("items")) return nullptr;
+      node = &(*node)["items"];
+    } else {
+      if (!node->contains("properties") || !(*node)["properties"].contains(part)) return nullptr;
+      node = &(*node)["properties"][part];
+    }
+  }
+  return deref(node);
+}
+
+const json& SchemaJson() {
+  static const json schema = json::parse(kSchemaText);
+  return schema;
+}
+
+// ---- JSON -> structs --------------------------------------------------------------
+
+template <typename T>
+void Get(const json& o, const char* key, T* out) {
+  if (o.contains(key) && !o[key].is_null()) *out = o[key].get<T>();
+}
+void GetOpt(const json& o, const char* key, std::optional<double>* out) {
+  if (o.contains(key) && !o[key].is_null()) *out = o[key].get<double>();
+}
+
+std::string ResolvePath(const std::string& raw, const std::string& field,
+                        const std::string& base_dir) {
+  std::string p = ExpandEnv(raw, field);
+  fs::path path(p);
+  if (path.is_relative()) path = fs::path(base_dir) / path;
+  return path.lexically_normal().string();
+}
+
+
+}  // namespace
+
+const char* AggregateName(Aggregate a) {
+  switch (a) {
+    case Aggregate::kMin:
+      return "min";
+    case Aggregate::kMean:
+      return "mean";
+    case Aggregate::kMax:
+      return "max";
+  }
+  return "mean";
+}
+
+const std::string& RecipeSchemaText() {
+  static const std::string text(kSchemaText);
+  return text;
+}
+
+json YamlToJson(const std::string& yaml_text, const std::string& file) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw InputError(file, "invalid YAML at line " + std::to_string(e.mark.line + 1) + ": " +
+                               e.msg);
+  }
+  return NodeToJson(root, file);
+}
+
+std::string ValidateRecipeJson(const json& recipe) {
+  static const valijson::Schema* schema = [] {
+    auto* s = new valijson::Schema();  // lives for the whole process
+    valijson::SchemaParser parser(valijson::SchemaParser::kDraft7);
+    valijson::adapters::NlohmannJsonAdapter adapter(SchemaJson());
+    parser.populateSchema(adapter, *s);
+    return s;
+  }();
+  if (!recipe.is_object()) return "(top level): expected a mapping of recipe keys";
+  valijson::Validator validator;
+  valijson::ValidationResults results;
+  valijson::adapters::NlohmannJsonAdapter target(recipe);
+  if (validator.validate(*schema, target, &results)) return "";
+  // Report the deepest error: the most specific field.
+  valijson::ValidationResults::Error best;
+  size_t best_depth = 0;
+  bool have = false;
+  valijson::ValidationResults::Error e;
+  while (results.popError(e)) {
+    if (!have || e.context.size() > best_depth) {
+      best = e;
+      best_depth = e.context.size();
+      have = true;
+    }
+  }
+  std::string path = DottedPath(best.context);
+  const std::string unknown_marker = "additionalProperties' constraints: '";
+  size_t pos = best.description.find(unknown_marker);
+  if (pos != std::string::npos) {
+    std::string key = best.description.substr(pos + unknown_marker.size());
+    key = key.substr(0, key.find('\''));
+    std::string allowed;
+    if (const json* sub = SubschemaAt(SchemaJson(), best.context);
+        sub && sub->contains("properties")) {
+      for (const auto& [k, v] : (*sub)["properties"].items()) allowed += (allowed.empty() ? "" : ", ") + k;
+    }
+    return (path.empty() ? key : path + "." + key) + ": unknown key (expected one of " + allowed +
+           ")";
+  }
+  const std::string missing_marker = "Missing required property '";
+  pos = best.description.find(missing_marker);
+  if (pos != std::string::npos) {
+    std::string key = best.description.substr(pos + missing_marker.size());
+    key = key.substr(0, key.find('\''));
+    return (path.empty() ? key : path + "." + key) + ": missing (required)";
+  }
+  // Index inside an array: describe the array.
+  std::vector<std::string> context = best.context;
+  while (!context.empty()) {
+    const std::string& last = context.back();
+    std::string p = last.size() >= 2 ? last.substr(1, last.size() - 2) : last;
+    if (!p.empty() && std::all_of(p.begin(), p.end(), ::isdigit)) {
+      context.pop_back();
+    } else {
+      break;
+    }
+  }
+  const json* sub = SubschemaAt(SchemaJson(), context);
+  std::string expected = (sub && sub->contains("description"))
+                             ? (*sub)["description"].get<std::string>()
+                             : best.description;
+  return (context.size() > 1 ? DottedPath(context) : std::string("(top level)")) +
+         ": expected " + expected;
+}
+
+std::string ExpandEnv(const std::string& text, const std::string& field) {
+  std::string out;
+  size_t i = 0;
+  while (i < text.size()) {
+    if (text[i] == '$' && i + 1 < text.size() && text[i + 1] == '{') {
+      size_t end = text.find('}', i);
+      if (end == std::string::npos) throw InputError(field, "unterminated ${...} in '" + text + "'");
+      std::string body = text.substr(i + 2, end - i - 2);
+      std::string name = body, fallback;
+      bool has_default = false;
+      size_t dash = body.find(":-");
+      if (dash != std::string::npos) {
+        name = body.substr(0, dash);
+        fallback = body.substr(dash + 2);
+        has_default = true;
+      }
+      if (name.empty()) throw InputError(field, "empty variable name in '" + text + "'");
+      const char* value = std::getenv(name.c_str());
+      if (value && *value) {
+        out += value;
+      } else if (has_default) {
+        out += fallback;
+      } else {
+        throw InputError(field, "environment variable " + name +
+                                    " is not set (use ${" + name + ":-default} or set it)");
+      }
+      i = end + 1;
+    } else {
+      out += text[i++];
+    }
+  }
+  return out;
+}
+
+bool DatasetOptions::Check(std::string* error) const {
+  auto fail = [&](const std::string& m) { return *error = m, false; };
+  if (format.empty()) return fail("dataset.format: expected a dataset format");
+  if (format != "synthetic" && root.empty()) return fail("dataset.root: expected a folder path");
+  if (frame_stride < 1) return fail("dataset.frame_stride: expected an integer >= 1");
+  if (!(min_valid_depth_fraction >= 0 && min_valid_depth_fraction <= 1)) {
+    return fail("dataset.min_valid_depth_fraction: expected a number in [0, 1]");
+  }
+  if (min_depth_m && max_depth_m && !(*min_depth_m < *max_depth_m)) {
+    return fail("dataset.max_depth_m: expected a number > dataset.min_depth_m");
+  }
+  if (!scenes.empty() && !split_file.empty()) {
+    return fail("dataset.split_file: expected either dataset.scenes or dataset.split_file, not both");
+  }
+  return true;
+}
+
+bool PruningOptions::Check(std::string* error) const {
+  if (!(max_distance_m >= 0)) return *error = "selection.pruning.max_distance_m: expected >= 0", false;
+  if (!(max_view_angle_deg >= 0 && max_view_angle_deg <= 180)) {
+    return *error = "selection.pruning.max_view_angle_deg: expected a number in [0, 180]", false;
+  }
+  return true;
+}
+
+bool SelectionOptions::Check(std::string* error) const {
+  auto range_ok = [](double lo, double hi) { return 0 <= lo && lo <= hi && hi <= 1; };
+  if (max_frame_gap < 0) return *error = "selection.max_frame_gap: expected an integer >= 0", false;
+  if (!pruning.Check(error)) return false;
+  if (score_stride < 1) return *error = "selection.score_stride: expected an integer >= 1", false;
+  if (!range_ok(overlap_lo, overlap_hi)) {
+    return *error = "selection.overlap: expected [lo, hi] with 0 <= lo <= hi <= 1", false;
+  }
+  if (!range_ok(occlusion_lo, occlusion_hi)) {
+    return *error = "selection.occlusion: expected [lo, hi] with 0 <= lo <= hi <= 1", false;
+  }
+  if (occlusion_metric != "image" && occlusion_metric != "visible") {
+    return *error = "selection.occlusion_metric: expected image or visible", false;
+  }
+  if (quota_per_scene < 0) return *error = "selection.quota_per_scene: expected >= 0", false;
+  if (balance_bins < 0) return *error = "selection.balance_bins: expected >= 0", false;
+  if (!import_pairs.path.empty() && import_pairs.format != "loftr-npz") {
+    return *error = "selection.import_pairs.format: expected loftr-npz", false;
+  }
+  return true;
+}
+
+bool OccupancyRecipe::Check(std::string* error) const {
+  if (!(voxel_m > 0)) return *error = "occupancy.voxel_m: expected a number > 0 (metres)", false;
+  if (bins < 1 || bins > 64) return *error = "occupancy.bins: expected an integer in [1, 64]", false;
+  if (!(near_m > 0)) return *error = "occupancy.near_m: expected a number > 0 (metres)", false;
+  if (!(far_m > near_m)) return *error = "occupancy.far_m: expected a number > occupancy.near_m", false;
+  return true;
+}
+
+bool ShardOptions::Check(std::string* error) const {
+  if (samples_per_shard < 1) return *error = "shards.samples_per_shard: expected an integer >= 1", false;
+  if (!(target_mb >= 0)) return *error = "shards.target_mb: expected a number >= 0", false;
+  return true;
+}
+
+bool Recipe::Check(std::string* error) const {
+  if (name.empty()) return *error = "name: expected a non-empty name", false;
+  if (width < 8 || height < 8) return *error = "resolution: expected [W, H] with 8 <= W, H <= 8192", false;
+  if (!dataset.Check(error) || !selection.Check(error) || !occupancy.Check(error) ||
+      !shards.Check(error)) {
+    return false;
+  }
+  if (width % patches.stride != 0 || height % patches.stride != 0) {
+    return *error = "patches.stride: expected a divisor of both resolution W and H", false;
+  }
+  if (occupancy.enabled && (width % 2 != 0 || height % 2 != 0)) {
+    return *error = "resolution: expected even W and H when occupancy.enabled (H/2 x W/2 rays)",
+           false;
+  }
+  if (loftr_export == "test" && !sample.depth) {
+    return *error = "sample.depth: expected true for loftr_export.kind test (Occ2Net's test step reads depth)",
+           false;
+  }
+  return true;
+}
+
+json Recipe::ToJson() const {
+  json j;
+  j["name"] = name;
+  j["split"] = split;
+  j["seed"] = seed;
+  j["resolution"] = {width, height};
+  json d;
+  d["format"] = dataset.format;
+  d["root"] = dataset.root;
+  d["scenes"] = dataset.scenes;
+  d["split_file"] = dataset.split_file;
+  d["frame_stride"] = dataset.frame_stride;
+  d["min_valid_depth_fraction"] = dataset.min_valid_depth_fraction;
+  d["min_depth_m"] = dataset.min_depth_m ? json(*dataset.min_depth_m) : json(nullptr);
+  d["max_depth_m"] = dataset.max_depth_m ? json(*dataset.max_depth_m) : json(nullptr);
+  if (dataset.format == "synthetic") {
+    d["synthetic"] = {{"scenes", dataset.synthetic.scenes},
+                      {"frames", dataset.synthetic.frames},
+                      {"width", dataset.synthetic.width},
+                      {"height", dataset.synthetic.height},
+                      {"seed", dataset.synthetic.seed}};
+  }
+  j["dataset"] = d;
+  auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+  j["labels"] = {{"preset", labels.preset},
+                 {"overrides",
+                  {{"abs_tol_m", opt(labels.abs_tol_m)},
+                   {"rel_tol", opt(labels.rel_tol)},
+                   {"min_depth_m", opt(labels.min_depth_m)},
+                   {"max_depth_m", opt(labels.max_depth_m)}}}};
+  j["patches"] = {{"stride", patches.stride}, {"anchor", patches.anchor}, {"mutual", patches.mutual}};
+  j["selection"] = {
+      {"max_frame_gap", selection.max_frame_gap},
+      {"pruning",
+       {{"max_distance_m", selection.pruning.max_distance_m},
+        {"max_view_angle_deg", selection.pruning.max_view_angle_deg},
+        {"frustum", selection.pruning.frustum}}},
+      {"score_stride", selection.score_stride},
+      {"overlap", {selection.overlap_lo, selection.overlap_hi}},
+      {"occlusion", {selection.occlusion_lo, selection.occlusion_hi}},
+      {"occlusion_metric", selection.occlusion_metric},
+      {"aggregate", AggregateName(selection.aggregate)},
+      {"quota_per_scene", selection.quota_per_scene},
+      {"balance_bins", selection.balance_bins},
+      {"import_pairs",
+       {{"format", selection.import_pairs.format}, {"path", selection.import_pairs.path}}}};
+  j["occupancy"] = {{"enabled", occupancy.enabled},   {"voxel_m", occupancy.voxel_m},
+                    {"bins", occupancy.bins},         {"near_m", occupancy.near_m},
+                    {"far_m", occupancy.far_m},       {"spacing", occupancy.spacing},
+                    {"traversal", occupancy.traversal}, {"scope", occupancy.scope},
+                    {"mode", occupancy.mode},         {"encoding", occupancy.encoding}};
+  j["sample"] = {{"image", sample.image},
+                 {"depth", sample.depth},
+                 {"labels", sample.labels},
+                 {"occupancy", sample.occupancy}};
+  j["shards"] = {{"samples_per_shard", shards.samples_per_shard}, {"target_mb", shards.target_mb}};
+  j["loftr_export"] = loftr_export;
+  return j;
+}
+
+std::string Recipe::Digest() const {
+  // Paths are machine specific: the digest covers the options, not where the data is.
+  json j = ToJson();
+  j["dataset"].erase("root");
+  j["dataset"].erase("split_file");
+  j["selection"]["import_pairs"].erase("path");
+  return io::Md5Hex(j.dump());
+}
+
+Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
+                   const std::string& base_dir, const RecipeOverrides& overrides) {
+  const json j = YamlToJson(yaml_text, file);
+  if (std::string problem = ValidateRecipeJson(j); !problem.empty()) {
+    throw InputError(file, problem);
+  }
+  Recipe r;
+  r.file = file;
+  r.base_dir = base_dir;
+  r.name = j["name"].get<std::string>();
+  Get(j, "split", &r.split);
+  Get(j, "seed", &r.seed);
+  if (j.contains("resolution")) {
+    r.width = j["resolution"][0].get<int>();
+    r.height = j["resolution"][1].get<int>();
+  }
+  const json& d = j["dataset"];
+  r.dataset.format = d["format"].get<std::string>();
+  if (d.contains("root")) r.dataset.root = ResolvePath(d["root"].get<std::string>(), file + ": dataset.root", base_dir);
+  Get(d, "scenes", &r.dataset.scenes);
+  if (d.contains("split_file")) {
+    r.dataset.split_file =
+        ResolvePath(d["split_file"].get<std::string>(), file + ": dataset.split_file", base_dir);
+  }
+  Get(d, "frame_stride", &r.dataset.frame_stride);
+  Get(d, "min_valid_depth_fraction", &r.dataset.min_valid_depth_fraction);
+  GetOpt(d, "min_depth_m", &r.dataset.min_depth_m);
+  GetOpt(d, "max_depth_m", &r.dataset.max_depth_m);
+  if (d.contains("synthetic")) {
+    const json& s = d["synthetic"];
+    Get(s, "scenes", &r.dataset.synthetic.scenes);
+    Get(s, "frames", &r.dataset.synthetic.frames);
+    Get(s, "width", &r.dataset.synthetic.width);
+    Get(s, "height", &r.dataset.synthetic.height);
+    Get(s, "seed", &r.dataset.synthetic.seed);
+  }
+  if (!overrides.root.empty()) {
+    r.dataset.root = fs::absolute(overrides.root).lexically_normal().string();
+  }
+  if (j.contains("labels")) {
+    const json& l = j["labels"];
+    Get(l, "preset", &r.labels.preset);
+    if (l.contains("overrides")) {
+      const json& o = l["overrides"];
+      GetOpt(o, "abs_tol_m", &r.labels.abs_tol_m);
+      GetOpt(o, "rel_tol", &r.labels.rel_tol);
+      GetOpt(o, "min_depth_m", &r.labels.min_depth_m);
+      GetOpt(o, "max_depth_m", &r.labels.max_depth_m);
+    }
+  }
+  if (j.contains("patches")) {
+    const json& p = j["patches"];
+    Get(p, "stride", &r.patches.stride);
+    Get(p, "anchor", &r.patches.anchor);
+    Get(p, "mutual", &r.patches.mutual);
+  }
+  if (j.contains("selection")) {
+    const json& s = j["selection"];
+    SelectionOptions& o = r.selection;
+    Get(s, "max_frame_gap", &o.max_frame_gap);
+    if (s.contains("pruning")) {
+      Get(s["pruning"], "max_distance_m", &o.pruning.max_distance_m);
+      Get(s["pruning"], "max_view_angle_deg", &o.pruning.max_view_angle_deg);
+      Get(s["pruning"], "frustum", &o.pruning.frustum);
+    }
+    Get(s, "score_stride", &o.score_stride);
+    if (s.contains("overlap")) {
+      o.overlap_lo = s["overlap"][0].get<double>();
+      o.overlap_hi = s["overlap"][1].get<double>();
+    }
+    if (s.contains("occlusion")) {
+      o.occlusion_lo = s["occlusion"][0].get<double>();
+      o.occlusion_hi = s["occlusion"][1].get<double>();
+    }
+    Get(s, "occlusion_metric", &o.occlusion_metric);
+    if (s.contains("aggregate")) {
+      std::string a = s["aggregate"].get<std::string>();
+      o.aggregate = a == "min" ? Aggregate::kMin : a == "max" ? Aggregate::kMax : Aggregate::kMean;
+    }
+    Get(s, "quota_per_scene", &o.quota_per_scene);
+    Get(s, "balance_bins", &o.balance_bins);
+    if (s.contains("import_pairs")) {
+      Get(s["import_pairs"], "format", &o.import_pairs.format);
+      o.import_pairs.path = ResolvePath(s["import_pairs"]["path"].get<std::string>(),
+                                        file + ": selection.import_pairs.path", base_dir);
+    }
+  }
+  if (j.contains("occupancy")) {
+    const json& o = j["occupancy"];
+    Get(o, "enabled", &r.occupancy.enabled);
+    Get(o, "voxel_m", &r.occupancy.voxel_m);
+    Get(o, "bins", &r.occupancy.bins);
+    Get(o, "near_m", &r.occupancy.near_m);
+    Get(o, "far_m", &r.occupancy.far_m);
+    Get(o, "spacing", &r.occupancy.spacing);
+    Get(o, "traversal", &r.occupancy.traversal);
+    Get(o, "scope", &r.occupancy.scope);
+    Get(o, "mode", &r.occupancy.mode);
+    Get(o, "encoding", &r.occupancy.encoding);
+  }
+  if (j.contains("sample")) {
+    const json& s = j["sample"];
+    Get(s, "image", &r.sample.image);
+    Get(s, "depth", &r.sample.depth);
+    Get(s, "labels", &r.sample.labels);
+    Get(s, "occupancy", &r.sample.occupancy);
+  }
+  if (j.contains("shards")) {
+    Get(j["shards"], "samples_per_shard", &r.shards.samples_per_shard);
+    Get(j["shards"], "target_mb", &r.shards.target_mb);
+  }
+  if (j.contains("loftr_export")) r.loftr_export = j["loftr_export"]["kind"].get<std::string>();
+  std::string error;
+  if (!r.Check(&error)) throw InputError(file, error);
+  return r;
+}
+
+Recipe LoadRecipe(const std::string& path, const RecipeOverrides& overrides) {
+  if (!fs::is_regular_file(path)) throw InputError(path, "recipe file not found");
+  const std::string text = io::ReadFileBytes(path);
+  std::string base = fs::absolute(fs::path(path)).parent_path().lexically_normal().string();
+  Recipe r = ParseRecipe(text, path, base, overrides);
+  // Inputs that must exist before any work starts.
+  if (r.dataset.format != "synthetic" && !fs::is_directory(r.dataset.root)) {
+    throw InputError(path, "dataset.root: expected an existing folder, not found: " + r.dataset.root);
+  }
+  if (!r.dataset.split_file.empty() && !fs::is_regular_file(r.dataset.split_file)) {
+    throw InputError(path, "dataset.split_file: expected an existing file, not found: " +
+                               r.dataset.split_file);
+  }
+  if (!r.selection.import_pairs.path.empty() && !fs::is_regular_file(r.selection.import_pairs.path)) {
+    throw InputError(path, "selection.import_pairs.path: expected an existing file, not found: " +
+                               r.selection.import_pairs.path);
+  }
+  return r;
+}
+
+}  // namespace gt::pairs

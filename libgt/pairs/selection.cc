@@ -1,0 +1,376 @@
+#include "libgt/pairs/selection.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <random>
+
+#include "libgt/core/error.h"
+#include "libgt/io/depth_io.h"
+
+namespace gt::pairs {
+
+void AddCounts(const DropCounts& from, DropCounts* to) {
+  for (const auto& [k, v] : from) (*to)[k] += v;
+}
+
+// ---- DepthCache -------------------------------------------------------------------
+
+DepthCache::DepthCache(const Scene& scene, int width, int height, size_t max_bytes)
+    : scene_(scene), width_(width), height_(height), max_bytes_(max_bytes) {}
+
+std::shared_ptr<const DepthImage> DepthCache::Get(size_t frame_index) {
+  GT_ASSERT(frame_index < scene_.frames.size());
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = maps_.find(frame_index);
+    if (it != maps_.end()) {
+      lru_.splice(lru_.begin(), lru_, it->second.second);
+      ++hits_;
+      return it->second.first;
+    }
+    ++misses_;
+  }
+  const Frame& frame = scene_.frames[frame_index];
+  DepthImage full = io::ReadDepth(frame.depth, frame.depth_camera.width, frame.depth_camera.height);
+  auto map = std::make_shared<const DepthImage>(
+      (full.width == width_ && full.height == height_) ? std::move(full)
+                                                       : ResizeDepthNearest(full, width_, height_));
+  const size_t map_bytes = map->values_m.size() * sizeof(float);
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = maps_.find(frame_index);
+  if (it != maps_.end()) return it->second.first;  // another thread decoded it meanwhile
+  lru_.push_front(frame_index);
+  maps_.emplace(frame_index, std::make_pair(map, lru_.begin()));
+  bytes_ += map_bytes;
+  while (bytes_ > max_bytes_ && lru_.size() > 1) {
+    const size_t victim = lru_.back();
+    lru_.pop_back();
+    auto v = maps_.find(victim);
+    bytes_ -= v->second.first->values_m.size() * sizeof(float);
+    maps_.erase(v);
+  }
+  return map;
+}
+
+int64_t DepthCache::hits() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return hits_;
+}
+int64_t DepthCache::misses() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return misses_;
+}
+size_t DepthCache::bytes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return bytes_;
+}
+
+// ---- scan -------------------------------------------------------------------------
+
+bool ScanOptions::Check(std::string* error) const {
+  if (frame_stride < 1) return *error = "frame_stride: expected an integer >= 1", false;
+  if (!(min_valid_depth_fraction >= 0 && min_valid_depth_fraction <= 1)) {
+    return *error = "min_valid_depth_fraction: expected a number in [0, 1]", false;
+  }
+  if (!(min_depth_m >= 0 && max_depth_m > min_depth_m)) {
+    return *error = "max_depth_m: expected 0 <= min_depth_m < max_depth_m", false;
+  }
+  return true;
+}
+
+ScanResult ScanFrames(const Scene& scene, const ScanOptions& options, DepthCache* cache) {
+  std::string error;
+  if (!options.Check(&error)) throw InputError("scan options", error);
+  ScanResult result;
+  result.frames_total = static_cast<int64_t>(scene.frames.size());
+  const size_t n = scene.frames.size();
+  std::vector<int> status(n, 0);  // 0 kept, 1 stride, 2 unusable, 3 read error, 4 low depth
+  std::vector<double> medians(n, 0.0);
+  tbb::parallel_for(size_t{0}, n, [&](size_t i) {
+    if (i % static_cast<size_t>(options.frame_stride) != 0) {
+      status[i] = 1;
+      return;
+    }
+    if (!scene.frames[i].usable) {
+      status[i] = 2;
+      return;
+    }
+    std::shared_ptr<const DepthImage> depth;
+    try {
+      depth = cache->Get(i);
+    } catch (const InputError&) {
+      status[i] = 3;
+      return;
+    }
+    std::vector<float> valid;
+    valid.reserve(depth->values_m.size());
+    for (float d : depth->values_m) {
+      if (IsValidDepth(d, options.min_depth_m, options.max_depth_m)) valid.push_back(d);
+    }
+    const double fraction =
+        depth->values_m.empty() ? 0.0 : static_cast<double>(valid.size()) / depth->values_m.size();
+    if (valid.empty() || fraction < options.min_valid_depth_fraction) {
+      status[i] = 4;
+      return;
+    }
+    std::nth_element(valid.begin(), valid.begin() + valid.size() / 2, valid.end());
+    medians[i] = valid[valid.size() / 2];
+  });
+  static const char* kReasons[] = {"", "scan.stride", "scan.unusable", "scan.read_error",
+                                   "scan.low_valid_depth"};
+  for (size_t i = 0; i < n; ++i) {
+    if (status[i] == 0) {
+      result.kept.push_back(i);
+      result.median_depth_m[i] = medians[i];
+    } else {
+      ++result.drops[kReasons[status[i]]];
+    }
+  }
+  return result;
+}
+
+// ---- candidates and pruning --------------------------------------------------------
+
+std::vector<CandidatePair> GenerateCandidates(const std::vector<size_t>& kept, int max_frame_gap) {
+  std::vector<CandidatePair> out;
+  const size_t n = kept.size();
+  for (size_t a = 0; a < n; ++a) {
+    const size_t last = max_frame_gap <= 0 ? n : std::min(n, a + 1 + static_cast<size_t>(max_frame_gap));
+    for (size_t b = a + 1; b < last; ++b) out.push_back({kept[a], kept[b]});
+  }
+  return out;
+}
+
+double ViewAngleDeg(const Rigid3d& world_from_a, const Rigid3d& world_from_b) {
+  const Eigen::Vector3d za = world_from_a.linear().col(2).normalized();
+  const Eigen::Vector3d zb = world_from_b.linear().col(2).normalized();
+  const double c = std::clamp(za.dot(zb), -1.0, 1.0);
+  return std::acos(c) * 180.0 / M_PI;
+}
+
+bool FrustumsIntersect(const Camera& cam_a, const Rigid3d& world_from_a, double depth_m_a,
+                       const Camera& cam_b, const Rigid3d& world_from_b) {
+  const Rigid3d b_from_a = RelativePose(world_from_a, world_from_b);
+  static const double kFractions[] = {0.02, 0.25, 0.5, 0.75, 0.98};
+  static const double kDepthScales[] = {0.5, 1.0, 2.0};
+  for (double s : kDepthScales) {
+    for (double fy : kFractions) {
+      for (double fx : kFractions) {
+        const double u = fx * cam_a.width - 0.5, v = fy * cam_a.height - 0.5;
+        const Eigen::Vector3d p_in_b = b_from_a * cam_a.CamFromImg(u, v, s * depth_m_a);
+        const auto x = cam_b.ImgFromCam(p_in_b, 0.0);
+        if (x && cam_b.InPixelArea(x->x(), x->y())) return true;
+      }
+    }
+  }
+  return false;
+}
+
+std::vector<CandidatePair> PruneCandidates(const Scene& scene, const std::vector<Camera>& cameras,
+                                           const std::vector<CandidatePair>& candidates,
+                                           const std::map<size_t, double>& median_depth_m,
+                                           const PruningOptions& options, DropCounts* drops) {
+  std::vector<CandidatePair> out;
+  out.reserve(candidates.size());
+  int64_t by_distance = 0, by_angle = 0, by_frustum = 0;
+  for (const CandidatePair& c : candidates) {
+    const Rigid3d& wa = scene.frames[c.i0].world_from_cam;
+    const Rigid3d& wb = scene.frames[c.i1].world_from_cam;
+    if (options.max_distance_m > 0 &&
+        (wa.translation() - wb.translation()).norm() > options.max_distance_m) {
+      ++by_distance;
+      continue;
+    }
+    if (options.max_view_angle_deg < 180 && ViewAngleDeg(wa, wb) > options.max_view_angle_deg) {
+      ++by_angle;
+      continue;
+    }
+    if (options.frustum) {
+      auto da = median_depth_m.find(c.i0), db = median_depth_m.find(c.i1);
+      GT_ASSERT(da != median_depth_m.end() && db != median_depth_m.end());
+      if (!FrustumsIntersect(cameras[c.i0], wa, da->second, cameras[c.i1], wb) &&
+          !FrustumsIntersect(cameras[c.i1], wb, db->second, cameras[c.i0], wa)) {
+        ++by_frustum;
+        continue;
+      }
+    }
+    out.push_back(c);
+  }
+  if (by_distance) (*drops)["prune.distance"] += by_distance;
+  if (by_angle) (*drops)["prune.view_angle"] += by_angle;
+  if (by_frustum) (*drops)["prune.frustum"] += by_frustum;
+  return out;
+}
+
+// ---- scoring ----------------------------------------------------------------------
+
+std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>& cameras,
+                                   const std::vector<CandidatePair>& candidates,
+                                   const LabelOptions& label_options, int score_stride,
+                                   DepthCache* cache, DropCounts* drops) {
+  std::vector<std::optional<ScoredPair>> results(candidates.size());
+  tbb::parallel_for(size_t{0}, candidates.size(), [&](size_t k) {
+    const CandidatePair& c = candidates[k];
+    std::shared_ptr<const DepthImage> d0, d1;
+    try {
+      d0 = cache->Get(c.i0);
+      d1 = cache->Get(c.i1);
+    } catch (const InputError&) {
+      return;
+    }
+    const Rigid3d& w0 = scene.frames[c.i0].world_from_cam;
+    const Rigid3d& w1 = scene.frames[c.i1].world_from_cam;
+    ScoredPair s;
+    s.pair = c;
+    s.m01 = ScoreDirection(*d0, cameras[c.i0], *d1, cameras[c.i1], RelativePose(w0, w1),
+                           label_options, score_stride);
+    s.m10 = ScoreDirection(*d1, cameras[c.i1], *d0, cameras[c.i0], RelativePose(w1, w0),
+                           label_options, score_stride);
+    results[k] = s;
+  });
+  std::vector<ScoredPair> out;
+  out.reserve(results.size());
+  int64_t errors = 0;
+  for (auto& r : results) {
+    if (r) {
+      out.push_back(*r);
+    } else {
+      ++errors;
+    }
+  }
+  if (errors) (*drops)["score.read_error"] += errors;
+  return out;
+}
+
+// ---- filters and sampling ------------------------------------------------------------
+
+double Combine(double a, double b, Aggregate aggregate) {
+  switch (aggregate) {
+    case Aggregate::kMin:
+      return std::min(a, b);
+    case Aggregate::kMax:
+      return std::max(a, b);
+    case Aggregate::kMean:
+      return 0.5 * (a + b);
+  }
+  return 0.5 * (a + b);
+}
+
+double PairOverlap(const ScoredPair& p, Aggregate aggregate) {
+  return Combine(p.m01.overlap, p.m10.overlap, aggregate);
+}
+
+double PairOcclusion(const ScoredPair& p, Aggregate aggregate, const std::string& metric) {
+  if (metric == "visible") {
+    return Combine(p.m01.occlusion_ratio_visible, p.m10.occlusion_ratio_visible, aggregate);
+  }
+  return Combine(p.m01.occlusion_ratio, p.m10.occlusion_ratio, aggregate);
+}
+
+uint64_t SceneSeed(uint64_t recipe_seed, const std::string& scene_name) {
+  uint64_t h = 1469598103934665603ull;  // FNV-1a 64
+  for (unsigned char ch : scene_name) {
+    h ^= ch;
+    h *= 1099511628211ull;
+  }
+  uint64_t z = h ^ (recipe_seed + 0x9e3779b97f4a7c15ull);  // SplitMix64 finaliser
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+uint64_t UniformBelow(uint64_t n, std::mt19937_64* rng) {
+  GT_ASSERT(n > 0);
+  const uint64_t limit = std::numeric_limits<uint64_t>::max() - std::numeric_limits<uint64_t>::max() % n;
+  uint64_t x;
+  do {
+    x = (*rng)();
+  } while (x >= limit);
+  return x % n;
+}
+
+namespace {
+// Fisher-Yates with UniformBelow: a portable seeded permutation.
+void SeededShuffle(std::vector<size_t>* v, std::mt19937_64* rng) {
+  for (size_t i = v->size(); i > 1; --i) {
+    const size_t j = static_cast<size_t>(UniformBelow(i, rng));
+    std::swap((*v)[i - 1], (*v)[j]);
+  }
+}
+}  // namespace
+
+std::vector<size_t> FilterAndSample(const std::vector<ScoredPair>& scored,
+                                    const SelectionOptions& options, uint64_t scene_seed,
+                                    DropCounts* drops) {
+  std::vector<size_t> passed;
+  int64_t by_overlap = 0, by_occlusion = 0;
+  for (size_t k = 0; k < scored.size(); ++k) {
+    const double ov = PairOverlap(scored[k], options.aggregate);
+    if (!(ov >= options.overlap_lo && ov <= options.overlap_hi)) {
+      ++by_overlap;
+      continue;
+    }
+    const double oc = PairOcclusion(scored[k], options.aggregate, options.occlusion_metric);
+    if (!(oc >= options.occlusion_lo && oc <= options.occlusion_hi)) {
+      ++by_occlusion;
+      continue;
+    }
+    passed.push_back(k);
+  }
+  if (by_overlap) (*drops)["filter.overlap"] += by_overlap;
+  if (by_occlusion) (*drops)["filter.occlusion"] += by_occlusion;
+
+  std::mt19937_64 rng(scene_seed);
+  std::vector<size_t> chosen;
+  const size_t quota = options.quota_per_scene > 0 ? static_cast<size_t>(options.quota_per_scene)
+                                                   : passed.size();
+  if (options.balance_bins > 0 && !passed.empty()) {
+    // Equal bins over [overlap_lo, overlap_hi]; each bin shuffled; round robin over bins
+    // until the quota is met. Without a quota every bin is capped at the smallest non-empty
+    // bin's size.
+    const int nb = options.balance_bins;
+    std::vector<std::vector<size_t>> bins(nb);
+    const double width = options.overlap_hi - options.overlap_lo;
+    for (size_t k : passed) {
+      const double ov = PairOverlap(scored[k], options.aggregate);
+      int b = width > 0 ? static_cast<int>((ov - options.overlap_lo) / width * nb) : 0;
+      bins[std::clamp(b, 0, nb - 1)].push_back(k);
+    }
+    size_t smallest = passed.size();
+    for (auto& bin : bins) {
+      SeededShuffle(&bin, &rng);
+      if (!bin.empty()) smallest = std::min(smallest, bin.size());
+    }
+    const size_t cap = options.quota_per_scene > 0 ? passed.size() : smallest;
+    const size_t target = std::min(quota, passed.size());
+    for (size_t round = 0; round < cap && chosen.size() < target; ++round) {
+      for (auto& bin : bins) {
+        if (round < bin.size() && chosen.size() < target) chosen.push_back(bin[round]);
+      }
+    }
+    const int64_t balanced_out = static_cast<int64_t>(passed.size() - chosen.size());
+    if (balanced_out) {
+      // Attribute the drop to balancing, or to the quota when the quota alone was binding.
+      (*drops)[options.quota_per_scene > 0 ? "sample.quota" : "sample.balance"] += balanced_out;
+    }
+  } else if (passed.size() > quota) {
+    chosen = passed;
+    SeededShuffle(&chosen, &rng);
+    chosen.resize(quota);
+    (*drops)["sample.quota"] += static_cast<int64_t>(passed.size() - quota);
+  } else {
+    chosen = passed;
+  }
+  std::sort(chosen.begin(), chosen.end(), [&](size_t a, size_t b) {
+    const auto& pa = scored[a].pair;
+    const auto& pb = scored[b].pair;
+    return pa.i0 != pb.i0 ? pa.i0 < pb.i0 : pa.i1 < pb.i1;
+  });
+  return chosen;
+}
+
+}  // namespace gt::pairs
