@@ -33,6 +33,22 @@ struct NpyArray {
 // uint8_t "|u1", uint16_t "<u2", uint32_t "<u4", uint64_t "<u8".
 template <typename T>
 const char* NpyDescr();
+template <>
+const char* NpyDescr<float>();
+template <>
+const char* NpyDescr<double>();
+template <>
+const char* NpyDescr<int32_t>();
+template <>
+const char* NpyDescr<int64_t>();
+template <>
+const char* NpyDescr<uint8_t>();
+template <>
+const char* NpyDescr<uint16_t>();
+template <>
+const char* NpyDescr<uint32_t>();
+template <>
+const char* NpyDescr<uint64_t>();
 
 // Parse .npy bytes; `name` is used in error messages (a path or "file.npz:member").
 NpyArray ParseNpy(std::string_view bytes, const std::string& name);
