@@ -1,0 +1,241 @@
+#include "libgt/io/depth_io.h"
+
+#include <ImathBox.h>
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+
+#include "libgt/core/error.h"
+#include "libgt/io/files.h"
+#include "libgt/io/npy.h"
+
+namespace gt::io {
+namespace {
+
+// Depth values at or above this are background markers (Blender writes ~1e10).
+constexpr float kHugeDepthM = 1e9f;
+
+float Sanitize(float d) { return (std::isfinite(d) && d > 0.0f && d < kHugeDepthM) ? d : 0.0f; }
+
+DepthImage ReadNpyDepth(const DepthSource& src) {
+  const NpyArray a = ReadNpy(src.path);
+  if (a.shape.size() != 2 && !(a.shape.size() == 3 && a.shape[2] == 1)) {
+    std::ostringstream s;
+    s << "expected a depth array of shape (H, W), got " << a.shape.size() << " dimensions";
+    throw InputError(src.path, s.str());
+  }
+  if (a.fortran_order) throw InputError(src.path, "expected C order, got fortran_order");
+  if (a.shape[0] <= 0 || a.shape[1] <= 0 || a.shape[0] > 1 << 16 || a.shape[1] > 1 << 16) {
+    throw InputError(src.path, "depth array has an empty or implausible shape");
+  }
+  DepthImage d(static_cast<int>(a.shape[1]), static_cast<int>(a.shape[0]));
+  const size_t n = d.values_m.size();
+  if (a.descr == "<f4") {
+    const float* p = a.As<float>(src.path);
+    for (size_t i = 0; i < n; ++i) d.values_m[i] = Sanitize(p[i]);
+  } else if (a.descr == "<f8") {
+    const double* p = a.As<double>(src.path);
+    for (size_t i = 0; i < n; ++i) d.values_m[i] = Sanitize(static_cast<float>(p[i]));
+  } else {
+    throw InputError(src.path,
+                     "expected float32 ('<f4') depth in metres, got dtype '" + a.descr + "'");
+  }
+  return d;
+}
+
+DepthImage ReadPng16Depth(const DepthSource& src) {
+  if (!FileExists(src.path)) throw InputError(src.path, "cannot open file (missing or unreadable)");
+  if (!(src.scale_m_per_unit > 0) || !std::isfinite(src.scale_m_per_unit)) {
+    throw InputError(src.path, "depth scale must be a positive number of metres per unit");
+  }
+  const cv::Mat m = cv::imread(src.path, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+  if (m.empty()) throw InputError(src.path, "cannot decode image (corrupt or unsupported)");
+  if (m.type() != CV_16UC1) {
+    throw InputError(src.path, "expected a 16-bit single-channel depth image, got OpenCV type " +
+                                   std::to_string(m.type()) +
+                                   (m.depth() == CV_8U ? " (8-bit)" : ""));
+  }
+  DepthImage d(m.cols, m.rows);
+  for (int v = 0; v < m.rows; ++v) {
+    const uint16_t* row = m.ptr<uint16_t>(v);
+    for (int u = 0; u < m.cols; ++u) {
+      const uint16_t raw = row[u];
+      d.at(u, v) = (raw == 0 || static_cast<int>(raw) == src.invalid_value)
+                       ? 0.0f
+                       : static_cast<float>(raw * src.scale_m_per_unit);
+    }
+  }
+  return d;
+}
+
+bool EndsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// The channel for `wanted`: exact name, else the first name ending in "." + wanted; for
+// wanted == "": the first channel named (or ending in ".") Z, then Y, then V, else the
+// only channel. Empty result: no match.
+std::string PickChannel(const std::vector<std::string>& names, const std::string& wanted) {
+  auto match = [&](const std::string& w) -> std::string {
+    for (const auto& n : names) {
+      if (n == w) return n;
+    }
+    for (const auto& n : names) {
+      if (EndsWith(n, "." + w)) return n;
+    }
+    return "";
+  };
+  if (!wanted.empty()) return match(wanted);
+  for (const char* w : {"Z", "Y", "V"}) {
+    const std::string n = match(w);
+    if (!n.empty()) return n;
+  }
+  return names.size() == 1 ? names[0] : "";
+}
+
+DepthImage ReadExrDepth(const DepthSource& src) {
+  if (!FileExists(src.path)) throw InputError(src.path, "cannot open file (missing or unreadable)");
+  try {
+    Imf::InputFile file(src.path.c_str());
+    const Imf::Header& header = file.header();
+    std::vector<std::string> names;
+    for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+      names.emplace_back(it.name());
+    }
+    const std::string channel = PickChannel(names, src.exr_channel);
+    if (channel.empty()) {
+      std::string present;
+      for (const auto& n : names) present += (present.empty() ? "" : ", ") + ("'" + n + "'");
+      throw InputError(
+          src.path, (src.exr_channel.empty() ? std::string("no depth channel (Z, Y or V) found")
+                                             : "EXR channel '" + src.exr_channel + "' not found") +
+                        "; channels present: " + present);
+    }
+    const Imath::Box2i dw = header.dataWindow();
+    const int width = dw.max.x - dw.min.x + 1;
+    const int height = dw.max.y - dw.min.y + 1;
+    if (width <= 0 || height <= 0 || width > 1 << 16 || height > 1 << 16) {
+      throw InputError(src.path, "EXR data window has an empty or implausible size");
+    }
+    std::vector<float> values(static_cast<size_t>(width) * height, 0.0f);
+    Imf::FrameBuffer fb;
+    // Base pointer offset so that (x, y) in the data window lands at (x - min.x, y - min.y).
+    char* base = reinterpret_cast<char*>(values.data()) -
+                 (static_cast<ptrdiff_t>(dw.min.x) + static_cast<ptrdiff_t>(dw.min.y) * width) *
+                     static_cast<ptrdiff_t>(sizeof(float));
+    fb.insert(channel,
+              Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * width, 1, 1, 0.0));
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    DepthImage d(width, height);
+    for (size_t i = 0; i < values.size(); ++i) d.values_m[i] = Sanitize(values[i]);
+    return d;
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(src.path, std::string("cannot read EXR: ") + e.what());
+  }
+}
+
+}  // namespace
+
+DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected_height) {
+  DepthImage d;
+  switch (source.format) {
+    case DepthFormat::kNpyFloat32:
+      d = ReadNpyDepth(source);
+      break;
+    case DepthFormat::kPng16:
+      d = ReadPng16Depth(source);
+      break;
+    case DepthFormat::kExr:
+      d = ReadExrDepth(source);
+      break;
+  }
+  if (expected_width > 0 && expected_height > 0 &&
+      (d.width != expected_width || d.height != expected_height)) {
+    std::ostringstream s;
+    s << "depth is " << d.width << "x" << d.height << ", expected " << expected_width << "x"
+      << expected_height;
+    throw InputError(source.path, s.str());
+  }
+  return d;
+}
+
+namespace {
+
+uint32_t BigEndian32(const unsigned char* p) {
+  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
+}
+
+// PNG: the IHDR chunk follows the 8-byte signature.
+bool PngSize(const std::string& head, ImageSize* size) {
+  static const unsigned char kSig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (head.size() < 24 || std::memcmp(head.data(), kSig, 8) != 0) return false;
+  if (head.compare(12, 4, "IHDR") != 0) return false;
+  const auto* p = reinterpret_cast<const unsigned char*>(head.data());
+  size->width = static_cast<int>(BigEndian32(p + 16));
+  size->height = static_cast<int>(BigEndian32(p + 20));
+  return size->width > 0 && size->height > 0;
+}
+
+// JPEG: walk the marker segments to the first start-of-frame (SOF0..SOF15 except
+// DHT/JPG/DAC = C4, C8, CC).
+bool JpegSize(const std::string& path, ImageSize* size) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char b[2];
+  if (!in.read(reinterpret_cast<char*>(b), 2) || b[0] != 0xFF || b[1] != 0xD8) return false;
+  for (int guard = 0; guard < 10000; ++guard) {
+    int c = in.get();
+    while (c == 0xFF) c = in.get();  // fill bytes
+    if (c == EOF) return false;
+    const int marker = c;
+    if (marker == 0xD8 || (marker >= 0xD0 && marker <= 0xD7) || marker == 0x01) continue;
+    if (!in.read(reinterpret_cast<char*>(b), 2)) return false;
+    const int len = (b[0] << 8) | b[1];
+    if (len < 2) return false;
+    if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) {
+      unsigned char sof[5];
+      if (!in.read(reinterpret_cast<char*>(sof), 5)) return false;
+      size->height = (sof[1] << 8) | sof[2];
+      size->width = (sof[3] << 8) | sof[4];
+      return size->width > 0 && size->height > 0;
+    }
+    in.seekg(len - 2, std::ios::cur);
+    if (!in) return false;
+  }
+  return false;
+}
+
+}  // namespace
+
+ImageSize ReadImageSize(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "cannot open file (missing or unreadable)");
+  std::string head(32, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  in.close();
+  ImageSize size;
+  if (PngSize(head, &size)) return size;
+  if (head.size() >= 2 && static_cast<unsigned char>(head[0]) == 0xFF &&
+      static_cast<unsigned char>(head[1]) == 0xD8 && JpegSize(path, &size)) {
+    return size;
+  }
+  // Anything else (PGM, BMP, ...): decode.
+  const cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (m.empty()) throw InputError(path, "cannot decode image (corrupt or unsupported)");
+  return {m.cols, m.rows};
+}
+
+}  // namespace gt::io

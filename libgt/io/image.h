@@ -1,0 +1,41 @@
+// Colour images: loading (PNG/JPG via OpenCV) and bilinear resizing to the working
+// resolution, with K rescaled by Camera::Resized (camera.h: pixel areas stay aligned,
+// which is also what cv::resize with INTER_LINEAR assumes).
+//
+// Layout: ColorImage::rgb is uint8, row-major [height, width, 3], channels in R, G, B
+// order (OpenCV's BGR is swapped on load). Grey and 16-bit inputs are converted to 8-bit
+// RGB; an alpha channel is dropped.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "libgt/core/camera.h"
+
+namespace gt::io {
+
+struct ColorImage {
+  int width = 0;
+  int height = 0;
+  std::vector<uint8_t> rgb;  // [height, width, 3], R G B
+
+  const uint8_t* pixel(int u, int v) const {
+    return &rgb[(static_cast<size_t>(v) * width + u) * 3];
+  }
+  bool empty() const { return rgb.empty(); }
+};
+
+// Decodes an image file; InputError naming the file when missing or undecodable.
+ColorImage ReadColor(const std::string& path);
+
+// Bilinear resize (cv::resize, INTER_LINEAR) to new_width x new_height. Same size: a copy.
+ColorImage ResizeColorBilinear(const ColorImage& image, int new_width, int new_height);
+
+// Reads `path`, whose intrinsics are `camera` (its size must match the file, else
+// InputError naming the file), and resizes it to new_width x new_height; *resized_camera
+// (optional) receives camera.Resized(new_width, new_height).
+ColorImage ReadColorResized(const std::string& path, const Camera& camera, int new_width,
+                            int new_height, Camera* resized_camera = nullptr);
+
+}  // namespace gt::io

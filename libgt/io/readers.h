@@ -1,0 +1,72 @@
+// Private to libgt/io: the reader classes behind MakeReader (reader.h), one .cc each.
+// Layouts, conventions and unusable reasons are documented in docs/DATASETS.md.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "libgt/io/reader.h"
+
+namespace gt::io {
+
+// ScanNet, Python SensReader export: color/, depth/, pose/, intrinsic/ (scannet.cc).
+class ScanNetReader : public DatasetReader {
+ public:
+  explicit ScanNetReader(const ReaderOptions& options) : options_(options) {}
+  std::string Format() const override { return "scannet"; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  ReaderOptions options_;
+};
+
+// TartanAir v1 trajectories, NED poses converted to OpenCV axes (tartanair.cc).
+class TartanAirReader : public DatasetReader {
+ public:
+  explicit TartanAirReader(const ReaderOptions& options) : options_(options) {}
+  std::string Format() const override { return "tartanair"; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  ReaderOptions options_;
+};
+
+// Microsoft 7-Scenes sequences: frame-NNNNNN.{color.png,depth.png,pose.txt} (sevenscenes.cc).
+class SevenScenesReader : public DatasetReader {
+ public:
+  explicit SevenScenesReader(const ReaderOptions& options) : options_(options) {}
+  std::string Format() const override { return "sevenscenes"; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  ReaderOptions options_;
+};
+
+// TUM RGB-D sequences: rgb.txt, depth.txt, groundtruth.txt, associated by time (tum.cc).
+class TumReader : public DatasetReader {
+ public:
+  explicit TumReader(const ReaderOptions& options) : options_(options) {}
+  std::string Format() const override { return "tum"; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  ReaderOptions options_;
+};
+
+// occgt's own JSON manifest, schemas/manifest.schema.json (generic.cc).
+class GenericReader : public DatasetReader {
+ public:
+  explicit GenericReader(const ReaderOptions& options) : options_(options) {}
+  std::string Format() const override { return "generic"; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  ReaderOptions options_;
+};
+
+}  // namespace gt::io

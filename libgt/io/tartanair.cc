@@ -1,0 +1,150 @@
+// TartanAir v1 reader (docs/DATASETS.md "TartanAir v1").
+//
+// pose_left.txt holds world_from_body as "tx ty tz qx qy qz qw" per line, both frames in
+// NED axes (x forward, y right, z down). The OpenCV camera (x right, y down, z forward)
+// relates to the body by p_in_body = M * p_in_cam with M = [[0,0,1],[1,0,0],[0,1,0]]
+// (camera x = body y, camera y = body z, camera z = body x), so
+// world_from_cam = world_from_body * M. The world frame stays NED.
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "libgt/core/error.h"
+#include "libgt/io/files.h"
+#include "libgt/io/readers.h"
+#include "libgt/io/text_parsing.h"
+
+namespace gt::io {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr int kWidth = 640;
+constexpr int kHeight = 480;
+constexpr double kFocal = 320.0;  // fx = fy (90 degree field of view)
+constexpr double kCx = 320.0;
+constexpr double kCy = 240.0;
+
+bool IsTrajectory(const std::string& folder) {
+  return FileExists((fs::path(folder) / "pose_left.txt").string());
+}
+
+// body_from_cam: columns are the camera axes expressed in the body (NED) frame.
+Eigen::Matrix3d BodyFromCamRotation() {
+  Eigen::Matrix3d m;
+  m << 0, 0, 1,  //
+      1, 0, 0,   //
+      0, 1, 0;
+  return m;
+}
+
+}  // namespace
+
+std::vector<std::string> TartanAirReader::ListScenes(const std::string& root) const {
+  RequireRoot(root);
+  if (IsTrajectory(root)) return {FolderName(root)};
+  std::vector<std::string> out;
+  for (const auto& env : ListSubfolders(root)) {
+    for (const char* level : {"Easy", "Hard"}) {
+      const fs::path level_dir = fs::path(root) / env / level;
+      for (const auto& traj : ListSubfolders(level_dir.string())) {
+        if (IsTrajectory((level_dir / traj).string())) {
+          out.push_back(env + "/" + level + "/" + traj);
+        }
+      }
+    }
+  }
+  std::sort(out.begin(), out.end());
+  if (out.empty()) {
+    throw InputError(root,
+                     "no TartanAir trajectory found (expected pose_left.txt or ENV/Easy/Pxxx)");
+  }
+  return out;
+}
+
+Scene TartanAirReader::ReadScene(const std::string& root, const std::string& scene_name) const {
+  const std::string folder = ResolveSceneFolder(root, scene_name, IsTrajectory(root));
+  Scene scene;
+  scene.name = scene_name.empty() ? FolderName(folder) : scene_name;
+  scene.format = Format();
+  scene.path = folder;
+  scene.min_depth_m = 0.05;
+  scene.max_depth_m = 500.0;
+
+  // Frames: the union of depth_left and image_left numbers.
+  const auto depths =
+      ListNumberedFiles((fs::path(folder) / "depth_left").string(), "", "_left_depth.npy");
+  const auto images =
+      ListNumberedFiles((fs::path(folder) / "image_left").string(), "", "_left.png");
+  std::map<int64_t, std::string> stems;
+  for (const auto& f : depths) stems.emplace(f.number, f.stem);
+  for (const auto& f : images) stems.emplace(f.number, f.stem);
+  if (stems.empty()) {
+    throw InputError(folder,
+                     "empty scene: no depth_left/NNNNNN_left_depth.npy or image_left files");
+  }
+
+  // Pose lines: frame n is the n-th non-empty line (0-based).
+  const std::string pose_path = (fs::path(folder) / "pose_left.txt").string();
+  const std::vector<std::string> lines = ReadLines(pose_path);
+  std::vector<std::pair<int, std::vector<double>>> pose_rows;  // (line number, numbers)
+  for (size_t i = 0; i < lines.size(); ++i) {
+    std::vector<double> v = ParseNumbers(lines[i], pose_path, static_cast<int>(i) + 1);
+    if (v.empty()) continue;
+    if (v.size() != 7) {
+      throw InputError(
+          pose_path + ":" + std::to_string(i + 1),
+          "expected 7 numbers (tx ty tz qx qy qz qw), found " + std::to_string(v.size()));
+    }
+    pose_rows.emplace_back(static_cast<int>(i) + 1, std::move(v));
+  }
+  const int64_t last_number = stems.rbegin()->first;
+  if (static_cast<int64_t>(pose_rows.size()) < static_cast<int64_t>(depths.size()) ||
+      static_cast<int64_t>(pose_rows.size()) <= last_number) {
+    std::ostringstream s;
+    s << "has " << pose_rows.size() << " poses, fewer than the frames on disk (" << depths.size()
+      << " depth files, last frame " << last_number << ")";
+    throw InputError(pose_path, s.str());
+  }
+
+  const Camera camera = [] {
+    Camera c;
+    c.width = kWidth;
+    c.height = kHeight;
+    c.fx = c.fy = kFocal;
+    c.cx = kCx;
+    c.cy = kCy;
+    return c;
+  }();
+  const Eigen::Matrix3d body_from_cam = BodyFromCamRotation();
+  for (const auto& [number, stem] : stems) {
+    Frame f;
+    f.id = stem;
+    f.number = number;
+    f.depth.path = (fs::path(folder) / "depth_left" / (stem + "_left_depth.npy")).string();
+    f.depth.format = DepthFormat::kNpyFloat32;
+    f.depth_camera = camera;
+    const std::string color = (fs::path(folder) / "image_left" / (stem + "_left.png")).string();
+    if (FileExists(color)) {
+      f.color_path = color;
+      f.color_camera = camera;
+    }
+    const std::vector<double>& v = pose_rows[static_cast<size_t>(number)].second;
+    const Eigen::Vector3d t(v[0], v[1], v[2]);
+    const Eigen::Vector4d q(v[3], v[4], v[5], v[6]);
+    if (const auto problem = PoseProblemTQ(t, q)) {
+      MarkUnusable(&f, PoseReason(*problem));
+    } else {
+      const Rigid3d world_from_body = RigidFromTQ(t, q);
+      f.world_from_cam = world_from_body;
+      f.world_from_cam.linear() = world_from_body.linear() * body_from_cam;
+    }
+    if (options_.check_depth_files && !FileExists(f.depth.path)) {
+      MarkUnusable(&f, kReasonDepthMissing);
+    }
+    scene.frames.push_back(std::move(f));
+  }
+  return scene;
+}
+
+}  // namespace gt::io

@@ -1,0 +1,147 @@
+#include "libgt/io/text_parsing.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "libgt/core/error.h"
+#include "libgt/io/files.h"
+
+namespace gt::io {
+namespace fs = std::filesystem;
+
+std::string PoseReason(const std::string& problem) { return "pose: " + problem; }
+
+Eigen::MatrixXd ReadMatrixText(const std::string& path, int rows, int cols) {
+  const std::vector<std::string> lines = ReadLines(path);
+  std::vector<double> values;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const std::vector<double> row = ParseNumbers(lines[i], path, static_cast<int>(i) + 1);
+    values.insert(values.end(), row.begin(), row.end());
+  }
+  const size_t expected = static_cast<size_t>(rows) * cols;
+  if (values.size() != expected) {
+    std::ostringstream msg;
+    msg << "expected " << expected << " numbers (" << rows << "x" << cols << " matrix), found "
+        << values.size();
+    throw InputError(path, msg.str());
+  }
+  Eigen::MatrixXd m(rows, cols);
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) m(r, c) = values[static_cast<size_t>(r) * cols + c];
+  }
+  return m;
+}
+
+Eigen::Matrix3d ReadIntrinsicsText(const std::string& path) {
+  const std::vector<std::string> lines = ReadLines(path);
+  size_t count = 0;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    count += ParseNumbers(lines[i], path, static_cast<int>(i) + 1).size();
+  }
+  if (count != 9 && count != 16) {
+    throw InputError(path, "expected a 3x3 or 4x4 intrinsics matrix (9 or 16 numbers), found " +
+                               std::to_string(count) + " numbers");
+  }
+  const int n = count == 9 ? 3 : 4;
+  const Eigen::Matrix3d K = ReadMatrixText(path, n, n).topLeftCorner<3, 3>();
+  if (!K.allFinite() || !(K(0, 0) > 0) || !(K(1, 1) > 0) || K(2, 0) != 0 || K(2, 1) != 0 ||
+      K(2, 2) != 1) {
+    throw InputError(path, "expected K = [[fx 0 cx] [0 fy cy] [0 0 1]] with finite fx, fy > 0");
+  }
+  return K;
+}
+
+std::vector<TextRecord> ReadRecords(const std::string& path) {
+  const std::vector<std::string> lines = ReadLines(path);
+  std::vector<TextRecord> out;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const std::string& line = lines[i];
+    const size_t first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#') continue;
+    TextRecord rec;
+    rec.line_no = static_cast<int>(i) + 1;
+    std::istringstream ss(line);
+    std::string tok;
+    while (ss >> tok) rec.tokens.push_back(tok);
+    out.push_back(std::move(rec));
+  }
+  return out;
+}
+
+std::vector<NumberedFile> ListNumberedFiles(const std::string& folder, const std::string& prefix,
+                                            const std::string& suffix) {
+  std::vector<NumberedFile> out;
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) return out;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("._", 0) == 0) continue;  // AppleDouble
+    if (name.size() <= prefix.size() + suffix.size()) continue;
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    if (name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) continue;
+    const std::string digits =
+        name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+    if (digits.empty() || digits.size() > 15 ||
+        !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+      continue;
+    }
+    if (!entry.is_regular_file(ec)) continue;
+    NumberedFile f;
+    f.number = std::stoll(digits);
+    f.stem = digits;
+    f.path = entry.path().string();
+    out.push_back(std::move(f));
+  }
+  std::sort(out.begin(), out.end(), [](const NumberedFile& a, const NumberedFile& b) {
+    return a.number != b.number ? a.number < b.number : a.stem < b.stem;
+  });
+  return out;
+}
+
+std::vector<std::string> ListSubfolders(const std::string& folder) {
+  std::vector<std::string> out;
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) return out;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || name[0] == '.') continue;
+    if (entry.is_directory(ec)) out.push_back(name);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+void RequireRoot(const std::string& root) {
+  std::error_code ec;
+  if (root.empty() || !fs::exists(root, ec)) throw InputError(root, "dataset root not found");
+}
+
+std::string FolderName(const std::string& path) {
+  fs::path p(path);
+  if (!p.has_filename()) p = p.parent_path();  // trailing '/'
+  std::string name = p.filename().string();
+  if (name == "." || name.empty()) name = fs::absolute(p).lexically_normal().filename().string();
+  if (name.empty()) name = fs::absolute(p).lexically_normal().parent_path().filename().string();
+  return name;
+}
+
+std::string ResolveSceneFolder(const std::string& root, const std::string& name,
+                               bool root_is_scene) {
+  RequireRoot(root);
+  if (root_is_scene && (name.empty() || name == FolderName(root))) return root;
+  if (name.empty()) throw InputError(root, "not a scene folder and no scene name given");
+  const std::string folder = (fs::path(root) / name).string();
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) throw InputError(folder, "scene folder not found");
+  return folder;
+}
+
+void MarkUnusable(Frame* frame, const std::string& reason) {
+  if (!frame->usable) return;
+  frame->usable = false;
+  frame->unusable_reason = reason;
+}
+
+}  // namespace gt::io

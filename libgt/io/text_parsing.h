@@ -1,0 +1,67 @@
+// Parsing helpers shared by the dataset readers (libgt/io/*.cc), so that every reader
+// reports the same errors in the same words: numeric matrices in text files (poses,
+// intrinsics), timestamped lists (TUM), folder listings sorted by frame number, scene
+// folder resolution and the unusable-frame reasons that `occgt scan` counts.
+//
+// Matrices are read row-major from all numbers of the file (blank lines ignored); the
+// count must match exactly, otherwise InputError("<path>", "expected 16 numbers (4x4),
+// found 12"). A token that is not a number is InputError("<path>:<line>", ...).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "libgt/core/frame.h"
+
+namespace gt::io {
+
+// Stable reasons for unusable frames (counted by `occgt scan`).
+inline constexpr const char* kReasonDepthMissing = "depth: missing file";
+// "pose: " + PoseProblem(...) text, e.g. "pose: non-finite pose entries (lost tracking)".
+std::string PoseReason(const std::string& problem);
+
+// All numbers of a text file, row-major, with exactly rows * cols entries.
+Eigen::MatrixXd ReadMatrixText(const std::string& path, int rows, int cols);
+// K from a 3x3 or 4x4 (top-left 3x3 used) text file; a malformed K (non-finite, fx/fy <= 0,
+// bottom row not [0 0 1]) is InputError naming the file.
+Eigen::Matrix3d ReadIntrinsicsText(const std::string& path);
+
+// A text line split off a list file: its 1-based line number and numbers/tokens.
+struct TextRecord {
+  int line_no = 0;
+  std::vector<std::string> tokens;
+};
+// Non-empty lines that do not start with '#', split on whitespace.
+std::vector<TextRecord> ReadRecords(const std::string& path);
+
+// A file in a folder whose name is <prefix><digits><suffix>.
+struct NumberedFile {
+  int64_t number = 0;
+  std::string stem;  // the digits as written ("0048", "000150")
+  std::string path;  // full path
+};
+// Files of `folder` named prefix + digits + suffix, sorted by number (then by stem), with
+// AppleDouble "._*" files ignored. Missing folder: empty result.
+std::vector<NumberedFile> ListNumberedFiles(const std::string& folder, const std::string& prefix,
+                                            const std::string& suffix);
+
+// Immediate subfolders of `folder`, sorted by name, hidden and "._*" entries ignored.
+std::vector<std::string> ListSubfolders(const std::string& folder);
+
+// Throws InputError(root, "dataset root not found") when root does not exist.
+void RequireRoot(const std::string& root);
+// The folder of scene `name` under root: root itself when `root_is_scene` and name is
+// empty or equals the root's folder name, else root/name; InputError naming the folder
+// when it does not exist.
+std::string ResolveSceneFolder(const std::string& root, const std::string& name,
+                               bool root_is_scene);
+// Last path component of a folder (without trailing '/').
+std::string FolderName(const std::string& path);
+
+// Marks a frame unusable with `reason` unless it already is (the first reason wins).
+void MarkUnusable(Frame* frame, const std::string& reason);
+
+}  // namespace gt::io
