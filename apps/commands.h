@@ -4,6 +4,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <string>
 
 namespace occgt {
 
@@ -11,5 +12,11 @@ void AddScanCommand(CLI::App& app);       // cmd_scan.cc
 void AddSynthCommand(CLI::App& app);      // cmd_synth.cc
 void AddPairCommand(CLI::App& app);       // cmd_pair.cc
 void AddOccupancyCommand(CLI::App& app);  // cmd_occupancy.cc
+void AddMergeCommand(CLI::App& app);      // cmd_merge.cc
+void AddValidateCommand(CLI::App& app);   // cmd_validate.cc
+// Folder of the JSON Schemas: $OCCGT_SCHEMAS, else schemas/ found next to the binary
+// (../schemas, ../../schemas, ../share/occgt/schemas); "" when none (cmd_validate.cc).
+std::string DefaultSchemasDir();
+void AddBuildCommand(CLI::App& app);      // cmd_build.cc
 
 }  // namespace occgt

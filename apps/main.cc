@@ -15,6 +15,9 @@ int main(int argc, char** argv) {
   occgt::AddSynthCommand(app);
   occgt::AddPairCommand(app);
   occgt::AddOccupancyCommand(app);
+  occgt::AddMergeCommand(app);
+  occgt::AddValidateCommand(app);
+  occgt::AddBuildCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

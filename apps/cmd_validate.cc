@@ -1,0 +1,62 @@
+// occgt validate DIR: re-checks a published split from DIR/index.json (MD5 and size of
+// every shard, sample counts and member names read back from the tars, .npy headers,
+// JSON against schemas/) and prints one line per problem; exit code 1 when any.
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "apps/commands.h"
+#include "libgt/core/error.h"
+#include "libgt/shards/split.h"
+
+namespace occgt {
+
+void AddValidateCommand(CLI::App& app) {
+  struct Args {
+    std::string dir;
+    gt::shards::ValidateOptions options;
+  };
+  auto args = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand("validate", "Re-check the shards and indices of a split");
+  cmd->add_option("dir", args->dir, "Folder holding index.json")->required();
+  cmd->add_option("--schemas", args->options.schemas_dir,
+                  "Folder with index/sample/pairs_line schemas "
+                  "(default: $OCCGT_SCHEMAS or the source tree's schemas/, when found)");
+  cmd->callback([args] {
+    gt::shards::ValidateOptions options = args->options;
+    if (options.schemas_dir.empty()) options.schemas_dir = DefaultSchemasDir();
+    std::string error;
+    if (!options.Check(&error)) throw gt::InputError("occgt validate", error);
+    const std::vector<std::string> problems = gt::shards::ValidateSplit(args->dir, options);
+    for (const std::string& p : problems) std::printf("%s\n", p.c_str());
+    if (!problems.empty()) {
+      throw gt::InputError(args->dir, std::to_string(problems.size()) + " problem(s) found");
+    }
+    std::printf("%s: valid\n", args->dir.c_str());
+  });
+}
+
+}  // namespace occgt
+
+namespace occgt {
+
+std::string DefaultSchemasDir() {
+  namespace fs = std::filesystem;
+  if (const char* env = std::getenv("OCCGT_SCHEMAS"); env != nullptr && *env != '\0') {
+    return env;
+  }
+  std::error_code ec;
+  const fs::path exe_dir = fs::read_symlink("/proc/self/exe", ec).parent_path();
+  if (ec) return "";
+  for (const fs::path& candidate : {exe_dir / ".." / "schemas", exe_dir / ".." / ".." / "schemas",
+                                    exe_dir / ".." / "share" / "occgt" / "schemas"}) {
+    if (fs::exists(candidate / "index.schema.json", ec)) {
+      return fs::weakly_canonical(candidate, ec).string();
+    }
+  }
+  return "";
+}
+
+}  // namespace occgt

@@ -1,0 +1,149 @@
+#include "libgt/shards/sample.h"
+
+#include <set>
+
+#include "libgt/core/error.h"
+
+namespace gt::shards {
+namespace {
+
+bool IsSafeKeyChar(char c) {
+  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
+         c == '_';
+}
+
+std::string Quoted(std::string_view s) {
+  std::string out = "\"";
+  for (char c : s) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u >= 0x7f) {
+      static const char* kHex = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[u >> 4];
+      out += kHex[u & 15];
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+std::string CheckSampleKey(std::string_view key) {
+  if (key.empty()) return "empty sample key";
+  for (char c : key) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7f) return "sample key " + Quoted(key) + " contains a control character";
+    if (u >= 0x80) return "sample key " + Quoted(key) + " is not ASCII";
+    if (c == '\\') return "sample key " + Quoted(key) + " contains a backslash";
+  }
+  if (key.front() == '/') return "sample key " + Quoted(key) + " is an absolute path";
+  size_t start = 0;
+  while (true) {
+    const size_t slash = key.find('/', start);
+    const std::string_view part =
+        key.substr(start, slash == std::string_view::npos ? std::string_view::npos : slash - start);
+    if (part.empty()) return "sample key " + Quoted(key) + " has an empty path component";
+    if (part == "..") return "sample key " + Quoted(key) + " contains '..'";
+    if (part == ".") return "sample key " + Quoted(key) + " contains a '.' component";
+    if (slash == std::string_view::npos) {
+      if (part.find('.') != std::string_view::npos) {
+        return "sample key " + Quoted(key) + " has a dot in its basename";
+      }
+      if (part.substr(0, 2) == "__") {
+        return "sample key " + Quoted(key) + " has a basename starting with \"__\"";
+      }
+      break;
+    }
+    start = slash + 1;
+  }
+  if (key.size() + 2 > kMaxMemberPathBytes) {
+    return "sample key " + Quoted(key) + " is too long for " + std::to_string(kMaxMemberPathBytes) +
+           "-byte member paths";
+  }
+  return "";
+}
+
+std::string CheckFieldName(std::string_view field) {
+  if (field.empty()) return "empty field name";
+  if (!(field.front() >= 'a' && field.front() <= 'z')) {
+    return "field name " + Quoted(field) + " must start with a lower-case letter";
+  }
+  for (char c : field) {
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '.')) {
+      return "field name " + Quoted(field) + " may contain only [a-z0-9_.]";
+    }
+  }
+  if (field.back() == '.' || field.find("..") != std::string_view::npos) {
+    return "field name " + Quoted(field) + " has an empty extension";
+  }
+  return "";
+}
+
+std::string CheckSample(const Sample& sample) {
+  if (std::string e = CheckSampleKey(sample.key); !e.empty()) return e;
+  if (sample.fields.empty()) return "sample " + Quoted(sample.key) + " has no fields";
+  std::set<std::string> seen;
+  for (const auto& f : sample.fields) {
+    if (std::string e = CheckFieldName(f.name); !e.empty()) {
+      return "sample " + Quoted(sample.key) + ": " + e;
+    }
+    if (!seen.insert(f.name).second) {
+      return "sample " + Quoted(sample.key) + ": duplicate field " + Quoted(f.name);
+    }
+    const size_t len = sample.key.size() + 1 + f.name.size();
+    if (len > kMaxMemberPathBytes) {
+      return "member " + Quoted(sample.key + "." + f.name) + " is " + std::to_string(len) +
+             " bytes, longer than " + std::to_string(kMaxMemberPathBytes);
+    }
+  }
+  return "";
+}
+
+std::string SanitizeKeyComponent(std::string_view component) {
+  std::string out;
+  out.reserve(component.size());
+  for (char c : component) out += IsSafeKeyChar(c) ? c : '_';
+  if (out.empty() || out.substr(0, 2) == "__") out.insert(out.begin(), 'x');
+  return out;
+}
+
+std::string SanitizeScenePath(std::string_view scene) {
+  std::string out;
+  size_t start = 0;
+  while (start <= scene.size()) {
+    size_t slash = scene.find('/', start);
+    if (slash == std::string_view::npos) slash = scene.size();
+    const std::string_view part = scene.substr(start, slash - start);
+    if (!part.empty() && part != "." && part != "..") {
+      if (!out.empty()) out += '/';
+      out += SanitizeKeyComponent(part);
+    }
+    start = slash + 1;
+  }
+  return out;
+}
+
+std::string MakeSampleKey(std::string_view scene, std::string_view frame0_id,
+                          std::string_view frame1_id) {
+  std::string key = SanitizeScenePath(scene);
+  if (!key.empty()) key += '/';
+  key += SanitizeKeyComponent(frame0_id) + "_" + SanitizeKeyComponent(frame1_id);
+  if (std::string e = CheckSampleKey(key); !e.empty()) {
+    throw InputError("sample key " + key, e);
+  }
+  return key;
+}
+
+bool SplitMemberPath(std::string_view member_path, std::string* key, std::string* field) {
+  const size_t slash = member_path.rfind('/');
+  const size_t base = slash == std::string_view::npos ? 0 : slash + 1;
+  const size_t dot = member_path.find('.', base);
+  if (dot == std::string_view::npos) return false;
+  *key = std::string(member_path.substr(0, dot));
+  *field = std::string(member_path.substr(dot + 1));
+  return true;
+}
+
+}  // namespace gt::shards

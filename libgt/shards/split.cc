@@ -1,0 +1,628 @@
+#include "libgt/shards/split.h"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <utility>
+#include <valijson/adapters/nlohmann_json_adapter.hpp>
+#include <valijson/schema.hpp>
+#include <valijson/schema_parser.hpp>
+#include <valijson/validation_results.hpp>
+#include <valijson/validator.hpp>
+
+#include "libgt/core/error.h"
+#include "libgt/io/files.h"
+#include "libgt/io/npy.h"
+
+namespace gt::shards {
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+json ParseJsonFile(const std::string& path) {
+  const std::string text = io::ReadFileBytes(path);
+  json doc = json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (doc.is_discarded()) throw InputError(path, "not valid JSON");
+  return doc;
+}
+
+// Typed member access with errors naming the file and field.
+const json& Member(const json& obj, const std::string& name, const std::string& path) {
+  if (!obj.is_object() || !obj.contains(name)) {
+    throw InputError(path, "missing field \"" + name + "\"");
+  }
+  return obj.at(name);
+}
+int64_t IntMember(const json& obj, const std::string& name, const std::string& path) {
+  const json& v = Member(obj, name, path);
+  if (!v.is_number_integer() || v.get<int64_t>() < 0) {
+    throw InputError(path, "field \"" + name + "\": expected a non-negative integer");
+  }
+  return v.get<int64_t>();
+}
+std::string StringMember(const json& obj, const std::string& name, const std::string& path) {
+  const json& v = Member(obj, name, path);
+  if (!v.is_string()) throw InputError(path, "field \"" + name + "\": expected a string");
+  return v.get<std::string>();
+}
+
+int64_t FileSize(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return -1;
+  return static_cast<int64_t>(st.st_size);
+}
+
+// A parsed JSON Schema, reused for many documents.
+class SchemaChecker {
+ public:
+  explicit SchemaChecker(const std::string& schema_path) : path_(schema_path) {
+    const json doc = ParseJsonFile(schema_path);
+    try {
+      valijson::SchemaParser parser;
+      valijson::adapters::NlohmannJsonAdapter adapter(doc);
+      parser.populateSchema(adapter, schema_);
+    } catch (const std::exception& e) {
+      throw InputError(schema_path, std::string("unusable JSON Schema: ") + e.what());
+    }
+  }
+  std::vector<std::string> Check(const json& doc) const {
+    valijson::Validator validator;
+    valijson::ValidationResults results;
+    valijson::adapters::NlohmannJsonAdapter adapter(doc);
+    std::vector<std::string> problems;
+    if (validator.validate(schema_, adapter, &results)) return problems;
+    valijson::ValidationResults::Error error;
+    while (results.popError(error)) {
+      std::string where;
+      for (const std::string& c : error.context) where += c;
+      problems.push_back(where + ": " + error.description);
+    }
+    if (problems.empty()) problems.push_back("does not match " + path_);
+    return problems;
+  }
+
+ private:
+  std::string path_;
+  valijson::Schema schema_;
+};
+
+// Optional schema in a folder: nullptr when the folder is "" or the file does not exist.
+std::unique_ptr<SchemaChecker> LoadSchema(const std::string& dir, const std::string& file) {
+  if (dir.empty()) return nullptr;
+  const std::string path = (fs::path(dir) / file).string();
+  if (!io::FileExists(path)) return nullptr;
+  return std::make_unique<SchemaChecker>(path);
+}
+
+std::string FirstLines(const std::vector<std::string>& problems) {
+  std::string out;
+  for (size_t i = 0; i < problems.size() && i < 3; ++i) out += (i ? "; " : "") + problems[i];
+  if (problems.size() > 3) out += "; ...";
+  return out;
+}
+
+std::string SceneOfLine(const json& line, const std::string& key) {
+  if (line.is_object() && line.contains("scene") && line["scene"].is_string()) {
+    return line["scene"].get<std::string>();
+  }
+  const size_t slash = key.rfind('/');
+  return slash == std::string::npos ? std::string() : key.substr(0, slash);
+}
+
+// Checks that a tar holds exactly `expected_keys` (when given) with valid member names;
+// validates sample JSON with `sample_schema` (may be null) and parses every .npy header.
+// Returns problems, each "<member>: <problem>"; `keys_out` gets the keys in order.
+std::vector<std::string> CheckTarContents(const std::string& tar_path,
+                                          const SchemaChecker* sample_schema,
+                                          std::vector<std::string>* keys_out) {
+  std::vector<std::string> problems;
+  std::vector<std::string> keys;
+  std::set<std::string> seen_keys;
+  std::set<std::string> fields_of_key;
+  ForEachTarMember(tar_path, [&](const TarMemberInfo& info, std::string_view data) {
+    const std::string& name = info.path;
+    if (!info.regular_file) {
+      problems.push_back(name + ": not a regular file");
+      return;
+    }
+    if (name.size() > kMaxMemberPathBytes) {
+      problems.push_back(name + ": member path longer than 100 bytes");
+    }
+    std::string key, field;
+    if (!SplitMemberPath(name, &key, &field)) {
+      problems.push_back(name + ": member name has no '.<field>' suffix");
+      return;
+    }
+    if (key.substr(key.rfind('/') + 1).substr(0, 2) == "__") return;  // reader-skipped meta
+    if (std::string e = CheckSampleKey(key); !e.empty()) problems.push_back(name + ": " + e);
+    if (std::string e = CheckFieldName(field); !e.empty()) problems.push_back(name + ": " + e);
+    if (keys.empty() || keys.back() != key) {
+      if (!seen_keys.insert(key).second) {
+        problems.push_back(name + ": members of sample " + key + " are not contiguous");
+      }
+      keys.push_back(key);
+      fields_of_key.clear();
+    }
+    if (!fields_of_key.insert(field).second) problems.push_back(name + ": duplicate member");
+    const std::string ext = field.substr(field.rfind('.') + 1);
+    if (ext == "npy") {
+      try {
+        io::ParseNpy(data, tar_path + ":" + name);
+      } catch (const InputError& e) {
+        problems.push_back(name + ": bad .npy: " + e.what());
+      }
+    } else if (ext == "json") {
+      json doc = json::parse(data, nullptr, false);
+      if (doc.is_discarded()) {
+        problems.push_back(name + ": not valid JSON");
+      } else if (field == "json" && sample_schema != nullptr) {
+        const auto p = sample_schema->Check(doc);
+        if (!p.empty()) problems.push_back(name + ": sample.schema.json: " + FirstLines(p));
+      }
+    } else if (ext == "pyd" || ext == "pth" || ext == "pickle") {
+      problems.push_back(name + ": pickle fields are not allowed");
+    }
+  });
+  if (keys_out != nullptr) *keys_out = std::move(keys);
+  return problems;
+}
+
+}  // namespace
+
+std::string ShardFileName(const std::string& split, int64_t shard_index) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "-%06lld.tar", static_cast<long long>(shard_index));
+  return split + buf;
+}
+std::string ShardPath(const std::string& dir, const std::string& split, int64_t shard_index) {
+  return (fs::path(dir) / ShardFileName(split, shard_index)).string();
+}
+std::string PartRecordPath(const std::string& dir, const std::string& split, int64_t shard_index) {
+  std::string name = ShardFileName(split, shard_index);
+  name.replace(name.size() - 4, 4, ".json");
+  return (fs::path(dir) / "parts" / name).string();
+}
+std::string PlanPath(const std::string& dir, const std::string& split) {
+  return (fs::path(dir) / "parts" / (split + ".plan.json")).string();
+}
+
+std::string CheckSplitName(const std::string& split) {
+  if (split.empty()) return "empty split name";
+  for (char c : split) {
+    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
+          c == '_')) {
+      return "split name \"" + split + "\" may contain only [A-Za-z0-9_-]";
+    }
+  }
+  if (split.rfind("__", 0) == 0) return "split name \"" + split + "\" starts with \"__\"";
+  return "";
+}
+
+SplitPlan PlanEqualShards(const std::string& split, int64_t total_samples,
+                          int64_t samples_per_shard) {
+  GT_ASSERT(samples_per_shard > 0 && total_samples >= 0);
+  SplitPlan plan;
+  plan.split = split;
+  for (int64_t start = 0; start < total_samples; start += samples_per_shard) {
+    plan.shard_nsamples.push_back(std::min(samples_per_shard, total_samples - start));
+  }
+  return plan;
+}
+
+void WritePlan(const std::string& dir, const SplitPlan& plan) {
+  if (std::string e = CheckSplitName(plan.split); !e.empty()) {
+    throw InputError(PlanPath(dir, plan.split), e);
+  }
+  json doc;
+  doc["split"] = plan.split;
+  doc["nshards"] = static_cast<int64_t>(plan.shard_nsamples.size());
+  doc["nsamples"] = plan.shard_nsamples;
+  io::WriteFileAtomic(PlanPath(dir, plan.split), doc.dump(2) + "\n");
+}
+
+SplitPlan ReadPlan(const std::string& dir, const std::string& split) {
+  const std::string path = PlanPath(dir, split);
+  if (!io::FileExists(path)) {
+    throw InputError(path, "missing split plan (the select stage writes it)");
+  }
+  const json doc = ParseJsonFile(path);
+  SplitPlan plan;
+  plan.split = StringMember(doc, "split", path);
+  if (plan.split != split) throw InputError(path, "field \"split\": expected \"" + split + "\"");
+  const int64_t nshards = IntMember(doc, "nshards", path);
+  const json& counts = Member(doc, "nsamples", path);
+  if (!counts.is_array() || static_cast<int64_t>(counts.size()) != nshards) {
+    throw InputError(path, "field \"nsamples\": expected an array of nshards integers");
+  }
+  for (const json& c : counts) {
+    if (!c.is_number_integer() || c.get<int64_t>() < 0) {
+      throw InputError(path, "field \"nsamples\": expected non-negative integers");
+    }
+    plan.shard_nsamples.push_back(c.get<int64_t>());
+  }
+  return plan;
+}
+
+std::vector<std::string> ListPlannedSplits(const std::string& dir) {
+  std::vector<std::string> splits;
+  const fs::path parts = fs::path(dir) / "parts";
+  std::error_code ec;
+  if (!fs::is_directory(parts, ec)) return splits;
+  const std::string suffix = ".plan.json";
+  for (const auto& entry : fs::directory_iterator(parts, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() > suffix.size() &&
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0) {
+      splits.push_back(name.substr(0, name.size() - suffix.size()));
+    }
+  }
+  std::sort(splits.begin(), splits.end());
+  return splits;
+}
+
+PartRecord ReadPartRecord(const std::string& dir, const std::string& split, int64_t shard_index) {
+  const std::string path = PartRecordPath(dir, split, shard_index);
+  const json doc = ParseJsonFile(path);
+  PartRecord r;
+  r.split = StringMember(doc, "split", path);
+  r.shard_index = IntMember(doc, "shard_index", path);
+  r.url = StringMember(doc, "url", path);
+  if (r.split != split || r.shard_index != shard_index ||
+      r.url != ShardFileName(split, shard_index)) {
+    throw InputError(path,
+                     "split/shard_index/url do not name " + ShardFileName(split, shard_index));
+  }
+  r.info.path = ShardPath(dir, split, shard_index);
+  r.info.nsamples = IntMember(doc, "nsamples", path);
+  r.info.md5sum = StringMember(doc, "md5sum", path);
+  r.info.filesize = IntMember(doc, "filesize", path);
+  const json& keys = Member(doc, "keys", path);
+  const json& pairs = Member(doc, "pairs", path);
+  if (!keys.is_array() || !pairs.is_array() ||
+      static_cast<int64_t>(keys.size()) != r.info.nsamples ||
+      static_cast<int64_t>(pairs.size()) != r.info.nsamples) {
+    throw InputError(path, "fields \"keys\" and \"pairs\": expected nsamples entries each");
+  }
+  for (size_t i = 0; i < keys.size(); ++i) {
+    if (!keys[i].is_string() || !pairs[i].is_object()) {
+      throw InputError(path, "keys[" + std::to_string(i) + "]/pairs[" + std::to_string(i) +
+                                 "]: expected a string and an object");
+    }
+    r.keys.push_back(keys[i].get<std::string>());
+    r.pair_lines.push_back(pairs[i].dump());
+  }
+  return r;
+}
+
+SplitShardWriter::SplitShardWriter(const std::string& dir, const std::string& split,
+                                   int64_t shard_index)
+    : dir_(dir) {
+  if (std::string e = CheckSplitName(split); !e.empty()) throw InputError(dir, e);
+  record_.split = split;
+  record_.shard_index = shard_index;
+  record_.url = ShardFileName(split, shard_index);
+  tar_ = std::make_unique<TarShardWriter>(ShardPath(dir, split, shard_index));
+}
+
+SplitShardWriter::~SplitShardWriter() = default;
+
+void SplitShardWriter::Add(const Sample& sample, const std::string& pair_line_json) {
+  json line = json::parse(pair_line_json, nullptr, false);
+  if (line.is_discarded() || !line.is_object()) {
+    throw InputError(ShardPath(dir_, record_.split, record_.shard_index) + ": " + sample.key,
+                     "pair line is not a JSON object");
+  }
+  tar_->Add(sample);
+  line["shard"] = record_.url;
+  line["key"] = sample.key;
+  record_.keys.push_back(sample.key);
+  record_.pair_lines.push_back(line.dump());
+}
+
+PartRecord SplitShardWriter::Finish() {
+  record_.info = tar_->Finish();
+  json doc;
+  doc["split"] = record_.split;
+  doc["shard_index"] = record_.shard_index;
+  doc["url"] = record_.url;
+  doc["nsamples"] = record_.info.nsamples;
+  doc["md5sum"] = record_.info.md5sum;
+  doc["filesize"] = record_.info.filesize;
+  doc["keys"] = record_.keys;
+  json pairs = json::array();
+  for (const std::string& l : record_.pair_lines) pairs.push_back(json::parse(l));
+  doc["pairs"] = std::move(pairs);
+  io::WriteFileAtomic(PartRecordPath(dir_, record_.split, record_.shard_index), doc.dump(1) + "\n");
+  return record_;
+}
+
+bool IsShardComplete(const std::string& dir, const std::string& split, int64_t shard_index,
+                     bool verify_md5) {
+  const std::string record_path = PartRecordPath(dir, split, shard_index);
+  if (!io::FileExists(record_path)) return false;
+  try {
+    const PartRecord r = ReadPartRecord(dir, split, shard_index);
+    if (FileSize(r.info.path) != r.info.filesize) return false;
+    if (verify_md5 && io::Md5HexOfFile(r.info.path) != r.info.md5sum) return false;
+    return true;
+  } catch (const InputError&) {
+    return false;
+  }
+}
+
+std::string IndexJson(const std::string& name, const std::vector<PartRecord>& parts) {
+  json doc;
+  doc["__kind__"] = "wids-shard-index-v1";
+  doc["wids_version"] = 1;
+  doc["name"] = name;
+  json list = json::array();
+  for (const PartRecord& p : parts) {
+    json e;
+    e["url"] = p.url;
+    e["nsamples"] = p.info.nsamples;
+    e["md5sum"] = p.info.md5sum;
+    e["filesize"] = p.info.filesize;
+    list.push_back(std::move(e));
+  }
+  doc["shardlist"] = std::move(list);
+  return doc.dump(2) + "\n";
+}
+
+void WriteJsonLines(const std::string& path, const std::vector<std::string>& lines) {
+  std::string text;
+  for (const std::string& l : lines) {
+    GT_ASSERT_MSG(l.find('\n') == std::string::npos, "JSONL line contains a newline");
+    text += l;
+    text += '\n';
+  }
+  io::WriteFileAtomic(path, text);
+}
+
+bool MergeOptions::Check(std::string* error) const {
+  if (!split.empty()) {
+    if (std::string e = CheckSplitName(split); !e.empty()) {
+      *error = "split: " + e;
+      return false;
+    }
+  }
+  if (!schemas_dir.empty() && !fs::is_directory(schemas_dir)) {
+    *error = "schemas_dir: \"" + schemas_dir + "\" is not a folder";
+    return false;
+  }
+  return true;
+}
+
+MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
+  if (std::string error; !options.Check(&error)) throw InputError("merge options", error);
+  MergeResult result;
+  result.split = options.split;
+  if (result.split.empty()) {
+    const std::vector<std::string> splits = ListPlannedSplits(dir);
+    if (splits.size() != 1) {
+      throw InputError((fs::path(dir) / "parts").string(),
+                       "expected exactly one <split>.plan.json, found " +
+                           std::to_string(splits.size()) + " (pass the split name)");
+    }
+    result.split = splits[0];
+  }
+  const SplitPlan plan = ReadPlan(dir, result.split);
+  const auto sample_schema = LoadSchema(options.schemas_dir, "sample.schema.json");
+  const auto line_schema = LoadSchema(options.schemas_dir, "pairs_line.schema.json");
+  std::vector<std::string> all_lines;
+  std::set<std::string> all_keys;
+  for (size_t s = 0; s < plan.shard_nsamples.size(); ++s) {
+    const auto idx = static_cast<int64_t>(s);
+    const std::string shard = ShardPath(dir, result.split, idx);
+    const std::string record_path = PartRecordPath(dir, result.split, idx);
+    if (!io::FileExists(record_path)) {
+      throw InputError(
+          shard, "missing part record " + record_path + " (shard not written or not finished)");
+    }
+    PartRecord r = ReadPartRecord(dir, result.split, idx);
+    const int64_t size = FileSize(shard);
+    if (size < 0) throw InputError(shard, "missing shard");
+    if (size != r.info.filesize) {
+      throw InputError(shard, "size " + std::to_string(size) + " differs from the recorded " +
+                                  std::to_string(r.info.filesize));
+    }
+    if (r.info.nsamples != plan.shard_nsamples[s]) {
+      throw InputError(shard, "holds " + std::to_string(r.info.nsamples) +
+                                  " samples, the plan says " +
+                                  std::to_string(plan.shard_nsamples[s]));
+    }
+    if (options.verify_md5) {
+      const std::string md5 = io::Md5HexOfFile(shard);
+      if (md5 != r.info.md5sum) {
+        throw InputError(shard, "md5 " + md5 + " differs from the recorded " + r.info.md5sum);
+      }
+    }
+    if (options.read_tars) {
+      std::vector<std::string> keys;
+      std::vector<std::string> problems;
+      try {
+        problems = CheckTarContents(shard, sample_schema.get(), &keys);
+      } catch (const InputError& e) {
+        throw InputError(shard, std::string("unreadable: ") + e.what());
+      }
+      if (!problems.empty()) throw InputError(shard, FirstLines(problems));
+      if (keys != r.keys) {
+        throw InputError(shard, "sample keys in the tar differ from " + record_path);
+      }
+    }
+    for (size_t i = 0; i < r.keys.size(); ++i) {
+      if (!all_keys.insert(r.keys[i]).second) {
+        throw InputError(shard, "sample key " + r.keys[i] + " appears in an earlier shard");
+      }
+      if (line_schema) {
+        const auto p = line_schema->Check(json::parse(r.pair_lines[i]));
+        if (!p.empty()) {
+          throw InputError(record_path, "pairs[" + std::to_string(i) +
+                                            "]: pairs_line.schema.json: " + FirstLines(p));
+        }
+      }
+      all_lines.push_back(r.pair_lines[i]);
+    }
+    result.nsamples += r.info.nsamples;
+    result.total_bytes += r.info.filesize;
+    result.parts.push_back(std::move(r));
+  }
+  result.nshards = static_cast<int64_t>(result.parts.size());
+  WriteJsonLines((fs::path(dir) / "pairs.jsonl").string(), all_lines);
+  io::WriteFileAtomic((fs::path(dir) / "index.json").string(),
+                      IndexJson(result.split, result.parts));
+  return result;
+}
+
+std::string MergeSummaryJson(const MergeResult& result) {
+  json doc;
+  doc["split"] = result.split;
+  doc["nshards"] = result.nshards;
+  doc["nsamples"] = result.nsamples;
+  doc["bytes"] = result.total_bytes;
+  json per_scene = json::object();
+  for (const PartRecord& p : result.parts) {
+    for (size_t i = 0; i < p.keys.size(); ++i) {
+      const std::string scene = SceneOfLine(json::parse(p.pair_lines[i]), p.keys[i]);
+      per_scene[scene] = per_scene.value(scene, 0) + 1;
+    }
+  }
+  doc["pairs_per_scene"] = std::move(per_scene);
+  return doc.dump(2) + "\n";
+}
+
+bool ValidateOptions::Check(std::string* error) const {
+  if (!schemas_dir.empty() && !fs::is_directory(schemas_dir)) {
+    *error = "schemas_dir: \"" + schemas_dir + "\" is not a folder";
+    return false;
+  }
+  return true;
+}
+
+std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOptions& options) {
+  std::vector<std::string> problems;
+  auto problem = [&](const std::string& where, const std::string& what) {
+    problems.push_back(where + ": " + what);
+  };
+  if (std::string error; !options.Check(&error)) {
+    problem("validate options", error);
+    return problems;
+  }
+  const std::string index_path = (fs::path(dir) / "index.json").string();
+  json index;
+  std::unique_ptr<SchemaChecker> index_schema, sample_schema, line_schema;
+  try {
+    index = ParseJsonFile(index_path);
+    index_schema = LoadSchema(options.schemas_dir, "index.schema.json");
+    sample_schema = LoadSchema(options.schemas_dir, "sample.schema.json");
+    line_schema = LoadSchema(options.schemas_dir, "pairs_line.schema.json");
+  } catch (const InputError& e) {
+    problems.push_back(e.what());
+    return problems;
+  }
+  if (index_schema) {
+    for (const std::string& p : index_schema->Check(index)) {
+      problem(index_path, "index.schema.json: " + p);
+    }
+  }
+  if (!index.is_object() || index.value("__kind__", "") != "wids-shard-index-v1" ||
+      index.value("wids_version", 0) != 1 || !index.contains("shardlist") ||
+      !index["shardlist"].is_array()) {
+    problem(index_path, "expected a wids-shard-index-v1 object with a shardlist");
+    return problems;
+  }
+  // key -> shard url, for the pairs.jsonl check.
+  std::map<std::string, std::string> shard_of_key;
+  int64_t total = 0;
+  for (size_t i = 0; i < index["shardlist"].size(); ++i) {
+    const json& e = index["shardlist"][i];
+    const std::string where = index_path + ": shardlist[" + std::to_string(i) + "]";
+    if (!e.is_object() || !e.contains("url") || !e["url"].is_string() || !e.contains("nsamples") ||
+        !e["nsamples"].is_number_integer() || !e.contains("md5sum") || !e["md5sum"].is_string() ||
+        !e.contains("filesize") || !e["filesize"].is_number_integer()) {
+      problem(where, "expected {url, nsamples, md5sum, filesize}");
+      continue;
+    }
+    const std::string url = e["url"].get<std::string>();
+    if (url.empty() || url.front() == '/' || url.find("..") != std::string::npos) {
+      problem(where, "url \"" + url + "\" is not a relative path inside the folder");
+      continue;
+    }
+    const std::string shard = (fs::path(dir) / url).string();
+    const int64_t size = FileSize(shard);
+    if (size < 0) {
+      problem(shard, "missing shard");
+      continue;
+    }
+    if (size != e["filesize"].get<int64_t>()) {
+      problem(shard, "size " + std::to_string(size) + " differs from index.json's " +
+                         std::to_string(e["filesize"].get<int64_t>()));
+    }
+    const std::string md5 = io::Md5HexOfFile(shard);
+    if (md5 != e["md5sum"].get<std::string>()) {
+      problem(shard, "md5 " + md5 + " differs from index.json's " + e["md5sum"].get<std::string>());
+    }
+    std::vector<std::string> keys;
+    try {
+      for (const std::string& p : CheckTarContents(shard, sample_schema.get(), &keys)) {
+        problem(shard, p);
+      }
+    } catch (const InputError& err) {
+      problem(shard, std::string("unreadable: ") + err.what());
+      continue;
+    }
+    if (static_cast<int64_t>(keys.size()) != e["nsamples"].get<int64_t>()) {
+      problem(shard, "holds " + std::to_string(keys.size()) + " samples, index.json says " +
+                         std::to_string(e["nsamples"].get<int64_t>()));
+    }
+    for (const std::string& k : keys) {
+      if (!shard_of_key.emplace(k, url).second) problem(shard, "sample " + k + " repeats");
+    }
+    total += static_cast<int64_t>(keys.size());
+  }
+  const std::string pairs_path = (fs::path(dir) / "pairs.jsonl").string();
+  if (!io::FileExists(pairs_path)) {
+    problem(pairs_path, "missing");
+    return problems;
+  }
+  int64_t nlines = 0;
+  for (const std::string& text : io::ReadLines(pairs_path)) {
+    ++nlines;
+    const std::string where = pairs_path + ":" + std::to_string(nlines);
+    const json line = json::parse(text, nullptr, false);
+    if (line.is_discarded() || !line.is_object()) {
+      problem(where, "not a JSON object");
+      continue;
+    }
+    if (line_schema) {
+      const auto p = line_schema->Check(line);
+      if (!p.empty()) problem(where, "pairs_line.schema.json: " + FirstLines(p));
+    }
+    const std::string key = line.value("key", "");
+    const std::string shard = line.value("shard", "");
+    const auto it = shard_of_key.find(key);
+    if (it == shard_of_key.end() || it->second != shard) {
+      problem(where, "key \"" + key + "\" is not in shard \"" + shard + "\"");
+    }
+  }
+  if (nlines != total) {
+    problem(pairs_path,
+            std::to_string(nlines) + " lines for " + std::to_string(total) + " samples");
+  }
+  return problems;
+}
+
+std::vector<std::string> ValidateJsonAgainstSchema(const std::string& document,
+                                                   const std::string& schema_path) {
+  const SchemaChecker checker(schema_path);
+  const json doc = json::parse(document, nullptr, false);
+  if (doc.is_discarded()) return {"not valid JSON"};
+  return checker.Check(doc);
+}
+
+}  // namespace gt::shards
