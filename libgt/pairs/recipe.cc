@@ -182,7 +182,6 @@ std::string ResolvePath(const std::string& raw, const std::string& field,
   return path.lexically_normal().string();
 }
 
-
 }  // namespace
 
 const char* AggregateName(Aggregate a) {
@@ -207,8 +206,8 @@ json YamlToJson(const std::string& yaml_text, const std::string& file) {
   try {
     root = YAML::Load(yaml_text);
   } catch (const YAML::Exception& e) {
-    throw InputError(file, "invalid YAML at line " + std::to_string(e.mark.line + 1) + ": " +
-                               e.msg);
+    throw InputError(file,
+                     "invalid YAML at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
   }
   return NodeToJson(root, file);
 }
@@ -247,7 +246,8 @@ std::string ValidateRecipeJson(const json& recipe) {
     std::string allowed;
     if (const json* sub = SubschemaAt(SchemaJson(), best.context);
         sub && sub->contains("properties")) {
-      for (const auto& [k, v] : (*sub)["properties"].items()) allowed += (allowed.empty() ? "" : ", ") + k;
+      for (const auto& [k, v] : (*sub)["properties"].items())
+        allowed += (allowed.empty() ? "" : ", ") + k;
     }
     return (path.empty() ? key : path + "." + key) + ": unknown key (expected one of " + allowed +
            ")";
@@ -274,8 +274,8 @@ std::string ValidateRecipeJson(const json& recipe) {
   std::string expected = (sub && sub->contains("description"))
                              ? (*sub)["description"].get<std::string>()
                              : best.description;
-  return (context.size() > 1 ? DottedPath(context) : std::string("(top level)")) +
-         ": expected " + expected;
+  return (context.size() > 1 ? DottedPath(context) : std::string("(top level)")) + ": expected " +
+         expected;
 }
 
 std::string ExpandEnv(const std::string& text, const std::string& field) {
@@ -284,7 +284,8 @@ std::string ExpandEnv(const std::string& text, const std::string& field) {
   while (i < text.size()) {
     if (text[i] == '$' && i + 1 < text.size() && text[i + 1] == '{') {
       size_t end = text.find('}', i);
-      if (end == std::string::npos) throw InputError(field, "unterminated ${...} in '" + text + "'");
+      if (end == std::string::npos)
+        throw InputError(field, "unterminated ${...} in '" + text + "'");
       std::string body = text.substr(i + 2, end - i - 2);
       std::string name = body, fallback;
       bool has_default = false;
@@ -301,8 +302,8 @@ std::string ExpandEnv(const std::string& text, const std::string& field) {
       } else if (has_default) {
         out += fallback;
       } else {
-        throw InputError(field, "environment variable " + name +
-                                    " is not set (use ${" + name + ":-default} or set it)");
+        throw InputError(field, "environment variable " + name + " is not set (use ${" + name +
+                                    ":-default} or set it)");
       }
       i = end + 1;
     } else {
@@ -324,13 +325,15 @@ bool DatasetOptions::Check(std::string* error) const {
     return fail("dataset.max_depth_m: expected a number > dataset.min_depth_m");
   }
   if (!scenes.empty() && !split_file.empty()) {
-    return fail("dataset.split_file: expected either dataset.scenes or dataset.split_file, not both");
+    return fail(
+        "dataset.split_file: expected either dataset.scenes or dataset.split_file, not both");
   }
   return true;
 }
 
 bool PruningOptions::Check(std::string* error) const {
-  if (!(max_distance_m >= 0)) return *error = "selection.pruning.max_distance_m: expected >= 0", false;
+  if (!(max_distance_m >= 0))
+    return *error = "selection.pruning.max_distance_m: expected >= 0", false;
   if (!(max_view_angle_deg >= 0 && max_view_angle_deg <= 180)) {
     return *error = "selection.pruning.max_view_angle_deg: expected a number in [0, 180]", false;
   }
@@ -361,21 +364,25 @@ bool SelectionOptions::Check(std::string* error) const {
 
 bool OccupancyRecipe::Check(std::string* error) const {
   if (!(voxel_m > 0)) return *error = "occupancy.voxel_m: expected a number > 0 (metres)", false;
-  if (bins < 1 || bins > 64) return *error = "occupancy.bins: expected an integer in [1, 64]", false;
+  if (bins < 1 || bins > 64)
+    return *error = "occupancy.bins: expected an integer in [1, 64]", false;
   if (!(near_m > 0)) return *error = "occupancy.near_m: expected a number > 0 (metres)", false;
-  if (!(far_m > near_m)) return *error = "occupancy.far_m: expected a number > occupancy.near_m", false;
+  if (!(far_m > near_m))
+    return *error = "occupancy.far_m: expected a number > occupancy.near_m", false;
   return true;
 }
 
 bool ShardOptions::Check(std::string* error) const {
-  if (samples_per_shard < 1) return *error = "shards.samples_per_shard: expected an integer >= 1", false;
+  if (samples_per_shard < 1)
+    return *error = "shards.samples_per_shard: expected an integer >= 1", false;
   if (!(target_mb >= 0)) return *error = "shards.target_mb: expected a number >= 0", false;
   return true;
 }
 
 bool Recipe::Check(std::string* error) const {
   if (name.empty()) return *error = "name: expected a non-empty name", false;
-  if (width < 8 || height < 8) return *error = "resolution: expected [W, H] with 8 <= W, H <= 8192", false;
+  if (width < 8 || height < 8)
+    return *error = "resolution: expected [W, H] with 8 <= W, H <= 8192", false;
   if (!dataset.Check(error) || !selection.Check(error) || !occupancy.Check(error) ||
       !shards.Check(error)) {
     return false;
@@ -388,7 +395,9 @@ bool Recipe::Check(std::string* error) const {
            false;
   }
   if (loftr_export == "test" && !sample.depth) {
-    return *error = "sample.depth: expected true for loftr_export.kind test (Occ2Net's test step reads depth)",
+    return *error =
+               "sample.depth: expected true for loftr_export.kind test (Occ2Net's test step reads "
+               "depth)",
            false;
   }
   return true;
@@ -424,7 +433,8 @@ json Recipe::ToJson() const {
                    {"rel_tol", opt(labels.rel_tol)},
                    {"min_depth_m", opt(labels.min_depth_m)},
                    {"max_depth_m", opt(labels.max_depth_m)}}}};
-  j["patches"] = {{"stride", patches.stride}, {"anchor", patches.anchor}, {"mutual", patches.mutual}};
+  j["patches"] = {
+      {"stride", patches.stride}, {"anchor", patches.anchor}, {"mutual", patches.mutual}};
   j["selection"] = {
       {"max_frame_gap", selection.max_frame_gap},
       {"pruning",
@@ -440,11 +450,12 @@ json Recipe::ToJson() const {
       {"balance_bins", selection.balance_bins},
       {"import_pairs",
        {{"format", selection.import_pairs.format}, {"path", selection.import_pairs.path}}}};
-  j["occupancy"] = {{"enabled", occupancy.enabled},   {"voxel_m", occupancy.voxel_m},
-                    {"bins", occupancy.bins},         {"near_m", occupancy.near_m},
-                    {"far_m", occupancy.far_m},       {"spacing", occupancy.spacing},
+  j["occupancy"] = {{"enabled", occupancy.enabled},     {"voxel_m", occupancy.voxel_m},
+                    {"bins", occupancy.bins},           {"near_m", occupancy.near_m},
+                    {"far_m", occupancy.far_m},         {"spacing", occupancy.spacing},
                     {"traversal", occupancy.traversal}, {"scope", occupancy.scope},
-                    {"mode", occupancy.mode},         {"encoding", occupancy.encoding}};
+                    {"window", occupancy.window},       {"scene_stride", occupancy.scene_stride},
+                    {"mode", occupancy.mode},           {"encoding", occupancy.encoding}};
   j["sample"] = {{"image", sample.image},
                  {"depth", sample.depth},
                  {"labels", sample.labels},
@@ -481,7 +492,8 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   }
   const json& d = j["dataset"];
   r.dataset.format = d["format"].get<std::string>();
-  if (d.contains("root")) r.dataset.root = ResolvePath(d["root"].get<std::string>(), file + ": dataset.root", base_dir);
+  if (d.contains("root"))
+    r.dataset.root = ResolvePath(d["root"].get<std::string>(), file + ": dataset.root", base_dir);
   Get(d, "scenes", &r.dataset.scenes);
   if (d.contains("split_file")) {
     r.dataset.split_file =
@@ -560,6 +572,8 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     Get(o, "spacing", &r.occupancy.spacing);
     Get(o, "traversal", &r.occupancy.traversal);
     Get(o, "scope", &r.occupancy.scope);
+    Get(o, "window", &r.occupancy.window);
+    Get(o, "scene_stride", &r.occupancy.scene_stride);
     Get(o, "mode", &r.occupancy.mode);
     Get(o, "encoding", &r.occupancy.encoding);
   }
@@ -587,13 +601,15 @@ Recipe LoadRecipe(const std::string& path, const RecipeOverrides& overrides) {
   Recipe r = ParseRecipe(text, path, base, overrides);
   // Inputs that must exist before any work starts.
   if (r.dataset.format != "synthetic" && !fs::is_directory(r.dataset.root)) {
-    throw InputError(path, "dataset.root: expected an existing folder, not found: " + r.dataset.root);
+    throw InputError(path,
+                     "dataset.root: expected an existing folder, not found: " + r.dataset.root);
   }
   if (!r.dataset.split_file.empty() && !fs::is_regular_file(r.dataset.split_file)) {
-    throw InputError(path, "dataset.split_file: expected an existing file, not found: " +
-                               r.dataset.split_file);
+    throw InputError(
+        path, "dataset.split_file: expected an existing file, not found: " + r.dataset.split_file);
   }
-  if (!r.selection.import_pairs.path.empty() && !fs::is_regular_file(r.selection.import_pairs.path)) {
+  if (!r.selection.import_pairs.path.empty() &&
+      !fs::is_regular_file(r.selection.import_pairs.path)) {
     throw InputError(path, "selection.import_pairs.path: expected an existing file, not found: " +
                                r.selection.import_pairs.path);
   }

@@ -24,21 +24,21 @@ namespace gt::pairs {
 
 // dataset.synthetic: the procedural sample generated into <out>/data when missing.
 struct SyntheticDatasetOptions {
-  int scenes = 2;      // number of synthetic scenes
-  int frames = 16;     // frames per scene
-  int width = 160;     // pixels of the generated depth/colour
-  int height = 120;    // pixels
-  uint64_t seed = 0;   // generator seed
+  int scenes = 2;     // number of synthetic scenes
+  int frames = 16;    // frames per scene
+  int width = 160;    // pixels of the generated depth/colour
+  int height = 120;   // pixels
+  uint64_t seed = 0;  // generator seed
 };
 
 struct DatasetOptions {
-  std::string format;                    // scannet | tartanair | sevenscenes | tum | generic | synthetic
-  std::string root;                      // absolute after loading ("" = <out>/data for synthetic)
-  std::vector<std::string> scenes;       // explicit scene names ({} = every scene under root)
-  std::string split_file;                // absolute after loading; one scene name per line
-  int frame_stride = 1;                  // keep every n-th frame of a scene
-  double min_valid_depth_fraction = 0.1; // frames with less valid depth are skipped
-  std::optional<double> min_depth_m;     // overrides the dataset's validity range (metres)
+  std::string format;               // scannet | tartanair | sevenscenes | tum | generic | synthetic
+  std::string root;                 // absolute after loading ("" = <out>/data for synthetic)
+  std::vector<std::string> scenes;  // explicit scene names ({} = every scene under root)
+  std::string split_file;           // absolute after loading; one scene name per line
+  int frame_stride = 1;             // keep every n-th frame of a scene
+  double min_valid_depth_fraction = 0.1;  // frames with less valid depth are skipped
+  std::optional<double> min_depth_m;      // overrides the dataset's validity range (metres)
   std::optional<double> max_depth_m;
   SyntheticDatasetOptions synthetic;
 
@@ -79,13 +79,13 @@ struct ImportPairsOptions {
 struct SelectionOptions {
   int max_frame_gap = 0;  // pairs (i < j) with j - i <= gap in kept-frame order; 0 = all pairs
   PruningOptions pruning;
-  int score_stride = 8;                      // score on every n-th pixel in x and y
-  double overlap_lo = 0.0, overlap_hi = 1.0; // aggregated overlap must lie in [lo, hi]
+  int score_stride = 8;                       // score on every n-th pixel in x and y
+  double overlap_lo = 0.0, overlap_hi = 1.0;  // aggregated overlap must lie in [lo, hi]
   double occlusion_lo = 0.0, occlusion_hi = 1.0;
-  std::string occlusion_metric = "image";    // image: OCCLUDED/(W*H); visible: /(VIS+OCC)
-  Aggregate aggregate = Aggregate::kMean;    // how the two directions are combined
-  int quota_per_scene = 0;                   // max pairs per scene after filters; 0 = all
-  int balance_bins = 0;                      // sample evenly across overlap bins; 0 = off
+  std::string occlusion_metric = "image";  // image: OCCLUDED/(W*H); visible: /(VIS+OCC)
+  Aggregate aggregate = Aggregate::kMean;  // how the two directions are combined
+  int quota_per_scene = 0;                 // max pairs per scene after filters; 0 = all
+  int balance_bins = 0;                    // sample evenly across overlap bins; 0 = off
   ImportPairsOptions import_pairs;
 
   bool Check(std::string* error) const;
@@ -93,15 +93,17 @@ struct SelectionOptions {
 
 struct OccupancyRecipe {
   bool enabled = true;
-  double voxel_m = 0.05;          // OctoMap resolution (metres)
-  int bins = 64;                  // depth bins per ray
-  double near_m = 0.1;            // first bin edge (metres)
-  double far_m = 10.0;            // last bin edge (metres)
-  std::string spacing = "linear"; // linear | log | inverse
-  std::string traversal = "exact";// exact | center
-  std::string scope = "pair";     // pair | window | scene
-  std::string mode = "octomap";   // octomap | two_point
-  std::string encoding = "packed";// packed | dense | both
+  double voxel_m = 0.05;            // OctoMap resolution (metres)
+  int bins = 64;                    // depth bins per ray
+  double near_m = 0.1;              // first bin edge (metres)
+  double far_m = 10.0;              // last bin edge (metres)
+  std::string spacing = "linear";   // linear | log | inverse
+  std::string traversal = "exact";  // exact | center
+  std::string scope = "pair";       // pair | window | scene
+  int window = 2;                   // scope window: usable neighbours on each side of the pair
+  int scene_stride = 10;            // scope scene: fuse every n-th frame (one map per scene)
+  std::string mode = "octomap";     // octomap | two_point
+  std::string encoding = "packed";  // packed | dense | both
 
   bool Check(std::string* error) const;
 };
@@ -121,8 +123,8 @@ struct ShardOptions {
 };
 
 struct Recipe {
-  std::string file;          // the recipe path as given (for messages)
-  std::string base_dir;      // folder relative paths are resolved against
+  std::string file;      // the recipe path as given (for messages)
+  std::string base_dir;  // folder relative paths are resolved against
   std::string name;
   std::string split = "train";
   uint64_t seed = 0;

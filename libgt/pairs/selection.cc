@@ -36,9 +36,9 @@ std::shared_ptr<const DepthImage> DepthCache::Get(size_t frame_index) {
   }
   const Frame& frame = scene_.frames[frame_index];
   DepthImage full = io::ReadDepth(frame.depth, frame.depth_camera.width, frame.depth_camera.height);
-  auto map = std::make_shared<const DepthImage>(
-      (full.width == width_ && full.height == height_) ? std::move(full)
-                                                       : ResizeDepthNearest(full, width_, height_));
+  auto map = std::make_shared<const DepthImage>((full.width == width_ && full.height == height_)
+                                                    ? std::move(full)
+                                                    : ResizeDepthNearest(full, width_, height_));
   const size_t map_bytes = map->values_m.size() * sizeof(float);
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = maps_.find(frame_index);
@@ -139,7 +139,8 @@ std::vector<CandidatePair> GenerateCandidates(const std::vector<size_t>& kept, i
   std::vector<CandidatePair> out;
   const size_t n = kept.size();
   for (size_t a = 0; a < n; ++a) {
-    const size_t last = max_frame_gap <= 0 ? n : std::min(n, a + 1 + static_cast<size_t>(max_frame_gap));
+    const size_t last =
+        max_frame_gap <= 0 ? n : std::min(n, a + 1 + static_cast<size_t>(max_frame_gap));
     for (size_t b = a + 1; b < last; ++b) out.push_back({kept[a], kept[b]});
   }
   return out;
@@ -285,7 +286,8 @@ uint64_t SceneSeed(uint64_t recipe_seed, const std::string& scene_name) {
 
 uint64_t UniformBelow(uint64_t n, std::mt19937_64* rng) {
   GT_ASSERT(n > 0);
-  const uint64_t limit = std::numeric_limits<uint64_t>::max() - std::numeric_limits<uint64_t>::max() % n;
+  const uint64_t limit =
+      std::numeric_limits<uint64_t>::max() - std::numeric_limits<uint64_t>::max() % n;
   uint64_t x;
   do {
     x = (*rng)();
@@ -326,8 +328,8 @@ std::vector<size_t> FilterAndSample(const std::vector<ScoredPair>& scored,
 
   std::mt19937_64 rng(scene_seed);
   std::vector<size_t> chosen;
-  const size_t quota = options.quota_per_scene > 0 ? static_cast<size_t>(options.quota_per_scene)
-                                                   : passed.size();
+  const size_t quota =
+      options.quota_per_scene > 0 ? static_cast<size_t>(options.quota_per_scene) : passed.size();
   if (options.balance_bins > 0 && !passed.empty()) {
     // Equal bins over [overlap_lo, overlap_hi]; each bin shuffled; round robin over bins
     // until the quota is met. Without a quota every bin is capped at the smallest non-empty

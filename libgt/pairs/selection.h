@@ -56,7 +56,8 @@ class DepthCache {
   size_t max_bytes_;
   mutable std::mutex mutex_;
   std::list<size_t> lru_;  // front = most recent
-  std::unordered_map<size_t, std::pair<std::shared_ptr<const DepthImage>, std::list<size_t>::iterator>>
+  std::unordered_map<size_t,
+                     std::pair<std::shared_ptr<const DepthImage>, std::list<size_t>::iterator>>
       maps_;
   size_t bytes_ = 0;
   int64_t hits_ = 0, misses_ = 0;

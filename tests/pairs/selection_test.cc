@@ -142,8 +142,8 @@ TEST(Scoring, SidewaysShiftOverPlaneHasClosedFormOverlap) {
   EXPECT_DOUBLE_EQ(scored[0].m01.occlusion_ratio, 0.0);
   EXPECT_EQ(scored[0].m01.counts[static_cast<int>(PixelLabel::kVisible)], 48 * kH);
   // Stride 4 samples every 4th column and row: columns 16..60 of 0,4,..,60 are in view.
-  auto strided = ScorePairs(scene, Cameras(scene), {{0, 1}}, LabelPreset("default"), 4, &cache,
-                            &drops);
+  auto strided =
+      ScorePairs(scene, Cameras(scene), {{0, 1}}, LabelPreset("default"), 4, &cache, &drops);
   EXPECT_DOUBLE_EQ(strided[0].m01.overlap, 12.0 / 16.0);
 }
 
@@ -209,7 +209,8 @@ TEST(Filters, AggregationMinMeanMax) {
   SelectionOptions o;
   o.overlap_lo = 0.3;
   o.overlap_hi = 0.5;
-  for (auto [agg, n] : {std::pair{Aggregate::kMin, 0u}, {Aggregate::kMean, 1u}, {Aggregate::kMax, 0u}}) {
+  for (auto [agg, n] :
+       {std::pair{Aggregate::kMin, 0u}, {Aggregate::kMean, 1u}, {Aggregate::kMax, 0u}}) {
     o.aggregate = agg;
     DropCounts d;
     EXPECT_EQ(FilterAndSample(s, o, 1, &d).size(), n) << AggregateName(agg);
@@ -228,7 +229,8 @@ std::vector<ScoredPair> RandomScored(size_t n, uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0, 1);
   std::vector<ScoredPair> s;
-  for (size_t k = 0; k < n; ++k) s.push_back(Fake(k, k + 1 + k % 3, u(rng), u(rng), u(rng) * 0.5, u(rng) * 0.5));
+  for (size_t k = 0; k < n; ++k)
+    s.push_back(Fake(k, k + 1 + k % 3, u(rng), u(rng), u(rng) * 0.5, u(rng) * 0.5));
   return s;
 }
 
@@ -245,7 +247,8 @@ TEST(Filters, PropertyDropsAddUpQuotaHoldsAndFiltersAreRespected) {
     o.aggregate = static_cast<Aggregate>(rng() % 3);
     DropCounts d;
     auto chosen = FilterAndSample(scored, o, trial, &d);
-    EXPECT_EQ(static_cast<int64_t>(chosen.size()) + Sum(d, ""), static_cast<int64_t>(scored.size()));
+    EXPECT_EQ(static_cast<int64_t>(chosen.size()) + Sum(d, ""),
+              static_cast<int64_t>(scored.size()));
     if (o.quota_per_scene > 0) EXPECT_LE(chosen.size(), static_cast<size_t>(o.quota_per_scene));
     std::set<size_t> unique(chosen.begin(), chosen.end());
     EXPECT_EQ(unique.size(), chosen.size());
@@ -312,11 +315,13 @@ TEST(Scoring, IdenticalResultsOnOneAndManyThreads) {
   std::vector<double> xs;
   for (int i = 0; i < 12; ++i) xs.push_back(0.13 * i);
   Scene scene = PlaneScene(dir, xs, 2.5, 0.8);
-  auto cands = GenerateCandidates([&] {
-    std::vector<size_t> k;
-    for (size_t i = 0; i < xs.size(); ++i) k.push_back(i);
-    return k;
-  }(), 0);
+  auto cands = GenerateCandidates(
+      [&] {
+        std::vector<size_t> k;
+        for (size_t i = 0; i < xs.size(); ++i) k.push_back(i);
+        return k;
+      }(),
+      0);
   auto run = [&](int threads) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     DepthCache cache(scene, kW, kH, 3 * kW * kH * sizeof(float));  // forces evictions

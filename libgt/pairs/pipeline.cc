@@ -1,0 +1,648 @@
+#include "libgt/pairs/pipeline.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+
+#include "libgt/core/error.h"
+#include "libgt/io/files.h"
+#include "libgt/io/npy.h"
+#include "libgt/io/reader.h"
+#include "libgt/pairs/synthetic.h"
+
+namespace gt::pairs {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+// Imported pairs (LoFTR test.npz): scene → (frame number 0, frame number 1) in file order.
+using ImportList = std::map<std::string, std::vector<std::pair<int64_t, int64_t>>>;
+
+std::vector<int64_t> IntegerValues(const io::NpyArray& a, const std::string& what) {
+  std::vector<int64_t> out(static_cast<size_t>(a.NumElements()));
+  auto copy = [&](auto tag) {
+    using T = decltype(tag);
+    const T* p = a.As<T>(what);
+    for (size_t i = 0; i < out.size(); ++i) out[i] = static_cast<int64_t>(p[i]);
+  };
+  if (a.descr == "<u2")
+    copy(uint16_t{});
+  else if (a.descr == "<i4")
+    copy(int32_t{});
+  else if (a.descr == "<i8")
+    copy(int64_t{});
+  else if (a.descr == "<u4")
+    copy(uint32_t{});
+  else if (a.descr == "<u8")
+    copy(uint64_t{});
+  else
+    throw InputError(what, "dtype '" + a.descr + "', expected an integer array");
+  return out;
+}
+
+ImportList ReadImportList(const std::string& path) {
+  const auto members = io::ReadNpz(path);
+  auto it = members.find("name");
+  if (it == members.end())
+    throw InputError(path, "no member 'name' (expected LoFTR's [N, 4] pair names)");
+  const io::NpyArray& name = it->second;
+  if (name.shape.size() != 2 || name.shape[1] != 4) {
+    throw InputError(path + ":name", "expected shape [N, 4] (scene, sub-scene, frame0, frame1)");
+  }
+  const std::vector<int64_t> v = IntegerValues(name, path + ":name");
+  ImportList list;
+  for (int64_t r = 0; r < name.shape[0]; ++r) {
+    char scene[64];
+    std::snprintf(scene, sizeof(scene), "scene%04lld_%02lld", static_cast<long long>(v[r * 4]),
+                  static_cast<long long>(v[r * 4 + 1]));
+    list[scene].emplace_back(v[r * 4 + 2], v[r * 4 + 3]);
+  }
+  return list;
+}
+
+std::vector<std::string> ResolveScenes(const Recipe& r, const io::DatasetReader& reader,
+                                       const ImportList* imports) {
+  std::vector<std::string> scenes;
+  if (!r.dataset.scenes.empty()) {
+    scenes = r.dataset.scenes;
+  } else if (!r.dataset.split_file.empty()) {
+    for (std::string line : io::ReadLines(r.dataset.split_file)) {
+      while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back())))
+        line.pop_back();
+      if (line.empty() || line[0] == '#') continue;
+      scenes.push_back(line);
+    }
+    if (scenes.empty())
+      throw InputError(r.file, "dataset.split_file: expected at least one scene name");
+  } else if (imports) {
+    for (const auto& [scene, pairs] : *imports) scenes.push_back(scene);
+  }
+  const std::vector<std::string> available = reader.ListScenes(r.dataset.root);
+  if (scenes.empty()) scenes = available;
+  std::sort(scenes.begin(), scenes.end());
+  scenes.erase(std::unique(scenes.begin(), scenes.end()), scenes.end());
+  const std::set<std::string> have(available.begin(), available.end());
+  for (const auto& s : scenes) {
+    if (!have.count(s)) {
+      throw InputError(r.file, "dataset: scene '" + s + "' not found under " + r.dataset.root);
+    }
+  }
+  if (scenes.empty())
+    throw InputError(r.file, "dataset.root: no scenes found under " + r.dataset.root);
+  std::map<std::string, std::string> files;
+  for (const auto& s : scenes) {
+    auto [it, inserted] = files.emplace(SceneFileName(s), s);
+    if (!inserted) {
+      throw InputError(r.file, "dataset: scenes '" + it->second + "' and '" + s +
+                                   "' have the same file name after sanitising");
+    }
+  }
+  return scenes;
+}
+
+struct SceneSelection {
+  std::string scene;
+  std::vector<SelectedPair> pairs;
+  json stats;
+};
+
+json PairJson(const SelectedPair& p) {
+  return {{"scene", p.scene},
+          {"frame0", p.frame0},
+          {"frame1", p.frame1},
+          {"number0", p.number0},
+          {"number1", p.number1},
+          {"score_metrics", {{"01", MetricsJson(p.score01)}, {"10", MetricsJson(p.score10)}}}};
+}
+
+SelectedPair PairFromJson(const json& j) {
+  SelectedPair p;
+  p.scene = j.at("scene").get<std::string>();
+  p.frame0 = j.at("frame0").get<std::string>();
+  p.frame1 = j.at("frame1").get<std::string>();
+  p.number0 = j.at("number0").get<int64_t>();
+  p.number1 = j.at("number1").get<int64_t>();
+  p.score01 = MetricsFromJson(j.at("score_metrics").at("01"));
+  p.score10 = MetricsFromJson(j.at("score_metrics").at("10"));
+  return p;
+}
+
+std::vector<Camera> WorkingCameras(const Scene& scene, int w, int h) {
+  std::vector<Camera> cams;
+  cams.reserve(scene.frames.size());
+  for (const auto& f : scene.frames) cams.push_back(WorkingCamera(f, w, h));
+  return cams;
+}
+
+SceneSelection SelectScene(const Recipe& r, const io::DatasetReader& reader,
+                           const std::string& scene_name, const BuildOptions& options,
+                           const ImportList* imports) {
+  const Scene scene = reader.ReadScene(r.dataset.root, scene_name);
+  const std::vector<Camera> cams = WorkingCameras(scene, r.width, r.height);
+  DepthCache cache(scene, r.width, r.height, options.depth_cache_mb << 20);
+  const LabelOptions labels = RecipeLabelOptions(r, scene);
+  SceneSelection out;
+  out.scene = scene_name;
+  DropCounts drops;
+  std::vector<CandidatePair> candidates, pruned;
+  int64_t frames_kept = 0;
+  if (imports) {
+    std::map<int64_t, size_t> by_number;
+    for (size_t i = 0; i < scene.frames.size(); ++i) by_number[scene.frames[i].number] = i;
+    auto it = imports->find(scene_name);
+    if (it != imports->end()) {
+      for (const auto& [n0, n1] : it->second) {
+        auto a = by_number.find(n0), b = by_number.find(n1);
+        if (a == by_number.end() || b == by_number.end()) {
+          ++drops["import.missing_frame"];
+        } else if (!scene.frames[a->second].usable || !scene.frames[b->second].usable) {
+          ++drops["import.unusable_frame"];
+        } else {
+          candidates.push_back({a->second, b->second});
+        }
+      }
+    }
+    pruned = candidates;
+    frames_kept = static_cast<int64_t>(scene.NumUsable());
+  } else {
+    ScanOptions scan;
+    scan.frame_stride = r.dataset.frame_stride;
+    scan.min_valid_depth_fraction = r.dataset.min_valid_depth_fraction;
+    scan.min_depth_m = labels.min_depth_m;
+    scan.max_depth_m = labels.max_depth_m;
+    const ScanResult scanned = ScanFrames(scene, scan, &cache);
+    AddCounts(scanned.drops, &drops);
+    frames_kept = static_cast<int64_t>(scanned.kept.size());
+    candidates = GenerateCandidates(scanned.kept, r.selection.max_frame_gap);
+    pruned = PruneCandidates(scene, cams, candidates, scanned.median_depth_m, r.selection.pruning,
+                             &drops);
+  }
+  // Imported pairs may list (i0 > i1); scoring and labels keep the file's order.
+  const std::vector<ScoredPair> scored =
+      ScorePairs(scene, cams, pruned, labels, r.selection.score_stride, &cache, &drops);
+  std::vector<size_t> chosen;
+  if (imports) {
+    for (size_t k = 0; k < scored.size(); ++k) chosen.push_back(k);
+  } else {
+    chosen = FilterAndSample(scored, r.selection, SceneSeed(r.seed, scene_name), &drops);
+  }
+  for (size_t k : chosen) {
+    const ScoredPair& s = scored[k];
+    SelectedPair p;
+    p.scene = scene_name;
+    p.frame0 = scene.frames[s.pair.i0].id;
+    p.frame1 = scene.frames[s.pair.i1].id;
+    p.number0 = scene.frames[s.pair.i0].number;
+    p.number1 = scene.frames[s.pair.i1].number;
+    p.score01 = s.m01;
+    p.score10 = s.m10;
+    out.pairs.push_back(p);
+  }
+  out.stats = {{"scene", scene_name},
+               {"frames_total", static_cast<int64_t>(scene.frames.size())},
+               {"frames_kept", frames_kept},
+               {"candidates", static_cast<int64_t>(candidates.size())},
+               {"after_pruning", static_cast<int64_t>(pruned.size())},
+               {"scored", static_cast<int64_t>(scored.size())},
+               {"selected", static_cast<int64_t>(out.pairs.size())},
+               {"drops", drops},
+               {"options_digest", r.Digest()}};
+  return out;
+}
+
+std::string SelectionDir(const BuildOptions& o) { return o.out_dir + "/selection"; }
+std::string SelectionLinesPath(const BuildOptions& o, const std::string& scene) {
+  return SelectionDir(o) + "/" + SceneFileName(scene) + ".jsonl";
+}
+std::string SelectionStatsPath(const BuildOptions& o, const std::string& scene) {
+  return SelectionDir(o) + "/" + SceneFileName(scene) + ".json";
+}
+
+int64_t WriteSelection(const BuildOptions& o, const SceneSelection& s) {
+  std::string lines;
+  for (const auto& p : s.pairs) lines += PairJson(p).dump() + "\n";
+  const std::string stats = s.stats.dump(2) + "\n";
+  io::WriteFileAtomic(SelectionLinesPath(o, s.scene), lines);
+  io::WriteFileAtomic(SelectionStatsPath(o, s.scene), stats);  // completion marker, last
+  return static_cast<int64_t>(lines.size() + stats.size());
+}
+
+// Reads a completed selection; nullopt when the scene is not complete.
+std::optional<SceneSelection> ReadSelection(const BuildOptions& o, const std::string& scene,
+                                            const std::string& digest) {
+  const std::string stats_path = SelectionStatsPath(o, scene);
+  if (!io::FileExists(stats_path)) return std::nullopt;
+  SceneSelection s;
+  s.scene = scene;
+  try {
+    s.stats = json::parse(io::ReadFileBytes(stats_path));
+  } catch (const json::exception& e) {
+    throw InputError(stats_path, std::string("not valid JSON: ") + e.what());
+  }
+  if (s.stats.value("options_digest", "") != digest) {
+    throw InputError(stats_path, "was selected with other options (digest " +
+                                     s.stats.value("options_digest", "?") + ", recipe " + digest +
+                                     "); use a fresh --out folder");
+  }
+  const std::string lines_path = SelectionLinesPath(o, scene);
+  for (const std::string& line : io::ReadLines(lines_path)) {
+    if (line.empty()) continue;
+    try {
+      s.pairs.push_back(PairFromJson(json::parse(line)));
+    } catch (const json::exception& e) {
+      throw InputError(lines_path, std::string("bad selection line: ") + e.what());
+    }
+  }
+  if (static_cast<int64_t>(s.pairs.size()) != s.stats.value("selected", int64_t{-1})) {
+    throw InputError(lines_path, "line count differs from " + stats_path);
+  }
+  return s;
+}
+
+// Everything the write stage needs about one scene.
+struct SceneData {
+  Scene scene;
+  std::unique_ptr<DepthCache> cache;
+  std::map<std::string, size_t> index_of_id;
+  SampleSpec spec;
+  std::once_flag map_once;
+  std::unique_ptr<occupancy::OccupancyMap> scene_map;  // scope scene
+};
+
+occupancy::OccupancyMap FuseFrames(SceneData* d, const std::vector<size_t>& frames,
+                                   const SampleSpec& spec) {
+  std::vector<std::shared_ptr<const DepthImage>> depths;
+  std::vector<occupancy::FusionInput> inputs;
+  for (size_t i : frames) {
+    depths.push_back(d->cache->Get(i));
+    inputs.push_back(
+        {depths.back().get(), WorkingCamera(d->scene.frames[i], spec.width, spec.height),
+         d->scene.frames[i].world_from_cam, spec.labels.min_depth_m, spec.labels.max_depth_m});
+  }
+  return occupancy::FuseOccupancy(inputs, spec.fusion);
+}
+
+}  // namespace
+
+bool BuildOptions::Check(std::string* error) const {
+  if (out_dir.empty()) return *error = "--out: expected an output folder", false;
+  if (tasks < 1) return *error = "--tasks: expected an integer >= 1", false;
+  if (task < 0 || task >= tasks) return *error = "--task: expected 0 <= task < tasks", false;
+  if (stage != "select" && stage != "write" && stage != "all") {
+    return *error = "--stage: expected select, write or all", false;
+  }
+  if (depth_cache_mb < 1) return *error = "depth cache: expected >= 1 MB", false;
+  return true;
+}
+
+std::string SceneFileName(const std::string& scene) {
+  std::string out;
+  for (unsigned char c : scene) {
+    if (c == '/') {
+      out += "__";
+    } else if (std::isalnum(c) || c == '-' || c == '_') {
+      out += static_cast<char>(c);
+    } else {
+      out += '_';
+    }
+  }
+  return out.empty() ? "_" : out;
+}
+
+int64_t EstimatedSampleBytes(const Recipe& r) {
+  const int64_t px = static_cast<int64_t>(r.width) * r.height;
+  int64_t bytes = 4096 + 64 * 1024;  // json + matches
+  if (r.sample.labels) bytes += 2 * px + 2 * px / (r.patches.stride * r.patches.stride);
+  if (r.occupancy.enabled && r.sample.occupancy) {
+    const int64_t rays = px / 4;
+    if (r.occupancy.encoding != "dense") bytes += 2 * 2 * 8 * rays;
+    if (r.occupancy.encoding != "packed") bytes += 2 * r.occupancy.bins * rays;
+  }
+  if (r.sample.image == "png") bytes += 2 * 2 * px;
+  if (r.sample.image == "jpg") bytes += 2 * px * 3 / 10;
+  if (r.sample.depth) bytes += 2 * 4 * px;
+  return bytes;
+}
+
+json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput* output,
+              const ProgressFn& progress) {
+  std::string error;
+  if (!options.Check(&error)) throw InputError("occgt build", error);
+  const auto t_start = Clock::now();
+  Recipe recipe = recipe_in;
+  json summary;
+  summary["recipe"] = recipe.name;
+  summary["split"] = recipe.split;
+  summary["options_digest"] = recipe.Digest();
+  summary["task"] = options.task;
+  summary["tasks"] = options.tasks;
+  summary["stage"] = options.stage;
+  summary["dry_run"] = options.dry_run;
+  json timings = json::object();
+  int64_t bytes_written = 0;
+
+  // Output folder identity: one recipe (options digest) per folder.
+  const std::string recipe_path = options.out_dir + "/recipe.json";
+  json normalised = recipe.ToJson();
+  normalised["options_digest"] = recipe.Digest();
+  if (io::FileExists(recipe_path)) {
+    json existing;
+    try {
+      existing = json::parse(io::ReadFileBytes(recipe_path));
+    } catch (const json::exception&) {
+      throw InputError(recipe_path, "not valid JSON");
+    }
+    if (existing.value("options_digest", "") != recipe.Digest()) {
+      throw InputError("--out " + options.out_dir,
+                       "holds outputs of another recipe (options digest " +
+                           existing.value("options_digest", "?") + "); use a fresh folder");
+    }
+  }
+
+  // Synthetic datasets are generated into DIR/data when missing.
+  if (recipe.dataset.format == "synthetic") {
+    if (recipe.dataset.root.empty()) recipe.dataset.root = options.out_dir + "/data";
+    if (!options.dry_run || !fs::exists(recipe.dataset.root)) {
+      EnsureSyntheticDataset(recipe.dataset.root, recipe.dataset.synthetic);
+    }
+    recipe.dataset.format = "generic";
+  }
+  std::unique_ptr<io::DatasetReader> reader = io::MakeReader(recipe.dataset.format);
+  std::unique_ptr<ImportList> imports;
+  if (!recipe.selection.import_pairs.path.empty()) {
+    imports = std::make_unique<ImportList>(ReadImportList(recipe.selection.import_pairs.path));
+  }
+  const std::vector<std::string> scenes = ResolveScenes(recipe, *reader, imports.get());
+  summary["scenes"] = static_cast<int64_t>(scenes.size());
+  if (!options.dry_run && !io::FileExists(recipe_path)) {
+    io::WriteFileAtomic(recipe_path, normalised.dump(2) + "\n");
+  }
+
+  // ---- phase 1: select ----
+  const auto t_select = Clock::now();
+  std::map<std::string, SceneSelection> selections;
+  int64_t scenes_selected = 0, scenes_reused = 0;
+  if (options.stage != "write") {
+    std::vector<std::string> mine;
+    for (size_t i = 0; i < scenes.size(); ++i) {
+      if (static_cast<int>(i % options.tasks) == options.task) mine.push_back(scenes[i]);
+    }
+    int64_t done = 0;
+    for (const std::string& scene : mine) {
+      if (auto s = ReadSelection(options, scene, recipe.Digest())) {
+        selections[scene] = std::move(*s);
+        ++scenes_reused;
+      } else {
+        SceneSelection sel = SelectScene(recipe, *reader, scene, options, imports.get());
+        if (!options.dry_run) bytes_written += WriteSelection(options, sel);
+        selections[scene] = std::move(sel);
+        ++scenes_selected;
+      }
+      if (progress)
+        progress({"select", ++done, static_cast<int64_t>(mine.size()), Seconds(t_select)});
+    }
+  }
+  timings["select_s"] = Seconds(t_select);
+  summary["scenes_selected_this_run"] = scenes_selected;
+  summary["scenes_reused"] = scenes_reused;
+
+  // Global statistics over every completed scene.
+  bool all_selected = true;
+  for (const std::string& scene : scenes) {
+    if (selections.count(scene)) continue;
+    if (auto s = ReadSelection(options, scene, recipe.Digest())) {
+      selections[scene] = std::move(*s);
+    } else {
+      all_selected = false;
+    }
+  }
+  json counts = {{"frames_total", 0},  {"frames_kept", 0}, {"candidates", 0},
+                 {"after_pruning", 0}, {"scored", 0},      {"selected", 0}};
+  DropCounts drops;
+  json per_scene = json::object();
+  for (const auto& [scene, sel] : selections) {
+    for (auto& [k, v] : counts.items()) v = v.get<int64_t>() + sel.stats.value(k, int64_t{0});
+    for (const auto& [k, v] : sel.stats.at("drops").items()) drops[k] += v.get<int64_t>();
+    per_scene[scene] = sel.stats.at("selected");
+  }
+  summary["counts"] = counts;
+  summary["drops"] = drops;
+  summary["pairs_per_scene"] = per_scene;
+  summary["scenes_complete"] = static_cast<int64_t>(selections.size());
+
+  // The global sample list.
+  std::vector<const SelectedPair*> all;
+  for (const std::string& scene : scenes) {
+    auto it = selections.find(scene);
+    if (it == selections.end()) continue;
+    for (const auto& p : it->second.pairs) all.push_back(&p);
+  }
+  {
+    json ov = json::array(), oc = json::array();
+    std::vector<double> overlaps, occlusions;
+    for (const SelectedPair* p : all) {
+      ScoredPair s;
+      s.m01 = p->score01;
+      s.m10 = p->score10;
+      overlaps.push_back(PairOverlap(s, recipe.selection.aggregate));
+      occlusions.push_back(
+          PairOcclusion(s, recipe.selection.aggregate, recipe.selection.occlusion_metric));
+    }
+    auto stats = [](std::vector<double> v) {
+      if (v.empty()) return json(nullptr);
+      std::sort(v.begin(), v.end());
+      double sum = 0;
+      for (double x : v) sum += x;
+      return json{{"min", v.front()},
+                  {"median", v[v.size() / 2]},
+                  {"mean", sum / v.size()},
+                  {"max", v.back()}};
+    };
+    summary["selected_overlap"] = stats(overlaps);
+    summary["selected_occlusion"] = stats(occlusions);
+  }
+  int64_t samples_per_shard = recipe.shards.samples_per_shard;
+  if (recipe.shards.target_mb > 0) {
+    samples_per_shard = std::max<int64_t>(
+        1, static_cast<int64_t>(recipe.shards.target_mb * 1e6 / EstimatedSampleBytes(recipe)));
+  }
+  const int64_t total = static_cast<int64_t>(all.size());
+  std::vector<int64_t> shard_sizes;
+  for (int64_t start = 0; start < total; start += samples_per_shard) {
+    shard_sizes.push_back(std::min(samples_per_shard, total - start));
+  }
+  summary["samples"] = total;
+  summary["samples_per_shard"] = samples_per_shard;
+  summary["shards_planned"] = static_cast<int64_t>(shard_sizes.size());
+  summary["estimated_bytes"] = total * EstimatedSampleBytes(recipe);
+
+  if (options.dry_run || options.stage == "select") {
+    timings["total_s"] = Seconds(t_start);
+    summary["timings"] = timings;
+    summary["bytes_written"] = bytes_written;
+    summary["complete"] = false;
+    return summary;
+  }
+  if (!all_selected) {
+    throw InputError("--stage write", "the selection of some scenes is not complete in " +
+                                          SelectionDir(options) +
+                                          " (run every task with --stage select first)");
+  }
+
+  // ---- phase 2: write ----
+  const auto t_write = Clock::now();
+  std::vector<std::string> keys(all.size());
+  {
+    std::map<std::string, size_t> seen;
+    for (size_t k = 0; k < all.size(); ++k) {
+      keys[k] = output->SampleKey(all[k]->scene, all[k]->frame0, all[k]->frame1);
+      auto [it, inserted] = seen.emplace(keys[k], k);
+      if (!inserted) {
+        throw InputError("sample key " + keys[k],
+                         "two pairs map to the same key after sanitising (" +
+                             all[it->second]->scene + " and " + all[k]->scene + ")");
+      }
+    }
+  }
+  output->WritePlan(shard_sizes);
+  const SampleSpec base_spec = RecipeSampleOptions(recipe);
+  std::map<std::string, std::unique_ptr<SceneData>> scene_data;
+  auto scene_of = [&](const std::string& name) -> SceneData& {
+    auto& d = scene_data[name];
+    if (!d) {
+      d = std::make_unique<SceneData>();
+      d->scene = reader->ReadScene(recipe.dataset.root, name);
+      d->cache = std::make_unique<DepthCache>(d->scene, recipe.width, recipe.height,
+                                              options.depth_cache_mb << 20);
+      for (size_t i = 0; i < d->scene.frames.size(); ++i) d->index_of_id[d->scene.frames[i].id] = i;
+      d->spec = base_spec;
+      d->spec.labels = RecipeLabelOptions(recipe, d->scene);
+      if (recipe.occupancy.scope == "window") {
+        d->spec.fusion.scope = occupancy::FusionScope::kWindow;
+        d->spec.fusion.window = recipe.occupancy.window;
+      } else if (recipe.occupancy.scope == "scene") {
+        d->spec.fusion.scope = occupancy::FusionScope::kScene;
+        d->spec.fusion.scene_stride = recipe.occupancy.scene_stride;
+      }
+    }
+    return *d;
+  };
+  int64_t shards_written = 0, shards_skipped = 0, samples_written = 0;
+  const int64_t nshards = static_cast<int64_t>(shard_sizes.size());
+  int64_t my_shards = 0;
+  for (int64_t s = 0; s < nshards; ++s) my_shards += (s % options.tasks == options.task) ? 1 : 0;
+  int64_t done_shards = 0;
+  for (int64_t s = 0, start = 0; s < nshards; start += shard_sizes[s], ++s) {
+    if (s % options.tasks != options.task) continue;
+    if (output->IsShardComplete(s)) {
+      ++shards_skipped;
+    } else {
+      const int64_t n = shard_sizes[s];
+      std::vector<SceneData*> data(n);
+      for (int64_t k = 0; k < n; ++k) data[k] = &scene_of(all[start + k]->scene);
+      std::vector<EncodedSample> samples(n);
+      tbb::parallel_for(int64_t{0}, n, [&](int64_t k) {
+        const SelectedPair& p = *all[start + k];
+        SceneData& d = *data[k];
+        auto i0 = d.index_of_id.find(p.frame0), i1 = d.index_of_id.find(p.frame1);
+        if (i0 == d.index_of_id.end() || i1 == d.index_of_id.end()) {
+          throw InputError(SelectionLinesPath(options, p.scene),
+                           "frame " + p.frame0 + " or " + p.frame1 + " no longer in the dataset");
+        }
+        const auto depth0 = d.cache->Get(i0->second);
+        const auto depth1 = d.cache->Get(i1->second);
+        const occupancy::OccupancyMap* shared = nullptr;
+        std::unique_ptr<occupancy::OccupancyMap> window_map;
+        if (d.spec.occupancy && d.spec.mode == occupancy::OccupancyMode::kOctomap) {
+          if (d.spec.fusion.scope == occupancy::FusionScope::kScene) {
+            std::call_once(d.map_once, [&] {
+              d.scene_map = std::make_unique<occupancy::OccupancyMap>(FuseFrames(
+                  &d, occupancy::ScopeFrameIndices(d.scene, i0->second, i1->second, d.spec.fusion),
+                  d.spec));
+            });
+            shared = d.scene_map.get();
+          } else if (d.spec.fusion.scope == occupancy::FusionScope::kWindow) {
+            window_map = std::make_unique<occupancy::OccupancyMap>(FuseFrames(
+                &d, occupancy::ScopeFrameIndices(d.scene, i0->second, i1->second, d.spec.fusion),
+                d.spec));
+            shared = window_map.get();
+          }
+        }
+        samples[k] = ComputeSample(d.scene, i0->second, i1->second, p, keys[start + k], *depth0,
+                                   *depth1, d.spec, shared);
+      });
+      bytes_written += output->WriteShard(s, samples);
+      ++shards_written;
+      samples_written += n;
+    }
+    if (progress) progress({"write", ++done_shards, my_shards, Seconds(t_write)});
+  }
+  timings["write_s"] = Seconds(t_write);
+  summary["shards_written_this_run"] = shards_written;
+  summary["shards_skipped_complete"] = shards_skipped;
+  summary["samples_written_this_run"] = samples_written;
+
+  // ---- indices ----
+  bool complete = true;
+  for (int64_t s = 0; s < nshards && complete; ++s) complete = output->IsShardComplete(s);
+  summary["complete"] = complete;
+  if (complete) {
+    const auto t_index = Clock::now();
+    output->Finish();
+    if (!recipe.loftr_export.empty()) {
+      std::vector<LoftrRow> rows;
+      std::map<std::string, std::array<double, 9>> intrinsics;
+      for (const SelectedPair* p : all) {
+        SceneData& d = scene_of(p->scene);
+        const size_t i0 = d.index_of_id.at(p->frame0), i1 = d.index_of_id.at(p->frame1);
+        LoftrRow row;
+        row.scene = p->scene;
+        row.frame0 = p->number0;
+        row.frame1 = p->number1;
+        ScoredPair s;
+        s.m01 = p->score01;
+        s.m10 = p->score10;
+        row.score = PairOverlap(s, recipe.selection.aggregate);
+        const Rigid3d t =
+            RelativePose(d.scene.frames[i0].world_from_cam, d.scene.frames[i1].world_from_cam);
+        for (int r = 0; r < 3; ++r) {
+          for (int c = 0; c < 4; ++c) row.cam1_from_cam0[r * 4 + c] = t.matrix()(r, c);
+        }
+        rows.push_back(row);
+        if (!intrinsics.count(p->scene)) {
+          const Eigen::Matrix3d K =
+              WorkingCamera(d.scene.frames[i0], recipe.width, recipe.height).K();
+          std::array<double, 9> k9;
+          for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) k9[r * 3 + c] = K(r, c);
+          }
+          intrinsics[p->scene] = k9;
+        }
+      }
+      output->ExportLoftr(recipe.loftr_export, rows, intrinsics);
+    }
+    timings["index_s"] = Seconds(t_index);
+  }
+  timings["total_s"] = Seconds(t_start);
+  summary["timings"] = timings;
+  summary["bytes_written"] = bytes_written;
+  if (complete) {
+    json on_disk = summary;
+    io::WriteFileAtomic(options.out_dir + "/summary.json", on_disk.dump(2) + "\n");
+  }
+  return summary;
+}
+
+}  // namespace gt::pairs
