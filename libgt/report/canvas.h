@@ -1,0 +1,32 @@
+// Small composition helpers shared by the renderers of libgt/report (internal): panels side
+// by side and stacked on a white background, titles, legend strips. Images are BGR
+// CV_8UC3; text is OpenCV's Hershey simplex font at 0.45 scale, black, anti-aliased.
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "libgt/report/pictures.h"
+
+namespace gt::report {
+
+struct LegendEntry {
+  Rgb color;
+  std::string text;
+};
+
+// Black text with its baseline at (x, y).
+void PutText(cv::Mat& image, const std::string& text, int x, int y, double scale = 0.45);
+// a | gap (white) | b, top-aligned, the shorter one padded white below.
+cv::Mat SideBySide(const cv::Mat& a, const cv::Mat& b, int gap = kPanelGap);
+// Images one above the other, left-aligned, narrower ones padded white on the right.
+cv::Mat StackVertical(const std::vector<cv::Mat>& images);
+// A 22-pixel white strip with `title` above the image.
+cv::Mat TitleAbove(const cv::Mat& image, const std::string& title);
+// A white strip `width` wide: colour swatches with their text, `per_row` entries a row,
+// and an optional note on a last line.
+cv::Mat LegendStrip(const std::vector<LegendEntry>& entries, int width, int per_row,
+                    const std::string& note);
+
+}  // namespace gt::report

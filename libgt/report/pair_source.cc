@@ -1,0 +1,395 @@
+#include "libgt/report/pair_source.h"
+
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "libgt/core/error.h"
+#include "libgt/geometry/pair.h"
+#include "libgt/io/depth_io.h"
+#include "libgt/io/files.h"
+#include "libgt/io/image.h"
+#include "libgt/io/npy.h"
+#include "libgt/io/reader.h"
+#include "libgt/occupancy/pair_occupancy.h"
+#include "libgt/shards/tar_shard.h"
+
+namespace gt::report {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::vector<std::string> kArrayFields = {
+    "label01.npy", "label10.npy",    "matches.npy",   "match_type.npy", "match_xy.npy",
+    "cells0.npy",  "cells1.npy",     "occ0.npy",      "known0.npy",     "occ1.npy",
+    "known1.npy",  "occ0_dense.npy", "occ1_dense.npy"};
+
+// Parsed .npy of a required field with the expected dtype and rank.
+gt::io::NpyArray NeedArray(const std::map<std::string, std::string>& fields,
+                           const std::string& field, const std::string& source,
+                           const std::string& descr, size_t rank) {
+  const auto it = fields.find(field);
+  if (it == fields.end()) throw InputError(source, "missing field " + field);
+  gt::io::NpyArray a = gt::io::ParseNpy(it->second, source + ":" + field);
+  if (a.descr != descr || a.shape.size() != rank) {
+    throw InputError(source + ":" + field,
+                     "expected dtype " + descr + " with " + std::to_string(rank) + " dimensions");
+  }
+  return a;
+}
+
+template <typename T>
+std::vector<T> Values(const gt::io::NpyArray& a, const std::string& name) {
+  const T* p = a.As<T>(name);
+  return std::vector<T>(p, p + a.NumElements());
+}
+
+LabelMap LabelsFrom(const gt::io::NpyArray& a, const std::string& name) {
+  LabelMap m;
+  m.height = static_cast<int>(a.shape[0]);
+  m.width = static_cast<int>(a.shape[1]);
+  m.codes = Values<uint8_t>(a, name);
+  return m;
+}
+
+// Depth-first search of the json for `pred(key, value)`; objects in key order.
+const nlohmann::json* FindJson(
+    const nlohmann::json& j,
+    const std::function<bool(const std::string&, const nlohmann::json&)>& pred) {
+  if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      if (pred(it.key(), it.value())) return &it.value();
+    }
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      if (const nlohmann::json* f = FindJson(it.value(), pred)) return f;
+    }
+  } else if (j.is_array()) {
+    for (const auto& e : j) {
+      if (const nlohmann::json* f = FindJson(e, pred)) return f;
+    }
+  }
+  return nullptr;
+}
+
+bool EndsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+std::vector<double> FindEdges(const nlohmann::json& meta, size_t count, const std::string& source) {
+  const nlohmann::json* e = FindJson(meta, [&](const std::string& k, const nlohmann::json& v) {
+    if (!EndsWith(k, "edges_m") || !v.is_array() || v.size() != count) return false;
+    for (const auto& x : v) {
+      if (!x.is_number()) return false;
+    }
+    return true;
+  });
+  if (e == nullptr) {
+    throw InputError(source + ": json", "expected the occupancy bin edges (an array of " +
+                                            std::to_string(count) + " numbers named *edges_m)");
+  }
+  std::vector<double> edges = e->get<std::vector<double>>();
+  for (size_t k = 1; k < edges.size(); ++k) {
+    if (!(edges[k] > edges[k - 1])) {
+      throw InputError(source + ": edges_m", "expected increasing bin edges");
+    }
+  }
+  return edges;
+}
+
+cv::Mat DecodeImage(const std::string& bytes, const std::string& name) {
+  const cv::Mat img =
+      cv::imdecode(std::vector<uint8_t>(bytes.begin(), bytes.end()), cv::IMREAD_UNCHANGED);
+  if (img.empty()) throw InputError(name, "expected a PNG or JPEG image");
+  return img;
+}
+
+cv::Mat FieldImage(const std::map<std::string, std::string>& fields, const std::string& stem,
+                   const std::string& source) {
+  for (const char* ext : {".png", ".jpg", ".jpeg"}) {
+    const auto it = fields.find(stem + ext);
+    if (it != fields.end()) return DecodeImage(it->second, source + ":" + it->first);
+  }
+  return cv::Mat();
+}
+
+cv::Mat BgrFromColor(const gt::io::ColorImage& c) {
+  cv::Mat rgb(c.height, c.width, CV_8UC3, const_cast<uint8_t*>(c.rgb.data()));
+  cv::Mat bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  return bgr;
+}
+
+gt::occupancy::FrustumVolume VolumeFromFields(const std::map<std::string, std::string>& fields,
+                                              int cam, const nlohmann::json& meta,
+                                              const std::string& source) {
+  const std::string c = std::to_string(cam);
+  if (fields.count("occ" + c + ".npy")) {
+    const auto occ = NeedArray(fields, "occ" + c + ".npy", source, "<u8", 2);
+    const auto known = NeedArray(fields, "known" + c + ".npy", source, "<u8", 2);
+    if (occ.shape != known.shape) {
+      throw InputError(source + ":known" + c + ".npy", "expected the shape of occ" + c);
+    }
+    gt::occupancy::FrustumVolume v;
+    v.height = static_cast<int>(occ.shape[0]);
+    v.width = static_cast<int>(occ.shape[1]);
+    v.occ = Values<uint64_t>(occ, source + ":occ" + c + ".npy");
+    v.known = Values<uint64_t>(known, source + ":known" + c + ".npy");
+    // The number of bins: the edges array decides; try 64 first (the paper), then any.
+    const nlohmann::json* e = FindJson(meta, [](const std::string& k, const nlohmann::json& x) {
+      return EndsWith(k, "edges_m") && x.is_array() && x.size() >= 2 && x.size() <= 65;
+    });
+    if (e == nullptr) {
+      throw InputError(source + ": json", "expected the occupancy bin edges (*edges_m)");
+    }
+    v.edges_m = FindEdges(meta, e->size(), source);
+    const uint64_t mask = v.num_bins() >= 64 ? ~0ULL : ((1ULL << v.num_bins()) - 1);
+    for (size_t r = 0; r < v.occ.size(); ++r) {
+      if ((v.occ[r] & ~v.known[r]) != 0 || (v.known[r] & ~mask) != 0) {
+        throw InputError(source + ":occ" + c + ".npy",
+                         "expected occ within known and bits < number of bins");
+      }
+    }
+    return v;
+  }
+  const auto dense = NeedArray(fields, "occ" + c + "_dense.npy", source, "|u1", 3);
+  const int bins = static_cast<int>(dense.shape[0]);
+  return VolumeFromDense(Values<uint8_t>(dense, source), bins, static_cast<int>(dense.shape[1]),
+                         static_cast<int>(dense.shape[2]),
+                         FindEdges(meta, static_cast<size_t>(bins) + 1, source));
+}
+
+}  // namespace
+
+PairData PairFromFields(const std::map<std::string, std::string>& fields, const std::string& source,
+                        const cv::Mat& image0, const cv::Mat& image1) {
+  PairData p;
+  p.name = source;
+  for (const char* j : {"json", "meta.json"}) {
+    const auto it = fields.find(j);
+    if (it == fields.end()) continue;
+    try {
+      p.meta = nlohmann::json::parse(it->second);
+    } catch (const nlohmann::json::exception& e) {
+      throw InputError(source + ":" + j, std::string("expected JSON: ") + e.what());
+    }
+  }
+  p.labels01 = LabelsFrom(NeedArray(fields, "label01.npy", source, "|u1", 2), source);
+  p.labels10 = LabelsFrom(NeedArray(fields, "label10.npy", source, "|u1", 2), source);
+  p.width = p.labels01.width;
+  p.height = p.labels01.height;
+  if (p.width <= 0 || p.height <= 0) throw InputError(source + ":label01.npy", "empty");
+
+  const auto matches = NeedArray(fields, "matches.npy", source, "<i4", 2);
+  const auto types = NeedArray(fields, "match_type.npy", source, "|u1", 1);
+  const auto xy = NeedArray(fields, "match_xy.npy", source, "<f4", 2);
+  const auto cells0 = NeedArray(fields, "cells0.npy", source, "|u1", 2);
+  const auto cells1 = NeedArray(fields, "cells1.npy", source, "|u1", 2);
+  const int64_t m = types.shape[0];
+  if ((matches.shape[0] != m || matches.shape[1] != 2) || (xy.shape[0] != m || xy.shape[1] != 2)) {
+    throw InputError(source + ":matches.npy",
+                     "expected matches [M, 2], match_type [M], match_xy [M, 2] with equal M");
+  }
+  p.matches.matches = Values<int32_t>(matches, source + ":matches.npy");
+  p.matches.match_type = Values<uint8_t>(types, source + ":match_type.npy");
+  p.matches.match_xy = Values<float>(xy, source + ":match_xy.npy");
+  p.matches.cells_h0 = static_cast<int>(cells0.shape[0]);
+  p.matches.cells_w0 = static_cast<int>(cells0.shape[1]);
+  p.matches.cells_h1 = static_cast<int>(cells1.shape[0]);
+  p.matches.cells_w1 = static_cast<int>(cells1.shape[1]);
+  p.matches.cells0 = Values<uint8_t>(cells0, source + ":cells0.npy");
+  p.matches.cells1 = Values<uint8_t>(cells1, source + ":cells1.npy");
+  if (p.matches.cells_w0 <= 0 || p.width % p.matches.cells_w0 > p.width / p.matches.cells_w0) {
+    throw InputError(source + ":cells0.npy", "expected (H/s, W/s) cells for the label size");
+  }
+  p.stride = p.width / p.matches.cells_w0;
+  if (p.height / p.stride != p.matches.cells_h0) {
+    throw InputError(source + ":cells0.npy", "expected " + std::to_string(p.height / p.stride) +
+                                                 " rows of cells for stride " +
+                                                 std::to_string(p.stride));
+  }
+  if (const nlohmann::json* a = FindJson(p.meta, [](const std::string& k, const nlohmann::json& v) {
+        return k == "anchor" && v.is_string();
+      })) {
+    p.anchor = gt::ParseAnchor(a->get<std::string>(), source + ": anchor");
+  }
+
+  cv::Mat img0 = image0.empty() ? FieldImage(fields, "image0", source) : image0;
+  cv::Mat img1 = image1.empty() ? FieldImage(fields, "image1", source) : image1;
+  p.has_images = !img0.empty() && !img1.empty();
+  p.image0 = PrepareImage(img0, p.width, p.height);
+  p.image1 = PrepareImage(img1, p.labels10.width, p.labels10.height);
+
+  const bool occ0 = fields.count("occ0.npy") || fields.count("occ0_dense.npy");
+  const bool occ1 = fields.count("occ1.npy") || fields.count("occ1_dense.npy");
+  if (occ0 && occ1) {
+    p.occ0 = VolumeFromFields(fields, 0, p.meta, source);
+    p.occ1 = VolumeFromFields(fields, 1, p.meta, source);
+    p.has_occupancy = true;
+  }
+  return p;
+}
+
+PairData LoadPairFromShard(const std::string& tar_path, const std::string& key) {
+  const gt::shards::Sample sample = gt::shards::ReadShardSample(tar_path, key);
+  std::map<std::string, std::string> fields;
+  for (const auto& f : sample.fields) fields[f.name] = f.bytes;
+  return PairFromFields(fields, tar_path + ":" + key);
+}
+
+PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
+                         const std::string& image1_path) {
+  if (!fs::is_directory(dir)) throw InputError(dir, "expected an `occgt pair` output folder");
+  std::map<std::string, std::string> fields;
+  std::vector<std::string> names = kArrayFields;
+  for (const char* extra : {"meta.json", "image0.png", "image1.png", "image0.jpg", "image1.jpg"}) {
+    names.push_back(extra);
+  }
+  for (const std::string& name : names) {
+    const std::string path = (fs::path(dir) / name).string();
+    if (gt::io::FileExists(path)) fields[name] = gt::io::ReadFileBytes(path);
+  }
+  cv::Mat img0, img1;
+  std::string p0 = image0_path, p1 = image1_path;
+  if (p0.empty() && p1.empty() && !fields.count("image0.png") && !fields.count("image0.jpg") &&
+      fields.count("meta.json")) {
+    // Colour paths recorded by `occgt pair` (frame 0 first: "frame0" < "frame1" in key order).
+    std::vector<std::string> paths;
+    std::function<void(const nlohmann::json&)> collect = [&](const nlohmann::json& j) {
+      if (j.is_object()) {
+        for (auto it = j.begin(); it != j.end(); ++it) {
+          if (it.key() == "color_path" && it.value().is_string()) {
+            paths.push_back(it.value().get<std::string>());
+          } else {
+            collect(it.value());
+          }
+        }
+      } else if (j.is_array()) {
+        for (const auto& e : j) collect(e);
+      }
+    };
+    try {
+      collect(nlohmann::json::parse(fields["meta.json"]));
+    } catch (const nlohmann::json::exception&) {
+      // PairFromFields reports the parse error with the file name.
+    }
+    if (paths.size() >= 2 && gt::io::FileExists(paths[0]) && gt::io::FileExists(paths[1])) {
+      p0 = paths[0];
+      p1 = paths[1];
+    }
+  }
+  if (!p0.empty()) img0 = BgrFromColor(gt::io::ReadColor(p0));
+  if (!p1.empty()) img1 = BgrFromColor(gt::io::ReadColor(p1));
+  return PairFromFields(fields, dir, img0, img1);
+}
+
+bool ComputePairOptions::Check(std::string* error) const {
+  if (width <= 0 || height <= 0) {
+    *error = "resolution: expected positive width and height";
+    return false;
+  }
+  if (!patches.Check(error)) return false;
+  if (!bins.Check(error)) return false;
+  if (!(voxel_size_m > 0)) {
+    *error = "voxel_size_m: expected > 0";
+    return false;
+  }
+  return true;
+}
+
+PairData ComputePairFromScene(const std::string& root, const std::string& format,
+                              const std::string& scene_name, const std::string& id0,
+                              const std::string& id1, const ComputePairOptions& options) {
+  std::string error;
+  if (!options.Check(&error)) throw InputError("inspect options", error);
+  const auto reader = gt::io::MakeReader(format);
+  const gt::Scene scene = reader->ReadScene(root, scene_name);
+  auto find = [&](const std::string& id) -> const gt::Frame& {
+    for (const auto& f : scene.frames) {
+      if (f.id == id) {
+        if (!f.usable)
+          throw InputError("--frames", "frame " + id + " is unusable: " + f.unusable_reason);
+        return f;
+      }
+    }
+    throw InputError("--frames", "scene " + scene_name + " has no frame " + id);
+  };
+  const gt::Frame& f0 = find(id0);
+  const gt::Frame& f1 = find(id1);
+  const int w = options.width, h = options.height;
+  const gt::DepthImage d0 = gt::ResizeDepthNearest(gt::io::ReadDepth(f0.depth), w, h);
+  const gt::DepthImage d1 = gt::ResizeDepthNearest(gt::io::ReadDepth(f1.depth), w, h);
+  const gt::Camera c0 = f0.depth_camera.Resized(w, h);
+  const gt::Camera c1 = f1.depth_camera.Resized(w, h);
+  gt::LabelOptions lo = gt::LabelPreset(options.preset);
+  lo.min_depth_m = scene.min_depth_m;
+  lo.max_depth_m = scene.max_depth_m;
+  const gt::PairLabels pl =
+      gt::LabelPair(d0, c0, f0.world_from_cam, d1, c1, f1.world_from_cam, lo, options.patches);
+
+  PairData p;
+  p.name = scene_name + " " + id0 + "," + id1;
+  p.width = w;
+  p.height = h;
+  p.labels01 = {pl.l01.width, pl.l01.height, pl.l01.labels};
+  p.labels10 = {pl.l10.width, pl.l10.height, pl.l10.labels};
+  p.matches = pl.patches;
+  p.stride = options.patches.stride;
+  p.anchor = options.patches.anchor;
+  cv::Mat img0, img1;
+  if (!f0.color_path.empty()) img0 = BgrFromColor(gt::io::ReadColor(f0.color_path));
+  if (!f1.color_path.empty()) img1 = BgrFromColor(gt::io::ReadColor(f1.color_path));
+  p.has_images = !img0.empty() && !img1.empty();
+  p.image0 = PrepareImage(img0, w, h);
+  p.image1 = PrepareImage(img1, w, h);
+  if (options.occupancy) {
+    gt::occupancy::FusionInput in0{&d0, c0, f0.world_from_cam, scene.min_depth_m,
+                                   scene.max_depth_m};
+    gt::occupancy::FusionInput in1{&d1, c1, f1.world_from_cam, scene.min_depth_m,
+                                   scene.max_depth_m};
+    gt::occupancy::FusionOptions fo;
+    fo.voxel_size_m = options.voxel_size_m;
+    const auto occ = gt::occupancy::ComputePairOccupancy(in0, in1, fo, options.bins,
+                                                         gt::occupancy::OccupancyMode::kOctomap);
+    p.occ0 = occ.cam0;
+    p.occ1 = occ.cam1;
+    p.has_occupancy = true;
+  }
+  return p;
+}
+
+bool PairPictureOptions::Check(std::string* error) const {
+  return matches.Check(error) && labels.Check(error) && occupancy.Check(error);
+}
+
+PairPictures RenderPair(const PairData& pair, const PairPictureOptions& options) {
+  std::string error;
+  if (!options.Check(&error)) throw InputError("inspect options", error);
+  PairPictures out;
+  MatchPictureOptions mo = options.matches;
+  mo.stride = pair.stride;
+  mo.anchor = pair.anchor;
+  out.matches = RenderMatches(pair.image0, pair.image1, pair.matches, mo);
+  out.labels = RenderLabels(pair.image0, pair.labels01, pair.image1, pair.labels10, options.labels);
+  if (pair.has_occupancy) out.occupancy = RenderOccupancy(pair.occ0, &pair.occ1, options.occupancy);
+  return out;
+}
+
+std::vector<std::string> WritePairPictures(const PairPictures& pictures,
+                                           const std::string& out_dir) {
+  std::vector<std::string> written;
+  auto write = [&](const cv::Mat& m, const char* name) {
+    if (m.empty()) return;
+    const std::string path = (fs::path(out_dir) / name).string();
+    gt::io::WriteFileAtomic(path, EncodePng(m));
+    written.push_back(path);
+  };
+  write(pictures.matches, "matches.png");
+  write(pictures.labels, "labels.png");
+  write(pictures.occupancy, "occupancy.png");
+  return written;
+}
+
+}  // namespace gt::report

@@ -1,0 +1,97 @@
+// The arrays of one pair for the pictures of pictures.h, from the three places a pair can
+// come from, and the pictures of a pair written as PNG files (`occgt inspect pair`).
+//
+// Sources:
+//  - a WebDataset shard sample (SHARDS.md; fields written by `occgt build`): "json" (the
+//    sample metadata), "label01.npy", "label10.npy" (uint8 [H, W]), "matches.npy" (int32
+//    [M, 2]), "match_type.npy" (uint8 [M]), "match_xy.npy" (float32 [M, 2]), "cells0.npy",
+//    "cells1.npy" (uint8 [H/s, W/s]), optional "image0.png"/"image1.png" (or .jpg) and
+//    optional occupancy "occ0.npy"/"known0.npy"/"occ1.npy"/"known1.npy" (uint64 [H/2, W/2])
+//    or dense "occ0_dense.npy"/"occ1_dense.npy" (uint8 [D, H/2, W/2]);
+//  - an `occgt pair` output folder: the same arrays as files, "meta.json" instead of the
+//    sample json, colour images as image0.png/image1.png in the folder or through the
+//    "color_path" entries of meta.json (or given explicitly);
+//  - a scene and two frame ids: computed here with libgt/geometry (labels, matches) and,
+//    when asked, libgt/occupancy (pair fusion, 64 bins).
+// Metadata lookups: the patch stride is W / (columns of cells0); the anchor rule is the
+// first "anchor" string found in the json ("center" when absent); occupancy bin edges are
+// the first numeric array of D + 1 entries under a key "edges_m" or "bin_edges_m" (or
+// one ending in "edges_m", e.g. "occupancy_edges_m"). A missing or malformed array is an
+// InputError naming the source and the field.
+#pragma once
+
+#include <map>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "libgt/geometry/labels.h"
+#include "libgt/geometry/patches.h"
+#include "libgt/occupancy/frustum.h"
+#include "libgt/report/pictures.h"
+
+namespace gt::report {
+
+struct PairData {
+  std::string name;           // "<shard>:<key>", a folder, or "<scene> <id0>,<id1>"
+  int width = 0, height = 0;  // working resolution (size of label01)
+  cv::Mat image0, image1;     // BGR CV_8UC3 at the working resolution (grey when absent)
+  bool has_images = false;    // false when grey placeholders stand in for the colour
+  LabelMap labels01, labels10;
+  gt::PatchMatches matches;  // cells_w*/cells_h* filled
+  int stride = 8;
+  gt::Anchor anchor = gt::Anchor::kCenter;
+  bool has_occupancy = false;
+  gt::occupancy::FrustumVolume occ0, occ1;
+  nlohmann::json meta;  // the sample json / meta.json (null when computed here)
+};
+
+// Fields by name ("label01.npy" → bytes). `source` names the origin in error messages.
+// image0/image1 override colour from the fields when non-empty.
+PairData PairFromFields(const std::map<std::string, std::string>& fields, const std::string& source,
+                        const cv::Mat& image0 = cv::Mat(), const cv::Mat& image1 = cv::Mat());
+
+// Sample `key` of a shard (gt::shards::ReadShardSample).
+PairData LoadPairFromShard(const std::string& tar_path, const std::string& key);
+
+// An `occgt pair` output folder. image0_path/image1_path ("" = image*.png in the folder,
+// else meta.json's color_path entries, else grey placeholders).
+PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path = "",
+                         const std::string& image1_path = "");
+
+struct ComputePairOptions {
+  std::string preset = "default";  // label preset (GROUND_TRUTH.md §2)
+  int width = 640, height = 480;   // working resolution
+  gt::PatchOptions patches;        // stride 8, centre anchors, mutual
+  bool occupancy = true;           // also fuse the pair and bin it (64 linear bins)
+  gt::occupancy::BinOptions bins;  // near/far of the frustum bins
+  double voxel_size_m = 0.05;      // OctoMap resolution of the pair fusion
+  bool Check(std::string* error) const;
+};
+
+// Reads scene `scene` of `root` with the reader of `format`, and computes frames id0, id1.
+PairData ComputePairFromScene(const std::string& root, const std::string& format,
+                              const std::string& scene, const std::string& id0,
+                              const std::string& id1, const ComputePairOptions& options);
+
+struct PairPictureOptions {
+  MatchPictureOptions matches;  // stride/anchor are taken from the PairData
+  LabelPictureOptions labels;
+  OccupancyPictureOptions occupancy;
+  bool Check(std::string* error) const;
+};
+
+struct PairPictures {
+  cv::Mat matches;    // RenderMatches
+  cv::Mat labels;     // RenderLabels
+  cv::Mat occupancy;  // RenderOccupancy; empty when the pair has none
+};
+PairPictures RenderPair(const PairData& pair, const PairPictureOptions& options);
+
+// Writes matches.png, labels.png and (when present) occupancy.png into out_dir atomically;
+// returns the paths written.
+std::vector<std::string> WritePairPictures(const PairPictures& pictures,
+                                           const std::string& out_dir);
+
+}  // namespace gt::report
