@@ -129,7 +129,9 @@ std::string MakeSampleKey(std::string_view scene, std::string_view frame0_id,
                           std::string_view frame1_id) {
   std::string key = SanitizeScenePath(scene);
   if (!key.empty()) key += '/';
-  key += SanitizeKeyComponent(frame0_id) + "_" + SanitizeKeyComponent(frame1_id);
+  std::string base = SanitizeKeyComponent(frame0_id) + "_" + SanitizeKeyComponent(frame1_id);
+  if (base.rfind("__", 0) == 0) base.insert(base.begin(), 'x');  // e.g. ids "_" and "7"
+  key += base;
   if (std::string e = CheckSampleKey(key); !e.empty()) {
     throw InputError("sample key " + key, e);
   }

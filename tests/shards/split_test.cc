@@ -1,0 +1,364 @@
+// Split layout: part records, merge (index.json, pairs.jsonl) and validate, including the
+// failures they must catch (missing / corrupt shards and part records), through the
+// library and through `occgt merge` / `occgt validate`.
+//
+// With OCCGT_SHARDS_DEMO_OUT=<dir> set, ShardsDemo.WriteDemoSplit writes a small split
+// with the field set of `occgt build` to <dir> and merges it with the occgt binary; the
+// Python integration test tests/integration/shards_test.py reads that folder.
+#include "libgt/shards/split.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "libgt/core/error.h"
+#include "libgt/io/files.h"
+#include "libgt/io/npy.h"
+#include "libgt/shards/loftr_export.h"
+#include "tests/support/test_support.h"
+
+namespace gt::shards {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::string SchemasDir() { return std::string(OCCGT_SOURCE_DIR) + "/schemas"; }
+
+// A sample like the ones `occgt build` writes (small arrays).
+Sample PairSample(const std::string& scene, int f0, int f1, std::mt19937* rng, int w = 16,
+                  int h = 12) {
+  Sample s;
+  s.key = MakeSampleKey(scene, std::to_string(f0), std::to_string(f1));
+  json meta;
+  meta["scene"] = scene;
+  meta["frame0"] = f0;
+  meta["frame1"] = f1;
+  s.fields.push_back({"json", meta.dump()});
+  std::vector<uint8_t> label(static_cast<size_t>(w * h));
+  for (auto& v : label) v = static_cast<uint8_t>((*rng)() % 6);
+  s.fields.push_back({"label01.npy", io::EncodeNpy<uint8_t>({h, w}, label)});
+  for (auto& v : label) v = static_cast<uint8_t>((*rng)() % 6);
+  s.fields.push_back({"label10.npy", io::EncodeNpy<uint8_t>({h, w}, label)});
+  std::vector<int32_t> matches(static_cast<size_t>(5 * 2));
+  for (auto& v : matches) v = static_cast<int32_t>((*rng)() % 48);
+  s.fields.push_back({"matches.npy", io::EncodeNpy<int32_t>({5, 2}, matches)});
+  std::vector<float> depth(static_cast<size_t>(w * h));
+  for (auto& v : depth) v = 0.5f + static_cast<float>((*rng)() % 400) / 100.0f;
+  s.fields.push_back({"depth0.npy", io::EncodeNpy<float>({h, w}, depth)});
+  cv::Mat image(h, w, CV_8UC3);
+  for (int i = 0; i < h * w * 3; ++i) image.data[i] = static_cast<uint8_t>((*rng)() % 256);
+  std::vector<uint8_t> png;
+  cv::imencode(".png", image, png);
+  s.fields.push_back({"image0.png", std::string(png.begin(), png.end())});
+  return s;
+}
+
+std::string PairLine(const std::string& scene, int f0, int f1, double overlap) {
+  json line;
+  line["scene"] = scene;
+  line["frame0"] = f0;
+  line["frame1"] = f1;
+  line["overlap_01"] = overlap;
+  return line.dump();
+}
+
+struct DemoPair {
+  std::string scene;
+  int f0, f1;
+};
+std::vector<DemoPair> DemoPairs() {
+  std::vector<DemoPair> pairs;
+  for (int k = 0; k < 7; ++k) pairs.push_back({"scene0707_00", 15 * k, 15 * k + 300});
+  for (int k = 0; k < 4; ++k) pairs.push_back({"hospital/Easy/P036", k, k + 10});
+  return pairs;
+}
+
+// Writes a 3-shard split (4 + 4 + 3 samples) with plan and part records.
+void WriteSplit(const std::string& dir, const std::string& split = "train") {
+  const auto pairs = DemoPairs();
+  const SplitPlan plan = PlanEqualShards(split, static_cast<int64_t>(pairs.size()), 4);
+  WritePlan(dir, plan);
+  std::mt19937 rng(5);
+  size_t next = 0;
+  for (size_t s = 0; s < plan.shard_nsamples.size(); ++s) {
+    SplitShardWriter writer(dir, split, static_cast<int64_t>(s));
+    for (int64_t k = 0; k < plan.shard_nsamples[s]; ++k, ++next) {
+      const DemoPair& p = pairs[next];
+      writer.Add(PairSample(p.scene, p.f0, p.f1, &rng),
+                 PairLine(p.scene, p.f0, p.f1, 0.1 * static_cast<double>(next % 9)));
+    }
+    writer.Finish();
+  }
+}
+
+std::string Md5sumTool(const std::string& path) {
+  const auto r = test::RunShell("md5sum '" + path + "'");
+  EXPECT_EQ(r.exit_code, 0);
+  return r.stdout_text.substr(0, 32);
+}
+
+TEST(Split, PlanCutsEquallyAndRoundTrips) {
+  const SplitPlan plan = PlanEqualShards("val", 10, 4);
+  EXPECT_EQ(plan.shard_nsamples, (std::vector<int64_t>{4, 4, 2}));
+  EXPECT_TRUE(PlanEqualShards("val", 0, 4).shard_nsamples.empty());
+  EXPECT_EQ(PlanEqualShards("val", 8, 4).shard_nsamples, (std::vector<int64_t>{4, 4}));
+  const std::string dir = test::ScratchDir("split_plan");
+  WritePlan(dir, plan);
+  EXPECT_EQ(ReadPlan(dir, "val").shard_nsamples, plan.shard_nsamples);
+  EXPECT_EQ(ListPlannedSplits(dir), std::vector<std::string>{"val"});
+  EXPECT_EQ(ShardFileName("val", 12), "val-000012.tar");
+  EXPECT_EQ(PartRecordPath(dir, "val", 3), dir + "/parts/val-000003.json");
+  EXPECT_THROW(WritePlan(dir, PlanEqualShards("bad/name", 1, 1)), InputError);
+  io::WriteFileAtomic(PlanPath(dir, "broken"), "{\"split\": \"broken\", \"nshards\": 2}");
+  EXPECT_THROW(ReadPlan(dir, "broken"), InputError);
+}
+
+TEST(Split, MergeWritesIndexAndPairsMatchingTheFiles) {
+  const std::string dir = test::ScratchDir("split_merge");
+  WriteSplit(dir);
+  for (int s = 0; s < 3; ++s) EXPECT_TRUE(IsShardComplete(dir, "train", s, true));
+  EXPECT_FALSE(IsShardComplete(dir, "train", 3));
+
+  MergeOptions options;
+  options.schemas_dir = SchemasDir();
+  const MergeResult result = MergeSplit(dir, options);
+  EXPECT_EQ(result.split, "train");
+  EXPECT_EQ(result.nshards, 3);
+  EXPECT_EQ(result.nsamples, 11);
+
+  const json index = json::parse(io::ReadFileBytes(dir + "/index.json"));
+  EXPECT_EQ(index["__kind__"], "wids-shard-index-v1");
+  EXPECT_EQ(index["wids_version"], 1);
+  EXPECT_EQ(index["name"], "train");
+  ASSERT_EQ(index["shardlist"].size(), 3u);
+  const std::vector<int> expected_counts = {4, 4, 3};
+  int64_t bytes = 0;
+  for (int s = 0; s < 3; ++s) {
+    const json& e = index["shardlist"][s];
+    const std::string url = ShardFileName("train", s);
+    EXPECT_EQ(e["url"], url);
+    EXPECT_EQ(e["nsamples"], expected_counts[s]);
+    EXPECT_EQ(e["md5sum"], Md5sumTool(dir + "/" + url));  // recomputed independently
+    EXPECT_EQ(e["filesize"], static_cast<int64_t>(fs::file_size(dir + "/" + url)));
+    EXPECT_EQ(static_cast<int64_t>(ReadShardSamples(dir + "/" + url).size()), expected_counts[s]);
+    bytes += e["filesize"].get<int64_t>();
+  }
+  EXPECT_EQ(result.total_bytes, bytes);
+  EXPECT_TRUE(ValidateJsonAgainstSchema(index.dump(), SchemasDir() + "/index.schema.json").empty());
+
+  // pairs.jsonl: one line per sample, in shard order, naming the shard and key holding it.
+  const auto lines = io::ReadLines(dir + "/pairs.jsonl");
+  const auto pairs = DemoPairs();
+  ASSERT_EQ(lines.size(), pairs.size());
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const json line = json::parse(lines[i]);
+    EXPECT_EQ(line["scene"], pairs[i].scene);
+    EXPECT_EQ(line["frame0"], pairs[i].f0);
+    const std::string shard = ShardFileName("train", static_cast<int64_t>(i / 4));
+    EXPECT_EQ(line["shard"], shard);
+    EXPECT_EQ(line["key"], MakeSampleKey(pairs[i].scene, std::to_string(pairs[i].f0),
+                                         std::to_string(pairs[i].f1)));
+    EXPECT_NO_THROW(ReadShardSample(dir + "/" + shard, line["key"]));
+  }
+  const json summary = json::parse(MergeSummaryJson(result));
+  EXPECT_EQ(summary["pairs_per_scene"]["scene0707_00"], 7);
+  EXPECT_EQ(summary["pairs_per_scene"]["hospital/Easy/P036"], 4);
+
+  EXPECT_TRUE(ValidateSplit(dir, ValidateOptions{SchemasDir()}).empty());
+
+  // Deterministic: the same samples in another folder give identical bytes.
+  const std::string dir2 = test::ScratchDir("split_merge_again");
+  WriteSplit(dir2);
+  MergeSplit(dir2, options);
+  for (const std::string& f :
+       std::vector<std::string>{"index.json", "pairs.jsonl", "train-000000.tar", "train-000002.tar",
+                                "parts/train-000001.json"}) {
+    EXPECT_EQ(io::ReadFileBytes(dir + "/" + f), io::ReadFileBytes(dir2 + "/" + f)) << f;
+  }
+}
+
+// Expects MergeSplit to throw an InputError whose message contains `needle`, and no index.
+void ExpectMergeFails(const std::string& dir, const std::string& needle) {
+  fs::remove(dir + "/index.json");
+  try {
+    MergeSplit(dir, MergeOptions{});
+    ADD_FAILURE() << "merge accepted a broken split; expected " << needle;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos);
+  }
+  EXPECT_FALSE(fs::exists(dir + "/index.json"));
+}
+
+TEST(Split, MergeFailsNamingAMissingOrCorruptShard) {
+  {
+    const std::string dir = test::ScratchDir("merge_missing_tar");
+    WriteSplit(dir);
+    fs::remove(dir + "/train-000001.tar");
+    ExpectMergeFails(dir, "train-000001.tar");
+  }
+  {
+    const std::string dir = test::ScratchDir("merge_missing_part");
+    WriteSplit(dir);
+    fs::remove(dir + "/parts/train-000002.json");
+    ExpectMergeFails(dir, "train-000002.tar");
+  }
+  {
+    const std::string dir = test::ScratchDir("merge_flipped_byte");
+    WriteSplit(dir);
+    const std::string path = dir + "/train-000001.tar";
+    std::string bytes = io::ReadFileBytes(path);
+    bytes[700] ^= 0x01;  // inside the first member's data: same size, other MD5
+    io::WriteFileAtomic(path, bytes);
+    ExpectMergeFails(dir, "train-000001.tar: md5");
+  }
+  {
+    const std::string dir = test::ScratchDir("merge_truncated");
+    WriteSplit(dir);
+    const std::string path = dir + "/train-000000.tar";
+    io::WriteFileAtomic(path, io::ReadFileBytes(path).substr(0, 2048));
+    ExpectMergeFails(dir, "train-000000.tar: size");
+  }
+  {
+    // Consistent record and tar, but fewer samples than the plan promised.
+    const std::string dir = test::ScratchDir("merge_plan_mismatch");
+    WriteSplit(dir);
+    SplitPlan plan = ReadPlan(dir, "train");
+    plan.shard_nsamples[2] = 5;
+    WritePlan(dir, plan);
+    ExpectMergeFails(dir, "train-000002.tar: holds 3 samples, the plan says 5");
+  }
+  {
+    // A tar replaced by a different valid shard with a matching record is caught by keys.
+    const std::string dir = test::ScratchDir("merge_swapped");
+    WriteSplit(dir);
+    fs::copy_file(dir + "/train-000000.tar", dir + "/train-000001.tar",
+                  fs::copy_options::overwrite_existing);
+    json rec = json::parse(io::ReadFileBytes(PartRecordPath(dir, "train", 1)));
+    rec["md5sum"] = io::Md5HexOfFile(dir + "/train-000001.tar");
+    rec["filesize"] = fs::file_size(dir + "/train-000001.tar");
+    io::WriteFileAtomic(PartRecordPath(dir, "train", 1), rec.dump());
+    ExpectMergeFails(dir, "train-000001.tar");
+  }
+  {
+    const std::string dir = test::ScratchDir("merge_no_plan");
+    WriteSplit(dir);
+    fs::remove(PlanPath(dir, "train"));
+    ExpectMergeFails(dir, "parts");
+  }
+}
+
+TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
+  const std::string dir = test::ScratchDir("validate_problems");
+  WriteSplit(dir);
+  MergeSplit(dir, MergeOptions{});
+  ASSERT_TRUE(ValidateSplit(dir, ValidateOptions{SchemasDir()}).empty());
+
+  std::string bytes = io::ReadFileBytes(dir + "/train-000000.tar");
+  bytes[900] ^= 0x20;
+  io::WriteFileAtomic(dir + "/train-000000.tar", bytes);
+  fs::remove(dir + "/train-000002.tar");
+  const auto problems = ValidateSplit(dir, ValidateOptions{SchemasDir()});
+  std::string all;
+  for (const auto& p : problems) {
+    EXPECT_EQ(p.find('\n'), std::string::npos);
+    all += p + "\n";
+  }
+  EXPECT_NE(all.find("train-000000.tar: md5"), std::string::npos) << all;
+  EXPECT_NE(all.find("train-000002.tar: missing shard"), std::string::npos) << all;
+  // The 3 pairs of the missing shard point at keys that are not there.
+  EXPECT_NE(all.find("pairs.jsonl:9"), std::string::npos) << all;
+  EXPECT_EQ(all.find("train-000001.tar"), std::string::npos) << all;
+
+  // A corrupt .npy header inside an otherwise consistent shard is found by reading it.
+  const std::string dir2 = test::ScratchDir("validate_npy");
+  WriteSplit(dir2);
+  MergeSplit(dir2, MergeOptions{});
+  const std::string shard = dir2 + "/train-000001.tar";
+  std::string tar = io::ReadFileBytes(shard);
+  const size_t magic = tar.find("\x93NUMPY");
+  ASSERT_NE(magic, std::string::npos);
+  tar[magic + 1] = 'X';
+  io::WriteFileAtomic(shard, tar);
+  json index = json::parse(io::ReadFileBytes(dir2 + "/index.json"));
+  index["shardlist"][1]["md5sum"] = io::Md5Hex(tar);
+  io::WriteFileAtomic(dir2 + "/index.json", index.dump(2));
+  const auto p2 = ValidateSplit(dir2, ValidateOptions{SchemasDir()});
+  ASSERT_EQ(p2.size(), 1u);
+  EXPECT_NE(p2[0].find("bad .npy"), std::string::npos) << p2[0];
+
+  // index.json that breaks the schema.
+  index["__kind__"] = "something-else";
+  io::WriteFileAtomic(dir2 + "/index.json", index.dump(2));
+  const auto p3 = ValidateSplit(dir2, ValidateOptions{SchemasDir()});
+  ASSERT_FALSE(p3.empty());
+  EXPECT_NE(p3[0].find("index.schema.json"), std::string::npos) << p3[0];
+}
+
+TEST(Split, CommandsMergeAndValidate) {
+  const std::string dir = test::ScratchDir("split_cli");
+  WriteSplit(dir);
+  auto r = test::RunOccgt("merge '" + dir + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
+  EXPECT_NE(r.stdout_text.find("11 samples"), std::string::npos) << r.stdout_text;
+  const json summary = json::parse(io::ReadFileBytes(dir + "/summary.json"));
+  EXPECT_EQ(summary["nsamples"], 11);
+  r = test::RunOccgt("validate '" + dir + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.stdout_text << r.stderr_text;
+
+  std::string bytes = io::ReadFileBytes(dir + "/train-000002.tar");
+  bytes[1000] ^= 0x04;
+  io::WriteFileAtomic(dir + "/train-000002.tar", bytes);
+  r = test::RunOccgt("validate '" + dir + "'");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.stdout_text.find("train-000002.tar: md5"), std::string::npos) << r.stdout_text;
+  r = test::RunOccgt("merge '" + dir + "'");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.stderr_text.find("train-000002.tar"), std::string::npos) << r.stderr_text;
+  EXPECT_EQ(std::count(r.stderr_text.begin(), r.stderr_text.end(), '\n'), 1) << r.stderr_text;
+}
+
+// Leaves a demo split (shards, merged indices, LoFTR export) in $OCCGT_SHARDS_DEMO_OUT for
+// tests/integration/shards_test.py; without the variable it writes to a scratch folder
+// and checks the same files exist.
+TEST(ShardsDemo, WriteDemoSplit) {
+  const char* env = std::getenv("OCCGT_SHARDS_DEMO_OUT");
+  const std::string dir = env != nullptr && *env ? std::string(env) : test::ScratchDir("demo");
+  fs::create_directories(dir);
+  WriteSplit(dir);
+  const auto r = test::RunOccgt("merge '" + dir + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
+  std::vector<LoftrPair> pairs;
+  SceneIntrinsics intrinsics;
+  int i = 0;
+  for (const DemoPair& p : DemoPairs()) {
+    LoftrPair lp;
+    lp.scene = p.scene;
+    lp.frame0 = p.f0;
+    lp.frame1 = p.f1;
+    lp.score = 0.1 * (i++ % 9);
+    lp.cam1_from_cam0 = {1, 0, 0, 0.1 * i, 0, 1, 0, 0, 0, 0, 1, 0};
+    pairs.push_back(lp);
+    intrinsics[p.scene] = {500, 0, 320, 0, 500, 240, 0, 0, 1};
+  }
+  ExportLoftrTrain(dir + "/loftr", pairs, intrinsics, LoftrExportOptions{});
+  ExportLoftrTest(dir + "/loftr_test", pairs, intrinsics, LoftrExportOptions{});
+  for (const std::string& f :
+       std::vector<std::string>{"index.json", "pairs.jsonl", "summary.json", "loftr/intrinsics.npz",
+                                "loftr/train_list.txt", "loftr_test/test.npz"}) {
+    EXPECT_TRUE(fs::exists(dir + "/" + f)) << f;
+  }
+}
+
+}  // namespace
+}  // namespace gt::shards
