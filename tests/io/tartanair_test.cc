@@ -1,0 +1,198 @@
+// TartanAir reader on the real sample (tartanair/hospital_sample): NED -> OpenCV pose
+// conversion checked by depth reprojection, the raw NED pose as a negative control, the
+// pose file parsed independently, and bad layouts (short pose file, AppleDouble files).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "libgt/core/error.h"
+#include "libgt/io/depth_io.h"
+#include "libgt/io/files.h"
+#include "libgt/io/npy.h"
+#include "libgt/io/reader.h"
+#include "tests/io/consistency.h"
+#include "tests/support/test_support.h"
+
+namespace gt::io {
+namespace {
+namespace fs = std::filesystem;
+
+const Frame& FrameById(const Scene& s, const std::string& id) {
+  for (const auto& f : s.frames) {
+    if (f.id == id) return f;
+  }
+  ADD_FAILURE() << "no frame " << id;
+  static Frame none;
+  return none;
+}
+
+TEST(TartanAir, SampleListsOneTrajectoryOf24Frames) {
+  const std::string root = test::SharedData("tartanair/hospital_sample");
+  ASSERT_FALSE(root.empty());
+  const auto reader = MakeReader("tartanair");
+  const auto names = reader->ListScenes(root);
+  ASSERT_EQ(names, std::vector<std::string>{"hospital_sample"});
+  const Scene s = reader->ReadScene(root, names[0]);
+  ASSERT_EQ(s.frames.size(), 24u);
+  EXPECT_EQ(s.NumUsable(), 24u);
+  EXPECT_EQ(s.min_depth_m, 0.05);
+  EXPECT_EQ(s.max_depth_m, 500.0);
+  for (size_t i = 0; i < s.frames.size(); ++i) {
+    const Frame& f = s.frames[i];
+    char id[32];
+    std::snprintf(id, sizeof(id), "%06zu", i);
+    EXPECT_EQ(f.id, id);
+    EXPECT_EQ(f.number, static_cast<int64_t>(i));
+    EXPECT_EQ(f.depth_camera.width, 640);
+    EXPECT_EQ(f.depth_camera.height, 480);
+    EXPECT_EQ(f.depth_camera.fx, 320.0);
+    EXPECT_EQ(f.depth_camera.fy, 320.0);
+    EXPECT_EQ(f.depth_camera.cx, 320.0);
+    EXPECT_EQ(f.depth_camera.cy, 240.0);
+    EXPECT_TRUE(FileExists(f.color_path)) << f.color_path;
+  }
+}
+
+TEST(TartanAir, PoseIsNedBodyTimesAxisPermutation) {
+  // Independent parse of pose_left.txt with >> double; the camera's z axis (third column
+  // of R) must be the body's x axis (forward), camera x = body y, camera y = body z.
+  const std::string root = test::SharedData("tartanair/hospital_sample");
+  ASSERT_FALSE(root.empty());
+  const Scene s = MakeReader("tartanair")->ReadScene(root, "");
+  std::ifstream in(root + "/pose_left.txt");
+  for (size_t i = 0; i < s.frames.size(); ++i) {
+    double t[3], q[4];
+    ASSERT_TRUE(in >> t[0] >> t[1] >> t[2] >> q[0] >> q[1] >> q[2] >> q[3]);
+    const Eigen::Matrix3d R_body =
+        Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized().toRotationMatrix();
+    const Rigid3d& T = s.frames[i].world_from_cam;
+    EXPECT_NEAR((T.translation() - Eigen::Vector3d(t[0], t[1], t[2])).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((T.linear().col(2) - R_body.col(0)).norm(), 0.0, 1e-9);
+    EXPECT_NEAR((T.linear().col(0) - R_body.col(1)).norm(), 0.0, 1e-9);
+    EXPECT_NEAR((T.linear().col(1) - R_body.col(2)).norm(), 0.0, 1e-9);
+  }
+}
+
+TEST(TartanAir, Frames0And10ReprojectConsistently) {
+  const std::string root = test::SharedData("tartanair/hospital_sample");
+  ASSERT_FALSE(root.empty());
+  const Scene s = MakeReader("tartanair")->ReadScene(root, "");
+  const Frame& a = FrameById(s, "000000");
+  const Frame& b = FrameById(s, "000010");
+  const DepthImage da = ReadDepth(a.depth, 640, 480);
+  const DepthImage db = ReadDepth(b.depth, 640, 480);
+  for (bool a_to_b : {true, false}) {
+    const auto c =
+        a_to_b ? test::DepthConsistency(da, a.depth_camera, a.world_from_cam, db, b.depth_camera,
+                                        b.world_from_cam, s.min_depth_m, s.max_depth_m, 0.05)
+               : test::DepthConsistency(db, b.depth_camera, b.world_from_cam, da, a.depth_camera,
+                                        a.world_from_cam, s.min_depth_m, s.max_depth_m, 0.05);
+    EXPECT_GT(c.compared, 20000);
+    std::printf("tartanair %s: %ld compared, fraction %.4f\n", a_to_b ? "0->10" : "10->0",
+                c.compared, c.fraction());
+    EXPECT_GE(c.fraction(), 0.95) << (a_to_b ? "0->10" : "10->0");
+  }
+  // Negative control: the raw NED poses (no axis permutation) must do much worse.
+  std::ifstream in(root + "/pose_left.txt");
+  std::vector<Rigid3d> raw;
+  double t[3], q[4];
+  while (in >> t[0] >> t[1] >> t[2] >> q[0] >> q[1] >> q[2] >> q[3]) {
+    raw.push_back(
+        RigidFromTQ(Eigen::Vector3d(t[0], t[1], t[2]), Eigen::Vector4d(q[0], q[1], q[2], q[3])));
+  }
+  ASSERT_EQ(raw.size(), 24u);
+  const auto bad = test::DepthConsistency(da, a.depth_camera, raw[0], db, b.depth_camera, raw[10],
+                                          s.min_depth_m, s.max_depth_m, 0.05);
+  const auto good = test::DepthConsistency(da, a.depth_camera, a.world_from_cam, db, b.depth_camera,
+                                           b.world_from_cam, s.min_depth_m, s.max_depth_m, 0.05);
+  std::printf("tartanair raw NED 0->10: fraction %.4f\n", bad.fraction());
+  EXPECT_LT(bad.fraction(), good.fraction() - 0.3) << "raw " << bad.fraction();
+}
+
+// A scratch trajectory with n depth files of 4x4 and the given pose lines.
+std::string MakeTrajectory(const std::string& name, int n_depth, const std::string& poses) {
+  const std::string dir = test::ScratchDir(name);
+  const std::vector<float> depth(16, 2.0f);
+  for (int i = 0; i < n_depth; ++i) {
+    char file[64];
+    std::snprintf(file, sizeof(file), "/depth_left/%06d_left_depth.npy", i);
+    WriteFileAtomic(dir + file, EncodeNpy("<f4", {4, 4}, depth.data(), depth.size() * 4));
+  }
+  WriteFileAtomic(dir + "/pose_left.txt", poses);
+  return dir;
+}
+
+TEST(TartanAir, ShortPoseFileIsFatalAndNamesTheFile) {
+  const std::string fixture = std::string(OCCGT_FIXTURES_DIR) + "/io/tartanair_short_pose";
+  try {
+    MakeReader("tartanair")->ReadScene(fixture, "");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), fixture + "/pose_left.txt") << e.what();
+    EXPECT_NE(std::string(e.what()).find("fewer"), std::string::npos) << e.what();
+  }
+}
+
+TEST(TartanAir, PoseLineWithSixNumbersNamesFileAndLine) {
+  const std::string dir = MakeTrajectory("ta_six", 2, "0 0 0 0 0 0 1\n0 0 0 0 0 1\n");
+  try {
+    MakeReader("tartanair")->ReadScene(dir, "");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), dir + "/pose_left.txt:2") << e.what();
+  }
+}
+
+TEST(TartanAir, NonUnitQuaternionMakesFrameUnusable) {
+  const std::string dir = MakeTrajectory("ta_quat", 2, "0 0 0 0 0 0 1\n0 0 0 0 0 0 2\n");
+  const Scene s = MakeReader("tartanair")->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), 2u);
+  EXPECT_TRUE(s.frames[0].usable);
+  EXPECT_FALSE(s.frames[1].usable);
+  EXPECT_EQ(s.frames[1].unusable_reason.rfind("pose: quaternion norm", 0), 0u)
+      << s.frames[1].unusable_reason;
+}
+
+TEST(TartanAir, AppleDoubleFilesIgnoredAndEnvLayoutListed) {
+  const std::string root = test::ScratchDir("ta_env");
+  for (const char* traj : {"office/Easy/P001", "office/Hard/P003", "amusement/Easy/P008"}) {
+    const std::string dir = root + "/" + traj;
+    const std::vector<float> depth(16, 1.0f);
+    WriteFileAtomic(dir + "/depth_left/000000_left_depth.npy",
+                    EncodeNpy("<f4", {4, 4}, depth.data(), depth.size() * 4));
+    WriteFileAtomic(dir + "/depth_left/._000000_left_depth.npy", "mac resource fork");
+    WriteFileAtomic(dir + "/pose_left.txt", "0 0 0 0 0 0 1\n");
+  }
+  fs::create_directories(root + "/office/Easy/._P001");
+  const auto reader = MakeReader("tartanair");
+  EXPECT_EQ(
+      reader->ListScenes(root),
+      (std::vector<std::string>{"amusement/Easy/P008", "office/Easy/P001", "office/Hard/P003"}));
+  const Scene s = reader->ReadScene(root, "office/Hard/P003");
+  EXPECT_EQ(s.name, "office/Hard/P003");
+  ASSERT_EQ(s.frames.size(), 1u);
+  EXPECT_TRUE(s.frames[0].usable);
+  try {
+    reader->ReadScene(root, "office/Easy/P999");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), root + "/office/Easy/P999");
+  }
+}
+
+TEST(TartanAir, EmptyTrajectoryIsFatal) {
+  const std::string dir = test::ScratchDir("ta_empty");
+  WriteFileAtomic(dir + "/pose_left.txt", "0 0 0 0 0 0 1\n");
+  try {
+    MakeReader("tartanair")->ReadScene(dir, "");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), dir);
+    EXPECT_NE(std::string(e.what()).find("empty scene"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace gt::io
