@@ -86,6 +86,22 @@ struct FusionStats {
   int64_t inserted_points = 0;
 };
 
+// Dense copy of a box of the map's finest-resolution voxel states. Voxel index
+// i = floor(x / voxel_size_m) per world axis (voxel i covers [i, i + 1) * voxel_size_m; the
+// OctoMap key is i + 2^15). state is row-major [size.z, size.y, size.x] (x fastest).
+struct VoxelBlock {
+  static constexpr int8_t kUnknown = -1, kFree = 0, kOccupied = 1;
+  double voxel_size_m = 0.0;
+  Eigen::Vector3i min_index = Eigen::Vector3i::Zero();  // index of element (0, 0, 0)
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();       // voxels along x, y, z
+  std::vector<int8_t> state;
+
+  bool empty() const { return state.empty(); }
+  int8_t at(int ix, int iy, int iz) const {  // block-local indices, must be inside
+    return state[(static_cast<size_t>(iz) * size.y() + iy) * size.x() + ix];
+  }
+};
+
 // Opaque fused map (an octomap::OcTree inside).
 class OccupancyMap {
  public:
@@ -105,10 +121,14 @@ class OccupancyMap {
   // Voxel state at a world point: 1 occupied, 0 free, -1 unknown or outside the key range.
   int StateAt(const Eigen::Vector3d& p_in_world) const;
   const FusionStats& stats() const;
+  // Inclusive voxel-index bounds containing every voxel the fusion touched (camera centres,
+  // inserted points, rays between them); false for an empty map.
+  bool KnownIndexBounds(Eigen::Vector3i* min_index, Eigen::Vector3i* max_index) const;
+  // States of the voxels with index in [min_index, max_index] (inclusive; clipped to the
+  // key range). Pruned leaves are expanded to their voxels.
+  VoxelBlock ExtractBlock(const Eigen::Vector3i& min_index, const Eigen::Vector3i& max_index) const;
   // OctoMap binary (.bt, maximum-likelihood occupancy), which octovis opens; atomic write.
   void SaveBinary(const std::string& path) const;
-
-  const Impl& impl() const { return *impl_; }
 
  private:
   std::unique_ptr<Impl> impl_;
@@ -119,9 +139,9 @@ class OccupancyMap {
 // range. Options must pass Check (GT_ASSERT otherwise).
 OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionOptions& options);
 
-// Downsampling used by FuseOccupancy, exposed for tests: one centroid (float arithmetic as in
-// pcl::VoxelGrid) per voxel floor(p / leaf_m), output sorted by voxel index (x fastest is NOT
-// guaranteed; compare as sets). Uses pcl::VoxelGrid when its int32 leaf count does not
+// Downsampling used by FuseOccupancy, exposed for tests: one centroid per voxel
+// floor(p / leaf_m) (up to float rounding at voxel borders); output order is deterministic
+// but unspecified (compare as sets). Uses pcl::VoxelGrid when its int32 leaf count does not
 // overflow, otherwise an own sort-based bucketing; *used_fallback says which.
 std::vector<Eigen::Vector3f> DownsampleVoxelCentroids(const std::vector<Eigen::Vector3f>& points,
                                                       double leaf_m, bool* used_fallback);

@@ -1,0 +1,407 @@
+// OctoMap fusion (fusion.h). PCL and OctoMap are used only in this file.
+#include "libgt/occupancy/fusion.h"
+
+#include <octomap/OcTree.h>
+#include <pcl/filters/statistical_outlier_removal.h>
+#include <pcl/filters/voxel_grid.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <sstream>
+
+#include "libgt/core/error.h"
+#include "libgt/io/files.h"
+
+namespace gt::occupancy {
+
+// Voxel indices accepted before insertion: OctoMap's checked range is [-2^15, 2^15); one
+// voxel of margin on each side keeps rounding at the border harmless.
+constexpr int64_t kMinSafeIndex = -32767;
+constexpr int64_t kMaxSafeIndex = 32766;
+constexpr int kKeyOffset = 32768;
+
+struct OccupancyMap::Impl {
+  std::unique_ptr<octomap::OcTree> tree;
+  FusionStats stats;
+  bool has_bounds = false;
+  Eigen::Vector3i min_index = Eigen::Vector3i::Zero();
+  Eigen::Vector3i max_index = Eigen::Vector3i::Zero();
+
+  void Grow(const Eigen::Vector3i& i) {
+    if (!has_bounds) {
+      min_index = max_index = i;
+      has_bounds = true;
+      return;
+    }
+    min_index = min_index.cwiseMin(i);
+    max_index = max_index.cwiseMax(i);
+  }
+};
+
+namespace {
+
+bool InsideKeyRange(const Eigen::Vector3d& p, double inv_res) {
+  for (int a = 0; a < 3; ++a) {
+    const double s = std::floor(p[a] * inv_res);
+    if (!(s >= kMinSafeIndex && s <= kMaxSafeIndex)) return false;  // also rejects NaN
+  }
+  return true;
+}
+
+Eigen::Vector3i IndexOf(const Eigen::Vector3d& p, double inv_res) {
+  return Eigen::Vector3i(static_cast<int>(std::floor(p.x() * inv_res)),
+                         static_cast<int>(std::floor(p.y() * inv_res)),
+                         static_cast<int>(std::floor(p.z() * inv_res)));
+}
+
+// Own bucketing: sort point indices by voxel, average each run (double accumulation).
+std::vector<Eigen::Vector3f> BucketCentroids(const std::vector<Eigen::Vector3f>& points,
+                                             double leaf_m) {
+  const double inv = 1.0 / leaf_m;
+  struct Item {
+    int64_t ix, iy, iz;
+    uint32_t i;
+  };
+  std::vector<Item> items(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    items[i] = {static_cast<int64_t>(std::floor(points[i].x() * inv)),
+                static_cast<int64_t>(std::floor(points[i].y() * inv)),
+                static_cast<int64_t>(std::floor(points[i].z() * inv)), static_cast<uint32_t>(i)};
+  }
+  std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) {
+    if (a.iz != b.iz) return a.iz < b.iz;
+    if (a.iy != b.iy) return a.iy < b.iy;
+    if (a.ix != b.ix) return a.ix < b.ix;
+    return a.i < b.i;
+  });
+  std::vector<Eigen::Vector3f> out;
+  for (size_t s = 0; s < items.size();) {
+    size_t e = s;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    while (e < items.size() && items[e].ix == items[s].ix && items[e].iy == items[s].iy &&
+           items[e].iz == items[s].iz) {
+      sum += points[items[e].i].cast<double>();
+      ++e;
+    }
+    out.push_back((sum / static_cast<double>(e - s)).cast<float>());
+    s = e;
+  }
+  return out;
+}
+
+pcl::PointCloud<pcl::PointXYZ>::Ptr ToPcl(const std::vector<Eigen::Vector3f>& points) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  cloud->resize(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    (*cloud)[i] = pcl::PointXYZ(points[i].x(), points[i].y(), points[i].z());
+  }
+  cloud->width = static_cast<uint32_t>(points.size());
+  cloud->height = 1;
+  cloud->is_dense = true;
+  return cloud;
+}
+
+std::vector<Eigen::Vector3f> FromPcl(const pcl::PointCloud<pcl::PointXYZ>& cloud) {
+  std::vector<Eigen::Vector3f> out(cloud.size());
+  for (size_t i = 0; i < cloud.size(); ++i) out[i] = {cloud[i].x, cloud[i].y, cloud[i].z};
+  return out;
+}
+
+}  // namespace
+
+bool FusionOptions::Check(std::string* error) const {
+  auto fail = [&](const std::string& m) {
+    if (error) *error = m;
+    return false;
+  };
+  if (!(voxel_size_m > 0.0) || !std::isfinite(voxel_size_m))
+    return fail("voxel_size_m must be > 0");
+  if (!std::isfinite(max_range_m)) return fail("max_range_m must be finite (<= 0: unlimited)");
+  if (outlier_k < 1) return fail("outlier_k must be >= 1");
+  if (!(outlier_stddev > 0.0) || !std::isfinite(outlier_stddev))
+    return fail("outlier_stddev must be > 0");
+  if (scope == FusionScope::kWindow && window < 1) return fail("window scope needs window >= 1");
+  if (scope == FusionScope::kScene && scene_stride < 1)
+    return fail("scene scope needs scene_stride >= 1");
+  return true;
+}
+
+void ParseFusionScope(const std::string& text, FusionOptions* options) {
+  auto parse_count = [&](const std::string& digits) {
+    if (digits.empty() || digits.size() > 9 ||
+        !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      throw InputError("--scope",
+                       "expected pair, window:N or scene:S with N, S >= 1, got '" + text + "'");
+    const int n = std::stoi(digits);
+    if (n < 1) throw InputError("--scope", "N and S must be >= 1, got '" + text + "'");
+    return n;
+  };
+  if (text == "pair") {
+    options->scope = FusionScope::kPair;
+  } else if (text.rfind("window:", 0) == 0) {
+    options->scope = FusionScope::kWindow;
+    options->window = parse_count(text.substr(7));
+  } else if (text.rfind("scene:", 0) == 0) {
+    options->scope = FusionScope::kScene;
+    options->scene_stride = parse_count(text.substr(6));
+  } else {
+    throw InputError("--scope", "expected pair, window:N or scene:S, got '" + text + "'");
+  }
+}
+
+std::string FusionScopeName(const FusionOptions& options) {
+  switch (options.scope) {
+    case FusionScope::kPair:
+      return "pair";
+    case FusionScope::kWindow:
+      return "window:" + std::to_string(options.window);
+    case FusionScope::kScene:
+      return "scene:" + std::to_string(options.scene_stride);
+  }
+  return "pair";
+}
+
+std::vector<size_t> ScopeFrameIndices(const Scene& scene, size_t i0, size_t i1,
+                                      const FusionOptions& options) {
+  const size_t n = scene.frames.size();
+  if (i0 >= n || i1 >= n) throw InputError("--frames", "frame index outside the scene");
+  std::vector<size_t> out;
+  for (size_t i = 0; i < n; ++i) {
+    bool take = false;
+    switch (options.scope) {
+      case FusionScope::kPair:
+        take = (i == i0 || i == i1);
+        break;
+      case FusionScope::kWindow: {
+        const auto dist = [](size_t a, size_t b) { return a > b ? a - b : b - a; };
+        const size_t w = static_cast<size_t>(std::max(options.window, 0));
+        take = dist(i, i0) <= w || dist(i, i1) <= w;
+        break;
+      }
+      case FusionScope::kScene:
+        take = options.scene_stride > 0 && i % static_cast<size_t>(options.scene_stride) == 0;
+        break;
+    }
+    if (take && scene.frames[i].usable) out.push_back(i);
+  }
+  return out;
+}
+
+std::vector<Eigen::Vector3f> BackProjectValid(const FusionInput& frame) {
+  GT_ASSERT(frame.depth != nullptr);
+  const DepthImage& d = *frame.depth;
+  const Camera& c = frame.camera;
+  const Eigen::Matrix3d R = frame.world_from_cam.linear();
+  const Eigen::Vector3d t = frame.world_from_cam.translation();
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(d.values_m.size());
+  for (int v = 0; v < d.height; ++v) {
+    const double y = (v - c.cy) / c.fy;
+    for (int u = 0; u < d.width; ++u) {
+      const float z = d.at(u, v);
+      if (!IsValidDepth(z, frame.min_depth_m, frame.max_depth_m)) continue;  // before transform
+      const Eigen::Vector3d p_in_cam((u - c.cx) / c.fx * z, y * z, z);
+      out.push_back((R * p_in_cam + t).cast<float>());
+    }
+  }
+  return out;
+}
+
+std::vector<Eigen::Vector3f> DownsampleVoxelCentroids(const std::vector<Eigen::Vector3f>& points,
+                                                      double leaf_m, bool* used_fallback) {
+  GT_ASSERT(leaf_m > 0.0);
+  if (used_fallback) *used_fallback = false;
+  if (points.empty()) return {};
+  // pcl::VoxelGrid's own test: (dx * dy * dz) > INT32_MAX makes it warn and return the input
+  // unfiltered. Replicate it (with a factor 2 of margin for float rounding) and bucket
+  // ourselves instead.
+  Eigen::Vector3f lo = points[0], hi = points[0];
+  for (const auto& p : points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const double inv = 1.0 / leaf_m;
+  double cells = 1.0;
+  for (int a = 0; a < 3; ++a) cells *= std::floor((hi[a] - lo[a]) * inv) + 2.0;
+  if (cells > static_cast<double>(std::numeric_limits<int32_t>::max()) / 2.0) {
+    if (used_fallback) *used_fallback = true;
+    return BucketCentroids(points, leaf_m);
+  }
+  auto cloud = ToPcl(points);
+  pcl::VoxelGrid<pcl::PointXYZ> grid;
+  grid.setInputCloud(cloud);
+  const float leaf = static_cast<float>(leaf_m);
+  grid.setLeafSize(leaf, leaf, leaf);
+  pcl::PointCloud<pcl::PointXYZ> filtered;
+  grid.filter(filtered);
+  return FromPcl(filtered);
+}
+
+OccupancyMap::OccupancyMap() : impl_(std::make_unique<Impl>()) {
+  impl_->tree = std::make_unique<octomap::OcTree>(0.05);
+}
+OccupancyMap::OccupancyMap(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+OccupancyMap::OccupancyMap(OccupancyMap&&) noexcept = default;
+OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
+OccupancyMap::~OccupancyMap() = default;
+
+double OccupancyMap::resolution_m() const { return impl_->tree->getResolution(); }
+int64_t OccupancyMap::NumLeafNodes() const {
+  return static_cast<int64_t>(impl_->tree->getNumLeafNodes());
+}
+
+namespace {
+int64_t CountVoxels(const octomap::OcTree& tree, bool occupied) {
+  int64_t n = 0;
+  const unsigned depth = tree.getTreeDepth();
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (tree.isNodeOccupied(*it) != occupied) continue;
+    const int64_t side = int64_t{1} << (depth - it.getDepth());
+    n += side * side * side;
+  }
+  return n;
+}
+}  // namespace
+
+int64_t OccupancyMap::NumOccupiedVoxels() const { return CountVoxels(*impl_->tree, true); }
+int64_t OccupancyMap::NumFreeVoxels() const { return CountVoxels(*impl_->tree, false); }
+
+int OccupancyMap::StateAt(const Eigen::Vector3d& p_in_world) const {
+  const octomap::OcTree& tree = *impl_->tree;
+  if (!InsideKeyRange(p_in_world, 1.0 / tree.getResolution())) return -1;
+  const octomap::OcTreeNode* node = tree.search(p_in_world.x(), p_in_world.y(), p_in_world.z());
+  if (node == nullptr) return -1;
+  return tree.isNodeOccupied(node) ? 1 : 0;
+}
+
+const FusionStats& OccupancyMap::stats() const { return impl_->stats; }
+
+bool OccupancyMap::KnownIndexBounds(Eigen::Vector3i* min_index, Eigen::Vector3i* max_index) const {
+  if (!impl_->has_bounds) return false;
+  *min_index = impl_->min_index;
+  *max_index = impl_->max_index;
+  return true;
+}
+
+VoxelBlock OccupancyMap::ExtractBlock(const Eigen::Vector3i& min_index_in,
+                                      const Eigen::Vector3i& max_index_in) const {
+  const octomap::OcTree& tree = *impl_->tree;
+  VoxelBlock block;
+  block.voxel_size_m = tree.getResolution();
+  const Eigen::Vector3i lo = min_index_in.cwiseMax(Eigen::Vector3i::Constant(-kKeyOffset));
+  const Eigen::Vector3i hi = max_index_in.cwiseMin(Eigen::Vector3i::Constant(kKeyOffset - 1));
+  if ((hi.array() < lo.array()).any()) return block;
+  block.min_index = lo;
+  block.size = hi - lo + Eigen::Vector3i::Ones();
+  block.state.assign(static_cast<size_t>(block.size.x()) * block.size.y() * block.size.z(),
+                     VoxelBlock::kUnknown);
+  const octomap::OcTreeKey kmin(lo.x() + kKeyOffset, lo.y() + kKeyOffset, lo.z() + kKeyOffset);
+  const octomap::OcTreeKey kmax(hi.x() + kKeyOffset, hi.y() + kKeyOffset, hi.z() + kKeyOffset);
+  const unsigned depth = tree.getTreeDepth();
+  for (auto it = tree.begin_leafs_bbx(kmin, kmax), end = tree.end_leafs_bbx(); it != end; ++it) {
+    const int8_t s = tree.isNodeOccupied(*it) ? VoxelBlock::kOccupied : VoxelBlock::kFree;
+    const int side = 1 << (depth - it.getDepth());
+    const octomap::OcTreeKey k0 = it.getIndexKey();
+    Eigen::Vector3i a, b;  // inclusive voxel range of the leaf, clipped to the block
+    for (int ax = 0; ax < 3; ++ax) {
+      a[ax] = std::max(static_cast<int>(k0[ax]) - kKeyOffset, lo[ax]);
+      b[ax] = std::min(static_cast<int>(k0[ax]) - kKeyOffset + side - 1, hi[ax]);
+    }
+    for (int z = a.z(); z <= b.z(); ++z) {
+      for (int y = a.y(); y <= b.y(); ++y) {
+        int8_t* row =
+            &block.state[(static_cast<size_t>(z - lo.z()) * block.size.y() + (y - lo.y())) *
+                         block.size.x()];
+        std::fill(row + (a.x() - lo.x()), row + (b.x() - lo.x()) + 1, s);
+      }
+    }
+  }
+  return block;
+}
+
+void OccupancyMap::SaveBinary(const std::string& path) const {
+  std::ostringstream out;
+  if (!impl_->tree->writeBinaryConst(out))
+    throw InputError(path, "OctoMap could not encode the map");
+  gt::io::WriteFileAtomic(path, out.str());
+}
+
+OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionOptions& options) {
+  std::string why;
+  GT_ASSERT_MSG(options.Check(&why), why);
+  auto impl = std::make_unique<OccupancyMap::Impl>();
+  impl->tree = std::make_unique<octomap::OcTree>(options.voxel_size_m);
+  octomap::OcTree& tree = *impl->tree;
+  const double inv_res = 1.0 / options.voxel_size_m;
+  FusionStats& st = impl->stats;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    const FusionInput& in = frames[f];
+    const std::string where = "frame " + std::to_string(f);
+    if (in.depth == nullptr) throw InputError(where, "no depth map");
+    if (in.depth->width != in.camera.width || in.depth->height != in.camera.height)
+      throw InputError(where, "depth size " + std::to_string(in.depth->width) + "x" +
+                                  std::to_string(in.depth->height) + " differs from camera " +
+                                  std::to_string(in.camera.width) + "x" +
+                                  std::to_string(in.camera.height));
+    if (in.depth->values_m.size() != static_cast<size_t>(in.depth->width) * in.depth->height)
+      throw InputError(where, "depth buffer size does not match width * height");
+    const Eigen::Vector3d origin = in.world_from_cam.translation();
+    if (!InsideKeyRange(origin, inv_res))
+      throw InputError(where, "camera centre outside the OctoMap key range (+-" +
+                                  std::to_string(kMaxSafeIndex * options.voxel_size_m) + " m)");
+    ++st.frames;
+    st.pixels += static_cast<int64_t>(in.depth->values_m.size());
+    std::vector<Eigen::Vector3f> points = BackProjectValid(in);
+    st.invalid_pixels += static_cast<int64_t>(in.depth->values_m.size() - points.size());
+    // Key-range clipping: drop points whose voxel index would wrap in OctoMap.
+    const size_t before = points.size();
+    points.erase(std::remove_if(points.begin(), points.end(),
+                                [&](const Eigen::Vector3f& p) {
+                                  return !InsideKeyRange(p.cast<double>(), inv_res);
+                                }),
+                 points.end());
+    st.out_of_key_range += static_cast<int64_t>(before - points.size());
+    if (options.downsample) {
+      bool fallback = false;
+      points = DownsampleVoxelCentroids(points, options.voxel_size_m, &fallback);
+      st.downsample_fallbacks += fallback ? 1 : 0;
+    }
+    st.after_downsample += static_cast<int64_t>(points.size());
+    if (options.remove_outliers && points.size() > static_cast<size_t>(options.outlier_k)) {
+      auto cloud = ToPcl(points);
+      pcl::StatisticalOutlierRemoval<pcl::PointXYZ> sor;
+      sor.setInputCloud(cloud);
+      sor.setMeanK(options.outlier_k);
+      sor.setStddevMulThresh(options.outlier_stddev);
+      pcl::PointCloud<pcl::PointXYZ> kept;
+      sor.filter(kept);
+      st.outliers_removed += static_cast<int64_t>(points.size() - kept.size());
+      points = FromPcl(kept);
+    }
+    st.inserted_points += static_cast<int64_t>(points.size());
+    // Bounds of everything the rays can touch: the origin and the (possibly truncated)
+    // end points lie in the convex hull of the origin and the points.
+    impl->Grow(IndexOf(origin, inv_res));
+    octomap::Pointcloud scan;
+    scan.reserve(points.size());
+    for (const auto& p : points) {
+      scan.push_back(p.x(), p.y(), p.z());
+      impl->Grow(IndexOf(p.cast<double>(), inv_res));
+    }
+    tree.insertPointCloud(scan, octomap::point3d(origin.x(), origin.y(), origin.z()),
+                          options.max_range_m > 0 ? options.max_range_m : -1.0,
+                          /*lazy_eval=*/false, /*discretize=*/true);
+  }
+  if (impl->has_bounds) {  // one voxel of margin for rounding of ray keys
+    impl->min_index -= Eigen::Vector3i::Ones();
+    impl->max_index += Eigen::Vector3i::Ones();
+  }
+  return OccupancyMap(std::move(impl));
+}
+
+}  // namespace gt::occupancy

@@ -1,0 +1,169 @@
+// Bin edges (closed forms per spacing), bin lookup, option checks and parsers, and the
+// packed (occ/known words) vs dense encodings.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "libgt/core/error.h"
+#include "libgt/occupancy/frustum.h"
+#include "libgt/occupancy/pair_occupancy.h"
+
+namespace gt::occupancy {
+namespace {
+
+TEST(BinEdges, LinearIsEvenlySpacedInDepth) {
+  BinOptions o;
+  o.near_m = 0.5;
+  o.far_m = 8.5;
+  o.num_bins = 64;
+  const auto e = BinEdges(o);
+  ASSERT_EQ(e.size(), 65u);
+  for (int k = 0; k <= 64; ++k) EXPECT_NEAR(e[k], 0.5 + k * 0.125, 1e-12) << k;
+}
+
+TEST(BinEdges, LogIsEvenlySpacedInLogDepth) {
+  BinOptions o;
+  o.near_m = 0.25;
+  o.far_m = 16.0;  // ratio 64 = 2^6: every 64/6 bins doubles
+  o.num_bins = 6;
+  o.spacing = BinSpacing::kLog;
+  const auto e = BinEdges(o);
+  ASSERT_EQ(e.size(), 7u);
+  for (int k = 0; k <= 6; ++k) EXPECT_NEAR(e[k], 0.25 * std::pow(2.0, k), 1e-12) << k;
+}
+
+TEST(BinEdges, InverseIsEvenlySpacedInDisparity) {
+  BinOptions o;
+  o.near_m = 0.5;  // disparity 2
+  o.far_m = 10.0;  // disparity 0.1
+  o.num_bins = 19;
+  o.spacing = BinSpacing::kInverse;
+  const auto e = BinEdges(o);
+  for (int k = 0; k <= 19; ++k) EXPECT_NEAR(1.0 / e[k], 2.0 - 0.1 * k, 1e-12) << k;
+  for (int k = 0; k < 19; ++k) EXPECT_LT(e[k], e[k + 1]);
+}
+
+TEST(BinEdges, BinOfDepthIsHalfOpen) {
+  BinOptions o;
+  o.near_m = 1.0;
+  o.far_m = 5.0;
+  o.num_bins = 4;
+  const auto e = BinEdges(o);  // 1 2 3 4 5
+  EXPECT_EQ(BinOfDepth(e, 0.999), -1);
+  EXPECT_EQ(BinOfDepth(e, 1.0), 0);
+  EXPECT_EQ(BinOfDepth(e, 1.999), 0);
+  EXPECT_EQ(BinOfDepth(e, 2.0), 1);
+  EXPECT_EQ(BinOfDepth(e, 4.999), 3);
+  EXPECT_EQ(BinOfDepth(e, 5.0), -1);
+  EXPECT_EQ(BinOfDepth(e, std::nan("")), -1);
+}
+
+TEST(Options, ChecksRejectBadValues) {
+  std::string why;
+  BinOptions b;
+  EXPECT_TRUE(b.Check(&why));
+  b.num_bins = 65;
+  EXPECT_FALSE(b.Check(&why));
+  b = BinOptions();
+  b.far_m = b.near_m;
+  EXPECT_FALSE(b.Check(&why));
+  b = BinOptions();
+  b.near_m = 0;
+  EXPECT_FALSE(b.Check(&why));
+  FusionOptions f;
+  EXPECT_TRUE(f.Check(&why));
+  f.voxel_size_m = 0;
+  EXPECT_FALSE(f.Check(&why));
+  f = FusionOptions();
+  f.scope = FusionScope::kWindow;
+  EXPECT_FALSE(f.Check(&why));  // window 0
+}
+
+TEST(Options, ParsersRoundTripAndRejectUnknownNames) {
+  FusionOptions f;
+  ParseFusionScope("window:3", &f);
+  EXPECT_EQ(f.scope, FusionScope::kWindow);
+  EXPECT_EQ(f.window, 3);
+  EXPECT_EQ(FusionScopeName(f), "window:3");
+  ParseFusionScope("scene:10", &f);
+  EXPECT_EQ(f.scope, FusionScope::kScene);
+  EXPECT_EQ(FusionScopeName(f), "scene:10");
+  ParseFusionScope("pair", &f);
+  EXPECT_EQ(FusionScopeName(f), "pair");
+  EXPECT_THROW(ParseFusionScope("window:", &f), InputError);
+  EXPECT_THROW(ParseFusionScope("window:0", &f), InputError);
+  EXPECT_THROW(ParseFusionScope("scene:-2", &f), InputError);
+  EXPECT_THROW(ParseFusionScope("all", &f), InputError);
+  for (auto s : {"linear", "log", "inverse"}) EXPECT_EQ(BinSpacingName(ParseBinSpacing(s)), s);
+  EXPECT_THROW(ParseBinSpacing("quadratic"), InputError);
+  for (auto s : {"exact", "center"}) EXPECT_EQ(TraversalName(ParseTraversal(s)), s);
+  EXPECT_THROW(ParseTraversal("centre"), InputError);
+  for (auto s : {"octomap", "two_point"}) EXPECT_EQ(OccupancyModeName(ParseOccupancyMode(s)), s);
+  EXPECT_THROW(ParseOccupancyMode("voxels"), InputError);
+}
+
+TEST(Options, ScopeFrameIndices) {
+  Scene scene;
+  scene.frames.resize(10);
+  scene.frames[4].usable = false;
+  FusionOptions f;
+  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{2, 7}));
+  ParseFusionScope("window:1", &f);
+  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{1, 2, 3, 6, 7, 8}));
+  ParseFusionScope("window:2", &f);
+  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{0, 1, 2, 3, 5, 6, 7, 8, 9}));
+  ParseFusionScope("scene:4", &f);
+  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{0, 8}));
+  EXPECT_THROW(ScopeFrameIndices(scene, 2, 10, f), InputError);
+}
+
+// Packed and dense encodings agree on random volumes (occ a subset of known).
+TEST(Encoding, DenseMatchesPackedBits) {
+  std::mt19937_64 rng(3);
+  FrustumVolume v;
+  v.width = 7;
+  v.height = 5;
+  BinOptions o;
+  o.num_bins = 64;
+  v.edges_m = BinEdges(o);
+  for (int i = 0; i < v.width * v.height; ++i) {
+    const uint64_t known = rng();
+    v.known.push_back(known);
+    v.occ.push_back(known & rng());
+  }
+  const auto dense = DenseVolume(v);
+  ASSERT_EQ(dense.size(), 64u * 7 * 5);
+  VolumeCounts expect;
+  for (int k = 0; k < 64; ++k) {
+    for (int y = 0; y < 5; ++y) {
+      for (int x = 0; x < 7; ++x) {
+        const size_t i = y * 7 + x;
+        const uint8_t d = dense[(static_cast<size_t>(k) * 5 + y) * 7 + x];
+        const bool known = (v.known[i] >> k) & 1, occ = (v.occ[i] >> k) & 1;
+        EXPECT_EQ(d, !known ? 255 : (occ ? 1 : 0));
+        expect.occupied += d == 1;
+        expect.free += d == 0;
+        expect.unknown += d == 255;
+      }
+    }
+  }
+  const VolumeCounts c = CountBins(v);
+  EXPECT_EQ(c.occupied, expect.occupied);
+  EXPECT_EQ(c.free, expect.free);
+  EXPECT_EQ(c.unknown, expect.unknown);
+}
+
+TEST(Encoding, FewerBinsLeaveHighBitsUnset) {
+  FrustumVolume v;
+  v.width = v.height = 1;
+  BinOptions o;
+  o.num_bins = 3;
+  v.edges_m = BinEdges(o);
+  v.known = {0b111};
+  v.occ = {0b010};
+  EXPECT_EQ(DenseVolume(v), (std::vector<uint8_t>{0, 1, 0}));
+}
+
+}  // namespace
+}  // namespace gt::occupancy
