@@ -32,7 +32,18 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-std::string SchemasDir() { return std::string(OCCGT_SOURCE_DIR) + "/schemas"; }
+// A schemas folder holding only schemas/index.schema.json: the demo samples here are not
+// `occgt build` samples, so the sample / pair-line schemas of the pipeline do not apply
+// (their checking is tested with a schema of this test below).
+std::string SchemasDir() {
+  static const std::string dir = [] {
+    const std::string d = test::ScratchDir("schemas_index_only");
+    fs::copy_file(std::string(OCCGT_SOURCE_DIR) + "/schemas/index.schema.json",
+                  d + "/index.schema.json");
+    return d;
+  }();
+  return dir;
+}
 
 // A sample like the ones `occgt build` writes (small arrays).
 Sample PairSample(const std::string& scene, int f0, int f1, std::mt19937* rng, int w = 16,
@@ -191,7 +202,9 @@ TEST(Split, MergeWritesIndexAndPairsMatchingTheFiles) {
 void ExpectMergeFails(const std::string& dir, const std::string& needle) {
   fs::remove(dir + "/index.json");
   try {
-    MergeSplit(dir, MergeOptions{});
+    MergeOptions options;
+    options.schemas_dir = SchemasDir();
+    MergeSplit(dir, options);
     ADD_FAILURE() << "merge accepted a broken split; expected " << needle;
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
@@ -305,24 +318,72 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   EXPECT_NE(p3[0].find("index.schema.json"), std::string::npos) << p3[0];
 }
 
+TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasWhenPresent) {
+  const std::string schemas = test::ScratchDir("schemas_strict");
+  fs::copy_file(SchemasDir() + "/index.schema.json", schemas + "/index.schema.json");
+  auto write_schema = [&](const std::string& file, const std::string& frame_type) {
+    io::WriteFileAtomic(schemas + "/" + file,
+                        R"({"type": "object", "required": ["scene", "frame0"],
+                            "properties": {"frame0": {"type": ")" +
+                            frame_type + R"("}}})");
+  };
+  const std::string dir = test::ScratchDir("merge_schema");
+  WriteSplit(dir);
+  MergeOptions options;
+  options.schemas_dir = schemas;
+  write_schema("sample.schema.json", "integer");
+  write_schema("pairs_line.schema.json", "integer");
+  EXPECT_NO_THROW(MergeSplit(dir, options));
+  EXPECT_TRUE(ValidateSplit(dir, ValidateOptions{schemas}).empty());
+
+  write_schema("sample.schema.json", "string");  // the samples hold integers
+  try {
+    MergeSplit(dir, options);
+    ADD_FAILURE() << "sample JSON not checked";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("train-000000.tar: scene0707_00/0_300.json: "
+                                         "sample.schema.json"),
+              std::string::npos)
+        << e.what();
+  }
+  auto problems = ValidateSplit(dir, ValidateOptions{schemas});
+  EXPECT_EQ(problems.size(), 11u);  // one per sample
+
+  write_schema("sample.schema.json", "integer");
+  write_schema("pairs_line.schema.json", "string");
+  try {
+    MergeSplit(dir, options);
+    ADD_FAILURE() << "pair lines not checked";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("parts/train-000000.json: pairs[0]: "
+                                         "pairs_line.schema.json"),
+              std::string::npos)
+        << e.what();
+  }
+  problems = ValidateSplit(dir, ValidateOptions{schemas});
+  ASSERT_EQ(problems.size(), 11u);
+  EXPECT_NE(problems[0].find("pairs.jsonl:1: pairs_line.schema.json"), std::string::npos)
+      << problems[0];
+}
+
 TEST(Split, CommandsMergeAndValidate) {
   const std::string dir = test::ScratchDir("split_cli");
   WriteSplit(dir);
-  auto r = test::RunOccgt("merge '" + dir + "'");
+  auto r = test::RunOccgt("merge --schemas '" + SchemasDir() + "' '" + dir + "'");
   ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
   EXPECT_NE(r.stdout_text.find("11 samples"), std::string::npos) << r.stdout_text;
   const json summary = json::parse(io::ReadFileBytes(dir + "/summary.json"));
   EXPECT_EQ(summary["nsamples"], 11);
-  r = test::RunOccgt("validate '" + dir + "'");
+  r = test::RunOccgt("validate --schemas '" + SchemasDir() + "' '" + dir + "'");
   EXPECT_EQ(r.exit_code, 0) << r.stdout_text << r.stderr_text;
 
   std::string bytes = io::ReadFileBytes(dir + "/train-000002.tar");
   bytes[1000] ^= 0x04;
   io::WriteFileAtomic(dir + "/train-000002.tar", bytes);
-  r = test::RunOccgt("validate '" + dir + "'");
+  r = test::RunOccgt("validate --schemas '" + SchemasDir() + "' '" + dir + "'");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.stdout_text.find("train-000002.tar: md5"), std::string::npos) << r.stdout_text;
-  r = test::RunOccgt("merge '" + dir + "'");
+  r = test::RunOccgt("merge --schemas '" + SchemasDir() + "' '" + dir + "'");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.stderr_text.find("train-000002.tar"), std::string::npos) << r.stderr_text;
   EXPECT_EQ(std::count(r.stderr_text.begin(), r.stderr_text.end(), '\n'), 1) << r.stderr_text;
@@ -336,7 +397,7 @@ TEST(ShardsDemo, WriteDemoSplit) {
   const std::string dir = env != nullptr && *env ? std::string(env) : test::ScratchDir("demo");
   fs::create_directories(dir);
   WriteSplit(dir);
-  const auto r = test::RunOccgt("merge '" + dir + "'");
+  const auto r = test::RunOccgt("merge --schemas '" + SchemasDir() + "' '" + dir + "'");
   ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
   std::vector<LoftrPair> pairs;
   SceneIntrinsics intrinsics;
