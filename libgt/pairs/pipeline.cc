@@ -598,7 +598,11 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   bool complete = true;
   for (int64_t s = 0; s < nshards && complete; ++s) complete = output->IsShardComplete(s);
   summary["complete"] = complete;
-  if (complete) {
+  // A re-run that wrote nothing leaves published indices alone (no new inodes or mtimes).
+  const bool indices_current = shards_written == 0 &&
+                               io::FileExists(options.out_dir + "/index.json") &&
+                               io::FileExists(options.out_dir + "/summary.json");
+  if (complete && !indices_current) {
     const auto t_index = Clock::now();
     output->Finish();
     if (!recipe.loftr_export.empty()) {
@@ -638,7 +642,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   timings["total_s"] = Seconds(t_start);
   summary["timings"] = timings;
   summary["bytes_written"] = bytes_written;
-  if (complete) {
+  if (complete && !indices_current) {
     json on_disk = summary;
     io::WriteFileAtomic(options.out_dir + "/summary.json", on_disk.dump(2) + "\n");
   }

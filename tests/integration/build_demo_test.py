@@ -1,0 +1,279 @@
+"""occgt build on recipes/demo.yaml (synthetic data generated into <out>/data), read back
+the way a trainer would: tarfile + numpy grouping members by key, every array's shape and
+dtype, labels consistent with metrics, cells and matches; JSON validated against schemas/;
+LoFTR test.npz read with numpy. Then: two runs give byte-identical shards, a deleted shard
+is rebuilt by a re-run and nothing else is rewritten, a 2-task split gives the same files,
+--dry-run writes nothing, and bad recipes fail before any work with one line."""
+import glob
+import io
+import json
+import os
+import shutil
+import sys
+import tarfile
+
+import numpy as np
+import jsonschema
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import common  # noqa: E402
+
+LABELS = {"NO_DEPTH": 0, "OUT_OF_VIEW": 1, "VISIBLE": 2, "OCCLUDED": 3, "INCONSISTENT": 4, "UNKNOWN": 5}
+
+
+def schema(name):
+    with open(os.path.join(common.SOURCE, "schemas", name)) as f:
+        return json.load(f)
+
+
+def validate(doc, name):
+    jsonschema.validate(doc, schema(name), cls=jsonschema.Draft202012Validator)
+
+
+def read_shard(path):
+    """{key: {field: bytes}} in tar order, grouped the WebDataset way."""
+    samples = {}
+    order = []
+    with tarfile.open(path) as tf:
+        for m in tf:
+            assert m.isfile(), m.name
+            assert len(m.name.encode()) <= 100, m.name
+            assert m.mtime == 0 and m.uid == 0 and m.gid == 0, m.name
+            folder, base = os.path.split(m.name)
+            stem, field = base.split(".", 1)
+            key = f"{folder}/{stem}" if folder else stem
+            if key not in samples:
+                assert not order or order[-1] != key
+                order.append(key)
+                samples[key] = {}
+            assert order[-1] == key, f"members of {key} not contiguous"
+            samples[key][field] = tf.extractfile(m).read()
+    return samples
+
+
+def npy(b):
+    return np.load(io.BytesIO(b), allow_pickle=False)
+
+
+def check_sample(key, fields, width, height, stride=8):
+    """Shapes, dtypes and cross-consistency of one sample; returns its metadata."""
+    meta = json.loads(fields["json"])
+    validate(meta, "sample.schema.json")
+    assert meta["key"] == key
+    assert "." not in key.rsplit("/", 1)[-1]
+    assert meta["resolution"] == [width, height]
+    l01 = npy(fields["label01.npy"])
+    l10 = npy(fields["label10.npy"])
+    for lab, d in ((l01, "01"), (l10, "10")):
+        assert lab.dtype == np.uint8 and lab.shape == (height, width), (lab.dtype, lab.shape)
+        assert lab.max() <= 5
+        counts = meta["metrics"][d]["counts"]
+        for name, code in LABELS.items():
+            assert int((lab == code).sum()) == counts[name], (key, d, name)
+        m = meta["metrics"][d]
+        valid = lab.size - counts["NO_DEPTH"]
+        assert m["valid"] == valid
+        moved = counts["VISIBLE"] + counts["OCCLUDED"] + counts["INCONSISTENT"] + counts["UNKNOWN"]
+        assert abs(m["overlap"] - (moved / valid if valid else 0.0)) < 1e-12
+        assert abs(m["occlusion_ratio"] - counts["OCCLUDED"] / lab.size) < 1e-12
+    matches = npy(fields["matches.npy"])
+    mtype = npy(fields["match_type.npy"])
+    mxy = npy(fields["match_xy.npy"])
+    n = meta["matches"]["total"]
+    assert matches.dtype == np.int32 and matches.shape == (n, 2)
+    assert mtype.dtype == np.uint8 and mtype.shape == (n,)
+    assert mxy.dtype == np.float32 and mxy.shape == (n, 2)
+    for t, name in enumerate(("vv", "vo", "ov")):
+        assert int((mtype == t).sum()) == meta["matches"][name]
+    cw, ch = width // stride, height // stride
+    c0 = npy(fields["cells0.npy"])
+    c1 = npy(fields["cells1.npy"])
+    assert c0.dtype == np.uint8 and c0.shape == (ch, cw)
+    assert c1.shape == (ch, cw)
+    # Centre anchors: the cell label is the label of pixel (s*c + s/2, s*r + s/2).
+    a = np.arange(cw) * stride + stride // 2
+    b = np.arange(ch) * stride + stride // 2
+    assert np.array_equal(c0, l01[np.ix_(b, a)])
+    assert np.array_equal(c1, l10[np.ix_(b, a)])
+    assert matches.size == 0 or (matches.min() >= 0 and matches.max() < cw * ch)
+    # vv and vo: the anchor of cell i in image 0 is VISIBLE / OCCLUDED; ov: anchor j of 1 OCCLUDED.
+    flat0, flat1 = c0.reshape(-1), c1.reshape(-1)
+    assert np.all(flat0[matches[mtype == 0, 0]] == 2)
+    assert np.all(flat0[matches[mtype == 1, 0]] == 3)
+    assert np.all(flat1[matches[mtype == 2, 1]] == 3)
+    for c in ("0", "1"):
+        occ = npy(fields[f"occ{c}.npy"])
+        known = npy(fields[f"known{c}.npy"])
+        assert occ.dtype == np.uint64 and occ.shape == (height // 2, width // 2)
+        assert known.dtype == np.uint64 and known.shape == occ.shape
+        assert not np.any(occ & ~known), "occupied bits outside known bits"
+        counts = meta["occupancy"][f"counts{c}"]
+        bits = np.unpackbits(occ.view(np.uint8)).sum()
+        assert int(bits) == counts["occupied"]
+    assert len(meta["occupancy"]["bin_edges_m"]) == 65
+    for c in ("0", "1"):
+        d = npy(fields[f"depth{c}.npy"])
+        assert d.dtype == np.float32 and d.shape == (height, width)
+    # Pixels without depth are NO_DEPTH and nothing else is.
+    d0 = npy(fields["depth0.npy"])
+    opts = meta["label_preset_options"]
+    invalid = ~((d0 > 0) & (d0 >= opts["min_depth_m"]) & (d0 <= opts["max_depth_m"]) & np.isfinite(d0))
+    assert np.array_equal(invalid, l01 == 0)
+    # T_0to1 = inv(world_from_cam1) @ world_from_cam0.
+    w0 = np.array(meta["world_from_cam0"])
+    w1 = np.array(meta["world_from_cam1"])
+    assert np.allclose(np.array(meta["T_0to1"]), np.linalg.inv(w1) @ w0, atol=1e-9)
+    if "image0.png" in fields:
+        from PIL import Image
+        for c in ("0", "1"):
+            im = Image.open(io.BytesIO(fields[f"image{c}.png"]))
+            assert im.size == (width, height) and im.mode == "RGB"
+    return meta
+
+
+def read_split(out, split, width, height, stride=8):
+    """Reads index.json, every shard and pairs.jsonl; returns (keys in order, metas)."""
+    with open(os.path.join(out, "index.json")) as f:
+        index = json.load(f)
+    validate(index, "index.schema.json")
+    keys, metas = [], []
+    for shard in index["shardlist"]:
+        path = os.path.join(out, shard["url"])
+        assert os.path.getsize(path) == shard["filesize"]
+        samples = read_shard(path)
+        assert len(samples) == shard["nsamples"]
+        for key, fields in samples.items():
+            metas.append(check_sample(key, fields, width, height, stride))
+            keys.append(key)
+    with open(os.path.join(out, "pairs.jsonl")) as f:
+        lines = [json.loads(line) for line in f]
+    assert [p["key"] for p in lines] == keys
+    for p, m in zip(lines, metas):
+        validate(p, "pairs_line.schema.json")
+        assert p["scene"] == m["scene"] and p["metrics"] == m["metrics"]
+    with open(os.path.join(out, "summary.json")) as f:
+        summary = json.load(f)
+    validate(summary, "summary.schema.json")
+    assert summary["samples"] == len(keys) and summary["complete"]
+    c = summary["counts"]
+    drops = summary["drops"]
+    # Drop counts add up stage by stage.
+    assert c["frames_total"] == c["frames_kept"] + sum(v for k, v in drops.items() if k.startswith("scan."))
+    assert c["candidates"] == c["after_pruning"] + sum(v for k, v in drops.items() if k.startswith("prune."))
+    assert c["scored"] == c["selected"] + sum(v for k, v in drops.items()
+                                              if k.startswith(("filter.", "sample.")))
+    return keys, metas, lines, summary
+
+
+def tree_state(out):
+    """{relative path: (inode, mtime_ns)} of every file."""
+    state = {}
+    for path in glob.glob(os.path.join(out, "**"), recursive=True):
+        if os.path.isfile(path):
+            st = os.stat(path)
+            state[os.path.relpath(path, out)] = (st.st_ino, st.st_mtime_ns)
+    return state
+
+
+def file_bytes(out, pattern):
+    return {os.path.basename(p): open(p, "rb").read() for p in sorted(glob.glob(os.path.join(out, pattern)))}
+
+
+def main():
+    recipe = os.path.join(common.SOURCE, "recipes", "demo.yaml")
+    root = common.scratch("build_demo")
+    out = os.path.join(root, "a")
+    r = common.occgt("build", recipe, "--out", out)
+    summary_stdout = json.loads(r.stdout)
+    validate(summary_stdout, "summary.schema.json")
+    assert "[write]" in r.stderr and "[select]" in r.stderr
+    keys, metas, lines, summary = read_split(out, "demo", 320, 240)
+    assert len(keys) == 24, len(keys)  # 2 scenes, quota 12
+    assert summary["pairs_per_scene"] == {"synth_000": 12, "synth_001": 12}
+    for p in lines:
+        ov = (p["score_metrics"]["01"]["overlap"] + p["score_metrics"]["10"]["overlap"]) / 2
+        assert 0.3 <= ov <= 0.95
+    # LoFTR test export read with numpy.
+    t = np.load(os.path.join(out, "loftr", "test.npz"))
+    assert t["name"].shape == (24, 4) and t["rel_pose"].shape == (24, 12)
+    for row, p in zip(t["rel_pose"], lines):
+        assert np.allclose(row.reshape(3, 4), np.array(p["T_0to1"])[:3], atol=1e-5)
+    assert [int(x) for x in t["name"][:, 2]] == [p["number0"] for p in lines]
+
+    # Determinism: a second run in another folder gives byte-identical outputs.
+    out_b = os.path.join(root, "b")
+    common.occgt("build", recipe, "--out", out_b, "--threads", "1")
+    for pattern in ("*.tar", "index.json", "pairs.jsonl", "selection/*", "loftr/*"):
+        a, b = file_bytes(out, pattern), file_bytes(out_b, pattern)
+        assert a and a == b, pattern
+
+    # Re-run: nothing rewritten; a deleted shard is rebuilt, nothing else rewritten.
+    before = tree_state(out)
+    r = common.occgt("build", recipe, "--out", out)
+    s2 = json.loads(r.stdout)
+    assert s2["shards_written_this_run"] == 0 and s2["scenes_reused"] == 2
+    assert tree_state(out) == before, "a re-run with nothing to do rewrote files"
+    victim = os.path.join(out, "demo-000001.tar")
+    victim_bytes = open(victim, "rb").read()
+    os.remove(victim)
+    before = tree_state(out)
+    r = common.occgt("build", recipe, "--out", out)
+    assert json.loads(r.stdout)["shards_written_this_run"] == 1
+    after = tree_state(out)
+    assert open(victim, "rb").read() == victim_bytes
+    for k, v in before.items():
+        if k.endswith(".tar") or k.startswith(("selection/", "data/")):
+            assert after[k] == v, f"{k} was rewritten"
+
+    # Two tasks, select then write, give the same files as one run.
+    out_c = os.path.join(root, "c")
+    for stage in ("select", "write"):
+        for task in ("1", "0"):
+            common.occgt("build", recipe, "--out", out_c, "--tasks", "2", "--task", task, "--stage", stage)
+    for pattern in ("*.tar", "index.json", "pairs.jsonl", "selection/*"):
+        assert file_bytes(out, pattern) == file_bytes(out_c, pattern), pattern
+
+    # Write before every selection exists: refused.
+    out_d = os.path.join(root, "d")
+    common.occgt("build", recipe, "--out", out_d, "--tasks", "2", "--task", "0", "--stage", "select")
+    r = common.occgt("build", recipe, "--out", out_d, "--stage", "write", check=False)
+    assert r.returncode == 1 and "not complete" in r.stderr, r.stderr
+
+    # Dry run: plan and statistics, no shards, nothing written except the synthetic data.
+    out_e = os.path.join(root, "e")
+    common.occgt("build", recipe, "--out", out_e)  # dataset + outputs
+    shutil.rmtree(os.path.join(out_e, "selection"))
+    for p in glob.glob(os.path.join(out_e, "*.tar")) + glob.glob(os.path.join(out_e, "*.json*")):
+        os.remove(p)
+    shutil.rmtree(os.path.join(out_e, "parts"))
+    r = common.occgt("build", recipe, "--out", out_e, "--dry-run")
+    s = json.loads(r.stdout)
+    assert s["dry_run"] and s["samples"] == 24 and s["shards_planned"] == 3
+    assert not glob.glob(os.path.join(out_e, "*.tar")) and not os.path.exists(os.path.join(out_e, "selection"))
+
+    # Bad recipes: one line naming the file and field, exit 1, nothing created.
+    bad_dir = common.scratch("build_demo_bad")
+    cases = {
+        "unknown.yaml": ("name: x\ndataset: {format: synthetic}\nselection: {overlapp: [0.1, 0.2]}\n",
+                         "selection.overlapp: unknown key"),
+        "type.yaml": ("name: x\ndataset: {format: synthetic}\nselection: {overlap: high}\n",
+                      "selection.overlap: expected [lo, hi] with 0 <= lo <= hi <= 1"),
+        "nodata.yaml": ("name: x\nseed: 1\n", "dataset: missing (required)"),
+        "noroot.yaml": ("name: x\ndataset: {format: sevenscenes, root: nowhere}\n",
+                        "dataset.root: expected an existing folder"),
+    }
+    for name, (text, expected) in cases.items():
+        path = os.path.join(bad_dir, name)
+        with open(path, "w") as f:
+            f.write(text)
+        out_bad = os.path.join(bad_dir, "out-" + name)
+        r = common.occgt("build", path, "--out", out_bad, check=False)
+        assert r.returncode == 1, (name, r.returncode)
+        lines_err = r.stderr.strip().splitlines()
+        assert len(lines_err) == 1 and lines_err[0].startswith(f"occgt: error: {path}: {expected}"), r.stderr
+        assert not os.path.exists(out_bad), f"{name}: output created before validation"
+    print("build_demo: 1 passed, 0 failed")
+
+
+if __name__ == "__main__":
+    main()
