@@ -18,5 +18,6 @@ void AddValidateCommand(CLI::App& app);   // cmd_validate.cc
 // (../schemas, ../../schemas, ../share/occgt/schemas); "" when none (cmd_validate.cc).
 std::string DefaultSchemasDir();
 void AddBuildCommand(CLI::App& app);      // cmd_build.cc
+void AddInspectCommand(CLI::App& app);    // cmd_inspect.cc
 
 }  // namespace occgt

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   occgt::AddMergeCommand(app);
   occgt::AddValidateCommand(app);
   occgt::AddBuildCommand(app);
+  occgt::AddInspectCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

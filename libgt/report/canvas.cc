@@ -45,6 +45,14 @@ cv::Mat TitleAbove(const cv::Mat& image, const std::string& title) {
 cv::Mat LegendStrip(const std::vector<LegendEntry>& entries, int width, int per_row,
                     const std::string& note) {
   const int row_h = 22;
+  // Fewer entries a row when the widest text would not fit its cell.
+  int widest = 0;
+  for (const auto& e : entries) {
+    int baseline = 0;
+    widest = std::max(widest,
+                      cv::getTextSize(e.text, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &baseline).width);
+  }
+  per_row = std::max(1, std::min(per_row, width / (widest + 34)));
   const int rows =
       static_cast<int>((entries.size() + per_row - 1) / per_row) + (note.empty() ? 0 : 1);
   cv::Mat strip(rows * row_h + 6, width, CV_8UC3, kWhite);

@@ -357,7 +357,7 @@ cv::Mat RenderFirstOccupied(const gt::occupancy::FrustumVolume& volume,
       {kNoOccupiedSeenColor, "no occupied bin (free seen)"},
       {kNothingKnownColor, "nothing known"},
   };
-  return StackVertical({row, LegendStrip(entries, row.cols, 2, "first occupied bin depth")});
+  return StackVertical({row, LegendStrip(entries, row.cols, 1, "")});
 }
 
 cv::Mat RenderOccupancySlice(const gt::occupancy::FrustumVolume& volume,

@@ -1,0 +1,151 @@
+// occgt inspect pair | split: pictures of one pair and a report of a split (libgt/report).
+//   occgt inspect pair (--shard X.tar --key K | --pair-dir D | --root R --format F --scene S
+//                      --frames A,B) --out DIR
+//   occgt inspect split DIR [--out OUT]
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "apps/commands.h"
+#include "libgt/core/error.h"
+#include "libgt/report/pair_source.h"
+#include "libgt/report/split_report.h"
+
+namespace occgt {
+namespace {
+
+struct InspectPairArgs {
+  std::string shard, key, pair_dir, root, format, scene, frames, out;
+  std::string image0, image1;
+  std::string preset = "default";
+  std::string resolution = "640x480";
+  bool no_occupancy = false;
+  int max_lines = 200;
+  uint64_t seed = 0;
+  double alpha = 0.55;
+  int slice_row = -1;
+};
+
+struct InspectSplitArgs {
+  std::string dir, out, aggregate = "mean", occlusion_metric = "image";
+  int gallery = 6;
+  uint64_t seed = 0;
+  int bins = 20;
+};
+
+void RunInspectPair(const InspectPairArgs& a) {
+  const int sources = (!a.shard.empty() || !a.key.empty()) + !a.pair_dir.empty() +
+                      (!a.root.empty() || !a.scene.empty() || !a.frames.empty());
+  if (sources != 1) {
+    throw gt::InputError("occgt inspect pair",
+                         "expected exactly one source: --shard/--key, --pair-dir, or "
+                         "--root/--format/--scene/--frames");
+  }
+  gt::report::PairData pair;
+  if (!a.shard.empty() || !a.key.empty()) {
+    if (a.shard.empty() || a.key.empty()) {
+      throw gt::InputError("--shard/--key", "expected both a shard and a sample key");
+    }
+    pair = gt::report::LoadPairFromShard(a.shard, a.key);
+  } else if (!a.pair_dir.empty()) {
+    pair = gt::report::LoadPairFromDir(a.pair_dir, a.image0, a.image1);
+  } else {
+    if (a.root.empty() || a.format.empty() || a.scene.empty() || a.frames.empty()) {
+      throw gt::InputError("--root/--format/--scene/--frames", "expected all four");
+    }
+    const size_t comma = a.frames.find(',');
+    if (comma == std::string::npos || comma == 0 || comma + 1 == a.frames.size()) {
+      throw gt::InputError("--frames", "expected two frame ids: A,B");
+    }
+    gt::report::ComputePairOptions o;
+    o.preset = a.preset;
+    if (std::sscanf(a.resolution.c_str(), "%dx%d", &o.width, &o.height) != 2) {
+      throw gt::InputError("--resolution", "expected WxH, e.g. 640x480");
+    }
+    o.occupancy = !a.no_occupancy;
+    pair = gt::report::ComputePairFromScene(a.root, a.format, a.scene, a.frames.substr(0, comma),
+                                            a.frames.substr(comma + 1), o);
+  }
+  gt::report::PairPictureOptions po;
+  po.matches.max_lines = a.max_lines;
+  po.matches.seed = a.seed;
+  po.labels.alpha = a.alpha;
+  po.occupancy.slice_row = a.slice_row;
+  const auto written = gt::report::WritePairPictures(gt::report::RenderPair(pair, po), a.out);
+  std::printf("inspect pair %s: %d x %d, %zu matches%s%s\n", pair.name.c_str(), pair.width,
+              pair.height, pair.matches.size(), pair.has_images ? "" : " (no colour images)",
+              pair.has_occupancy ? ", occupancy" : "");
+  for (const auto& p : written) std::printf("  wrote %s\n", p.c_str());
+}
+
+void RunInspectSplit(const InspectSplitArgs& a) {
+  gt::report::SplitReportOptions o;
+  o.aggregate = gt::report::ParseAggregate(a.aggregate);
+  o.occlusion_metric = a.occlusion_metric;
+  o.gallery_pairs = a.gallery;
+  o.seed = a.seed;
+  o.histogram_bins = a.bins;
+  std::string error;
+  if (!o.Check(&error)) throw gt::InputError("occgt inspect split", error);
+  const std::string out = a.out.empty() ? a.dir + "/inspect" : a.out;
+  const auto written = gt::report::WriteSplitReport(a.dir, out, o);
+  std::printf("inspect split %s\n", a.dir.c_str());
+  for (const auto& p : written) std::printf("  wrote %s\n", p.c_str());
+}
+
+}  // namespace
+
+void AddInspectCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand("inspect", "Pictures of a pair and a report of a split");
+  cmd->require_subcommand(1);
+
+  auto pa = std::make_shared<InspectPairArgs>();
+  auto* pair = cmd->add_subcommand(
+      "pair",
+      "matches.png, labels.png, occupancy.png of one pair (from a shard sample, an "
+      "`occgt pair` folder, or a scene and two frames)");
+  pair->add_option("--shard", pa->shard, "WebDataset shard (.tar) holding the sample");
+  pair->add_option("--key", pa->key, "sample key in the shard, e.g. scene/000010_000020");
+  pair->add_option("--pair-dir", pa->pair_dir, "output folder of `occgt pair`");
+  pair->add_option("--image0", pa->image0, "colour image of frame 0 (with --pair-dir)");
+  pair->add_option("--image1", pa->image1, "colour image of frame 1 (with --pair-dir)");
+  pair->add_option("--root", pa->root, "dataset root (compute the pair here)");
+  pair->add_option("--format", pa->format, "dataset format: scannet, tartanair, ...");
+  pair->add_option("--scene", pa->scene, "scene name");
+  pair->add_option("--frames", pa->frames, "two frame ids: A,B");
+  pair->add_option("--preset", pa->preset, "label preset (with --root)")->capture_default_str();
+  pair->add_option("--resolution", pa->resolution, "working resolution WxH (with --root)")
+      ->capture_default_str();
+  pair->add_flag("--no-occupancy", pa->no_occupancy, "skip the occupancy fusion (with --root)");
+  pair->add_option("--max-lines", pa->max_lines, "match lines drawn at most")
+      ->capture_default_str();
+  pair->add_option("--seed", pa->seed, "seed of the drawn subset of matches")
+      ->capture_default_str();
+  pair->add_option("--alpha", pa->alpha, "weight of label colours over the images")
+      ->capture_default_str();
+  pair->add_option("--slice-row", pa->slice_row,
+                   "half-grid row of the occupancy slice (-1: middle)")
+      ->capture_default_str();
+  pair->add_option("--out", pa->out, "folder for the PNG files")->required();
+  pair->callback([pa] { RunInspectPair(*pa); });
+
+  auto sa = std::make_shared<InspectSplitArgs>();
+  auto* split = cmd->add_subcommand(
+      "split", "plots (gnuplot) and a self-contained report.html of an `occgt build` folder");
+  split->add_option("dir", sa->dir, "output folder of `occgt build` (pairs.jsonl, summary.json)")
+      ->required();
+  split->add_option("--out", sa->out, "report folder (default DIR/inspect)");
+  split->add_option("--aggregate", sa->aggregate, "combine both directions: min, mean, max")
+      ->capture_default_str();
+  split
+      ->add_option("--occlusion-metric", sa->occlusion_metric,
+                   "image (OCCLUDED / W*H) or visible (OCCLUDED / (VISIBLE+OCCLUDED))")
+      ->capture_default_str();
+  split->add_option("--gallery", sa->gallery, "pairs shown with their pictures")
+      ->capture_default_str();
+  split->add_option("--seed", sa->seed, "seed of the gallery choice")->capture_default_str();
+  split->add_option("--bins", sa->bins, "histogram bins over [0, 1]")->capture_default_str();
+  split->callback([sa] { RunInspectSplit(*sa); });
+}
+
+}  // namespace occgt

@@ -1,0 +1,587 @@
+#include "libgt/report/split_report.h"
+
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "libgt/core/error.h"
+#include "libgt/io/files.h"
+
+namespace gt::report {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+uint64_t SplitMix64(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+uint64_t Fnv1a64(std::string_view s) {
+  uint64_t h = 0xcbf29ce484222325ULL;
+  for (unsigned char c : s) {
+    h ^= c;
+    h *= 0x100000001b3ULL;
+  }
+  return h;
+}
+
+double Combine(double a, double b, Aggregate agg) {
+  switch (agg) {
+    case Aggregate::kMin:
+      return std::min(a, b);
+    case Aggregate::kMax:
+      return std::max(a, b);
+    case Aggregate::kMean:
+      break;
+  }
+  return 0.5 * (a + b);
+}
+
+const char* AggregateName(Aggregate agg) {
+  return agg == Aggregate::kMin ? "min" : agg == Aggregate::kMax ? "max" : "mean";
+}
+
+double NeedNumber(const json& j, const char* key, const std::string& where) {
+  if (!j.is_object() || !j.contains(key) || !j.at(key).is_number()) {
+    throw InputError(where, std::string("expected a number \"") + key + "\"");
+  }
+  return j.at(key).get<double>();
+}
+
+std::string NeedString(const json& j, const char* key, const std::string& where) {
+  if (!j.contains(key) || !j.at(key).is_string()) {
+    throw InputError(where, std::string("expected a string \"") + key + "\"");
+  }
+  return j.at(key).get<std::string>();
+}
+
+std::string ShellQuote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) {
+    if (c == '\'') {
+      out += "'\\''";
+    } else {
+      out += c;
+    }
+  }
+  return out + "'";
+}
+
+// A string inside gnuplot double quotes (noenhanced text: only quotes and backslashes).
+std::string GnuplotString(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\'';
+    } else if (static_cast<unsigned char>(c) >= 32) {
+      out += c;
+    }
+  }
+  return "\"" + out + "\"";
+}
+
+std::string Num(double v, int digits = 4) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*g", digits, v);
+  return buf;
+}
+
+std::string HtmlEscape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::string JsonScalar(const json& v) {
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_number_float()) return Num(v.get<double>(), 6);
+  return v.dump();
+}
+
+struct Stats {
+  double min = 0, median = 0, mean = 0, max = 0;
+};
+Stats Describe(std::vector<double> v) {
+  Stats s;
+  if (v.empty()) return s;
+  std::sort(v.begin(), v.end());
+  s.min = v.front();
+  s.max = v.back();
+  s.median = v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+  double sum = 0;
+  for (double x : v) sum += x;
+  s.mean = sum / v.size();
+  return s;
+}
+
+std::string ImgTag(const NamedImage& im, const std::string& alt) {
+  return "<img alt=\"" + HtmlEscape(alt) + "\" src=\"data:" + im.mime + ";base64," +
+         Base64(im.bytes) + "\">";
+}
+
+}  // namespace
+
+Aggregate ParseAggregate(const std::string& name) {
+  if (name == "min") return Aggregate::kMin;
+  if (name == "mean") return Aggregate::kMean;
+  if (name == "max") return Aggregate::kMax;
+  throw InputError("--aggregate", "expected one of min, mean, max; got '" + name + "'");
+}
+
+bool SplitReportOptions::Check(std::string* error) const {
+  if (occlusion_metric != "image" && occlusion_metric != "visible") {
+    *error = "occlusion_metric: expected image or visible";
+    return false;
+  }
+  if (histogram_bins < 1 || histogram_bins > 200) {
+    *error = "histogram_bins: expected 1..200";
+    return false;
+  }
+  if (gallery_pairs < 0 || gallery_pairs > 100) {
+    *error = "gallery_pairs: expected 0..100";
+    return false;
+  }
+  if (!(gallery_scale > 0 && gallery_scale <= 1)) {
+    *error = "gallery_scale: expected (0, 1]";
+    return false;
+  }
+  if (gnuplot.empty()) {
+    *error = "gnuplot: expected an executable name";
+    return false;
+  }
+  if (plot_width_px < 200 || plot_height_px < 150 || plot_width_px > 4000 ||
+      plot_height_px > 4000) {
+    *error = "plot size: expected 200..4000 x 150..4000 pixels";
+    return false;
+  }
+  return pictures.Check(error);
+}
+
+SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
+  std::string error;
+  if (!options.Check(&error)) throw InputError("inspect options", error);
+  SplitData split;
+  split.dir = dir;
+  const std::string pairs_path = (fs::path(dir) / "pairs.jsonl").string();
+  if (!gt::io::FileExists(pairs_path)) {
+    throw InputError(pairs_path, "missing: expected the pairs.jsonl of an `occgt build` folder");
+  }
+  const std::vector<std::string> lines = gt::io::ReadLines(pairs_path);
+  const char* occ_key =
+      options.occlusion_metric == "image" ? "occlusion_ratio" : "occlusion_ratio_visible";
+  for (size_t n = 0; n < lines.size(); ++n) {
+    if (lines[n].find_first_not_of(" \t") == std::string::npos) continue;
+    const std::string where = pairs_path + ":" + std::to_string(n + 1);
+    json j;
+    try {
+      j = json::parse(lines[n]);
+    } catch (const json::exception&) {
+      throw InputError(where, "expected one JSON object per line");
+    }
+    if (!j.is_object()) throw InputError(where, "expected one JSON object per line");
+    SplitPair p;
+    p.scene = NeedString(j, "scene", where);
+    p.frame0 = NeedString(j, "frame0", where);
+    p.frame1 = NeedString(j, "frame1", where);
+    p.shard = j.value("shard", "");
+    p.key = j.value("key", "");
+    if (!j.contains("metrics") || !j["metrics"].is_object()) {
+      throw InputError(where, "expected \"metrics\": {\"01\": {...}, \"10\": {...}}");
+    }
+    const json& m = j["metrics"];
+    const json m01 = m.value("01", json()), m10 = m.value("10", json());
+    p.overlap01 = NeedNumber(m01, "overlap", where + ": metrics.01");
+    p.overlap10 = NeedNumber(m10, "overlap", where + ": metrics.10");
+    p.occlusion01 = NeedNumber(m01, occ_key, where + ": metrics.01");
+    p.occlusion10 = NeedNumber(m10, occ_key, where + ": metrics.10");
+    p.overlap = Combine(p.overlap01, p.overlap10, options.aggregate);
+    p.occlusion = Combine(p.occlusion01, p.occlusion10, options.aggregate);
+    split.pairs.push_back(std::move(p));
+  }
+  const std::string summary_path = (fs::path(dir) / "summary.json").string();
+  if (gt::io::FileExists(summary_path)) {
+    try {
+      split.summary = json::parse(gt::io::ReadFileBytes(summary_path));
+    } catch (const json::exception&) {
+      throw InputError(summary_path, "expected a JSON object");
+    }
+    if (!split.summary.is_object()) throw InputError(summary_path, "expected a JSON object");
+  }
+  return split;
+}
+
+std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReportOptions& options,
+                                       const std::string& scratch_dir) {
+  std::string error;
+  if (!options.Check(&error)) throw InputError("inspect options", error);
+  fs::create_directories(scratch_dir);
+  auto write = [&](const std::string& name, const std::string& text) {
+    gt::io::WriteFileAtomic((fs::path(scratch_dir) / name).string(), text);
+  };
+  const size_t n = split.pairs.size();
+  const int bins = options.histogram_bins;
+  auto histogram = [&](auto value) {
+    std::vector<int64_t> counts(bins, 0);
+    for (const auto& p : split.pairs) {
+      const double v = std::clamp(value(p), 0.0, 1.0);
+      ++counts[std::min(bins - 1, static_cast<int>(std::floor(v * bins)))];
+    }
+    std::string text;
+    for (int b = 0; b < bins; ++b) {
+      text += Num((b + 0.5) / bins, 8) + " " + std::to_string(counts[b]) + "\n";
+    }
+    return text;
+  };
+  write("overlap_hist.dat", histogram([](const SplitPair& p) { return p.overlap; }));
+  write("occlusion_hist.dat", histogram([](const SplitPair& p) { return p.occlusion; }));
+
+  std::vector<double> occ;
+  for (const auto& p : split.pairs) occ.push_back(p.occlusion);
+  std::sort(occ.begin(), occ.end());
+  std::string cumulative = "0 0\n";
+  for (size_t i = 0; i < occ.size(); ++i)
+    cumulative += Num(occ[i], 8) + " " + std::to_string(i + 1) + "\n";
+  cumulative += "1 " + std::to_string(occ.size()) + "\n";
+  write("cumulative.dat", cumulative);
+
+  std::string scatter;
+  for (const auto& p : split.pairs) scatter += Num(p.overlap, 8) + " " + Num(p.occlusion, 8) + "\n";
+  if (scatter.empty()) scatter = "NaN NaN\n";
+  write("scatter.dat", scatter);
+
+  std::map<std::string, int64_t> per_scene;
+  for (const auto& p : split.pairs) ++per_scene[p.scene];
+  std::vector<std::pair<std::string, int64_t>> scenes(per_scene.begin(), per_scene.end());
+  const size_t kMaxScenes = 60;
+  const size_t total_scenes = scenes.size();
+  if (scenes.size() > kMaxScenes) {
+    std::stable_sort(scenes.begin(), scenes.end(),
+                     [](const auto& a, const auto& b) { return a.second > b.second; });
+    scenes.resize(kMaxScenes);
+    std::sort(scenes.begin(), scenes.end());
+  }
+  std::string scene_text;
+  for (size_t i = 0; i < scenes.size(); ++i) {
+    scene_text += std::to_string(i) + " " + std::to_string(scenes[i].second) + " " +
+                  GnuplotString(scenes[i].first) + "\n";
+  }
+  if (scene_text.empty()) scene_text = "0 0 \"(none)\"\n";
+  write("scenes.dat", scene_text);
+
+  const std::string agg = AggregateName(options.aggregate);
+  const std::string occ_name = options.occlusion_metric == "image"
+                                   ? "occlusion ratio (OCCLUDED / W*H)"
+                                   : "occlusion ratio (OCCLUDED / (VISIBLE+OCCLUDED))";
+  const std::string count = std::to_string(n) + " pairs";
+  std::ostringstream gp;
+  gp << "set terminal pngcairo size " << options.plot_width_px << "," << options.plot_height_px
+     << " font \"DejaVu Sans,11\" noenhanced\n"
+     << "set encoding utf8\nset grid ytics lc rgb '#dddddd'\nset border 3\n"
+     << "set xtics nomirror\nset ytics nomirror\nset style fill solid 0.85 border -1\n"
+     << "set boxwidth " << Num(0.9 / bins, 8) << "\n";
+  gp << "set output 'overlap_hist.png'\nset title "
+     << GnuplotString("Overlap (" + agg + " of both directions), " + count)
+     << "\nset xlabel 'overlap'\nset ylabel 'pairs'\nset xrange [0:1]\nset yrange [0:*]\n"
+     << "plot 'overlap_hist.dat' using 1:2 with boxes lc rgb '#3b7dd8' notitle\n";
+  gp << "set output 'occlusion_hist.png'\nset title "
+     << GnuplotString("Occlusion ratio (" + agg + " of both directions), " + count)
+     << "\nset xlabel " << GnuplotString(occ_name)
+     << "\nplot 'occlusion_hist.dat' using 1:2 with boxes lc rgb '#d8503b' notitle\n";
+  gp << "set output 'occlusion_cumulative.png'\nset title "
+     << GnuplotString("Pairs with occlusion ratio <= x, " + count) << "\nset xlabel "
+     << GnuplotString(occ_name) << "\nset ylabel 'cumulative number of pairs'\n"
+     << "set yrange [0:" << std::max<size_t>(n, 1) << "]\n"
+     << "plot 'cumulative.dat' using 1:2 with steps lw 2 lc rgb '#d8503b' notitle\n";
+  gp << "set output 'overlap_vs_occlusion.png'\nset title "
+     << GnuplotString("Overlap vs occlusion ratio, " + count)
+     << "\nset xlabel 'overlap'\nset ylabel " << GnuplotString(occ_name)
+     << "\nset yrange [0:*]\nset grid xtics ytics\n"
+     << "plot 'scatter.dat' using 1:2 with points pt 7 ps 0.6 lc rgb '#3b7dd8' notitle\n";
+  gp << "set output 'pairs_per_scene.png'\nunset grid\nset grid ytics lc rgb '#dddddd'\n"
+     << "set title "
+     << GnuplotString("Pairs per scene (" + std::to_string(scenes.size()) + " of " +
+                      std::to_string(total_scenes) + " scenes)")
+     << "\nset xlabel ''\nset ylabel 'pairs'\nset boxwidth 0.8\nset xrange [-0.6:"
+     << Num(std::max<size_t>(scenes.size(), 1) - 0.4, 8) << "]\nset yrange [0:*]\n"
+     << "set xtics rotate by 60 right\n"
+     << "plot 'scenes.dat' using 1:2:xtic(3) with boxes lc rgb '#5a9e4b' notitle\n";
+  write("plots.gp", gp.str());
+
+  const std::string err_path = (fs::path(scratch_dir) / "gnuplot.err").string();
+  const std::string cmd = "cd " + ShellQuote(scratch_dir) + " && " + ShellQuote(options.gnuplot) +
+                          " plots.gp > /dev/null 2> gnuplot.err";
+  const int rc = std::system(cmd.c_str());
+  if (rc != 0) {
+    std::string first;
+    if (gt::io::FileExists(err_path)) {
+      const auto lines = gt::io::ReadLines(err_path);
+      for (const auto& l : lines) {
+        if (!l.empty()) {
+          first = l;
+          break;
+        }
+      }
+    }
+    if (WIFEXITED(rc) && WEXITSTATUS(rc) == 127) {
+      throw InputError(
+          "gnuplot", "'" + options.gnuplot + "' not found: install gnuplot-nox (scripts/setup.sh)");
+    }
+    throw InputError("gnuplot", "failed on " + (fs::path(scratch_dir) / "plots.gp").string() +
+                                    (first.empty() ? "" : ": " + first));
+  }
+  std::vector<NamedImage> plots;
+  for (const char* name : {"overlap_hist.png", "occlusion_hist.png", "occlusion_cumulative.png",
+                           "overlap_vs_occlusion.png", "pairs_per_scene.png"}) {
+    const std::string path = (fs::path(scratch_dir) / name).string();
+    if (!gt::io::FileExists(path))
+      throw InputError("gnuplot", std::string("did not write ") + name);
+    plots.push_back({name, "image/png", gt::io::ReadFileBytes(path)});
+  }
+  return plots;
+}
+
+std::vector<size_t> PickGalleryPairs(const SplitData& split, const SplitReportOptions& options) {
+  std::vector<std::pair<uint64_t, size_t>> keyed;
+  const uint64_t seed_hash = SplitMix64(options.seed);
+  for (size_t i = 0; i < split.pairs.size(); ++i) {
+    const SplitPair& p = split.pairs[i];
+    if (p.shard.empty() || p.key.empty()) continue;
+    keyed.emplace_back(SplitMix64(seed_hash ^ Fnv1a64(p.key)), i);
+  }
+  const size_t take = std::min(keyed.size(), static_cast<size_t>(options.gallery_pairs));
+  std::partial_sort(keyed.begin(), keyed.begin() + static_cast<std::ptrdiff_t>(take), keyed.end());
+  std::vector<size_t> out;
+  for (size_t k = 0; k < take; ++k) out.push_back(keyed[k].second);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::string Base64(std::string_view bytes) {
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  size_t i = 0;
+  for (; i + 2 < bytes.size(); i += 3) {
+    const uint32_t v = (static_cast<uint8_t>(bytes[i]) << 16) |
+                       (static_cast<uint8_t>(bytes[i + 1]) << 8) |
+                       static_cast<uint8_t>(bytes[i + 2]);
+    out += kAlphabet[(v >> 18) & 63];
+    out += kAlphabet[(v >> 12) & 63];
+    out += kAlphabet[(v >> 6) & 63];
+    out += kAlphabet[v & 63];
+  }
+  if (i + 1 == bytes.size()) {
+    const uint32_t v = static_cast<uint8_t>(bytes[i]) << 16;
+    out += kAlphabet[(v >> 18) & 63];
+    out += kAlphabet[(v >> 12) & 63];
+    out += "==";
+  } else if (i + 2 == bytes.size()) {
+    const uint32_t v =
+        (static_cast<uint8_t>(bytes[i]) << 16) | (static_cast<uint8_t>(bytes[i + 1]) << 8);
+    out += kAlphabet[(v >> 18) & 63];
+    out += kAlphabet[(v >> 12) & 63];
+    out += kAlphabet[(v >> 6) & 63];
+    out += '=';
+  }
+  return out;
+}
+
+std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& options,
+                             const std::vector<NamedImage>& plots,
+                             const std::vector<GalleryItem>& gallery) {
+  const std::string name = split.summary.is_object() && split.summary.contains("split") &&
+                                   split.summary["split"].is_string()
+                               ? split.summary["split"].get<std::string>()
+                               : fs::path(split.dir).filename().string();
+  std::ostringstream h;
+  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+    << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+    << "<title>occgt split report: " << HtmlEscape(name) << "</title>\n<style>\n"
+    << "body{font-family:'DejaVu Sans',Helvetica,Arial,sans-serif;margin:0 auto;"
+       "max-width:1320px;padding:16px 24px;color:#222;line-height:1.4}\n"
+    << "h1{font-size:1.6em;margin:0.2em 0}h2{font-size:1.25em;border-bottom:1px solid #ccc;"
+       "padding-bottom:4px;margin-top:1.6em}\n"
+    << "table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #ccc;"
+       "padding:3px 10px;text-align:left;font-size:0.92em}th{background:#f2f2f2}\n"
+    << "td.n{text-align:right;font-variant-numeric:tabular-nums}\n"
+    << ".plots{display:flex;flex-wrap:wrap;gap:12px}.plots figure{margin:0;flex:1 1 600px;"
+       "max-width:640px}\n"
+    << "img{max-width:100%;height:auto;border:1px solid #ddd}\n"
+    << "figure{margin:0 0 16px 0}figcaption{font-size:0.88em;color:#555}\n"
+    << ".pair{margin-bottom:28px;page-break-inside:avoid}.muted{color:#777}\n"
+    << ".tables{display:flex;flex-wrap:wrap;gap:32px;align-items:flex-start}\n"
+    << "@media print{body{max-width:none;padding:0;font-size:10pt}"
+       ".plots figure{flex:none;width:100%;max-width:100%}img{max-width:100%;"
+       "page-break-inside:avoid}h2{page-break-after:avoid}figure{page-break-inside:avoid}}\n"
+    << "</style>\n</head>\n<body data-images-decoded=\"pending\">\n";
+  h << "<h1>Split report: " << HtmlEscape(name) << "</h1>\n<p class=\"muted\">"
+    << HtmlEscape(split.dir) << " &middot; " << split.pairs.size() << " pairs &middot; "
+    << "pair values are the " << AggregateName(options.aggregate)
+    << " of both directions; occlusion ratio = "
+    << (options.occlusion_metric == "image" ? "OCCLUDED / (W&middot;H)"
+                                            : "OCCLUDED / (VISIBLE + OCCLUDED)")
+    << "</p>\n";
+
+  // Summary tables.
+  h << "<h2>Summary</h2>\n<div class=\"tables\">\n";
+  std::vector<double> ov, oc;
+  for (const auto& p : split.pairs) {
+    ov.push_back(p.overlap);
+    oc.push_back(p.occlusion);
+  }
+  const Stats so = Describe(ov), sc = Describe(oc);
+  h << "<table><tr><th>selected pairs</th><th>min</th><th>median</th><th>mean</th>"
+       "<th>max</th></tr>\n";
+  for (const auto& [label, s] :
+       {std::pair<const char*, Stats>{"overlap", so}, {"occlusion ratio", sc}}) {
+    h << "<tr><td>" << label << "</td><td class=\"n\">" << Num(s.min) << "</td><td class=\"n\">"
+      << Num(s.median) << "</td><td class=\"n\">" << Num(s.mean) << "</td><td class=\"n\">"
+      << Num(s.max) << "</td></tr>\n";
+  }
+  h << "</table>\n";
+  if (split.summary.is_object()) {
+    h << "<table><tr><th>summary.json</th><th>value</th></tr>\n";
+    for (auto it = split.summary.begin(); it != split.summary.end(); ++it) {
+      if (it.value().is_primitive()) {
+        h << "<tr><td>" << HtmlEscape(it.key()) << "</td><td class=\"n\">"
+          << HtmlEscape(JsonScalar(it.value())) << "</td></tr>\n";
+      }
+    }
+    for (const char* group : {"counts", "timings"}) {
+      if (!split.summary.contains(group) || !split.summary[group].is_object()) continue;
+      for (auto it = split.summary[group].begin(); it != split.summary[group].end(); ++it) {
+        if (!it.value().is_primitive()) continue;
+        h << "<tr><td>" << group << "." << HtmlEscape(it.key()) << "</td><td class=\"n\">"
+          << HtmlEscape(JsonScalar(it.value())) << "</td></tr>\n";
+      }
+    }
+    h << "</table>\n";
+    h << "<table><tr><th>dropped, by reason</th><th>pairs or frames</th></tr>\n";
+    const json drops = split.summary.value("drops", json::object());
+    if (!drops.is_object() || drops.empty()) {
+      h << "<tr><td colspan=\"2\" class=\"muted\">none recorded</td></tr>\n";
+    } else {
+      for (auto it = drops.begin(); it != drops.end(); ++it) {
+        h << "<tr><td>" << HtmlEscape(it.key()) << "</td><td class=\"n\">"
+          << HtmlEscape(JsonScalar(it.value())) << "</td></tr>\n";
+      }
+    }
+    h << "</table>\n";
+  } else {
+    h << "<p class=\"muted\">No summary.json in this folder.</p>\n";
+  }
+  h << "</div>\n";
+
+  h << "<h2>Plots</h2>\n<div class=\"plots\">\n";
+  for (const auto& p : plots) {
+    h << "<figure>" << ImgTag(p, p.name) << "<figcaption>" << HtmlEscape(p.name)
+      << "</figcaption></figure>\n";
+  }
+  h << "</div>\n";
+
+  h << "<h2>Gallery</h2>\n<p class=\"muted\">" << gallery.size() << " pairs picked with seed "
+    << options.seed
+    << ". Matches: vv green, vo yellow, ov red. Labels: NO_DEPTH near black, OUT_OF_VIEW blue, "
+       "VISIBLE green, OCCLUDED red, INCONSISTENT magenta, UNKNOWN orange.</p>\n";
+  for (const auto& g : gallery) {
+    h << "<div class=\"pair\"><h3>" << HtmlEscape(g.caption) << "</h3>\n";
+    for (const auto& im : g.images) {
+      h << "<figure>" << ImgTag(im, im.name) << "<figcaption>" << HtmlEscape(im.name)
+        << "</figcaption></figure>\n";
+    }
+    h << "</div>\n";
+  }
+  // Records how many images decoded (the page needs no script to be read).
+  h << "<script>window.addEventListener('load',function(){var a=document.images,k=0;"
+       "for(var i=0;i<a.length;i++){if(a[i].complete&&a[i].naturalWidth>0)k++;}"
+       "document.body.setAttribute('data-images-decoded',k+'/'+a.length);});</script>\n";
+  h << "</body>\n</html>\n";
+  return h.str();
+}
+
+std::vector<std::string> WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
+                                          const SplitReportOptions& options) {
+  const SplitData split = LoadSplit(split_dir, options);
+  fs::create_directories(out_dir);
+  const std::string scratch = (fs::path(out_dir) / ".plots.tmp").string();
+  fs::remove_all(scratch);
+  std::vector<NamedImage> plots;
+  try {
+    plots = MakeSplitPlots(split, options, scratch);
+  } catch (...) {
+    fs::remove_all(scratch);
+    throw;
+  }
+  fs::remove_all(scratch);
+
+  std::vector<GalleryItem> gallery;
+  for (size_t i : PickGalleryPairs(split, options)) {
+    const SplitPair& p = split.pairs[i];
+    GalleryItem item;
+    char caption[256];
+    std::snprintf(caption, sizeof(caption), "%s  (overlap %.3f, occlusion %.3f)", p.key.c_str(),
+                  p.overlap, p.occlusion);
+    item.caption = caption;
+    try {
+      const PairData pair = LoadPairFromShard((fs::path(split_dir) / p.shard).string(), p.key);
+      const PairPictures pics = RenderPair(pair, options.pictures);
+      for (const auto& [mat, label] :
+           {std::pair<const cv::Mat*, const char*>{&pics.matches, "matches"},
+            {&pics.labels, "labels"},
+            {&pics.occupancy, "occupancy"}}) {
+        if (mat->empty()) continue;
+        cv::Mat small;
+        cv::resize(*mat, small, cv::Size(), options.gallery_scale, options.gallery_scale,
+                   cv::INTER_AREA);
+        std::vector<uint8_t> buf;
+        cv::imencode(".jpg", small, buf, {cv::IMWRITE_JPEG_QUALITY, 85});
+        item.images.push_back({label, "image/jpeg", std::string(buf.begin(), buf.end())});
+      }
+    } catch (const InputError& e) {
+      item.caption += " — could not be read: " + std::string(e.what());
+    }
+    gallery.push_back(std::move(item));
+  }
+
+  std::vector<std::string> written;
+  for (const auto& p : plots) {
+    const std::string path = (fs::path(out_dir) / p.name).string();
+    gt::io::WriteFileAtomic(path, p.bytes);
+    written.push_back(path);
+  }
+  const std::string html_path = (fs::path(out_dir) / "report.html").string();
+  gt::io::WriteFileAtomic(html_path, RenderHtmlReport(split, options, plots, gallery));
+  written.push_back(html_path);
+  return written;
+}
+
+}  // namespace gt::report

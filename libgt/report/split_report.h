@@ -1,0 +1,99 @@
+// A report of one split written by `occgt build` (`occgt inspect split DIR`): plots made
+// with gnuplot and a self-contained HTML page.
+//
+// Input (SHARDS.md, libgt/shards/split.h): DIR/pairs.jsonl, one JSON object per pair with
+// "scene", "frame0", "frame1", "metrics": {"01": {...}, "10": {...}} (DirectionMetrics:
+// "overlap", "occlusion_ratio", "occlusion_ratio_visible", ...), "shard" (file name
+// relative to DIR) and "key"; DIR/summary.json (counts per stage, "drops" by reason,
+// "pairs_per_scene", ...), optional.
+// Pair values: overlap and occlusion ratio of both directions, combined with
+// `aggregate` (min, mean or max; GROUND_TRUTH.md §3); occlusion is "image" (OCCLUDED /
+// W·H, the paper's) or "visible" (OCCLUDED / (VISIBLE + OCCLUDED), the released code's).
+//
+// Plots (PNG, gnuplot's pngcairo terminal driven through a generated script, data in
+// temporary files next to the outputs): overlap_hist.png, occlusion_hist.png,
+// occlusion_cumulative.png (number of pairs with occlusion ratio <= x, the curve of the
+// Occ²Net paper), overlap_vs_occlusion.png (scatter), pairs_per_scene.png (bars; the 60
+// scenes with most pairs when there are more).
+// report.html: inline CSS (screen and print), every image embedded as a base64 data URI,
+// no network; a one-line inline script only records in <body data-images-decoded="k/n">
+// how many images decoded (used by the tests). Gallery: `gallery_pairs` pairs picked with
+// a seeded hash of their keys (same split and seed → same pairs), rendered from the shards
+// with pair_source.h / pictures.h.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "libgt/report/pair_source.h"
+
+namespace gt::report {
+
+enum class Aggregate { kMin, kMean, kMax };
+Aggregate ParseAggregate(const std::string& name);  // InputError("--aggregate", ...)
+
+struct SplitPair {
+  std::string scene, frame0, frame1, shard, key;
+  double overlap01 = 0, overlap10 = 0;      // DirectionMetrics::overlap
+  double occlusion01 = 0, occlusion10 = 0;  // occlusion_ratio or occlusion_ratio_visible
+  double overlap = 0, occlusion = 0;        // combined with the aggregate
+};
+
+struct SplitData {
+  std::string dir;
+  std::vector<SplitPair> pairs;  // pairs.jsonl order
+  nlohmann::json summary;        // summary.json, null when absent
+};
+
+struct SplitReportOptions {
+  Aggregate aggregate = Aggregate::kMean;
+  std::string occlusion_metric = "image";  // "image" | "visible"
+  int histogram_bins = 20;                 // bins over [0, 1], 1..200
+  int gallery_pairs = 6;                   // pairs rendered in the gallery, 0..100
+  uint64_t seed = 0;                       // gallery choice
+  double gallery_scale = 0.5;              // gallery pictures resized by this (0, 1]
+  std::string gnuplot = "gnuplot";         // executable (PATH lookup)
+  int plot_width_px = 800, plot_height_px = 480;
+  PairPictureOptions pictures;
+  bool Check(std::string* error) const;
+};
+
+// Reads DIR/pairs.jsonl (required) and DIR/summary.json (optional). Throws InputError
+// naming "<file>:<line>" and the field on malformed content.
+SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options);
+
+struct NamedImage {
+  std::string name;   // file name ("overlap_hist.png") or caption
+  std::string mime;   // "image/png" | "image/jpeg"
+  std::string bytes;  // encoded image
+};
+
+// Runs gnuplot once; returns the plots in the order listed above. Throws
+// InputError("gnuplot", ...) when gnuplot is missing or fails (its first error line).
+std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReportOptions& options,
+                                       const std::string& scratch_dir);
+
+// Indices into split.pairs of the gallery (increasing), at most options.gallery_pairs.
+std::vector<size_t> PickGalleryPairs(const SplitData& split, const SplitReportOptions& options);
+
+struct GalleryItem {
+  std::string caption;             // key and metrics
+  std::vector<NamedImage> images;  // matches, labels, occupancy (when present)
+};
+
+// RFC 4648 base64 (with padding).
+std::string Base64(std::string_view bytes);
+// The HTML page (deterministic for the same inputs).
+std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& options,
+                             const std::vector<NamedImage>& plots,
+                             const std::vector<GalleryItem>& gallery);
+
+// Everything: plots as PNG files, report.html, into out_dir (atomic writes). Returns the
+// paths written.
+std::vector<std::string> WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
+                                          const SplitReportOptions& options);
+
+}  // namespace gt::report
