@@ -1,0 +1,89 @@
+"""occgt scan --json on each real sample: schema-valid output (Draft 2020-12) and the
+expected counts; a bad input exits non-zero with one line naming the file."""
+import json
+import os
+import sys
+
+import jsonschema
+
+sys.path.insert(0, os.path.dirname(__file__))
+import common  # noqa: E402
+
+schema = json.load(open(os.path.join(common.SOURCE, "schemas", "scan.schema.json")))
+jsonschema.Draft202012Validator.check_schema(schema)
+validator = jsonschema.Draft202012Validator(schema)
+
+
+def scan(root, fmt, *extra):
+    r = common.occgt("scan", root, "--format", fmt, "--json", *extra)
+    doc = json.loads(r.stdout)
+    errors = sorted(validator.iter_errors(doc), key=str)
+    assert not errors, f"{fmt}: schema errors: {[e.message for e in errors]}"
+    assert doc["format"] == fmt
+    t = doc["totals"]
+    assert t["frames"] == sum(s["frames"] for s in doc["scenes"])
+    assert t["usable"] + t["unusable"] == t["frames"]
+    for s in doc["scenes"]:
+        assert s["usable"] + s["unusable"] == s["frames"]
+        assert sum(s["unusable_reasons"].values()) == s["unusable"]
+    return doc
+
+
+# TartanAir: 24 usable frames, K 320/320/320/240 at 640x480; every depth file read.
+doc = scan(common.shared("tartanair/hospital_sample"), "tartanair", "--check-depth")
+assert doc["totals"] == {"scenes": 1, "frames": 24, "usable": 24, "unusable": 0,
+                         "unusable_reasons": {}}, doc["totals"]
+s = doc["scenes"][0]
+assert s["depth_size"] == [640, 480] and s["K"] == {"fx": 320, "fy": 320, "cx": 320, "cy": 240}
+assert s["depth_check"]["files_read"] == 24 and s["depth_check"]["files_bad"] == 0
+assert 0.5 < s["depth_check"]["mean_valid_fraction"] <= 1.0
+
+# 7-Scenes: 50 usable frames, from the sequence folder or its parent.
+for root in ("sevenscenes/rgbd-frames", "sevenscenes"):
+    doc = scan(common.shared(root), "sevenscenes")
+    assert doc["totals"]["usable"] == 50 and doc["totals"]["frames"] == 50, doc["totals"]
+    assert doc["scenes"][0]["name"] == "rgbd-frames"
+    assert doc["scenes"][0]["K"] == {"fx": 585, "fy": 585, "cx": 320, "cy": 240}
+doc = scan(common.shared("sevenscenes/rgbd-frames"), "sevenscenes", "--check-depth")
+assert doc["scenes"][0]["depth_check"]["files_read"] == 50
+
+# ScanNet sample: 4 frames, none usable (no depth folder), K from intrinsic_depth.txt.
+doc = scan(common.shared("scannet_posed_color/scene_sample"), "scannet")
+assert doc["totals"] == {"scenes": 1, "frames": 4, "usable": 0, "unusable": 4,
+                         "unusable_reasons": {"depth: missing file": 4}}, doc["totals"]
+k = doc["scenes"][0]["K"]
+assert abs(k["fx"] - 577.590698) < 1e-9 and abs(k["cy"] - 242.683609) < 1e-9
+
+# --scene selects one scene by name.
+doc = scan(common.shared("scannet_posed_color"), "scannet", "--scene", "scene_sample")
+assert [s["name"] for s in doc["scenes"]] == ["scene_sample"]
+
+# Lost tracking is counted, not fatal.
+fixtures = os.path.join(common.SOURCE, "tests", "fixtures", "io")
+doc = scan(os.path.join(fixtures, "scannet_lost_tracking"), "scannet")
+assert doc["totals"]["unusable_reasons"] == {"depth: missing file": 1,
+                                             "pose: non-finite pose entries (lost tracking)": 2}
+
+# Bad inputs: exit 1, one line on stderr naming the file, nothing on stdout.
+bad = [
+    (os.path.join(fixtures, "scannet_short_pose"), "scannet",
+     os.path.join(fixtures, "scannet_short_pose", "pose", "1.txt")),
+    (os.path.join(fixtures, "scannet_bad_token"), "scannet",
+     os.path.join(fixtures, "scannet_bad_token", "pose", "3.txt:3")),
+    (os.path.join(fixtures, "generic_duplicate_ids"), "generic",
+     os.path.join(fixtures, "generic_duplicate_ids", "scene.json")),
+    (os.path.join(fixtures, "tartanair_short_pose"), "tartanair",
+     os.path.join(fixtures, "tartanair_short_pose", "pose_left.txt")),
+    ("/nonexistent/occgt_root", "tum", "/nonexistent/occgt_root"),
+]
+for root, fmt, named in bad:
+    r = common.occgt("scan", root, "--format", fmt, "--json", check=False)
+    assert r.returncode == 1, (root, r.returncode, r.stderr)
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and named in lines[0], (root, r.stderr)
+    assert r.stdout == "", r.stdout
+
+r = common.occgt("scan", common.shared("sevenscenes"), "--format", "nope", check=False)
+assert r.returncode == 1 and "--format" in r.stderr
+
+print("scan integration: OK")
