@@ -1,6 +1,7 @@
 // occgt merge DIR: checks every shard a split's plan lists (part record, size, MD5, sample
 // count, keys and member names, sample JSON against schemas/ when present) and writes
-// DIR/index.json, DIR/pairs.jsonl and DIR/summary.json (libgt/shards/split.h).
+// DIR/index.json, DIR/pairs.jsonl and DIR/summary.json (unless `occgt build` wrote its
+// own summary there; libgt/shards/split.h).
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -8,7 +9,6 @@
 
 #include "apps/commands.h"
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
 #include "libgt/shards/split.h"
 
 namespace occgt {
@@ -38,12 +38,15 @@ void AddMergeCommand(CLI::App& app) {
     std::string error;
     if (!options.Check(&error)) throw gt::InputError("occgt merge", error);
     const gt::shards::MergeResult result = gt::shards::MergeSplit(args->dir, options);
-    const std::string summary_path = (std::filesystem::path(args->dir) / "summary.json").string();
-    gt::io::WriteFileAtomic(summary_path, gt::shards::MergeSummaryJson(result));
+    const bool wrote_summary = gt::shards::WriteMergeSummary(args->dir, result);
     std::printf("merged split %s: %lld shards, %lld samples, %lld bytes -> %s/index.json\n",
                 result.split.c_str(), static_cast<long long>(result.nshards),
                 static_cast<long long>(result.nsamples), static_cast<long long>(result.total_bytes),
                 args->dir.c_str());
+    if (!wrote_summary) {
+      std::printf("kept the existing %s/summary.json (written by occgt build)\n",
+                  args->dir.c_str());
+    }
   });
 }
 

@@ -481,6 +481,7 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
 
 std::string MergeSummaryJson(const MergeResult& result) {
   json doc;
+  doc["kind"] = "occgt-merge-summary";
   doc["split"] = result.split;
   doc["nshards"] = result.nshards;
   doc["nsamples"] = result.nsamples;
@@ -494,6 +495,19 @@ std::string MergeSummaryJson(const MergeResult& result) {
   }
   doc["pairs_per_scene"] = std::move(per_scene);
   return doc.dump(2) + "\n";
+}
+
+bool WriteMergeSummary(const std::string& dir, const MergeResult& result) {
+  const std::string path = (fs::path(dir) / "summary.json").string();
+  if (io::FileExists(path)) {
+    const json existing = json::parse(io::ReadFileBytes(path), nullptr, false);
+    if (existing.is_discarded() || !existing.is_object() ||
+        existing.value("kind", "") != "occgt-merge-summary") {
+      return false;
+    }
+  }
+  io::WriteFileAtomic(path, MergeSummaryJson(result));
+  return true;
 }
 
 bool ValidateOptions::Check(std::string* error) const {

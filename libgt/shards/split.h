@@ -118,9 +118,13 @@ struct MergeResult {
 // DIR/pairs.jsonl atomically. The first missing or corrupt shard throws
 // InputError("<shard path>", reason); nothing is written then.
 MergeResult MergeSplit(const std::string& dir, const MergeOptions& options);
-// summary.json content of a merge: {"split", "nshards", "nsamples", "bytes",
-// "pairs_per_scene": {scene: n} (from the pair lines' "scene" field)}.
+// summary.json content of a merge: {"kind": "occgt-merge-summary", "split", "nshards",
+// "nsamples", "bytes", "pairs_per_scene": {scene: n} (from the pair lines' "scene" field)}.
 std::string MergeSummaryJson(const MergeResult& result);
+// Writes DIR/summary.json (MergeSummaryJson) atomically unless DIR/summary.json already
+// holds another document (the richer summary of `occgt build`, schemas/summary.schema.json),
+// which is left untouched. Returns true when it wrote.
+bool WriteMergeSummary(const std::string& dir, const MergeResult& result);
 
 struct ValidateOptions {
   std::string schemas_dir;  // "" = skip JSON Schema checks (structure is still checked)
