@@ -86,4 +86,23 @@ for root, fmt, named in bad:
 r = common.occgt("scan", common.shared("sevenscenes"), "--format", "nope", check=False)
 assert r.returncode == 1 and "--format" in r.stderr
 
+# --check-depth: a depth file of the wrong size is counted, not fatal.
+import numpy as np  # noqa: E402
+gen = common.scratch("scan_check_depth")
+np.save(os.path.join(gen, "a.npy"), np.full((48, 64), 2.0, np.float32))
+np.save(os.path.join(gen, "b.npy"), np.full((24, 32), 2.0, np.float32))
+K = [[100, 0, 31.5], [0, 100, 23.5], [0, 0, 1]]
+I = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+frames = [{"id": i, "depth": {"path": i + ".npy", "format": "npy"}, "K": K, "width": 64,
+           "height": 48, "world_from_cam": I} for i in ("a", "b", "c")]
+json.dump({"format": "occgt-scene-manifest", "version": 1, "scene": "chk", "frames": frames},
+          open(os.path.join(gen, "scene.json"), "w"))
+doc = scan(gen, "generic", "--check-depth")
+s = doc["scenes"][0]
+assert s["usable"] == 1 and s["unusable_reasons"] == {
+    "depth: missing file": 1, "depth: unreadable or wrong size": 1}, s
+assert s["depth_check"]["files_read"] == 1 and s["depth_check"]["files_bad"] == 1
+assert "b.npy: depth is 32x24, expected 64x48" in s["depth_check"]["errors"][0]
+assert s["depth_check"]["mean_valid_fraction"] == 1.0
+
 print("scan integration: OK")
