@@ -324,7 +324,7 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
   gp << "set output 'overlap_vs_occlusion.png'\nset title "
      << GnuplotString("Overlap vs occlusion ratio, " + count)
      << "\nset xlabel 'overlap'\nset ylabel " << GnuplotString(occ_name)
-     << "\nset yrange [0:*]\nset grid xtics ytics\n"
+     << "\nset yrange [0:" << (n == 0 ? "1" : "*") << "]\nset grid xtics ytics\n"
      << "plot 'scatter.dat' using 1:2 with points pt 7 ps 0.6 lc rgb '#3b7dd8' notitle\n";
   gp << "set output 'pairs_per_scene.png'\nunset grid\nset grid ytics lc rgb '#dddddd'\n"
      << "set title "
@@ -345,9 +345,9 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
     if (gt::io::FileExists(err_path)) {
       const auto lines = gt::io::ReadLines(err_path);
       for (const auto& l : lines) {
-        if (!l.empty()) {
-          first = l;
-          break;
+        if (!l.empty() && l.rfind("Warning", 0) != 0 && l.find('^') == std::string::npos &&
+            l.rfind(' ', 0) != 0) {
+          first = l;  // the last error line wins ("plots.gp" line N: ...)
         }
       }
     }

@@ -1,0 +1,195 @@
+"""occgt inspect pair / split, read back the way a person would look at them.
+
+- `occgt build recipes/demo.yaml`, then `inspect split` on it: the plots decode with the
+  expected sizes and are not blank; report.html opens in headless Chromium from disk,
+  every <img> decodes (the page records it in <body data-images-decoded="k/n">), the
+  screenshot is not blank, and there is no console error.
+- `inspect pair --shard/--key`: PNG sizes follow the working resolution; label overlay
+  pixels equal the blend of image0 and the documented label colour (computed here from
+  the shard's own label01.npy and image0.png); yellow appears iff the sample has vo
+  matches.
+- `inspect pair --root ... --frames` on the real TartanAir sample and `inspect split` on a
+  folder written by this test (an empty split, a malformed line).
+"""
+import io
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tarfile
+
+import numpy as np
+from PIL import Image
+
+sys.path.insert(0, os.path.dirname(__file__))
+import common  # noqa: E402
+
+# Documented colours (docs/INSPECT.md), (R, G, B).
+LABEL_RGB = [(40, 40, 40), (60, 110, 255), (0, 200, 70), (235, 30, 30), (230, 0, 230), (255, 170, 0)]
+VO_RGB = (255, 220, 0)
+PANEL_GAP = 8
+ALPHA = 0.55
+
+failures = []
+
+
+def check(cond, msg):
+    if not cond:
+        failures.append(msg)
+        print("FAIL:", msg)
+
+
+def png(path):
+    with open(path, "rb") as f:
+        data = f.read()
+    check(data[:8] == b"\x89PNG\r\n\x1a\n", f"{path}: PNG signature")
+    return np.asarray(Image.open(io.BytesIO(data)).convert("RGB"))
+
+
+def not_blank(img, name):
+    colours = len(np.unique(img.reshape(-1, 3), axis=0))
+    check(colours >= 8, f"{name}: only {colours} distinct colours (blank?)")
+    check(img.std() > 5, f"{name}: nearly uniform (std {img.std():.2f})")
+
+
+def read_sample(tar_path, key):
+    fields = {}
+    with tarfile.open(tar_path) as tf:
+        for m in tf.getmembers():
+            base = m.name.rsplit("/", 1)
+            k = m.name[: len(m.name) - len(base[-1])] + base[-1].split(".", 1)[0]
+            if k == key:
+                fields[base[-1].split(".", 1)[1]] = tf.extractfile(m).read()
+    return fields
+
+
+def chromium_check(html, tmp):
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    if chromium is None:
+        check(False, "chromium not installed (scripts/setup.sh --test installs it)")
+        return
+    base = [chromium, "--headless", "--no-sandbox", "--disable-gpu",
+            "--disable-background-networking", "--disable-component-update", "--disable-sync",
+            "--no-first-run", "--enable-logging=stderr", "--v=0"]
+    url = "file://" + os.path.abspath(html)
+    r = subprocess.run(base + [f"--user-data-dir={tmp}/profile1", "--dump-dom", url],
+                       capture_output=True, text=True, timeout=300)
+    dom = r.stdout
+    with open(html, encoding="utf-8") as f:
+        n_img = len(re.findall(r"<img ", f.read()))
+    m = re.search(r'data-images-decoded="(\d+)/(\d+)"', dom)
+    check(m is not None, f"report.html: no data-images-decoded in the DOM ({dom[:200]!r})")
+    if m:
+        check(m.group(1) == m.group(2) == str(n_img),
+              f"report.html: {m.group(1)}/{m.group(2)} images decoded, page has {n_img}")
+    check(n_img >= 5, f"report.html: only {n_img} images")
+    errors = [l for l in r.stderr.splitlines() if "Uncaught" in l or "ERROR:CONSOLE" in l]
+    check(not errors, f"report.html: console errors {errors[:3]}")
+    shot = os.path.join(tmp, "shot.png")
+    subprocess.run(base + [f"--user-data-dir={tmp}/profile2", f"--screenshot={shot}",
+                           "--window-size=1280,2000", url],
+                   capture_output=True, text=True, timeout=300)
+    check(os.path.exists(shot), "chromium wrote no screenshot")
+    if os.path.exists(shot):
+        img = png(shot)
+        check(img.shape[:2] == (2000, 1280), f"screenshot size {img.shape}")
+        not_blank(img, "report screenshot")
+
+
+def main():
+    tmp = common.scratch("inspect")
+    build = os.path.join(tmp, "demo")
+    common.occgt("build", os.path.join(common.SOURCE, "recipes", "demo.yaml"), "--out", build)
+
+    # --- split report on a real build.
+    report = os.path.join(tmp, "report")
+    common.occgt("inspect", "split", build, "--out", report, "--gallery", "3")
+    for name in ["overlap_hist.png", "occlusion_hist.png", "occlusion_cumulative.png",
+                 "overlap_vs_occlusion.png", "pairs_per_scene.png"]:
+        img = png(os.path.join(report, name))
+        check(img.shape == (480, 800, 3), f"{name}: size {img.shape}")
+        not_blank(img, name)
+    html = os.path.join(report, "report.html")
+    text = open(html, encoding="utf-8").read()
+    check("http://" not in text and "https://" not in text, "report.html refers to the network")
+    check("@media print" in text, "report.html has no print stylesheet")
+    check(text.count("data:image/jpeg;base64,") >= 3 * 2, "gallery images missing")
+    with open(os.path.join(build, "summary.json")) as f:
+        summary = json.load(f)
+    for reason, n in summary.get("drops", {}).items():
+        check(f"<td>{reason}</td><td class=\"n\">{n}</td>" in text, f"drop {reason} not in report")
+    chromium_check(html, tmp)
+    # Deterministic: a second run writes identical files.
+    report2 = os.path.join(tmp, "report2")
+    common.occgt("inspect", "split", build, "--out", report2, "--gallery", "3")
+    check(open(html, "rb").read() == open(os.path.join(report2, "report.html"), "rb").read(),
+          "report.html differs between two runs")
+
+    # --- pair from a shard: sizes, label blend, match colours.
+    with open(os.path.join(build, "pairs.jsonl")) as f:
+        lines = [json.loads(l) for l in f if l.strip()]
+    line = lines[0]
+    out = os.path.join(tmp, "pair_shard")
+    common.occgt("inspect", "pair", "--shard", os.path.join(build, line["shard"]), "--key",
+                 line["key"], "--out", out)
+    fields = read_sample(os.path.join(build, line["shard"]), line["key"])
+    label01 = np.load(io.BytesIO(fields["label01.npy"]))
+    types = np.load(io.BytesIO(fields["match_type.npy"]))
+    image0 = np.asarray(Image.open(io.BytesIO(fields["image0.png"])).convert("RGB")).astype(float)
+    h, w = label01.shape
+    matches = png(os.path.join(out, "matches.png"))
+    check(matches.shape[1] == 2 * w + PANEL_GAP and matches.shape[0] > h,
+          f"matches.png size {matches.shape} for {w}x{h}")
+    not_blank(matches, "matches.png")
+    has_yellow = bool(np.any(np.all(matches[:h] == VO_RGB, axis=-1)))
+    check(has_yellow == bool(np.any(types == 1)), "yellow lines iff vo matches")
+    labels = png(os.path.join(out, "labels.png"))
+    check(labels.shape[1] == 2 * w + PANEL_GAP and labels.shape[0] > h + 22,
+          f"labels.png size {labels.shape}")
+    panel = labels[22:22 + h, :w].astype(float)
+    colours = np.array(LABEL_RGB, dtype=float)[label01]
+    expected = (1 - ALPHA) * image0 + ALPHA * colours
+    err = np.abs(panel - expected).max()
+    check(err <= 1.0, f"labels.png differs from the documented blend by {err}")
+    occ = png(os.path.join(out, "occupancy.png"))
+    not_blank(occ, "occupancy.png")
+
+    # --- pair computed from the real TartanAir sample.
+    root = common.shared("tartanair/hospital_sample")
+    out = os.path.join(tmp, "pair_tartanair")
+    r = common.occgt("inspect", "pair", "--root", root, "--format", "tartanair", "--scene",
+                     "hospital_sample", "--frames", "000000,000010", "--out", out)
+    for name in ["matches.png", "labels.png", "occupancy.png"]:
+        img = png(os.path.join(out, name))
+        not_blank(img, "tartanair " + name)
+        check(img.shape[1] >= 2 * 640 + PANEL_GAP, f"tartanair {name}: width {img.shape[1]}")
+
+    # --- split written by the test: no pairs at all, and a malformed line.
+    empty = os.path.join(tmp, "empty_split")
+    os.makedirs(empty)
+    open(os.path.join(empty, "pairs.jsonl"), "w").close()
+    with open(os.path.join(empty, "summary.json"), "w") as f:
+        json.dump({"split": "empty", "drops": {"filter.overlap": 7}}, f)
+    common.occgt("inspect", "split", empty)
+    for name in ["overlap_hist.png", "occlusion_cumulative.png", "pairs_per_scene.png"]:
+        not_blank(png(os.path.join(empty, "inspect", name)), "empty split " + name)
+    with open(os.path.join(empty, "pairs.jsonl"), "w") as f:
+        f.write(json.dumps({"scene": "a", "frame0": "1", "frame1": "2",
+                            "metrics": {"01": {"overlap": 0.5}, "10": {}}}) + "\n")
+    r = common.occgt("inspect", "split", empty, check=False)
+    check(r.returncode == 1, f"malformed pairs.jsonl: exit {r.returncode}")
+    check("pairs.jsonl:1" in r.stderr and len(r.stderr.strip().splitlines()) == 1,
+          f"malformed pairs.jsonl: stderr {r.stderr!r}")
+    r = common.occgt("inspect", "pair", "--shard", os.path.join(build, line["shard"]), "--key",
+                     "no/such_key", "--out", os.path.join(tmp, "x"), check=False)
+    check(r.returncode == 1 and "no/such_key" in r.stderr, f"missing key: {r.stderr!r}")
+    check(not os.path.exists(os.path.join(tmp, "x", "matches.png")), "wrote output on error")
+
+    print(f"{0 if failures else 1} passed, {len(failures)} failed")
+    sys.exit(1 if failures else 0)
+
+
+if __name__ == "__main__":
+    main()
