@@ -1,0 +1,123 @@
+"""recipes/scannet-test-1500.yaml pointed (--root) at a synthetic ScanNet-layout fixture
+holding exactly the scenes and frames that LoFTR's test.npz names (80x60 depth PNGs of a
+plane, small known motions, intrinsic_depth.txt) reproduces the 1500 pairs: the select
+stage of the shipped recipe lists them scene by scene in file order, and a full build of
+the same recipe at 80x60 exports a test.npz whose names equal LoFTR's and whose rel_pose
+is inverse(pose1) @ pose0 of the fixture."""
+import json
+import os
+import sys
+
+import numpy as np
+import yaml
+from PIL import Image
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import common  # noqa: E402
+from build_demo_test import read_shard, check_sample, validate  # noqa: E402
+
+W, H = 80, 60
+FX = 72.0
+
+
+def pose_of(frame):
+    """world_from_cam of a frame: a small translation and yaw that depend on the number."""
+    t = frame * 1e-3
+    yaw = frame * 2e-4
+    c, s = np.cos(yaw), np.sin(yaw)
+    m = np.eye(4)
+    m[:3, :3] = [[c, 0, s], [0, 1, 0], [-s, 0, c]]
+    m[:3, 3] = [t, 0.5 * t, 0.2 * t]
+    return m
+
+
+def make_fixture(root, names):
+    scenes = {}
+    for s, sub, f0, f1 in names:
+        scenes.setdefault(f"scene{s:04d}_{sub:02d}", set()).update((int(f0), int(f1)))
+    # A plane at 2.5 m with a raised box in the middle (0.8 m closer): some occlusion.
+    depth = np.full((H, W), 2500, np.uint16)
+    depth[20:40, 30:50] = 1700
+    depth[0:3, 0:5] = 0  # a hole of missing depth
+    k = np.array([[FX, 0, (W - 1) / 2, 0], [0, FX, (H - 1) / 2, 0], [0, 0, 1, 0], [0, 0, 0, 1]])
+    for scene, frames in scenes.items():
+        for sub in ("depth", "pose", "intrinsic"):
+            os.makedirs(os.path.join(root, scene, sub), exist_ok=True)
+        np.savetxt(os.path.join(root, scene, "intrinsic", "intrinsic_depth.txt"), k, fmt="%f")
+        for f in frames:
+            Image.fromarray(depth).save(os.path.join(root, scene, "depth", f"{f}.png"))
+            np.savetxt(os.path.join(root, scene, "pose", f"{f}.txt"), pose_of(f), fmt="%.9f")
+    return scenes
+
+
+def main():
+    npz_path = common.shared("loftr_scannet_test_1500/test.npz")
+    loftr = np.load(npz_path)
+    names = loftr["name"].astype(np.int64)
+    assert names.shape == (1500, 4)
+    root = common.scratch("build_test1500")
+    data = os.path.join(root, "scans_test")
+    scenes = make_fixture(data, names)
+    assert len(scenes) == 100
+    env = dict(os.environ, OCCGT_SHARED_DATA=common.SHARED)
+    # Expected order: scenes sorted by name, pairs in file order within a scene.
+    order = sorted(range(len(names)), key=lambda i: (f"scene{names[i][0]:04d}_{names[i][1]:02d}", i))
+    expected = [tuple(int(x) for x in names[i]) for i in order]
+
+    # 1. The shipped recipe, select stage: the 1500 pairs.
+    recipe = os.path.join(common.SOURCE, "recipes", "scannet-test-1500.yaml")
+    out = os.path.join(root, "select")
+    r = common.occgt("build", recipe, "--out", out, "--root", data, "--stage", "select", env=env)
+    summary = json.loads(r.stdout)
+    assert summary["counts"]["selected"] == 1500 and summary["scenes"] == 100, summary
+    assert summary["drops"] == {}, summary["drops"]
+    got = []
+    for scene in sorted(scenes):
+        with open(os.path.join(out, "selection", scene + ".jsonl")) as f:
+            for line in f:
+                p = json.loads(line)
+                got.append((int(scene[5:9]), int(scene[10:12]), p["number0"], p["number1"]))
+    assert got == expected
+
+    # 2. The same recipe at 80x60 without images/occupancy: a full build and the export.
+    with open(recipe) as f:
+        doc = yaml.safe_load(f)
+    doc["resolution"] = [W, H]
+    doc["patches"]["stride"] = 4
+    doc["occupancy"]["enabled"] = False
+    doc["sample"]["image"] = "none"
+    doc["selection"]["import_pairs"]["path"] = npz_path
+    small = os.path.join(root, "test1500-small.yaml")
+    with open(small, "w") as f:
+        yaml.safe_dump(doc, f)
+    out = os.path.join(root, "full")
+    common.occgt("build", small, "--out", out, "--root", data, env=env)
+    t = np.load(os.path.join(out, "loftr", "test.npz"))
+    assert np.array_equal(t["name"].astype(np.int64), np.array(expected)), "names differ"
+    for row, (s, sub, f0, f1) in zip(t["rel_pose"], expected):
+        want = (np.linalg.inv(pose_of(f1)) @ pose_of(f0))[:3]
+        assert np.allclose(row.reshape(3, 4), want, atol=1e-5)
+    with open(os.path.join(out, "loftr", "statistics.json")) as f:
+        stats = json.load(f)
+    assert len(stats) == 100 and all(v == 15 for v in stats.values())
+    intr = np.load(os.path.join(out, "loftr", "intrinsics.npz"))
+    assert len(intr.files) == 100
+    k = intr["scene0707_00"]
+    assert np.allclose(k, [[FX, 0, (W - 1) / 2], [0, FX, (H - 1) / 2], [0, 0, 1]])
+    # Every sample is there, with depth for Occ2Net's test step.
+    with open(os.path.join(out, "index.json")) as f:
+        index = json.load(f)
+    n = 0
+    for shard in index["shardlist"]:
+        for key, fields in read_shard(os.path.join(out, shard["url"])).items():
+            meta = json.loads(fields["json"])
+            validate(meta, "sample.schema.json")
+            assert "depth0.npy" in fields and "image0.png" not in fields and "occ0.npy" not in fields
+            assert meta["metrics"]["01"]["counts"]["OCCLUDED"] >= 0
+            n += 1
+    assert n == 1500
+    print("build_test1500: 1 passed, 0 failed")
+
+
+if __name__ == "__main__":
+    main()
