@@ -31,7 +31,7 @@ TEST(LoftrExport, ParsesScanNetSceneNames) {
 }
 
 TEST(LoftrExport, TrainLayoutForScanNetAndOtherScenes) {
-  const std::string dir = test::ScratchDir("loftr_train");
+  const std::string dir = test::ScratchDir("shards_loftr_train");
   std::vector<LoftrPair> pairs;
   // Interleaved scenes: each scene's pairs keep their relative order.
   pairs.push_back({"scene0002_01", 10, 40, 0.55, {}});
@@ -76,7 +76,7 @@ TEST(LoftrExport, TrainLayoutForScanNetAndOtherScenes) {
   EXPECT_EQ(kk.As<double>("K")[2], 319.5);
 
   // Missing intrinsics is an input error, before anything is written.
-  const std::string dir2 = test::ScratchDir("loftr_train_missing");
+  const std::string dir2 = test::ScratchDir("shards_loftr_train_missing");
   SceneIntrinsics partial = {{"scene0002_01", k["scene0002_01"]}};
   EXPECT_THROW(ExportLoftrTrain(dir2, pairs, partial, options), InputError);
   EXPECT_TRUE(fs::is_empty(dir2));
@@ -110,7 +110,7 @@ TEST(LoftrExport, RealTest1500RoundTrips) {
     const double* d = arr.As<double>(scene);
     std::copy(d, d + 9, k[scene].begin());
   }
-  const std::string dir = test::ScratchDir("loftr_test1500");
+  const std::string dir = test::ScratchDir("shards_loftr_test1500");
   LoftrExportOptions options;
   options.list_name = "scannet_test.txt";
   ExportLoftrTest(dir, pairs, k, options);
@@ -136,7 +136,7 @@ TEST(LoftrExport, RealTest1500RoundTrips) {
 }
 
 TEST(LoftrExport, TestNameWidensWhenFrameNumbersExceedUint16) {
-  const std::string dir = test::ScratchDir("loftr_test_wide");
+  const std::string dir = test::ScratchDir("shards_loftr_test_wide");
   std::vector<LoftrPair> pairs = {{"scene0001_00", 70000, 3, 0.5, {}}};
   ExportLoftrTest(dir, pairs, {{"scene0001_00", {1, 0, 0, 0, 1, 0, 0, 0, 1}}},
                   LoftrExportOptions{});

@@ -37,7 +37,7 @@ using nlohmann::json;
 // (their checking is tested with a schema of this test below).
 std::string SchemasDir() {
   static const std::string dir = [] {
-    const std::string d = test::ScratchDir("schemas_index_only");
+    const std::string d = test::ScratchDir("shards_schemas_index_only");
     fs::copy_file(std::string(OCCGT_SOURCE_DIR) + "/schemas/index.schema.json",
                   d + "/index.schema.json");
     return d;
@@ -123,7 +123,7 @@ TEST(Split, PlanCutsEquallyAndRoundTrips) {
   EXPECT_EQ(plan.shard_nsamples, (std::vector<int64_t>{4, 4, 2}));
   EXPECT_TRUE(PlanEqualShards("val", 0, 4).shard_nsamples.empty());
   EXPECT_EQ(PlanEqualShards("val", 8, 4).shard_nsamples, (std::vector<int64_t>{4, 4}));
-  const std::string dir = test::ScratchDir("split_plan");
+  const std::string dir = test::ScratchDir("shards_split_plan");
   WritePlan(dir, plan);
   EXPECT_EQ(ReadPlan(dir, "val").shard_nsamples, plan.shard_nsamples);
   EXPECT_EQ(ListPlannedSplits(dir), std::vector<std::string>{"val"});
@@ -135,7 +135,7 @@ TEST(Split, PlanCutsEquallyAndRoundTrips) {
 }
 
 TEST(Split, MergeWritesIndexAndPairsMatchingTheFiles) {
-  const std::string dir = test::ScratchDir("split_merge");
+  const std::string dir = test::ScratchDir("shards_split_merge");
   WriteSplit(dir);
   for (int s = 0; s < 3; ++s) EXPECT_TRUE(IsShardComplete(dir, "train", s, true));
   EXPECT_FALSE(IsShardComplete(dir, "train", 3));
@@ -188,7 +188,7 @@ TEST(Split, MergeWritesIndexAndPairsMatchingTheFiles) {
   EXPECT_TRUE(ValidateSplit(dir, ValidateOptions{SchemasDir()}).empty());
 
   // Deterministic: the same samples in another folder give identical bytes.
-  const std::string dir2 = test::ScratchDir("split_merge_again");
+  const std::string dir2 = test::ScratchDir("shards_split_merge_again");
   WriteSplit(dir2);
   MergeSplit(dir2, options);
   for (const std::string& f :
@@ -215,19 +215,19 @@ void ExpectMergeFails(const std::string& dir, const std::string& needle) {
 
 TEST(Split, MergeFailsNamingAMissingOrCorruptShard) {
   {
-    const std::string dir = test::ScratchDir("merge_missing_tar");
+    const std::string dir = test::ScratchDir("shards_merge_missing_tar");
     WriteSplit(dir);
     fs::remove(dir + "/train-000001.tar");
     ExpectMergeFails(dir, "train-000001.tar");
   }
   {
-    const std::string dir = test::ScratchDir("merge_missing_part");
+    const std::string dir = test::ScratchDir("shards_merge_missing_part");
     WriteSplit(dir);
     fs::remove(dir + "/parts/train-000002.json");
     ExpectMergeFails(dir, "train-000002.tar");
   }
   {
-    const std::string dir = test::ScratchDir("merge_flipped_byte");
+    const std::string dir = test::ScratchDir("shards_merge_flipped_byte");
     WriteSplit(dir);
     const std::string path = dir + "/train-000001.tar";
     std::string bytes = io::ReadFileBytes(path);
@@ -236,7 +236,7 @@ TEST(Split, MergeFailsNamingAMissingOrCorruptShard) {
     ExpectMergeFails(dir, "train-000001.tar: md5");
   }
   {
-    const std::string dir = test::ScratchDir("merge_truncated");
+    const std::string dir = test::ScratchDir("shards_merge_truncated");
     WriteSplit(dir);
     const std::string path = dir + "/train-000000.tar";
     io::WriteFileAtomic(path, io::ReadFileBytes(path).substr(0, 2048));
@@ -244,7 +244,7 @@ TEST(Split, MergeFailsNamingAMissingOrCorruptShard) {
   }
   {
     // Consistent record and tar, but fewer samples than the plan promised.
-    const std::string dir = test::ScratchDir("merge_plan_mismatch");
+    const std::string dir = test::ScratchDir("shards_merge_plan_mismatch");
     WriteSplit(dir);
     SplitPlan plan = ReadPlan(dir, "train");
     plan.shard_nsamples[2] = 5;
@@ -253,7 +253,7 @@ TEST(Split, MergeFailsNamingAMissingOrCorruptShard) {
   }
   {
     // A tar replaced by a different valid shard with a matching record is caught by keys.
-    const std::string dir = test::ScratchDir("merge_swapped");
+    const std::string dir = test::ScratchDir("shards_merge_swapped");
     WriteSplit(dir);
     fs::copy_file(dir + "/train-000000.tar", dir + "/train-000001.tar",
                   fs::copy_options::overwrite_existing);
@@ -264,7 +264,7 @@ TEST(Split, MergeFailsNamingAMissingOrCorruptShard) {
     ExpectMergeFails(dir, "train-000001.tar");
   }
   {
-    const std::string dir = test::ScratchDir("merge_no_plan");
+    const std::string dir = test::ScratchDir("shards_merge_no_plan");
     WriteSplit(dir);
     fs::remove(PlanPath(dir, "train"));
     ExpectMergeFails(dir, "parts");
@@ -272,7 +272,7 @@ TEST(Split, MergeFailsNamingAMissingOrCorruptShard) {
 }
 
 TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
-  const std::string dir = test::ScratchDir("validate_problems");
+  const std::string dir = test::ScratchDir("shards_validate_problems");
   WriteSplit(dir);
   MergeSplit(dir, MergeOptions{});
   ASSERT_TRUE(ValidateSplit(dir, ValidateOptions{SchemasDir()}).empty());
@@ -294,7 +294,7 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   EXPECT_EQ(all.find("train-000001.tar"), std::string::npos) << all;
 
   // A corrupt .npy header inside an otherwise consistent shard is found by reading it.
-  const std::string dir2 = test::ScratchDir("validate_npy");
+  const std::string dir2 = test::ScratchDir("shards_validate_npy");
   WriteSplit(dir2);
   MergeSplit(dir2, MergeOptions{});
   const std::string shard = dir2 + "/train-000001.tar";
@@ -319,7 +319,7 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
 }
 
 TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasWhenPresent) {
-  const std::string schemas = test::ScratchDir("schemas_strict");
+  const std::string schemas = test::ScratchDir("shards_schemas_strict");
   fs::copy_file(SchemasDir() + "/index.schema.json", schemas + "/index.schema.json");
   auto write_schema = [&](const std::string& file, const std::string& frame_type) {
     io::WriteFileAtomic(schemas + "/" + file,
@@ -327,7 +327,7 @@ TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasWhenPresent) {
                             "properties": {"frame0": {"type": ")" +
                             frame_type + R"("}}})");
   };
-  const std::string dir = test::ScratchDir("merge_schema");
+  const std::string dir = test::ScratchDir("shards_merge_schema");
   WriteSplit(dir);
   MergeOptions options;
   options.schemas_dir = schemas;
@@ -367,7 +367,7 @@ TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasWhenPresent) {
 }
 
 TEST(Split, CommandsMergeAndValidate) {
-  const std::string dir = test::ScratchDir("split_cli");
+  const std::string dir = test::ScratchDir("shards_split_cli");
   WriteSplit(dir);
   auto r = test::RunOccgt("merge --schemas '" + SchemasDir() + "' '" + dir + "'");
   ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
@@ -400,7 +400,8 @@ TEST(Split, CommandsMergeAndValidate) {
 // and checks the same files exist.
 TEST(ShardsDemo, WriteDemoSplit) {
   const char* env = std::getenv("OCCGT_SHARDS_DEMO_OUT");
-  const std::string dir = env != nullptr && *env ? std::string(env) : test::ScratchDir("demo");
+  const std::string dir =
+      env != nullptr && *env ? std::string(env) : test::ScratchDir("shards_demo");
   fs::create_directories(dir);
   WriteSplit(dir);
   const auto r = test::RunOccgt("merge --schemas '" + SchemasDir() + "' '" + dir + "'");

@@ -114,7 +114,7 @@ ShardInfo WriteShard(const std::string& path, const std::vector<Sample>& samples
 }
 
 TEST(TarShard, HeadersOrderAndSizesMatchTheSamples) {
-  const std::string dir = test::ScratchDir("tar_headers");
+  const std::string dir = test::ScratchDir("shards_tar_headers");
   const std::string path = dir + "/train-000000.tar";
   const auto samples = MakeSamples();
   const ShardInfo info = WriteShard(path, samples);
@@ -196,7 +196,7 @@ TEST(TarShard, HeadersOrderAndSizesMatchTheSamples) {
 }
 
 TEST(TarShard, IdenticalInputGivesIdenticalBytes) {
-  const std::string dir = test::ScratchDir("tar_determinism");
+  const std::string dir = test::ScratchDir("shards_tar_determinism");
   const ShardInfo a = WriteShard(dir + "/a/train-000000.tar", MakeSamples());
   const ShardInfo b = WriteShard(dir + "/b/train-000000.tar", MakeSamples());
   EXPECT_EQ(io::ReadFileBytes(a.path), io::ReadFileBytes(b.path));
@@ -208,7 +208,7 @@ TEST(TarShard, IdenticalInputGivesIdenticalBytes) {
 }
 
 TEST(TarShard, NpyArrayDataIs64ByteAlignedInsideTheTar) {
-  const std::string dir = test::ScratchDir("tar_alignment");
+  const std::string dir = test::ScratchDir("shards_tar_alignment");
   // Members of many different sizes so that data offsets take many values mod 512.
   std::vector<Sample> samples;
   std::mt19937 rng(7);
@@ -289,7 +289,7 @@ TEST(SampleKey, SanitisingGivesValidDeterministicKeys) {
 }
 
 TEST(TarShard, BadSampleThrowsNamingShardAndKeyAndPublishesNothing) {
-  const std::string dir = test::ScratchDir("tar_bad_key");
+  const std::string dir = test::ScratchDir("shards_tar_bad_key");
   const std::string path = dir + "/train-000000.tar";
   for (const std::string& bad : std::vector<std::string>{"../escape", "/abs", "a/b.c", "ctl\x07"}) {
     TarShardWriter writer(path);
@@ -314,7 +314,7 @@ TEST(TarShard, BadSampleThrowsNamingShardAndKeyAndPublishesNothing) {
 }
 
 TEST(TarShard, DestroyedWithoutFinishLeavesNothing) {
-  const std::string dir = test::ScratchDir("tar_no_finish");
+  const std::string dir = test::ScratchDir("shards_tar_no_finish");
   const std::string path = dir + "/train-000003.tar";
   {
     TarShardWriter writer(path);
@@ -330,7 +330,7 @@ TEST(TarShard, DestroyedWithoutFinishLeavesNothing) {
 TEST(TarShard, DiskFullFailsLoudlyAndPublishesNothing) {
   // "<shard>.tmp" is a symlink to /dev/full: every write(2) fails with ENOSPC.
   ASSERT_TRUE(fs::exists("/dev/full"));
-  const std::string dir = test::ScratchDir("tar_disk_full");
+  const std::string dir = test::ScratchDir("shards_tar_disk_full");
   const std::string path = dir + "/train-000000.tar";
   fs::create_symlink("/dev/full", path + ".tmp");
   bool threw = false;
@@ -375,7 +375,7 @@ TEST(TarShard, DiskFullFailsLoudlyAndPublishesNothing) {
 }
 
 TEST(TarShard, TruncatedOrGarbageTarIsAnInputErrorNamingIt) {
-  const std::string dir = test::ScratchDir("tar_truncated");
+  const std::string dir = test::ScratchDir("shards_tar_truncated");
   const ShardInfo info = WriteShard(dir + "/t-000000.tar", MakeSamples());
   const std::string tar = io::ReadFileBytes(info.path);
   const std::string cut = dir + "/cut.tar";
