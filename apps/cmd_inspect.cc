@@ -34,8 +34,10 @@ struct InspectSplitArgs {
 };
 
 void RunInspectPair(const InspectPairArgs& a) {
-  const int sources = (!a.shard.empty() || !a.key.empty()) + !a.pair_dir.empty() +
-                      (!a.root.empty() || !a.scene.empty() || !a.frames.empty());
+  // --root alone with --pair-dir only says where the colour images are.
+  const bool scene_source =
+      !a.scene.empty() || !a.frames.empty() || (!a.root.empty() && a.pair_dir.empty());
+  const int sources = (!a.shard.empty() || !a.key.empty()) + !a.pair_dir.empty() + scene_source;
   if (sources != 1) {
     throw gt::InputError("occgt inspect pair",
                          "expected exactly one source: --shard/--key, --pair-dir, or "
@@ -48,7 +50,7 @@ void RunInspectPair(const InspectPairArgs& a) {
     }
     pair = gt::report::LoadPairFromShard(a.shard, a.key);
   } else if (!a.pair_dir.empty()) {
-    pair = gt::report::LoadPairFromDir(a.pair_dir, a.image0, a.image1);
+    pair = gt::report::LoadPairFromDir(a.pair_dir, a.image0, a.image1, a.root);
   } else {
     if (a.root.empty() || a.format.empty() || a.scene.empty() || a.frames.empty()) {
       throw gt::InputError("--root/--format/--scene/--frames", "expected all four");
@@ -109,7 +111,8 @@ void AddInspectCommand(CLI::App& app) {
   pair->add_option("--pair-dir", pa->pair_dir, "output folder of `occgt pair`");
   pair->add_option("--image0", pa->image0, "colour image of frame 0 (with --pair-dir)");
   pair->add_option("--image1", pa->image1, "colour image of frame 1 (with --pair-dir)");
-  pair->add_option("--root", pa->root, "dataset root (compute the pair here)");
+  pair->add_option("--root", pa->root,
+                   "dataset root: compute the pair here, or (with --pair-dir) find its colour");
   pair->add_option("--format", pa->format, "dataset format: scannet, tartanair, ...");
   pair->add_option("--scene", pa->scene, "scene name");
   pair->add_option("--frames", pa->frames, "two frame ids: A,B");

@@ -240,7 +240,7 @@ PairData LoadPairFromShard(const std::string& tar_path, const std::string& key) 
 }
 
 PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
-                         const std::string& image1_path) {
+                         const std::string& image1_path, const std::string& dataset_root) {
   if (!fs::is_directory(dir)) throw InputError(dir, "expected an `occgt pair` output folder");
   std::map<std::string, std::string> fields;
   std::vector<std::string> names = kArrayFields;
@@ -278,6 +278,31 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
     if (paths.size() >= 2 && gt::io::FileExists(paths[0]) && gt::io::FileExists(paths[1])) {
       p0 = paths[0];
       p1 = paths[1];
+    }
+  }
+  if (p0.empty() && p1.empty() && !dataset_root.empty() && fields.count("meta.json")) {
+    const std::string meta_path = (fs::path(dir) / "meta.json").string();
+    nlohmann::json meta;
+    try {
+      meta = nlohmann::json::parse(fields["meta.json"]);
+    } catch (const nlohmann::json::exception&) {
+      throw InputError(meta_path, "expected JSON");
+    }
+    if (!meta.contains("format") || !meta["format"].is_string() || !meta.contains("scene") ||
+        !meta["scene"].is_string() || !meta.contains("frames") || !meta["frames"].is_array() ||
+        meta["frames"].size() != 2 || !meta["frames"][0].is_string() ||
+        !meta["frames"][1].is_string()) {
+      throw InputError(meta_path,
+                       "expected \"format\", \"scene\" and \"frames\": [id0, id1] "
+                       "to find the colour images under --root");
+    }
+    const auto reader = gt::io::MakeReader(meta["format"].get<std::string>());
+    const gt::Scene scene = reader->ReadScene(dataset_root, meta["scene"].get<std::string>());
+    for (int k = 0; k < 2; ++k) {
+      const std::string id = meta["frames"][k].get<std::string>();
+      for (const auto& f : scene.frames) {
+        if (f.id == id) (k == 0 ? p0 : p1) = f.color_path;
+      }
     }
   }
   if (!p0.empty()) img0 = BgrFromColor(gt::io::ReadColor(p0));

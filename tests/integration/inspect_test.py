@@ -166,6 +166,23 @@ def main():
         not_blank(img, "tartanair " + name)
         check(img.shape[1] >= 2 * 640 + PANEL_GAP, f"tartanair {name}: width {img.shape[1]}")
 
+    # --- an `occgt pair` folder, colour found through meta.json + --root.
+    pair_dir = os.path.join(tmp, "occgt_pair")
+    common.occgt("pair", "--root", root, "--format", "tartanair", "--scene", "hospital_sample",
+                 "--frames", "000000,000020", "--out", pair_dir)
+    out = os.path.join(tmp, "pair_dir_pictures")
+    common.occgt("inspect", "pair", "--pair-dir", pair_dir, "--root", root, "--out", out)
+    label01 = np.load(os.path.join(pair_dir, "label01.npy"))
+    colour0 = np.asarray(Image.open(os.path.join(root, "image_left", "000000_left.png"))
+                         .convert("RGB")).astype(float)
+    check(colour0.shape[:2] == label01.shape, "TartanAir colour is at the working resolution")
+    labels = png(os.path.join(out, "labels.png"))
+    h, w = label01.shape
+    expected = (1 - ALPHA) * colour0 + ALPHA * np.array(LABEL_RGB, dtype=float)[label01]
+    err = np.abs(labels[22:22 + h, :w].astype(float) - expected).max()
+    check(err <= 1.0, f"pair-dir labels.png differs from the documented blend by {err}")
+    check(not os.path.exists(os.path.join(out, "occupancy.png")), "occupancy.png without occupancy")
+
     # --- split written by the test: no pairs at all, and a malformed line.
     empty = os.path.join(tmp, "empty_split")
     os.makedirs(empty)
