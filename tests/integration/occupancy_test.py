@@ -1,0 +1,95 @@
+"""occgt occupancy on the real TartanAir sample, read the way a trainer would: the packed
+words are unpacked with exactly the NumPy snippet of docs/OCCUPANCY.md, compared with
+--dense, and occupancy.json is validated against schemas/occupancy.schema.json."""
+import json
+import os
+import re
+import sys
+
+import jsonschema
+import numpy as np
+
+import common
+
+
+def doc_snippet():
+    text = open(os.path.join(common.SOURCE, "docs", "OCCUPANCY.md")).read()
+    m = re.search(r"<!-- unpack-snippet -->\s*```python\n(.*?)```", text, re.S)
+    assert m, "docs/OCCUPANCY.md lost its unpack snippet"
+    scope = {}
+    exec(m.group(1), scope)
+    return scope["unpack_occupancy"]
+
+
+def main():
+    unpack = doc_snippet()
+    root = common.shared("tartanair/hospital_sample")
+    schema = json.load(open(os.path.join(common.SOURCE, "schemas", "occupancy.schema.json")))
+    out = common.scratch("occupancy_tartanair")
+    common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
+                 "--frames", "000000,000020", "--out", out, "--dense",
+                 "--save-octree", os.path.join(out, "map.bt"))
+    meta = json.load(open(os.path.join(out, "occupancy.json")))
+    jsonschema.validate(meta, schema)
+    w, h = meta["grid"]
+    assert (w, h) == (320, 240), meta["grid"]
+    d = meta["bins"]["num_bins"]
+    assert len(meta["bins"]["edges_m"]) == d + 1
+    for cam in "01":
+        occ = np.load(os.path.join(out, f"occ{cam}.npy"))
+        known = np.load(os.path.join(out, f"known{cam}.npy"))
+        dense = np.load(os.path.join(out, f"occupancy{cam}.npy"))
+        assert occ.dtype == np.dtype("<u8") and occ.shape == (h, w), (occ.dtype, occ.shape)
+        assert known.dtype == np.dtype("<u8") and known.shape == (h, w)
+        assert dense.dtype == np.uint8 and dense.shape == (d, h, w), (dense.dtype, dense.shape)
+        assert np.all(occ & ~known == 0), "occupied bits outside known bits"
+        unpacked = unpack(occ, known, d)
+        assert unpacked.dtype == np.uint8 and unpacked.shape == (d, h, w)
+        assert np.array_equal(unpacked, dense), "snippet disagrees with --dense"
+        counts = meta["counts" + cam]
+        assert counts["occupied"] == int((dense == 1).sum())
+        assert counts["free"] == int((dense == 0).sum())
+        assert counts["unknown"] == int((dense == 255).sum())
+        assert 0 < counts["occupied"] and 0 < counts["free"], counts
+    with open(os.path.join(out, "map.bt"), "rb") as f:
+        assert f.readline().startswith(b"# Octomap OcTree binary file")
+
+    # Deterministic: a second run writes identical bytes.
+    out2 = common.scratch("occupancy_tartanair_again")
+    common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
+                 "--frames", "000000,000020", "--out", out2, "--dense")
+    for name in ["occ0.npy", "known0.npy", "occ1.npy", "known1.npy", "occupancy0.npy",
+                 "occupancy1.npy"]:
+        assert open(os.path.join(out, name), "rb").read() == \
+            open(os.path.join(out2, name), "rb").read(), name
+
+    # two_point and a window scope with other bin options also validate.
+    out3 = common.scratch("occupancy_two_point")
+    common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
+                 "--frames", "000000,000020", "--out", out3, "--mode", "two_point",
+                 "--bins", "32", "--spacing", "inverse")
+    meta3 = json.load(open(os.path.join(out3, "occupancy.json")))
+    jsonschema.validate(meta3, schema)
+    occ = np.load(os.path.join(out3, "occ0.npy"))
+    assert np.all(occ >> np.uint64(32) == 0), "bits above num_bins set"
+    out4 = common.scratch("occupancy_window")
+    common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
+                 "--frames", "000000,000020", "--out", out4, "--scope", "window:2",
+                 "--traversal", "center", "--resolution", "320x240")
+    meta4 = json.load(open(os.path.join(out4, "occupancy.json")))
+    jsonschema.validate(meta4, schema)
+    assert meta4["grid"] == [160, 120]
+    assert len(meta4["fusion"]["fused_frames"]) == 8, meta4["fusion"]["fused_frames"]
+
+    # Bad input: one line, exit 1, nothing written.
+    out5 = common.scratch("occupancy_bad")
+    r = common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
+                     "--frames", "000000,000020", "--out", out5, "--scope", "window:0",
+                     check=False)
+    assert r.returncode == 1 and "--scope" in r.stderr and r.stderr.count("\n") == 1, r.stderr
+    assert os.listdir(out5) == []
+    print("occupancy integration: ok")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
