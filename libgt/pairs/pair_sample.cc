@@ -40,7 +40,7 @@ std::string EncodeImage(const io::ColorImage& image, const std::string& format,
   std::vector<uchar> buf;
   std::vector<int> params;
   if (format == "jpg") params = {cv::IMWRITE_JPEG_QUALITY, 95};
-  if (format == "png") params = {cv::IMWRITE_PNG_COMPRESSION, 3};
+  if (format == "png") params = {cv::IMWRITE_PNG_COMPRESSION, 1};
   if (!cv::imencode("." + format, bgr, buf, params))
     throw InputError(what, "cannot encode " + format);
   return std::string(buf.begin(), buf.end());

@@ -1,0 +1,92 @@
+// Throughput of the build pipeline on the real 7-Scenes sample (640×480, 50 frames):
+// scoring a candidate pair (both directions, score_stride 8, depth cached), the frame scan
+// (decode + resize + valid fraction + median), and one full sample (labels, patch matches,
+// pair-scope OctoMap occupancy, PNG images, depth) as `occgt build` writes it.
+// Figures and commands: docs/PERFORMANCE.md.
+#include <benchmark/benchmark.h>
+
+#include "libgt/io/reader.h"
+#include "libgt/pairs/pair_sample.h"
+#include "libgt/pairs/recipe.h"
+#include "libgt/pairs/selection.h"
+#include "tests/support/test_support.h"
+
+namespace gt::pairs {
+namespace {
+
+const Scene& SevenScenes() {
+  static const Scene scene = [] {
+    const std::string root = std::string(OCCGT_SHARED_DATA) + "/sevenscenes";
+    auto reader = io::MakeReader("sevenscenes");
+    return reader->ReadScene(root, reader->ListScenes(root).at(0));
+  }();
+  return scene;
+}
+
+std::vector<Camera> Cameras(const Scene& scene) {
+  std::vector<Camera> cams;
+  for (const auto& f : scene.frames) cams.push_back(WorkingCamera(f, 640, 480));
+  return cams;
+}
+
+void BM_ScorePair(benchmark::State& state) {
+  const Scene& scene = SevenScenes();
+  const auto cams = Cameras(scene);
+  DepthCache cache(scene, 640, 480);
+  LabelOptions labels = LabelPreset("default");
+  labels.min_depth_m = scene.min_depth_m;
+  labels.max_depth_m = scene.max_depth_m;
+  std::vector<CandidatePair> pairs;
+  for (size_t i = 0; i + 8 < scene.frames.size(); ++i) pairs.push_back({i, i + 8});
+  for (const auto& p : pairs) cache.Get(p.i0), cache.Get(p.i1);  // decode outside the loop
+  DropCounts drops;
+  const int stride = static_cast<int>(state.range(0));
+  for (auto _ : state) {
+    auto scored = ScorePairs(scene, cams, pairs, labels, stride, &cache, &drops);
+    benchmark::DoNotOptimize(scored.data());
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(pairs.size()));
+}
+BENCHMARK(BM_ScorePair)->Arg(8)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_ScanFrames(benchmark::State& state) {
+  const Scene& scene = SevenScenes();
+  ScanOptions o;
+  o.min_depth_m = scene.min_depth_m;
+  o.max_depth_m = scene.max_depth_m;
+  for (auto _ : state) {
+    DepthCache cache(scene, 640, 480);  // cold: every depth PNG decoded
+    ScanResult r = ScanFrames(scene, o, &cache);
+    benchmark::DoNotOptimize(r.kept.data());
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(scene.frames.size()));
+}
+BENCHMARK(BM_ScanFrames)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_ComputeSample(benchmark::State& state) {
+  const Scene& scene = SevenScenes();
+  Recipe recipe = ParseRecipe(
+      "name: b\ndataset: {format: sevenscenes, root: /x}\nsample: {depth: true}\n"
+      "occupancy: {far_m: 8.0}\n",
+      "bench.yaml", "/");
+  SampleSpec spec = RecipeSampleOptions(recipe);
+  spec.labels = RecipeLabelOptions(recipe, scene);
+  // 0: everything; 1: without occupancy; 2: without occupancy and images.
+  if (state.range(0) >= 1) spec.occupancy = false;
+  if (state.range(0) >= 2) spec.image = "none";
+  DepthCache cache(scene, 640, 480);
+  const auto d0 = cache.Get(0);
+  const auto d1 = cache.Get(8);
+  SelectedPair pair;
+  for (auto _ : state) {
+    EncodedSample s = ComputeSample(scene, 0, 8, pair, "k/0_8", *d0, *d1, spec, nullptr);
+    benchmark::DoNotOptimize(s.bytes);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_ComputeSample)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+}  // namespace gt::pairs
+
+BENCHMARK_MAIN();
