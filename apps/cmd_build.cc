@@ -106,7 +106,7 @@ void PrintProgress(const gt::pairs::Progress& p) {
   static const bool tty = ::isatty(STDERR_FILENO);
   const double rate = p.elapsed_s > 0 ? p.done / p.elapsed_s : 0.0;
   const double eta = rate > 0 ? (p.total - p.done) / rate : 0.0;
-  const char* unit = p.stage == "select" ? "scenes" : "shards";
+  const char* unit = p.stage == "select" ? "scenes" : "pairs";
   if (tty) {
     std::fprintf(stderr, "\r[%s] %lld/%lld %s  %.2f/s  ETA %.0fs   ", p.stage.c_str(),
                  static_cast<long long>(p.done), static_cast<long long>(p.total), unit, rate, eta);

@@ -541,9 +541,11 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   };
   int64_t shards_written = 0, shards_skipped = 0, samples_written = 0;
   const int64_t nshards = static_cast<int64_t>(shard_sizes.size());
-  int64_t my_shards = 0;
-  for (int64_t s = 0; s < nshards; ++s) my_shards += (s % options.tasks == options.task) ? 1 : 0;
-  int64_t done_shards = 0;
+  int64_t my_samples = 0;  // progress unit of the write stage: pairs (samples)
+  for (int64_t s = 0; s < nshards; ++s) {
+    my_samples += (s % options.tasks == options.task) ? shard_sizes[s] : 0;
+  }
+  int64_t done_samples = 0;
   for (int64_t s = 0, start = 0; s < nshards; start += shard_sizes[s], ++s) {
     if (s % options.tasks != options.task) continue;
     if (output->IsShardComplete(s)) {
@@ -587,7 +589,8 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
       ++shards_written;
       samples_written += n;
     }
-    if (progress) progress({"write", ++done_shards, my_shards, Seconds(t_write)});
+    done_samples += shard_sizes[s];
+    if (progress) progress({"write", done_samples, my_samples, Seconds(t_write)});
   }
   timings["write_s"] = Seconds(t_write);
   summary["shards_written_this_run"] = shards_written;

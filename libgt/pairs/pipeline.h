@@ -76,7 +76,8 @@ class ShardOutput {
                            const std::map<std::string, std::array<double, 9>>& intrinsics) = 0;
 };
 
-// One progress report: `done` of `total` units of `stage` (scenes, pairs or samples).
+// One progress report: `done` of `total` units of `stage`: scenes for "select", pairs
+// (samples, reported after each shard) for "write".
 struct Progress {
   std::string stage;
   int64_t done = 0;

@@ -69,6 +69,11 @@ size_t DepthCache::bytes() const {
   return bytes_;
 }
 
+size_t DepthCache::CapacityMaps() const {
+  const size_t map_bytes = static_cast<size_t>(width_) * height_ * sizeof(float);
+  return std::max<size_t>(1, max_bytes_ / std::max<size_t>(1, map_bytes));
+}
+
 // ---- scan -------------------------------------------------------------------------
 
 bool ScanOptions::Check(std::string* error) const {
@@ -214,7 +219,18 @@ std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>
                                    const LabelOptions& label_options, int score_stride,
                                    DepthCache* cache, DropCounts* drops) {
   std::vector<std::optional<ScoredPair>> results(candidates.size());
-  tbb::parallel_for(size_t{0}, candidates.size(), [&](size_t k) {
+  // Visit order: by block of (i0 / B, i1 / B), then candidate order (results by index).
+  const size_t block = std::max<size_t>(1, cache->CapacityMaps() / 4);
+  std::vector<size_t> order(candidates.size());
+  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    const CandidatePair& ca = candidates[a];
+    const CandidatePair& cb = candidates[b];
+    const size_t a0 = ca.i0 / block, a1 = ca.i1 / block, b0 = cb.i0 / block, b1 = cb.i1 / block;
+    return a0 != b0 ? a0 < b0 : a1 < b1;
+  });
+  tbb::parallel_for(size_t{0}, order.size(), [&](size_t position) {
+    const size_t k = order[position];
     const CandidatePair& c = candidates[k];
     std::shared_ptr<const DepthImage> d0, d1;
     try {

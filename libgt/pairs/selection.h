@@ -49,6 +49,8 @@ class DepthCache {
   int64_t hits() const;
   int64_t misses() const;
   size_t bytes() const;
+  // How many maps of the working resolution fit in the budget (at least 1).
+  size_t CapacityMaps() const;
 
  private:
   const Scene& scene_;
@@ -115,6 +117,9 @@ struct ScoredPair {
 
 // ScoreDirection both ways for every candidate, in parallel, results in candidate order.
 // A candidate whose depth cannot be read is dropped and counted ("score.read_error").
+// Candidates are visited in blocks of frames (frame index / B for both frames, B a quarter
+// of the cache capacity) so that the depth maps a block needs stay cached even for "all
+// pairs" of a long scene: decodes grow like (frames / B)² · B, not like the pair count.
 std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>& cameras,
                                    const std::vector<CandidatePair>& candidates,
                                    const LabelOptions& label_options, int score_stride,

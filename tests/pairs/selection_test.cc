@@ -344,5 +344,36 @@ TEST(Scoring, IdenticalResultsOnOneAndManyThreads) {
   EXPECT_EQ(one, run(4));
 }
 
+// "All pairs" of a scene larger than the cache: blocked visiting keeps decodes far below
+// one per pair, and the results equal those of a cache that holds everything.
+TEST(Scoring, BlockedVisitBoundsDecodesForAllPairs) {
+  const std::string dir = test::ScratchDir("pairs_blocked");
+  std::vector<double> xs;
+  std::vector<size_t> kept;
+  for (int i = 0; i < 40; ++i) {
+    xs.push_back(0.01 * i);
+    kept.push_back(i);
+  }
+  Scene scene = PlaneScene(dir, xs);
+  const auto cands = GenerateCandidates(kept, 0);  // 780 pairs
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  DepthCache small(scene, kW, kH, 16 * kW * kH * sizeof(float));  // 16 maps, blocks of 4
+  DepthCache big(scene, kW, kH, 64 * kW * kH * sizeof(float));
+  DropCounts d;
+  auto a = ScorePairs(scene, Cameras(scene), cands, LabelPreset("default"), 4, &small, &d);
+  auto b = ScorePairs(scene, Cameras(scene), cands, LabelPreset("default"), 4, &big, &d);
+  ASSERT_EQ(a.size(), cands.size());
+  for (size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k].pair, cands[k]);
+    EXPECT_EQ(a[k].m01.counts, b[k].m01.counts);
+    EXPECT_EQ(a[k].m10.counts, b[k].m10.counts);
+  }
+  EXPECT_EQ(big.misses(), 40);
+  // 10 blocks of 4 frames: 55 block pairs, each needing at most 8 maps (4 when i0's block
+  // is reused): well under the 1560 lookups and under a quarter of the pair count.
+  EXPECT_LE(small.misses(), 10 * 4 + 55 * 4) << small.misses();
+  EXPECT_LT(small.misses(), static_cast<int64_t>(cands.size()) / 2);
+}
+
 }  // namespace
 }  // namespace gt::pairs
