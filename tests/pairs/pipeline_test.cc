@@ -1,0 +1,230 @@
+// The build pipeline against an in-memory ShardOutput: the same samples (bytes) whatever
+// the thread count and task split; re-runs reuse selections and skip complete shards; a
+// key collision after sanitising fails before any shard is written; a dry run writes
+// nothing; counts in the summary add up.
+#include "libgt/pairs/pipeline.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <filesystem>
+#include <map>
+
+#include "libgt/core/error.h"
+#include "libgt/pairs/synthetic.h"
+#include "tests/support/test_support.h"
+
+namespace gt::pairs {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Stores shards in memory; keys are "<scene>/<f0>_<f1>" (or one constant key on request).
+class MemoryOutput : public ShardOutput {
+ public:
+  bool constant_key = false;
+  std::vector<int64_t> plan;
+  std::map<int64_t, std::vector<EncodedSample>> shards;
+  int64_t writes = 0;
+  bool finished = false;
+
+  std::string SampleKey(const std::string& scene, const std::string& f0,
+                        const std::string& f1) const override {
+    return constant_key ? "same/key" : scene + "/" + f0 + "_" + f1;
+  }
+  void WritePlan(const std::vector<int64_t>& sizes) override { plan = sizes; }
+  bool IsShardComplete(int64_t s) const override { return shards.count(s) > 0; }
+  int64_t WriteShard(int64_t s, const std::vector<EncodedSample>& samples) override {
+    ++writes;
+    shards[s] = samples;
+    int64_t bytes = 0;
+    for (const auto& x : samples) bytes += x.bytes;
+    return bytes;
+  }
+  void Finish() override { finished = true; }
+  void ExportLoftr(const std::string&, const std::vector<LoftrRow>&,
+                   const std::map<std::string, std::array<double, 9>>&) override {}
+};
+
+Recipe SmallRecipe(const std::string& data_root) {
+  const std::string yaml = R"(
+name: small
+split: small
+resolution: [64, 48]
+dataset:
+  format: generic
+  root: )" + data_root + R"(
+  min_valid_depth_fraction: 0.2
+selection:
+  max_frame_gap: 3
+  score_stride: 2
+  overlap: [0.2, 1.0]
+  quota_per_scene: 5
+occupancy: {voxel_m: 0.1, far_m: 8.0}
+sample: {image: png, depth: true}
+shards: {samples_per_shard: 3}
+)";
+  return ParseRecipe(yaml, "small.yaml", "/");
+}
+
+// A synthetic dataset shared by the tests of this file (generated once).
+std::string Dataset() {
+  static const std::string root = [] {
+    const std::string dir = test::ScratchDir("pipeline_data");
+    SyntheticDatasetOptions o;
+    o.scenes = 2;
+    o.frames = 10;
+    o.width = 64;
+    o.height = 48;
+    EnsureSyntheticDataset(dir, o);
+    return dir;
+  }();
+  return root;
+}
+
+std::string Bytes(const MemoryOutput& out) {
+  std::string all;
+  for (const auto& [s, samples] : out.shards) {
+    for (const auto& x : samples) {
+      all += x.key + "\n";
+      for (const auto& [name, bytes] : x.fields) all += name + ":" + bytes;
+      all += x.pair_line.dump();
+    }
+  }
+  return all;
+}
+
+TEST(Pipeline, SameSamplesOnAnyThreadCountAndTaskSplit) {
+  const Recipe r = SmallRecipe(Dataset());
+  MemoryOutput one;
+  BuildOptions o;
+  o.out_dir = test::ScratchDir("pipeline_one");
+  nlohmann::json summary;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    summary = RunBuild(r, o, &one, nullptr);
+  }
+  ASSERT_TRUE(summary["complete"].get<bool>());
+  EXPECT_TRUE(one.finished);
+  // Quota 5 per scene; the plan is the equal cut of the samples into shards of 3.
+  const int64_t n = summary["samples"].get<int64_t>();
+  int64_t per_scene_total = 0;
+  for (const auto& [scene, k] : summary["pairs_per_scene"].items()) {
+    EXPECT_LE(k.get<int64_t>(), 5) << scene;
+    EXPECT_GE(k.get<int64_t>(), 1) << scene;
+    per_scene_total += k.get<int64_t>();
+  }
+  EXPECT_EQ(per_scene_total, n);
+  ASSERT_GE(n, 4);  // at least two shards, so that the task split below means something
+  std::vector<int64_t> plan;
+  for (int64_t left = n; left > 0; left -= 3) plan.push_back(std::min<int64_t>(3, left));
+  EXPECT_EQ(one.plan, plan);
+  int64_t stored = 0;
+  for (const auto& [shard, samples] : one.shards) stored += static_cast<int64_t>(samples.size());
+  EXPECT_EQ(stored, n);
+  const auto& c = summary["counts"];
+  int64_t scan = 0, prune = 0, later = 0;
+  for (const auto& [k, v] : summary["drops"].items()) {
+    if (k.rfind("scan.", 0) == 0) scan += v.get<int64_t>();
+    if (k.rfind("prune.", 0) == 0) prune += v.get<int64_t>();
+    if (k.rfind("filter.", 0) == 0 || k.rfind("sample.", 0) == 0) later += v.get<int64_t>();
+  }
+  EXPECT_EQ(c["frames_total"].get<int64_t>(), c["frames_kept"].get<int64_t>() + scan);
+  EXPECT_EQ(c["candidates"].get<int64_t>(), c["after_pruning"].get<int64_t>() + prune);
+  EXPECT_EQ(c["scored"].get<int64_t>(), c["selected"].get<int64_t>() + later);
+
+  // Two threads, three tasks (select for all, then write for all), into another folder.
+  MemoryOutput split;
+  BuildOptions t;
+  t.out_dir = test::ScratchDir("pipeline_tasks");
+  t.tasks = 3;
+  for (const char* stage : {"select", "write"}) {
+    for (int k = 2; k >= 0; --k) {
+      t.task = k;
+      t.stage = stage;
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+      RunBuild(r, t, &split, nullptr);
+    }
+  }
+  EXPECT_EQ(Bytes(one), Bytes(split));
+  EXPECT_EQ(split.writes, static_cast<int64_t>(plan.size()));
+  EXPECT_TRUE(split.finished);
+}
+
+TEST(Pipeline, ReRunReusesSelectionAndSkipsCompleteShards) {
+  const Recipe r = SmallRecipe(Dataset());
+  MemoryOutput out;
+  BuildOptions o;
+  o.out_dir = test::ScratchDir("pipeline_rerun");
+  RunBuild(r, o, &out, nullptr);
+  const std::string first = Bytes(out);
+  out.shards.erase(2);
+  const int64_t writes = out.writes;
+  nlohmann::json s = RunBuild(r, o, &out, nullptr);
+  EXPECT_EQ(out.writes, writes + 1);
+  EXPECT_EQ(s["shards_written_this_run"], 1);
+  EXPECT_EQ(s["shards_skipped_complete"], static_cast<int64_t>(out.plan.size()) - 1);
+  EXPECT_EQ(s["scenes_reused"], 2);
+  EXPECT_EQ(Bytes(out), first);
+  // Another recipe (options digest) into the same folder is refused.
+  Recipe other = r;
+  other.seed = 99;
+  EXPECT_THROW(RunBuild(other, o, &out, nullptr), InputError);
+}
+
+TEST(Pipeline, KeyCollisionFailsBeforeAnyShard) {
+  const Recipe r = SmallRecipe(Dataset());
+  MemoryOutput out;
+  out.constant_key = true;
+  BuildOptions o;
+  o.out_dir = test::ScratchDir("pipeline_collision");
+  try {
+    RunBuild(r, o, &out, nullptr);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("same key after sanitising"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(out.writes, 0);
+  EXPECT_TRUE(out.plan.empty());
+}
+
+TEST(Pipeline, DryRunWritesNothing) {
+  const Recipe r = SmallRecipe(Dataset());
+  MemoryOutput out;
+  BuildOptions o;
+  o.out_dir = test::ScratchDir("pipeline_dry") + "/out";
+  o.dry_run = true;
+  nlohmann::json s = RunBuild(r, o, &out, nullptr);
+  MemoryOutput real;
+  BuildOptions w;
+  w.out_dir = test::ScratchDir("pipeline_dry_real");
+  const nlohmann::json written = RunBuild(r, w, &real, nullptr);
+  EXPECT_EQ(s["samples"], written["samples"]);
+  EXPECT_EQ(s["shards_planned"], written["shards_planned"]);
+  EXPECT_EQ(s["drops"], written["drops"]);
+  EXPECT_EQ(s["selected_overlap"], written["selected_overlap"]);
+  EXPECT_FALSE(s["complete"].get<bool>());
+  EXPECT_EQ(out.writes, 0);
+  EXPECT_FALSE(fs::exists(o.out_dir));
+}
+
+TEST(Pipeline, SceneFileNamesAreSafeAndOptionsChecked) {
+  EXPECT_EQ(SceneFileName("hospital/Easy/P036"), "hospital__Easy__P036");
+  EXPECT_EQ(SceneFileName("seq.01 x"), "seq_01_x");
+  EXPECT_EQ(SceneFileName("scene0707_00"), "scene0707_00");
+  BuildOptions o;
+  std::string error;
+  EXPECT_FALSE(o.Check(&error));  // no --out
+  o.out_dir = "x";
+  EXPECT_TRUE(o.Check(&error));
+  o.tasks = 2;
+  o.task = 2;
+  EXPECT_FALSE(o.Check(&error));
+  o.task = 1;
+  o.stage = "merge";
+  EXPECT_FALSE(o.Check(&error));
+}
+
+}  // namespace
+}  // namespace gt::pairs
