@@ -11,6 +11,7 @@
 #include <map>
 
 #include "libgt/core/error.h"
+#include "libgt/io/npy.h"
 #include "libgt/pairs/synthetic.h"
 #include "tests/support/test_support.h"
 
@@ -224,6 +225,50 @@ TEST(Pipeline, SceneFileNamesAreSafeAndOptionsChecked) {
   o.task = 1;
   o.stage = "merge";
   EXPECT_FALSE(o.Check(&error));
+}
+
+int64_t KnownBits(const MemoryOutput& out) {
+  int64_t bits = 0;
+  for (const auto& [shard, samples] : out.shards) {
+    for (const auto& x : samples) {
+      for (const auto& [name, bytes] : x.fields) {
+        if (name.rfind("known", 0) != 0) continue;
+        const io::NpyArray a = io::ParseNpy(bytes, name);
+        const uint64_t* w = a.As<uint64_t>(name);
+        for (int64_t i = 0; i < a.NumElements(); ++i) bits += __builtin_popcountll(w[i]);
+      }
+    }
+  }
+  return bits;
+}
+
+// Occupancy scopes: a window around the pair and a scene map (fused once, reused by every
+// pair) see more of the room than the pair alone; two_point marks few bins.
+TEST(Pipeline, OccupancyScopesAndModes) {
+  Recipe r = SmallRecipe(Dataset());
+  auto run = [&](const std::string& scope, const std::string& mode, const std::string& name) {
+    Recipe x = r;
+    x.occupancy.scope = scope;
+    x.occupancy.mode = mode;
+    x.occupancy.window = 2;
+    x.occupancy.scene_stride = 2;
+    MemoryOutput out;
+    BuildOptions o;
+    o.out_dir = test::ScratchDir("pipeline_scope_" + name);
+    RunBuild(x, o, &out, nullptr);
+    return out;
+  };
+  const MemoryOutput pair = run("pair", "octomap", "pair");
+  const MemoryOutput window = run("window", "octomap", "window");
+  const MemoryOutput scene = run("scene", "octomap", "scene");
+  const MemoryOutput two = run("pair", "two_point", "two");
+  const int64_t k_pair = KnownBits(pair);
+  EXPECT_GT(k_pair, 0);
+  EXPECT_GE(KnownBits(window), k_pair);
+  EXPECT_GT(KnownBits(scene), 0);
+  EXPECT_NE(Bytes(scene), Bytes(pair));
+  EXPECT_GT(KnownBits(two), 0);
+  EXPECT_NE(Bytes(two), Bytes(pair));
 }
 
 }  // namespace
