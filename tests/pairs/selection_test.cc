@@ -249,7 +249,9 @@ TEST(Filters, PropertyDropsAddUpQuotaHoldsAndFiltersAreRespected) {
     auto chosen = FilterAndSample(scored, o, trial, &d);
     EXPECT_EQ(static_cast<int64_t>(chosen.size()) + Sum(d, ""),
               static_cast<int64_t>(scored.size()));
-    if (o.quota_per_scene > 0) EXPECT_LE(chosen.size(), static_cast<size_t>(o.quota_per_scene));
+    if (o.quota_per_scene > 0) {
+      EXPECT_LE(chosen.size(), static_cast<size_t>(o.quota_per_scene));
+    }
     std::set<size_t> unique(chosen.begin(), chosen.end());
     EXPECT_EQ(unique.size(), chosen.size());
     for (size_t k : chosen) {
