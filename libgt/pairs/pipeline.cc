@@ -539,6 +539,14 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
     }
     return *d;
   };
+  // Scene data (and its depth cache) is released after the last shard of this task that
+  // uses the scene, so a task over many scenes holds only the current ones in memory.
+  std::map<std::string, int64_t> last_shard_of_scene;
+  for (int64_t s = 0, start = 0; s < static_cast<int64_t>(shard_sizes.size());
+       start += shard_sizes[s], ++s) {
+    if (s % options.tasks != options.task) continue;
+    for (int64_t k = start; k < start + shard_sizes[s]; ++k) last_shard_of_scene[all[k]->scene] = s;
+  }
   int64_t shards_written = 0, shards_skipped = 0, samples_written = 0;
   const int64_t nshards = static_cast<int64_t>(shard_sizes.size());
   int64_t my_samples = 0;  // progress unit of the write stage: pairs (samples)
@@ -588,6 +596,9 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
       bytes_written += output->WriteShard(s, samples);
       ++shards_written;
       samples_written += n;
+    }
+    for (auto it = scene_data.begin(); it != scene_data.end();) {
+      it = last_shard_of_scene[it->first] <= s ? scene_data.erase(it) : std::next(it);
     }
     done_samples += shard_sizes[s];
     if (progress) progress({"write", done_samples, my_samples, Seconds(t_write)});
