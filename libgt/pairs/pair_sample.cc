@@ -115,10 +115,17 @@ DirectionMetrics MetricsFromJson(const json& j) {
   return m;
 }
 
+std::string EncodeFrameImage(const Frame& frame, const SampleSpec& options) {
+  const io::ColorImage c =
+      io::ReadColorResized(frame.color_path, frame.color_camera, options.width, options.height);
+  return EncodeImage(c, options.image, frame.color_path);
+}
+
 EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const SelectedPair& pair,
                             const std::string& key, const DepthImage& depth0,
                             const DepthImage& depth1, const SampleSpec& options,
-                            const occupancy::OccupancyMap* shared_map) {
+                            const occupancy::OccupancyMap* shared_map, const std::string* image0,
+                            const std::string* image1) {
   const Frame& f0 = scene.frames[i0];
   const Frame& f1 = scene.frames[i1];
   const Camera cam0 = WorkingCamera(f0, options.width, options.height);
@@ -182,13 +189,10 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
   }
   json image_json = nullptr;
   if (options.image != "none" && !f0.color_path.empty() && !f1.color_path.empty()) {
-    Camera k0, k1;
-    const io::ColorImage c0 =
-        io::ReadColorResized(f0.color_path, f0.color_camera, options.width, options.height, &k0);
-    const io::ColorImage c1 =
-        io::ReadColorResized(f1.color_path, f1.color_camera, options.width, options.height, &k1);
-    add("image0." + options.image, EncodeImage(c0, options.image, f0.color_path));
-    add("image1." + options.image, EncodeImage(c1, options.image, f1.color_path));
+    add("image0." + options.image, image0 ? *image0 : EncodeFrameImage(f0, options));
+    add("image1." + options.image, image1 ? *image1 : EncodeFrameImage(f1, options));
+    const Camera k0 = f0.color_camera.Resized(options.width, options.height);
+    const Camera k1 = f1.color_camera.Resized(options.width, options.height);
     image_json = {
         {"format", options.image}, {"K0", MatrixJson(k0.K())}, {"K1", MatrixJson(k1.K())}};
   }

@@ -71,12 +71,20 @@ struct SelectedPair {
 nlohmann::json MetricsJson(const DirectionMetrics& m);
 DirectionMetrics MetricsFromJson(const nlohmann::json& j);
 
-// Computes labels, matches, occupancy and encodes the sample. depth0/1 at W×H.
-// Throws InputError (naming the file) when an input cannot be read.
+// The colour of a frame at W×H, bilinear, encoded as options.image ("png" or "jpg").
+// Throws InputError naming the file when it cannot be read.
+std::string EncodeFrameImage(const Frame& frame, const SampleSpec& options);
+
+// Computes labels, matches, occupancy and encodes the sample. depth0/1 at W×H. image0/1:
+// EncodeFrameImage of the two frames when the caller caches them (a frame appears in many
+// pairs), else null and they are encoded here. Throws InputError (naming the file) when an
+// input cannot be read.
 EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const SelectedPair& pair,
                             const std::string& key, const DepthImage& depth0,
                             const DepthImage& depth1, const SampleSpec& options,
-                            const occupancy::OccupancyMap* shared_map);
+                            const occupancy::OccupancyMap* shared_map,
+                            const std::string* image0 = nullptr,
+                            const std::string* image1 = nullptr);
 
 // K (row-major 3×3) of a frame's depth camera at the working resolution.
 Camera WorkingCamera(const Frame& frame, int width, int height);

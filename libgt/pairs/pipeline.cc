@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <list>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -271,8 +272,44 @@ std::optional<SceneSelection> ReadSelection(const BuildOptions& o, const std::st
   return s;
 }
 
+// Encoded colour images of one scene's frames, least recently used dropped beyond
+// max_images (a frame appears in many pairs; decoding + resizing + encoding is ~25 ms).
+class ImageCache {
+ public:
+  explicit ImageCache(size_t max_images) : max_images_(max_images) {}
+  std::shared_ptr<const std::string> Get(const Scene& scene, size_t i, const SampleSpec& spec) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      auto it = images_.find(i);
+      if (it != images_.end()) {
+        lru_.splice(lru_.begin(), lru_, it->second.second);
+        return it->second.first;
+      }
+    }
+    auto bytes = std::make_shared<const std::string>(EncodeFrameImage(scene.frames[i], spec));
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = images_.find(i);
+    if (it != images_.end()) return it->second.first;
+    lru_.push_front(i);
+    images_.emplace(i, std::make_pair(bytes, lru_.begin()));
+    while (images_.size() > max_images_) {
+      images_.erase(lru_.back());
+      lru_.pop_back();
+    }
+    return bytes;
+  }
+
+ private:
+  size_t max_images_;
+  std::mutex mutex_;
+  std::list<size_t> lru_;
+  std::map<size_t, std::pair<std::shared_ptr<const std::string>, std::list<size_t>::iterator>>
+      images_;
+};
+
 // Everything the write stage needs about one scene.
 struct SceneData {
+  std::unique_ptr<ImageCache> images = std::make_unique<ImageCache>(128);
   Scene scene;
   std::unique_ptr<DepthCache> cache;
   std::map<std::string, size_t> index_of_id;
@@ -590,8 +627,15 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
             shared = window_map.get();
           }
         }
+        std::shared_ptr<const std::string> image0, image1;
+        const Frame& f0 = d.scene.frames[i0->second];
+        const Frame& f1 = d.scene.frames[i1->second];
+        if (d.spec.image != "none" && !f0.color_path.empty() && !f1.color_path.empty()) {
+          image0 = d.images->Get(d.scene, i0->second, d.spec);
+          image1 = d.images->Get(d.scene, i1->second, d.spec);
+        }
         samples[k] = ComputeSample(d.scene, i0->second, i1->second, p, keys[start + k], *depth0,
-                                   *depth1, d.spec, shared);
+                                   *depth1, d.spec, shared, image0.get(), image1.get());
       });
       bytes_written += output->WriteShard(s, samples);
       ++shards_written;
