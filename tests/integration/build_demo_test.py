@@ -200,6 +200,35 @@ def main():
         assert np.allclose(row.reshape(3, 4), np.array(p["T_0to1"])[:3], atol=1e-5)
     assert [int(x) for x in t["name"][:, 2]] == [p["number0"] for p in lines]
 
+    # LoFTR train export (ScanNet style) of the same recipe: names and overlap scores.
+    import yaml
+    with open(recipe) as f:
+        doc = yaml.safe_load(f)
+    doc["loftr_export"] = {"kind": "train"}
+    doc["sample"]["depth"] = False
+    train_recipe = os.path.join(root, "demo-train.yaml")
+    with open(train_recipe, "w") as f:
+        yaml.safe_dump(doc, f)
+    out_t = os.path.join(root, "train")
+    common.occgt("build", train_recipe, "--out", out_t)
+    with open(os.path.join(out_t, "pairs.jsonl")) as f:
+        tlines = [json.loads(line) for line in f]
+    with open(os.path.join(out_t, "loftr", "scenes.txt")) as f:
+        scene_names = f.read().split()
+    rows = []
+    for npz in sorted(glob.glob(os.path.join(out_t, "loftr", "scene_data", "demo", "*.npz"))):
+        z = np.load(npz)
+        assert z["name"].shape[1] == 4 and z["score"].dtype == np.float32
+        for name, score in zip(z["name"], z["score"]):
+            rows.append((scene_names[int(name[0])], int(name[2]), int(name[3]), float(score)))
+    assert len(rows) == len(tlines) == 24
+    for (scene, f0, f1, score), p in zip(rows, tlines):
+        assert (scene, f0, f1) == (p["scene"], p["number0"], p["number1"])
+        sm = p["score_metrics"]
+        assert abs(score - (sm["01"]["overlap"] + sm["10"]["overlap"]) / 2) < 1e-6
+    intr = np.load(os.path.join(out_t, "loftr", "intrinsics.npz"))
+    assert intr[intr.files[0]].shape == (3, 3)
+
     # Determinism: a second run in another folder gives byte-identical outputs.
     out_b = os.path.join(root, "b")
     common.occgt("build", recipe, "--out", out_b, "--threads", "1")
