@@ -395,7 +395,7 @@ OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionO
     }
     tree.insertPointCloud(scan, octomap::point3d(origin.x(), origin.y(), origin.z()),
                           options.max_range_m > 0 ? options.max_range_m : -1.0,
-                          /*lazy_eval=*/false, /*discretize=*/true);
+                          /*lazy_eval=*/false, options.discretize);
   }
   if (impl->has_bounds) {  // one voxel of margin for rounding of ray keys
     impl->min_index -= Eigen::Vector3i::Ones();

@@ -43,6 +43,8 @@ struct FusionOptions {
   double max_range_m = 10.0;     // ray truncation (metres); <= 0 means unlimited. 10 m covers
                                  // indoor depth sensors (ScanNet/7-Scenes read < 10 m).
   bool downsample = true;        // one centroid per voxel (pcl::VoxelGrid, overflow-guarded)
+  bool discretize = true;        // OctoMap's discretized insertion (one ray per end voxel); false =
+                                 // one ray per point, the naive baseline of the benchmark (slower)
   bool remove_outliers = false;  // pcl::StatisticalOutlierRemoval after downsampling
   int outlier_k = 20;            // neighbours for the mean distance, >= 1
   double outlier_stddev = 2.0;   // reject mean distance > mean + stddev * sigma, > 0
