@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <valijson/adapters/nlohmann_json_adapter.hpp>
 #include <valijson/schema.hpp>
 #include <valijson/schema_parser.hpp>
@@ -213,8 +214,8 @@ json YamlToJson(const std::string& yaml_text, const std::string& file) {
 }
 
 std::string ValidateRecipeJson(const json& recipe) {
-  static const valijson::Schema* schema = [] {
-    auto* s = new valijson::Schema();  // lives for the whole process
+  static const std::unique_ptr<valijson::Schema> schema = [] {
+    auto s = std::make_unique<valijson::Schema>();
     valijson::SchemaParser parser(valijson::SchemaParser::kDraft7);
     valijson::adapters::NlohmannJsonAdapter adapter(SchemaJson());
     parser.populateSchema(adapter, *s);
