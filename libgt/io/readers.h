@@ -9,7 +9,8 @@
 
 namespace gt::io {
 
-// ScanNet, Python SensReader export: color/, depth/, pose/, intrinsic/ (scannet.cc).
+// ScanNet, SensReader exports: Python (color/, depth/, pose/, intrinsic/) or C++
+// (frame-XXXXXX.{color.jpg,depth.pgm,pose.txt} + _info.txt) (scannet.cc).
 class ScanNetReader : public DatasetReader {
  public:
   explicit ScanNetReader(const ReaderOptions& options) : options_(options) {}
@@ -18,6 +19,7 @@ class ScanNetReader : public DatasetReader {
   Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
 
  private:
+  Scene ReadCppExport(const std::string& folder, const std::string& scene_name) const;
   ReaderOptions options_;
 };
 

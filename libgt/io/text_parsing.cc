@@ -45,10 +45,13 @@ Eigen::Matrix3d ReadIntrinsicsText(const std::string& path) {
                                std::to_string(count) + " numbers");
   }
   const int n = count == 9 ? 3 : 4;
-  const Eigen::Matrix3d K = ReadMatrixText(path, n, n).topLeftCorner<3, 3>();
+  return CheckedIntrinsics(ReadMatrixText(path, n, n).topLeftCorner<3, 3>(), path);
+}
+
+Eigen::Matrix3d CheckedIntrinsics(const Eigen::Matrix3d& K, const std::string& where) {
   if (!K.allFinite() || !(K(0, 0) > 0) || !(K(1, 1) > 0) || K(2, 0) != 0 || K(2, 1) != 0 ||
       K(2, 2) != 1) {
-    throw InputError(path, "expected K = [[fx 0 cx] [0 fy cy] [0 0 1]] with finite fx, fy > 0");
+    throw InputError(where, "expected K = [[fx 0 cx] [0 fy cy] [0 0 1]] with finite fx, fy > 0");
   }
   return K;
 }

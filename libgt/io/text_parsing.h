@@ -28,6 +28,9 @@ Eigen::MatrixXd ReadMatrixText(const std::string& path, int rows, int cols);
 // K from a 3x3 or 4x4 (top-left 3x3 used) text file; a malformed K (non-finite, fx/fy <= 0,
 // bottom row not [0 0 1]) is InputError naming the file.
 Eigen::Matrix3d ReadIntrinsicsText(const std::string& path);
+// The K check of ReadIntrinsicsText for a K parsed elsewhere: throws InputError(where, ...)
+// unless K is finite with fx, fy > 0 and bottom row [0 0 1]; returns K.
+Eigen::Matrix3d CheckedIntrinsics(const Eigen::Matrix3d& K, const std::string& where);
 
 // A text line split off a list file: its 1-based line number and numbers/tokens.
 struct TextRecord {

@@ -160,5 +160,94 @@ TEST(ScanNet, DepthSizeFromPngAndColourIntrinsicsFile) {
   }
 }
 
+// The C++ SensReader export: frame-XXXXXX.{color.jpg,depth.pgm,pose.txt} + _info.txt, K and
+// sizes from _info.txt, depth in units of 1/m_depthShift metres, lost tracking skipped.
+void WriteCppExport(const std::string& dir, const std::string& info) {
+  const std::string pose = "1 0 0 0.5\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  WriteFileAtomic(dir + "/frame-000000.pose.txt", pose);
+  WriteFileAtomic(
+      dir + "/frame-000001.pose.txt",
+      "-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n");
+  WriteFileAtomic(dir + "/frame-000002.pose.txt", pose);
+  WriteFileAtomic(dir + "/_info.txt", info);
+  cv::Mat depth(24, 32, CV_16UC1, cv::Scalar(3000));
+  depth.at<uint16_t>(2, 7) = 0;
+  ASSERT_TRUE(cv::imwrite(dir + "/frame-000000.depth.pgm", depth));
+  ASSERT_TRUE(cv::imwrite(dir + "/frame-000001.depth.pgm", depth));
+  ASSERT_TRUE(
+      cv::imwrite(dir + "/frame-000000.color.jpg", cv::Mat(48, 64, CV_8UC3, cv::Scalar(9))));
+}
+
+const char* kCppInfo =
+    "m_versionNumber = 4\n"
+    "m_sensorName = StructureSensor\n"
+    "m_colorWidth = 64\n"
+    "m_colorHeight = 48\n"
+    "m_depthWidth = 32\n"
+    "m_depthHeight = 24\n"
+    "m_depthShift = 2000\n"
+    "m_calibrationColorIntrinsic = 60 0 31.5 0 0 61 23.5 0 0 0 1 0 0 0 0 1 \n"
+    "m_calibrationColorExtrinsic = 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1 \n"
+    "m_calibrationDepthIntrinsic = 30 0 15.5 0 0 30.5 11.5 0 0 0 1 0 0 0 0 1 \n"
+    "m_calibrationDepthExtrinsic = 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1 \n"
+    "m_frames.size = 3\n";
+
+TEST(ScanNet, CppExporterLayout) {
+  const std::string root = test::ScratchDir("sn_cpp");
+  const std::string dir = root + "/scene0001_00";
+  WriteCppExport(dir, kCppInfo);
+  const auto reader = MakeReader("scannet");
+  ASSERT_EQ(reader->ListScenes(root), std::vector<std::string>{"scene0001_00"});
+  const Scene s = reader->ReadScene(root, "scene0001_00");
+  ASSERT_EQ(s.frames.size(), 3u);
+  EXPECT_EQ(s.frames[0].id, "000000");
+  EXPECT_EQ(s.frames[2].number, 2);
+  EXPECT_TRUE(s.frames[0].usable);
+  EXPECT_FALSE(s.frames[1].usable);  // -inf pose: lost tracking
+  EXPECT_NE(s.frames[1].unusable_reason.find("pose"), std::string::npos);
+  EXPECT_FALSE(s.frames[2].usable);  // no depth file
+  EXPECT_EQ(s.frames[2].unusable_reason, "depth: missing file");
+  const Frame& f = s.frames[0];
+  EXPECT_EQ(f.depth_camera.width, 32);
+  EXPECT_EQ(f.depth_camera.height, 24);
+  EXPECT_EQ(f.depth_camera.fx, 30.0);
+  EXPECT_EQ(f.depth_camera.fy, 30.5);
+  EXPECT_EQ(f.depth_camera.cx, 15.5);
+  EXPECT_EQ(f.depth_camera.cy, 11.5);
+  EXPECT_EQ(f.color_path, dir + "/frame-000000.color.jpg");
+  EXPECT_EQ(f.color_camera.width, 64);
+  EXPECT_EQ(f.color_camera.fx, 60.0);
+  EXPECT_EQ(f.color_camera.cy, 23.5);
+  EXPECT_TRUE(s.frames[2].color_path.empty());
+  EXPECT_EQ(f.world_from_cam.translation().x(), 0.5);
+  const DepthImage d = ReadDepth(f.depth, 32, 24);
+  EXPECT_FLOAT_EQ(d.at(0, 0), 1.5f);  // 3000 / m_depthShift 2000
+  EXPECT_EQ(d.at(7, 2), 0.0f);
+}
+
+TEST(ScanNet, CppExporterBadInfo) {
+  const std::string dir = test::ScratchDir("sn_cpp_bad");
+  std::string info = kCppInfo;
+  WriteCppExport(dir, info.substr(0, info.find("m_depthShift")) +
+                          info.substr(info.find("m_calibrationColorIntrinsic")));
+  ExpectErrorWhere(dir, dir + "/_info.txt", "m_depthShift: missing");
+  WriteFileAtomic(dir + "/_info.txt",
+                  "m_depthWidth = 32\nm_depthHeight = 24\nm_depthShift = 1000\n"
+                  "m_calibrationDepthIntrinsic = 30 0 15.5 0 30 11.5 0 0 1\n");
+  ExpectErrorWhere(dir, dir + "/_info.txt:4", "expected 16 (4x4) or 12 (3x4) numbers, found 9");
+  WriteFileAtomic(dir + "/_info.txt",
+                  "m_depthWidth = 32\nm_depthHeight = 24\nm_depthShift = 1000\n"
+                  "m_calibrationDepthIntrinsic = 0 0 15.5 0 0 30 11.5 0 0 0 1 0\n");
+  ExpectErrorWhere(dir, dir + "/_info.txt:4 m_calibrationDepthIntrinsic", "expected K");
+  WriteFileAtomic(dir + "/_info.txt",
+                  "m_depthWidth = -3\nm_depthHeight = 24\nm_depthShift = 1000\n"
+                  "m_calibrationDepthIntrinsic = 30 0 15.5 0 0 30 11.5 0 0 0 1 0\n");
+  ExpectErrorWhere(dir, dir + "/_info.txt:1", "positive integer");
+  WriteFileAtomic(dir + "/_info.txt",
+                  "m_depthWidth = 32\nm_depthHeight = 24\nm_depthShift = nan\n"
+                  "m_calibrationDepthIntrinsic = 30 0 15.5 0 0 30 11.5 0 0 0 1 0\n");
+  ExpectErrorWhere(dir, dir + "/_info.txt:3", "m_depthShift");
+}
+
 }  // namespace
 }  // namespace gt::io
