@@ -87,7 +87,15 @@ std::vector<NumberedFile> ListNumberedFiles(const std::string& folder, const std
         !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) {
       continue;
     }
-    if (!entry.is_regular_file(ec)) continue;
+    // A frame file that cannot be read (a folder, a dangling or looping link, a socket) is
+    // an error, never a silently missing frame.
+    if (!entry.is_regular_file(ec)) {
+      std::error_code lec;
+      const bool dangling = entry.is_symlink(lec) && !fs::exists(entry.path(), lec);
+      throw InputError(entry.path().string(),
+                       dangling ? "dangling symbolic link (expected a readable file)"
+                                : "expected a regular file, found a folder or special file");
+    }
     NumberedFile f;
     f.number = std::stoll(digits);
     f.stem = digits;
@@ -97,6 +105,14 @@ std::vector<NumberedFile> ListNumberedFiles(const std::string& folder, const std
   std::sort(out.begin(), out.end(), [](const NumberedFile& a, const NumberedFile& b) {
     return a.number != b.number ? a.number < b.number : a.stem < b.stem;
   });
+  // "1.txt" and "01.txt" would be two frames with the same number: refuse to guess.
+  for (size_t i = 1; i < out.size(); ++i) {
+    if (out[i].number == out[i - 1].number) {
+      throw InputError(folder, "files " + fs::path(out[i - 1].path).filename().string() + " and " +
+                                   fs::path(out[i].path).filename().string() +
+                                   " both give frame number " + std::to_string(out[i].number));
+    }
+  }
   return out;
 }
 
