@@ -163,6 +163,9 @@ std::vector<std::string> GenericReader::ListScenes(const std::string& root) cons
 
 Scene GenericReader::ReadScene(const std::string& root, const std::string& scene_name) const {
   RequireRoot(root);
+  if (std::string e = CheckSceneName(scene_name); !e.empty()) {
+    throw InputError("scene '" + scene_name + "'", e);
+  }
   std::string manifest = SingleManifest(root);
   if (manifest.empty() ||
       (!scene_name.empty() && FileExists((fs::path(root) / scene_name / kManifestName).string()))) {

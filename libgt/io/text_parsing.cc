@@ -143,11 +143,27 @@ std::string FolderName(const std::string& path) {
   return name;
 }
 
+std::string CheckSceneName(const std::string& name) {
+  if (name.empty()) return "";
+  if (name.front() == '/') return "expected a scene name relative to the dataset root, got an absolute path";
+  size_t start = 0;
+  while (start <= name.size()) {
+    size_t slash = name.find('/', start);
+    if (slash == std::string::npos) slash = name.size();
+    if (name.compare(start, slash - start, "..") == 0 && slash - start == 2) {
+      return "expected a scene name inside the dataset root (no '..' components)";
+    }
+    start = slash + 1;
+  }
+  return "";
+}
+
 std::string ResolveSceneFolder(const std::string& root, const std::string& name,
                                bool root_is_scene) {
   RequireRoot(root);
   if (root_is_scene && (name.empty() || name == FolderName(root))) return root;
   if (name.empty()) throw InputError(root, "not a scene folder and no scene name given");
+  if (std::string e = CheckSceneName(name); !e.empty()) throw InputError("scene '" + name + "'", e);
   const std::string folder = (fs::path(root) / name).string();
   std::error_code ec;
   if (!fs::is_directory(folder, ec)) throw InputError(folder, "scene folder not found");
