@@ -113,7 +113,7 @@ json ParseManifest(const std::string& path) {
   const std::string bytes = ReadFileBytes(path);
   try {
     return json::parse(bytes);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for 1e999
     throw InputError(path, std::string("invalid JSON: ") + e.what());
   }
 }
