@@ -16,6 +16,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/io/files.h"
+#include "libgt/io/image.h"
 #include "libgt/io/npy.h"
 
 namespace gt::io {
@@ -57,7 +58,11 @@ DepthImage ReadPng16Depth(const DepthSource& src) {
   if (!(src.scale_m_per_unit > 0) || !std::isfinite(src.scale_m_per_unit)) {
     throw InputError(src.path, "depth scale must be a positive number of metres per unit");
   }
-  const cv::Mat m = cv::imread(src.path, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+  const std::string bytes = ReadFileBytes(src.path);
+  if (std::string e = PngDamage(bytes); !e.empty()) throw InputError(src.path, e);
+  const cv::Mat m = cv::imdecode(
+      cv::Mat(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data())),
+      cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
   if (m.empty()) throw InputError(src.path, "cannot decode image (corrupt or unsupported)");
   if (m.type() != CV_16UC1) {
     throw InputError(src.path, "expected a 16-bit single-channel depth image, got OpenCV type " +

@@ -24,11 +24,42 @@ ColorImage FromRgbMat(const cv::Mat& rgb) {
   return out;
 }
 
+uint32_t BigEndian32At(std::string_view b, size_t i) {
+  return (static_cast<uint32_t>(static_cast<unsigned char>(b[i])) << 24) |
+         (static_cast<uint32_t>(static_cast<unsigned char>(b[i + 1])) << 16) |
+         (static_cast<uint32_t>(static_cast<unsigned char>(b[i + 2])) << 8) |
+         static_cast<uint32_t>(static_cast<unsigned char>(b[i + 3]));
+}
+
 }  // namespace
+
+std::string PngDamage(std::string_view bytes) {
+  static constexpr char kSignature[] = "\x89PNG\r\n\x1a\n";
+  if (bytes.size() < 8 || bytes.compare(0, 8, std::string_view(kSignature, 8)) != 0) return "";
+  size_t pos = 8;
+  while (true) {
+    if (bytes.size() - pos < 12) {
+      return "truncated PNG (file ends at byte " + std::to_string(bytes.size()) +
+             " before the IEND chunk)";
+    }
+    const uint64_t length = BigEndian32At(bytes, pos);
+    const std::string_view type = bytes.substr(pos + 4, 4);
+    if (length > bytes.size() - pos - 12) {
+      return "truncated PNG (chunk '" + std::string(type) + "' at byte " + std::to_string(pos) +
+             " needs " + std::to_string(length) + " data bytes past the end of the file)";
+    }
+    pos += 12 + length;
+    if (type == "IEND") return "";
+  }
+}
 
 ColorImage ReadColor(const std::string& path) {
   if (!FileExists(path)) throw InputError(path, "cannot open file (missing or unreadable)");
-  cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
+  const std::string bytes = ReadFileBytes(path);
+  if (std::string e = PngDamage(bytes); !e.empty()) throw InputError(path, e);
+  cv::Mat m = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8U,
+                                    const_cast<char*>(bytes.data())),
+                           cv::IMREAD_UNCHANGED);
   if (m.empty()) throw InputError(path, "cannot decode image (corrupt or unsupported)");
   if (m.depth() == CV_16U) {
     m.convertTo(m, CV_8U, 1.0 / 257.0);
