@@ -169,6 +169,9 @@ def check_case(spec, case_dir):
     else:
         fail(cid, f"unknown expect.kind {kind}")
         return
+    for rel in expect.get("absent", []):
+        if os.path.lexists(os.path.join(case_dir, rel)):
+            fail(cid, f"{rel} exists after the failure")
     leftovers = tmp_files(case_dir)
     if leftovers:
         fail(cid, f"*.tmp left behind: {leftovers}")
