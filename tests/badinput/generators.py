@@ -366,7 +366,7 @@ def op_npy_array(case, m):
 
 
 def op_npz(case, m):
-    """A .npz with members {name: {"shape", "dtype", "value"}}, or raw bytes when "raw"."""
+    """A .npz with members {name: {"shape", "dtype", "value"}} (arrays filled with value)."""
     members = {k: np.full(v["shape"], v.get("value", 0), dtype=np.dtype(v["dtype"]))
                for k, v in m["members"].items()}
     write_bytes(os.path.join(case, m["path"]), npz_bytes(members))

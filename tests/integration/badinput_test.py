@@ -323,7 +323,6 @@ def main():
             fail(spec["id"], f"generator failed: {type(e).__name__}: {e}")
             continue
         check_case(spec, case_dir)
-        # restore permissions-independent cleanup for the next run
     if not only:
         check_escape(cache)
     areas = {}
