@@ -108,7 +108,9 @@ std::string PickChannel(const std::vector<std::string>& names, const std::string
   return names.size() == 1 ? names[0] : "";
 }
 
-DepthImage ReadExrDepth(const DepthSource& src) {
+// The data window is checked against the expected size (when given) and a pixel cap
+// before the float buffer is allocated: a 1 KB file may claim 65536x65536 (16 GB).
+DepthImage ReadExrDepth(const DepthSource& src, int expected_width, int expected_height) {
   if (!FileExists(src.path)) throw InputError(src.path, "cannot open file (missing or unreadable)");
   try {
     Imf::InputFile file(src.path.c_str());
@@ -129,8 +131,17 @@ DepthImage ReadExrDepth(const DepthSource& src) {
     const Imath::Box2i dw = header.dataWindow();
     const int width = dw.max.x - dw.min.x + 1;
     const int height = dw.max.y - dw.min.y + 1;
-    if (width <= 0 || height <= 0 || width > 1 << 16 || height > 1 << 16) {
-      throw InputError(src.path, "EXR data window has an empty or implausible size");
+    if (expected_width > 0 && expected_height > 0 &&
+        (width != expected_width || height != expected_height)) {
+      throw InputError(src.path, "depth is " + std::to_string(width) + "x" +
+                                     std::to_string(height) + ", expected " +
+                                     std::to_string(expected_width) + "x" +
+                                     std::to_string(expected_height));
+    }
+    if (width <= 0 || height <= 0 || width > 1 << 16 || height > 1 << 16 ||
+        static_cast<int64_t>(width) * height > (int64_t{1} << 28)) {
+      throw InputError(src.path, "EXR data window " + std::to_string(width) + "x" +
+                                     std::to_string(height) + " is empty or implausibly large");
     }
     std::vector<float> values(static_cast<size_t>(width) * height, 0.0f);
     Imf::FrameBuffer fb;
@@ -164,7 +175,7 @@ DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected
       d = ReadPng16Depth(source);
       break;
     case DepthFormat::kExr:
-      d = ReadExrDepth(source);
+      d = ReadExrDepth(source, expected_width, expected_height);
       break;
   }
   if (expected_width > 0 && expected_height > 0 &&

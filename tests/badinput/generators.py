@@ -67,8 +67,10 @@ def npy_bytes(header, data=b""):
     return b"\x93NUMPY\x01\x00" + struct.pack("<H", len(h)) + h + data
 
 
-def exr_bytes(width, height, channels, value=2.0):
-    """Minimal uncompressed scanline OpenEXR with FLOAT channels (one line per block)."""
+def exr_bytes(width, height, channels, value=2.0, header_only=False):
+    """Minimal uncompressed scanline OpenEXR with FLOAT channels (one line per block);
+    `header_only`: the header and an all-zero line offset table, no pixels (a data window
+    the file does not hold)."""
     def attr(name, type_name, payload):
         return name.encode() + b"\0" + type_name.encode() + b"\0" + struct.pack("<i", len(payload)) + payload
 
@@ -85,6 +87,8 @@ def exr_bytes(width, height, channels, value=2.0):
               attr("pixelAspectRatio", "float", struct.pack("<f", 1.0)) +
               attr("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0)) +
               attr("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
+    if header_only:
+        return header + b"\0" * (8 * height)
     line = b"".join(struct.pack("<f", value) * width for _ in names)
     start = len(header) + 8 * height
     block = 8 + len(line)
@@ -404,7 +408,8 @@ def op_png8(case, m):
 
 def op_exr(case, m):
     write_bytes(os.path.join(case, m["path"]),
-                exr_bytes(m["width"], m["height"], m["channels"], m.get("value", 2.0)))
+                exr_bytes(m["width"], m["height"], m["channels"], m.get("value", 2.0),
+                          m.get("header_only", False)))
 
 
 def op_mkdirs(case, m):
