@@ -53,12 +53,25 @@ DepthImage ReadNpyDepth(const DepthSource& src) {
   return d;
 }
 
-DepthImage ReadPng16Depth(const DepthSource& src) {
+bool PngSize(const std::string& head, ImageSize* size);  // below
+
+// The IHDR size is compared with the expected size (when given) before decoding, so a
+// small PNG claiming 30000x30000 is refused without a gigabyte buffer or libpng's
+// "Not enough image data" line on stderr.
+DepthImage ReadPng16Depth(const DepthSource& src, int expected_width, int expected_height) {
   if (!FileExists(src.path)) throw InputError(src.path, "cannot open file (missing or unreadable)");
   if (!(src.scale_m_per_unit > 0) || !std::isfinite(src.scale_m_per_unit)) {
     throw InputError(src.path, "depth scale must be a positive number of metres per unit");
   }
   const std::string bytes = ReadFileBytes(src.path);
+  ImageSize header_size;
+  if (expected_width > 0 && expected_height > 0 && PngSize(bytes.substr(0, 32), &header_size) &&
+      (header_size.width != expected_width || header_size.height != expected_height)) {
+    throw InputError(src.path, "depth is " + std::to_string(header_size.width) + "x" +
+                                   std::to_string(header_size.height) + ", expected " +
+                                   std::to_string(expected_width) + "x" +
+                                   std::to_string(expected_height));
+  }
   if (std::string e = PngDamage(bytes); !e.empty()) throw InputError(src.path, e);
   const cv::Mat m = cv::imdecode(
       cv::Mat(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data())),
@@ -172,7 +185,7 @@ DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected
       d = ReadNpyDepth(source);
       break;
     case DepthFormat::kPng16:
-      d = ReadPng16Depth(source);
+      d = ReadPng16Depth(source, expected_width, expected_height);
       break;
     case DepthFormat::kExr:
       d = ReadExrDepth(source, expected_width, expected_height);

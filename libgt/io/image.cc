@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "libgt/core/error.h"
+#include "libgt/io/depth_io.h"
 #include "libgt/io/files.h"
 
 namespace gt::io {
@@ -37,6 +38,7 @@ std::string PngDamage(std::string_view bytes) {
   static constexpr char kSignature[] = "\x89PNG\r\n\x1a\n";
   if (bytes.size() < 8 || bytes.compare(0, 8, std::string_view(kSignature, 8)) != 0) return "";
   size_t pos = 8;
+  uint64_t width = 0, height = 0, bits_per_pixel = 0, idat_bytes = 0;
   while (true) {
     if (bytes.size() - pos < 12) {
       return "truncated PNG (file ends at byte " + std::to_string(bytes.size()) +
@@ -48,9 +50,27 @@ std::string PngDamage(std::string_view bytes) {
       return "truncated PNG (chunk '" + std::string(type) + "' at byte " + std::to_string(pos) +
              " needs " + std::to_string(length) + " data bytes past the end of the file)";
     }
+    if (type == "IHDR" && length >= 13) {
+      width = BigEndian32At(bytes, pos + 8);
+      height = BigEndian32At(bytes, pos + 12);
+      const auto bit_depth = static_cast<unsigned char>(bytes[pos + 16]);
+      const auto colour_type = static_cast<unsigned char>(bytes[pos + 17]);
+      static const int kChannels[7] = {1, 0, 3, 1, 2, 0, 4};  // by PNG colour type
+      bits_per_pixel = colour_type < 7 ? uint64_t{bit_depth} * kChannels[colour_type] : 0;
+    } else if (type == "IDAT") {
+      idat_bytes += length;
+    }
     pos += 12 + length;
-    if (type == "IEND") return "";
+    if (type == "IEND") break;
   }
+  // Deflate compresses at most ~1032:1, so less IDAT data than raw / 1032 cannot hold the
+  // image (libpng would print "Not enough image data" after a full-size allocation).
+  const uint64_t raw_bytes = height * ((width * bits_per_pixel + 7) / 8);
+  if (raw_bytes / 1032 > idat_bytes + 64) {
+    return "PNG image data too short (" + std::to_string(idat_bytes) + " compressed bytes for " +
+           std::to_string(width) + "x" + std::to_string(height) + ")";
+  }
+  return "";
 }
 
 ColorImage ReadColor(const std::string& path) {
@@ -96,6 +116,15 @@ ColorImage ResizeColorBilinear(const ColorImage& image, int new_width, int new_h
 
 ColorImage ReadColorResized(const std::string& path, const Camera& camera, int new_width,
                             int new_height, Camera* resized_camera) {
+  if (camera.width > 0 && FileExists(path)) {  // header size first: no decode of a wrong file
+    const ImageSize header = ReadImageSize(path);
+    if (header.width != camera.width || header.height != camera.height) {
+      std::ostringstream s;
+      s << "colour image is " << header.width << "x" << header.height << ", expected "
+        << camera.width << "x" << camera.height;
+      throw InputError(path, s.str());
+    }
+  }
   ColorImage image = ReadColor(path);
   if (camera.width > 0 && (image.width != camera.width || image.height != camera.height)) {
     std::ostringstream s;

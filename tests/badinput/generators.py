@@ -97,6 +97,17 @@ def exr_bytes(width, height, channels, value=2.0, header_only=False):
     return header + offsets + blocks
 
 
+def png_claim_bytes(width, height, bit_depth=16):
+    """A structurally complete greyscale PNG whose IHDR claims width x height but whose
+    IDAT holds only a few bytes of image data."""
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data +
+                struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+    ihdr = struct.pack(">IIBBBBB", width, height, bit_depth, 0, 0, 0, 0)
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) +
+            chunk(b"IDAT", zlib.compress(b"\0" * 16)) + chunk(b"IEND", b""))
+
+
 def npz_bytes(members):
     """A stored .npz (zip) of {name: numpy array}, written with Python's zipfile."""
     import io
@@ -400,6 +411,10 @@ def op_tar_size_field(case, m):
 
 def op_png16(case, m):
     png16(os.path.join(case, m["path"]), m["width"], m["height"], m.get("value", 1000))
+
+
+def op_png_claim(case, m):
+    write_bytes(os.path.join(case, m["path"]), png_claim_bytes(m["width"], m["height"]))
 
 
 def op_png8(case, m):
