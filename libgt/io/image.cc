@@ -73,10 +73,45 @@ std::string PngDamage(std::string_view bytes) {
   return "";
 }
 
+std::string JpegDamage(std::string_view bytes) {
+  const auto at = [&](size_t i) { return static_cast<unsigned char>(bytes[i]); };
+  if (bytes.size() < 2 || at(0) != 0xFF || at(1) != 0xD8) return "";
+  const std::string truncated = "truncated JPEG (no end-of-image marker in " +
+                                std::to_string(bytes.size()) + " bytes)";
+  size_t pos = 2;
+  while (true) {
+    // A marker: 0xFF (fill bytes allowed), then its code.
+    if (pos >= bytes.size() || at(pos) != 0xFF) return truncated;
+    while (pos < bytes.size() && at(pos) == 0xFF) ++pos;
+    if (pos >= bytes.size()) return truncated;
+    const unsigned char marker = at(pos++);
+    if (marker == 0xD9) return "";  // EOI
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) continue;  // no length
+    if (bytes.size() - pos < 2) return truncated;
+    const size_t length = (static_cast<size_t>(at(pos)) << 8) | at(pos + 1);
+    if (length < 2 || length > bytes.size() - pos) return truncated;
+    pos += length;
+    if (marker != 0xDA) continue;
+    // Entropy-coded data after SOS: runs to the next marker other than a stuffed 0xFF00
+    // or a restart marker.
+    while (true) {
+      if (bytes.size() - pos < 2) return truncated;
+      if (at(pos) == 0xFF) {
+        const unsigned char next = at(pos + 1);
+        if (next != 0x00 && next != 0xFF && !(next >= 0xD0 && next <= 0xD7)) break;
+        pos += next == 0xFF ? 1 : 2;
+      } else {
+        ++pos;
+      }
+    }
+  }
+}
+
 ColorImage ReadColor(const std::string& path) {
   if (!FileExists(path)) throw InputError(path, "cannot open file (missing or unreadable)");
   const std::string bytes = ReadFileBytes(path);
   if (std::string e = PngDamage(bytes); !e.empty()) throw InputError(path, e);
+  if (std::string e = JpegDamage(bytes); !e.empty()) throw InputError(path, e);
   cv::Mat m = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8U,
                                     const_cast<char*>(bytes.data())),
                            cv::IMREAD_UNCHANGED);

@@ -32,6 +32,10 @@ struct ColorImage {
 // Checked before decoding so that a cut file is one clear InputError and libpng never
 // prints its own "libpng error: Read Error" line on stderr.
 std::string PngDamage(std::string_view bytes);
+// "" when `bytes` are not a JPEG or one whose scan data reaches the EOI marker (segments
+// walked by their lengths, entropy-coded data scanned for the next marker); else the
+// problem ("truncated JPEG (...)"). OpenCV decodes a cut JPEG silently, grey below the cut.
+std::string JpegDamage(std::string_view bytes);
 
 // Decodes an image file; InputError naming the file when missing or undecodable.
 ColorImage ReadColor(const std::string& path);

@@ -417,6 +417,14 @@ def op_png_claim(case, m):
     write_bytes(os.path.join(case, m["path"]), png_claim_bytes(m["width"], m["height"]))
 
 
+def op_jpeg(case, m):
+    """A noisy RGB JPEG (quality 90; `progressive` optional)."""
+    p = os.path.join(case, m["path"])
+    os.makedirs(os.path.dirname(p), exist_ok=True)
+    rgb = (np.random.RandomState(0).rand(m["height"], m["width"], 3) * 255).astype(np.uint8)
+    Image.fromarray(rgb).save(p, quality=90, progressive=m.get("progressive", False))
+
+
 def op_png8(case, m):
     png8(os.path.join(case, m["path"]), m["width"], m["height"], m.get("channels", 1))
 
