@@ -229,42 +229,55 @@ def check_readme(cases):
         fail("README", f"README lists {cid}, which is not in cases.json")
 
 
-def check_escape(cache):
-    """Hostile scene folder names build with sanitised member names, all inside --out,
-    also when --out is a symlink."""
-    root = common.scratch("badinput/_escape")
-    generators.base_generic(root, common.occgt, cache)
+ESCAPES = [
+    # (base, reader format, scene folder under data/, hostile new name)
+    ("generic", "generic", "synth_000", "a\x07b..c"),
+    ("scannet", "scannet", "scene0000_00", "scene\x1b[31m..x y"),
+    ("tum", "tum", "rgbd_dataset_freiburg1_xyz", "fr1\t..\u00e9"),
+]
+
+
+def check_escape(cache, base, fmt, folder, hostile):
+    """A hostile scene folder name builds with sanitised member and file names, all
+    inside --out, also when --out is a symlink."""
+    tag = f"escape/{base}"
+    root = common.scratch(f"badinput/_escape_{base}")
+    generators.BASES[base](root, common.occgt, cache)
     data = os.path.join(root, "data")
-    # Generic subfolder scenes named with a control character and with dots.
-    os.rename(os.path.join(data, "synth_000"), os.path.join(data, "a\x07b..c"))
+    os.rename(os.path.join(data, folder), os.path.join(data, hostile))
+    generators.write_text(os.path.join(root, "recipe.yaml"),
+                          generators.RECIPE.replace("format: generic", f"format: {fmt}"))
+    if base == "scannet":
+        shutil.rmtree(os.path.join(root, "outside"))
     real_out = os.path.join(root, "real_out")
     os.makedirs(real_out)
     os.symlink(real_out, os.path.join(root, "out"))
     before = set(os.listdir(root))
     r, _ = run(["build", os.path.join(root, "recipe.yaml"), "--out", os.path.join(root, "out")])
     if r.returncode != 0:
-        fail("escape", f"build over a hostile scene name failed: {r.stderr}")
+        fail(tag, f"build over a hostile scene name failed: {r.stderr}")
         return
     if set(os.listdir(root)) != before:
-        fail("escape", f"build wrote next to --out: {set(os.listdir(root)) - before}")
+        fail(tag, f"build wrote next to --out: {set(os.listdir(root)) ^ before}")
     if not os.path.islink(os.path.join(root, "out")):
-        fail("escape", "--out symlink was replaced")
+        fail(tag, "--out symlink was replaced")
     tars = [n for n in os.listdir(real_out) if n.endswith(".tar")]
     if not tars:
-        fail("escape", "no shard written")
+        fail(tag, "no shard written")
     for t in tars:
         with tarfile.open(os.path.join(real_out, t)) as tar:
             for m in tar.getmembers():
                 n = m.name
                 if (n.startswith("/") or ".." in n.split("/") or
-                        any(ord(c) < 0x20 or ord(c) >= 0x7f for c in n) or "." in n.split("/")[0]):
-                    fail("escape", f"{t}: unsafe member name {n!r}")
-    for sel in os.listdir(os.path.join(real_out, "selection")):
-        if any(ord(c) < 0x20 for c in sel) or ".." in sel:
-            fail("escape", f"unsafe selection file name {sel!r}")
+                        any(ord(c) < 0x21 or ord(c) >= 0x7f for c in n) or "." in n.split("/")[0]):
+                    fail(tag, f"{t}: unsafe member name {n!r}")
+    for dirpath, dirnames, filenames in os.walk(real_out):
+        for n in dirnames + filenames:
+            if any(ord(c) < 0x20 for c in n) or n in ("..", "."):
+                fail(tag, f"unsafe output file name {os.path.join(dirpath, n)!r}")
     r, _ = run(["validate", os.path.join(root, "out")])
     if r.returncode != 0:
-        fail("escape", f"validate of the symlinked --out failed: {r.stdout}{r.stderr}")
+        fail(tag, f"validate of the symlinked --out failed: {r.stdout}{r.stderr}")
 
 
 def expected_text(e):
@@ -324,7 +337,8 @@ def main():
             continue
         check_case(spec, case_dir)
     if not only:
-        check_escape(cache)
+        for escape in ESCAPES:
+            check_escape(cache, *escape)
     areas = {}
     for c in cases:
         areas[c["area"]] = areas.get(c["area"], 0) + 1
