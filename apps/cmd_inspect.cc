@@ -61,8 +61,10 @@ void RunInspectPair(const InspectPairArgs& a) {
     }
     gt::report::ComputePairOptions o;
     o.preset = a.preset;
-    if (std::sscanf(a.resolution.c_str(), "%dx%d", &o.width, &o.height) != 2) {
-      throw gt::InputError("--resolution", "expected WxH, e.g. 640x480");
+    char extra = 0;
+    if (std::sscanf(a.resolution.c_str(), "%dx%d%c", &o.width, &o.height, &extra) != 2 ||
+        o.width < 1 || o.height < 1 || o.width > 8192 || o.height > 8192) {
+      throw gt::InputError("--resolution", "expected WxH with integers in 1..8192, e.g. 640x480");
     }
     o.occupancy = !a.no_occupancy;
     pair = gt::report::ComputePairFromScene(a.root, a.format, a.scene, a.frames.substr(0, comma),

@@ -42,8 +42,9 @@ std::pair<int, int> ParseResolution(const std::string& s) {
   int w = 0, h = 0;
   char x = 0, extra = 0;
   std::istringstream in(s);
-  if (!(in >> w >> x >> h) || x != 'x' || (in >> extra) || w <= 1 || h <= 1) {
-    throw gt::InputError("--resolution", "expected WxH with integers >= 2, got '" + s + "'");
+  if (!(in >> w >> x >> h) || x != 'x' || (in >> extra) || w <= 1 || h <= 1 || w > 8192 ||
+      h > 8192) {
+    throw gt::InputError("--resolution", "expected WxH with integers in 2..8192, got '" + s + "'");
   }
   return {w, h};
 }

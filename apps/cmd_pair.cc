@@ -38,8 +38,12 @@ std::pair<int, int> ParseResolution(const std::string& s) {
   int w = 0, h = 0;
   char x = 0, extra = 0;
   std::istringstream in(s);
-  if (!(in >> w >> x >> h) || x != 'x' || (in >> extra) || w <= 0 || h <= 0) {
-    throw gt::InputError("--resolution", "expected WxH with positive integers, got '" + s + "'");
+  // Same bounds as a recipe's resolution: a typo such as 60000x60000 must not become a
+  // multi-gigabyte allocation (std::bad_alloc).
+  if (!(in >> w >> x >> h) || x != 'x' || (in >> extra) || w <= 0 || h <= 0 || w > 8192 ||
+      h > 8192) {
+    throw gt::InputError("--resolution",
+                         "expected WxH with integers in 1..8192, got '" + s + "'");
   }
   return {w, h};
 }

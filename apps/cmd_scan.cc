@@ -1,6 +1,7 @@
 // occgt scan ROOT --format F [--scene NAME] [--json] [--check-depth]: lists the scenes of
 // a dataset root with frame counts, unusable frames by reason, depth size and K
 // (docs/CLI.md; JSON output follows schemas/scan.schema.json).
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -79,6 +80,10 @@ void PrintSceneText(const gt::io::SceneSummary& s) {
 }
 
 void RunScan(const ScanArgs& args) {
+  if (!std::isfinite(args.reader.tum_max_dt_s) || args.reader.tum_max_dt_s < 0) {
+    throw gt::InputError("--tum-max-dt", "expected a finite number of seconds >= 0, got " +
+                                             std::to_string(args.reader.tum_max_dt_s));
+  }
   const auto reader = gt::io::MakeReader(args.format, args.reader);
   std::vector<std::string> names;
   if (!args.scene.empty()) {

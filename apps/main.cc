@@ -1,5 +1,6 @@
 // occgt: ground truth and datasets for occlusion-aware image matching.
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <cstdio>
 #include <exception>
 
@@ -8,6 +9,10 @@
 #include "libgt/core/error.h"
 
 int main(int argc, char** argv) {
+  // Past a file-size limit (ulimit -f) write(2) raises SIGXFSZ, whose default action kills
+  // the process and leaves its *.tmp behind. Ignored, the write fails with EFBIG instead:
+  // the writers remove their temporary file and report one line naming it.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"occgt: ground truth and datasets for occlusion-aware image matching"};
   app.set_version_flag("--version", std::string("occgt ") + gt::kVersion);
   app.require_subcommand(1);

@@ -16,6 +16,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/io/files.h"
+#include "libgt/io/image.h"
 #include "libgt/io/npy.h"
 
 namespace gt::io {
@@ -52,12 +53,29 @@ DepthImage ReadNpyDepth(const DepthSource& src) {
   return d;
 }
 
-DepthImage ReadPng16Depth(const DepthSource& src) {
+bool PngSize(const std::string& head, ImageSize* size);  // below
+
+// The IHDR size is compared with the expected size (when given) before decoding, so a
+// small PNG claiming 30000x30000 is refused without a gigabyte buffer or libpng's
+// "Not enough image data" line on stderr.
+DepthImage ReadPng16Depth(const DepthSource& src, int expected_width, int expected_height) {
   if (!FileExists(src.path)) throw InputError(src.path, "cannot open file (missing or unreadable)");
   if (!(src.scale_m_per_unit > 0) || !std::isfinite(src.scale_m_per_unit)) {
     throw InputError(src.path, "depth scale must be a positive number of metres per unit");
   }
-  const cv::Mat m = cv::imread(src.path, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+  const std::string bytes = ReadFileBytes(src.path);
+  ImageSize header_size;
+  if (expected_width > 0 && expected_height > 0 && PngSize(bytes.substr(0, 32), &header_size) &&
+      (header_size.width != expected_width || header_size.height != expected_height)) {
+    throw InputError(src.path, "depth is " + std::to_string(header_size.width) + "x" +
+                                   std::to_string(header_size.height) + ", expected " +
+                                   std::to_string(expected_width) + "x" +
+                                   std::to_string(expected_height));
+  }
+  if (std::string e = PngDamage(bytes); !e.empty()) throw InputError(src.path, e);
+  const cv::Mat m = cv::imdecode(
+      cv::Mat(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data())),
+      cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
   if (m.empty()) throw InputError(src.path, "cannot decode image (corrupt or unsupported)");
   if (m.type() != CV_16UC1) {
     throw InputError(src.path, "expected a 16-bit single-channel depth image, got OpenCV type " +
@@ -103,7 +121,9 @@ std::string PickChannel(const std::vector<std::string>& names, const std::string
   return names.size() == 1 ? names[0] : "";
 }
 
-DepthImage ReadExrDepth(const DepthSource& src) {
+// The data window is checked against the expected size (when given) and a pixel cap
+// before the float buffer is allocated: a 1 KB file may claim 65536x65536 (16 GB).
+DepthImage ReadExrDepth(const DepthSource& src, int expected_width, int expected_height) {
   if (!FileExists(src.path)) throw InputError(src.path, "cannot open file (missing or unreadable)");
   try {
     Imf::InputFile file(src.path.c_str());
@@ -124,8 +144,17 @@ DepthImage ReadExrDepth(const DepthSource& src) {
     const Imath::Box2i dw = header.dataWindow();
     const int width = dw.max.x - dw.min.x + 1;
     const int height = dw.max.y - dw.min.y + 1;
-    if (width <= 0 || height <= 0 || width > 1 << 16 || height > 1 << 16) {
-      throw InputError(src.path, "EXR data window has an empty or implausible size");
+    if (expected_width > 0 && expected_height > 0 &&
+        (width != expected_width || height != expected_height)) {
+      throw InputError(src.path, "depth is " + std::to_string(width) + "x" +
+                                     std::to_string(height) + ", expected " +
+                                     std::to_string(expected_width) + "x" +
+                                     std::to_string(expected_height));
+    }
+    if (width <= 0 || height <= 0 || width > 1 << 16 || height > 1 << 16 ||
+        static_cast<int64_t>(width) * height > (int64_t{1} << 28)) {
+      throw InputError(src.path, "EXR data window " + std::to_string(width) + "x" +
+                                     std::to_string(height) + " is empty or implausibly large");
     }
     std::vector<float> values(static_cast<size_t>(width) * height, 0.0f);
     Imf::FrameBuffer fb;
@@ -156,10 +185,10 @@ DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected
       d = ReadNpyDepth(source);
       break;
     case DepthFormat::kPng16:
-      d = ReadPng16Depth(source);
+      d = ReadPng16Depth(source, expected_width, expected_height);
       break;
     case DepthFormat::kExr:
-      d = ReadExrDepth(source);
+      d = ReadExrDepth(source, expected_width, expected_height);
       break;
   }
   if (expected_width > 0 && expected_height > 0 &&

@@ -113,7 +113,7 @@ json ParseManifest(const std::string& path) {
   const std::string bytes = ReadFileBytes(path);
   try {
     return json::parse(bytes);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for 1e999
     throw InputError(path, std::string("invalid JSON: ") + e.what());
   }
 }
@@ -163,6 +163,9 @@ std::vector<std::string> GenericReader::ListScenes(const std::string& root) cons
 
 Scene GenericReader::ReadScene(const std::string& root, const std::string& scene_name) const {
   RequireRoot(root);
+  if (std::string e = CheckSceneName(scene_name); !e.empty()) {
+    throw InputError("scene '" + scene_name + "'", e);
+  }
   std::string manifest = SingleManifest(root);
   if (manifest.empty() ||
       (!scene_name.empty() && FileExists((fs::path(root) / scene_name / kManifestName).string()))) {

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "libgt/core/camera.h"
@@ -25,6 +26,16 @@ struct ColorImage {
   }
   bool empty() const { return rgb.empty(); }
 };
+
+// "" when `bytes` are not a PNG or a structurally complete one (signature, then chunks
+// that fit in the file, ending with IEND); else the problem ("truncated PNG (...)").
+// Checked before decoding so that a cut file is one clear InputError and libpng never
+// prints its own "libpng error: Read Error" line on stderr.
+std::string PngDamage(std::string_view bytes);
+// "" when `bytes` are not a JPEG or one whose scan data reaches the EOI marker (segments
+// walked by their lengths, entropy-coded data scanned for the next marker); else the
+// problem ("truncated JPEG (...)"). OpenCV decodes a cut JPEG silently, grey below the cut.
+std::string JpegDamage(std::string_view bytes);
 
 // Decodes an image file; InputError naming the file when missing or undecodable.
 ColorImage ReadColor(const std::string& path);

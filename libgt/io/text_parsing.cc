@@ -90,7 +90,15 @@ std::vector<NumberedFile> ListNumberedFiles(const std::string& folder, const std
         !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) {
       continue;
     }
-    if (!entry.is_regular_file(ec)) continue;
+    // A frame file that cannot be read (a folder, a dangling or looping link, a socket) is
+    // an error, never a silently missing frame.
+    if (!entry.is_regular_file(ec)) {
+      std::error_code lec;
+      const bool dangling = entry.is_symlink(lec) && !fs::exists(entry.path(), lec);
+      throw InputError(entry.path().string(),
+                       dangling ? "dangling symbolic link (expected a readable file)"
+                                : "expected a regular file, found a folder or special file");
+    }
     NumberedFile f;
     f.number = std::stoll(digits);
     f.stem = digits;
@@ -100,6 +108,14 @@ std::vector<NumberedFile> ListNumberedFiles(const std::string& folder, const std
   std::sort(out.begin(), out.end(), [](const NumberedFile& a, const NumberedFile& b) {
     return a.number != b.number ? a.number < b.number : a.stem < b.stem;
   });
+  // "1.txt" and "01.txt" would be two frames with the same number: refuse to guess.
+  for (size_t i = 1; i < out.size(); ++i) {
+    if (out[i].number == out[i - 1].number) {
+      throw InputError(folder, "files " + fs::path(out[i - 1].path).filename().string() + " and " +
+                                   fs::path(out[i].path).filename().string() +
+                                   " both give frame number " + std::to_string(out[i].number));
+    }
+  }
   return out;
 }
 
@@ -130,11 +146,27 @@ std::string FolderName(const std::string& path) {
   return name;
 }
 
+std::string CheckSceneName(const std::string& name) {
+  if (name.empty()) return "";
+  if (name.front() == '/') return "expected a scene name relative to the dataset root, got an absolute path";
+  size_t start = 0;
+  while (start <= name.size()) {
+    size_t slash = name.find('/', start);
+    if (slash == std::string::npos) slash = name.size();
+    if (name.compare(start, slash - start, "..") == 0 && slash - start == 2) {
+      return "expected a scene name inside the dataset root (no '..' components)";
+    }
+    start = slash + 1;
+  }
+  return "";
+}
+
 std::string ResolveSceneFolder(const std::string& root, const std::string& name,
                                bool root_is_scene) {
   RequireRoot(root);
   if (root_is_scene && (name.empty() || name == FolderName(root))) return root;
   if (name.empty()) throw InputError(root, "not a scene folder and no scene name given");
+  if (std::string e = CheckSceneName(name); !e.empty()) throw InputError("scene '" + name + "'", e);
   const std::string folder = (fs::path(root) / name).string();
   std::error_code ec;
   if (!fs::is_directory(folder, ec)) throw InputError(folder, "scene folder not found");

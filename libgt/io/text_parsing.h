@@ -56,7 +56,10 @@ std::vector<std::string> ListSubfolders(const std::string& folder);
 
 // Throws InputError(root, "dataset root not found") when root does not exist.
 void RequireRoot(const std::string& root);
-// The folder of scene `name` under root: root itself when `root_is_scene` and name is
+// "" when `name` is a usable scene name: relative, no ".." component (scene names select
+// folders under the root; they never leave it). Output names are sanitised separately.
+std::string CheckSceneName(const std::string& name);
+// The folder of scene `name` under root (InputError when CheckSceneName fails): root itself when `root_is_scene` and name is
 // empty or equals the root's folder name, else root/name; InputError naming the folder
 // when it does not exist.
 std::string ResolveSceneFolder(const std::string& root, const std::string& name,

@@ -194,6 +194,9 @@ void ForEachTarMember(
   if (archive_read_open_filename(a, tar_path.c_str(), 1 << 16) != ARCHIVE_OK) {
     throw InputError(tar_path, "cannot open as a tar archive: " + ArchiveMessage(a));
   }
+  struct stat archive_st {};
+  const int64_t archive_bytes =
+      ::stat(tar_path.c_str(), &archive_st) == 0 ? static_cast<int64_t>(archive_st.st_size) : 0;
   std::string data;
   std::string last_member = "(start)";
   while (true) {
@@ -216,6 +219,11 @@ void ForEachTarMember(
     info.mode = static_cast<int>(archive_entry_perm(entry));
     info.regular_file = archive_entry_filetype(entry) == AE_IFREG;
     if (info.size < 0) throw InputError(tar_path + ": " + info.path, "negative member size");
+    if (info.size > archive_bytes) {  // checked before allocating the member's buffer
+      throw InputError(tar_path + ": " + info.path,
+                       "member size " + std::to_string(info.size) + " exceeds the archive's " +
+                           std::to_string(archive_bytes) + " bytes");
+    }
     data.resize(static_cast<size_t>(info.size));
     size_t done = 0;
     while (done < data.size()) {

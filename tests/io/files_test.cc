@@ -11,6 +11,8 @@
 #include <random>
 
 #include "libgt/core/error.h"
+#include "libgt/io/image.h"
+#include "libgt/io/text_parsing.h"
 #include "tests/support/test_support.h"
 
 namespace gt::io {
@@ -150,6 +152,62 @@ TEST(WriteFileAtomic, FailureNamesThePathAndKeepsTheOldFile) {
     FAIL();
   } catch (const InputError& e) {
     EXPECT_EQ(e.where(), dir + "/target");
+  }
+}
+
+TEST(ListNumberedFiles, UnreadableEntriesAndDuplicateNumbersAreErrors) {
+  const std::string dir = test::ScratchDir("io_numbered_files");
+  for (const char* name : {"0.txt", "1.txt", "2.txt"}) std::ofstream(dir + "/" + name) << "x";
+  EXPECT_EQ(ListNumberedFiles(dir, "", ".txt").size(), 3u);
+  // "01.txt" next to "1.txt": two files for frame 1.
+  std::ofstream(dir + "/01.txt") << "x";
+  try {
+    ListNumberedFiles(dir, "", ".txt");
+    ADD_FAILURE() << "duplicate frame number accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("01.txt and 1.txt both give frame number 1"),
+              std::string::npos)
+        << e.what();
+  }
+  fs::remove(dir + "/01.txt");
+  // A folder or a dangling link where a frame file is expected (root reads chmod 000).
+  fs::create_directory(dir + "/3.txt");
+  EXPECT_THROW(ListNumberedFiles(dir, "", ".txt"), InputError);
+  fs::remove(dir + "/3.txt");
+  fs::create_symlink("missing", dir + "/4.txt");
+  try {
+    ListNumberedFiles(dir, "", ".txt");
+    ADD_FAILURE() << "dangling link accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("4.txt: dangling"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneName, DotDotAndAbsoluteNamesNeverLeaveTheRoot) {
+  EXPECT_EQ(CheckSceneName("scene0000_00"), "");
+  EXPECT_EQ(CheckSceneName("office/Easy/P001"), "");
+  EXPECT_EQ(CheckSceneName("a..b"), "");
+  for (const char* bad : {"..", "../x", "a/../../x", "a/..", "/etc"}) {
+    EXPECT_NE(CheckSceneName(bad), "") << bad;
+  }
+  const std::string root = test::ScratchDir("io_scene_escape");
+  fs::create_directories(root + "/inside");
+  EXPECT_THROW(ResolveSceneFolder(root + "/inside", "../inside", false), InputError);
+}
+
+TEST(PngDamage, CompleteTruncatedAndNonPng) {
+  // A 1x1 grey PNG.
+  const std::string png(
+      "\211\120\116\107\015\012\032\012\000\000\000\015\111\110\104\122"
+      "\000\000\000\001\000\000\000\001\010\000\000\000\000\072\176\233"
+      "\125\000\000\000\012\111\104\101\124\170\234\143\140\000\000\000"
+      "\002\000\001\110\257\244\161\000\000\000\000\111\105\116\104\256"
+      "\102\140\202",
+      67);
+  EXPECT_EQ(PngDamage(png), "");
+  EXPECT_EQ(PngDamage("not a png"), "");
+  for (size_t keep : {8u, 20u, 40u, 60u}) {
+    EXPECT_NE(PngDamage(png.substr(0, keep)), "") << keep;
   }
 }
 

@@ -310,6 +310,27 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   ASSERT_EQ(p2.size(), 1u);
   EXPECT_NE(p2[0].find("bad .npy"), std::string::npos) << p2[0];
 
+  // A shard the index does not list, a leftover temporary file, and a pair line whose
+  // key is not a string: each one problem line, never an exception.
+  const std::string dir3 = test::ScratchDir("shards_validate_extra");
+  WriteSplit(dir3);
+  MergeSplit(dir3, MergeOptions{});
+  fs::copy_file(dir3 + "/train-000000.tar", dir3 + "/train-000099.tar");
+  io::WriteFileAtomic(dir3 + "/stale.tar.tmp", "x");
+  std::vector<std::string> lines = io::ReadLines(dir3 + "/pairs.jsonl");
+  json first = json::parse(lines[0]);
+  first["key"] = 7;
+  lines[0] = first.dump();
+  WriteJsonLines(dir3 + "/pairs.jsonl", lines);
+  std::string all3;
+  for (const auto& p : ValidateSplit(dir3, ValidateOptions{SchemasDir()})) all3 += p + "\n";
+  EXPECT_NE(all3.find("train-000099.tar: shard not listed in index.json"), std::string::npos)
+      << all3;
+  EXPECT_NE(all3.find("stale.tar.tmp: temporary file left"), std::string::npos) << all3;
+  EXPECT_NE(all3.find("pairs.jsonl:1: fields \"key\" and \"shard\": expected strings"),
+            std::string::npos)
+      << all3;
+
   // index.json that breaks the schema.
   index["__kind__"] = "something-else";
   io::WriteFileAtomic(dir2 + "/index.json", index.dump(2));

@@ -9,7 +9,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -388,6 +390,30 @@ TEST(TarShard, TruncatedOrGarbageTarIsAnInputErrorNamingIt) {
     ADD_FAILURE() << "garbage accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(garbage), std::string::npos);
+  }
+}
+
+TEST(TarShard, MemberSizeBeyondTheArchiveFailsBeforeAllocating) {
+  // A header claiming an 8 GiB member (valid checksum) in a small file: one InputError
+  // naming the member, not an 8 GiB allocation.
+  const std::string dir = test::ScratchDir("shards_tar_huge_member");
+  const ShardInfo info = WriteShard(dir + "/t-000000.tar", MakeSamples());
+  std::string tar = io::ReadFileBytes(info.path);
+  const std::string size_field = "77777777777";
+  tar.replace(124, 11, size_field);
+  std::fill(tar.begin() + 148, tar.begin() + 156, ' ');
+  unsigned sum = 0;
+  for (int i = 0; i < 512; ++i) sum += static_cast<unsigned char>(tar[i]);
+  char checksum[8];
+  std::snprintf(checksum, sizeof(checksum), "%06o", sum);
+  tar.replace(148, 7, std::string(checksum, 6) + '\0');
+  const std::string huge = dir + "/huge.tar";
+  io::WriteFileAtomic(huge, tar);
+  try {
+    ReadShardSamples(huge);
+    ADD_FAILURE() << "huge member accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(huge), std::string::npos) << e.what();
   }
 }
 
