@@ -431,11 +431,19 @@ OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionO
     st.invalid_pixels += static_cast<int64_t>(in.depth->values_m.size() - points.size());
     // Key-range clipping: drop points whose voxel index would wrap in OctoMap.
     const size_t before = points.size();
-    points.erase(std::remove_if(points.begin(), points.end(),
-                                [&](const Eigen::Vector3f& p) {
-                                  return !InsideKeyRange(p.cast<double>(), inv_res);
-                                }),
-                 points.end());
+    if (!points.empty()) {  // per point only when the cloud's box is not inside (floor is monotonic)
+      Eigen::Vector3f lo = points[0], hi = points[0];
+      for (const auto& p : points) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+      if (!InsideKeyRange(lo.cast<double>(), inv_res) || !InsideKeyRange(hi.cast<double>(), inv_res))
+        points.erase(std::remove_if(points.begin(), points.end(),
+                                    [&](const Eigen::Vector3f& p) {
+                                      return !InsideKeyRange(p.cast<double>(), inv_res);
+                                    }),
+                     points.end());
+    }
     st.out_of_key_range += static_cast<int64_t>(before - points.size());
     if (options.downsample) {
       bool fallback = false;

@@ -131,6 +131,10 @@ void VoxelMap::CastMisses(const float origin[3], const float end[3]) {
       t_delta[a] = std::numeric_limits<double>::max();
     }
   }
+  // Miss bits of the current block, and the voxel's place in it, followed incrementally.
+  uint64_t* miss = scan_[ScanBlock(cur[0], cur[1], cur[2])].miss.data();
+  int local = Local(cur[0], cur[1], cur[2]);
+  constexpr int kStride[3] = {1, kSide, kSide * kSide};
   while (true) {
     const int a =
         t_max[0] < t_max[1] ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
@@ -138,7 +142,14 @@ void VoxelMap::CastMisses(const float origin[3], const float end[3]) {
     t_max[a] += t_delta[a];
     if (cur[0] == ke[0] && cur[1] == ke[1] && cur[2] == ke[2]) break;
     if (std::min(std::min(t_max[0], t_max[1]), t_max[2]) > length) break;
-    Mark(cur[0], cur[1], cur[2], 1);
+    const int within = (cur[a] & (kSide - 1));
+    if (within == (step[a] > 0 ? 0 : kSide - 1)) {  // entered the next block along a
+      miss = scan_[ScanBlock(cur[0], cur[1], cur[2])].miss.data();
+      local = Local(cur[0], cur[1], cur[2]);
+    } else {
+      local += step[a] * kStride[a];
+    }
+    miss[local >> 6] |= uint64_t{1} << (local & 63);
   }
 }
 
@@ -151,12 +162,17 @@ void VoxelMap::InsertScan(const std::vector<Eigen::Vector3f>& points,
   int lo[3], hi[3], io[3];
   if (!CheckedIndex(origin, inv_res_, io)) return;  // OctoMap casts nothing from there
   for (int a = 0; a < 3; ++a) lo[a] = hi[a] = io[a];
-  for (const auto& p : points) {
-    int ip[3];
-    if (!CheckedIndex(p.data(), inv_res_, ip)) continue;
+  if (!points.empty()) {  // floor is monotonic: the index box is that of the extreme coordinates
+    Eigen::Vector3f p_lo = points[0], p_hi = points[0];
+    for (const auto& p : points) {
+      p_lo = p_lo.cwiseMin(p);
+      p_hi = p_hi.cwiseMax(p);
+    }
     for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], ip[a]);
-      hi[a] = std::max(hi[a], ip[a]);
+      const double l = std::floor(inv_res_ * static_cast<double>(p_lo[a]));
+      const double h = std::floor(inv_res_ * static_cast<double>(p_hi[a]));
+      lo[a] = std::min(lo[a], static_cast<int>(std::clamp<double>(l, kMinIndex, kMaxIndex)));
+      hi[a] = std::max(hi[a], static_cast<int>(std::clamp<double>(h, kMinIndex, kMaxIndex)));
     }
   }
   size_t cells = 1;
@@ -173,11 +189,14 @@ void VoxelMap::InsertScan(const std::vector<Eigen::Vector3f>& points,
   }
   last_block_ = {INT32_MIN, 0, 0};
 
+  int prev[3] = {INT32_MIN, 0, 0};  // voxel of the previous point (neighbouring pixels)
   for (const auto& p : points) {
     float end[3];
     if (discretize) {  // the centre of the point's voxel, once per voxel
       int ip[3];
       if (!CheckedIndex(p.data(), inv_res_, ip)) continue;
+      if (ip[0] == prev[0] && ip[1] == prev[1] && ip[2] == prev[2]) continue;  // seen already
+      prev[0] = ip[0], prev[1] = ip[1], prev[2] = ip[2];
       const int32_t b = ScanBlock(ip[0], ip[1], ip[2]);
       const int l = Local(ip[0], ip[1], ip[2]);
       uint64_t& seen = scan_[b].seen[l >> 6];
