@@ -227,45 +227,56 @@ RayBits TraverseExact(const MapView& m, const Eigen::Vector3d& o, const Eigen::V
           tx = t3[0], ty = t3[1], tz = t3[2];
         }
         const double dx = vox_step[0], dy = vox_step[1], dz = vox_step[2];
-        const int sx = step[0], sy = step[1], sz = step[2];
         int lin = (lz << (2 * S)) | (ly << S) | lx;
         double zv = z;
         double edge = e[k + 1];  // upper edge of the cursor's bin
+        bool to_block_loop = false;
         while (true) {
           const double t = std::min(std::min(tx, ty), tz);
-          const double zx = std::min(t, z_out);
+          const double zx = std::min(t, z_end);
           const int8_t s = states[lin];
-          if (s != VoxelMap::kUnknown) {
-            if (zx > zv) {
-              if (zv < edge && zx <= edge && k < D) {  // the whole voxel within bin k
-                const uint64_t bit = uint64_t{1} << k;
-                r.known |= bit;
-                if (s == VoxelMap::kOccupied) r.occ |= bit;
-              } else {
-                MarkBins(e, D, zv, zx, s == VoxelMap::kOccupied, &k, &r);
-                edge = e[k + 1];
-              }
+          if (s != VoxelMap::kUnknown && zx > zv) {
+            if (zv < edge && zx <= edge) {  // the whole voxel within bin k
+              const uint64_t bit = uint64_t{1} << k;
+              r.known |= bit;
+              if (s == VoxelMap::kOccupied) r.occ |= bit;
+            } else {
+              MarkBins(e, D, zv, zx, s == VoxelMap::kOccupied, &k, &r);
+              edge = e[k + 1];
             }
           }
-          if (t >= z_out) break;
+          if (t >= z_end) return r;
           zv = std::max(zv, t);
+          int a, l;
           if (tx == t) {
-            lx += sx;
-            if (static_cast<unsigned>(lx) >= static_cast<unsigned>(W)) break;
-            lin += sx;
+            a = 0, l = (lx += step[0]);
             tx += dx;
           } else if (ty == t) {
-            ly += sy;
-            if (static_cast<unsigned>(ly) >= static_cast<unsigned>(W)) break;
-            lin += sy * W;
+            a = 1, l = (ly += step[1]);
             ty += dy;
           } else {
-            lz += sz;
-            if (static_cast<unsigned>(lz) >= static_cast<unsigned>(W)) break;
-            lin += sz * W * W;
+            a = 2, l = (lz += step[2]);
             tz += dz;
           }
+          if (static_cast<unsigned>(l) < static_cast<unsigned>(W)) {
+            lin += step[a] * (a == 0 ? 1 : (a == 1 ? W : W * W));
+            continue;
+          }
+          // Entered the next block along a: keep the block-level DDA in step.
+          bc[a] += step[a];
+          t_next[a] += t_delta[a];
+          z = zv;
+          if (bc[a] < blo[a] || bc[a] > bhi[a]) return r;
+          const int32_t nb = m.window->Find(bc[0], bc[1], bc[2]);
+          if (nb < 0 || m.map->kind(nb) != VoxelMap::Kind::kMixed) {
+            to_block_loop = true;  // uniform or absent: crossed whole by the block loop
+            break;
+          }
+          states = m.map->states(nb);  // mixed again: carry on voxel by voxel
+          (a == 0 ? lx : (a == 1 ? ly : lz)) = step[a] > 0 ? 0 : W - 1;
+          lin = (lz << (2 * S)) | (ly << S) | lx;
         }
+        if (to_block_loop) continue;
       }
     }
     if (t_next[ax] >= z_end) break;
