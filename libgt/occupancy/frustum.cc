@@ -127,7 +127,8 @@ bool ClipToBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::
       if (o[a] < lo[a] || o[a] > hi[a]) return false;
       continue;
     }
-    double t0 = (lo[a] - o[a]) / d[a], t1 = (hi[a] - o[a]) / d[a];
+    const double inv = 1.0 / d[a];
+    double t0 = (lo[a] - o[a]) * inv, t1 = (hi[a] - o[a]) * inv;
     if (t0 > t1) std::swap(t0, t1);
     *z_lo = std::max(*z_lo, t0);
     *z_hi = std::min(*z_hi, t1);
@@ -175,7 +176,7 @@ RayBits TraverseExact(const MapView& m, const Eigen::Vector3d& o, const Eigen::V
   constexpr int S = VoxelMap::kShift, W = VoxelMap::kSide;
   double z = e.front(), z_end = e.back();
   if (!ClipToBox(o, d, m.lo_m, m.hi_m, &z, &z_end)) return r;
-  const double res = m.res, block_m = res * W;
+  const double res = m.res, inv_res = 1.0 / m.res, block_m = res * W;
   int step[3], bc[3], blo[3], bhi[3];
   double inv_d[3], t_next[3], t_delta[3], vox_step[3];  // block level; voxel parameter step
   const Eigen::Vector3d p = o + z * d;
@@ -185,7 +186,7 @@ RayBits TraverseExact(const MapView& m, const Eigen::Vector3d& o, const Eigen::V
     blo[a] = m.lo[a] >> S;
     bhi[a] = m.hi[a] >> S;
     // Start block, clamped against rounding at the box faces.
-    const int vi = std::clamp(static_cast<int>(std::floor(p[a] / res)), m.lo[a], m.hi[a]);
+    const int vi = std::clamp(static_cast<int>(std::floor(p[a] * inv_res)), m.lo[a], m.hi[a]);
     bc[a] = vi >> S;
     if (step[a] != 0) {
       t_next[a] = ((bc[a] + (step[a] > 0 ? 1 : 0)) * block_m - o[a]) * inv_d[a];
@@ -217,8 +218,8 @@ RayBits TraverseExact(const MapView& m, const Eigen::Vector3d& o, const Eigen::V
           double t3[3];
           for (int a = 0; a < 3; ++a) {
             const int base = bc[a] << S;
-            const int i = std::clamp(static_cast<int>(std::floor((o[a] + zm * d[a]) / res)), base,
-                                     base + W - 1);
+            const int i = std::clamp(static_cast<int>(std::floor((o[a] + zm * d[a]) * inv_res)),
+                                     base, base + W - 1);
             l3[a] = i - base;
             t3[a] = step[a] != 0 ? ((i + (step[a] > 0 ? 1 : 0)) * res - o[a]) * inv_d[a]
                                  : std::numeric_limits<double>::infinity();
