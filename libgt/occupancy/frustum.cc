@@ -1,5 +1,6 @@
-// Frustum binning (frustum.h): exact 3-D DDA or bin-centre sampling over a dense block of
-// voxel states extracted from the map once per camera, and the two_point target.
+// Frustum binning (frustum.h): exact 3-D DDA or bin-centre sampling directly over the map's
+// voxel store (voxel_map.h; uniform 8^3 blocks are crossed in one step), and the two_point
+// target.
 #include "libgt/occupancy/frustum.h"
 
 #include <algorithm>
@@ -7,6 +8,7 @@
 #include <limits>
 
 #include "libgt/core/error.h"
+#include "libgt/occupancy/voxel_map.h"
 
 namespace gt::occupancy {
 
@@ -125,7 +127,8 @@ bool ClipToBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::
       if (o[a] < lo[a] || o[a] > hi[a]) return false;
       continue;
     }
-    double t0 = (lo[a] - o[a]) / d[a], t1 = (hi[a] - o[a]) / d[a];
+    const double inv = 1.0 / d[a];
+    double t0 = (lo[a] - o[a]) * inv, t1 = (hi[a] - o[a]) * inv;
     if (t0 > t1) std::swap(t0, t1);
     *z_lo = std::max(*z_lo, t0);
     *z_hi = std::min(*z_hi, t1);
@@ -138,83 +141,180 @@ struct RayBits {
   uint64_t known = 0;
 };
 
-// Exact: every voxel of the block crossed by o + z d, z in [z0, z1) (clipped to the block),
-// contributes its state to every bin its z-interval overlaps.
-RayBits TraverseExact(const VoxelBlock& b, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+// The map as the traversals see it: voxel store, block table over the frustum, and the box
+// (voxel indices and metres) outside which everything is unknown.
+struct MapView {
+  const VoxelMap* map;
+  const BlockWindow* window;
+  double res;
+  Eigen::Vector3i lo, hi;      // inclusive voxel-index box
+  Eigen::Vector3d lo_m, hi_m;  // the same box in metres
+};
+
+// Sets the bins overlapping the planar-depth interval [z0, z1) (empty: nothing); *k is the
+// first bin whose upper edge lies above the previous interval (a cursor: z only grows).
+inline void MarkBins(const std::vector<double>& e, int num_bins, double z0, double z1,
+                     bool occupied, int* k, RayBits* r) {
+  if (!(z1 > z0)) return;
+  while (*k < num_bins - 1 && e[*k + 1] <= z0) ++*k;
+  int kk = *k;
+  while (kk < num_bins - 1 && e[kk + 1] < z1) ++kk;
+  const uint64_t m = BitRange(*k, kk);
+  r->known |= m;
+  if (occupied) r->occ |= m;
+}
+
+// Exact: every voxel crossed by o + z d, z in [e_0, e_D) (clipped to the box), contributes its
+// state to every bin its z-interval overlaps. Two-level 3-D DDA (Amanatides & Woo 1987): over
+// 8^3 blocks first; a block that is absent (all unknown) is skipped, a uniform one (all free /
+// all occupied) contributes its whole z-interval at once, and only inside a mixed block are
+// its voxels stepped through.
+RayBits TraverseExact(const MapView& m, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
                       const std::vector<double>& e) {
   RayBits r;
   const int D = static_cast<int>(e.size()) - 1;
-  const double res = b.voxel_size_m;
-  const Eigen::Vector3d lo = b.min_index.cast<double>() * res;
-  const Eigen::Vector3d hi = (b.min_index + b.size).cast<double>() * res;
+  constexpr int S = VoxelMap::kShift, W = VoxelMap::kSide;
   double z = e.front(), z_end = e.back();
-  if (!ClipToBox(o, d, lo, hi, &z, &z_end)) return r;
-  // Start voxel (block-local), clamped against rounding at the box faces.
+  if (!ClipToBox(o, d, m.lo_m, m.hi_m, &z, &z_end)) return r;
+  const double res = m.res, inv_res = 1.0 / m.res, block_m = res * W;
+  int step[3], bc[3], blo[3], bhi[3];
+  double inv_d[3], t_next[3], t_delta[3], vox_step[3];  // block level; voxel parameter step
   const Eigen::Vector3d p = o + z * d;
-  int idx[3], step[3];
-  double t_max[3], t_delta[3];
   for (int a = 0; a < 3; ++a) {
-    idx[a] = static_cast<int>(std::floor(p[a] / res)) - b.min_index[a];
-    idx[a] = std::clamp(idx[a], 0, b.size[a] - 1);
-    if (d[a] > 0) {
-      step[a] = 1;
-      t_max[a] = ((idx[a] + b.min_index[a] + 1) * res - o[a]) / d[a];
-      t_delta[a] = res / d[a];
-    } else if (d[a] < 0) {
-      step[a] = -1;
-      t_max[a] = ((idx[a] + b.min_index[a]) * res - o[a]) / d[a];
-      t_delta[a] = -res / d[a];
+    step[a] = d[a] > 0 ? 1 : (d[a] < 0 ? -1 : 0);
+    inv_d[a] = step[a] != 0 ? 1.0 / d[a] : 0.0;
+    blo[a] = m.lo[a] >> S;
+    bhi[a] = m.hi[a] >> S;
+    // Start block, clamped against rounding at the box faces.
+    const int vi = std::clamp(static_cast<int>(std::floor(p[a] * inv_res)), m.lo[a], m.hi[a]);
+    bc[a] = vi >> S;
+    if (step[a] != 0) {
+      t_next[a] = ((bc[a] + (step[a] > 0 ? 1 : 0)) * block_m - o[a]) * inv_d[a];
+      t_delta[a] = block_m * std::abs(inv_d[a]);
+      vox_step[a] = res * std::abs(inv_d[a]);
     } else {
-      step[a] = 0;
-      t_max[a] = std::numeric_limits<double>::infinity();
-      t_delta[a] = std::numeric_limits<double>::infinity();
+      t_next[a] = t_delta[a] = vox_step[a] = std::numeric_limits<double>::infinity();
     }
   }
-  const size_t sx = 1, sy = static_cast<size_t>(b.size.x()),
-               sz = static_cast<size_t>(b.size.x()) * b.size.y();
-  const size_t strides[3] = {sx, sy, sz};
-  size_t lin = idx[2] * sz + idx[1] * sy + idx[0];
-  int k = 0;  // first bin whose upper edge is above the current z
+  int k = 0;
   while (true) {
-    const int a =
-        (t_max[0] < t_max[1]) ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
-    const double z_exit = std::min(t_max[a], z_end);
-    const int8_t s = b.state[lin];
-    if (s != VoxelBlock::kUnknown && z_exit > z) {
-      while (k < D - 1 && e[k + 1] <= z) ++k;
-      int kk = k;
-      while (kk < D - 1 && e[kk + 1] < z_exit) ++kk;
-      const uint64_t m = BitRange(k, kk);
-      r.known |= m;
-      if (s == VoxelBlock::kOccupied) r.occ |= m;
+    const int ax =
+        (t_next[0] < t_next[1]) ? (t_next[0] < t_next[2] ? 0 : 2) : (t_next[1] < t_next[2] ? 1 : 2);
+    const double z_out = std::min(t_next[ax], z_end);  // the ray leaves this block at z_out
+    const int32_t b = m.window->Find(bc[0], bc[1], bc[2]);
+    if (b >= 0 && z_out > z) {
+      const VoxelMap::Kind kind = m.map->kind(b);
+      if (kind != VoxelMap::Kind::kMixed) {
+        MarkBins(e, D, z, z_out, kind == VoxelMap::Kind::kAllOccupied, &k, &r);
+      } else {
+        // Voxel DDA inside the block, from z to z_out, on block-local coordinates (0..7) and
+        // the linear index into the block's states (x fastest).
+        const int8_t* states = m.map->states(b);
+        const double zm = z + std::min(1e-6, 0.5 * (z_out - z));  // just inside the block
+        int lx, ly, lz;
+        double tx, ty, tz;
+        {
+          int l3[3];
+          double t3[3];
+          for (int a = 0; a < 3; ++a) {
+            const int base = bc[a] << S;
+            const int i = std::clamp(static_cast<int>(std::floor((o[a] + zm * d[a]) * inv_res)),
+                                     base, base + W - 1);
+            l3[a] = i - base;
+            t3[a] = step[a] != 0 ? ((i + (step[a] > 0 ? 1 : 0)) * res - o[a]) * inv_d[a]
+                                 : std::numeric_limits<double>::infinity();
+          }
+          lx = l3[0], ly = l3[1], lz = l3[2];
+          tx = t3[0], ty = t3[1], tz = t3[2];
+        }
+        const double dx = vox_step[0], dy = vox_step[1], dz = vox_step[2];
+        int lin = (lz << (2 * S)) | (ly << S) | lx;
+        double zv = z;
+        double edge = e[k + 1];  // upper edge of the cursor's bin
+        bool to_block_loop = false;
+        while (true) {
+          const double t = std::min(std::min(tx, ty), tz);
+          const double zx = std::min(t, z_end);
+          const int8_t s = states[lin];
+          if (s != VoxelMap::kUnknown && zx > zv) {
+            if (zv < edge && zx <= edge) {  // the whole voxel within bin k
+              const uint64_t bit = uint64_t{1} << k;
+              r.known |= bit;
+              if (s == VoxelMap::kOccupied) r.occ |= bit;
+            } else {
+              MarkBins(e, D, zv, zx, s == VoxelMap::kOccupied, &k, &r);
+              edge = e[k + 1];
+            }
+          }
+          if (t >= z_end) return r;
+          zv = std::max(zv, t);
+          int a, l;
+          if (tx == t) {
+            a = 0, l = (lx += step[0]);
+            tx += dx;
+          } else if (ty == t) {
+            a = 1, l = (ly += step[1]);
+            ty += dy;
+          } else {
+            a = 2, l = (lz += step[2]);
+            tz += dz;
+          }
+          if (static_cast<unsigned>(l) < static_cast<unsigned>(W)) {
+            lin += step[a] * (a == 0 ? 1 : (a == 1 ? W : W * W));
+            continue;
+          }
+          // Entered the next block along a: keep the block-level DDA in step.
+          bc[a] += step[a];
+          t_next[a] += t_delta[a];
+          z = zv;
+          if (bc[a] < blo[a] || bc[a] > bhi[a]) return r;
+          const int32_t nb = m.window->Find(bc[0], bc[1], bc[2]);
+          if (nb < 0 || m.map->kind(nb) != VoxelMap::Kind::kMixed) {
+            to_block_loop = true;  // uniform or absent: crossed whole by the block loop
+            break;
+          }
+          states = m.map->states(nb);  // mixed again: carry on voxel by voxel
+          (a == 0 ? lx : (a == 1 ? ly : lz)) = step[a] > 0 ? 0 : W - 1;
+          lin = (lz << (2 * S)) | (ly << S) | lx;
+        }
+        if (to_block_loop) continue;
+      }
     }
-    if (t_max[a] >= z_end) break;
-    z = t_max[a];
-    idx[a] += step[a];
-    if (idx[a] < 0 || idx[a] >= b.size[a]) break;
-    lin = (step[a] > 0) ? lin + strides[a] : lin - strides[a];
-    t_max[a] += t_delta[a];
+    if (t_next[ax] >= z_end) break;
+    z = std::max(z, t_next[ax]);
+    bc[ax] += step[ax];
+    if (bc[ax] < blo[ax] || bc[ax] > bhi[ax]) break;
+    t_next[ax] += t_delta[ax];
   }
   return r;
 }
 
 // Center: only the voxel at each bin's centre depth.
-RayBits TraverseCenter(const VoxelBlock& b, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+RayBits TraverseCenter(const MapView& m, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
                        const std::vector<double>& e) {
   RayBits r;
   const int D = static_cast<int>(e.size()) - 1;
-  const double inv = 1.0 / b.voxel_size_m;
+  double z_lo = e.front(), z_hi = e.back();
+  if (!ClipToBox(o, d, m.lo_m, m.hi_m, &z_lo, &z_hi)) return r;
+  const double inv = 1.0 / m.res;
+  constexpr int S = VoxelMap::kShift;
   for (int k = 0; k < D; ++k) {
-    const Eigen::Vector3d p = o + (0.5 * (e[k] + e[k + 1])) * d;
-    int ix = static_cast<int>(std::floor(p.x() * inv)) - b.min_index.x();
-    int iy = static_cast<int>(std::floor(p.y() * inv)) - b.min_index.y();
-    int iz = static_cast<int>(std::floor(p.z() * inv)) - b.min_index.z();
-    if (ix < 0 || iy < 0 || iz < 0 || ix >= b.size.x() || iy >= b.size.y() || iz >= b.size.z())
+    const double zc = 0.5 * (e[k] + e[k + 1]);
+    if (zc < z_lo) continue;
+    if (zc > z_hi) break;
+    const Eigen::Vector3d p = o + zc * d;
+    const int ix = static_cast<int>(std::floor(p.x() * inv));
+    const int iy = static_cast<int>(std::floor(p.y() * inv));
+    const int iz = static_cast<int>(std::floor(p.z() * inv));
+    if (ix < m.lo.x() || iy < m.lo.y() || iz < m.lo.z() || ix > m.hi.x() || iy > m.hi.y() ||
+        iz > m.hi.z())
       continue;
-    const int8_t s = b.at(ix, iy, iz);
-    if (s == VoxelBlock::kUnknown) continue;
+    const int32_t b = m.window->Find(ix >> S, iy >> S, iz >> S);
+    if (b < 0) continue;
+    const int8_t s = m.map->states(b)[VoxelMap::Local(ix, iy, iz)];
+    if (s == VoxelMap::kUnknown) continue;
     r.known |= uint64_t{1} << k;
-    if (s == VoxelBlock::kOccupied) r.occ |= uint64_t{1} << k;
+    if (s == VoxelMap::kOccupied) r.occ |= uint64_t{1} << k;
   }
   return r;
 }
@@ -260,16 +360,27 @@ FrustumVolume ProjectToFrustum(const OccupancyMap& map, const Camera& camera_ful
     hi[a] = std::min(static_cast<int>(h), map_hi[a]);
   }
   if ((hi.array() < lo.array()).any()) return vol;
-  const VoxelBlock block = map.ExtractBlock(lo, hi);
-  if (block.empty()) return vol;
+  const VoxelMap& voxels = map.voxels();
+  const Eigen::Vector3i block_lo(lo.x() >> VoxelMap::kShift, lo.y() >> VoxelMap::kShift,
+                                 lo.z() >> VoxelMap::kShift);
+  const Eigen::Vector3i block_hi(hi.x() >> VoxelMap::kShift, hi.y() >> VoxelMap::kShift,
+                                 hi.z() >> VoxelMap::kShift);
+  const BlockWindow window(voxels, block_lo, block_hi);
+  const MapView view{&voxels,
+                     &window,
+                     res,
+                     lo,
+                     hi,
+                     lo.cast<double>() * res,
+                     (hi + Eigen::Vector3i::Ones()).cast<double>() * res};
 
   for (int v = 0; v < vol.height; ++v) {
     for (int u = 0; u < vol.width; ++u) {
       const Eigen::Vector3d d =
           R * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
       const RayBits r = options.traversal == Traversal::kExact
-                            ? TraverseExact(block, o, d, vol.edges_m)
-                            : TraverseCenter(block, o, d, vol.edges_m);
+                            ? TraverseExact(view, o, d, vol.edges_m)
+                            : TraverseCenter(view, o, d, vol.edges_m);
       const size_t i = static_cast<size_t>(v) * vol.width + u;
       vol.occ[i] = r.occ;
       vol.known[i] = r.known;

@@ -1,4 +1,5 @@
-// OctoMap fusion (fusion.h). PCL and OctoMap are used only in this file.
+// Fusion (fusion.h): own OctoMap-equivalent ray casting into a VoxelMap (voxel_map.h), or
+// OctoMap's insertPointCloud as the reference engine. PCL and OctoMap are used only here.
 #include "libgt/occupancy/fusion.h"
 
 #include <octomap/OcTree.h>
@@ -11,11 +12,13 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <mutex>
 #include <numeric>
 #include <sstream>
 
 #include "libgt/core/error.h"
 #include "libgt/io/files.h"
+#include "libgt/occupancy/voxel_map.h"
 
 namespace gt::occupancy {
 
@@ -25,22 +28,19 @@ constexpr int64_t kMinSafeIndex = -32767;
 constexpr int64_t kMaxSafeIndex = 32766;
 constexpr int kKeyOffset = 32768;
 
+// The map lives in one of two forms, the other built on first use: own engine -> VoxelMap
+// (octree built for SaveBinary / NumLeafNodes); OctoMap engine -> the OcTree OctoMap's
+// insertPointCloud built (voxel store built for binning and counts).
 struct OccupancyMap::Impl {
-  std::unique_ptr<octomap::OcTree> tree;
+  bool octomap_engine = false;
   FusionStats stats;
-  bool has_bounds = false;
-  Eigen::Vector3i min_index = Eigen::Vector3i::Zero();
-  Eigen::Vector3i max_index = Eigen::Vector3i::Zero();
+  std::unique_ptr<VoxelMap> voxels;
+  std::unique_ptr<octomap::OcTree> tree;
+  std::once_flag voxels_once, tree_once;
 
-  void Grow(const Eigen::Vector3i& i) {
-    if (!has_bounds) {
-      min_index = max_index = i;
-      has_bounds = true;
-      return;
-    }
-    min_index = min_index.cwiseMin(i);
-    max_index = max_index.cwiseMax(i);
-  }
+  double resolution_m() const { return voxels ? voxels->voxel_size_m() : tree->getResolution(); }
+  const VoxelMap& Voxels();
+  const octomap::OcTree& Tree();
 };
 
 namespace {
@@ -242,57 +242,124 @@ std::vector<Eigen::Vector3f> DownsampleVoxelCentroids(const std::vector<Eigen::V
   return FromPcl(filtered);
 }
 
+namespace {
+
+LogOddsModel ModelOf(const octomap::OcTree& tree) {
+  LogOddsModel m;
+  m.hit = tree.getProbHitLog();
+  m.miss = tree.getProbMissLog();
+  m.clamp_min = tree.getClampingThresMinLog();
+  m.clamp_max = tree.getClampingThresMaxLog();
+  m.occupied_threshold = tree.getOccupancyThresLog();
+  return m;
+}
+
+// OctoMap's defaults (hit 0.7, miss 0.4, clamping 0.1192 / 0.971, threshold 0.5), read from
+// a default-constructed tree so the numbers are OctoMap's own floats.
+const LogOddsModel& DefaultModel() {
+  static const LogOddsModel model = ModelOf(octomap::OcTree(0.1));
+  return model;
+}
+
+// Octree holding exactly the voxel log-odds of `voxels` (then pruned, inner nodes updated):
+// the same tree OctoMap's own insertion builds, since a fully pruned tree depends only on its
+// leaves' values.
+std::unique_ptr<octomap::OcTree> ToOctree(const VoxelMap& voxels) {
+  auto tree = std::make_unique<octomap::OcTree>(voxels.voxel_size_m());
+  for (int32_t b = 0; b < voxels.num_blocks(); ++b) {
+    const auto& c = voxels.block_coord(b);
+    const float* l = voxels.log_odds(b);
+    for (int i = 0; i < VoxelMap::kBlockVoxels; ++i) {
+      if (std::isnan(l[i])) continue;
+      const int ix = (c[0] << VoxelMap::kShift) + (i & (VoxelMap::kSide - 1));
+      const int iy = (c[1] << VoxelMap::kShift) + ((i >> VoxelMap::kShift) & (VoxelMap::kSide - 1));
+      const int iz = (c[2] << VoxelMap::kShift) + (i >> (2 * VoxelMap::kShift));
+      const octomap::OcTreeKey key(static_cast<octomap::key_type>(ix + kKeyOffset),
+                                   static_cast<octomap::key_type>(iy + kKeyOffset),
+                                   static_cast<octomap::key_type>(iz + kKeyOffset));
+      tree->setNodeValue(key, l[i], /*lazy_eval=*/true);
+    }
+  }
+  tree->updateInnerOccupancy();
+  tree->prune();
+  return tree;
+}
+
+// Voxel store of every finest-resolution voxel of the tree (pruned leaves expanded).
+std::unique_ptr<VoxelMap> FromOctree(const octomap::OcTree& tree) {
+  auto voxels = std::make_unique<VoxelMap>(tree.getResolution(), ModelOf(tree));
+  const unsigned depth = tree.getTreeDepth();
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const int side = 1 << (depth - it.getDepth());
+    const octomap::OcTreeKey k0 = it.getIndexKey();
+    const float l = it->getLogOdds();
+    for (int z = 0; z < side; ++z)
+      for (int y = 0; y < side; ++y)
+        for (int x = 0; x < side; ++x)
+          voxels->SetLogOdds(k0[0] - kKeyOffset + x, k0[1] - kKeyOffset + y,
+                             k0[2] - kKeyOffset + z, l);
+  }
+  voxels->Finalize();
+  return voxels;
+}
+
+}  // namespace
+
+const VoxelMap& OccupancyMap::Impl::Voxels() {
+  std::call_once(voxels_once, [this] {
+    if (!voxels) voxels = FromOctree(*tree);
+  });
+  return *voxels;
+}
+
+const octomap::OcTree& OccupancyMap::Impl::Tree() {
+  std::call_once(tree_once, [this] {
+    if (!tree) tree = ToOctree(*voxels);
+  });
+  return *tree;
+}
+
 OccupancyMap::OccupancyMap() : impl_(std::make_unique<Impl>()) {
-  impl_->tree = std::make_unique<octomap::OcTree>(0.05);
+  impl_->voxels = std::make_unique<VoxelMap>(0.05, DefaultModel());
+  impl_->voxels->Finalize();
 }
 OccupancyMap::OccupancyMap(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 OccupancyMap::OccupancyMap(OccupancyMap&&) noexcept = default;
 OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
 OccupancyMap::~OccupancyMap() = default;
 
-double OccupancyMap::resolution_m() const { return impl_->tree->getResolution(); }
+double OccupancyMap::resolution_m() const { return impl_->resolution_m(); }
 int64_t OccupancyMap::NumLeafNodes() const {
-  return static_cast<int64_t>(impl_->tree->getNumLeafNodes());
+  return static_cast<int64_t>(impl_->Tree().getNumLeafNodes());
 }
-
-namespace {
-int64_t CountVoxels(const octomap::OcTree& tree, bool occupied) {
-  int64_t n = 0;
-  const unsigned depth = tree.getTreeDepth();
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    if (tree.isNodeOccupied(*it) != occupied) continue;
-    const int64_t side = int64_t{1} << (depth - it.getDepth());
-    n += side * side * side;
-  }
-  return n;
-}
-}  // namespace
-
-int64_t OccupancyMap::NumOccupiedVoxels() const { return CountVoxels(*impl_->tree, true); }
-int64_t OccupancyMap::NumFreeVoxels() const { return CountVoxels(*impl_->tree, false); }
+int64_t OccupancyMap::NumOccupiedVoxels() const { return impl_->Voxels().num_occupied(); }
+int64_t OccupancyMap::NumFreeVoxels() const { return impl_->Voxels().num_free(); }
+const VoxelMap& OccupancyMap::voxels() const { return impl_->Voxels(); }
 
 int OccupancyMap::StateAt(const Eigen::Vector3d& p_in_world) const {
-  const octomap::OcTree& tree = *impl_->tree;
-  if (!InsideKeyRange(p_in_world, 1.0 / tree.getResolution())) return -1;
-  const octomap::OcTreeNode* node = tree.search(p_in_world.x(), p_in_world.y(), p_in_world.z());
-  if (node == nullptr) return -1;
-  return tree.isNodeOccupied(node) ? 1 : 0;
+  const double inv_res = 1.0 / impl_->resolution_m();
+  if (!InsideKeyRange(p_in_world, inv_res)) return -1;
+  if (impl_->octomap_engine) {  // the fused tree itself (the benchmark's naive baseline)
+    const octomap::OcTree& tree = impl_->Tree();
+    const octomap::OcTreeNode* node = tree.search(p_in_world.x(), p_in_world.y(), p_in_world.z());
+    if (node == nullptr) return -1;
+    return tree.isNodeOccupied(node) ? 1 : 0;
+  }
+  const Eigen::Vector3i i = IndexOf(p_in_world, inv_res);
+  return impl_->Voxels().StateAt(i.x(), i.y(), i.z());
 }
 
 const FusionStats& OccupancyMap::stats() const { return impl_->stats; }
 
 bool OccupancyMap::KnownIndexBounds(Eigen::Vector3i* min_index, Eigen::Vector3i* max_index) const {
-  if (!impl_->has_bounds) return false;
-  *min_index = impl_->min_index;
-  *max_index = impl_->max_index;
-  return true;
+  return impl_->Voxels().Bounds(min_index, max_index);
 }
 
 VoxelBlock OccupancyMap::ExtractBlock(const Eigen::Vector3i& min_index_in,
                                       const Eigen::Vector3i& max_index_in) const {
-  const octomap::OcTree& tree = *impl_->tree;
+  const VoxelMap& vm = impl_->Voxels();
   VoxelBlock block;
-  block.voxel_size_m = tree.getResolution();
+  block.voxel_size_m = vm.voxel_size_m();
   const Eigen::Vector3i lo = min_index_in.cwiseMax(Eigen::Vector3i::Constant(-kKeyOffset));
   const Eigen::Vector3i hi = max_index_in.cwiseMin(Eigen::Vector3i::Constant(kKeyOffset - 1));
   if ((hi.array() < lo.array()).any()) return block;
@@ -300,24 +367,22 @@ VoxelBlock OccupancyMap::ExtractBlock(const Eigen::Vector3i& min_index_in,
   block.size = hi - lo + Eigen::Vector3i::Ones();
   block.state.assign(static_cast<size_t>(block.size.x()) * block.size.y() * block.size.z(),
                      VoxelBlock::kUnknown);
-  const octomap::OcTreeKey kmin(lo.x() + kKeyOffset, lo.y() + kKeyOffset, lo.z() + kKeyOffset);
-  const octomap::OcTreeKey kmax(hi.x() + kKeyOffset, hi.y() + kKeyOffset, hi.z() + kKeyOffset);
-  const unsigned depth = tree.getTreeDepth();
-  for (auto it = tree.begin_leafs_bbx(kmin, kmax), end = tree.end_leafs_bbx(); it != end; ++it) {
-    const int8_t s = tree.isNodeOccupied(*it) ? VoxelBlock::kOccupied : VoxelBlock::kFree;
-    const int side = 1 << (depth - it.getDepth());
-    const octomap::OcTreeKey k0 = it.getIndexKey();
-    Eigen::Vector3i a, b;  // inclusive voxel range of the leaf, clipped to the block
-    for (int ax = 0; ax < 3; ++ax) {
-      a[ax] = std::max(static_cast<int>(k0[ax]) - kKeyOffset, lo[ax]);
-      b[ax] = std::min(static_cast<int>(k0[ax]) - kKeyOffset + side - 1, hi[ax]);
-    }
-    for (int z = a.z(); z <= b.z(); ++z) {
-      for (int y = a.y(); y <= b.y(); ++y) {
-        int8_t* row =
-            &block.state[(static_cast<size_t>(z - lo.z()) * block.size.y() + (y - lo.y())) *
-                         block.size.x()];
-        std::fill(row + (a.x() - lo.x()), row + (b.x() - lo.x()) + 1, s);
+  const int s = VoxelMap::kShift;
+  for (int bz = lo.z() >> s; bz <= hi.z() >> s; ++bz) {
+    for (int by = lo.y() >> s; by <= hi.y() >> s; ++by) {
+      for (int bx = lo.x() >> s; bx <= hi.x() >> s; ++bx) {
+        const int32_t b = vm.FindBlock(bx, by, bz);
+        if (b < 0) continue;
+        const int8_t* st = vm.states(b);
+        for (int z = std::max(bz << s, lo.z()); z <= std::min((bz << s) + 7, hi.z()); ++z) {
+          for (int y = std::max(by << s, lo.y()); y <= std::min((by << s) + 7, hi.y()); ++y) {
+            int8_t* row =
+                &block.state[(static_cast<size_t>(z - lo.z()) * block.size.y() + (y - lo.y())) *
+                             block.size.x()];
+            for (int x = std::max(bx << s, lo.x()); x <= std::min((bx << s) + 7, hi.x()); ++x)
+              row[x - lo.x()] = st[VoxelMap::Local(x, y, z)];
+          }
+        }
       }
     }
   }
@@ -326,7 +391,7 @@ VoxelBlock OccupancyMap::ExtractBlock(const Eigen::Vector3i& min_index_in,
 
 void OccupancyMap::SaveBinary(const std::string& path) const {
   std::ostringstream out;
-  if (!impl_->tree->writeBinaryConst(out))
+  if (!impl_->Tree().writeBinaryConst(out))
     throw InputError(path, "OctoMap could not encode the map");
   gt::io::WriteFileAtomic(path, out.str());
 }
@@ -335,9 +400,15 @@ OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionO
   std::string why;
   GT_ASSERT_MSG(options.Check(&why), why);
   auto impl = std::make_unique<OccupancyMap::Impl>();
-  impl->tree = std::make_unique<octomap::OcTree>(options.voxel_size_m);
-  octomap::OcTree& tree = *impl->tree;
+  const bool octomap_engine = options.engine == FusionEngine::kOctomap;
+  impl->octomap_engine = octomap_engine;
+  if (octomap_engine) {
+    impl->tree = std::make_unique<octomap::OcTree>(options.voxel_size_m);
+  } else {
+    impl->voxels = std::make_unique<VoxelMap>(options.voxel_size_m, DefaultModel());
+  }
   const double inv_res = 1.0 / options.voxel_size_m;
+  const double max_range = options.max_range_m > 0 ? options.max_range_m : -1.0;
   FusionStats& st = impl->stats;
   for (size_t f = 0; f < frames.size(); ++f) {
     const FusionInput& in = frames[f];
@@ -360,11 +431,19 @@ OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionO
     st.invalid_pixels += static_cast<int64_t>(in.depth->values_m.size() - points.size());
     // Key-range clipping: drop points whose voxel index would wrap in OctoMap.
     const size_t before = points.size();
-    points.erase(std::remove_if(points.begin(), points.end(),
-                                [&](const Eigen::Vector3f& p) {
-                                  return !InsideKeyRange(p.cast<double>(), inv_res);
-                                }),
-                 points.end());
+    if (!points.empty()) {  // per point only when the cloud's box is not inside (floor is monotonic)
+      Eigen::Vector3f lo = points[0], hi = points[0];
+      for (const auto& p : points) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+      if (!InsideKeyRange(lo.cast<double>(), inv_res) || !InsideKeyRange(hi.cast<double>(), inv_res))
+        points.erase(std::remove_if(points.begin(), points.end(),
+                                    [&](const Eigen::Vector3f& p) {
+                                      return !InsideKeyRange(p.cast<double>(), inv_res);
+                                    }),
+                     points.end());
+    }
     st.out_of_key_range += static_cast<int64_t>(before - points.size());
     if (options.downsample) {
       bool fallback = false;
@@ -384,23 +463,18 @@ OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionO
       points = FromPcl(kept);
     }
     st.inserted_points += static_cast<int64_t>(points.size());
-    // Bounds of everything the rays can touch: the origin and the (possibly truncated)
-    // end points lie in the convex hull of the origin and the points.
-    impl->Grow(IndexOf(origin, inv_res));
-    octomap::Pointcloud scan;
-    scan.reserve(points.size());
-    for (const auto& p : points) {
-      scan.push_back(p.x(), p.y(), p.z());
-      impl->Grow(IndexOf(p.cast<double>(), inv_res));
+    const Eigen::Vector3f origin_f = origin.cast<float>();  // OctoMap's point3d is float
+    if (octomap_engine) {
+      octomap::Pointcloud scan;
+      scan.reserve(points.size());
+      for (const auto& p : points) scan.push_back(p.x(), p.y(), p.z());
+      impl->tree->insertPointCloud(scan, octomap::point3d(origin_f.x(), origin_f.y(), origin_f.z()),
+                                   max_range, /*lazy_eval=*/false, options.discretize);
+    } else {
+      impl->voxels->InsertScan(points, origin_f, max_range, options.discretize);
     }
-    tree.insertPointCloud(scan, octomap::point3d(origin.x(), origin.y(), origin.z()),
-                          options.max_range_m > 0 ? options.max_range_m : -1.0,
-                          /*lazy_eval=*/false, options.discretize);
   }
-  if (impl->has_bounds) {  // one voxel of margin for rounding of ray keys
-    impl->min_index -= Eigen::Vector3i::Ones();
-    impl->max_index += Eigen::Vector3i::Ones();
-  }
+  if (impl->voxels) impl->voxels->Finalize();
   return OccupancyMap(std::move(impl));
 }
 

@@ -1,4 +1,4 @@
-// OctoMap fusion of posed depth maps (GROUND_TRUTH.md §5, "Fusion").
+// Fusion of posed depth maps into one occupancy map (GROUND_TRUTH.md §5, "Fusion").
 //
 // Each frame's valid pixels (IsValidDepth with the frame's [min_depth_m, max_depth_m]) are
 // back-projected with the frame's Camera (planar depth z in metres, OpenCV axes, pixel
@@ -6,10 +6,17 @@
 // Invalid pixels are dropped BEFORE any transform: a zero depth would land on the camera
 // centre and a NaN becomes the origin in PCL's transform. The cloud is optionally
 // downsampled to one centroid per voxel of the map resolution and filtered by statistical
-// outlier removal, then inserted into one OctoMap OcTree with the camera centre as the
-// sensor origin: the ray to every point marks free voxels, its end voxel is a hit, rays are
-// truncated at max_range_m (OctoMap's ray model, default hit/miss probabilities 0.7/0.4,
-// clamping 0.12/0.97, occupancy threshold 0.5).
+// outlier removal, then inserted as one scan with the camera centre as the sensor origin:
+// the ray to every point marks free voxels, its end voxel is a hit, rays are truncated at
+// max_range_m (OctoMap's ray model, default hit/miss probabilities 0.7/0.4, clamping
+// 0.12/0.97, occupancy threshold 0.5).
+//
+// Engines: by default the scans are ray-cast by occgt's own code into a sparse voxel store
+// (voxel_map.h) that reproduces OctoMap's OcTree::insertPointCloud exactly (same keys, same
+// per-scan update rule, same float log-odds; tests/occupancy/equivalence_test.cc compares
+// them voxel by voxel). The OctoMap OcTree is built from it only when asked for (SaveBinary,
+// NumLeafNodes). FusionEngine::kOctomap runs OctoMap's own insertPointCloud instead (the
+// reference of the tests and the benchmark's naive baseline).
 //
 // Key range: OctoMap keys are 16-bit per axis, so the map spans 2^16 * voxel_size_m per
 // axis centred on the world origin (3276.8 m at 5 cm). Points outside are dropped (and
@@ -38,13 +45,21 @@ enum class FusionScope {
   kScene,   // "scene:S": every S-th usable frame of the scene; one map reused by all pairs
 };
 
+// Who casts the rays (see the top of this file).
+enum class FusionEngine {
+  kOwn,      // occgt's OctoMap-equivalent ray casting into a sparse voxel store (fast)
+  kOctomap,  // OctoMap's OcTree::insertPointCloud (reference for tests and benchmarks)
+};
+
 struct FusionOptions {
   double voxel_size_m = 0.05;    // OctoMap resolution (metres), > 0
   double max_range_m = 10.0;     // ray truncation (metres); <= 0 means unlimited. 10 m covers
                                  // indoor depth sensors (ScanNet/7-Scenes read < 10 m).
-  bool downsample = true;        // one centroid per voxel (pcl::VoxelGrid, overflow-guarded)
-  bool discretize = true;        // OctoMap's discretized insertion (one ray per end voxel); false =
-                                 // one ray per point, the naive baseline of the benchmark (slower)
+  bool downsample = false;       // one centroid per voxel (pcl::VoxelGrid, overflow-guarded);
+                                 // off: with `discretize` every voxel gets one ray anyway
+  bool discretize = true;        // OctoMap's discretized insertion (one ray per end voxel, to its
+                                 // centre); false = one ray per point (the naive baseline)
+  FusionEngine engine = FusionEngine::kOwn;
   bool remove_outliers = false;  // pcl::StatisticalOutlierRemoval after downsampling
   int outlier_k = 20;            // neighbours for the mean distance, >= 1
   double outlier_stddev = 2.0;   // reject mean distance > mean + stddev * sigma, > 0
@@ -104,7 +119,10 @@ struct VoxelBlock {
   }
 };
 
-// Opaque fused map (an octomap::OcTree inside).
+class VoxelMap;  // voxel_map.h, internal to libgt/occupancy
+
+// Opaque fused map: a sparse voxel store (voxel_map.h) and/or an octomap::OcTree, each
+// derived from the other on first use. Read-only use is thread-safe.
 class OccupancyMap {
  public:
   struct Impl;
@@ -115,7 +133,8 @@ class OccupancyMap {
   ~OccupancyMap();
 
   double resolution_m() const;
-  // Leaf nodes of the (pruned) tree; a pruned leaf may cover many voxels.
+  // Leaf nodes of the (pruned) OcTree; a pruned leaf may cover many voxels. With the own
+  // engine the OcTree is built on the first call (as for SaveBinary).
   int64_t NumLeafNodes() const;
   // Known voxels at the finest resolution (pruned leaves expanded), occupied and free.
   int64_t NumOccupiedVoxels() const;
@@ -123,14 +142,17 @@ class OccupancyMap {
   // Voxel state at a world point: 1 occupied, 0 free, -1 unknown or outside the key range.
   int StateAt(const Eigen::Vector3d& p_in_world) const;
   const FusionStats& stats() const;
-  // Inclusive voxel-index bounds containing every voxel the fusion touched (camera centres,
-  // inserted points, rays between them); false for an empty map.
+  // Tight inclusive voxel-index bounds of the known (occupied or free) voxels; false when
+  // none is known.
   bool KnownIndexBounds(Eigen::Vector3i* min_index, Eigen::Vector3i* max_index) const;
   // States of the voxels with index in [min_index, max_index] (inclusive; clipped to the
   // key range). Pruned leaves are expanded to their voxels.
   VoxelBlock ExtractBlock(const Eigen::Vector3i& min_index, const Eigen::Vector3i& max_index) const;
   // OctoMap binary (.bt, maximum-likelihood occupancy), which octovis opens; atomic write.
+  // With the own engine the OcTree is built here (first call), from the voxel store.
   void SaveBinary(const std::string& path) const;
+  // The voxel store, for libgt/occupancy's own use (frustum binning).
+  const VoxelMap& voxels() const;
 
  private:
   std::unique_ptr<Impl> impl_;

@@ -1,10 +1,14 @@
 // Occupancy target speed: both cameras of a real pair at 640x480, 5 cm voxels, pair fusion,
-// one thread (the target: <= 100 ms for fusion + both volumes), broken down into fusion and
-// binning, next to a naive use of OctoMap for the same output (one ray per point, no
-// discretization, then OcTree::search at every bin centre). Peak memory: run under
-// /usr/bin/time -v. Figures and commands: docs/PERFORMANCE.md, section "Occupancy".
+// one thread (the target: <= 100 ms for fusion + both volumes), broken down into
+// back-projection, fusion and binning, next to a naive use of OctoMap for the same output
+// (OcTree::insertPointCloud of every valid point of both frames without discretization, each
+// with its camera centre and max range, then OcTree::search at every bin centre of both
+// cameras). Peak memory: run one benchmark under /usr/bin/time -v. Figures and commands:
+// docs/PERFORMANCE.md, section "Occupancy".
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
+
+#include <memory>
 
 #include "libgt/io/depth_io.h"
 #include "libgt/io/reader.h"
@@ -59,6 +63,19 @@ void BM_PairTotal(benchmark::State& state) {
   SetLabel(state);
 }
 
+// The same with bin-centre sampling: the output of the naive baseline below.
+void BM_PairTotalCenter(benchmark::State& state) {
+  const PairData& p = Data(static_cast<int>(state.range(0)));
+  BinOptions b;
+  b.traversal = Traversal::kCenter;
+  for (auto _ : state) {
+    PairOccupancy out =
+        ComputePairOccupancy(p.in0, p.in1, FusionOptions(), b, OccupancyMode::kOctomap);
+    benchmark::DoNotOptimize(out.cam0.occ.data());
+  }
+  SetLabel(state);
+}
+
 void BM_BackProject(benchmark::State& state) {
   const PairData& p = Data(static_cast<int>(state.range(0)));
   for (auto _ : state) {
@@ -81,6 +98,7 @@ void BM_BackProjectAndDownsample(benchmark::State& state) {
   SetLabel(state);
 }
 
+// Own engine (the default): back-projection + OctoMap-equivalent ray casting.
 void BM_Fuse(benchmark::State& state) {
   const PairData& p = Data(static_cast<int>(state.range(0)));
   for (auto _ : state) {
@@ -90,13 +108,41 @@ void BM_Fuse(benchmark::State& state) {
   SetLabel(state);
 }
 
-void BM_FuseNoDownsample(benchmark::State& state) {
+// The same map with OctoMap's own discretized insertPointCloud (the reference engine).
+void BM_FuseOctomapDiscretized(benchmark::State& state) {
   const PairData& p = Data(static_cast<int>(state.range(0)));
   FusionOptions o;
-  o.downsample = false;
+  o.engine = FusionEngine::kOctomap;
   for (auto _ : state) {
     OccupancyMap map = FuseOccupancy({p.in0, p.in1}, o);
     benchmark::DoNotOptimize(map.resolution_m());
+  }
+  SetLabel(state);
+}
+
+// Voxel-grid downsampling before the (discretized) insertion, off by default.
+void BM_FuseWithDownsample(benchmark::State& state) {
+  const PairData& p = Data(static_cast<int>(state.range(0)));
+  FusionOptions o;
+  o.downsample = true;
+  for (auto _ : state) {
+    OccupancyMap map = FuseOccupancy({p.in0, p.in1}, o);
+    benchmark::DoNotOptimize(map.resolution_m());
+  }
+  SetLabel(state);
+}
+
+// Building the OctoMap OcTree from the own voxel store (only when asked: --save-octree).
+void BM_BuildOctree(benchmark::State& state) {
+  const PairData& p = Data(static_cast<int>(state.range(0)));
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto map = std::make_unique<OccupancyMap>(FuseOccupancy({p.in0, p.in1}, FusionOptions()));
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(map->NumLeafNodes());
+    state.PauseTiming();
+    map.reset();
+    state.ResumeTiming();
   }
   SetLabel(state);
 }
@@ -117,11 +163,13 @@ void Project(benchmark::State& state, Traversal traversal) {
 void BM_ProjectExactBothCams(benchmark::State& state) { Project(state, Traversal::kExact); }
 void BM_ProjectCenterBothCams(benchmark::State& state) { Project(state, Traversal::kCenter); }
 
-// Naive: one OctoMap ray per point (no downsampling, no discretization), then an octree
-// search at every bin centre of both cameras (the center approximation's output).
+// Naive: OctoMap's insertPointCloud with one ray per valid point (no downsampling, no
+// discretization), then OcTree::search (OccupancyMap::StateAt of an OctoMap-engine map) at
+// every bin centre of both cameras (the center approximation's output).
 void BM_NaivePairTotal(benchmark::State& state) {
   const PairData& p = Data(static_cast<int>(state.range(0)));
   FusionOptions o;
+  o.engine = FusionEngine::kOctomap;
   o.downsample = false;
   o.discretize = false;
   const BinOptions b;
@@ -147,10 +195,13 @@ void BM_NaivePairTotal(benchmark::State& state) {
 }
 
 BENCHMARK(BM_PairTotal)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PairTotalCenter)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BackProject)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BackProjectAndDownsample)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Fuse)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_FuseNoDownsample)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FuseWithDownsample)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FuseOctomapDiscretized)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BuildOctree)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ProjectExactBothCams)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ProjectCenterBothCams)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_NaivePairTotal)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(2);

@@ -334,6 +334,33 @@ TEST_F(RoomAndBox, ExactTraversalAgreesWithDenseSamplingReference) {
   EXPECT_GE(static_cast<double>(agree) / bins, 0.995) << agree << " of " << bins;
 }
 
+// The own ray casting (the default engine) gives exactly the voxel states of OctoMap's own
+// insertPointCloud on this scene (tests/occupancy/equivalence_test.cc does the same on random
+// scenes and the real samples).
+TEST_F(RoomAndBox, OwnFusionEqualsOctomapInsertionVoxelForVoxel) {
+  FusionOptions own = fusion_, ref = fusion_;
+  own.engine = FusionEngine::kOwn;
+  ref.engine = FusionEngine::kOctomap;
+  const OccupancyMap a = FuseOccupancy(inputs_, own), b = FuseOccupancy(inputs_, ref);
+  Eigen::Vector3i lo_a, hi_a, lo_b, hi_b;
+  ASSERT_TRUE(a.KnownIndexBounds(&lo_a, &hi_a));
+  ASSERT_TRUE(b.KnownIndexBounds(&lo_b, &hi_b));
+  EXPECT_EQ(lo_a, lo_b);
+  EXPECT_EQ(hi_a, hi_b);
+  const VoxelBlock x = a.ExtractBlock(lo_a, hi_a), y = b.ExtractBlock(lo_a, hi_a);
+  ASSERT_EQ(x.state.size(), y.state.size());
+  int64_t differing = 0, known = 0;
+  for (size_t i = 0; i < x.state.size(); ++i) {
+    differing += x.state[i] != y.state[i];
+    known += y.state[i] != VoxelBlock::kUnknown;
+  }
+  EXPECT_GT(known, 100000);
+  EXPECT_EQ(differing, 0);
+  EXPECT_EQ(a.NumOccupiedVoxels(), b.NumOccupiedVoxels());
+  EXPECT_EQ(a.NumFreeVoxels(), b.NumFreeVoxels());
+  EXPECT_EQ(a.NumLeafNodes(), b.NumLeafNodes());
+}
+
 // Camera looking down +z at a fronto-parallel wall 1.96 m away: the wall's voxels are
 // [1.95, 2.00) in z, bin 12 of 64 linear bins in [0.1, 10) is [1.9563, 2.1109) with centre
 // 2.0336, behind the wall. Bin-centre sampling misses the wall; exact traversal catches it.

@@ -174,6 +174,7 @@ TEST(Fusion, OverflowGuardIsUsedDuringFusion) {
   for (int v = 0; v < 48; ++v)
     for (int u = 0; u < 64; ++u) depth.at(u, v) = (u < 32) ? 2.0f : 1000.0f;
   FusionOptions opt;
+  opt.downsample = true;  // off by default
   const OccupancyMap map = FuseOccupancy({{&depth, cam, Rigid3d::Identity(), 0.1, 1e4}}, opt);
   EXPECT_EQ(map.stats().out_of_key_range, 0);
   EXPECT_EQ(map.stats().downsample_fallbacks, 1);

@@ -103,7 +103,9 @@ void ExpectPlausible(const Loaded& l, size_t i0, size_t i1, const char* what) {
     EXPECT_GT(n.unknown / total, 0.05);
     ASSERT_GT(r.rays_with_depth, vol->width * vol->height / 2);
     EXPECT_GT(double(r.occupied_at_own_depth) / r.rays_with_depth, 0.95);
-    if (r.front_bins > 0) EXPECT_GT(double(r.front_known) / r.front_bins, 0.95);
+    if (r.front_bins > 0) {
+      EXPECT_GT(double(r.front_known) / r.front_bins, 0.95);
+    }
     EXPECT_GT(double(r.unknown_behind) / r.unknown, 0.9);
     ++c;
   }
