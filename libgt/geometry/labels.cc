@@ -23,12 +23,16 @@ E ParseName(const std::string& name, const std::string& field, const char* const
 
 // Everything the per-pixel loop needs, computed once per call.
 struct Kernel {
-  // q = d · (col[u] + row(v)) + k, with col[u] = a·u and row(v) = b·v + c.
+  // q = d · (a·u + b·v + c) + k; z = q.z, (x, y) = (q.x, q.y) · 1 / (z + eps).
   double a[3], b[3], c[3], k[3];
-  double min_depth_m, max_depth_m;
-  double abs_tol_m, rel_tol;
-  bool observed;                      // tolerance relative to d_B
-  bool cheirality;                    // z <= min_depth_m → OUT_OF_VIEW before dividing
+  // IsValidDepth(d, min, max) for a float d is exactly depth_lo <= d <= depth_hi in double:
+  // d > 0 is d >= the smallest positive float, isfinite is d <= FLT_MAX, NaN fails both.
+  double depth_lo, depth_hi;
+  double z_min;  // OUT_OF_VIEW unless z > z_min; -inf without cheirality (z is finite for
+                 // every valid depth)
+  // τ = max(abs_tol_m, max(rel_tol_db · d_B, rel_tol_z · z)): one of the two factors is 0,
+  // so this is max(abs_tol_m, rel_tol · base) without a per-pixel choice of the base.
+  double abs_tol_m, rel_tol_db, rel_tol_z;
   bool missing_zero;                  // invalid d_B compared as 0
   double eps;                         // added to z before dividing
   double x_min, x_max, y_min, y_max;  // inside iff x >= x_min && x < x_max (same for y)
@@ -54,15 +58,16 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
     kn.c[r] = m(r, 2);
     kn.k[r] = t(r);
   }
-  kn.min_depth_m = o.min_depth_m;
-  kn.max_depth_m = o.max_depth_m;
+  const double inf = std::numeric_limits<double>::infinity();
+  kn.depth_lo = std::max(o.min_depth_m, double{std::numeric_limits<float>::denorm_min()});
+  kn.depth_hi = std::min(o.max_depth_m, double{std::numeric_limits<float>::max()});
+  kn.z_min = o.cheirality ? o.min_depth_m : -inf;
   kn.abs_tol_m = o.abs_tol_m;
-  kn.rel_tol = o.rel_tol;
-  kn.observed = o.relative_to == RelativeTo::kObserved;
-  kn.cheirality = o.cheirality;
+  const bool observed = o.relative_to == RelativeTo::kObserved;
+  kn.rel_tol_db = observed ? o.rel_tol : 0.0;
+  kn.rel_tol_z = observed ? 0.0 : o.rel_tol;
   kn.missing_zero = o.missing_target == MissingTarget::kAsZeroDepth;
   kn.eps = o.projection_eps_m;
-  const double inf = std::numeric_limits<double>::infinity();
   if (o.bounds == Bounds::kPixelArea) {
     kn.x_min = -0.5;
     kn.y_min = -0.5;
@@ -81,106 +86,88 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
   return kn;
 }
 
-// Scratch rows reused for every row of one call (no per-pixel allocation).
-struct RowBuffers {
-  std::vector<double> col_x, col_y, col_z;  // a·u for the sampled columns
-  std::vector<double> z, x, y;
-  std::vector<float> depth;
-};
-
-void PrepareColumns(const Kernel& kn, int width_a, int stride, RowBuffers* buf) {
-  const int n = (width_a + stride - 1) / stride;
-  buf->col_x.resize(n);
-  buf->col_y.resize(n);
-  buf->col_z.resize(n);
-  buf->z.resize(n);
-  buf->x.resize(n);
-  buf->y.resize(n);
-  buf->depth.resize(n);
-  for (int i = 0; i < n; ++i) {
-    const double u = static_cast<double>(i) * stride;
-    buf->col_x[i] = kn.a[0] * u;
-    buf->col_y[i] = kn.a[1] * u;
-    buf->col_z[i] = kn.a[2] * u;
-  }
-}
-
-// Labels the sampled pixels (u = 0, stride, 2·stride, …) of row v of A. labels_out gets
-// one code per sampled pixel; xy_out (nullable) gets (x, y) per sampled pixel.
-inline void LabelRow(const Kernel& kn, const float* depth_row_a, int v, int stride, RowBuffers* buf,
-                     uint8_t* labels_out, float* xy_out) {
-  const int n = static_cast<int>(buf->z.size());
-  float* __restrict dep = buf->depth.data();
-  if (stride == 1) {
-    std::copy(depth_row_a, depth_row_a + n, dep);
-  } else {
-    for (int i = 0; i < n; ++i) dep[i] = depth_row_a[static_cast<size_t>(i) * stride];
-  }
+// Labels the n sampled pixels u = 0, stride, 2·stride, … of row v of A, whose depths are
+// dep[0 .. n): codes[i] = PixelLabel code (int32, so that the loop runs on 32- and 64-bit
+// lanes only), xy[2i], xy[2i + 1] = warped (x, y) (NaN where not projected).
+//
+// Double precision, one branch-free loop that GCC vectorises (-fopt-info-vec): each decision
+// of GROUND_TRUTH.md §2 is a compare and a select; the target pixel is clamped into the image
+// (min/max, a NaN becomes 0) so that the read is always in bounds (its value is used only
+// when the point is inside, where the clamp changes nothing); one reciprocal per pixel.
+// The clones run the same IEEE operations on wider registers: gt_geometry is built with
+// -ffp-contract=off (no FMA contraction, which g++ does by default whenever FMA is
+// enabled, even with -std=c++17) and -fno-trapping-math (lets the selects be vectorised;
+// values are unchanged), so every clone gives bit-identical results.
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRowKernel(
+    const Kernel& kn, const float* __restrict dep, int n, int stride, int v,
+    int32_t* __restrict codes, float* __restrict xy) {
   const double vv = v;
+  const double ax = kn.a[0], ay = kn.a[1], az = kn.a[2];
   const double rx = kn.b[0] * vv + kn.c[0];
   const double ry = kn.b[1] * vv + kn.c[1];
   const double rz = kn.b[2] * vv + kn.c[2];
   const double kx = kn.k[0], ky = kn.k[1], kz = kn.k[2], eps = kn.eps;
-  const double* __restrict cx = buf->col_x.data();
-  const double* __restrict cy = buf->col_y.data();
-  const double* __restrict cz = buf->col_z.data();
-  double* __restrict zs = buf->z.data();
-  double* __restrict xs = buf->x.data();
-  double* __restrict ys = buf->y.data();
-  // Pass 1 (vectorisable): projection of every sampled pixel, valid or not.
-  for (int i = 0; i < n; ++i) {
-    const double d = dep[i];
-    const double qz = d * (cz[i] + rz) + kz;
-    const double den = qz + eps;
-    zs[i] = qz;
-    xs[i] = (d * (cx[i] + rx) + kx) / den;
-    ys[i] = (d * (cy[i] + ry) + ky) / den;
-  }
-  // Pass 2: the decisions of GROUND_TRUTH.md §2.
+  const double lo = kn.depth_lo, hi = kn.depth_hi, z_min = kn.z_min;
+  const bool missing_zero = kn.missing_zero;
+  const double abs_tol = kn.abs_tol_m, rel_db = kn.rel_tol_db, rel_z = kn.rel_tol_z;
+  const double x_min = kn.x_min, x_max = kn.x_max, y_min = kn.y_min, y_max = kn.y_max;
+  const double offset = kn.lookup_offset;
+  const int wb = kn.width_b;
+  // The largest doubles below W and H: they truncate to W − 1 and H − 1.
+  const double tx_cap = std::nextafter(static_cast<double>(kn.width_b), 0.0);
+  const double ty_cap = std::nextafter(static_cast<double>(kn.height_b), 0.0);
+  const float* __restrict depth_b = kn.depth_b;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (int i = 0; i < n; ++i) {
-    const float d = dep[i];
-    const double z = zs[i];
-    const double x = xs[i], y = ys[i];
-    PixelLabel label;
-    bool projected = true;
-    if (!IsValidDepth(d, kn.min_depth_m, kn.max_depth_m)) {
-      label = PixelLabel::kNoDepth;
-      projected = false;
-    } else if (kn.cheirality && !(z > kn.min_depth_m)) {
-      label = PixelLabel::kOutOfView;
-      projected = false;
-    } else if (!(x >= kn.x_min && x < kn.x_max && y >= kn.y_min && y < kn.y_max)) {
-      label = PixelLabel::kOutOfView;
-    } else {
-      const int tu = std::min(static_cast<int>(x + kn.lookup_offset), kn.width_b - 1);
-      const int tv = std::min(static_cast<int>(y + kn.lookup_offset), kn.height_b - 1);
-      double db = kn.depth_b[static_cast<size_t>(tv) * kn.width_b + tu];
-      bool known = IsValidDepth(static_cast<float>(db), kn.min_depth_m, kn.max_depth_m);
-      if (!known && kn.missing_zero) {
-        db = 0.0;
-        known = true;
-      }
-      if (!known) {
-        label = PixelLabel::kUnknown;
-      } else {
-        const double tol = std::max(kn.abs_tol_m, kn.rel_tol * (kn.observed ? db : z));
-        const double diff = z - db;
-        if (std::abs(diff) <= tol) {
-          label = PixelLabel::kVisible;
-        } else if (diff > tol) {
-          label = PixelLabel::kOccluded;
-        } else {
-          label = PixelLabel::kInconsistent;
-        }
-      }
-    }
-    labels_out[i] = static_cast<uint8_t>(label);
-    if (xy_out) {
-      xy_out[2 * i] = projected ? static_cast<float>(x) : nan;
-      xy_out[2 * i + 1] = projected ? static_cast<float>(y) : nan;
-    }
+    const double d = dep[i];
+    const double u = static_cast<double>(i * stride);
+    const double z = d * (az * u + rz) + kz;
+    const double inv = 1.0 / (z + eps);
+    const double x = (d * (ax * u + rx) + kx) * inv;
+    const double y = (d * (ay * u + ry) + ky) * inv;
+    const bool valid = (d >= lo) & (d <= hi);
+    const bool projected = valid & (z > z_min);
+    const bool inside = projected & (x >= x_min) & (x < x_max) & (y >= y_min) & (y < y_max);
+    const double tx = std::min(tx_cap, std::max(0.0, x + offset));
+    const double ty = std::min(ty_cap, std::max(0.0, y + offset));
+    const int tu = static_cast<int>(tx), tv = static_cast<int>(ty);
+    const double db_raw = depth_b[tv * wb + tu];
+    const bool db_valid = (db_raw >= lo) & (db_raw <= hi);
+    const double db = db_valid ? db_raw : 0.0;  // compat compares a missing depth as 0
+    const bool known = db_valid | missing_zero;
+    const double tol = std::max(abs_tol, std::max(rel_db * db, rel_z * z));
+    const double diff = z - db;
+    const int32_t decided = std::abs(diff) <= tol ? 2   // kVisible
+                            : diff > tol          ? 3   // kOccluded
+                                                  : 4;  // kInconsistent
+    const int32_t in_view = known ? decided : 5;        // kUnknown
+    const int32_t with_depth = inside ? in_view : 1;    // kOutOfView
+    codes[i] = valid ? with_depth : 0;                  // kNoDepth
+    xy[2 * i] = projected ? static_cast<float>(x) : nan;
+    xy[2 * i + 1] = projected ? static_cast<float>(y) : nan;
   }
+}
+
+// labels[i] = codes[i] for i < n.
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void StoreLabels(
+    const int32_t* __restrict codes, int n, uint8_t* __restrict labels) {
+  for (int i = 0; i < n; ++i) labels[i] = static_cast<uint8_t>(codes[i]);
+}
+
+// Adds the number of each code in codes[0 .. n) to counts (vectorised compare-and-sum).
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void CountCodes(
+    const int32_t* __restrict codes, int n, std::array<int64_t, kNumPixelLabels>* counts) {
+  int32_t c[kNumPixelLabels] = {};
+  for (int i = 0; i < n; ++i) {
+    const int32_t code = codes[i];
+    c[0] += code == 0;
+    c[1] += code == 1;
+    c[2] += code == 2;
+    c[3] += code == 3;
+    c[4] += code == 4;
+    c[5] += code == 5;
+  }
+  for (int k = 0; k < kNumPixelLabels; ++k) (*counts)[k] += c[k];
 }
 
 void CheckInputs(const DepthImage& depth_a, const Camera& cam_a, const DepthImage& depth_b,
@@ -321,11 +308,11 @@ DirectionLabels LabelDirection(const DepthImage& depth_a, const Camera& cam_a,
   const size_t w = static_cast<size_t>(out.width);
   out.labels.resize(w * out.height);
   out.warped_xy.resize(w * out.height * 2);
-  RowBuffers buf;
-  PrepareColumns(kn, out.width, 1, &buf);
+  std::vector<int32_t> codes(w);  // one row, reused
   for (int v = 0; v < out.height; ++v) {
-    LabelRow(kn, depth_a.values_m.data() + v * w, v, 1, &buf, out.labels.data() + v * w,
-             out.warped_xy.data() + v * w * 2);
+    LabelRowKernel(kn, depth_a.values_m.data() + v * w, out.width, 1, v, codes.data(),
+                   out.warped_xy.data() + v * w * 2);
+    StoreLabels(codes.data(), out.width, out.labels.data() + v * w);
   }
   return out;
 }
@@ -353,16 +340,25 @@ DirectionMetrics ScoreDirection(const DepthImage& depth_a, const Camera& cam_a,
   CheckInputs(depth_a, cam_a, depth_b, cam_b, options);
   if (score_stride < 1) throw InputError("score_stride", "expected >= 1");
   const Kernel kn = MakeKernel(cam_a, cam_b, b_from_a, depth_b, options);
-  RowBuffers buf;
-  PrepareColumns(kn, cam_a.width, score_stride, &buf);
-  std::vector<uint8_t> row_labels(buf.z.size());
+  // Scratch rows reused for every row (no per-pixel allocation): the sampled depths of A
+  // (stride > 1), the codes and warped positions of one row (the positions are not needed
+  // here, but one kernel that always writes them vectorises; an L1-resident row costs
+  // little). Labels are counted row by row, in the same pass.
+  const int n = (cam_a.width + score_stride - 1) / score_stride;
+  std::vector<float> row_depth(score_stride > 1 ? n : 0);
+  std::vector<int32_t> codes(n);
+  std::vector<float> row_xy(2 * static_cast<size_t>(n));
   DirectionMetrics m;
   const size_t w = static_cast<size_t>(cam_a.width);
   for (int v = 0; v < cam_a.height; v += score_stride) {
-    LabelRow(kn, depth_a.values_m.data() + v * w, v, score_stride, &buf, row_labels.data(),
-             nullptr);
-    for (uint8_t l : row_labels) ++m.counts[l];
-    m.sampled += static_cast<int64_t>(row_labels.size());
+    const float* depth_row = depth_a.values_m.data() + v * w;
+    if (score_stride > 1) {
+      for (int i = 0; i < n; ++i) row_depth[i] = depth_row[static_cast<size_t>(i) * score_stride];
+      depth_row = row_depth.data();
+    }
+    LabelRowKernel(kn, depth_row, n, score_stride, v, codes.data(), row_xy.data());
+    CountCodes(codes.data(), n, &m.counts);
+    m.sampled += n;
   }
   FinishMetrics(&m);
   return m;

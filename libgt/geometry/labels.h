@@ -17,10 +17,13 @@
 // ResizeDepthNearest and Camera::Resized).
 //
 // Arithmetic: double precision, with K_B · R · K_A⁻¹ and K_B · t folded into one affine map
-// (q = d · (a·u + b·v + c) + k, z = q.z, x = q.x / z). A slow step-by-step evaluation
-// agrees with it except when a value lands within ~1e-12 of a threshold (a tie); the
-// tests bound the number of such pixels. Same inputs → identical labels on any machine
-// that implements IEEE-754 double (no fast-math).
+// (q = d · (a·u + b·v + c) + k, z = q.z, (x, y) = (q.x, q.y) · r with one reciprocal
+// r = 1 / (z + eps)), in one branch-free loop per row that the compiler vectorises. A slow
+// step-by-step evaluation (tests/geometry/reference.h) agrees with it except when a value
+// lands within ~1e-12 of a threshold (a tie); the tests require no difference on their
+// random scenes. Same inputs → identical labels on any machine that implements IEEE-754
+// double: no fast-math, no FMA contraction (-ffp-contract=off), and the SIMD clones of the
+// kernel (AVX-512, AVX2, baseline x86-64, chosen at run time) do the same operations.
 #pragma once
 
 #include <array>
