@@ -23,7 +23,8 @@ E ParseName(const std::string& name, const std::string& field, const char* const
 
 // Everything the per-pixel loop needs, computed once per call.
 struct Kernel {
-  // q = d · (a·u + b·v + c) + k; z = q.z, (x, y) = (q.x, q.y) · 1 / (z + eps).
+  // q = d · (a·u + b·v + c) + k; z = q.z, (x, y) = (q.x, q.y) · 1 / (z + eps). Double here;
+  // the row kernel rounds a, b·v + c and k to float once per row.
   double a[3], b[3], c[3], k[3];
   // IsValidDepth(d, min, max) for a float d is exactly depth_lo <= d <= depth_hi in double:
   // d > 0 is d >= the smallest positive float, isfinite is d <= FLT_MAX, NaN fails both.
@@ -39,7 +40,25 @@ struct Kernel {
   double lookup_offset;               // 0.5 nearest (floor(x + 0.5)), 0 truncate
   int width_b, height_b;
   const float* depth_b;
+  // float32 thresholds giving the same decision for float values: d >= depth_lo_f is
+  // d >= depth_lo, d <= depth_hi_f is d <= depth_hi, x >= x_min_f is x > 0 (strict) ...
+  float depth_lo_f, depth_hi_f, z_min_f, x_min_f, x_max_f, y_min_f, y_max_f;
 };
+
+// The smallest float >= x and the largest float <= x.
+float FloatAtLeast(double x) {
+  if (x > std::numeric_limits<float>::max()) return std::numeric_limits<float>::infinity();
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
+}
+float FloatAtMost(double x) {
+  if (x < -std::numeric_limits<float>::max()) return -std::numeric_limits<float>::infinity();
+  if (x > std::numeric_limits<float>::max()) return std::numeric_limits<float>::max();
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+  return f;
+}
 
 Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_from_a,
                   const DepthImage& depth_b, const LabelOptions& o) {
@@ -83,68 +102,79 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
   kn.width_b = cam_b.width;
   kn.height_b = cam_b.height;
   kn.depth_b = depth_b.values_m.data();
+  kn.depth_lo_f = FloatAtLeast(kn.depth_lo);
+  kn.depth_hi_f = FloatAtMost(kn.depth_hi);
+  // z > z_min for a float z: z >= the next float above z_min when z_min is not a float.
+  kn.z_min_f = o.cheirality ? FloatAtMost(kn.z_min) : -std::numeric_limits<float>::infinity();
+  kn.x_min_f = o.bounds == Bounds::kPixelArea ? -0.5f : std::numeric_limits<float>::denorm_min();
+  kn.y_min_f = kn.x_min_f;
+  kn.x_max_f = FloatAtLeast(kn.x_max);  // x < x_max: exact, W − 0.5 and W − 1 are floats
+  kn.y_max_f = FloatAtLeast(kn.y_max);
   return kn;
 }
 
 // Labels the n sampled pixels u = 0, stride, 2·stride, … of row v of A, whose depths are
-// dep[0 .. n): codes[i] = PixelLabel code (int32, so that the loop runs on 32- and 64-bit
-// lanes only), xy[2i], xy[2i + 1] = warped (x, y) (NaN where not projected).
+// dep[0 .. n): codes[i] = PixelLabel code (int32, so that the loop runs on 32-bit lanes
+// only), xy[2i], xy[2i + 1] = warped (x, y) (NaN where not projected).
 //
-// Double precision, one branch-free loop that GCC vectorises (-fopt-info-vec): each decision
-// of GROUND_TRUTH.md §2 is a compare and a select; the target pixel is clamped into the image
+// float32, like the tensors of LoFTR / Occ²Net: the per-row coefficients a, r = b·v + c, k
+// are computed in double and rounded once; every threshold is converted to the float that
+// gives the same decision for float values (Kernel::*_f), so the only departures from the
+// double reference are rounding ties (docs/GROUND_TRUTH.md, "Arithmetic").
+// One branch-free loop that GCC vectorises (-fopt-info-vec): each decision of
+// GROUND_TRUTH.md §2 is a compare and a select; the target pixel is clamped into the image
 // (min/max, a NaN becomes 0) so that the read is always in bounds (its value is used only
 // when the point is inside, where the clamp changes nothing); one reciprocal per pixel.
-// The clones run the same IEEE operations on wider registers: gt_geometry is built with
-// -ffp-contract=off (no FMA contraction, which g++ does by default whenever FMA is
-// enabled, even with -std=c++17) and -fno-trapping-math (lets the selects be vectorised;
-// values are unchanged), so every clone gives bit-identical results.
+// The clones (AVX-512, AVX2, baseline x86-64, picked at load time) run the same IEEE
+// operations on wider registers: gt_geometry is built with -ffp-contract=off (no FMA
+// contraction, which g++ does by default whenever FMA is enabled, even with -std=c++17) and
+// -fno-trapping-math (lets the selects be vectorised; values are unchanged), so every clone
+// gives bit-identical results.
 __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRowKernel(
     const Kernel& kn, const float* __restrict dep, int n, int stride, int v,
     int32_t* __restrict codes, float* __restrict xy) {
+  const auto f = [](double x) { return static_cast<float>(x); };
   const double vv = v;
-  const double ax = kn.a[0], ay = kn.a[1], az = kn.a[2];
-  const double rx = kn.b[0] * vv + kn.c[0];
-  const double ry = kn.b[1] * vv + kn.c[1];
-  const double rz = kn.b[2] * vv + kn.c[2];
-  const double kx = kn.k[0], ky = kn.k[1], kz = kn.k[2], eps = kn.eps;
-  const double lo = kn.depth_lo, hi = kn.depth_hi, z_min = kn.z_min;
+  const float ax = f(kn.a[0]), ay = f(kn.a[1]), az = f(kn.a[2]);
+  const float rx = f(kn.b[0] * vv + kn.c[0]);
+  const float ry = f(kn.b[1] * vv + kn.c[1]);
+  const float rz = f(kn.b[2] * vv + kn.c[2]);
+  const float kx = f(kn.k[0]), ky = f(kn.k[1]), kz = f(kn.k[2]), eps = f(kn.eps);
+  const float lo = kn.depth_lo_f, hi = kn.depth_hi_f, z_min = kn.z_min_f;
   const bool missing_zero = kn.missing_zero;
-  const double abs_tol = kn.abs_tol_m, rel_db = kn.rel_tol_db, rel_z = kn.rel_tol_z;
-  const double x_min = kn.x_min, x_max = kn.x_max, y_min = kn.y_min, y_max = kn.y_max;
-  const double offset = kn.lookup_offset;
+  const float abs_tol = f(kn.abs_tol_m), rel_db = f(kn.rel_tol_db), rel_z = f(kn.rel_tol_z);
+  const float x_min = kn.x_min_f, x_max = kn.x_max_f, y_min = kn.y_min_f, y_max = kn.y_max_f;
+  const float offset = f(kn.lookup_offset);
   const int wb = kn.width_b;
-  // The largest doubles below W and H: they truncate to W − 1 and H − 1.
-  const double tx_cap = std::nextafter(static_cast<double>(kn.width_b), 0.0);
-  const double ty_cap = std::nextafter(static_cast<double>(kn.height_b), 0.0);
+  const float tx_cap = std::nextafter(static_cast<float>(kn.width_b), 0.0f);
+  const float ty_cap = std::nextafter(static_cast<float>(kn.height_b), 0.0f);
   const float* __restrict depth_b = kn.depth_b;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (int i = 0; i < n; ++i) {
-    const double d = dep[i];
-    const double u = static_cast<double>(i * stride);
-    const double z = d * (az * u + rz) + kz;
-    const double inv = 1.0 / (z + eps);
-    const double x = (d * (ax * u + rx) + kx) * inv;
-    const double y = (d * (ay * u + ry) + ky) * inv;
+    const float d = dep[i];
+    const float u = static_cast<float>(i * stride);  // exact (below 2^24)
+    const float z = d * (az * u + rz) + kz;
+    const float inv = 1.0f / (z + eps);
+    const float x = (d * (ax * u + rx) + kx) * inv;
+    const float y = (d * (ay * u + ry) + ky) * inv;
     const bool valid = (d >= lo) & (d <= hi);
     const bool projected = valid & (z > z_min);
     const bool inside = projected & (x >= x_min) & (x < x_max) & (y >= y_min) & (y < y_max);
-    const double tx = std::min(tx_cap, std::max(0.0, x + offset));
-    const double ty = std::min(ty_cap, std::max(0.0, y + offset));
+    const float tx = std::min(tx_cap, std::max(0.0f, x + offset));
+    const float ty = std::min(ty_cap, std::max(0.0f, y + offset));
     const int tu = static_cast<int>(tx), tv = static_cast<int>(ty);
-    const double db_raw = depth_b[tv * wb + tu];
+    const float db_raw = depth_b[tv * wb + tu];
     const bool db_valid = (db_raw >= lo) & (db_raw <= hi);
-    const double db = db_valid ? db_raw : 0.0;  // compat compares a missing depth as 0
+    const float db = db_valid ? db_raw : 0.0f;
     const bool known = db_valid | missing_zero;
-    const double tol = std::max(abs_tol, std::max(rel_db * db, rel_z * z));
-    const double diff = z - db;
-    const int32_t decided = std::abs(diff) <= tol ? 2   // kVisible
-                            : diff > tol          ? 3   // kOccluded
-                                                  : 4;  // kInconsistent
-    const int32_t in_view = known ? decided : 5;        // kUnknown
-    const int32_t with_depth = inside ? in_view : 1;    // kOutOfView
-    codes[i] = valid ? with_depth : 0;                  // kNoDepth
-    xy[2 * i] = projected ? static_cast<float>(x) : nan;
-    xy[2 * i + 1] = projected ? static_cast<float>(y) : nan;
+    const float tol = std::max(abs_tol, std::max(rel_db * db, rel_z * z));
+    const float diff = z - db;
+    const int32_t decided = std::abs(diff) <= tol ? 2 : diff > tol ? 3 : 4;
+    const int32_t in_view = known ? decided : 5;
+    const int32_t with_depth = inside ? in_view : 1;
+    codes[i] = valid ? with_depth : 0;
+    xy[2 * i] = projected ? x : nan;
+    xy[2 * i + 1] = projected ? y : nan;
   }
 }
 
