@@ -115,7 +115,8 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
 
 // Labels the n sampled pixels u = 0, stride, 2·stride, … of row v of A, whose depths are
 // dep[0 .. n): codes[i] = PixelLabel code (int32, so that the loop runs on 32-bit lanes
-// only), xy[2i], xy[2i + 1] = warped (x, y) (NaN where not projected).
+// only) and xy[2i], xy[2i + 1] = warped (x, y) (NaN where not projected) if kMaps; else
+// adds the number of pixels of each label to counts[0 .. 6) (metrics: no maps written).
 //
 // float32, like the tensors of LoFTR / Occ²Net: the per-row coefficients a, r = b·v + c, k
 // are computed in double and rounded once; every threshold is converted to the float that
@@ -130,9 +131,10 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
 // contraction, which g++ does by default whenever FMA is enabled, even with -std=c++17) and
 // -fno-trapping-math (lets the selects be vectorised; values are unchanged), so every clone
 // gives bit-identical results.
+template <bool kMaps>
 __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRowKernel(
     const Kernel& kn, const float* __restrict dep, int n, int stride, int v,
-    int32_t* __restrict codes, float* __restrict xy) {
+    int32_t* __restrict codes, float* __restrict xy, int64_t* __restrict counts) {
   const auto f = [](double x) { return static_cast<float>(x); };
   const double vv = v;
   const float ax = f(kn.a[0]), ay = f(kn.a[1]), az = f(kn.a[2]);
@@ -150,6 +152,7 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRo
   const float ty_cap = std::nextafter(static_cast<float>(kn.height_b), 0.0f);
   const float* __restrict depth_b = kn.depth_b;
   const float nan = std::numeric_limits<float>::quiet_NaN();
+  int32_t c0 = 0, c1 = 0, c2 = 0, c3 = 0, c4 = 0, c5 = 0;  // per-label counts (!kMaps)
   for (int i = 0; i < n; ++i) {
     const float d = dep[i];
     const float u = static_cast<float>(i * stride);  // exact (below 2^24)
@@ -172,9 +175,27 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRo
     const int32_t decided = std::abs(diff) <= tol ? 2 : diff > tol ? 3 : 4;
     const int32_t in_view = known ? decided : 5;
     const int32_t with_depth = inside ? in_view : 1;
-    codes[i] = valid ? with_depth : 0;
-    xy[2 * i] = projected ? x : nan;
-    xy[2 * i + 1] = projected ? y : nan;
+    const int32_t label = valid ? with_depth : 0;
+    if constexpr (kMaps) {
+      codes[i] = label;
+      xy[2 * i] = projected ? x : nan;
+      xy[2 * i + 1] = projected ? y : nan;
+    } else {
+      c0 += label == 0;
+      c1 += label == 1;
+      c2 += label == 2;
+      c3 += label == 3;
+      c4 += label == 4;
+      c5 += label == 5;
+    }
+  }
+  if constexpr (!kMaps) {
+    counts[0] += c0;
+    counts[1] += c1;
+    counts[2] += c2;
+    counts[3] += c3;
+    counts[4] += c4;
+    counts[5] += c5;
   }
 }
 
@@ -182,22 +203,6 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRo
 __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void StoreLabels(
     const int32_t* __restrict codes, int n, uint8_t* __restrict labels) {
   for (int i = 0; i < n; ++i) labels[i] = static_cast<uint8_t>(codes[i]);
-}
-
-// Adds the number of each code in codes[0 .. n) to counts (vectorised compare-and-sum).
-__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void CountCodes(
-    const int32_t* __restrict codes, int n, std::array<int64_t, kNumPixelLabels>* counts) {
-  int32_t c[kNumPixelLabels] = {};
-  for (int i = 0; i < n; ++i) {
-    const int32_t code = codes[i];
-    c[0] += code == 0;
-    c[1] += code == 1;
-    c[2] += code == 2;
-    c[3] += code == 3;
-    c[4] += code == 4;
-    c[5] += code == 5;
-  }
-  for (int k = 0; k < kNumPixelLabels; ++k) (*counts)[k] += c[k];
 }
 
 void CheckInputs(const DepthImage& depth_a, const Camera& cam_a, const DepthImage& depth_b,
@@ -340,8 +345,8 @@ DirectionLabels LabelDirection(const DepthImage& depth_a, const Camera& cam_a,
   out.warped_xy.resize(w * out.height * 2);
   std::vector<int32_t> codes(w);  // one row, reused
   for (int v = 0; v < out.height; ++v) {
-    LabelRowKernel(kn, depth_a.values_m.data() + v * w, out.width, 1, v, codes.data(),
-                   out.warped_xy.data() + v * w * 2);
+    LabelRowKernel<true>(kn, depth_a.values_m.data() + v * w, out.width, 1, v, codes.data(),
+                         out.warped_xy.data() + v * w * 2, nullptr);
     StoreLabels(codes.data(), out.width, out.labels.data() + v * w);
   }
   return out;
@@ -371,13 +376,9 @@ DirectionMetrics ScoreDirection(const DepthImage& depth_a, const Camera& cam_a,
   if (score_stride < 1) throw InputError("score_stride", "expected >= 1");
   const Kernel kn = MakeKernel(cam_a, cam_b, b_from_a, depth_b, options);
   // Scratch rows reused for every row (no per-pixel allocation): the sampled depths of A
-  // (stride > 1), the codes and warped positions of one row (the positions are not needed
-  // here, but one kernel that always writes them vectorises; an L1-resident row costs
-  // little). Labels are counted row by row, in the same pass.
+  // (stride > 1). Labels are counted in the labelling loop itself: no label map.
   const int n = (cam_a.width + score_stride - 1) / score_stride;
   std::vector<float> row_depth(score_stride > 1 ? n : 0);
-  std::vector<int32_t> codes(n);
-  std::vector<float> row_xy(2 * static_cast<size_t>(n));
   DirectionMetrics m;
   const size_t w = static_cast<size_t>(cam_a.width);
   for (int v = 0; v < cam_a.height; v += score_stride) {
@@ -386,8 +387,7 @@ DirectionMetrics ScoreDirection(const DepthImage& depth_a, const Camera& cam_a,
       for (int i = 0; i < n; ++i) row_depth[i] = depth_row[static_cast<size_t>(i) * score_stride];
       depth_row = row_depth.data();
     }
-    LabelRowKernel(kn, depth_row, n, score_stride, v, codes.data(), row_xy.data());
-    CountCodes(codes.data(), n, &m.counts);
+    LabelRowKernel<false>(kn, depth_row, n, score_stride, v, nullptr, nullptr, m.counts.data());
     m.sampled += n;
   }
   FinishMetrics(&m);
