@@ -113,7 +113,23 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
   return kn;
 }
 
-// Labels the n sampled pixels u = 0, stride, 2·stride, … of row v of A, whose depths are
+// The column terms a·u of the affine map in float32 for the sampled columns
+// u = 0, stride, 2·stride, … (the same for every row; the kernel adds b·v + c per row).
+struct Columns {
+  std::vector<float> x, y, z;
+  Columns(const Kernel& kn, int n, int stride) : x(n), y(n), z(n) {
+    const float ax = static_cast<float>(kn.a[0]), ay = static_cast<float>(kn.a[1]),
+                az = static_cast<float>(kn.a[2]);
+    for (int i = 0; i < n; ++i) {
+      const float u = static_cast<float>(i * stride);  // exact (below 2^24)
+      x[i] = ax * u;
+      y[i] = ay * u;
+      z[i] = az * u;
+    }
+  }
+};
+
+// Labels the n sampled pixels u = 0, stride, 2·stride, … (cols) of row v of A, whose depths are
 // dep[0 .. n): codes[i] = PixelLabel code (int32, so that the loop runs on 32-bit lanes
 // only) and xy[2i], xy[2i + 1] = warped (x, y) (NaN where not projected) if kMaps; else
 // adds the number of pixels of each label to counts[0 .. 6) (metrics: no maps written).
@@ -133,11 +149,13 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
 // gives bit-identical results.
 template <bool kMaps>
 __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRowKernel(
-    const Kernel& kn, const float* __restrict dep, int n, int stride, int v,
+    const Kernel& kn, const Columns& cols, const float* __restrict dep, int n, int v,
     int32_t* __restrict codes, float* __restrict xy, int64_t* __restrict counts) {
+  const float* __restrict col_x = cols.x.data();
+  const float* __restrict col_y = cols.y.data();
+  const float* __restrict col_z = cols.z.data();
   const auto f = [](double x) { return static_cast<float>(x); };
   const double vv = v;
-  const float ax = f(kn.a[0]), ay = f(kn.a[1]), az = f(kn.a[2]);
   const float rx = f(kn.b[0] * vv + kn.c[0]);
   const float ry = f(kn.b[1] * vv + kn.c[1]);
   const float rz = f(kn.b[2] * vv + kn.c[2]);
@@ -152,14 +170,13 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRo
   const float ty_cap = std::nextafter(static_cast<float>(kn.height_b), 0.0f);
   const float* __restrict depth_b = kn.depth_b;
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  int32_t c0 = 0, c1 = 0, c2 = 0, c3 = 0, c4 = 0, c5 = 0;  // per-label counts (!kMaps)
+  int32_t c0 = 0, c1 = 0, c2 = 0, c3 = 0, c4 = 0;  // per-label counts (!kMaps; 5 = the rest)
   for (int i = 0; i < n; ++i) {
     const float d = dep[i];
-    const float u = static_cast<float>(i * stride);  // exact (below 2^24)
-    const float z = d * (az * u + rz) + kz;
+    const float z = d * (col_z[i] + rz) + kz;
     const float inv = 1.0f / (z + eps);
-    const float x = (d * (ax * u + rx) + kx) * inv;
-    const float y = (d * (ay * u + ry) + ky) * inv;
+    const float x = (d * (col_x[i] + rx) + kx) * inv;
+    const float y = (d * (col_y[i] + ry) + ky) * inv;
     const bool valid = (d >= lo) & (d <= hi);
     const bool projected = valid & (z > z_min);
     const bool inside = projected & (x >= x_min) & (x < x_max) & (y >= y_min) & (y < y_max);
@@ -186,7 +203,6 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRo
       c2 += label == 2;
       c3 += label == 3;
       c4 += label == 4;
-      c5 += label == 5;
     }
   }
   if constexpr (!kMaps) {
@@ -195,7 +211,7 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRo
     counts[2] += c2;
     counts[3] += c3;
     counts[4] += c4;
-    counts[5] += c5;
+    counts[5] += n - (c0 + c1 + c2 + c3 + c4);
   }
 }
 
@@ -343,9 +359,10 @@ DirectionLabels LabelDirection(const DepthImage& depth_a, const Camera& cam_a,
   const size_t w = static_cast<size_t>(out.width);
   out.labels.resize(w * out.height);
   out.warped_xy.resize(w * out.height * 2);
+  const Columns cols(kn, out.width, 1);
   std::vector<int32_t> codes(w);  // one row, reused
   for (int v = 0; v < out.height; ++v) {
-    LabelRowKernel<true>(kn, depth_a.values_m.data() + v * w, out.width, 1, v, codes.data(),
+    LabelRowKernel<true>(kn, cols, depth_a.values_m.data() + v * w, out.width, v, codes.data(),
                          out.warped_xy.data() + v * w * 2, nullptr);
     StoreLabels(codes.data(), out.width, out.labels.data() + v * w);
   }
@@ -379,6 +396,7 @@ DirectionMetrics ScoreDirection(const DepthImage& depth_a, const Camera& cam_a,
   // (stride > 1). Labels are counted in the labelling loop itself: no label map.
   const int n = (cam_a.width + score_stride - 1) / score_stride;
   std::vector<float> row_depth(score_stride > 1 ? n : 0);
+  const Columns cols(kn, n, score_stride);
   DirectionMetrics m;
   const size_t w = static_cast<size_t>(cam_a.width);
   for (int v = 0; v < cam_a.height; v += score_stride) {
@@ -387,7 +405,7 @@ DirectionMetrics ScoreDirection(const DepthImage& depth_a, const Camera& cam_a,
       for (int i = 0; i < n; ++i) row_depth[i] = depth_row[static_cast<size_t>(i) * score_stride];
       depth_row = row_depth.data();
     }
-    LabelRowKernel<false>(kn, depth_row, n, score_stride, v, nullptr, nullptr, m.counts.data());
+    LabelRowKernel<false>(kn, cols, depth_row, n, v, nullptr, nullptr, m.counts.data());
     m.sampled += n;
   }
   FinishMetrics(&m);
