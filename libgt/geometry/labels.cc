@@ -357,14 +357,20 @@ DirectionLabels LabelDirection(const DepthImage& depth_a, const Camera& cam_a,
   out.width = cam_a.width;
   out.height = cam_a.height;
   const size_t w = static_cast<size_t>(out.width);
-  out.labels.resize(w * out.height);
-  out.warped_xy.resize(w * out.height * 2);
+  // Rows are labelled into L1-resident scratch and appended: the maps are written once
+  // (resize would first zero 2.8 MB at 640x480, then the kernel would overwrite it).
+  out.labels.reserve(w * out.height);
+  out.warped_xy.reserve(w * out.height * 2);
   const Columns cols(kn, out.width, 1);
-  std::vector<int32_t> codes(w);  // one row, reused
+  std::vector<int32_t> codes(w);
+  std::vector<uint8_t> row_labels(w);
+  std::vector<float> row_xy(2 * w);
   for (int v = 0; v < out.height; ++v) {
     LabelRowKernel<true>(kn, cols, depth_a.values_m.data() + v * w, out.width, v, codes.data(),
-                         out.warped_xy.data() + v * w * 2, nullptr);
-    StoreLabels(codes.data(), out.width, out.labels.data() + v * w);
+                         row_xy.data(), nullptr);
+    StoreLabels(codes.data(), out.width, row_labels.data());
+    out.labels.insert(out.labels.end(), row_labels.begin(), row_labels.end());
+    out.warped_xy.insert(out.warped_xy.end(), row_xy.begin(), row_xy.end());
   }
   return out;
 }
