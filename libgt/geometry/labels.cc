@@ -24,10 +24,10 @@ E ParseName(const std::string& name, const std::string& field, const char* const
 // Everything the per-pixel loop needs, computed once per call.
 struct Kernel {
   // q = d · (a·u + b·v + c) + k; z = q.z, (x, y) = (q.x, q.y) · 1 / (z + eps). Double here;
-  // the row kernel rounds a, b·v + c and k to float once per row.
+  // a·u is rounded to float once per call (Columns), b·v + c and k once per row.
   double a[3], b[3], c[3], k[3];
-  // IsValidDepth(d, min, max) for a float d is exactly depth_lo <= d <= depth_hi in double:
-  // d > 0 is d >= the smallest positive float, isfinite is d <= FLT_MAX, NaN fails both.
+  // IsValidDepth(d, min, max) for a float d is exactly depth_lo <= d <= depth_hi: d > 0 is
+  // d >= the smallest positive float, isfinite is d <= FLT_MAX, NaN fails both.
   double depth_lo, depth_hi;
   double z_min;  // OUT_OF_VIEW unless z > z_min; -inf without cheirality (z is finite for
                  // every valid depth)
@@ -45,7 +45,8 @@ struct Kernel {
   float depth_lo_f, depth_hi_f, z_min_f, x_min_f, x_max_f, y_min_f, y_max_f;
 };
 
-// The smallest float >= x and the largest float <= x.
+// The smallest float >= x and the largest float <= x (so that, for a float f, f >= x is
+// f >= FloatAtLeast(x) and f <= x is f <= FloatAtMost(x)).
 float FloatAtLeast(double x) {
   if (x > std::numeric_limits<float>::max()) return std::numeric_limits<float>::infinity();
   float f = static_cast<float>(x);
@@ -104,11 +105,12 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
   kn.depth_b = depth_b.values_m.data();
   kn.depth_lo_f = FloatAtLeast(kn.depth_lo);
   kn.depth_hi_f = FloatAtMost(kn.depth_hi);
-  // z > z_min for a float z: z >= the next float above z_min when z_min is not a float.
+  // For a float z: z > z_min  <=>  z > the largest float <= z_min.
   kn.z_min_f = o.cheirality ? FloatAtMost(kn.z_min) : -std::numeric_limits<float>::infinity();
   kn.x_min_f = o.bounds == Bounds::kPixelArea ? -0.5f : std::numeric_limits<float>::denorm_min();
   kn.y_min_f = kn.x_min_f;
-  kn.x_max_f = FloatAtLeast(kn.x_max);  // x < x_max: exact, W − 0.5 and W − 1 are floats
+  // x < x_max  <=>  x < the smallest float >= x_max (W − 0.5 and W − 1 are floats anyway).
+  kn.x_max_f = FloatAtLeast(kn.x_max);
   kn.y_max_f = FloatAtLeast(kn.y_max);
   return kn;
 }

@@ -119,8 +119,9 @@ struct DirectionLabels {
   int height = 0;               // of A
   std::vector<uint8_t> labels;  // [height * width], row-major, PixelLabel codes
   // [height * width * 2] float32 (x, y) in B's pixel coordinates (working resolution):
-  // the continuous projection of the pixel, computed in float32 (see "Arithmetic"). NaN for kNoDepth and for points that fail the
-  // cheirality test; finite (possibly outside B) for every other label.
+  // the continuous projection of the pixel, computed in float32 (see "Arithmetic"). NaN for
+  // kNoDepth and for points that fail the cheirality test; finite (possibly outside B) for every
+  // other label.
   std::vector<float> warped_xy;
 
   PixelLabel at(int u, int v) const {

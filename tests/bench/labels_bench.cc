@@ -79,8 +79,8 @@ using ArrayX2l = Eigen::Array<int64_t, Eigen::Dynamic, 2, Eigen::RowMajor>;
 using MatrixX3f = Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor>;  // [L, 3]
 
 struct BaselineOut {
-  ArrayXu8 labels;   // [L] PixelLabel codes
-  ArrayX2f warped;   // [L, 2] (x, y) in B
+  ArrayXu8 labels;  // [L] PixelLabel codes
+  ArrayX2f warped;  // [L, 2] (x, y) in B
   std::array<int64_t, gt::kNumPixelLabels> counts{};
 };
 
@@ -183,7 +183,8 @@ BaselineOut BatchedBaseline(const gt::DepthImage& depth_a, const gt::DepthImage&
   const ArrayXu8 l1 = occluded_mask.select(ArrayXu8::Constant(n, code(PixelLabel::kOccluded)), l0);
   const ArrayXu8 l2 = visible_mask.select(ArrayXu8::Constant(n, code(PixelLabel::kVisible)), l1);
   const ArrayXu8 l3 = known_mask.select(l2, ArrayXu8::Constant(n, code(PixelLabel::kUnknown)));
-  const ArrayXu8 l4 = covisible_mask.select(l3, ArrayXu8::Constant(n, code(PixelLabel::kOutOfView)));
+  const ArrayXu8 l4 =
+      covisible_mask.select(l3, ArrayXu8::Constant(n, code(PixelLabel::kOutOfView)));
   BaselineOut out;
   out.labels = valid_mask.select(l4, ArrayXu8::Constant(n, code(PixelLabel::kNoDepth)));
   out.warped = w_kpts0;

@@ -143,8 +143,8 @@ double ReferenceMargin(const RandomScene& s, const LabelOptions& o, int u, int v
   const double x_hi = area ? s.cam_b.width - 0.5 : s.cam_b.width - 1.0;
   const double y_hi = area ? s.cam_b.height - 0.5 : s.cam_b.height - 1.0;
   for (const auto& [c, lo, hi] : {std::tuple{x, x_lo, x_hi}, std::tuple{y, y_lo, y_hi}}) {
-    margin = std::min({margin, std::abs(c - lo) / (1 + std::abs(c)),
-                       std::abs(c - hi) / (1 + std::abs(c))});
+    margin = std::min(
+        {margin, std::abs(c - lo) / (1 + std::abs(c)), std::abs(c - hi) / (1 + std::abs(c))});
   }
   if (!(x >= x_lo && x < x_hi && y >= y_lo && y < y_hi)) return margin;
   const double offset = o.target_lookup == TargetLookup::kNearest ? 0.5 : 0.0;
@@ -191,10 +191,9 @@ TEST(Reference, Float32FastPathDiffersFromDoubleReferenceOnlyAtTies) {
             test::ReferenceLabel(s.depth_a, s.cam_a, s.depth_b, s.cam_b, s.b_from_a, o, u, v);
         if (fast.at(u, v) == ref.label) continue;
         ++differ;
-        EXPECT_LT(margin, kTieWidth)
-            << "trial " << trial << " (" << u << ", " << v << "): fast "
-            << PixelLabelName(fast.at(u, v)) << ", reference " << PixelLabelName(ref.label)
-            << ", margin " << margin;
+        EXPECT_LT(margin, kTieWidth) << "trial " << trial << " (" << u << ", " << v << "): fast "
+                                     << PixelLabelName(fast.at(u, v)) << ", reference "
+                                     << PixelLabelName(ref.label) << ", margin " << margin;
       }
     }
   }
@@ -203,8 +202,8 @@ TEST(Reference, Float32FastPathDiffersFromDoubleReferenceOnlyAtTies) {
   // of all labels differ.
   EXPECT_LT(ties_seen, total / 50) << "of " << total;
   EXPECT_LE(differ, total / 100000) << "of " << total;
-  std::cout << "float32 vs double: " << differ << " labels differ of " << total << " ("
-            << ties_seen << " pixels within a tie width of a threshold)\n";
+  std::cout << "float32 vs double: " << differ << " labels differ of " << total << " (" << ties_seen
+            << " pixels within a tie width of a threshold)\n";
 }
 
 TEST(Reference, ScoreDirectionEqualsMetricsFromLabels) {
