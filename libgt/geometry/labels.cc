@@ -23,19 +23,43 @@ E ParseName(const std::string& name, const std::string& field, const char* const
 
 // Everything the per-pixel loop needs, computed once per call.
 struct Kernel {
-  // q = d · (col[u] + row(v)) + k, with col[u] = a·u and row(v) = b·v + c.
+  // q = d · (a·u + b·v + c) + k; z = q.z, (x, y) = (q.x, q.y) · 1 / (z + eps). Double here;
+  // a·u is rounded to float once per call (Columns), b·v + c and k once per row.
   double a[3], b[3], c[3], k[3];
-  double min_depth_m, max_depth_m;
-  double abs_tol_m, rel_tol;
-  bool observed;                      // tolerance relative to d_B
-  bool cheirality;                    // z <= min_depth_m → OUT_OF_VIEW before dividing
+  // IsValidDepth(d, min, max) for a float d is exactly depth_lo <= d <= depth_hi: d > 0 is
+  // d >= the smallest positive float, isfinite is d <= FLT_MAX, NaN fails both.
+  double depth_lo, depth_hi;
+  double z_min;  // OUT_OF_VIEW unless z > z_min; -inf without cheirality (z is finite for
+                 // every valid depth)
+  // τ = max(abs_tol_m, max(rel_tol_db · d_B, rel_tol_z · z)): one of the two factors is 0,
+  // so this is max(abs_tol_m, rel_tol · base) without a per-pixel choice of the base.
+  double abs_tol_m, rel_tol_db, rel_tol_z;
   bool missing_zero;                  // invalid d_B compared as 0
   double eps;                         // added to z before dividing
   double x_min, x_max, y_min, y_max;  // inside iff x >= x_min && x < x_max (same for y)
   double lookup_offset;               // 0.5 nearest (floor(x + 0.5)), 0 truncate
   int width_b, height_b;
   const float* depth_b;
+  // float32 thresholds giving the same decision for float values: d >= depth_lo_f is
+  // d >= depth_lo, d <= depth_hi_f is d <= depth_hi, x >= x_min_f is x > 0 (strict) ...
+  float depth_lo_f, depth_hi_f, z_min_f, x_min_f, x_max_f, y_min_f, y_max_f;
 };
+
+// The smallest float >= x and the largest float <= x (so that, for a float f, f >= x is
+// f >= FloatAtLeast(x) and f <= x is f <= FloatAtMost(x)).
+float FloatAtLeast(double x) {
+  if (x > std::numeric_limits<float>::max()) return std::numeric_limits<float>::infinity();
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
+}
+float FloatAtMost(double x) {
+  if (x < -std::numeric_limits<float>::max()) return -std::numeric_limits<float>::infinity();
+  if (x > std::numeric_limits<float>::max()) return std::numeric_limits<float>::max();
+  float f = static_cast<float>(x);
+  if (static_cast<double>(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+  return f;
+}
 
 Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_from_a,
                   const DepthImage& depth_b, const LabelOptions& o) {
@@ -54,15 +78,16 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
     kn.c[r] = m(r, 2);
     kn.k[r] = t(r);
   }
-  kn.min_depth_m = o.min_depth_m;
-  kn.max_depth_m = o.max_depth_m;
+  const double inf = std::numeric_limits<double>::infinity();
+  kn.depth_lo = std::max(o.min_depth_m, double{std::numeric_limits<float>::denorm_min()});
+  kn.depth_hi = std::min(o.max_depth_m, double{std::numeric_limits<float>::max()});
+  kn.z_min = o.cheirality ? o.min_depth_m : -inf;
   kn.abs_tol_m = o.abs_tol_m;
-  kn.rel_tol = o.rel_tol;
-  kn.observed = o.relative_to == RelativeTo::kObserved;
-  kn.cheirality = o.cheirality;
+  const bool observed = o.relative_to == RelativeTo::kObserved;
+  kn.rel_tol_db = observed ? o.rel_tol : 0.0;
+  kn.rel_tol_z = observed ? 0.0 : o.rel_tol;
   kn.missing_zero = o.missing_target == MissingTarget::kAsZeroDepth;
   kn.eps = o.projection_eps_m;
-  const double inf = std::numeric_limits<double>::infinity();
   if (o.bounds == Bounds::kPixelArea) {
     kn.x_min = -0.5;
     kn.y_min = -0.5;
@@ -78,109 +103,124 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
   kn.width_b = cam_b.width;
   kn.height_b = cam_b.height;
   kn.depth_b = depth_b.values_m.data();
+  kn.depth_lo_f = FloatAtLeast(kn.depth_lo);
+  kn.depth_hi_f = FloatAtMost(kn.depth_hi);
+  // For a float z: z > z_min  <=>  z > the largest float <= z_min.
+  kn.z_min_f = o.cheirality ? FloatAtMost(kn.z_min) : -std::numeric_limits<float>::infinity();
+  kn.x_min_f = o.bounds == Bounds::kPixelArea ? -0.5f : std::numeric_limits<float>::denorm_min();
+  kn.y_min_f = kn.x_min_f;
+  // x < x_max  <=>  x < the smallest float >= x_max (W − 0.5 and W − 1 are floats anyway).
+  kn.x_max_f = FloatAtLeast(kn.x_max);
+  kn.y_max_f = FloatAtLeast(kn.y_max);
   return kn;
 }
 
-// Scratch rows reused for every row of one call (no per-pixel allocation).
-struct RowBuffers {
-  std::vector<double> col_x, col_y, col_z;  // a·u for the sampled columns
-  std::vector<double> z, x, y;
-  std::vector<float> depth;
+// The column terms a·u of the affine map in float32 for the sampled columns
+// u = 0, stride, 2·stride, … (the same for every row; the kernel adds b·v + c per row).
+struct Columns {
+  std::vector<float> x, y, z;
+  Columns(const Kernel& kn, int n, int stride) : x(n), y(n), z(n) {
+    const float ax = static_cast<float>(kn.a[0]), ay = static_cast<float>(kn.a[1]),
+                az = static_cast<float>(kn.a[2]);
+    for (int i = 0; i < n; ++i) {
+      const float u = static_cast<float>(i * stride);  // exact (below 2^24)
+      x[i] = ax * u;
+      y[i] = ay * u;
+      z[i] = az * u;
+    }
+  }
 };
 
-void PrepareColumns(const Kernel& kn, int width_a, int stride, RowBuffers* buf) {
-  const int n = (width_a + stride - 1) / stride;
-  buf->col_x.resize(n);
-  buf->col_y.resize(n);
-  buf->col_z.resize(n);
-  buf->z.resize(n);
-  buf->x.resize(n);
-  buf->y.resize(n);
-  buf->depth.resize(n);
+// Labels the n sampled pixels u = 0, stride, 2·stride, … (cols) of row v of A, whose depths are
+// dep[0 .. n): codes[i] = PixelLabel code (int32, so that the loop runs on 32-bit lanes
+// only) and xy[2i], xy[2i + 1] = warped (x, y) (NaN where not projected) if kMaps; else
+// adds the number of pixels of each label to counts[0 .. 6) (metrics: no maps written).
+//
+// float32, like the tensors of LoFTR / Occ²Net: the per-row coefficients a, r = b·v + c, k
+// are computed in double and rounded once; every threshold is converted to the float that
+// gives the same decision for float values (Kernel::*_f), so the only departures from the
+// double reference are rounding ties (docs/GROUND_TRUTH.md, "Arithmetic").
+// One branch-free loop that GCC vectorises (-fopt-info-vec): each decision of
+// GROUND_TRUTH.md §2 is a compare and a select; the target pixel is clamped into the image
+// (min/max, a NaN becomes 0) so that the read is always in bounds (its value is used only
+// when the point is inside, where the clamp changes nothing); one reciprocal per pixel.
+// The clones (AVX-512, AVX2, baseline x86-64, picked at load time) run the same IEEE
+// operations on wider registers: gt_geometry is built with -ffp-contract=off (no FMA
+// contraction, which g++ does by default whenever FMA is enabled, even with -std=c++17) and
+// -fno-trapping-math (lets the selects be vectorised; values are unchanged), so every clone
+// gives bit-identical results.
+template <bool kMaps>
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRowKernel(
+    const Kernel& kn, const Columns& cols, const float* __restrict dep, int n, int v,
+    int32_t* __restrict codes, float* __restrict xy, int64_t* __restrict counts) {
+  const float* __restrict col_x = cols.x.data();
+  const float* __restrict col_y = cols.y.data();
+  const float* __restrict col_z = cols.z.data();
+  const auto f = [](double x) { return static_cast<float>(x); };
+  const double vv = v;
+  const float rx = f(kn.b[0] * vv + kn.c[0]);
+  const float ry = f(kn.b[1] * vv + kn.c[1]);
+  const float rz = f(kn.b[2] * vv + kn.c[2]);
+  const float kx = f(kn.k[0]), ky = f(kn.k[1]), kz = f(kn.k[2]), eps = f(kn.eps);
+  const float lo = kn.depth_lo_f, hi = kn.depth_hi_f, z_min = kn.z_min_f;
+  const bool missing_zero = kn.missing_zero;
+  const float abs_tol = f(kn.abs_tol_m), rel_db = f(kn.rel_tol_db), rel_z = f(kn.rel_tol_z);
+  const float x_min = kn.x_min_f, x_max = kn.x_max_f, y_min = kn.y_min_f, y_max = kn.y_max_f;
+  const float offset = f(kn.lookup_offset);
+  const int wb = kn.width_b;
+  const float tx_cap = std::nextafter(static_cast<float>(kn.width_b), 0.0f);
+  const float ty_cap = std::nextafter(static_cast<float>(kn.height_b), 0.0f);
+  const float* __restrict depth_b = kn.depth_b;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  int32_t c0 = 0, c1 = 0, c2 = 0, c3 = 0, c4 = 0;  // per-label counts (!kMaps; 5 = the rest)
   for (int i = 0; i < n; ++i) {
-    const double u = static_cast<double>(i) * stride;
-    buf->col_x[i] = kn.a[0] * u;
-    buf->col_y[i] = kn.a[1] * u;
-    buf->col_z[i] = kn.a[2] * u;
+    const float d = dep[i];
+    const float z = d * (col_z[i] + rz) + kz;
+    const float inv = 1.0f / (z + eps);
+    const float x = (d * (col_x[i] + rx) + kx) * inv;
+    const float y = (d * (col_y[i] + ry) + ky) * inv;
+    const bool valid = (d >= lo) & (d <= hi);
+    const bool projected = valid & (z > z_min);
+    const bool inside = projected & (x >= x_min) & (x < x_max) & (y >= y_min) & (y < y_max);
+    const float tx = std::min(tx_cap, std::max(0.0f, x + offset));
+    const float ty = std::min(ty_cap, std::max(0.0f, y + offset));
+    const int tu = static_cast<int>(tx), tv = static_cast<int>(ty);
+    const float db_raw = depth_b[tv * wb + tu];
+    const bool db_valid = (db_raw >= lo) & (db_raw <= hi);
+    const float db = db_valid ? db_raw : 0.0f;
+    const bool known = db_valid | missing_zero;
+    const float tol = std::max(abs_tol, std::max(rel_db * db, rel_z * z));
+    const float diff = z - db;
+    const int32_t decided = std::abs(diff) <= tol ? 2 : diff > tol ? 3 : 4;
+    const int32_t in_view = known ? decided : 5;
+    const int32_t with_depth = inside ? in_view : 1;
+    const int32_t label = valid ? with_depth : 0;
+    if constexpr (kMaps) {
+      codes[i] = label;
+      xy[2 * i] = projected ? x : nan;
+      xy[2 * i + 1] = projected ? y : nan;
+    } else {
+      c0 += label == 0;
+      c1 += label == 1;
+      c2 += label == 2;
+      c3 += label == 3;
+      c4 += label == 4;
+    }
+  }
+  if constexpr (!kMaps) {
+    counts[0] += c0;
+    counts[1] += c1;
+    counts[2] += c2;
+    counts[3] += c3;
+    counts[4] += c4;
+    counts[5] += n - (c0 + c1 + c2 + c3 + c4);
   }
 }
 
-// Labels the sampled pixels (u = 0, stride, 2·stride, …) of row v of A. labels_out gets
-// one code per sampled pixel; xy_out (nullable) gets (x, y) per sampled pixel.
-inline void LabelRow(const Kernel& kn, const float* depth_row_a, int v, int stride, RowBuffers* buf,
-                     uint8_t* labels_out, float* xy_out) {
-  const int n = static_cast<int>(buf->z.size());
-  float* __restrict dep = buf->depth.data();
-  if (stride == 1) {
-    std::copy(depth_row_a, depth_row_a + n, dep);
-  } else {
-    for (int i = 0; i < n; ++i) dep[i] = depth_row_a[static_cast<size_t>(i) * stride];
-  }
-  const double vv = v;
-  const double rx = kn.b[0] * vv + kn.c[0];
-  const double ry = kn.b[1] * vv + kn.c[1];
-  const double rz = kn.b[2] * vv + kn.c[2];
-  const double kx = kn.k[0], ky = kn.k[1], kz = kn.k[2], eps = kn.eps;
-  const double* __restrict cx = buf->col_x.data();
-  const double* __restrict cy = buf->col_y.data();
-  const double* __restrict cz = buf->col_z.data();
-  double* __restrict zs = buf->z.data();
-  double* __restrict xs = buf->x.data();
-  double* __restrict ys = buf->y.data();
-  // Pass 1 (vectorisable): projection of every sampled pixel, valid or not.
-  for (int i = 0; i < n; ++i) {
-    const double d = dep[i];
-    const double qz = d * (cz[i] + rz) + kz;
-    const double den = qz + eps;
-    zs[i] = qz;
-    xs[i] = (d * (cx[i] + rx) + kx) / den;
-    ys[i] = (d * (cy[i] + ry) + ky) / den;
-  }
-  // Pass 2: the decisions of GROUND_TRUTH.md §2.
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (int i = 0; i < n; ++i) {
-    const float d = dep[i];
-    const double z = zs[i];
-    const double x = xs[i], y = ys[i];
-    PixelLabel label;
-    bool projected = true;
-    if (!IsValidDepth(d, kn.min_depth_m, kn.max_depth_m)) {
-      label = PixelLabel::kNoDepth;
-      projected = false;
-    } else if (kn.cheirality && !(z > kn.min_depth_m)) {
-      label = PixelLabel::kOutOfView;
-      projected = false;
-    } else if (!(x >= kn.x_min && x < kn.x_max && y >= kn.y_min && y < kn.y_max)) {
-      label = PixelLabel::kOutOfView;
-    } else {
-      const int tu = std::min(static_cast<int>(x + kn.lookup_offset), kn.width_b - 1);
-      const int tv = std::min(static_cast<int>(y + kn.lookup_offset), kn.height_b - 1);
-      double db = kn.depth_b[static_cast<size_t>(tv) * kn.width_b + tu];
-      bool known = IsValidDepth(static_cast<float>(db), kn.min_depth_m, kn.max_depth_m);
-      if (!known && kn.missing_zero) {
-        db = 0.0;
-        known = true;
-      }
-      if (!known) {
-        label = PixelLabel::kUnknown;
-      } else {
-        const double tol = std::max(kn.abs_tol_m, kn.rel_tol * (kn.observed ? db : z));
-        const double diff = z - db;
-        if (std::abs(diff) <= tol) {
-          label = PixelLabel::kVisible;
-        } else if (diff > tol) {
-          label = PixelLabel::kOccluded;
-        } else {
-          label = PixelLabel::kInconsistent;
-        }
-      }
-    }
-    labels_out[i] = static_cast<uint8_t>(label);
-    if (xy_out) {
-      xy_out[2 * i] = projected ? static_cast<float>(x) : nan;
-      xy_out[2 * i + 1] = projected ? static_cast<float>(y) : nan;
-    }
-  }
+// labels[i] = codes[i] for i < n.
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void StoreLabels(
+    const int32_t* __restrict codes, int n, uint8_t* __restrict labels) {
+  for (int i = 0; i < n; ++i) labels[i] = static_cast<uint8_t>(codes[i]);
 }
 
 void CheckInputs(const DepthImage& depth_a, const Camera& cam_a, const DepthImage& depth_b,
@@ -319,13 +359,20 @@ DirectionLabels LabelDirection(const DepthImage& depth_a, const Camera& cam_a,
   out.width = cam_a.width;
   out.height = cam_a.height;
   const size_t w = static_cast<size_t>(out.width);
-  out.labels.resize(w * out.height);
-  out.warped_xy.resize(w * out.height * 2);
-  RowBuffers buf;
-  PrepareColumns(kn, out.width, 1, &buf);
+  // Rows are labelled into L1-resident scratch and appended: the maps are written once
+  // (resize would first zero 2.8 MB at 640x480, then the kernel would overwrite it).
+  out.labels.reserve(w * out.height);
+  out.warped_xy.reserve(w * out.height * 2);
+  const Columns cols(kn, out.width, 1);
+  std::vector<int32_t> codes(w);
+  std::vector<uint8_t> row_labels(w);
+  std::vector<float> row_xy(2 * w);
   for (int v = 0; v < out.height; ++v) {
-    LabelRow(kn, depth_a.values_m.data() + v * w, v, 1, &buf, out.labels.data() + v * w,
-             out.warped_xy.data() + v * w * 2);
+    LabelRowKernel<true>(kn, cols, depth_a.values_m.data() + v * w, out.width, v, codes.data(),
+                         row_xy.data(), nullptr);
+    StoreLabels(codes.data(), out.width, row_labels.data());
+    out.labels.insert(out.labels.end(), row_labels.begin(), row_labels.end());
+    out.warped_xy.insert(out.warped_xy.end(), row_xy.begin(), row_xy.end());
   }
   return out;
 }
@@ -353,16 +400,21 @@ DirectionMetrics ScoreDirection(const DepthImage& depth_a, const Camera& cam_a,
   CheckInputs(depth_a, cam_a, depth_b, cam_b, options);
   if (score_stride < 1) throw InputError("score_stride", "expected >= 1");
   const Kernel kn = MakeKernel(cam_a, cam_b, b_from_a, depth_b, options);
-  RowBuffers buf;
-  PrepareColumns(kn, cam_a.width, score_stride, &buf);
-  std::vector<uint8_t> row_labels(buf.z.size());
+  // Scratch rows reused for every row (no per-pixel allocation): the sampled depths of A
+  // (stride > 1). Labels are counted in the labelling loop itself: no label map.
+  const int n = (cam_a.width + score_stride - 1) / score_stride;
+  std::vector<float> row_depth(score_stride > 1 ? n : 0);
+  const Columns cols(kn, n, score_stride);
   DirectionMetrics m;
   const size_t w = static_cast<size_t>(cam_a.width);
   for (int v = 0; v < cam_a.height; v += score_stride) {
-    LabelRow(kn, depth_a.values_m.data() + v * w, v, score_stride, &buf, row_labels.data(),
-             nullptr);
-    for (uint8_t l : row_labels) ++m.counts[l];
-    m.sampled += static_cast<int64_t>(row_labels.size());
+    const float* depth_row = depth_a.values_m.data() + v * w;
+    if (score_stride > 1) {
+      for (int i = 0; i < n; ++i) row_depth[i] = depth_row[static_cast<size_t>(i) * score_stride];
+      depth_row = row_depth.data();
+    }
+    LabelRowKernel<false>(kn, cols, depth_row, n, v, nullptr, nullptr, m.counts.data());
+    m.sampled += n;
   }
   FinishMetrics(&m);
   return m;
