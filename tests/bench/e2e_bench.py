@@ -8,7 +8,8 @@
    tartanair-sample.yaml, demo.yaml with its synthetic data generated beforehand) in a
    fresh output folder, --threads 1 and --threads 2 alternated, `--reps` times each; wall
    time, CPU time and peak RSS of each process (os.wait4), the stage times of its summary,
-   bytes per sample (shards / samples). Reports medians and the median ratio t1 / t2.
+   bytes per sample (shards / samples). Reports medians and the median ratio t1 / t2; also
+   the same build as 2 tasks of 1 thread running at once (the Slurm layout on one machine).
 2. one long scene: `occgt synth` rooms of N frames (--frames, 640x480) read by a recipe
    with recipes/scannet-train.yaml's selection (max_frame_gap 60, score_stride 10, overlap
    [0.4, 0.8], jpg, no depth, pair OctoMap occupancy) and a quota of 40 pairs; built with
@@ -70,6 +71,26 @@ def build(recipe, out, threads, extra=(), seed_data=None):
             "candidates": s["counts"]["candidates"], "bytes": shard_bytes(out)}
 
 
+def build_two_tasks(recipe, out, seed_data=None):
+    """--tasks 2, one thread each, both tasks at once: select, then write (the last write
+    task publishes the indices). Returns the wall seconds of the whole."""
+    shutil.rmtree(out, ignore_errors=True)
+    if seed_data:
+        os.makedirs(out)
+        shutil.copytree(seed_data, os.path.join(out, "data"))
+    t0 = time.perf_counter()
+    for stage in ("select", "write"):
+        procs = [subprocess.Popen([OCCGT, "build", recipe, "--out", out, "--threads", "1",
+                                   "--tasks", "2", "--task", str(k), "--stage", stage],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                 for k in (0, 1)]
+        for p in procs:
+            _, err = p.communicate()
+            if p.returncode != 0:
+                sys.exit(f"e2e_bench: two-task {stage} failed:\n{err.decode()}")
+    return time.perf_counter() - t0
+
+
 def med(rows, key):
     return statistics.median(r[key] for r in rows)
 
@@ -83,8 +104,9 @@ def speedup(results):
         timed([OCCGT, "build", recipes[2][1], "--out", demo_data, "--dry-run"])
     print("\n## speed-up, --threads 1 vs 2 (fresh output folder each run)")
     print("| recipe | samples | t1 wall (median) | t2 wall (median) | ratio t1/t2 (median of reps) "
-          "| t1 select / write | t2 select / write | peak RSS t1 / t2 | bytes/sample |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "| t1 select / write | t2 select / write | 2 tasks x 1 thread wall (ratio) "
+          "| CPU t1 / t2 | peak RSS t1 / t2 | bytes/sample |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for name, recipe in recipes:
         rows = {1: [], 2: []}
         seed = os.path.join(demo_data, "data") if name == "demo" else None
@@ -92,13 +114,17 @@ def speedup(results):
             for t in ((1, 2) if rep % 2 == 0 else (2, 1)):
                 rows[t].append(build(recipe, os.path.join(ARGS.scratch, f"{name}-t{t}"), t,
                                      seed_data=seed))
+        two = [build_two_tasks(recipe, os.path.join(ARGS.scratch, f"{name}-p2"), seed)
+               for _ in range(ARGS.reps)]
         ratios = [a["wall_s"] / b["wall_s"] for a, b in zip(rows[1], rows[2])]
         r1, r2 = rows[1], rows[2]
-        results["speedup"][name] = {"t1": r1, "t2": r2, "ratios": ratios}
+        results["speedup"][name] = {"t1": r1, "t2": r2, "ratios": ratios, "tasks2_wall_s": two}
         print(f"| {name} | {r1[0]['samples']} | {med(r1, 'wall_s'):.2f} s | {med(r2, 'wall_s'):.2f} s "
               f"| {statistics.median(ratios):.2f} (min {min(ratios):.2f}, max {max(ratios):.2f}) "
               f"| {med(r1, 'select_s'):.2f} / {med(r1, 'write_s'):.2f} s "
               f"| {med(r2, 'select_s'):.2f} / {med(r2, 'write_s'):.2f} s "
+              f"| {statistics.median(two):.2f} s ({med(r1, 'wall_s') / statistics.median(two):.2f}) "
+              f"| {med(r1, 'cpu_s'):.2f} / {med(r2, 'cpu_s'):.2f} s "
               f"| {med(r1, 'rss_mb'):.0f} / {med(r2, 'rss_mb'):.0f} MB "
               f"| {r1[0]['bytes'] / r1[0]['samples'] / 1e6:.2f} MB |")
 
