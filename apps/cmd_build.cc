@@ -46,7 +46,8 @@ std::optional<int> EnvIndex(const char* name) {
   errno = 0;
   char* end = nullptr;
   const long v = std::strtol(text, &end, 10);
-  if (*end != '\0' || errno != 0 || v < 0 || v > 1000000000 || !std::isdigit(static_cast<unsigned char>(*text))) {
+  if (*end != '\0' || errno != 0 || v < 0 || v > 1000000000 ||
+      !std::isdigit(static_cast<unsigned char>(*text))) {
     throw gt::InputError(name, std::string("expected an integer >= 0, got '") + text + "'");
   }
   return static_cast<int>(v);
@@ -81,8 +82,8 @@ bool TaskFromSlurm(gt::pairs::BuildOptions* build) {
   if (*count < 1 || *id - min >= *count) {
     throw gt::InputError("SLURM_ARRAY_TASK_COUNT",
                          std::to_string(*count) + " does not cover SLURM_ARRAY_TASK_ID " +
-                             std::to_string(*id) + " (SLURM_ARRAY_TASK_MIN " +
-                             std::to_string(min) + ")");
+                             std::to_string(*id) + " (SLURM_ARRAY_TASK_MIN " + std::to_string(min) +
+                             ")");
   }
   build->task = *id - min;
   build->tasks = *count;
