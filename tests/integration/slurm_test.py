@@ -4,6 +4,7 @@ the way docs/SCALE.md runs it: scripts/slurm/submit.sh submits a 4-task select a
 tasks take their layout from SLURM_ARRAY_TASK_*. Every file of the result (shards,
 index.json, pairs.jsonl, part records, selections, recipe.json, LoFTR export, generated
 data; summary.json on its run-independent keys) must equal a one-process run byte for byte.
+A recipe whose select tasks fail gets its write array and merge job cancelled.
 
 The cluster is started by scripts/slurm/local_cluster.sh (which installs the Debian packages
 when missing) in a scratch state folder on free ports, and always stopped in `finally` by
@@ -121,6 +122,19 @@ def main():
             assert m, r.stdout
             jobs += list(m.groups())
             outs[name] = (recipe, out, m.groups())
+        # A failing select array (dataset root missing): write and merge must be cancelled.
+        bad_recipe = os.path.join(root, "bad.yaml")
+        with open(os.path.join(common.SOURCE, "recipes", "demo.yaml")) as f:
+            text = f.read().replace("format: synthetic", "format: sevenscenes\n  root: /nonexistent")
+        with open(bad_recipe, "w") as f:
+            f.write(text)
+        bad_out = os.path.join(root, "bad", "slurm")
+        r = subprocess.run(["bash", os.path.join(script_dir, "submit.sh"), bad_recipe, bad_out,
+                            str(NTASKS)], stdin=subprocess.DEVNULL, capture_output=True,
+                           text=True, env=env)
+        assert r.returncode == 0, f"submit.sh bad.yaml failed:\n{r.stderr}"
+        bad_ids = re.fullmatch(r"select=(\d+) write=(\d+) merge=(\d+)\n", r.stdout).groups()
+        jobs += list(bad_ids)
         for name, (recipe, _, _) in outs.items():
             common.occgt("build", recipe, "--out", os.path.join(root, name, "ref"), env=env)
 
@@ -136,8 +150,17 @@ def main():
                                      + "".join(logs_of(o) for _, o, _ in outs.values()))
             time.sleep(0.5)
         t_jobs = time.time()
-        print(f"{len(RECIPES)} recipes x (2 arrays of {NTASKS} tasks + merge): "
-              f"{len(RECIPES) * (2 * NTASKS + 1)} Slurm jobs done in {t_jobs - t_up:.1f} s")
+        print(f"{len(RECIPES)} recipes x (2 arrays of {NTASKS} tasks + merge) + a failing one: "
+              f"{(len(RECIPES) + 1) * (2 * NTASKS + 1)} Slurm jobs done in {t_jobs - t_up:.1f} s")
+
+        states = {}
+        for job_id in bad_ids:
+            states.update(job_states(env, job_id))
+        assert sum(v == "FAILED" for v in states.values()) == NTASKS, states
+        assert sum(v == "CANCELLED" for v in states.values()) in (2, NTASKS + 1), states
+        assert "dataset.root: expected an existing folder" in logs_of(bad_out), logs_of(bad_out)
+        print(f"failing select array: {NTASKS} tasks FAILED, write array and merge job cancelled "
+              f"(--kill-on-invalid-dep): {sorted(states.values())}")
 
         for name, (recipe, out, ids) in outs.items():
             states = {}
