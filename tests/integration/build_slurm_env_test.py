@@ -1,11 +1,13 @@
 """`occgt build` takes its task layout from a Slurm array task's environment when neither
 --task nor --tasks is given (docs/CLI.md): task = SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN
 of SLURM_ARRAY_TASK_COUNT. Checks: a 2-task run driven only by the environment gives the
-same files as one process; an array starting at 1 maps to tasks 0..N-1; flags win (even
+same files as one process, also with 4 tasks running at once (as an array on one machine);
+an array starting at 1 maps to tasks 0..N-1; flags win (even
 over a malformed variable); malformed or inconsistent values fail with one line naming the
 variable before anything is created. No Slurm needed: the variables are set by hand."""
 import json
 import os
+import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -40,6 +42,20 @@ def main():
                 assert sorted(os.listdir(os.path.join(out, "selection"))) == \
                     ["synth_001.json", "synth_001.jsonl"], "task 1 of 2 takes the second scene only"
     n = common.assert_same_outputs(ref, out)
+
+    # An array on one machine: 4 tasks at once per stage (they share recipe.json, the
+    # synthetic dataset they generate, the shard plan and the indices: DIR/.lock).
+    out4 = os.path.join(root, "concurrent")
+    for stage in ("select", "write"):
+        procs = [subprocess.Popen([common.BINARY, "build", recipe, "--out", out4, "--stage", stage],
+                                  env=slurm_env(id=k, min=0, max=3, count=4),
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                 for k in range(4)]
+        for p in procs:
+            _, err = p.communicate()
+            assert p.returncode == 0, f"concurrent {stage} task failed:\n{err}"
+    common.assert_same_outputs(ref, out4)
+    assert not common.tmp_files(out4), common.tmp_files(out4)
 
     # An array 1-2 (no MIN: 0 assumed only when unset) gives tasks 0 and 1; COUNT from MAX.
     out1 = os.path.join(root, "from1")
