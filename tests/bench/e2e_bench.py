@@ -34,7 +34,14 @@ SOURCE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file_
 
 
 def uptime():
-    return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+    """`uptime`, plus the CPU pressure (PSI: share of time some runnable task waited for a CPU)."""
+    text = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+    try:
+        with open("/proc/pressure/cpu") as f:
+            text += "; cpu pressure " + f.readline().strip()
+    except OSError:
+        pass
+    return text
 
 
 def timed(cmd, env=None):
