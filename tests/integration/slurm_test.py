@@ -142,11 +142,10 @@ def main():
         while True:
             r = subprocess.run(["squeue", "-h", "-j", ",".join(jobs), "-o", "%i %T %r"],
                                capture_output=True, text=True, env=env)
-            assert r.returncode == 0, r.stderr
-            if not r.stdout.strip():
-                break
+            if r.returncode == 0 and not r.stdout.strip():
+                break  # (a non-zero exit, e.g. slurmctld busy, is retried until the deadline)
             if time.time() > deadline:
-                raise AssertionError(f"jobs not done after {TIMEOUT_S} s:\n{r.stdout}\n"
+                raise AssertionError(f"jobs not done after {TIMEOUT_S} s:\n{r.stdout}{r.stderr}\n"
                                      + "".join(logs_of(o) for _, o, _ in outs.values()))
             time.sleep(0.5)
         t_jobs = time.time()
