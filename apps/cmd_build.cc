@@ -1,16 +1,21 @@
 // occgt build RECIPE --out DIR [--dry-run] [--threads N] [--task K --tasks N]
-//                   [--stage select|write|all] [--root PATH]
+//                   [--stage select|write|all] [--root PATH] [--depth-cache-mb MB]
 // Turns a dataset and a YAML recipe into a filtered pair index and WebDataset shards
 // (docs/USER_GUIDE.md, docs/RECIPES.md, docs/CLI.md). The job is libgt/pairs/pipeline.h;
 // this file parses flags, connects the pipeline's ShardOutput to libgt/shards, prints
-// progress on stderr and the summary on stdout.
+// progress on stderr and the summary on stdout. Without --task/--tasks, a Slurm array
+// task takes its place from SLURM_ARRAY_TASK_{ID,MIN,MAX,COUNT} (docs/SCALE.md).
 #include <tbb/global_control.h>
 #include <unistd.h>
 
+#include <cctype>
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "apps/commands.h"
@@ -29,8 +34,61 @@ struct BuildArgs {
   std::string recipe;
   std::string root;
   int threads = 0;
+  bool task_given = false;  // --task or --tasks on the command line (then Slurm's env is ignored)
   gt::pairs::BuildOptions build;
 };
+
+// The value of environment variable `name` as an integer >= 0, nullopt when unset or empty;
+// anything else throws InputError naming the variable.
+std::optional<int> EnvIndex(const char* name) {
+  const char* text = std::getenv(name);
+  if (text == nullptr || *text == '\0') return std::nullopt;
+  errno = 0;
+  char* end = nullptr;
+  const long v = std::strtol(text, &end, 10);
+  if (*end != '\0' || errno != 0 || v < 0 || v > 1000000000 ||
+      !std::isdigit(static_cast<unsigned char>(*text))) {
+    throw gt::InputError(name, std::string("expected an integer >= 0, got '") + text + "'");
+  }
+  return static_cast<int>(v);
+}
+
+// Task layout of a Slurm array task: task = SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN,
+// tasks = SLURM_ARRAY_TASK_COUNT. The array must be contiguous with step 1 (0-7, or 1-8),
+// so that the tasks cover 0..tasks-1 exactly once. False when not in an array job.
+bool TaskFromSlurm(gt::pairs::BuildOptions* build) {
+  const std::optional<int> id = EnvIndex("SLURM_ARRAY_TASK_ID");
+  if (!id) return false;
+  const int min = EnvIndex("SLURM_ARRAY_TASK_MIN").value_or(0);
+  const std::optional<int> max = EnvIndex("SLURM_ARRAY_TASK_MAX");
+  std::optional<int> count = EnvIndex("SLURM_ARRAY_TASK_COUNT");
+  if (!count && max) count = *max - min + 1;
+  if (!count) {
+    throw gt::InputError("SLURM_ARRAY_TASK_COUNT",
+                         "unset (and no SLURM_ARRAY_TASK_MAX): pass --task K --tasks N");
+  }
+  if (*id < min || (max && *id > *max)) {
+    throw gt::InputError("SLURM_ARRAY_TASK_ID", std::to_string(*id) + " outside the array " +
+                                                    std::to_string(min) + "-" +
+                                                    (max ? std::to_string(*max) : "?"));
+  }
+  if (max && *max - min + 1 != *count) {
+    throw gt::InputError("SLURM_ARRAY_TASK_COUNT",
+                         std::to_string(*count) + " tasks do not fill the array " +
+                             std::to_string(min) + "-" + std::to_string(*max) +
+                             " (use a contiguous --array=0-N-1 without a step, or pass --task "
+                             "K --tasks N)");
+  }
+  if (*count < 1 || *id - min >= *count) {
+    throw gt::InputError("SLURM_ARRAY_TASK_COUNT",
+                         std::to_string(*count) + " does not cover SLURM_ARRAY_TASK_ID " +
+                             std::to_string(*id) + " (SLURM_ARRAY_TASK_MIN " + std::to_string(min) +
+                             ")");
+  }
+  build->task = *id - min;
+  build->tasks = *count;
+  return true;
+}
 
 // ShardOutput over libgt/shards: tar shards + part records, plan, merge, LoFTR export.
 class ShardsOutput : public gt::pairs::ShardOutput {
@@ -118,7 +176,9 @@ void PrintProgress(const gt::pairs::Progress& p) {
   std::fflush(stderr);
 }
 
-void Run(const BuildArgs& args) {
+void Run(const BuildArgs& args_in) {
+  BuildArgs args = args_in;
+  const bool from_slurm = !args.task_given && TaskFromSlurm(&args.build);
   gt::pairs::RecipeOverrides overrides;
   overrides.root = args.root;
   const gt::pairs::Recipe recipe = gt::pairs::LoadRecipe(args.recipe, overrides);
@@ -133,6 +193,10 @@ void Run(const BuildArgs& args) {
   if (!args.build.Check(&error)) throw gt::InputError("occgt build", error);
   if (std::string e = gt::shards::CheckSplitName(recipe.split); !e.empty()) {
     throw gt::InputError(args.recipe, "split: " + e);
+  }
+  if (from_slurm) {
+    std::fprintf(stderr, "[build] task %d of %d (from SLURM_ARRAY_TASK_ID %s)\n", args.build.task,
+                 args.build.tasks, std::getenv("SLURM_ARRAY_TASK_ID"));
   }
   ShardsOutput output(args.build.out_dir, recipe.split);
   const nlohmann::json summary = gt::pairs::RunBuild(recipe, args.build, &output, PrintProgress);
@@ -150,13 +214,22 @@ void AddBuildCommand(CLI::App& app) {
   cmd->add_flag("--dry-run", args->build.dry_run,
                 "Select in memory, print the plan and statistics, write nothing");
   cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)");
-  cmd->add_option("--task", args->build.task, "This task's index (0-based) when split in --tasks");
-  cmd->add_option("--tasks", args->build.tasks, "Number of tasks the run is split into");
+  auto* task = cmd->add_option(
+      "--task", args->build.task,
+      "This task's index (0-based) when split in --tasks (default: from SLURM_ARRAY_TASK_ID)");
+  auto* tasks = cmd->add_option(
+      "--tasks", args->build.tasks,
+      "Number of tasks the run is split into (default: SLURM_ARRAY_TASK_COUNT, else 1)");
   cmd->add_option("--stage", args->build.stage, "select | write | all (default all)");
+  cmd->add_option("--depth-cache-mb", args->build.depth_cache_mb,
+                  "Budget of decoded depth maps held per scene (LRU, default 512)");
   cmd->add_option(
       "--root", args->root,
       "Dataset root overriding the recipe's dataset.root (relative to the working folder)");
-  cmd->callback([args] { Run(*args); });
+  cmd->callback([args, task, tasks] {
+    args->task_given = task->count() > 0 || tasks->count() > 0;
+    Run(*args);
+  });
 }
 
 }  // namespace occgt

@@ -1,14 +1,20 @@
 #include "libgt/pairs/pipeline.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <tbb/parallel_for.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <list>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 
 #include "libgt/core/error.h"
@@ -27,6 +33,34 @@ using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
+
+// Exclusive advisory lock (flock) on DIR/.lock, held while a task writes one of the files
+// that every task of a split may write at the same moment (recipe.json, the synthetic
+// dataset, the shard plan, the indices and summary): WriteFileAtomic's fixed `X.tmp` name
+// is safe for one writer only. The lock file is empty and never removed.
+class FolderLock {
+ public:
+  explicit FolderLock(const std::string& dir) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) throw InputError(dir, "cannot create the output folder: " + ec.message());
+    const std::string path = dir + "/.lock";
+    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw InputError(path, std::string("cannot open: ") + std::strerror(errno));
+    while (::flock(fd_, LOCK_EX) != 0) {
+      if (errno == EINTR) continue;
+      const int e = errno;
+      ::close(fd_);
+      throw InputError(path, std::string("cannot lock: ") + std::strerror(e));
+    }
+  }
+  ~FolderLock() { ::close(fd_); }  // releases the lock
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
 
 // Imported pairs (LoFTR test.npz): scene → (frame number 0, frame number 1) in file order.
 using ImportList = std::map<std::string, std::vector<std::pair<int64_t, int64_t>>>;
@@ -412,6 +446,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   if (recipe.dataset.format == "synthetic") {
     if (recipe.dataset.root.empty()) recipe.dataset.root = options.out_dir + "/data";
     if (!options.dry_run || !fs::exists(recipe.dataset.root)) {
+      FolderLock lock(options.out_dir);
       EnsureSyntheticDataset(recipe.dataset.root, recipe.dataset.synthetic);
     }
     recipe.dataset.format = "generic";
@@ -424,7 +459,8 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   const std::vector<std::string> scenes = ResolveScenes(recipe, *reader, imports.get());
   summary["scenes"] = static_cast<int64_t>(scenes.size());
   if (!options.dry_run && !io::FileExists(recipe_path)) {
-    io::WriteFileAtomic(recipe_path, normalised.dump(2) + "\n");
+    FolderLock lock(options.out_dir);
+    if (!io::FileExists(recipe_path)) io::WriteFileAtomic(recipe_path, normalised.dump(2) + "\n");
   }
 
   // ---- phase 1: select ----
@@ -553,7 +589,10 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
       }
     }
   }
-  output->WritePlan(shard_sizes);
+  {
+    FolderLock lock(options.out_dir);
+    output->WritePlan(shard_sizes);
+  }
   const SampleSpec base_spec = RecipeSampleOptions(recipe);
   std::map<std::string, std::unique_ptr<SceneData>> scene_data;
   auto scene_of = [&](const std::string& name) -> SceneData& {
@@ -657,6 +696,9 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   for (int64_t s = 0; s < nshards && complete; ++s) complete = output->IsShardComplete(s);
   summary["complete"] = complete;
   // A re-run that wrote nothing leaves published indices alone (no new inodes or mtimes).
+  // Tasks finishing together publish one after the other (the lock is held to the end).
+  std::optional<FolderLock> publish_lock;
+  if (complete) publish_lock.emplace(options.out_dir);
   const bool indices_current = shards_written == 0 &&
                                io::FileExists(options.out_dir + "/index.json") &&
                                io::FileExists(options.out_dir + "/summary.json");

@@ -6,6 +6,8 @@
 #   scripts/slurm/local_cluster.sh stop STATE_DIR    # stops them by the PIDs in their pid files
 #
 # Commands then need SLURM_CONF=STATE_DIR/slurm.conf in their environment.
+# OCCGT_SLURM_PORT (default 6817) sets slurmctld's port; slurmd listens on the next one,
+# so a second cluster (another STATE_DIR) can run beside the first.
 set -euo pipefail
 action="${1:?usage: local_cluster.sh start|stop STATE_DIR}"
 state="$(mkdir -p "${2:?usage: local_cluster.sh start|stop STATE_DIR}" && cd "$2" && pwd)"
@@ -33,15 +35,21 @@ case "$action" in
     done
     if ((${#missing[@]})); then
       export DEBIAN_FRONTEND=noninteractive
-      apt-get update -qq && apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+      # Wait for another apt/dpkg run to finish rather than fail on its lock.
+      apt-get -o DPkg::Lock::Timeout=600 update -qq
+      apt-get -o DPkg::Lock::Timeout=600 install -y -qq --no-install-recommends \
+        "${missing[@]}" </dev/null >/dev/null
     fi
     mem="$(slurmd -C | sed -n 's/.*RealMemory=\([0-9]*\).*/\1/p')"
     cpus="$(slurmd -C | sed -n 's/.*CPUs=\([0-9]*\).*/\1/p')"
+    port="${OCCGT_SLURM_PORT:-6817}"
     mkdir -p "$state/ctld" "$state/d" "$state/log"
     chown slurm:slurm "$state/ctld" 2>/dev/null || true
     cat >"$state/slurm.conf" <<CONF
 ClusterName=occgtlocal
 SlurmctldHost=localhost
+SlurmctldPort=$port
+SlurmdPort=$((port + 1))
 SlurmUser=root
 SlurmdUser=root
 AuthType=auth/munge
@@ -83,6 +91,7 @@ CONF
       sleep 0.2
     done
     echo "local_cluster.sh: cluster did not become idle; see $state/log" >&2
+    tail -n 5 "$state/log/slurmctld.log" "$state/log/slurmd.log" >&2 2>/dev/null || true
     exit 1
     ;;
   stop)

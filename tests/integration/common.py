@@ -31,3 +31,50 @@ def occgt(*args, check=True, env=None):
     if check and r.returncode != 0:
         raise AssertionError(f"occgt {' '.join(map(str, args))} failed ({r.returncode}):\n{r.stderr}")
     return r
+
+
+# Keys of an `occgt build` summary that depend on the run (task layout, what this run
+# wrote, timings); every other key must be equal between any two runs of one recipe.
+RUN_SUMMARY_KEYS = {"task", "tasks", "stage", "timings", "bytes_written", "scenes_selected_this_run",
+                    "scenes_reused", "shards_written_this_run", "shards_skipped_complete",
+                    "samples_written_this_run"}
+
+
+def stable_summary(path):
+    """summary.json of a build without the keys of RUN_SUMMARY_KEYS."""
+    import json
+    with open(path) as f:
+        doc = json.load(f)
+    return {k: v for k, v in doc.items() if k not in RUN_SUMMARY_KEYS}
+
+
+def tree_files(root, skip_dirs=()):
+    """Sorted relative paths of every file under root, minus the folders in skip_dirs."""
+    out = []
+    for folder, dirs, files in os.walk(root):
+        rel = os.path.relpath(folder, root)
+        dirs[:] = [d for d in dirs if os.path.normpath(os.path.join(rel, d)) not in skip_dirs]
+        out += [os.path.normpath(os.path.join(rel, f)) for f in files]
+    return sorted(out)
+
+
+def assert_same_outputs(ref, out, skip_dirs=()):
+    """Same files under ref and out, byte for byte (summary.json: its stable keys).
+    Returns the number of files compared."""
+    a, b = tree_files(ref, skip_dirs), tree_files(out, skip_dirs)
+    assert a == b, f"file lists differ: only in {ref}: {sorted(set(a) - set(b))}, " \
+                   f"only in {out}: {sorted(set(b) - set(a))}"
+    assert any(p.endswith(".tar") for p in a), f"no shard under {ref}"
+    for rel in a:
+        if rel == "summary.json":
+            sa, sb = stable_summary(os.path.join(ref, rel)), stable_summary(os.path.join(out, rel))
+            assert sa == sb, f"summary.json differs: {sa} vs {sb}"
+            continue
+        with open(os.path.join(ref, rel), "rb") as fa, open(os.path.join(out, rel), "rb") as fb:
+            assert fa.read() == fb.read(), f"{rel} differs between {ref} and {out}"
+    return len(a)
+
+
+def tmp_files(root):
+    """Leftover temporary files (*.tmp) anywhere under root."""
+    return [p for p in tree_files(root) if p.endswith(".tmp") or ".tmp." in os.path.basename(p)]
