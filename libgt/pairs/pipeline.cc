@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstring>
 #include <filesystem>
+#include <future>
 #include <list>
 #include <map>
 #include <memory>
@@ -630,6 +631,18 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
     my_samples += (s % options.tasks == options.task) ? shard_sizes[s] : 0;
   }
   int64_t done_samples = 0;
+  // Shard s is written (tar, fsync, MD5, part record) on a writer thread while the samples
+  // of the next shard are computed, so the serial write overlaps the parallel compute. At
+  // most one write is in flight; shards are still published in order and byte for byte as
+  // before. `finish_write` waits for it and rethrows its error.
+  std::future<int64_t> pending_write;
+  int64_t pending_samples = 0;
+  auto finish_write = [&] {
+    if (!pending_write.valid()) return;
+    bytes_written += pending_write.get();
+    ++shards_written;
+    samples_written += pending_samples;
+  };
   for (int64_t s = 0, start = 0; s < nshards; start += shard_sizes[s], ++s) {
     if (s % options.tasks != options.task) continue;
     if (output->IsShardComplete(s)) {
@@ -676,9 +689,11 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
         samples[k] = ComputeSample(d.scene, i0->second, i1->second, p, keys[start + k], *depth0,
                                    *depth1, d.spec, shared, image0.get(), image1.get());
       });
-      bytes_written += output->WriteShard(s, samples);
-      ++shards_written;
-      samples_written += n;
+      finish_write();
+      pending_samples = n;
+      pending_write = std::async(std::launch::async, [output, s, batch = std::move(samples)] {
+        return output->WriteShard(s, batch);
+      });
     }
     for (auto it = scene_data.begin(); it != scene_data.end();) {
       it = last_shard_of_scene[it->first] <= s ? scene_data.erase(it) : std::next(it);
@@ -686,6 +701,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
     done_samples += shard_sizes[s];
     if (progress) progress({"write", done_samples, my_samples, Seconds(t_write)});
   }
+  finish_write();
   timings["write_s"] = Seconds(t_write);
   summary["shards_written_this_run"] = shards_written;
   summary["shards_skipped_complete"] = shards_skipped;
