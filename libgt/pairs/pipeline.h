@@ -21,6 +21,8 @@
 //
 // Threads: TBB inside a scene (frame scan, scoring) and inside a shard (samples); results
 // are stored by index and written in order, so outputs never depend on the thread count.
+// A shard is written on a writer thread while the next shard's samples are computed (at
+// most one write in flight; its error is rethrown before the next write starts).
 // The write stage depends on libgt/shards, which sits above this layer: it is reached only
 // through the ShardOutput interface (apps/cmd_build.cc implements it with libgt/shards).
 #pragma once
