@@ -4,15 +4,19 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIO.h>
 #include <ImfInputFile.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <stdexcept>
+#include <string_view>
 
 #include "libgt/core/error.h"
 #include "libgt/io/files.h"
@@ -24,17 +28,31 @@ namespace {
 // Depth values at or above this are background markers (Blender writes ~1e10).
 constexpr float kHugeDepthM = 1e9f;
 
-float Sanitize(float d) { return (std::isfinite(d) && d > 0.0f && d < kHugeDepthM) ? d : 0.0f; }
+// Larger depth maps are rejected as implausible before any pixel buffer is allocated
+// (a 16384 x 8192 float map is 512 MiB); each side is also at most 65536.
+constexpr int64_t kMaxDepthPixels = int64_t{1} << 27;
+constexpr int64_t kMaxDepthSide = int64_t{1} << 16;
 
-DepthImage ReadNpyDepth(const DepthSource& src) {
-  const NpyArray a = ReadNpy(src.path);
+bool PlausibleSize(int64_t width, int64_t height) {
+  return width > 0 && height > 0 && width <= kMaxDepthSide && height <= kMaxDepthSide &&
+         width * height <= kMaxDepthPixels;
+}
+
+float Sanitize(float d) { return (std::isfinite(d) && d > 0.0f && d < kHugeDepthM) ? d : 0.0f; }
+// In double before narrowing, so that values beyond float's range never reach the cast.
+float Sanitize(double d) {
+  return (std::isfinite(d) && d > 0.0 && d < kHugeDepthM) ? static_cast<float>(d) : 0.0f;
+}
+
+DepthImage DecodeNpyDepth(std::string_view bytes, const DepthSource& src) {
+  const NpyArray a = ParseNpy(bytes, src.path);
   if (a.shape.size() != 2 && !(a.shape.size() == 3 && a.shape[2] == 1)) {
     std::ostringstream s;
     s << "expected a depth array of shape (H, W), got " << a.shape.size() << " dimensions";
     throw InputError(src.path, s.str());
   }
   if (a.fortran_order) throw InputError(src.path, "expected C order, got fortran_order");
-  if (a.shape[0] <= 0 || a.shape[1] <= 0 || a.shape[0] > 1 << 16 || a.shape[1] > 1 << 16) {
+  if (!PlausibleSize(a.shape[1], a.shape[0])) {
     throw InputError(src.path, "depth array has an empty or implausible shape");
   }
   DepthImage d(static_cast<int>(a.shape[1]), static_cast<int>(a.shape[0]));
@@ -44,7 +62,7 @@ DepthImage ReadNpyDepth(const DepthSource& src) {
     for (size_t i = 0; i < n; ++i) d.values_m[i] = Sanitize(p[i]);
   } else if (a.descr == "<f8") {
     const double* p = a.As<double>(src.path);
-    for (size_t i = 0; i < n; ++i) d.values_m[i] = Sanitize(static_cast<float>(p[i]));
+    for (size_t i = 0; i < n; ++i) d.values_m[i] = Sanitize(p[i]);
   } else {
     throw InputError(src.path,
                      "expected float32 ('<f4') depth in metres, got dtype '" + a.descr + "'");
@@ -52,12 +70,44 @@ DepthImage ReadNpyDepth(const DepthSource& src) {
   return d;
 }
 
-DepthImage ReadPng16Depth(const DepthSource& src) {
-  if (!FileExists(src.path)) throw InputError(src.path, "cannot open file (missing or unreadable)");
+uint32_t BigEndian32(const unsigned char* p) {
+  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
+}
+
+// PNG: the IHDR chunk follows the 8-byte signature.
+bool PngSize(std::string_view head, ImageSize* size) {
+  static const unsigned char kSig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (head.size() < 24 || std::memcmp(head.data(), kSig, 8) != 0) return false;
+  if (head.compare(12, 4, "IHDR") != 0) return false;
+  const auto* p = reinterpret_cast<const unsigned char*>(head.data());
+  const uint32_t width = BigEndian32(p + 16);
+  const uint32_t height = BigEndian32(p + 20);
+  if (width == 0 || height == 0 || width > INT32_MAX || height > INT32_MAX) return false;
+  size->width = static_cast<int>(width);
+  size->height = static_cast<int>(height);
+  return true;
+}
+
+
+DepthImage DecodePng16Depth(std::string_view bytes, const DepthSource& src) {
   if (!(src.scale_m_per_unit > 0) || !std::isfinite(src.scale_m_per_unit)) {
     throw InputError(src.path, "depth scale must be a positive number of metres per unit");
   }
-  const cv::Mat m = cv::imread(src.path, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+  ImageSize declared;
+  if (PngSize(bytes, &declared) && !PlausibleSize(declared.width, declared.height)) {
+    throw InputError(src.path, "PNG header declares an implausible size " +
+                                   std::to_string(declared.width) + "x" +
+                                   std::to_string(declared.height));
+  }
+  if (bytes.empty()) throw InputError(src.path, "empty file");
+  cv::Mat m;
+  try {
+    const cv::Mat encoded(1, static_cast<int>(std::min<size_t>(bytes.size(), INT32_MAX)), CV_8UC1,
+                          const_cast<char*>(bytes.data()));
+    m = cv::imdecode(encoded, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+  } catch (const cv::Exception& e) {
+    throw InputError(src.path, std::string("cannot decode image: ") + e.what());
+  }
   if (m.empty()) throw InputError(src.path, "cannot decode image (corrupt or unsupported)");
   if (m.type() != CV_16UC1) {
     throw InputError(src.path, "expected a 16-bit single-channel depth image, got OpenCV type " +
@@ -71,7 +121,7 @@ DepthImage ReadPng16Depth(const DepthSource& src) {
       const uint16_t raw = row[u];
       d.at(u, v) = (raw == 0 || static_cast<int>(raw) == src.invalid_value)
                        ? 0.0f
-                       : static_cast<float>(raw * src.scale_m_per_unit);
+                       : Sanitize(raw * src.scale_m_per_unit);
     }
   }
   return d;
@@ -103,10 +153,33 @@ std::string PickChannel(const std::vector<std::string>& names, const std::string
   return names.size() == 1 ? names[0] : "";
 }
 
-DepthImage ReadExrDepth(const DepthSource& src) {
-  if (!FileExists(src.path)) throw InputError(src.path, "cannot open file (missing or unreadable)");
+// An OpenEXR input stream over bytes in memory (the library reads headers, offset tables
+// and chunks through it; reading past the end throws, as Imf's own file stream does).
+class MemoryIStream : public Imf::IStream {
+ public:
+  MemoryIStream(std::string_view bytes, const std::string& name)
+      : Imf::IStream(name.c_str()), bytes_(bytes) {}
+  bool read(char c[], int n) override {
+    if (n < 0 || pos_ > bytes_.size() || static_cast<uint64_t>(n) > bytes_.size() - pos_) {
+      throw std::runtime_error("unexpected end of file");
+    }
+    if (n > 0) std::memcpy(c, bytes_.data() + pos_, static_cast<size_t>(n));
+    pos_ += static_cast<uint64_t>(n);
+    return pos_ < bytes_.size();
+  }
+  uint64_t tellg() override { return pos_; }
+  void seekg(uint64_t pos) override { pos_ = pos; }
+  void clear() override {}
+
+ private:
+  std::string_view bytes_;
+  uint64_t pos_ = 0;
+};
+
+DepthImage DecodeExrDepth(std::string_view bytes, const DepthSource& src) {
   try {
-    Imf::InputFile file(src.path.c_str());
+    MemoryIStream stream(bytes, src.path);
+    Imf::InputFile file(stream);
     const Imf::Header& header = file.header();
     std::vector<std::string> names;
     for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
@@ -122,11 +195,14 @@ DepthImage ReadExrDepth(const DepthSource& src) {
                         "; channels present: " + present);
     }
     const Imath::Box2i dw = header.dataWindow();
-    const int width = dw.max.x - dw.min.x + 1;
-    const int height = dw.max.y - dw.min.y + 1;
-    if (width <= 0 || height <= 0 || width > 1 << 16 || height > 1 << 16) {
+    // In 64 bits: the corners are arbitrary ints in a corrupt file.
+    const int64_t width64 = int64_t{dw.max.x} - dw.min.x + 1;
+    const int64_t height64 = int64_t{dw.max.y} - dw.min.y + 1;
+    if (!PlausibleSize(width64, height64)) {
       throw InputError(src.path, "EXR data window has an empty or implausible size");
     }
+    const int width = static_cast<int>(width64);
+    const int height = static_cast<int>(height64);
     std::vector<float> values(static_cast<size_t>(width) * height, 0.0f);
     Imf::FrameBuffer fb;
     // Base pointer offset so that (x, y) in the data window lands at (x - min.x, y - min.y).
@@ -150,16 +226,21 @@ DepthImage ReadExrDepth(const DepthSource& src) {
 }  // namespace
 
 DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected_height) {
+  return DecodeDepth(ReadFileBytes(source.path), source, expected_width, expected_height);
+}
+
+DepthImage DecodeDepth(std::string_view bytes, const DepthSource& source, int expected_width,
+                       int expected_height) {
   DepthImage d;
   switch (source.format) {
     case DepthFormat::kNpyFloat32:
-      d = ReadNpyDepth(source);
+      d = DecodeNpyDepth(bytes, source);
       break;
     case DepthFormat::kPng16:
-      d = ReadPng16Depth(source);
+      d = DecodePng16Depth(bytes, source);
       break;
     case DepthFormat::kExr:
-      d = ReadExrDepth(source);
+      d = DecodeExrDepth(bytes, source);
       break;
   }
   if (expected_width > 0 && expected_height > 0 &&
@@ -173,21 +254,6 @@ DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected
 }
 
 namespace {
-
-uint32_t BigEndian32(const unsigned char* p) {
-  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
-}
-
-// PNG: the IHDR chunk follows the 8-byte signature.
-bool PngSize(const std::string& head, ImageSize* size) {
-  static const unsigned char kSig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (head.size() < 24 || std::memcmp(head.data(), kSig, 8) != 0) return false;
-  if (head.compare(12, 4, "IHDR") != 0) return false;
-  const auto* p = reinterpret_cast<const unsigned char*>(head.data());
-  size->width = static_cast<int>(BigEndian32(p + 16));
-  size->height = static_cast<int>(BigEndian32(p + 20));
-  return size->width > 0 && size->height > 0;
-}
 
 // JPEG: walk the marker segments to the first start-of-frame (SOF0..SOF15 except
 // DHT/JPG/DAC = C4, C8, CC).
