@@ -112,7 +112,8 @@ class Validator {
 json ParseManifestJson(std::string_view bytes, const std::string& path) {
   try {
     return json::parse(bytes);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
+    // parse_error, and out_of_range for a number beyond double's range (found by fuzzing).
     throw InputError(path, std::string("invalid JSON: ") + e.what());
   }
 }

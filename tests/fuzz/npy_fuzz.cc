@@ -16,8 +16,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   gt::DepthSource src;
   src.path = name;
   src.format = gt::DepthFormat::kNpyFloat32;
-  gt::fuzz::ExpectValueOrInputError(name, [&] {
-    (void)gt::io::DecodeDepth(gt::fuzz::Bytes(data, size), src);
-  });
+  gt::fuzz::ExpectValueOrInputError(
+      name, [&] { (void)gt::io::DecodeDepth(gt::fuzz::Bytes(data, size), src); });
   return 0;
 }

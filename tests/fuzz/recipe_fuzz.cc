@@ -9,8 +9,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string name = "fuzz-recipe.yaml";
   gt::fuzz::ExpectValueOrInputError(name, [&] {
-    const gt::pairs::Recipe r = gt::pairs::ParseRecipe(
-        std::string(gt::fuzz::Bytes(data, size)), name, "/nonexistent-occgt-fuzz");
+    const gt::pairs::Recipe r = gt::pairs::ParseRecipe(std::string(gt::fuzz::Bytes(data, size)),
+                                                       name, "/nonexistent-occgt-fuzz");
     std::string error;
     if (!r.Check(&error)) std::abort();
     (void)r.ToJson().dump();
