@@ -89,7 +89,6 @@ bool PngSize(std::string_view head, ImageSize* size) {
   return true;
 }
 
-
 DepthImage DecodePng16Depth(std::string_view bytes, const DepthSource& src) {
   if (!(src.scale_m_per_unit > 0) || !std::isfinite(src.scale_m_per_unit)) {
     throw InputError(src.path, "depth scale must be a positive number of metres per unit");

@@ -95,9 +95,9 @@ std::vector<TimedPath> ParseTimedPathList(std::string_view text, const std::stri
   std::vector<TimedPath> out;
   for (const auto& rec : ParseRecords(text)) {
     if (rec.tokens.size() != 2) {
-      throw InputError(LineName(name, rec.line_no),
-                       "expected 'timestamp filename', found " +
-                           std::to_string(rec.tokens.size()) + " fields");
+      throw InputError(
+          LineName(name, rec.line_no),
+          "expected 'timestamp filename', found " + std::to_string(rec.tokens.size()) + " fields");
     }
     const std::vector<double> v = ParseNumbers(rec.tokens[0], name, rec.line_no);
     if (v.size() != 1 || !std::isfinite(v[0])) {
@@ -140,11 +140,12 @@ std::vector<TQLine> ParseTQLines(std::string_view text, const std::string& name)
     const std::vector<double> v = ParseNumbers(lines[i], name, line_no);
     if (v.empty()) continue;
     if (v.size() != 7) {
-      throw InputError(LineName(name, line_no), "expected 7 numbers (tx ty tz qx qy qz qw), found " +
-                                                    std::to_string(v.size()));
+      throw InputError(
+          LineName(name, line_no),
+          "expected 7 numbers (tx ty tz qx qy qz qw), found " + std::to_string(v.size()));
     }
-    out.push_back({line_no, Eigen::Vector3d(v[0], v[1], v[2]),
-                   Eigen::Vector4d(v[3], v[4], v[5], v[6])});
+    out.push_back(
+        {line_no, Eigen::Vector3d(v[0], v[1], v[2]), Eigen::Vector4d(v[3], v[4], v[5], v[6])});
   }
   return out;
 }

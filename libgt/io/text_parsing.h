@@ -31,8 +31,7 @@ Eigen::MatrixXd ReadMatrixText(const std::string& path, int rows, int cols);
 Eigen::Matrix3d ReadIntrinsicsText(const std::string& path);
 // The same from text already in memory; `name` (a path) is used in error messages. The
 // Read* functions above are ReadFileBytes + these; the fuzz targets (tests/fuzz) call them.
-Eigen::MatrixXd ParseMatrixText(std::string_view text, const std::string& name, int rows,
-                                int cols);
+Eigen::MatrixXd ParseMatrixText(std::string_view text, const std::string& name, int rows, int cols);
 Eigen::Matrix3d ParseIntrinsicsText(std::string_view text, const std::string& name);
 
 // A text line split off a list file: its 1-based line number and numbers/tokens.

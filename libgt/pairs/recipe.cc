@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <limits>
-#include <type_traits>
 #include <filesystem>
+#include <limits>
 #include <memory>
+#include <type_traits>
 #include <valijson/adapters/nlohmann_json_adapter.hpp>
 #include <valijson/schema.hpp>
 #include <valijson/schema_parser.hpp>
@@ -112,8 +112,8 @@ constexpr int64_t kMaxYamlNodes = 100000;
 json NodeToJson(const YAML::Node& node, const std::string& file, int depth, int64_t* nodes) {
   const std::string line = "line " + std::to_string(node.Mark().line + 1);
   if (depth > kMaxYamlDepth) {
-    throw InputError(file, line + ": nested deeper than " + std::to_string(kMaxYamlDepth) +
-                               " levels");
+    throw InputError(file,
+                     line + ": nested deeper than " + std::to_string(kMaxYamlDepth) + " levels");
   }
   if (++*nodes > kMaxYamlNodes) {
     throw InputError(file, "more than " + std::to_string(kMaxYamlNodes) +
