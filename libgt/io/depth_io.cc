@@ -4,15 +4,20 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIO.h>
 #include <ImfInputFile.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <stdexcept>
+#include <string_view>
 
 #include "libgt/core/error.h"
 #include "libgt/io/files.h"
@@ -25,17 +30,43 @@ namespace {
 // Depth values at or above this are background markers (Blender writes ~1e10).
 constexpr float kHugeDepthM = 1e9f;
 
-float Sanitize(float d) { return (std::isfinite(d) && d > 0.0f && d < kHugeDepthM) ? d : 0.0f; }
+// Larger depth maps are rejected as implausible before any pixel buffer is allocated
+// (a 16384 x 8192 float map is 512 MiB); each side is also at most 65536.
+constexpr int64_t kMaxDepthPixels = int64_t{1} << 27;
+constexpr int64_t kMaxDepthSide = int64_t{1} << 16;
 
-DepthImage ReadNpyDepth(const DepthSource& src) {
-  const NpyArray a = ReadNpy(src.path);
+bool PlausibleSize(int64_t width, int64_t height) {
+  return width > 0 && height > 0 && width <= kMaxDepthSide && height <= kMaxDepthSide &&
+         width * height <= kMaxDepthPixels;
+}
+
+// Refuses a size declared by a file header that differs from the expected one (when
+// given), before any pixel buffer is allocated.
+void CheckDeclaredSize(const std::string& path, int64_t width, int64_t height, int expected_width,
+                       int expected_height) {
+  if (expected_width > 0 && expected_height > 0 &&
+      (width != expected_width || height != expected_height)) {
+    throw InputError(path, "depth is " + std::to_string(width) + "x" + std::to_string(height) +
+                               ", expected " + std::to_string(expected_width) + "x" +
+                               std::to_string(expected_height));
+  }
+}
+
+float Sanitize(float d) { return (std::isfinite(d) && d > 0.0f && d < kHugeDepthM) ? d : 0.0f; }
+// In double before narrowing, so that values beyond float's range never reach the cast.
+float Sanitize(double d) {
+  return (std::isfinite(d) && d > 0.0 && d < kHugeDepthM) ? static_cast<float>(d) : 0.0f;
+}
+
+DepthImage DecodeNpyDepth(std::string_view bytes, const DepthSource& src) {
+  const NpyArray a = ParseNpy(bytes, src.path);
   if (a.shape.size() != 2 && !(a.shape.size() == 3 && a.shape[2] == 1)) {
     std::ostringstream s;
     s << "expected a depth array of shape (H, W), got " << a.shape.size() << " dimensions";
     throw InputError(src.path, s.str());
   }
   if (a.fortran_order) throw InputError(src.path, "expected C order, got fortran_order");
-  if (a.shape[0] <= 0 || a.shape[1] <= 0 || a.shape[0] > 1 << 16 || a.shape[1] > 1 << 16) {
+  if (!PlausibleSize(a.shape[1], a.shape[0])) {
     throw InputError(src.path, "depth array has an empty or implausible shape");
   }
   DepthImage d(static_cast<int>(a.shape[1]), static_cast<int>(a.shape[0]));
@@ -45,7 +76,7 @@ DepthImage ReadNpyDepth(const DepthSource& src) {
     for (size_t i = 0; i < n; ++i) d.values_m[i] = Sanitize(p[i]);
   } else if (a.descr == "<f8") {
     const double* p = a.As<double>(src.path);
-    for (size_t i = 0; i < n; ++i) d.values_m[i] = Sanitize(static_cast<float>(p[i]));
+    for (size_t i = 0; i < n; ++i) d.values_m[i] = Sanitize(p[i]);
   } else {
     throw InputError(src.path,
                      "expected float32 ('<f4') depth in metres, got dtype '" + a.descr + "'");
@@ -53,29 +84,57 @@ DepthImage ReadNpyDepth(const DepthSource& src) {
   return d;
 }
 
-bool PngSize(const std::string& head, ImageSize* size);  // below
+uint32_t BigEndian32(const unsigned char* p) {
+  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
+}
 
-// The IHDR size is compared with the expected size (when given) before decoding, so a
-// small PNG claiming 30000x30000 is refused without a gigabyte buffer or libpng's
-// "Not enough image data" line on stderr.
-DepthImage ReadPng16Depth(const DepthSource& src, int expected_width, int expected_height) {
-  if (!FileExists(src.path)) throw InputError(src.path, "cannot open file (missing or unreadable)");
+// PNG: the IHDR chunk follows the 8-byte signature.
+bool PngSize(std::string_view head, ImageSize* size) {
+  static const unsigned char kSig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (head.size() < 24 || std::memcmp(head.data(), kSig, 8) != 0) return false;
+  if (head.compare(12, 4, "IHDR") != 0) return false;
+  const auto* p = reinterpret_cast<const unsigned char*>(head.data());
+  const uint32_t width = BigEndian32(p + 16);
+  const uint32_t height = BigEndian32(p + 20);
+  if (width == 0 || height == 0 || width > INT32_MAX || height > INT32_MAX) return false;
+  size->width = static_cast<int>(width);
+  size->height = static_cast<int>(height);
+  return true;
+}
+
+// The IHDR size is compared with the expected size (when given) and checked for
+// plausibility before decoding, and the chunk structure is checked, so that a small or cut
+// PNG claiming 30000x30000 is one clear InputError: no gigabyte buffer and no libpng line
+// of its own on stderr.
+DepthImage DecodePng16Depth(std::string_view bytes, const DepthSource& src, int expected_width,
+                            int expected_height) {
   if (!(src.scale_m_per_unit > 0) || !std::isfinite(src.scale_m_per_unit)) {
     throw InputError(src.path, "depth scale must be a positive number of metres per unit");
   }
-  const std::string bytes = ReadFileBytes(src.path);
-  ImageSize header_size;
-  if (expected_width > 0 && expected_height > 0 && PngSize(bytes.substr(0, 32), &header_size) &&
-      (header_size.width != expected_width || header_size.height != expected_height)) {
-    throw InputError(src.path, "depth is " + std::to_string(header_size.width) + "x" +
-                                   std::to_string(header_size.height) + ", expected " +
-                                   std::to_string(expected_width) + "x" +
-                                   std::to_string(expected_height));
+  ImageSize declared;
+  if (PngSize(bytes, &declared)) {
+    CheckDeclaredSize(src.path, declared.width, declared.height, expected_width, expected_height);
+    if (!PlausibleSize(declared.width, declared.height)) {
+      throw InputError(src.path, "PNG header declares an implausible size " +
+                                     std::to_string(declared.width) + "x" +
+                                     std::to_string(declared.height));
+    }
   }
   if (std::string e = PngDamage(bytes); !e.empty()) throw InputError(src.path, e);
-  const cv::Mat m = cv::imdecode(
-      cv::Mat(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data())),
-      cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+  // Only PNG and binary/ASCII PGM: cv::imdecode would otherwise try every codec OpenCV
+  // has (JPEG 2000, GDAL with temporary files, ...) on bytes that are none of them.
+  static const char kPngSig[] = "\x89PNG\r\n\x1a\n";
+  const bool png = bytes.size() >= 8 && bytes.compare(0, 8, std::string_view(kPngSig, 8)) == 0;
+  const bool pgm = bytes.size() >= 2 && bytes[0] == 'P' && (bytes[1] == '5' || bytes[1] == '2');
+  if (!png && !pgm) throw InputError(src.path, "not a PNG or PGM file (bad signature)");
+  cv::Mat m;
+  try {
+    const cv::Mat encoded(1, static_cast<int>(std::min<size_t>(bytes.size(), INT32_MAX)), CV_8UC1,
+                          const_cast<char*>(bytes.data()));
+    m = cv::imdecode(encoded, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+  } catch (const cv::Exception& e) {
+    throw InputError(src.path, std::string("cannot decode image: ") + e.what());
+  }
   if (m.empty()) throw InputError(src.path, "cannot decode image (corrupt or unsupported)");
   if (m.type() != CV_16UC1) {
     throw InputError(src.path, "expected a 16-bit single-channel depth image, got OpenCV type " +
@@ -89,7 +148,7 @@ DepthImage ReadPng16Depth(const DepthSource& src, int expected_width, int expect
       const uint16_t raw = row[u];
       d.at(u, v) = (raw == 0 || static_cast<int>(raw) == src.invalid_value)
                        ? 0.0f
-                       : static_cast<float>(raw * src.scale_m_per_unit);
+                       : Sanitize(raw * src.scale_m_per_unit);
     }
   }
   return d;
@@ -121,12 +180,94 @@ std::string PickChannel(const std::vector<std::string>& names, const std::string
   return names.size() == 1 ? names[0] : "";
 }
 
-// The data window is checked against the expected size (when given) and a pixel cap
-// before the float buffer is allocated: a 1 KB file may claim 65536x65536 (16 GB).
-DepthImage ReadExrDepth(const DepthSource& src, int expected_width, int expected_height) {
-  if (!FileExists(src.path)) throw InputError(src.path, "cannot open file (missing or unreadable)");
+// An OpenEXR input stream over bytes in memory (the library reads headers, offset tables
+// and chunks through it; reading past the end throws, as Imf's own file stream does).
+class MemoryIStream : public Imf::IStream {
+ public:
+  MemoryIStream(std::string_view bytes, const std::string& name)
+      : Imf::IStream(name.c_str()), bytes_(bytes) {}
+  bool read(char c[], int n) override {
+    if (n < 0 || pos_ > bytes_.size() || static_cast<uint64_t>(n) > bytes_.size() - pos_) {
+      throw std::runtime_error("unexpected end of file");
+    }
+    if (n > 0) std::memcpy(c, bytes_.data() + pos_, static_cast<size_t>(n));
+    pos_ += static_cast<uint64_t>(n);
+    return pos_ < bytes_.size();
+  }
+  uint64_t tellg() override { return pos_; }
+  void seekg(uint64_t pos) override { pos_ = pos; }
+  void clear() override {}
+
+ private:
+  std::string_view bytes_;
+  uint64_t pos_ = 0;
+};
+
+uint32_t LittleEndian32(std::string_view b, size_t pos) {
+  const auto* p = reinterpret_cast<const unsigned char*>(b.data() + pos);
+  return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) | (uint32_t(p[3]) << 24);
+}
+
+// Walks the EXR header(s) (magic, version, then per part "name\0type\0" int32 size and
+// value, ending with a 0 byte) before OpenEXR sees the bytes: every attribute must fit in
+// the file and the data window must be plausible. OpenEXR allocates attribute values and
+// offset tables from the sizes a header declares, so a 29-byte corrupt file made it
+// allocate hundreds of MiB (found by fuzz_depth_exr). "" when fine, else the problem.
+// The first part's data window size goes to *window_width/height (left alone when absent).
+std::string ExrHeaderProblem(std::string_view b, int64_t* window_width, int64_t* window_height) {
+  if (b.size() < 8 || LittleEndian32(b, 0) != 20000630u) return "not an OpenEXR file (bad magic)";
+  const bool multipart = (LittleEndian32(b, 4) & 0x1000u) != 0;
+  size_t pos = 8;
+  for (int part = 0;; ++part) {
+    int attributes = 0;
+    while (true) {
+      if (pos >= b.size()) return "file ends inside the header";
+      if (b[pos] == '\0') {
+        ++pos;
+        break;
+      }
+      std::string_view name, type;
+      for (std::string_view* field : {&name, &type}) {
+        const size_t end = b.find('\0', pos);
+        if (end == std::string_view::npos || end - pos > 255) return "malformed header attribute";
+        *field = b.substr(pos, end - pos);
+        pos = end + 1;
+      }
+      if (b.size() - pos < 4) return "file ends inside the header";
+      const uint32_t size = LittleEndian32(b, pos);
+      pos += 4;
+      if (size > b.size() - pos) {
+        return "header attribute '" + std::string(name) + "' is larger than the file";
+      }
+      if (name == "dataWindow" && type == "box2i" && size == 16) {
+        const auto corner = [&](size_t k) {
+          return static_cast<int64_t>(static_cast<int32_t>(LittleEndian32(b, pos + 4 * k)));
+        };
+        const int64_t width = corner(2) - corner(0) + 1, height = corner(3) - corner(1) + 1;
+        if (*window_width < 0) {
+          *window_width = width;
+          *window_height = height;
+        }
+        if (!PlausibleSize(width, height)) return "data window has an empty or implausible size";
+      }
+      pos += size;
+      ++attributes;
+    }
+    if (!multipart || (part > 0 && attributes == 0)) return "";
+  }
+}
+
+DepthImage DecodeExrDepth(std::string_view bytes, const DepthSource& src, int expected_width,
+                          int expected_height) {
+  int64_t window_width = -1, window_height = -1;  // of the first part, when declared
+  const std::string problem = ExrHeaderProblem(bytes, &window_width, &window_height);
+  if (window_width >= 0) {
+    CheckDeclaredSize(src.path, window_width, window_height, expected_width, expected_height);
+  }
+  if (!problem.empty()) throw InputError(src.path, "cannot read EXR: " + problem);
   try {
-    Imf::InputFile file(src.path.c_str());
+    MemoryIStream stream(bytes, src.path);
+    Imf::InputFile file(stream);
     const Imf::Header& header = file.header();
     std::vector<std::string> names;
     for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
@@ -142,24 +283,23 @@ DepthImage ReadExrDepth(const DepthSource& src, int expected_width, int expected
                         "; channels present: " + present);
     }
     const Imath::Box2i dw = header.dataWindow();
-    const int width = dw.max.x - dw.min.x + 1;
-    const int height = dw.max.y - dw.min.y + 1;
-    if (expected_width > 0 && expected_height > 0 &&
-        (width != expected_width || height != expected_height)) {
-      throw InputError(src.path, "depth is " + std::to_string(width) + "x" +
-                                     std::to_string(height) + ", expected " +
-                                     std::to_string(expected_width) + "x" +
-                                     std::to_string(expected_height));
+    // In 64 bits: the corners are arbitrary ints in a corrupt file.
+    const int64_t width64 = int64_t{dw.max.x} - dw.min.x + 1;
+    const int64_t height64 = int64_t{dw.max.y} - dw.min.y + 1;
+    CheckDeclaredSize(src.path, width64, height64, expected_width, expected_height);
+    if (!PlausibleSize(width64, height64)) {
+      throw InputError(src.path, "EXR data window has an empty or implausible size");
     }
-    if (width <= 0 || height <= 0 || width > 1 << 16 || height > 1 << 16 ||
-        static_cast<int64_t>(width) * height > (int64_t{1} << 28)) {
-      throw InputError(src.path, "EXR data window " + std::to_string(width) + "x" +
-                                     std::to_string(height) + " is empty or implausibly large");
-    }
-    std::vector<float> values(static_cast<size_t>(width) * height, 0.0f);
+    const int width = static_cast<int>(width64);
+    const int height = static_cast<int>(height64);
+    // Not zero-filled: readPixels writes every pixel of the window or throws, and a
+    // corrupt file that declares a big window then fails fast instead of first touching
+    // up to 512 MiB (found by fuzz_depth_exr: 22 executions/s).
+    const size_t npixels = static_cast<size_t>(width) * height;
+    const std::unique_ptr<float[]> values(new float[npixels]);
     Imf::FrameBuffer fb;
     // Base pointer offset so that (x, y) in the data window lands at (x - min.x, y - min.y).
-    char* base = reinterpret_cast<char*>(values.data()) -
+    char* base = reinterpret_cast<char*>(values.get()) -
                  (static_cast<ptrdiff_t>(dw.min.x) + static_cast<ptrdiff_t>(dw.min.y) * width) *
                      static_cast<ptrdiff_t>(sizeof(float));
     fb.insert(channel,
@@ -167,7 +307,7 @@ DepthImage ReadExrDepth(const DepthSource& src, int expected_width, int expected
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     DepthImage d(width, height);
-    for (size_t i = 0; i < values.size(); ++i) d.values_m[i] = Sanitize(values[i]);
+    for (size_t i = 0; i < npixels; ++i) d.values_m[i] = Sanitize(values[i]);
     return d;
   } catch (const InputError&) {
     throw;
@@ -179,16 +319,21 @@ DepthImage ReadExrDepth(const DepthSource& src, int expected_width, int expected
 }  // namespace
 
 DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected_height) {
+  return DecodeDepth(ReadFileBytes(source.path), source, expected_width, expected_height);
+}
+
+DepthImage DecodeDepth(std::string_view bytes, const DepthSource& source, int expected_width,
+                       int expected_height) {
   DepthImage d;
   switch (source.format) {
     case DepthFormat::kNpyFloat32:
-      d = ReadNpyDepth(source);
+      d = DecodeNpyDepth(bytes, source);
       break;
     case DepthFormat::kPng16:
-      d = ReadPng16Depth(source, expected_width, expected_height);
+      d = DecodePng16Depth(bytes, source, expected_width, expected_height);
       break;
     case DepthFormat::kExr:
-      d = ReadExrDepth(source, expected_width, expected_height);
+      d = DecodeExrDepth(bytes, source, expected_width, expected_height);
       break;
   }
   if (expected_width > 0 && expected_height > 0 &&
@@ -202,21 +347,6 @@ DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected
 }
 
 namespace {
-
-uint32_t BigEndian32(const unsigned char* p) {
-  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
-}
-
-// PNG: the IHDR chunk follows the 8-byte signature.
-bool PngSize(const std::string& head, ImageSize* size) {
-  static const unsigned char kSig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (head.size() < 24 || std::memcmp(head.data(), kSig, 8) != 0) return false;
-  if (head.compare(12, 4, "IHDR") != 0) return false;
-  const auto* p = reinterpret_cast<const unsigned char*>(head.data());
-  size->width = static_cast<int>(BigEndian32(p + 16));
-  size->height = static_cast<int>(BigEndian32(p + 20));
-  return size->width > 0 && size->height > 0;
-}
 
 // JPEG: walk the marker segments to the first start-of-frame (SOF0..SOF15 except
 // DHT/JPG/DAC = C4, C8, CC).

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include "libgt/core/depth.h"
 #include "libgt/core/frame.h"
@@ -12,7 +13,14 @@ namespace gt::io {
 
 // Reads a frame's depth; throws InputError naming the file on any problem, and when the
 // size differs from expected_width x expected_height (unless those are 0).
+// Depth maps are at most 65536 pixels a side and 2^27 pixels in all (checked from the
+// header, before any pixel buffer is allocated).
 DepthImage ReadDepth(const DepthSource& source, int expected_width = 0, int expected_height = 0);
+// The same from the file's bytes already in memory (source.path names it in messages):
+// ReadDepth is ReadFileBytes + DecodeDepth. PNG/PGM go through cv::imdecode, EXR through
+// an in-memory Imf::IStream.
+DepthImage DecodeDepth(std::string_view bytes, const DepthSource& source, int expected_width = 0,
+                       int expected_height = 0);
 
 // Size of an image file (PNG/JPG) without decoding pixels where possible.
 struct ImageSize {

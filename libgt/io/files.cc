@@ -161,13 +161,16 @@ std::vector<double> ParseNumbers(std::string_view line, const std::string& path,
 }
 
 std::vector<std::string> ReadLines(const std::string& path) {
-  const std::string bytes = ReadFileBytes(path);
+  return SplitLines(ReadFileBytes(path));
+}
+
+std::vector<std::string> SplitLines(std::string_view bytes) {
   std::vector<std::string> lines;
   size_t start = 0;
   while (start < bytes.size()) {
     size_t end = bytes.find('\n', start);
     if (end == std::string::npos) end = bytes.size();
-    std::string line = bytes.substr(start, end - start);
+    std::string line(bytes.substr(start, end - start));
     if (!line.empty() && line.back() == '\r') line.pop_back();
     lines.push_back(std::move(line));
     start = end + 1;

@@ -25,6 +25,8 @@ std::vector<double> ParseNumbers(std::string_view line, const std::string& path,
 
 // Lines of a text file (without '\n', '\r' stripped).
 std::vector<std::string> ReadLines(const std::string& path);
+// The same split of text already in memory.
+std::vector<std::string> SplitLines(std::string_view text);
 
 // Lower-case hex MD5 of bytes / of a file.
 std::string Md5Hex(std::string_view bytes);

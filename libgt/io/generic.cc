@@ -109,14 +109,16 @@ class Validator {
   std::string path_;
 };
 
-json ParseManifest(const std::string& path) {
-  const std::string bytes = ReadFileBytes(path);
+json ParseManifestJson(std::string_view bytes, const std::string& path) {
   try {
     return json::parse(bytes);
-  } catch (const json::exception& e) {  // parse_error, and out_of_range for 1e999
+  } catch (const json::exception& e) {
+    // parse_error, and out_of_range for a number beyond double's range (found by fuzzing).
     throw InputError(path, std::string("invalid JSON: ") + e.what());
   }
 }
+
+json ParseManifest(const std::string& path) { return ParseManifestJson(ReadFileBytes(path), path); }
 
 std::string ResolvePath(const fs::path& base, const std::string& p) {
   const fs::path q(p);
@@ -173,8 +175,13 @@ Scene GenericReader::ReadScene(const std::string& root, const std::string& scene
     manifest = (fs::path(root) / scene_name / kManifestName).string();
     if (!FileExists(manifest)) throw InputError(manifest, "scene manifest not found");
   }
+  return ParseGenericManifest(ReadFileBytes(manifest), manifest, scene_name, options_);
+}
+
+Scene ParseGenericManifest(std::string_view text, const std::string& manifest,
+                           const std::string& scene_name, const ReaderOptions& options) {
   const Validator val(manifest);
-  const json j = ParseManifest(manifest);
+  const json j = ParseManifestJson(text, manifest);
   val.RequireObject(j, "", {"$schema", "format", "version", "scene", "depth_range_m", "frames"},
                     {"format", "version", "scene", "frames"});
   if (!j["format"].is_string() || j["format"].get<std::string>() != "occgt-scene-manifest") {
@@ -192,7 +199,7 @@ Scene GenericReader::ReadScene(const std::string& root, const std::string& scene
 
   Scene scene;
   scene.name = scene_name.empty() ? manifest_scene : scene_name;
-  scene.format = Format();
+  scene.format = "generic";
   scene.path = manifest;
   scene.min_depth_m = 0.0;
   scene.max_depth_m = 1000.0;
@@ -259,7 +266,7 @@ Scene GenericReader::ReadScene(const std::string& root, const std::string& scene
       if (format != "exr") val.Fail(dp + ".channel", "allowed for exr depth only");
       f.depth.exr_channel = val.String(dj["channel"], dp + ".channel");
     } else if (format == "exr") {
-      f.depth.exr_channel = options_.exr_channel;
+      f.depth.exr_channel = options.exr_channel;
     }
 
     const Eigen::Matrix4d m = val.Matrix(fj["world_from_cam"], fp + ".world_from_cam", 4, 4);
@@ -295,7 +302,7 @@ Scene GenericReader::ReadScene(const std::string& root, const std::string& scene
       }
     }
 
-    if (options_.check_depth_files && !FileExists(f.depth.path)) {
+    if (options.check_depth_files && !FileExists(f.depth.path)) {
       MarkUnusable(&f, kReasonDepthMissing);
     }
     scene.frames.push_back(std::move(f));

@@ -382,6 +382,13 @@ void WriteNpy(const std::string& path, const std::vector<int64_t>& shape,
   WriteFileAtomic(path, EncodeNpy(shape, values));
 }
 
+namespace {
+
+// The members of an open archive; `path` names it in messages.
+std::map<std::string, NpyArray> ReadNpzMembers(zip_t* archive, const std::string& path);
+
+}  // namespace
+
 std::map<std::string, NpyArray> ReadNpz(const std::string& path) {
   int code = 0;
   std::unique_ptr<zip_t, ZipCloser> archive(zip_open(path.c_str(), ZIP_RDONLY, &code));
@@ -389,12 +396,39 @@ std::map<std::string, NpyArray> ReadNpz(const std::string& path) {
     if (!FileExists(path)) throw InputError(path, "cannot open (no such file)");
     throw InputError(path, "not a readable .npz (zip) archive: " + ZipErrorText(code));
   }
+  return ReadNpzMembers(archive.get(), path);
+}
+
+std::map<std::string, NpyArray> ParseNpz(std::string_view bytes, const std::string& name) {
+  zip_error_t error;
+  zip_error_init(&error);
+  // The source does not own the bytes (freep = 0); zip_open_from_source takes the source.
+  zip_source_t* source = zip_source_buffer_create(bytes.data(), bytes.size(), 0, &error);
+  if (source == nullptr) {
+    const std::string why = zip_error_strerror(&error);
+    zip_error_fini(&error);
+    throw InputError(name, "cannot read .npz bytes: " + why);
+  }
+  std::unique_ptr<zip_t, ZipCloser> archive(zip_open_from_source(source, ZIP_RDONLY, &error));
+  if (!archive) {
+    zip_source_free(source);
+    const std::string why = zip_error_strerror(&error);
+    zip_error_fini(&error);
+    throw InputError(name, "not a readable .npz (zip) archive: " + why);
+  }
+  zip_error_fini(&error);
+  return ReadNpzMembers(archive.get(), name);
+}
+
+namespace {
+
+std::map<std::string, NpyArray> ReadNpzMembers(zip_t* archive, const std::string& path) {
   std::map<std::string, NpyArray> out;
-  const zip_int64_t count = zip_get_num_entries(archive.get(), 0);
+  const zip_int64_t count = zip_get_num_entries(archive, 0);
   for (zip_int64_t i = 0; i < count; ++i) {
     zip_stat_t st;
     zip_stat_init(&st);
-    if (zip_stat_index(archive.get(), i, 0, &st) != 0 || !(st.valid & ZIP_STAT_NAME) ||
+    if (zip_stat_index(archive, i, 0, &st) != 0 || !(st.valid & ZIP_STAT_NAME) ||
         !(st.valid & ZIP_STAT_SIZE)) {
       throw InputError(path, "cannot read zip entry " + std::to_string(i));
     }
@@ -411,9 +445,9 @@ std::map<std::string, NpyArray> ReadNpz(const std::string& path) {
                                     " (expected stored or deflated)");
       }
     }
-    std::unique_ptr<zip_file_t, ZipFileCloser> file(zip_fopen_index(archive.get(), i, 0));
+    std::unique_ptr<zip_file_t, ZipFileCloser> file(zip_fopen_index(archive, i, 0));
     if (!file) {
-      throw InputError(where, std::string("cannot open member: ") + zip_strerror(archive.get()));
+      throw InputError(where, std::string("cannot open member: ") + zip_strerror(archive));
     }
     // Read in chunks rather than trusting the declared size for one big allocation.
     std::string bytes;
@@ -435,6 +469,8 @@ std::map<std::string, NpyArray> ReadNpz(const std::string& path) {
   }
   return out;
 }
+
+}  // namespace
 
 void WriteNpz(const std::string& path, const std::map<std::string, std::string>& npy_members) {
   // libzip writes to a file; write it beside the target, then publish its bytes atomically.

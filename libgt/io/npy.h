@@ -69,6 +69,8 @@ void WriteNpy(const std::string& path, const std::vector<int64_t>& shape,
 // .npz: a zip of "<name>.npy" members (stored or deflated). Keys are member names without
 // the ".npy" suffix.
 std::map<std::string, NpyArray> ReadNpz(const std::string& path);
+// The same from the archive's bytes in memory; `name` is used in error messages.
+std::map<std::string, NpyArray> ParseNpz(std::string_view bytes, const std::string& name);
 // Writes a stored (uncompressed) .npz atomically; members in the map's (sorted) order,
 // fixed timestamps, so equal inputs give identical bytes.
 void WriteNpz(const std::string& path, const std::map<std::string, std::string>& npy_members);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "libgt/io/reader.h"
@@ -70,5 +71,11 @@ class GenericReader : public DatasetReader {
  private:
   ReaderOptions options_;
 };
+
+// The generic reader's validation of one manifest already in memory: `manifest` is its
+// path (for messages and to resolve relative paths), `scene_name` overrides the manifest's
+// scene name when not empty. Throws InputError("<manifest>", "<field>: ...").
+Scene ParseGenericManifest(std::string_view text, const std::string& manifest,
+                           const std::string& scene_name, const ReaderOptions& options);
 
 }  // namespace gt::io

@@ -86,18 +86,7 @@ Scene TartanAirReader::ReadScene(const std::string& root, const std::string& sce
 
   // Pose lines: frame n is the n-th non-empty line (0-based).
   const std::string pose_path = (fs::path(folder) / "pose_left.txt").string();
-  const std::vector<std::string> lines = ReadLines(pose_path);
-  std::vector<std::pair<int, std::vector<double>>> pose_rows;  // (line number, numbers)
-  for (size_t i = 0; i < lines.size(); ++i) {
-    std::vector<double> v = ParseNumbers(lines[i], pose_path, static_cast<int>(i) + 1);
-    if (v.empty()) continue;
-    if (v.size() != 7) {
-      throw InputError(
-          pose_path + ":" + std::to_string(i + 1),
-          "expected 7 numbers (tx ty tz qx qy qz qw), found " + std::to_string(v.size()));
-    }
-    pose_rows.emplace_back(static_cast<int>(i) + 1, std::move(v));
-  }
+  const std::vector<TQLine> pose_rows = ParseTQLines(ReadFileBytes(pose_path), pose_path);
   const int64_t last_number = stems.rbegin()->first;
   if (static_cast<int64_t>(pose_rows.size()) < static_cast<int64_t>(depths.size()) ||
       static_cast<int64_t>(pose_rows.size()) <= last_number) {
@@ -129,9 +118,8 @@ Scene TartanAirReader::ReadScene(const std::string& root, const std::string& sce
       f.color_path = color;
       f.color_camera = camera;
     }
-    const std::vector<double>& v = pose_rows[static_cast<size_t>(number)].second;
-    const Eigen::Vector3d t(v[0], v[1], v[2]);
-    const Eigen::Vector4d q(v[3], v[4], v[5], v[6]);
+    const Eigen::Vector3d& t = pose_rows[static_cast<size_t>(number)].translation;
+    const Eigen::Vector4d& q = pose_rows[static_cast<size_t>(number)].q_xyzw;
     if (const auto problem = PoseProblemTQ(t, q)) {
       MarkUnusable(&f, PoseReason(*problem));
     } else {

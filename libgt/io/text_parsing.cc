@@ -14,10 +14,15 @@ namespace fs = std::filesystem;
 std::string PoseReason(const std::string& problem) { return "pose: " + problem; }
 
 Eigen::MatrixXd ReadMatrixText(const std::string& path, int rows, int cols) {
-  const std::vector<std::string> lines = ReadLines(path);
+  return ParseMatrixText(ReadFileBytes(path), path, rows, cols);
+}
+
+Eigen::MatrixXd ParseMatrixText(std::string_view text, const std::string& name, int rows,
+                                int cols) {
+  const std::vector<std::string> lines = SplitLines(text);
   std::vector<double> values;
   for (size_t i = 0; i < lines.size(); ++i) {
-    const std::vector<double> row = ParseNumbers(lines[i], path, static_cast<int>(i) + 1);
+    const std::vector<double> row = ParseNumbers(lines[i], name, static_cast<int>(i) + 1);
     values.insert(values.end(), row.begin(), row.end());
   }
   const size_t expected = static_cast<size_t>(rows) * cols;
@@ -25,7 +30,7 @@ Eigen::MatrixXd ReadMatrixText(const std::string& path, int rows, int cols) {
     std::ostringstream msg;
     msg << "expected " << expected << " numbers (" << rows << "x" << cols << " matrix), found "
         << values.size();
-    throw InputError(path, msg.str());
+    throw InputError(name, msg.str());
   }
   Eigen::MatrixXd m(rows, cols);
   for (int r = 0; r < rows; ++r) {
@@ -35,17 +40,21 @@ Eigen::MatrixXd ReadMatrixText(const std::string& path, int rows, int cols) {
 }
 
 Eigen::Matrix3d ReadIntrinsicsText(const std::string& path) {
-  const std::vector<std::string> lines = ReadLines(path);
+  return ParseIntrinsicsText(ReadFileBytes(path), path);
+}
+
+Eigen::Matrix3d ParseIntrinsicsText(std::string_view text, const std::string& name) {
+  const std::vector<std::string> lines = SplitLines(text);
   size_t count = 0;
   for (size_t i = 0; i < lines.size(); ++i) {
-    count += ParseNumbers(lines[i], path, static_cast<int>(i) + 1).size();
+    count += ParseNumbers(lines[i], name, static_cast<int>(i) + 1).size();
   }
   if (count != 9 && count != 16) {
-    throw InputError(path, "expected a 3x3 or 4x4 intrinsics matrix (9 or 16 numbers), found " +
+    throw InputError(name, "expected a 3x3 or 4x4 intrinsics matrix (9 or 16 numbers), found " +
                                std::to_string(count) + " numbers");
   }
   const int n = count == 9 ? 3 : 4;
-  return CheckedIntrinsics(ReadMatrixText(path, n, n).topLeftCorner<3, 3>(), path);
+  return CheckedIntrinsics(ParseMatrixText(text, name, n, n).topLeftCorner<3, 3>(), name);
 }
 
 Eigen::Matrix3d CheckedIntrinsics(const Eigen::Matrix3d& K, const std::string& where) {
@@ -57,7 +66,11 @@ Eigen::Matrix3d CheckedIntrinsics(const Eigen::Matrix3d& K, const std::string& w
 }
 
 std::vector<TextRecord> ReadRecords(const std::string& path) {
-  const std::vector<std::string> lines = ReadLines(path);
+  return ParseRecords(ReadFileBytes(path));
+}
+
+std::vector<TextRecord> ParseRecords(std::string_view text) {
+  const std::vector<std::string> lines = SplitLines(text);
   std::vector<TextRecord> out;
   for (size_t i = 0; i < lines.size(); ++i) {
     const std::string& line = lines[i];
@@ -69,6 +82,73 @@ std::vector<TextRecord> ReadRecords(const std::string& path) {
     std::string tok;
     while (ss >> tok) rec.tokens.push_back(tok);
     out.push_back(std::move(rec));
+  }
+  return out;
+}
+
+namespace {
+
+std::string LineName(const std::string& name, int line_no) {
+  return name + ":" + std::to_string(line_no);
+}
+
+}  // namespace
+
+std::vector<TimedPath> ParseTimedPathList(std::string_view text, const std::string& name) {
+  std::vector<TimedPath> out;
+  for (const auto& rec : ParseRecords(text)) {
+    if (rec.tokens.size() != 2) {
+      throw InputError(
+          LineName(name, rec.line_no),
+          "expected 'timestamp filename', found " + std::to_string(rec.tokens.size()) + " fields");
+    }
+    const std::vector<double> v = ParseNumbers(rec.tokens[0], name, rec.line_no);
+    if (v.size() != 1 || !std::isfinite(v[0])) {
+      throw InputError(LineName(name, rec.line_no), "expected a finite timestamp");
+    }
+    out.push_back({v[0], rec.tokens[1]});
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const TimedPath& a, const TimedPath& b) { return a.t < b.t; });
+  return out;
+}
+
+std::vector<TimedPose> ParseTimedPoses(std::string_view text, const std::string& name) {
+  std::vector<TimedPose> out;
+  for (const auto& rec : ParseRecords(text)) {
+    std::string line;
+    for (const auto& tok : rec.tokens) line += tok + " ";
+    const std::vector<double> v = ParseNumbers(line, name, rec.line_no);
+    if (v.size() != 8) {
+      throw InputError(
+          LineName(name, rec.line_no),
+          "expected 8 numbers (timestamp tx ty tz qx qy qz qw), found " + std::to_string(v.size()));
+    }
+    if (!std::isfinite(v[0])) {
+      throw InputError(LineName(name, rec.line_no), "expected a finite timestamp");
+    }
+    out.push_back(
+        {v[0], Eigen::Vector3d(v[1], v[2], v[3]), Eigen::Vector4d(v[4], v[5], v[6], v[7])});
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const TimedPose& a, const TimedPose& b) { return a.t < b.t; });
+  return out;
+}
+
+std::vector<TQLine> ParseTQLines(std::string_view text, const std::string& name) {
+  const std::vector<std::string> lines = SplitLines(text);
+  std::vector<TQLine> out;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const int line_no = static_cast<int>(i) + 1;
+    const std::vector<double> v = ParseNumbers(lines[i], name, line_no);
+    if (v.empty()) continue;
+    if (v.size() != 7) {
+      throw InputError(
+          LineName(name, line_no),
+          "expected 7 numbers (tx ty tz qx qy qz qw), found " + std::to_string(v.size()));
+    }
+    out.push_back(
+        {line_no, Eigen::Vector3d(v[0], v[1], v[2]), Eigen::Vector4d(v[3], v[4], v[5], v[6])});
   }
   return out;
 }
@@ -148,7 +228,8 @@ std::string FolderName(const std::string& path) {
 
 std::string CheckSceneName(const std::string& name) {
   if (name.empty()) return "";
-  if (name.front() == '/') return "expected a scene name relative to the dataset root, got an absolute path";
+  if (name.front() == '/')
+    return "expected a scene name relative to the dataset root, got an absolute path";
   size_t start = 0;
   while (start <= name.size()) {
     size_t slash = name.find('/', start);

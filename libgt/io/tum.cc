@@ -25,60 +25,17 @@ bool IsTumSequence(const std::string& folder) {
   return FileExists((fs::path(folder) / "depth.txt").string());
 }
 
-struct TimedPath {
+// "timestamp filename" lists (rgb.txt, depth.txt), sorted by time, paths made absolute.
+struct FramePath {
   double t = 0;
   std::string path;
 };
-struct TimedPose {
-  double t = 0;
-  Eigen::Vector3d translation;
-  Eigen::Vector4d q_xyzw;
-};
-
-double ParseTime(const TextRecord& rec, const std::string& path) {
-  const std::vector<double> v = ParseNumbers(rec.tokens[0], path, rec.line_no);
-  if (v.size() != 1 || !std::isfinite(v[0])) {
-    throw InputError(path + ":" + std::to_string(rec.line_no), "expected a finite timestamp");
-  }
-  return v[0];
-}
-
-// "timestamp filename" lists (rgb.txt, depth.txt), sorted by time.
-std::vector<TimedPath> ReadTimedPaths(const std::string& folder, const std::string& name) {
+std::vector<FramePath> ReadTimedPaths(const std::string& folder, const std::string& name) {
   const std::string path = (fs::path(folder) / name).string();
-  std::vector<TimedPath> out;
-  for (const auto& rec : ReadRecords(path)) {
-    if (rec.tokens.size() != 2) {
-      throw InputError(
-          path + ":" + std::to_string(rec.line_no),
-          "expected 'timestamp filename', found " + std::to_string(rec.tokens.size()) + " fields");
-    }
-    out.push_back({ParseTime(rec, path), (fs::path(folder) / rec.tokens[1]).string()});
+  std::vector<FramePath> out;
+  for (const TimedPath& e : ParseTimedPathList(ReadFileBytes(path), path)) {
+    out.push_back({e.t, (fs::path(folder) / e.file).string()});
   }
-  std::stable_sort(out.begin(), out.end(),
-                   [](const TimedPath& a, const TimedPath& b) { return a.t < b.t; });
-  return out;
-}
-
-std::vector<TimedPose> ReadGroundtruth(const std::string& path) {
-  std::vector<TimedPose> out;
-  for (const auto& rec : ReadRecords(path)) {
-    std::string line;
-    for (const auto& tok : rec.tokens) line += tok + " ";
-    const std::vector<double> v = ParseNumbers(line, path, rec.line_no);
-    if (v.size() != 8) {
-      throw InputError(
-          path + ":" + std::to_string(rec.line_no),
-          "expected 8 numbers (timestamp tx ty tz qx qy qz qw), found " + std::to_string(v.size()));
-    }
-    if (!std::isfinite(v[0])) {
-      throw InputError(path + ":" + std::to_string(rec.line_no), "expected a finite timestamp");
-    }
-    out.push_back(
-        {v[0], Eigen::Vector3d(v[1], v[2], v[3]), Eigen::Vector4d(v[4], v[5], v[6], v[7])});
-  }
-  std::stable_sort(out.begin(), out.end(),
-                   [](const TimedPose& a, const TimedPose& b) { return a.t < b.t; });
   return out;
 }
 
@@ -145,15 +102,15 @@ Scene TumReader::ReadScene(const std::string& root, const std::string& scene_nam
   scene.min_depth_m = 0.1;
   scene.max_depth_m = 10.0;
 
-  const std::vector<TimedPath> depths = ReadTimedPaths(folder, "depth.txt");
+  const std::vector<FramePath> depths = ReadTimedPaths(folder, "depth.txt");
   if (depths.empty()) {
     throw InputError((fs::path(folder) / "depth.txt").string(), "empty scene: no depth entries");
   }
-  const std::vector<TimedPath> rgbs = FileExists((fs::path(folder) / "rgb.txt").string())
+  const std::vector<FramePath> rgbs = FileExists((fs::path(folder) / "rgb.txt").string())
                                           ? ReadTimedPaths(folder, "rgb.txt")
-                                          : std::vector<TimedPath>{};
-  const std::vector<TimedPose> poses =
-      ReadGroundtruth((fs::path(folder) / "groundtruth.txt").string());
+                                          : std::vector<FramePath>{};
+  const std::string gt_path = (fs::path(folder) / "groundtruth.txt").string();
+  const std::vector<TimedPose> poses = ParseTimedPoses(ReadFileBytes(gt_path), gt_path);
   const Camera camera = TumCamera(FolderName(folder));
 
   std::ostringstream no_gt;

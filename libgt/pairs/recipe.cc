@@ -6,7 +6,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <memory>
+#include <type_traits>
 #include <valijson/adapters/nlohmann_json_adapter.hpp>
 #include <valijson/schema.hpp>
 #include <valijson/schema_parser.hpp>
@@ -67,30 +69,84 @@ bool ParseFloat(const std::string& s, double* out) {
   return true;
 }
 
-json NodeToJson(const YAML::Node& node, const std::string& file) {
+// Strict UTF-8 (no overlongs, surrogates or code points above U+10FFFF): YAML text is
+// Unicode, and nlohmann::json refuses to serialise anything else (the recipe digest).
+bool IsValidUtf8(const std::string& s) {
+  size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    int n = 0;
+    uint32_t cp = 0;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if (c >= 0xC2 && c <= 0xDF) {
+      n = 1, cp = c & 0x1F;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+      n = 2, cp = c & 0x0F;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      n = 3, cp = c & 0x07;
+    } else {
+      return false;
+    }
+    if (s.size() - i <= static_cast<size_t>(n)) return false;
+    for (int k = 1; k <= n; ++k) {
+      const auto cc = static_cast<unsigned char>(s[i + k]);
+      if ((cc & 0xC0) != 0x80) return false;
+      cp = (cp << 6) | (cc & 0x3F);
+    }
+    if ((n == 2 && (cp < 0x800 || (cp >= 0xD800 && cp <= 0xDFFF))) ||
+        (n == 3 && (cp < 0x10000 || cp > 0x10FFFF))) {
+      return false;
+    }
+    i += n + 1;
+  }
+  return true;
+}
+
+// Limits of the YAML -> JSON conversion. Aliases are expanded, so a few lines of anchors
+// can stand for billions of nodes ("billion laughs"); a recipe has a few hundred.
+constexpr int kMaxYamlDepth = 64;
+constexpr int64_t kMaxYamlNodes = 100000;
+
+json NodeToJson(const YAML::Node& node, const std::string& file, int depth, int64_t* nodes) {
+  const std::string line = "line " + std::to_string(node.Mark().line + 1);
+  if (depth > kMaxYamlDepth) {
+    throw InputError(file,
+                     line + ": nested deeper than " + std::to_string(kMaxYamlDepth) + " levels");
+  }
+  if (++*nodes > kMaxYamlNodes) {
+    throw InputError(file, "more than " + std::to_string(kMaxYamlNodes) +
+                               " YAML nodes (after expanding aliases)");
+  }
   switch (node.Type()) {
     case YAML::NodeType::Null:
     case YAML::NodeType::Undefined:
       return nullptr;
     case YAML::NodeType::Sequence: {
       json a = json::array();
-      for (const auto& item : node) a.push_back(NodeToJson(item, file));
+      for (const auto& item : node) a.push_back(NodeToJson(item, file, depth + 1, nodes));
       return a;
     }
     case YAML::NodeType::Map: {
       json o = json::object();
       for (const auto& kv : node) {
-        const std::string key = kv.first.as<std::string>();
-        if (o.contains(key)) {
-          throw InputError(file, "duplicate key '" + key + "' (line " +
-                                     std::to_string(kv.first.Mark().line + 1) + ")");
+        const std::string key_line = "line " + std::to_string(kv.first.Mark().line + 1);
+        if (!kv.first.IsScalar()) {
+          throw InputError(file, key_line + ": expected a plain key, found a sequence or mapping");
         }
-        o[key] = NodeToJson(kv.second, file);
+        const std::string key = kv.first.Scalar();
+        if (!IsValidUtf8(key)) throw InputError(file, key_line + ": key is not valid UTF-8");
+        if (o.contains(key)) {
+          throw InputError(file, "duplicate key '" + key + "' (" + key_line + ")");
+        }
+        o[key] = NodeToJson(kv.second, file, depth + 1, nodes);
       }
       return o;
     }
     case YAML::NodeType::Scalar: {
       const std::string s = node.Scalar();
+      if (!IsValidUtf8(s)) throw InputError(file, line + ": text is not valid UTF-8");
       if (node.Tag() == "!") return s;  // quoted: always a string
       if (s == "~" || s == "null" || s == "Null" || s == "NULL") return nullptr;
       if (s == "true" || s == "True" || s == "TRUE") return true;
@@ -167,9 +223,48 @@ const json& SchemaJson() {
 
 // ---- JSON -> structs --------------------------------------------------------------
 
+// An integer field as T: the schema checks "integer" and the ranges it states, but not
+// that the value fits T (frame_stride: 4294967297 became 1 through get<int>()).
 template <typename T>
-void Get(const json& o, const char* key, T* out) {
-  if (o.contains(key) && !o[key].is_null()) *out = o[key].get<T>();
+T CheckedInteger(const json& v, const std::string& field, const std::string& file) {
+  const auto fail = [&]() -> T {
+    throw InputError(file, field + ": expected an integer in [" +
+                               std::to_string(std::numeric_limits<T>::min()) + ", " +
+                               std::to_string(std::numeric_limits<T>::max()) + "]");
+  };
+  if (v.is_number_unsigned()) {
+    const uint64_t u = v.get<uint64_t>();
+    if (u > static_cast<uint64_t>(std::numeric_limits<T>::max())) return fail();
+    return static_cast<T>(u);
+  }
+  if (v.is_number_integer()) {
+    const int64_t i = v.get<int64_t>();
+    if (std::is_unsigned_v<T> ? i < 0
+                              : (i < static_cast<int64_t>(std::numeric_limits<T>::min()) ||
+                                 i > static_cast<int64_t>(std::numeric_limits<T>::max()))) {
+      return fail();
+    }
+    return static_cast<T>(i);
+  }
+  if (v.is_number_float()) {  // 3.0 is an integer to JSON Schema
+    const double d = v.get<double>();
+    // Both bounds exact in double: min is 0 or -2^k, max + 1 is 2^k.
+    const double lo = static_cast<double>(std::numeric_limits<T>::min());
+    const double hi = static_cast<double>(std::numeric_limits<T>::max()) + 1.0;
+    if (!(d >= lo && d < hi) || d != std::floor(d)) return fail();
+    return static_cast<T>(d);
+  }
+  return fail();
+}
+
+template <typename T>
+void Get(const json& o, const char* key, T* out, const std::string& file) {
+  if (!o.contains(key) || o[key].is_null()) return;
+  if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
+    *out = CheckedInteger<T>(o[key], key, file);
+  } else {
+    *out = o[key].get<T>();
+  }
 }
 void GetOpt(const json& o, const char* key, std::optional<double>* out) {
   if (o.contains(key) && !o[key].is_null()) *out = o[key].get<double>();
@@ -210,7 +305,8 @@ json YamlToJson(const std::string& yaml_text, const std::string& file) {
     throw InputError(file,
                      "invalid YAML at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
   }
-  return NodeToJson(root, file);
+  int64_t nodes = 0;
+  return NodeToJson(root, file, 0, &nodes);
 }
 
 std::string ValidateRecipeJson(const json& recipe) {
@@ -485,39 +581,39 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   r.file = file;
   r.base_dir = base_dir;
   r.name = j["name"].get<std::string>();
-  Get(j, "split", &r.split);
-  Get(j, "seed", &r.seed);
+  Get(j, "split", &r.split, file);
+  Get(j, "seed", &r.seed, file);
   if (j.contains("resolution")) {
-    r.width = j["resolution"][0].get<int>();
-    r.height = j["resolution"][1].get<int>();
+    r.width = CheckedInteger<int>(j["resolution"][0], "resolution[0]", file);
+    r.height = CheckedInteger<int>(j["resolution"][1], "resolution[1]", file);
   }
   const json& d = j["dataset"];
   r.dataset.format = d["format"].get<std::string>();
   if (d.contains("root"))
     r.dataset.root = ResolvePath(d["root"].get<std::string>(), file + ": dataset.root", base_dir);
-  Get(d, "scenes", &r.dataset.scenes);
+  Get(d, "scenes", &r.dataset.scenes, file);
   if (d.contains("split_file")) {
     r.dataset.split_file =
         ResolvePath(d["split_file"].get<std::string>(), file + ": dataset.split_file", base_dir);
   }
-  Get(d, "frame_stride", &r.dataset.frame_stride);
-  Get(d, "min_valid_depth_fraction", &r.dataset.min_valid_depth_fraction);
+  Get(d, "frame_stride", &r.dataset.frame_stride, file);
+  Get(d, "min_valid_depth_fraction", &r.dataset.min_valid_depth_fraction, file);
   GetOpt(d, "min_depth_m", &r.dataset.min_depth_m);
   GetOpt(d, "max_depth_m", &r.dataset.max_depth_m);
   if (d.contains("synthetic")) {
     const json& s = d["synthetic"];
-    Get(s, "scenes", &r.dataset.synthetic.scenes);
-    Get(s, "frames", &r.dataset.synthetic.frames);
-    Get(s, "width", &r.dataset.synthetic.width);
-    Get(s, "height", &r.dataset.synthetic.height);
-    Get(s, "seed", &r.dataset.synthetic.seed);
+    Get(s, "scenes", &r.dataset.synthetic.scenes, file);
+    Get(s, "frames", &r.dataset.synthetic.frames, file);
+    Get(s, "width", &r.dataset.synthetic.width, file);
+    Get(s, "height", &r.dataset.synthetic.height, file);
+    Get(s, "seed", &r.dataset.synthetic.seed, file);
   }
   if (!overrides.root.empty()) {
     r.dataset.root = fs::absolute(overrides.root).lexically_normal().string();
   }
   if (j.contains("labels")) {
     const json& l = j["labels"];
-    Get(l, "preset", &r.labels.preset);
+    Get(l, "preset", &r.labels.preset, file);
     if (l.contains("overrides")) {
       const json& o = l["overrides"];
       GetOpt(o, "abs_tol_m", &r.labels.abs_tol_m);
@@ -528,20 +624,20 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   }
   if (j.contains("patches")) {
     const json& p = j["patches"];
-    Get(p, "stride", &r.patches.stride);
-    Get(p, "anchor", &r.patches.anchor);
-    Get(p, "mutual", &r.patches.mutual);
+    Get(p, "stride", &r.patches.stride, file);
+    Get(p, "anchor", &r.patches.anchor, file);
+    Get(p, "mutual", &r.patches.mutual, file);
   }
   if (j.contains("selection")) {
     const json& s = j["selection"];
     SelectionOptions& o = r.selection;
-    Get(s, "max_frame_gap", &o.max_frame_gap);
+    Get(s, "max_frame_gap", &o.max_frame_gap, file);
     if (s.contains("pruning")) {
-      Get(s["pruning"], "max_distance_m", &o.pruning.max_distance_m);
-      Get(s["pruning"], "max_view_angle_deg", &o.pruning.max_view_angle_deg);
-      Get(s["pruning"], "frustum", &o.pruning.frustum);
+      Get(s["pruning"], "max_distance_m", &o.pruning.max_distance_m, file);
+      Get(s["pruning"], "max_view_angle_deg", &o.pruning.max_view_angle_deg, file);
+      Get(s["pruning"], "frustum", &o.pruning.frustum, file);
     }
-    Get(s, "score_stride", &o.score_stride);
+    Get(s, "score_stride", &o.score_stride, file);
     if (s.contains("overlap")) {
       o.overlap_lo = s["overlap"][0].get<double>();
       o.overlap_hi = s["overlap"][1].get<double>();
@@ -550,44 +646,44 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
       o.occlusion_lo = s["occlusion"][0].get<double>();
       o.occlusion_hi = s["occlusion"][1].get<double>();
     }
-    Get(s, "occlusion_metric", &o.occlusion_metric);
+    Get(s, "occlusion_metric", &o.occlusion_metric, file);
     if (s.contains("aggregate")) {
       std::string a = s["aggregate"].get<std::string>();
       o.aggregate = a == "min" ? Aggregate::kMin : a == "max" ? Aggregate::kMax : Aggregate::kMean;
     }
-    Get(s, "quota_per_scene", &o.quota_per_scene);
-    Get(s, "balance_bins", &o.balance_bins);
+    Get(s, "quota_per_scene", &o.quota_per_scene, file);
+    Get(s, "balance_bins", &o.balance_bins, file);
     if (s.contains("import_pairs")) {
-      Get(s["import_pairs"], "format", &o.import_pairs.format);
+      Get(s["import_pairs"], "format", &o.import_pairs.format, file);
       o.import_pairs.path = ResolvePath(s["import_pairs"]["path"].get<std::string>(),
                                         file + ": selection.import_pairs.path", base_dir);
     }
   }
   if (j.contains("occupancy")) {
     const json& o = j["occupancy"];
-    Get(o, "enabled", &r.occupancy.enabled);
-    Get(o, "voxel_m", &r.occupancy.voxel_m);
-    Get(o, "bins", &r.occupancy.bins);
-    Get(o, "near_m", &r.occupancy.near_m);
-    Get(o, "far_m", &r.occupancy.far_m);
-    Get(o, "spacing", &r.occupancy.spacing);
-    Get(o, "traversal", &r.occupancy.traversal);
-    Get(o, "scope", &r.occupancy.scope);
-    Get(o, "window", &r.occupancy.window);
-    Get(o, "scene_stride", &r.occupancy.scene_stride);
-    Get(o, "mode", &r.occupancy.mode);
-    Get(o, "encoding", &r.occupancy.encoding);
+    Get(o, "enabled", &r.occupancy.enabled, file);
+    Get(o, "voxel_m", &r.occupancy.voxel_m, file);
+    Get(o, "bins", &r.occupancy.bins, file);
+    Get(o, "near_m", &r.occupancy.near_m, file);
+    Get(o, "far_m", &r.occupancy.far_m, file);
+    Get(o, "spacing", &r.occupancy.spacing, file);
+    Get(o, "traversal", &r.occupancy.traversal, file);
+    Get(o, "scope", &r.occupancy.scope, file);
+    Get(o, "window", &r.occupancy.window, file);
+    Get(o, "scene_stride", &r.occupancy.scene_stride, file);
+    Get(o, "mode", &r.occupancy.mode, file);
+    Get(o, "encoding", &r.occupancy.encoding, file);
   }
   if (j.contains("sample")) {
     const json& s = j["sample"];
-    Get(s, "image", &r.sample.image);
-    Get(s, "depth", &r.sample.depth);
-    Get(s, "labels", &r.sample.labels);
-    Get(s, "occupancy", &r.sample.occupancy);
+    Get(s, "image", &r.sample.image, file);
+    Get(s, "depth", &r.sample.depth, file);
+    Get(s, "labels", &r.sample.labels, file);
+    Get(s, "occupancy", &r.sample.occupancy, file);
   }
   if (j.contains("shards")) {
-    Get(j["shards"], "samples_per_shard", &r.shards.samples_per_shard);
-    Get(j["shards"], "target_mb", &r.shards.target_mb);
+    Get(j["shards"], "samples_per_shard", &r.shards.samples_per_shard, file);
+    Get(j["shards"], "target_mb", &r.shards.target_mb, file);
   }
   if (j.contains("loftr_export")) r.loftr_export = j["loftr_export"]["kind"].get<std::string>();
   std::string error;

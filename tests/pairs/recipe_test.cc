@@ -277,5 +277,55 @@ TEST(Recipe, ScanNetTrainSplitIsTheOfficialList) {
   EXPECT_GT(scans.size(), 500u);  // every train scan, several with re-scans _01, _02
 }
 
+// Regressions found by tests/fuzz/recipe_fuzz.cc (docs/RELIABILITY.md): each used to
+// escape as a non-InputError exception, hang, or load a wrong value silently.
+TEST(Recipe, FuzzFoundSequenceAsKeyIsInputError) {
+  // yaml-cpp's BadConversion from kv.first.as<std::string>() escaped.
+  EXPECT_EQ(ErrorOf("name: a\ndataset: {format: synthetic}\n[1, 2]: 3\n"),
+            "recipes/x.yaml: line 3: expected a plain key, found a sequence or mapping");
+}
+
+TEST(Recipe, FuzzFoundInvalidUtf8IsInputError) {
+  // nlohmann::json::dump() (the options digest) threw type_error 316 on a scene name
+  // with a Latin-1 byte.
+  EXPECT_EQ(ErrorOf("name: a\ndataset: {format: synthetic, scenes: [gascola/E\xd2sy]}\n"),
+            "recipes/x.yaml: line 2: text is not valid UTF-8");
+  EXPECT_EQ(ErrorOf("name: a\ndataset: {format: synthetic}\n\xff: 1\n"),
+            "recipes/x.yaml: line 3: key is not valid UTF-8");
+  // Valid multi-byte text is fine (it fails later, on the scene name pattern or not at all).
+  EXPECT_EQ(ErrorOf("name: a\ndataset: {format: synthetic, scenes: [\xc3\xa9t\xc3\xa9]}\n"), "");
+}
+
+TEST(Recipe, FuzzFoundAliasExpansionIsBounded) {
+  // Ten anchors of ten aliases each stand for 10^7 nodes: the conversion used to run for
+  // minutes; now it stops at the node limit.
+  std::string yaml =
+      "name: a\ndataset: {format: synthetic}\nx:\n  a0: &a0 [x, x, x, x, x, x, x, x, x, x]\n";
+  for (int i = 1; i < 7; ++i) {
+    yaml += "  a" + std::to_string(i) + ": &a" + std::to_string(i) + " [";
+    for (int k = 0; k < 10; ++k) yaml += (k ? ", *a" : "*a") + std::to_string(i - 1);
+    yaml += "]\n";
+  }
+  EXPECT_EQ(ErrorOf(yaml), "recipes/x.yaml: more than 100000 YAML nodes (after expanding aliases)");
+  std::string deep = "name: a\ndataset: {format: synthetic}\nx: ";
+  for (int i = 0; i < 100; ++i) deep += "[";
+  for (int i = 0; i < 100; ++i) deep += "]";
+  EXPECT_NE(ErrorOf(deep + "\n").find("nested deeper than 64 levels"), std::string::npos);
+}
+
+TEST(Recipe, FuzzFoundIntegersMustFitTheirField) {
+  // get<int>() truncated 4294967297 to 1, which then passed every check.
+  EXPECT_EQ(ErrorOf("name: a\ndataset: {format: synthetic, frame_stride: 4294967297}\n"),
+            "recipes/x.yaml: frame_stride: expected an integer in [-2147483648, 2147483647]");
+  EXPECT_EQ(ErrorOf("name: a\ndataset: {format: synthetic}\nshards: {samples_per_shard: 3e9}\n")
+                .rfind("recipes/x.yaml: ", 0),
+            0u);
+  const Recipe r = ParseRecipe(
+      "name: a\nseed: 9223372036854775807\ndataset: {format: synthetic, frame_stride: 3}\n",
+      "x.yaml", "/b");
+  EXPECT_EQ(r.seed, 9223372036854775807u);
+  EXPECT_EQ(r.dataset.frame_stride, 3);
+}
+
 }  // namespace
 }  // namespace gt::pairs

@@ -1,0 +1,174 @@
+#!/usr/bin/python3
+"""Builds the seed corpus of every fuzz target (tests/fuzz/*_fuzz.cc) at run time.
+
+usage: make_seeds.py OUT_DIR SHARED_DATA SOURCE_DIR
+
+OUT_DIR/<target>/ gets copies of real samples from SHARED_DATA (../shared/data: never
+committed to the project), the project's own fixtures and recipes from SOURCE_DIR, and
+tiny seeds generated here (numpy for .npy/.npz, PIL for 16-bit PNG, a hand-built
+uncompressed scanline OpenEXR file). Fails loudly when SHARED_DATA is missing.
+"""
+import glob
+import io
+import os
+import shutil
+import struct
+import sys
+import zipfile
+import zlib
+
+import numpy as np
+from PIL import Image
+
+
+def main():
+    out, shared, src = sys.argv[1:4]
+    if not os.path.isdir(shared):
+        sys.exit(f"make_seeds.py: shared data folder {shared} is missing")
+    counts = {}
+
+    def put(target, name, data):
+        d = os.path.join(out, target)
+        os.makedirs(d, exist_ok=True)
+        with open(os.path.join(d, name), "wb") as f:
+            f.write(data)
+        counts[target] = counts.get(target, 0) + 1
+
+    def copy(target, paths, limit=None, prefix=""):
+        paths = sorted(paths)
+        if not paths:
+            sys.exit(f"make_seeds.py: no seed files for {target} ({prefix})")
+        for p in paths[:limit]:
+            with open(p, "rb") as f:
+                put(target, prefix + os.path.basename(p), f.read())
+
+    # --- npy: one real TartanAir depth map (1.2 MB) and small arrays of every dtype.
+    copy("npy", glob.glob(f"{shared}/tartanair/hospital_sample/depth_left/*.npy"), 1, "real_")
+    rng = np.random.default_rng(0)
+    for descr in ["<f4", "<f8", "|u1", "<u2", "<i4", "<i8", "|b1", "<f2"]:
+        a = (rng.random((3, 4)) * 10).astype(np.dtype(descr))
+        b = io.BytesIO()
+        np.save(b, a)
+        put("npy", f"small_{descr[1:]}.npy", b.getvalue())
+    for shape in [(0,), (5,), (2, 3, 1), (1, 1)]:
+        b = io.BytesIO()
+        np.save(b, np.ones(shape, np.float32))
+        put("npy", f"shape_{len(shape)}d_{shape[0]}.npy", b.getvalue())
+    b = io.BytesIO()
+    np.lib.format.write_array(b, np.ones((2, 2), np.float32), version=(2, 0))
+    put("npy", "version2.npy", b.getvalue())
+
+    # --- npz: LoFTR's test-1500 index and intrinsics (real), small stored/deflated ones.
+    copy("npz", glob.glob(f"{shared}/loftr_scannet_test_1500/*.npz"), None, "real_")
+    for compression, tag in [(zipfile.ZIP_STORED, "stored"), (zipfile.ZIP_DEFLATED, "deflated")]:
+        b = io.BytesIO()
+        with zipfile.ZipFile(b, "w", compression) as z:
+            for key, arr in [("name", np.arange(8, dtype=np.uint16).reshape(2, 4)),
+                             ("score", np.array([0.5, 0.25], np.float32))]:
+                m = io.BytesIO()
+                np.save(m, arr)
+                z.writestr(key + ".npy", m.getvalue())
+        put("npz", f"small_{tag}.npz", b.getvalue())
+
+    # --- 4x4 poses and intrinsics: ScanNet (real), 7-Scenes (real), fixtures.
+    copy("pose_matrix", glob.glob(f"{shared}/scannet_posed_color/scene_sample/pose/*.txt"), None,
+         "scannet_")
+    copy("pose_matrix", glob.glob(f"{shared}/scannet_posed_color/scene_sample/intrinsic/*.txt"),
+         None, "scannet_K_")
+    copy("pose_matrix", glob.glob(f"{shared}/sevenscenes/rgbd-frames/*.pose.txt"), 8, "7scenes_")
+    copy("pose_matrix", [f"{shared}/sevenscenes/camera-intrinsics.txt"], None, "7scenes_K_")
+    for p in sorted(glob.glob(f"{src}/tests/fixtures/io/scannet_*/*/*.txt")):
+        with open(p, "rb") as f:
+            put("pose_matrix", "fixture_" + p.split("/fixtures/io/")[1].replace("/", "_"),
+                f.read())
+
+    # --- quaternion lines: TartanAir pose_left.txt (real), fixture, TUM groundtruth.
+    copy("tq_pose", [f"{shared}/tartanair/hospital_sample/pose_left.txt"], None, "tartanair_")
+    copy("tq_pose", [f"{src}/tests/fixtures/io/tartanair_short_pose/pose_left.txt"], None,
+         "fixture_")
+    tum_gt = (b"# ground truth trajectory\n# timestamp tx ty tz qx qy qz qw\n"
+              b"1305031102.1758 1.3405 0.6266 1.6575 0.6574 0.6126 -0.2949 -0.3248\n"
+              b"1305031102.1858 1.3303 0.6256 1.6464 0.6579 0.6161 -0.2932 -0.3189\n"
+              b"9.99 1 0 0 0 0 0 1\n10.51 5 0 0 0 0 0 2\n")
+    put("tq_pose", "tum_groundtruth.txt", tum_gt)
+    put("tq_pose", "lost.txt", b"0 0 0 nan nan nan nan\n1 2 3 0 0 0 1\n\n-inf 0 0 0 0 0 1\n")
+
+    # --- TUM lists: depth.txt alone, and depth.txt \0 rgb.txt \0 groundtruth.txt.
+    depth = (b"# depth maps\n# timestamp filename\n10.100000 depth/10.100000.png\n"
+             b"10.000000 depth/10.000000.png\n10.200000 depth/10.200000.png\n")
+    rgb = b"# color images\n10.005 rgb/10.005.png\n10.130 rgb/10.130.png\n"
+    put("tum_list", "depth_only.txt", depth)
+    put("tum_list", "sequence.bin", depth + b"\0" + rgb + b"\0" + tum_gt)
+    put("tum_list", "dup_ids.bin", b"1.0 d/a.png\n2.0 e/a.png\n\0\0" + tum_gt)
+
+    # --- generic manifests: fixtures and a small valid one.
+    for p in sorted(glob.glob(f"{src}/tests/fixtures/io/generic_*/scene.json")):
+        with open(p, "rb") as f:
+            put("manifest", p.split("/")[-2] + ".json", f.read())
+    put("manifest", "valid.json", b"""{"format": "occgt-scene-manifest", "version": 1,
+ "scene": "s0", "depth_range_m": [0.1, 20],
+ "frames": [{"id": "000000", "width": 160, "height": 120,
+   "K": [[100, 0, 80], [0, 100, 60], [0, 0, 1]],
+   "depth": {"path": "depth/000000.png", "format": "png16", "scale_m": 0.001, "invalid_value": 0},
+   "world_from_cam": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]],
+   "color": {"path": "color/000000.png", "width": 320, "height": 240,
+             "K": [[200, 0, 160], [0, 200, 120], [0, 0, 1]]}},
+  {"id": "000001", "width": 160, "height": 120,
+   "K": [[100, 0, 80], [0, 100, 60], [0, 0, 1]],
+   "depth": {"path": "d.exr", "format": "exr", "channel": "Depth.Z"},
+   "world_from_cam": [[0, -1, 0, 1], [1, 0, 0, 2], [0, 0, 1, 3], [0, 0, 0, 1]]}]}
+""")
+
+    # --- recipes: the project's shipped recipes.
+    copy("recipe", glob.glob(f"{src}/recipes/*.yaml"), None, "shipped_")
+    put("recipe", "anchors.yaml", b"name: a\nx: &a [1, 2]\ndataset: {format: synthetic}\n"
+                                  b"selection: {overlap: [0.1, 0.9], occlusion: *a}\n")
+
+    # --- 16-bit PNG depth: one real 7-Scenes depth map, small generated ones, a PGM.
+    copy("depth_png", glob.glob(f"{shared}/sevenscenes/rgbd-frames/*.depth.png"), 1, "real_")
+    for w, h in [(4, 3), (1, 1), (16, 9)]:
+        b = io.BytesIO()
+        Image.fromarray((np.arange(w * h, dtype=np.uint16).reshape(h, w) * 97)).save(b, "PNG")
+        put("depth_png", f"small_{w}x{h}.png", b.getvalue())
+    b = io.BytesIO()
+    Image.fromarray(np.zeros((3, 4), np.uint8)).save(b, "PNG")
+    put("depth_png", "gray8.png", b.getvalue())
+    put("depth_png", "small.pgm", b"P5\n4 3\n65535\n" + bytes(range(24)))
+
+    # --- OpenEXR depth: uncompressed scanline files written by hand (no EXR writer in
+    # Debian's python3), with the channel names Blender uses.
+    for chans, tag in [(["Z"], "z"), (["View Layer.Depth.Z"], "blender"), (["R", "G", "B"], "rgb"),
+                       (["Y", "A"], "ya")]:
+        put("depth_exr", f"small_{tag}.exr", Exr(chans, 4, 3))
+    put("depth_exr", "one_pixel.exr", Exr(["Z"], 1, 1))
+
+    for target, n in sorted(counts.items()):
+        print(f"make_seeds.py: {target}: {n} seeds")
+
+
+def Exr(channels, width, height):
+    """A minimal single-part scanline OpenEXR 2.0 file, FLOAT channels, no compression."""
+    def attr(name, type_name, value):
+        return name.encode() + b"\0" + type_name.encode() + b"\0" + struct.pack("<i", len(value)) + value
+    chlist = b"".join(c.encode() + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1)
+                      for c in sorted(channels)) + b"\0"
+    box = struct.pack("<iiii", 0, 0, width - 1, height - 1)
+    header = (attr("channels", "chlist", chlist) + attr("compression", "compression", b"\0") +
+              attr("dataWindow", "box2i", box) + attr("displayWindow", "box2i", box) +
+              attr("lineOrder", "lineOrder", b"\0") +
+              attr("pixelAspectRatio", "float", struct.pack("<f", 1.0)) +
+              attr("screenWindowCenter", "v2f", struct.pack("<ff", 0, 0)) +
+              attr("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
+    start = 8 + len(header) + 8 * height
+    lines, offsets = b"", []
+    for y in range(height):
+        offsets.append(start + len(lines))
+        data = b"".join(struct.pack("<f", 1.0 + y + 0.25 * x + c)
+                        for c in range(len(channels)) for x in range(width))
+        lines += struct.pack("<ii", y, len(data)) + data
+    return (struct.pack("<ii", 20000630, 2) + header +
+            b"".join(struct.pack("<Q", o) for o in offsets) + lines)
+
+
+if __name__ == "__main__":
+    main()
