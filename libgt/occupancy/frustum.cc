@@ -151,8 +151,9 @@ struct MapView {
   Eigen::Vector3d lo_m, hi_m;  // the same box in metres
 };
 
-// Sets the bins overlapping the planar-depth interval [z0, z1) (empty: nothing); *k is the
-// first bin whose upper edge lies above the previous interval (a cursor: z only grows).
+// Sets the bins overlapping the planar-depth interval [z0, z1) (empty: nothing). *k is a
+// cursor, a bin with e_k <= every later z0 (z only grows and every later interval starts at
+// or after z1); it is left at the last bin marked.
 inline void MarkBins(const std::vector<double>& e, int num_bins, double z0, double z1,
                      bool occupied, int* k, RayBits* r) {
   if (!(z1 > z0)) return;
@@ -162,6 +163,7 @@ inline void MarkBins(const std::vector<double>& e, int num_bins, double z0, doub
   const uint64_t m = BitRange(*k, kk);
   r->known |= m;
   if (occupied) r->occ |= m;
+  *k = kk;  // e_kk < z1 <= every later z0
 }
 
 // Exact: every voxel crossed by o + z d, z in [e_0, e_D) (clipped to the box), contributes its
@@ -241,10 +243,16 @@ __attribute__((noinline)) RayBits TraverseExact(const MapView& m, const Eigen::V
           const double zx = std::min(t, z_end);
           const int8_t s = states[lin];
           if (s != VoxelMap::kUnknown && zx > zv) {
-            if (zv < edge && zx <= edge) {  // the whole voxel within bin k
+            if (zx <= edge) {  // the whole voxel within bin k (zv >= e_k, zv < zx)
               const uint64_t bit = uint64_t{1} << k;
               r.known |= bit;
               if (s == VoxelMap::kOccupied) r.occ |= bit;
+            } else if (zv < edge && zx <= e[k + 2]) {  // in bins k and k + 1 (k + 1 < D,
+              const uint64_t bits = uint64_t{3} << k;  // since zx > e_{k+1} and zx < e_D)
+              r.known |= bits;
+              if (s == VoxelMap::kOccupied) r.occ |= bits;
+              ++k;  // e_{k+1} < zx <= every later zv
+              edge = e[k + 1];
             } else {
               MarkBins(e, D, zv, zx, s == VoxelMap::kOccupied, &k, &r);
               edge = e[k + 1];
