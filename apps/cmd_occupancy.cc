@@ -34,7 +34,7 @@ struct OccupancyArgs {
   double voxel_m = 0.05, max_range_m = 10.0, near_m = 0.1, far_m = 10.0;
   int bins = 64;
   std::string spacing = "linear", traversal = "exact", scope = "pair", mode = "octomap";
-  bool dense = false, no_downsample = false, remove_outliers = false;
+  bool dense = false, downsample = false, no_downsample = false, remove_outliers = false;
   std::string save_octree;
 };
 
@@ -76,7 +76,9 @@ void RunOccupancy(const OccupancyArgs& args) {
   occ::FusionOptions fo;
   fo.voxel_size_m = args.voxel_m;
   fo.max_range_m = args.max_range_m;
-  fo.downsample = !args.no_downsample;
+  if (args.downsample && args.no_downsample)
+    throw gt::InputError("--downsample", "conflicts with --no-downsample");
+  fo.downsample = args.downsample;  // off by default, as in the library and `build`
   fo.remove_outliers = args.remove_outliers;
   occ::ParseFusionScope(args.scope, &fo);
   std::string error;
@@ -246,7 +248,10 @@ void AddOccupancyCommand(CLI::App& app) {
   cmd->add_option("--scope", args->scope, "pair|window:N|scene:S (default pair)");
   cmd->add_option("--mode", args->mode, "octomap|two_point (default octomap)");
   cmd->add_flag("--dense", args->dense, "also write occupancy0/1.npy, uint8 [bins, H/2, W/2]");
-  cmd->add_flag("--no-downsample", args->no_downsample, "insert every point (no voxel grid)");
+  cmd->add_flag("--downsample", args->downsample,
+                "one centroid per voxel before insertion (default off)");
+  cmd->add_flag("--no-downsample", args->no_downsample,
+                "insert every point (the default; kept for old command lines)");
   cmd->add_flag("--remove-outliers", args->remove_outliers, "statistical outlier removal");
   cmd->add_option("--save-octree", args->save_octree, "also write the fused map (.bt)");
   cmd->callback([args] { RunOccupancy(*args); });

@@ -13,6 +13,7 @@
 #include "libgt/io/depth_io.h"
 #include "libgt/io/reader.h"
 #include "libgt/occupancy/pair_occupancy.h"
+#include "tests/occupancy/reference_traversal.h"
 #include "tests/support/test_support.h"
 
 namespace gt::occupancy {
@@ -161,6 +162,22 @@ void Project(benchmark::State& state, Traversal traversal) {
   SetLabel(state);
 }
 void BM_ProjectExactBothCams(benchmark::State& state) { Project(state, Traversal::kExact); }
+// The previous exact traversal (voxel by voxel through mixed blocks), kept as the tests'
+// reference (tests/occupancy/reference_traversal.h): same output, for the speed-up.
+void BM_ProjectExactReferenceBothCams(benchmark::State& state) {
+  const PairData& p = Data(static_cast<int>(state.range(0)));
+  const OccupancyMap map = FuseOccupancy({p.in0, p.in1}, FusionOptions());
+  const BinOptions b;
+  for (auto _ : state) {
+    FrustumVolume v0 =
+        reference::ProjectToFrustumReference(map, p.in0.camera, p.in0.world_from_cam, b);
+    FrustumVolume v1 =
+        reference::ProjectToFrustumReference(map, p.in1.camera, p.in1.world_from_cam, b);
+    benchmark::DoNotOptimize(v0.occ.data());
+    benchmark::DoNotOptimize(v1.occ.data());
+  }
+  SetLabel(state);
+}
 void BM_ProjectCenterBothCams(benchmark::State& state) { Project(state, Traversal::kCenter); }
 
 // Naive: OctoMap's insertPointCloud with one ray per valid point (no downsampling, no
@@ -203,6 +220,7 @@ BENCHMARK(BM_FuseWithDownsample)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FuseOctomapDiscretized)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BuildOctree)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ProjectExactBothCams)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ProjectExactReferenceBothCams)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ProjectCenterBothCams)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_NaivePairTotal)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(2);
 

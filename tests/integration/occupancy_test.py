@@ -31,6 +31,7 @@ def main():
                  "--save-octree", os.path.join(out, "map.bt"))
     meta = json.load(open(os.path.join(out, "occupancy.json")))
     jsonschema.validate(meta, schema)
+    assert meta["fusion"]["downsample"] is False, "downsampling is off by default"
     w, h = meta["grid"]
     assert (w, h) == (320, 240), meta["grid"]
     d = meta["bins"]["num_bins"]
@@ -75,9 +76,10 @@ def main():
     out4 = common.scratch("occupancy_window")
     common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
                  "--frames", "000000,000020", "--out", out4, "--scope", "window:2",
-                 "--traversal", "center", "--resolution", "320x240")
+                 "--traversal", "center", "--resolution", "320x240", "--downsample")
     meta4 = json.load(open(os.path.join(out4, "occupancy.json")))
     jsonschema.validate(meta4, schema)
+    assert meta4["fusion"]["downsample"] is True, "--downsample turns it on"
     assert meta4["grid"] == [160, 120]
     assert len(meta4["fusion"]["fused_frames"]) == 8, meta4["fusion"]["fused_frames"]
 
