@@ -167,8 +167,8 @@ inline void MarkBins(const std::vector<double>& e, int num_bins, double z0, doub
 }
 
 // Exact: every voxel crossed by o + z d, z in [e_0, e_D) (clipped to the box and to
-// z_known_max, beyond which the caller guarantees that the ray meets no known voxel), contributes its
-// state to every bin its z-interval overlaps. Two-level 3-D DDA (Amanatides & Woo 1987): over
+// z_known_max, beyond which the caller guarantees that the ray meets no known voxel), contributes
+// its state to every bin its z-interval overlaps. Two-level 3-D DDA (Amanatides & Woo 1987): over
 // 8^3 blocks first; a block that is absent (all unknown) is skipped, a uniform one (all free /
 // all occupied) contributes its whole z-interval at once, and only inside a mixed block are
 // its voxels stepped through.
@@ -177,8 +177,7 @@ inline void MarkBins(const std::vector<double>& e, int num_bins, double z0, doub
 // against BM_ProjectExactReferenceBothCams, the same code compiled on its own).
 __attribute__((noinline)) RayBits TraverseExact(const MapView& m, const Eigen::Vector3d& o,
                                                 const Eigen::Vector3d& d,
-                                                const std::vector<double>& e,
-                                                double z_known_max) {
+                                                const std::vector<double>& e, double z_known_max) {
   RayBits r;
   const int D = static_cast<int>(e.size()) - 1;
   constexpr int S = VoxelMap::kShift, W = VoxelMap::kSide;
@@ -225,7 +224,7 @@ __attribute__((noinline)) RayBits TraverseExact(const MapView& m, const Eigen::V
           int l3[3];
           double t3[3];
           for (int a = 0; a < 3; ++a) {
-            const int base = bc[a] << S;
+            const int base = bc[a] * (1 << S);  // not bc << S: negative coordinates
             const int i = std::clamp(static_cast<int>(std::floor((o[a] + zm * d[a]) * inv_res)),
                                      base, base + W - 1);
             l3[a] = i - base;
@@ -427,8 +426,10 @@ FrustumVolume ProjectToFrustum(const OccupancyMap& map, const Camera& camera_ful
         continue;
       }
       // Rays (u, v) inside the image of the block (the hull of its corners), one ray margin.
-      const double u0 = std::max(std::floor(u_min) - 1, 0.0), u1 = std::min(std::ceil(u_max) + 1, vol.width - 1.0);
-      const double v0 = std::max(std::floor(v_min) - 1, 0.0), v1 = std::min(std::ceil(v_max) + 1, vol.height - 1.0);
+      const double u0 = std::max(std::floor(u_min) - 1, 0.0),
+                   u1 = std::min(std::ceil(u_max) + 1, vol.width - 1.0);
+      const double v0 = std::max(std::floor(v_min) - 1, 0.0),
+                   v1 = std::min(std::ceil(v_max) + 1, vol.height - 1.0);
       if (!(u0 <= u1 && v0 <= v1)) continue;
       for (int ty = static_cast<int>(v0) / kTile; ty <= static_cast<int>(v1) / kTile; ++ty)
         for (int tx = static_cast<int>(u0) / kTile; tx <= static_cast<int>(u1) / kTile; ++tx) {

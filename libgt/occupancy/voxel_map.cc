@@ -123,7 +123,7 @@ void VoxelMap::CastMisses(const float origin[3], const float end[3]) {
     step[a] = dir[a] > 0.0f ? 1 : (dir[a] < 0.0f ? -1 : 0);
     if (step[a] != 0) {
       double border = (static_cast<double>(cur[a]) + 0.5) * res_;  // voxel centre
-      border += static_cast<float>(step[a] * res_ * 0.5);           // its face ahead
+      border += static_cast<float>(step[a] * res_ * 0.5);          // its face ahead
       t_max[a] = (border - origin[a]) / dir[a];
       t_delta[a] = res_ / std::fabs(dir[a]);
     } else {
@@ -286,8 +286,8 @@ void VoxelMap::Finalize() {
                 : free == kBlockVoxels   ? Kind::kAllFree
                                          : Kind::kMixed;
     if (occupied + free == 0) continue;
-    const Eigen::Vector3i base(coords_[b][0] << kShift, coords_[b][1] << kShift,
-                               coords_[b][2] << kShift);
+    const Eigen::Vector3i base(coords_[b][0] * kSide, coords_[b][1] * kSide,  // may be < 0
+                               coords_[b][2] * kSide);
     Eigen::Vector3i blo, bhi;
     if (occupied + free == kBlockVoxels) {
       blo = base;

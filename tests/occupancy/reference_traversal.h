@@ -9,8 +9,8 @@
 #include <limits>
 #include <vector>
 
-#include "libgt/occupancy/frustum.h"
 #include "libgt/core/error.h"
+#include "libgt/occupancy/frustum.h"
 #include "libgt/occupancy/voxel_map.h"
 
 namespace gt::occupancy::reference {
@@ -24,7 +24,7 @@ inline uint64_t BitRange(int lo, int hi) {
 // Range [z_lo, z_hi] of planar depth for which o + z d lies inside the box [lo, hi]
 // (world metres); false when empty.
 inline bool ClipToBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& lo,
-               const Eigen::Vector3d& hi, double* z_lo, double* z_hi) {
+                      const Eigen::Vector3d& hi, double* z_lo, double* z_hi) {
   for (int a = 0; a < 3; ++a) {
     if (std::abs(d[a]) < 1e-15) {
       if (o[a] < lo[a] || o[a] > hi[a]) return false;
@@ -73,7 +73,7 @@ inline void MarkBins(const std::vector<double>& e, int num_bins, double z0, doub
 // all occupied) contributes its whole z-interval at once, and only inside a mixed block are
 // its voxels stepped through.
 inline RayBits TraverseExact(const MapView& m, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                      const std::vector<double>& e) {
+                             const std::vector<double>& e) {
   RayBits r;
   const int D = static_cast<int>(e.size()) - 1;
   constexpr int S = VoxelMap::kShift, W = VoxelMap::kSide;
@@ -120,7 +120,7 @@ inline RayBits TraverseExact(const MapView& m, const Eigen::Vector3d& o, const E
           int l3[3];
           double t3[3];
           for (int a = 0; a < 3; ++a) {
-            const int base = bc[a] << S;
+            const int base = bc[a] * (1 << S);  // not bc << S: negative coordinates
             const int i = std::clamp(static_cast<int>(std::floor((o[a] + zm * d[a]) * inv_res)),
                                      base, base + W - 1);
             l3[a] = i - base;
@@ -192,8 +192,10 @@ inline RayBits TraverseExact(const MapView& m, const Eigen::Vector3d& o, const E
   return r;
 }
 
-inline FrustumVolume ProjectToFrustumReference(const OccupancyMap& map, const Camera& camera_full_res,
-                               const Rigid3d& world_from_cam, const BinOptions& options) {
+inline FrustumVolume ProjectToFrustumReference(const OccupancyMap& map,
+                                               const Camera& camera_full_res,
+                                               const Rigid3d& world_from_cam,
+                                               const BinOptions& options) {
   std::string why;
   GT_ASSERT_MSG(options.Check(&why), why);
   const Camera cam = camera_full_res.HalfGrid();
