@@ -271,9 +271,9 @@ std::unique_ptr<octomap::OcTree> ToOctree(const VoxelMap& voxels) {
     const float* l = voxels.log_odds(b);
     for (int i = 0; i < VoxelMap::kBlockVoxels; ++i) {
       if (std::isnan(l[i])) continue;
-      const int ix = (c[0] << VoxelMap::kShift) + (i & (VoxelMap::kSide - 1));
-      const int iy = (c[1] << VoxelMap::kShift) + ((i >> VoxelMap::kShift) & (VoxelMap::kSide - 1));
-      const int iz = (c[2] << VoxelMap::kShift) + (i >> (2 * VoxelMap::kShift));
+      const int ix = (c[0] * VoxelMap::kSide) + (i & (VoxelMap::kSide - 1));
+      const int iy = (c[1] * VoxelMap::kSide) + ((i >> VoxelMap::kShift) & (VoxelMap::kSide - 1));
+      const int iz = (c[2] * VoxelMap::kSide) + (i >> (2 * VoxelMap::kShift));
       const octomap::OcTreeKey key(static_cast<octomap::key_type>(ix + kKeyOffset),
                                    static_cast<octomap::key_type>(iy + kKeyOffset),
                                    static_cast<octomap::key_type>(iz + kKeyOffset));
@@ -296,8 +296,8 @@ std::unique_ptr<VoxelMap> FromOctree(const octomap::OcTree& tree) {
     for (int z = 0; z < side; ++z)
       for (int y = 0; y < side; ++y)
         for (int x = 0; x < side; ++x)
-          voxels->SetLogOdds(k0[0] - kKeyOffset + x, k0[1] - kKeyOffset + y,
-                             k0[2] - kKeyOffset + z, l);
+          voxels->SetLogOdds(k0[0] - kKeyOffset + x, k0[1] - kKeyOffset + y, k0[2] - kKeyOffset + z,
+                             l);
   }
   voxels->Finalize();
   return voxels;
@@ -374,12 +374,15 @@ VoxelBlock OccupancyMap::ExtractBlock(const Eigen::Vector3i& min_index_in,
         const int32_t b = vm.FindBlock(bx, by, bz);
         if (b < 0) continue;
         const int8_t* st = vm.states(b);
-        for (int z = std::max(bz << s, lo.z()); z <= std::min((bz << s) + 7, hi.z()); ++z) {
-          for (int y = std::max(by << s, lo.y()); y <= std::min((by << s) + 7, hi.y()); ++y) {
+        for (int z = std::max(bz * (1 << s), lo.z()); z <= std::min(bz * (1 << s) + 7, hi.z());
+             ++z) {
+          for (int y = std::max(by * (1 << s), lo.y()); y <= std::min(by * (1 << s) + 7, hi.y());
+               ++y) {
             int8_t* row =
                 &block.state[(static_cast<size_t>(z - lo.z()) * block.size.y() + (y - lo.y())) *
                              block.size.x()];
-            for (int x = std::max(bx << s, lo.x()); x <= std::min((bx << s) + 7, hi.x()); ++x)
+            for (int x = std::max(bx * (1 << s), lo.x()); x <= std::min(bx * (1 << s) + 7, hi.x());
+                 ++x)
               row[x - lo.x()] = st[VoxelMap::Local(x, y, z)];
           }
         }
@@ -431,13 +434,15 @@ OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionO
     st.invalid_pixels += static_cast<int64_t>(in.depth->values_m.size() - points.size());
     // Key-range clipping: drop points whose voxel index would wrap in OctoMap.
     const size_t before = points.size();
-    if (!points.empty()) {  // per point only when the cloud's box is not inside (floor is monotonic)
+    if (!points
+             .empty()) {  // per point only when the cloud's box is not inside (floor is monotonic)
       Eigen::Vector3f lo = points[0], hi = points[0];
       for (const auto& p : points) {
         lo = lo.cwiseMin(p);
         hi = hi.cwiseMax(p);
       }
-      if (!InsideKeyRange(lo.cast<double>(), inv_res) || !InsideKeyRange(hi.cast<double>(), inv_res))
+      if (!InsideKeyRange(lo.cast<double>(), inv_res) ||
+          !InsideKeyRange(hi.cast<double>(), inv_res))
         points.erase(std::remove_if(points.begin(), points.end(),
                                     [&](const Eigen::Vector3f& p) {
                                       return !InsideKeyRange(p.cast<double>(), inv_res);
