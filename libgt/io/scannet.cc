@@ -156,12 +156,7 @@ Scene ScanNetReader::ReadScene(const std::string& root, const std::string& scene
   std::error_code ec;
   if (!fs::is_directory(pose_dir, ec)) throw InputError(pose_dir, "pose folder not found");
 
-  Scene scene;
-  scene.name = scene_name.empty() ? FolderName(folder) : scene_name;
-  scene.format = Format();
-  scene.path = folder;
-  scene.min_depth_m = 0.1;
-  scene.max_depth_m = 10.0;
+  Scene scene = NewFolderScene(folder, scene_name, Format(), 0.1, 10.0);
 
   const std::vector<NumberedFile> poses = ListNumberedFiles(pose_dir, "", ".txt");
   if (poses.empty()) throw InputError(pose_dir, "empty scene: no <n>.txt pose files");
@@ -214,12 +209,7 @@ Scene ScanNetReader::ReadScene(const std::string& root, const std::string& scene
 }
 
 Scene ScanNetReader::ReadCppExport(const std::string& folder, const std::string& scene_name) const {
-  Scene scene;
-  scene.name = scene_name.empty() ? FolderName(folder) : scene_name;
-  scene.format = Format();
-  scene.path = folder;
-  scene.min_depth_m = 0.1;
-  scene.max_depth_m = 10.0;
+  Scene scene = NewFolderScene(folder, scene_name, Format(), 0.1, 10.0);
 
   const CppInfo info = ReadCppInfo((fs::path(folder) / kCppInfoFile).string());
   const double depth_shift = info.Number("m_depthShift");

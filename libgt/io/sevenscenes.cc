@@ -39,12 +39,7 @@ std::vector<std::string> SevenScenesReader::ListScenes(const std::string& root) 
 
 Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& scene_name) const {
   const std::string folder = ResolveSceneFolder(root, scene_name, IsSequence(root));
-  Scene scene;
-  scene.name = scene_name.empty() ? FolderName(folder) : scene_name;
-  scene.format = Format();
-  scene.path = folder;
-  scene.min_depth_m = 0.1;
-  scene.max_depth_m = 10.0;
+  Scene scene = NewFolderScene(folder, scene_name, Format(), 0.1, 10.0);
 
   const auto poses = ListNumberedFiles(folder, "frame-", ".pose.txt");
   if (poses.empty()) throw InputError(folder, "empty scene: no frame-NNNNNN.pose.txt files");

@@ -64,12 +64,7 @@ std::vector<std::string> TartanAirReader::ListScenes(const std::string& root) co
 
 Scene TartanAirReader::ReadScene(const std::string& root, const std::string& scene_name) const {
   const std::string folder = ResolveSceneFolder(root, scene_name, IsTrajectory(root));
-  Scene scene;
-  scene.name = scene_name.empty() ? FolderName(folder) : scene_name;
-  scene.format = Format();
-  scene.path = folder;
-  scene.min_depth_m = 0.05;
-  scene.max_depth_m = 500.0;
+  Scene scene = NewFolderScene(folder, scene_name, Format(), 0.05, 500.0);
 
   // Frames: the union of depth_left and image_left numbers.
   const auto depths =

@@ -226,6 +226,17 @@ std::string FolderName(const std::string& path) {
   return name;
 }
 
+Scene NewFolderScene(const std::string& folder, const std::string& scene_name,
+                     const std::string& format, double min_depth_m, double max_depth_m) {
+  Scene scene;
+  scene.name = scene_name.empty() ? FolderName(folder) : scene_name;
+  scene.format = format;
+  scene.path = folder;
+  scene.min_depth_m = min_depth_m;
+  scene.max_depth_m = max_depth_m;
+  return scene;
+}
+
 std::string CheckSceneName(const std::string& name) {
   if (name.empty()) return "";
   if (name.front() == '/')

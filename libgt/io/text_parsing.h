@@ -100,6 +100,10 @@ std::string ResolveSceneFolder(const std::string& root, const std::string& name,
                                bool root_is_scene);
 // Last path component of a folder (without trailing '/').
 std::string FolderName(const std::string& path);
+// An empty Scene read from `folder`: named scene_name, or the folder's name when that is
+// empty, with the reader's format and valid depth range [min_depth_m, max_depth_m].
+Scene NewFolderScene(const std::string& folder, const std::string& scene_name,
+                     const std::string& format, double min_depth_m, double max_depth_m);
 
 // Marks a frame unusable with `reason` unless it already is (the first reason wins).
 void MarkUnusable(Frame* frame, const std::string& reason);

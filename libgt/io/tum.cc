@@ -95,12 +95,7 @@ std::vector<std::string> TumReader::ListScenes(const std::string& root) const {
 
 Scene TumReader::ReadScene(const std::string& root, const std::string& scene_name) const {
   const std::string folder = ResolveSceneFolder(root, scene_name, IsTumSequence(root));
-  Scene scene;
-  scene.name = scene_name.empty() ? FolderName(folder) : scene_name;
-  scene.format = Format();
-  scene.path = folder;
-  scene.min_depth_m = 0.1;
-  scene.max_depth_m = 10.0;
+  Scene scene = NewFolderScene(folder, scene_name, Format(), 0.1, 10.0);
 
   const std::vector<FramePath> depths = ReadTimedPaths(folder, "depth.txt");
   if (depths.empty()) {
