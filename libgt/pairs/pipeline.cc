@@ -367,7 +367,24 @@ occupancy::OccupancyMap FuseFrames(SceneData* d, const std::vector<size_t>& fram
   return occupancy::FuseOccupancy(inputs, spec.fusion);
 }
 
+// ShardOutput::OpenShard's default: the samples in memory, one WriteShard at Finish.
+class BufferedShard : public ShardStream {
+ public:
+  BufferedShard(ShardOutput* output, int64_t shard) : output_(output), shard_(shard) {}
+  void Add(EncodedSample sample) override { samples_.push_back(std::move(sample)); }
+  int64_t Finish() override { return output_->WriteShard(shard_, samples_); }
+
+ private:
+  ShardOutput* output_;
+  int64_t shard_;
+  std::vector<EncodedSample> samples_;
+};
+
 }  // namespace
+
+std::unique_ptr<ShardStream> ShardOutput::OpenShard(int64_t shard) {
+  return std::make_unique<BufferedShard>(this, shard);
+}
 
 bool BuildOptions::Check(std::string* error) const {
   if (out_dir.empty()) return *error = "--out: expected an output folder", false;
@@ -652,16 +669,17 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   // The samples of this task flow through one pipeline without a barrier at shard ends:
   //   1. serial, in order: the next job; reads its scene when first needed;
   //   2. parallel: ComputeSample (labels, occupancy, encoding);
-  //   3. serial, in order: appends the sample to its shard; a complete shard is handed to
-  //      the writer thread (tar, fsync, MD5, part record), which writes it while the
-  //      pipeline goes on computing. At most one write is in flight (stage 3 waits for the
-  //      previous one before handing over the next shard), so shards are published in
+  //   3. serial, in order: adds the sample to its shard's stream (OpenShard: the tar
+  //      member data is written and digested now); when the shard is complete, its
+  //      Finish (close, fsync, rename, part record) is handed to a writer thread while
+  //      the pipeline goes on computing. At most one Finish is in flight (stage 3 waits
+  //      for the previous one before handing over the next), so shards are published in
   //      order and byte for byte as with any thread count.
-  // At most `tokens` samples are in flight between stages 1 and 3, plus the shard being
-  // collected and the shard being written: memory stays bounded. An exception in any
-  // stage (InputError of a sample, a write error) cancels the pipeline and propagates
-  // from here; the shard it belongs to is never written, and a write in flight completes
-  // (the future's destructor waits for it) before RunBuild returns.
+  // At most `tokens` samples are in flight between stages 1 and 3; memory stays bounded.
+  // An exception in any stage (InputError of a sample, a write error) cancels the
+  // pipeline and propagates from here: the stream being filled is dropped (its temporary
+  // file removed, nothing published), and a Finish in flight completes (the future's
+  // destructor waits for it) before RunBuild returns.
   std::future<int64_t> pending_write;
   int64_t pending_samples = 0;
   auto finish_write = [&] {
@@ -679,7 +697,8 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
       1, tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
   const size_t tokens = 2 * threads;
   size_t next_job = 0;
-  std::vector<EncodedSample> batch;
+  std::unique_ptr<ShardStream> stream;  // the shard being collected
+  int64_t in_stream = 0;                // its samples so far
   auto input = [&](tbb::flow_control& fc) -> std::shared_ptr<Item> {
     if (next_job == jobs.size()) {
       fc.stop();
@@ -734,15 +753,17 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   };
   auto collect = [&](std::shared_ptr<Item> item) {
     const int64_t s = jobs[item->job].shard;
-    batch.push_back(std::move(item->sample));
+    if (!stream) stream = output->OpenShard(s);
+    stream->Add(std::move(item->sample));
     item.reset();
     const int64_t n = shard_sizes[s];
-    if (static_cast<int64_t>(batch.size()) < n) return;
+    if (++in_stream < n) return;
     finish_write();
     pending_samples = n;
-    pending_write = std::async(
-        std::launch::async, [output, s, b = std::move(batch)] { return output->WriteShard(s, b); });
-    batch = {};
+    pending_write =
+        std::async(std::launch::async, [st = std::move(stream)] { return st->Finish(); });
+    stream.reset();
+    in_stream = 0;
     done_samples += n;
     if (progress) progress({"write", done_samples, my_samples, Seconds(t_write)});
   };
