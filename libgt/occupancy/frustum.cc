@@ -3,8 +3,12 @@
 // target.
 #include "libgt/occupancy/frustum.h"
 
+#include <immintrin.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 
 #include "libgt/core/error.h"
@@ -332,7 +336,449 @@ RayBits TraverseCenter(const MapView& m, const Eigen::Vector3d& o, const Eigen::
   return r;
 }
 
+// Bin lookup for the box splat: for planar depths in [e_0, e_D], the bins of MarkBins (first
+// bin with e_{k+1} > z0, last bin with e_k < z1), through a uniform table whose cells are at
+// most half as wide as the narrowest bin (so a cell holds at most one edge), corrected by
+// one comparison with the edge on either side: the result is exactly MarkBins', whatever the
+// spacing.
+class EdgeIndex {
+ public:
+  explicit EdgeIndex(const std::vector<double>& e) : e_(e.data()), lo_(e.front()) {
+    const int D = static_cast<int>(e.size()) - 1;
+    double narrowest = e.back() - e.front();
+    for (int k = 0; k < D; ++k) narrowest = std::min(narrowest, e[k + 1] - e[k]);
+    const double cells =
+        std::clamp(std::ceil(2.0 * (e.back() - e.front()) / narrowest), 16.0, double{1 << 20});
+    cells_ = static_cast<int>(cells);
+    inv_h_ = cells_ / (e.back() - e.front());
+    start_.resize(cells_ + 1);
+    int k = 0;
+    for (int c = 0; c <= cells_; ++c) {
+      const double z = lo_ + c / inv_h_;
+      while (k < D - 1 && e_[k + 1] <= z) ++k;
+      start_[c] = k;
+    }
+  }
+  // First bin k with e_{k+1} > z, for e_0 <= z < e_D. At k = D - 1, e_{k+1} = e_D > z; at
+  // k = 0, e_0 <= z: neither correction leaves [0, D - 1].
+  int First(double z) const {
+    int k = Start(z);
+    k += e_[k + 1] <= z;
+    k -= e_[k] > z;
+    return k;
+  }
+  // Last bin k with e_k < z, for e_0 < z <= e_D.
+  int Last(double z) const {
+    int k = Start(z);
+    k += e_[k + 1] < z;
+    k -= e_[k] >= z;
+    return k;
+  }
+
+  int Start(double z) const {
+    const double c = (z - lo_) * inv_h_;
+    return start_[c <= 0 ? 0 : (c >= cells_ ? cells_ : static_cast<int>(c))];
+  }
+  // Read by SplatRowAvx2.
+  const double* e_;
+  double lo_, inv_h_ = 0;
+  int cells_ = 0;
+  std::vector<int> start_;
+};
+
+// A box of voxels of one state (block-local voxel ranges [x0, x1) x [y0, y1) x [z0, z1)).
+struct LocalBox {
+  uint8_t x0, y0, z0, x1, y1, z1;
+  bool occupied;
+};
+
+// Greedy decomposition of the known voxels of a mixed block into boxes of one state: runs
+// along x, grown along y, then along z. A ray crosses a box with positive length exactly
+// when it crosses at least one of its voxels so, and its z-interval in the box is the union
+// of those in the voxels, so the bins the box marks are the union of the voxels' bins.
+__attribute__((noinline)) void BlockBoxes(const int8_t* s, std::vector<LocalBox>* out) {
+  constexpr int W = VoxelMap::kSide;
+  bool used[VoxelMap::kBlockVoxels] = {};
+  auto at = [](int x, int y, int z) { return (z * W + y) * W + x; };
+  for (int z = 0; z < W; ++z) {
+    for (int y = 0; y < W; ++y) {
+      for (int x = 0; x < W; ++x) {
+        const int i = at(x, y, z);
+        if (used[i] || s[i] == VoxelMap::kUnknown) continue;
+        const int8_t st = s[i];
+        auto same = [&](int xx, int yy, int zz) {
+          const int j = at(xx, yy, zz);
+          return !used[j] && s[j] == st;
+        };
+        int x1 = x + 1;
+        while (x1 < W && same(x1, y, z)) ++x1;
+        int y1 = y + 1;
+        for (; y1 < W; ++y1) {
+          bool row = true;
+          for (int xx = x; xx < x1 && row; ++xx) row = same(xx, y1, z);
+          if (!row) break;
+        }
+        int z1 = z + 1;
+        for (; z1 < W; ++z1) {
+          bool rect = true;
+          for (int yy = y; yy < y1 && rect; ++yy)
+            for (int xx = x; xx < x1 && rect; ++xx) rect = same(xx, yy, z1);
+          if (!rect) break;
+        }
+        for (int zz = z; zz < z1; ++zz)
+          for (int yy = y; yy < y1; ++yy)
+            for (int xx = x; xx < x1; ++xx) used[at(xx, yy, zz)] = true;
+        out->push_back({static_cast<uint8_t>(x), static_cast<uint8_t>(y), static_cast<uint8_t>(z),
+                        static_cast<uint8_t>(x1), static_cast<uint8_t>(y1),
+                        static_cast<uint8_t>(z1), st == VoxelMap::kOccupied});
+      }
+    }
+  }
+}
+
+// Per ray of the half grid (row-major), 1 / d per world axis for the slab tests of the box
+// splat; 0 on all three axes for the rays left to TraverseExact (their slab interval is then
+// empty, so no box marks them).
+struct SplatRays {
+  std::vector<double> inv_x, inv_y, inv_z;
+};
+
+// Convex hull of points (Andrew's monotone chain), counter-clockwise, in place; returns the
+// number of hull vertices.
+__attribute__((noinline)) int ConvexHull(Eigen::Vector2d* p, int n) {
+  std::sort(p, p + n, [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  if (n < 3) return n;
+  Eigen::Vector2d h[2 * 24];
+  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+  };
+  int k = 0;
+  for (int i = 0; i < n; ++i) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  for (int i = n - 2, t = k + 1; i >= 0; --i) {
+    while (k >= t && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  for (int i = 0; i < k - 1; ++i) p[i] = h[i];
+  return k - 1;
+}
+
+// One row of rays [ua, ub] against one box (corners a, b relative to the camera centre).
+struct RowArgs {
+  const SplatRays* rays;
+  const EdgeIndex* bins;
+  FrustumVolume* vol;
+  const Eigen::Vector3d *a, *b;
+  double e0, eD;
+  bool occupied;
+  size_t row;  // index of the row's first ray
+  int ua, ub;
+};
+
+// Slab test per ray: z-interval inside the box, clipped to [e_0, e_D]; then the bins k0..k1
+// it overlaps (a ray that misses gets no bits: its k0 and k1 are only kept in range).
+// The AVX2 version below computes the same values with the same operations in the same
+// order (min/max as the selects written here), so both give identical bits.
+void SplatRowScalar(const RowArgs& r) {
+  const double* ix = r.rays->inv_x.data() + r.row;
+  const double* iy = r.rays->inv_y.data() + r.row;
+  const double* iz = r.rays->inv_z.data() + r.row;
+  uint64_t* known = r.vol->known.data() + r.row;
+  uint64_t* occ = r.vol->occ.data() + r.row;
+  const uint64_t occ_mask = r.occupied ? ~uint64_t{0} : 0;
+  const Eigen::Vector3d &a = *r.a, &b = *r.b;
+  const double e0 = r.e0, eD = r.eD;
+  for (int u = r.ua; u <= r.ub; ++u) {
+    const double ax = a.x() * ix[u], bx = b.x() * ix[u], ay = a.y() * iy[u], by = b.y() * iy[u],
+                 az = a.z() * iz[u], bz = b.z() * iz[u];
+    const double nx = ax < bx ? ax : bx, fx = bx > ax ? bx : ax;
+    const double ny = ay < by ? ay : by, fy = by > ay ? by : ay;
+    const double nz = az < bz ? az : bz, fz = bz > az ? bz : az;
+    double z0 = nx > ny ? nx : ny;
+    z0 = z0 > nz ? z0 : nz;
+    z0 = z0 > e0 ? z0 : e0;
+    double z1 = fx < fy ? fx : fy;
+    z1 = z1 < fz ? z1 : fz;
+    z1 = z1 < eD ? z1 : eD;
+    const int k0 = r.bins->First(z0 < eD ? z0 : e0);
+    const int k1 = r.bins->Last(z1 > e0 ? z1 : eD);
+    const uint64_t range = (~uint64_t{0} >> (63 - k1)) & (~uint64_t{0} << k0);
+    const uint64_t m = z1 > z0 ? range : 0;
+    known[u] |= m;
+    occ[u] |= m & occ_mask;
+  }
+}
+
+std::atomic<bool> g_vector_kernels{true};
+
+bool HasAvx2() {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes && g_vector_kernels.load(std::memory_order_relaxed);
+}
+
+// Table start of four z (clamped cell), as EdgeIndex::Start: c <= 0 -> 0, c >= cells -> cells.
+__attribute__((target("avx2"))) inline __m128i TableStart4(const int* start, __m256d z, __m256d lo,
+                                                           __m256d inv_h, __m256d cells) {
+  const __m256d zero = _mm256_setzero_pd();
+  __m256d c = _mm256_mul_pd(_mm256_sub_pd(z, lo), inv_h);
+  c = _mm256_blendv_pd(c, zero, _mm256_cmp_pd(c, zero, _CMP_LE_OQ));
+  c = _mm256_blendv_pd(c, cells, _mm256_cmp_pd(c, cells, _CMP_GE_OQ));
+  // The masked gathers (all lanes) avoid g++ 12's maybe-uninitialized on the plain ones.
+  return _mm_mask_i32gather_epi32(_mm_setzero_si128(), start, _mm256_cvttpd_epi32(c),
+                                  _mm_set1_epi32(-1), 4);
+}
+
+__attribute__((target("avx2"))) inline __m256d Gather4(const double* base, __m128i index) {
+  return _mm256_mask_i32gather_pd(_mm256_setzero_pd(), base, index,
+                                  _mm256_castsi256_pd(_mm256_set1_epi64x(-1)), 8);
+}
+
+// Four 64-bit lane masks (all ones / zero) as 32-bit lanes.
+__attribute__((target("avx2"))) inline __m128i Narrow4(__m256d m) {
+  const __m256i idx = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+  return _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(_mm256_castpd_si256(m), idx));
+}
+
+// The same as SplatRowScalar, four rays at a time (_mm256_min_pd(x, y) is x < y ? x : y and
+// _mm256_max_pd(x, y) is x > y ? x : y, as the selects there). Masked-out lanes load zeros:
+// their inverse directions are 0, so z1 > z0 fails and they would get no bits anyway.
+__attribute__((target("avx2"))) void SplatRowAvx2(const RowArgs& r) {
+  const double* ix = r.rays->inv_x.data() + r.row;
+  const double* iy = r.rays->inv_y.data() + r.row;
+  const double* iz = r.rays->inv_z.data() + r.row;
+  uint64_t* known = r.vol->known.data() + r.row;
+  uint64_t* occ = r.vol->occ.data() + r.row;
+  const EdgeIndex& bins = *r.bins;
+  const __m256d ax = _mm256_set1_pd(r.a->x()), bx = _mm256_set1_pd(r.b->x());
+  const __m256d ay = _mm256_set1_pd(r.a->y()), by = _mm256_set1_pd(r.b->y());
+  const __m256d az = _mm256_set1_pd(r.a->z()), bz = _mm256_set1_pd(r.b->z());
+  const __m256d e0 = _mm256_set1_pd(r.e0), eD = _mm256_set1_pd(r.eD);
+  const __m256d lo = _mm256_set1_pd(bins.lo_), inv_h = _mm256_set1_pd(bins.inv_h_);
+  const __m256d cells = _mm256_set1_pd(bins.cells_);
+  const __m256i ones = _mm256_set1_epi64x(-1), c63 = _mm256_set1_epi64x(63);
+  const __m256i occ_mask = r.occupied ? ones : _mm256_setzero_si256();
+  const int* start = bins.start_.data();
+  const double* e = bins.e_;
+  const __m256i lane = _mm256_setr_epi64x(0, 1, 2, 3);
+  for (int u = r.ua; u <= r.ub; u += 4) {
+    // Lanes past the row's end (the last group only) are neither read nor written.
+    const __m256i live = _mm256_cmpgt_epi64(_mm256_set1_epi64x(r.ub - u + 1), lane);
+    const __m256d vx = _mm256_maskload_pd(ix + u, live), vy = _mm256_maskload_pd(iy + u, live),
+                  vz = _mm256_maskload_pd(iz + u, live);
+    const __m256d tax = _mm256_mul_pd(ax, vx), tbx = _mm256_mul_pd(bx, vx);
+    const __m256d tay = _mm256_mul_pd(ay, vy), tby = _mm256_mul_pd(by, vy);
+    const __m256d taz = _mm256_mul_pd(az, vz), tbz = _mm256_mul_pd(bz, vz);
+    const __m256d nx = _mm256_min_pd(tax, tbx), fx = _mm256_max_pd(tbx, tax);
+    const __m256d ny = _mm256_min_pd(tay, tby), fy = _mm256_max_pd(tby, tay);
+    const __m256d nz = _mm256_min_pd(taz, tbz), fz = _mm256_max_pd(tbz, taz);
+    __m256d z0 = _mm256_max_pd(nx, ny);
+    z0 = _mm256_max_pd(z0, nz);
+    z0 = _mm256_max_pd(z0, e0);
+    __m256d z1 = _mm256_min_pd(fx, fy);
+    z1 = _mm256_min_pd(z1, fz);
+    z1 = _mm256_min_pd(z1, eD);
+    // k0 = First(z0 < eD ? z0 : e0), k1 = Last(z1 > e0 ? z1 : eD).
+    const __m256d q0 = _mm256_blendv_pd(e0, z0, _mm256_cmp_pd(z0, eD, _CMP_LT_OQ));
+    const __m256d q1 = _mm256_blendv_pd(eD, z1, _mm256_cmp_pd(z1, e0, _CMP_GT_OQ));
+    __m128i k0 = TableStart4(start, q0, lo, inv_h, cells),
+            k1 = TableStart4(start, q1, lo, inv_h, cells);
+    // k += e[k + 1] <= z (First) / < z (Last): masks are -1, so subtract them.
+    k0 = _mm_sub_epi32(k0, Narrow4(_mm256_cmp_pd(Gather4(e + 1, k0), q0, _CMP_LE_OQ)));
+    k1 = _mm_sub_epi32(k1, Narrow4(_mm256_cmp_pd(Gather4(e + 1, k1), q1, _CMP_LT_OQ)));
+    // k -= e[k] > z (First) / >= z (Last).
+    k0 = _mm_add_epi32(k0, Narrow4(_mm256_cmp_pd(Gather4(e, k0), q0, _CMP_GT_OQ)));
+    k1 = _mm_add_epi32(k1, Narrow4(_mm256_cmp_pd(Gather4(e, k1), q1, _CMP_GE_OQ)));
+    const __m256i k0l = _mm256_cvtepi32_epi64(k0), k1l = _mm256_cvtepi32_epi64(k1);
+    const __m256i range = _mm256_and_si256(_mm256_srlv_epi64(ones, _mm256_sub_epi64(c63, k1l)),
+                                           _mm256_sllv_epi64(ones, k0l));
+    const __m256i m =
+        _mm256_and_si256(range, _mm256_castpd_si256(_mm256_cmp_pd(z1, z0, _CMP_GT_OQ)));
+    long long* pk = reinterpret_cast<long long*>(known + u);
+    long long* po = reinterpret_cast<long long*>(occ + u);
+    _mm256_maskstore_epi64(pk, live, _mm256_or_si256(_mm256_maskload_epi64(pk, live), m));
+    _mm256_maskstore_epi64(
+        po, live, _mm256_or_si256(_mm256_maskload_epi64(po, live), _mm256_and_si256(m, occ_mask)));
+  }
+}
+
+// Marks the bins of one box (world metres [lo_m, hi_m], one state) in every ray that crosses
+// it. Rays are tried only inside the image of the box's part at camera z >= e_0 (the convex
+// hull of its projected vertices), widened by one ray against rounding; the slab test below
+// decides.
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void SplatBox(
+    const Eigen::Vector3d& lo_m, const Eigen::Vector3d& hi_m, bool occupied,
+    const Eigen::Vector3d& o, const Eigen::Matrix3d& Rt, const Camera& cam,
+    const std::vector<double>& e, const EdgeIndex& bins, const SplatRays& rays, FrustumVolume* vol,
+    std::vector<double>* spans) {
+  const Eigen::Vector3d a = lo_m - o, b = hi_m - o;
+  const double e0 = e.front(), eD = e.back();
+  Eigen::Vector3d pc[8];
+  double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
+  for (int c = 0; c < 8; ++c) {
+    pc[c] = Rt * Eigen::Vector3d((c & 1) ? b.x() : a.x(), (c & 2) ? b.y() : a.y(),
+                                 (c & 4) ? b.z() : a.z());
+    z_min = std::min(z_min, pc[c].z());
+    z_max = std::max(z_max, pc[c].z());
+  }
+  if (z_max < e0 || z_min >= eD) return;
+  // Vertices of the box's part at z >= e_0: its corners there and the points where its
+  // edges cross z = e_0 (at most 8 + 12), projected.
+  Eigen::Vector2d q[24];
+  int nq = 0;
+  auto add = [&](const Eigen::Vector3d& p) {
+    q[nq++] = Eigen::Vector2d(cam.fx * p.x() / p.z() + cam.cx, cam.fy * p.y() / p.z() + cam.cy);
+  };
+  for (int c = 0; c < 8; ++c) {
+    if (pc[c].z() >= e0) add(pc[c]);
+  }
+  if (z_min < e0) {
+    for (int c = 0; c < 8; ++c) {
+      for (int bit = 1; bit < 8; bit <<= 1) {
+        if (c & bit) continue;
+        const Eigen::Vector3d &p = pc[c], &r = pc[c | bit];
+        if ((p.z() < e0) == (r.z() < e0)) continue;
+        const double f = (e0 - p.z()) / (r.z() - p.z());
+        Eigen::Vector3d x = p + f * (r - p);
+        x.z() = e0;
+        add(x);
+      }
+    }
+  }
+  for (int i = 0; i < nq; ++i) {
+    if (!q[i].allFinite()) return;  // degenerate: no box reaches z >= e_0 with extent
+  }
+  const int nh = ConvexHull(q, nq);
+  if (nh == 0) return;
+  // Rays (u, v) are the image points (u, v): row v is tried over the hull's intersection
+  // with the line y = v, found by walking each edge over the rows it spans; kEps (pixels)
+  // covers the rounding of the projections many times over.
+  constexpr double kEps = 1e-3;
+  double v_min = q[0].y(), v_max = q[0].y();
+  for (int i = 1; i < nh; ++i) v_min = std::min(v_min, q[i].y()), v_max = std::max(v_max, q[i].y());
+  const int v0 = static_cast<int>(std::max(std::ceil(v_min - kEps), 0.0));
+  const int v1 = static_cast<int>(std::min(std::floor(v_max + kEps), vol->height - 1.0));
+  if (v0 > v1) return;
+  const int width = vol->width;
+  spans->assign(2 * static_cast<size_t>(v1 - v0 + 1), 0.0);
+  double* lo_u = spans->data();
+  double* hi_u = lo_u + (v1 - v0 + 1);
+  std::fill(lo_u, hi_u, std::numeric_limits<double>::infinity());
+  std::fill(hi_u, hi_u + (v1 - v0 + 1), -std::numeric_limits<double>::infinity());
+  for (int i = 0; i < nh; ++i) {
+    const Eigen::Vector2d& p = q[i];
+    const Eigen::Vector2d& r = q[i + 1 < nh ? i + 1 : 0];
+    const double y_lo = std::min(p.y(), r.y()), y_hi = std::max(p.y(), r.y());
+    const int first = std::max(v0, static_cast<int>(std::ceil(y_lo - kEps)));
+    const int last = std::min(v1, static_cast<int>(std::floor(y_hi + kEps)));
+    for (int v = first; v <= last; ++v) {
+      double x_lo, x_hi;
+      if (y_hi - y_lo <= 0) {  // horizontal edge (or a single point)
+        x_lo = std::min(p.x(), r.x()), x_hi = std::max(p.x(), r.x());
+      } else {
+        const double y = std::clamp(static_cast<double>(v), y_lo, y_hi);
+        x_lo = x_hi = p.x() + (y - p.y()) / (r.y() - p.y()) * (r.x() - p.x());
+      }
+      lo_u[v - v0] = std::min(lo_u[v - v0], x_lo);
+      hi_u[v - v0] = std::max(hi_u[v - v0], x_hi);
+    }
+  }
+  for (int v = v0; v <= v1; ++v) {
+    const double u_lo = lo_u[v - v0], u_hi = hi_u[v - v0];
+    if (!(u_lo <= u_hi)) continue;
+    const int ua = static_cast<int>(std::max(std::ceil(u_lo - kEps), 0.0));
+    const int ub = static_cast<int>(std::min(std::floor(u_hi + kEps), width - 1.0));
+    if (ua > ub) continue;
+    RowArgs args{&rays, &bins, vol, &a, &b, e0, eD, occupied, static_cast<size_t>(v) * width,
+                 ua,    ub};
+    if (HasAvx2()) {
+      SplatRowAvx2(args);
+    } else {
+      SplatRowScalar(args);
+    }
+  }
+}
+
+// Exact binning by splatting boxes of known voxels into the rays that cross them: the
+// transpose of the walk (TraverseExact), with the same result up to ties. A ray's bin k is
+// marked by a box when the ray's planar-depth interval inside the (closed) box, clipped to
+// [e_0, e_D], has positive length and overlaps [e_k, e_{k+1}); this is what the walk marks
+// voxel by voxel, as the boxes (BlockBoxes) are exact unions of voxels of one state.
+// "Up to ties": a crossing shorter than ~1e-6 m, or a ray through a voxel edge, may come
+// out differently by rounding here and in the walk (the walk, for one, starts each mixed
+// block at a point 1e-6 m inside it); tests/occupancy/traversal_test.cc checks that every
+// difference from the reference walk is such a tie.
+// Rays with a zero (or denormal) direction component (a ray in a voxel face plane belongs to
+// the voxel its floor() gives, on one side only) are walked by TraverseExact instead.
+// Cost: per box, its projected hull; per ray it covers, one slab test and one bin lookup
+// (four rays at a time with AVX2); no voxel-by-voxel stepping.
+void SplatExact(const MapView& view, const Camera& cam, const Eigen::Matrix3d& R,
+                const Eigen::Vector3d& o, FrustumVolume* vol) {
+  const std::vector<double>& e = vol->edges_m;
+  const EdgeIndex bins(e);
+  const size_t n = vol->occ.size();
+  SplatRays rays;
+  rays.inv_x.resize(n), rays.inv_y.resize(n), rays.inv_z.resize(n);
+  std::vector<size_t> walk;
+  for (int v = 0; v < vol->height; ++v) {
+    for (int u = 0; u < vol->width; ++u) {
+      const size_t i = static_cast<size_t>(v) * vol->width + u;
+      const Eigen::Vector3d d =
+          R * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
+      const Eigen::Vector3d inv(1.0 / d.x(), 1.0 / d.y(), 1.0 / d.z());
+      if (d.x() == 0 || d.y() == 0 || d.z() == 0 || !inv.allFinite()) {
+        walk.push_back(i);
+        rays.inv_x[i] = rays.inv_y[i] = rays.inv_z[i] = 0.0;  // z-interval empty: no box
+      } else {
+        rays.inv_x[i] = inv.x(), rays.inv_y[i] = inv.y(), rays.inv_z[i] = inv.z();
+      }
+    }
+  }
+  const Eigen::Matrix3d Rt = R.transpose();
+  const VoxelMap& map = *view.map;
+  constexpr int W = VoxelMap::kSide;
+  const double res = view.res;
+  std::vector<LocalBox> boxes;
+  std::vector<double> spans;
+  for (int32_t blk = 0; blk < map.num_blocks(); ++blk) {
+    const auto& c = map.block_coord(blk);
+    const Eigen::Vector3i base(c[0] * W, c[1] * W, c[2] * W);
+    if ((base.array() + W - 1 < view.lo.array()).any() || (base.array() > view.hi.array()).any())
+      continue;
+    boxes.clear();
+    const VoxelMap::Kind kind = map.kind(blk);
+    if (kind == VoxelMap::Kind::kMixed) {
+      BlockBoxes(map.states(blk), &boxes);
+    } else {
+      boxes.push_back({0, 0, 0, W, W, W, kind == VoxelMap::Kind::kAllOccupied});
+    }
+    for (const LocalBox& bx : boxes) {
+      // Clipped to the voxel box of the view, as the walk clips its rays.
+      const Eigen::Vector3i lo = base + Eigen::Vector3i(bx.x0, bx.y0, bx.z0);
+      const Eigen::Vector3i hi = base + Eigen::Vector3i(bx.x1, bx.y1, bx.z1);  // exclusive
+      const Eigen::Vector3i clo = lo.cwiseMax(view.lo);
+      const Eigen::Vector3i chi = hi.cwiseMin(view.hi + Eigen::Vector3i::Ones());
+      if ((chi.array() <= clo.array()).any()) continue;
+      SplatBox(clo.cast<double>() * res, chi.cast<double>() * res, bx.occupied, o, Rt, cam, e, bins,
+               rays, vol, &spans);
+    }
+  }
+  for (const size_t i : walk) {
+    const int u = static_cast<int>(i % vol->width), v = static_cast<int>(i / vol->width);
+    const Eigen::Vector3d d =
+        R * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
+    const RayBits r = TraverseExact(view, o, d, e, std::numeric_limits<double>::infinity());
+    vol->occ[i] = r.occ;
+    vol->known[i] = r.known;
+  }
+}
+
 }  // namespace
+
+void SetVectorKernelsForTesting(bool enabled) { g_vector_kernels.store(enabled); }
 
 FrustumVolume ProjectToFrustum(const OccupancyMap& map, const Camera& camera_full_res,
                                const Rigid3d& world_from_cam, const BinOptions& options) {
@@ -387,68 +833,15 @@ FrustumVolume ProjectToFrustum(const OccupancyMap& map, const Camera& camera_ful
                      lo.cast<double>() * res,
                      (hi + Eigen::Vector3i::Ones()).cast<double>() * res};
 
-  // Farthest planar depth of a block of the map seen through each tile of kTile x kTile rays:
-  // a ray meets no known voxel beyond the largest camera z of the corners of the blocks whose
-  // image covers it, so the exact walk stops there (plus one voxel against rounding) instead
-  // of crossing absent blocks to the far plane or the box. Conservative: a block reaching
-  // the camera plane (z <= 0 at a corner) counts for every tile; the bins do not change.
-  constexpr int kTile = 8;
-  const int tiles_w = (vol.width + kTile - 1) / kTile, tiles_h = (vol.height + kTile - 1) / kTile;
-  std::vector<double> tile_far(static_cast<size_t>(tiles_w) * tiles_h,
-                               -std::numeric_limits<double>::infinity());
   if (options.traversal == Traversal::kExact) {
-    const Eigen::Matrix3d Rt = R.transpose();
-    const double block_m = res * VoxelMap::kSide;
-    double everywhere = -std::numeric_limits<double>::infinity();
-    for (int32_t b = 0; b < voxels.num_blocks(); ++b) {
-      const auto& c = voxels.block_coord(b);
-      if (c[0] < block_lo.x() || c[1] < block_lo.y() || c[2] < block_lo.z() ||
-          c[0] > block_hi.x() || c[1] > block_hi.y() || c[2] > block_hi.z())
-        continue;  // outside the box every ray is clipped to
-      double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
-      double u_min = z_min, u_max = -z_min, v_min = z_min, v_max = -z_min;
-      for (int corner = 0; corner < 8; ++corner) {
-        const Eigen::Vector3d w((c[0] + (corner & 1)) * block_m,
-                                (c[1] + ((corner >> 1) & 1)) * block_m,
-                                (c[2] + (corner >> 2)) * block_m);
-        const Eigen::Vector3d pc = Rt * (w - o);
-        z_min = std::min(z_min, pc.z());
-        z_max = std::max(z_max, pc.z());
-        if (pc.z() > 0) {
-          const double u = cam.fx * pc.x() / pc.z() + cam.cx, v = cam.fy * pc.y() / pc.z() + cam.cy;
-          u_min = std::min(u_min, u), u_max = std::max(u_max, u);
-          v_min = std::min(v_min, v), v_max = std::max(v_max, v);
-        }
-      }
-      if (z_max <= 0) continue;  // behind the camera: rays have z >= near_m > 0
-      if (z_min <= 1e-6) {       // reaches the camera plane: no bounded image
-        everywhere = std::max(everywhere, z_max);
-        continue;
-      }
-      // Rays (u, v) inside the image of the block (the hull of its corners), one ray margin.
-      const double u0 = std::max(std::floor(u_min) - 1, 0.0),
-                   u1 = std::min(std::ceil(u_max) + 1, vol.width - 1.0);
-      const double v0 = std::max(std::floor(v_min) - 1, 0.0),
-                   v1 = std::min(std::ceil(v_max) + 1, vol.height - 1.0);
-      if (!(u0 <= u1 && v0 <= v1)) continue;
-      for (int ty = static_cast<int>(v0) / kTile; ty <= static_cast<int>(v1) / kTile; ++ty)
-        for (int tx = static_cast<int>(u0) / kTile; tx <= static_cast<int>(u1) / kTile; ++tx) {
-          double& f = tile_far[static_cast<size_t>(ty) * tiles_w + tx];
-          f = std::max(f, z_max);
-        }
-    }
-    for (double& f : tile_far) f = std::max(f, everywhere) + res;
+    SplatExact(view, cam, R, o, &vol);
+    return vol;
   }
-
   for (int v = 0; v < vol.height; ++v) {
     for (int u = 0; u < vol.width; ++u) {
       const Eigen::Vector3d d =
           R * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
-      const RayBits r =
-          options.traversal == Traversal::kExact
-              ? TraverseExact(view, o, d, vol.edges_m,
-                              tile_far[static_cast<size_t>(v / kTile) * tiles_w + u / kTile])
-              : TraverseCenter(view, o, d, vol.edges_m);
+      const RayBits r = TraverseCenter(view, o, d, vol.edges_m);
       const size_t i = static_cast<size_t>(v) * vol.width + u;
       vol.occ[i] = r.occ;
       vol.known[i] = r.known;
