@@ -386,56 +386,6 @@ class EdgeIndex {
   std::vector<int> start_;
 };
 
-// A box of voxels of one state (block-local voxel ranges [x0, x1) x [y0, y1) x [z0, z1)).
-struct LocalBox {
-  uint8_t x0, y0, z0, x1, y1, z1;
-  bool occupied;
-};
-
-// Greedy decomposition of the known voxels of a mixed block into boxes of one state: runs
-// along x, grown along y, then along z. A ray crosses a box with positive length exactly
-// when it crosses at least one of its voxels so, and its z-interval in the box is the union
-// of those in the voxels, so the bins the box marks are the union of the voxels' bins.
-__attribute__((noinline)) void BlockBoxes(const int8_t* s, std::vector<LocalBox>* out) {
-  constexpr int W = VoxelMap::kSide;
-  bool used[VoxelMap::kBlockVoxels] = {};
-  auto at = [](int x, int y, int z) { return (z * W + y) * W + x; };
-  for (int z = 0; z < W; ++z) {
-    for (int y = 0; y < W; ++y) {
-      for (int x = 0; x < W; ++x) {
-        const int i = at(x, y, z);
-        if (used[i] || s[i] == VoxelMap::kUnknown) continue;
-        const int8_t st = s[i];
-        auto same = [&](int xx, int yy, int zz) {
-          const int j = at(xx, yy, zz);
-          return !used[j] && s[j] == st;
-        };
-        int x1 = x + 1;
-        while (x1 < W && same(x1, y, z)) ++x1;
-        int y1 = y + 1;
-        for (; y1 < W; ++y1) {
-          bool row = true;
-          for (int xx = x; xx < x1 && row; ++xx) row = same(xx, y1, z);
-          if (!row) break;
-        }
-        int z1 = z + 1;
-        for (; z1 < W; ++z1) {
-          bool rect = true;
-          for (int yy = y; yy < y1 && rect; ++yy)
-            for (int xx = x; xx < x1 && rect; ++xx) rect = same(xx, yy, z1);
-          if (!rect) break;
-        }
-        for (int zz = z; zz < z1; ++zz)
-          for (int yy = y; yy < y1; ++yy)
-            for (int xx = x; xx < x1; ++xx) used[at(xx, yy, zz)] = true;
-        out->push_back({static_cast<uint8_t>(x), static_cast<uint8_t>(y), static_cast<uint8_t>(z),
-                        static_cast<uint8_t>(x1), static_cast<uint8_t>(y1),
-                        static_cast<uint8_t>(z1), st == VoxelMap::kOccupied});
-      }
-    }
-  }
-}
-
 // Per ray of the half grid (row-major), 1 / d per world axis for the slab tests of the box
 // splat; 0 on all three axes for the rays left to TraverseExact (their slab interval is then
 // empty, so no box marks them).
@@ -618,9 +568,13 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void SplatBo
   const double e0 = e.front(), eD = e.back();
   Eigen::Vector3d pc[8];
   double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
+  // Corners in the camera frame from the six products Rt.col(k) * {a_k, b_k} (a footprint
+  // only: its rounding is covered by kEps below).
+  const Eigen::Vector3d cx0 = Rt.col(0) * a.x(), cx1 = Rt.col(0) * b.x();
+  const Eigen::Vector3d cy0 = Rt.col(1) * a.y(), cy1 = Rt.col(1) * b.y();
+  const Eigen::Vector3d cz0 = Rt.col(2) * a.z(), cz1 = Rt.col(2) * b.z();
   for (int c = 0; c < 8; ++c) {
-    pc[c] = Rt * Eigen::Vector3d((c & 1) ? b.x() : a.x(), (c & 2) ? b.y() : a.y(),
-                                 (c & 4) ? b.z() : a.z());
+    pc[c] = ((c & 1) ? cx1 : cx0) + ((c & 2) ? cy1 : cy0) + ((c & 4) ? cz1 : cz0);
     z_min = std::min(z_min, pc[c].z());
     z_max = std::max(z_max, pc[c].z());
   }
@@ -663,27 +617,32 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void SplatBo
   const int v1 = static_cast<int>(std::min(std::floor(v_max + kEps), vol->height - 1.0));
   if (v0 > v1) return;
   const int width = vol->width;
-  spans->assign(2 * static_cast<size_t>(v1 - v0 + 1), 0.0);
+  const size_t rows = static_cast<size_t>(v1 - v0 + 1);
+  if (spans->size() < 2 * rows) spans->resize(2 * rows);
   double* lo_u = spans->data();
-  double* hi_u = lo_u + (v1 - v0 + 1);
+  double* hi_u = lo_u + rows;
   std::fill(lo_u, hi_u, std::numeric_limits<double>::infinity());
-  std::fill(hi_u, hi_u + (v1 - v0 + 1), -std::numeric_limits<double>::infinity());
+  std::fill(hi_u, hi_u + rows, -std::numeric_limits<double>::infinity());
   for (int i = 0; i < nh; ++i) {
     const Eigen::Vector2d& p = q[i];
     const Eigen::Vector2d& r = q[i + 1 < nh ? i + 1 : 0];
     const double y_lo = std::min(p.y(), r.y()), y_hi = std::max(p.y(), r.y());
     const int first = std::max(v0, static_cast<int>(std::ceil(y_lo - kEps)));
     const int last = std::min(v1, static_cast<int>(std::floor(y_hi + kEps)));
-    for (int v = first; v <= last; ++v) {
-      double x_lo, x_hi;
-      if (y_hi - y_lo <= 0) {  // horizontal edge (or a single point)
-        x_lo = std::min(p.x(), r.x()), x_hi = std::max(p.x(), r.x());
-      } else {
-        const double y = std::clamp(static_cast<double>(v), y_lo, y_hi);
-        x_lo = x_hi = p.x() + (y - p.y()) / (r.y() - p.y()) * (r.x() - p.x());
+    if (y_hi - y_lo <= 0) {  // horizontal edge (or a single point)
+      const double x_lo = std::min(p.x(), r.x()), x_hi = std::max(p.x(), r.x());
+      for (int v = first; v <= last; ++v) {
+        lo_u[v - v0] = std::min(lo_u[v - v0], x_lo);
+        hi_u[v - v0] = std::max(hi_u[v - v0], x_hi);
       }
-      lo_u[v - v0] = std::min(lo_u[v - v0], x_lo);
-      hi_u[v - v0] = std::max(hi_u[v - v0], x_hi);
+      continue;
+    }
+    const double slope = (r.x() - p.x()) / (r.y() - p.y());
+    for (int v = first; v <= last; ++v) {
+      const double y = std::clamp(static_cast<double>(v), y_lo, y_hi);
+      const double x = p.x() + (y - p.y()) * slope;
+      lo_u[v - v0] = std::min(lo_u[v - v0], x);
+      hi_u[v - v0] = std::max(hi_u[v - v0], x);
     }
   }
   for (int v = v0; v <= v1; ++v) {
@@ -706,7 +665,7 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void SplatBo
 // transpose of the walk (TraverseExact), with the same result up to ties. A ray's bin k is
 // marked by a box when the ray's planar-depth interval inside the (closed) box, clipped to
 // [e_0, e_D], has positive length and overlaps [e_k, e_{k+1}); this is what the walk marks
-// voxel by voxel, as the boxes (BlockBoxes) are exact unions of voxels of one state.
+// voxel by voxel, as the boxes (VoxelMap::Boxes) are exact unions of voxels of one state.
 // "Up to ties": a crossing shorter than ~1e-6 m, or a ray through a voxel edge, may come
 // out differently by rounding here and in the walk (the walk, for one, starts each mixed
 // block at a point 1e-6 m inside it); tests/occupancy/traversal_test.cc checks that every
@@ -741,21 +700,15 @@ void SplatExact(const MapView& view, const Camera& cam, const Eigen::Matrix3d& R
   const VoxelMap& map = *view.map;
   constexpr int W = VoxelMap::kSide;
   const double res = view.res;
-  std::vector<LocalBox> boxes;
   std::vector<double> spans;
+  const VoxelMap::BlockBoxes& boxes = map.Boxes();
   for (int32_t blk = 0; blk < map.num_blocks(); ++blk) {
     const auto& c = map.block_coord(blk);
     const Eigen::Vector3i base(c[0] * W, c[1] * W, c[2] * W);
     if ((base.array() + W - 1 < view.lo.array()).any() || (base.array() > view.hi.array()).any())
       continue;
-    boxes.clear();
-    const VoxelMap::Kind kind = map.kind(blk);
-    if (kind == VoxelMap::Kind::kMixed) {
-      BlockBoxes(map.states(blk), &boxes);
-    } else {
-      boxes.push_back({0, 0, 0, W, W, W, kind == VoxelMap::Kind::kAllOccupied});
-    }
-    for (const LocalBox& bx : boxes) {
+    for (int32_t k = boxes.first[blk]; k < boxes.first[blk + 1]; ++k) {
+      const VoxelMap::Box& bx = boxes.boxes[k];
       // Clipped to the voxel box of the view, as the walk clips its rays.
       const Eigen::Vector3i lo = base + Eigen::Vector3i(bx.x0, bx.y0, bx.z0);
       const Eigen::Vector3i hi = base + Eigen::Vector3i(bx.x1, bx.y1, bx.z1);  // exclusive

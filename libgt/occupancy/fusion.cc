@@ -198,17 +198,23 @@ std::vector<Eigen::Vector3f> BackProjectValid(const FusionInput& frame) {
   const Camera& c = frame.camera;
   const Eigen::Matrix3d R = frame.world_from_cam.linear();
   const Eigen::Vector3d t = frame.world_from_cam.translation();
-  std::vector<Eigen::Vector3f> out;
-  out.reserve(d.values_m.size());
+  // The same arithmetic per point as (R * p + t) with p = ((u - cx) / fx * z, (v - cy) / fy * z,
+  // z), with the per-column factor computed once and no growth checks per point.
+  std::vector<double> x_of_u(d.width);
+  for (int u = 0; u < d.width; ++u) x_of_u[u] = (u - c.cx) / c.fx;
+  std::vector<Eigen::Vector3f> out(d.values_m.size());
+  size_t n = 0;
   for (int v = 0; v < d.height; ++v) {
     const double y = (v - c.cy) / c.fy;
+    const float* row = &d.values_m[static_cast<size_t>(v) * d.width];
     for (int u = 0; u < d.width; ++u) {
-      const float z = d.at(u, v);
+      const float z = row[u];
       if (!IsValidDepth(z, frame.min_depth_m, frame.max_depth_m)) continue;  // before transform
-      const Eigen::Vector3d p_in_cam((u - c.cx) / c.fx * z, y * z, z);
-      out.push_back((R * p_in_cam + t).cast<float>());
+      const Eigen::Vector3d p_in_cam(x_of_u[u] * z, y * z, z);
+      out[n++] = (R * p_in_cam + t).cast<float>();
     }
   }
+  out.resize(n);
   return out;
 }
 
