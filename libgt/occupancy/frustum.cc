@@ -427,6 +427,10 @@ struct RowArgs {
   bool occupied;
   size_t row;  // index of the row's first ray
   int ua, ub;
+  // Bins any crossing of the box can overlap, from the planar depths of its corners, when
+  // they are at most two (k_last <= k_first + 1): the bin lookup then reduces to comparing
+  // with the one edge between them. Otherwise k_first = -1 (general lookup).
+  int k_first, k_last;
 };
 
 // Slab test per ray: z-interval inside the box, clipped to [e_0, e_D]; then the bins k0..k1
@@ -454,9 +458,16 @@ void SplatRowScalar(const RowArgs& r) {
     double z1 = fx < fy ? fx : fy;
     z1 = z1 < fz ? z1 : fz;
     z1 = z1 < eD ? z1 : eD;
-    const int k0 = r.bins->First(z0 < eD ? z0 : e0);
-    const int k1 = r.bins->Last(z1 > e0 ? z1 : eD);
-    const uint64_t range = (~uint64_t{0} >> (63 - k1)) & (~uint64_t{0} << k0);
+    uint64_t range;
+    if (r.k_first < 0) {
+      const int k0 = r.bins->First(z0 < eD ? z0 : e0);
+      const int k1 = r.bins->Last(z1 > e0 ? z1 : eD);
+      range = (~uint64_t{0} >> (63 - k1)) & (~uint64_t{0} << k0);
+    } else {  // First(z0) is k_first + (z0 >= edge), Last(z1) is k_first + (z1 > edge)
+      const double edge = r.bins->e_[r.k_first + 1];
+      range =
+          (z0 < edge ? uint64_t{1} << r.k_first : 0) | (z1 > edge ? uint64_t{1} << r.k_last : 0);
+    }
     const uint64_t m = z1 > z0 ? range : 0;
     known[u] |= m;
     occ[u] |= m & occ_mask;
@@ -496,6 +507,7 @@ __attribute__((target("avx2"))) inline __m128i Narrow4(__m256d m) {
 // The same as SplatRowScalar, four rays at a time (_mm256_min_pd(x, y) is x < y ? x : y and
 // _mm256_max_pd(x, y) is x > y ? x : y, as the selects there). Masked-out lanes load zeros:
 // their inverse directions are 0, so z1 > z0 fails and they would get no bits anyway.
+template <bool kGeneral>
 __attribute__((target("avx2"))) void SplatRowAvx2(const RowArgs& r) {
   const double* ix = r.rays->inv_x.data() + r.row;
   const double* iy = r.rays->inv_y.data() + r.row;
@@ -511,6 +523,9 @@ __attribute__((target("avx2"))) void SplatRowAvx2(const RowArgs& r) {
   const __m256d cells = _mm256_set1_pd(bins.cells_);
   const __m256i ones = _mm256_set1_epi64x(-1), c63 = _mm256_set1_epi64x(63);
   const __m256i occ_mask = r.occupied ? ones : _mm256_setzero_si256();
+  const __m256d edge = _mm256_set1_pd(kGeneral ? 0.0 : bins.e_[r.k_first + 1]);
+  const __m256i bit_first = _mm256_set1_epi64x(kGeneral ? 0 : int64_t{1} << r.k_first);
+  const __m256i bit_last = _mm256_set1_epi64x(kGeneral ? 0 : int64_t{1} << r.k_last);
   const int* start = bins.start_.data();
   const double* e = bins.e_;
   const __m256i lane = _mm256_setr_epi64x(0, 1, 2, 3);
@@ -531,20 +546,27 @@ __attribute__((target("avx2"))) void SplatRowAvx2(const RowArgs& r) {
     __m256d z1 = _mm256_min_pd(fx, fy);
     z1 = _mm256_min_pd(z1, fz);
     z1 = _mm256_min_pd(z1, eD);
-    // k0 = First(z0 < eD ? z0 : e0), k1 = Last(z1 > e0 ? z1 : eD).
-    const __m256d q0 = _mm256_blendv_pd(e0, z0, _mm256_cmp_pd(z0, eD, _CMP_LT_OQ));
-    const __m256d q1 = _mm256_blendv_pd(eD, z1, _mm256_cmp_pd(z1, e0, _CMP_GT_OQ));
-    __m128i k0 = TableStart4(start, q0, lo, inv_h, cells),
-            k1 = TableStart4(start, q1, lo, inv_h, cells);
-    // k += e[k + 1] <= z (First) / < z (Last): masks are -1, so subtract them.
-    k0 = _mm_sub_epi32(k0, Narrow4(_mm256_cmp_pd(Gather4(e + 1, k0), q0, _CMP_LE_OQ)));
-    k1 = _mm_sub_epi32(k1, Narrow4(_mm256_cmp_pd(Gather4(e + 1, k1), q1, _CMP_LT_OQ)));
-    // k -= e[k] > z (First) / >= z (Last).
-    k0 = _mm_add_epi32(k0, Narrow4(_mm256_cmp_pd(Gather4(e, k0), q0, _CMP_GT_OQ)));
-    k1 = _mm_add_epi32(k1, Narrow4(_mm256_cmp_pd(Gather4(e, k1), q1, _CMP_GE_OQ)));
-    const __m256i k0l = _mm256_cvtepi32_epi64(k0), k1l = _mm256_cvtepi32_epi64(k1);
-    const __m256i range = _mm256_and_si256(_mm256_srlv_epi64(ones, _mm256_sub_epi64(c63, k1l)),
-                                           _mm256_sllv_epi64(ones, k0l));
+    __m256i range;
+    if (kGeneral) {
+      // k0 = First(z0 < eD ? z0 : e0), k1 = Last(z1 > e0 ? z1 : eD).
+      const __m256d q0 = _mm256_blendv_pd(e0, z0, _mm256_cmp_pd(z0, eD, _CMP_LT_OQ));
+      const __m256d q1 = _mm256_blendv_pd(eD, z1, _mm256_cmp_pd(z1, e0, _CMP_GT_OQ));
+      __m128i k0 = TableStart4(start, q0, lo, inv_h, cells),
+              k1 = TableStart4(start, q1, lo, inv_h, cells);
+      // k += e[k + 1] <= z (First) / < z (Last): masks are -1, so subtract them.
+      k0 = _mm_sub_epi32(k0, Narrow4(_mm256_cmp_pd(Gather4(e + 1, k0), q0, _CMP_LE_OQ)));
+      k1 = _mm_sub_epi32(k1, Narrow4(_mm256_cmp_pd(Gather4(e + 1, k1), q1, _CMP_LT_OQ)));
+      // k -= e[k] > z (First) / >= z (Last).
+      k0 = _mm_add_epi32(k0, Narrow4(_mm256_cmp_pd(Gather4(e, k0), q0, _CMP_GT_OQ)));
+      k1 = _mm_add_epi32(k1, Narrow4(_mm256_cmp_pd(Gather4(e, k1), q1, _CMP_GE_OQ)));
+      const __m256i k0l = _mm256_cvtepi32_epi64(k0), k1l = _mm256_cvtepi32_epi64(k1);
+      range = _mm256_and_si256(_mm256_srlv_epi64(ones, _mm256_sub_epi64(c63, k1l)),
+                               _mm256_sllv_epi64(ones, k0l));
+    } else {
+      range = _mm256_or_si256(
+          _mm256_and_si256(bit_first, _mm256_castpd_si256(_mm256_cmp_pd(z0, edge, _CMP_LT_OQ))),
+          _mm256_and_si256(bit_last, _mm256_castpd_si256(_mm256_cmp_pd(z1, edge, _CMP_GT_OQ))));
+    }
     const __m256i m =
         _mm256_and_si256(range, _mm256_castpd_si256(_mm256_cmp_pd(z1, z0, _CMP_GT_OQ)));
     long long* pk = reinterpret_cast<long long*>(known + u);
@@ -579,6 +601,16 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void SplatBo
     z_max = std::max(z_max, pc[c].z());
   }
   if (z_max < e0 || z_min >= eD) return;
+  // Bins the box can reach (1e-9 m of margin: far beyond the rounding of these depths, which
+  // are a few ulps of ~10 m): at most two means the cheap lookup (RowArgs).
+  int k_first = -1, k_last = -1;
+  {
+    const double z_lo = std::max(z_min - 1e-9, e0), z_hi = std::min(z_max + 1e-9, eD);
+    if (z_lo < eD && z_hi > e0) {
+      const int f = bins.First(z_lo), l = bins.Last(z_hi);
+      if (l <= f + 1) k_first = f, k_last = l;
+    }
+  }
   // Vertices of the box's part at z >= e_0: its corners there and the points where its
   // edges cross z = e_0 (at most 8 + 12), projected.
   Eigen::Vector2d q[24];
@@ -651,10 +683,14 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void SplatBo
     const int ua = static_cast<int>(std::max(std::ceil(u_lo - kEps), 0.0));
     const int ub = static_cast<int>(std::min(std::floor(u_hi + kEps), width - 1.0));
     if (ua > ub) continue;
-    RowArgs args{&rays, &bins, vol, &a, &b, e0, eD, occupied, static_cast<size_t>(v) * width,
-                 ua,    ub};
+    RowArgs args{&rays, &bins, vol,     &a,    &b, e0, eD, occupied, static_cast<size_t>(v) * width,
+                 ua,    ub,    k_first, k_last};
     if (HasAvx2()) {
-      SplatRowAvx2(args);
+      if (k_first < 0) {
+        SplatRowAvx2<true>(args);
+      } else {
+        SplatRowAvx2<false>(args);
+      }
     } else {
       SplatRowScalar(args);
     }
