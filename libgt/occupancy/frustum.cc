@@ -581,11 +581,10 @@ __attribute__((target("avx2"))) void SplatRowAvx2(const RowArgs& r) {
 // it. Rays are tried only inside the image of the box's part at camera z >= e_0 (the convex
 // hull of its projected vertices), widened by one ray against rounding; the slab test below
 // decides.
-__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void SplatBox(
-    const Eigen::Vector3d& lo_m, const Eigen::Vector3d& hi_m, bool occupied,
-    const Eigen::Vector3d& o, const Eigen::Matrix3d& Rt, const Camera& cam,
-    const std::vector<double>& e, const EdgeIndex& bins, const SplatRays& rays, FrustumVolume* vol,
-    std::vector<double>* spans) {
+void SplatBox(const Eigen::Vector3d& lo_m, const Eigen::Vector3d& hi_m, bool occupied,
+              const Eigen::Vector3d& o, const Eigen::Matrix3d& Rt, const Camera& cam,
+              const std::vector<double>& e, const EdgeIndex& bins, const SplatRays& rays,
+              FrustumVolume* vol, std::vector<double>* spans) {
   const Eigen::Vector3d a = lo_m - o, b = hi_m - o;
   const double e0 = e.front(), eD = e.back();
   Eigen::Vector3d pc[8];
