@@ -307,11 +307,12 @@ __attribute__((noinline)) RayBits TraverseExact(const MapView& m, const Eigen::V
 }
 
 // Center: only the voxel at each bin's centre depth.
+// Beyond z_known_max the caller guarantees that the ray meets no known voxel.
 RayBits TraverseCenter(const MapView& m, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                       const std::vector<double>& e) {
+                       const std::vector<double>& e, double z_known_max) {
   RayBits r;
   const int D = static_cast<int>(e.size()) - 1;
-  double z_lo = e.front(), z_hi = e.back();
+  double z_lo = e.front(), z_hi = std::min(e.back(), z_known_max);
   if (!ClipToBox(o, d, m.lo_m, m.hi_m, &z_lo, &z_hi)) return r;
   const double inv = 1.0 / m.res;
   constexpr int S = VoxelMap::kShift;
@@ -320,12 +321,14 @@ RayBits TraverseCenter(const MapView& m, const Eigen::Vector3d& o, const Eigen::
     if (zc < z_lo) continue;
     if (zc > z_hi) break;
     const Eigen::Vector3d p = o + zc * d;
-    const int ix = static_cast<int>(std::floor(p.x() * inv));
-    const int iy = static_cast<int>(std::floor(p.y() * inv));
-    const int iz = static_cast<int>(std::floor(p.z() * inv));
-    if (ix < m.lo.x() || iy < m.lo.y() || iz < m.lo.z() || ix > m.hi.x() || iy > m.hi.y() ||
-        iz > m.hi.z())
+    // floor(s) in [lo, hi] iff s in [lo, hi + 1) (integers); there floor is the truncation
+    // minus one for negative non-integers (std::floor is a libm call on baseline x86-64).
+    const double sx = p.x() * inv, sy = p.y() * inv, sz = p.z() * inv;
+    if (!(sx >= m.lo.x() && sy >= m.lo.y() && sz >= m.lo.z() && sx < m.hi.x() + 1.0 &&
+          sy < m.hi.y() + 1.0 && sz < m.hi.z() + 1.0))
       continue;
+    const int tx = static_cast<int>(sx), ty = static_cast<int>(sy), tz = static_cast<int>(sz);
+    const int ix = tx - (sx < tx), iy = ty - (sy < ty), iz = tz - (sz < tz);
     const int32_t b = m.window->Find(ix >> S, iy >> S, iz >> S);
     if (b < 0) continue;
     const int8_t s = m.map->states(b)[VoxelMap::Local(ix, iy, iz)];
@@ -825,11 +828,64 @@ FrustumVolume ProjectToFrustum(const OccupancyMap& map, const Camera& camera_ful
     SplatExact(view, cam, R, o, &vol);
     return vol;
   }
+  // Farthest planar depth of a block of the map seen through each tile of kTile x kTile rays:
+  // a ray meets no known voxel beyond the largest camera z of the corners of the blocks whose
+  // image covers it, so the bin-centre lookups stop there (plus one voxel against rounding) instead
+  // of crossing absent blocks to the far plane or the box. Conservative: a block reaching
+  // the camera plane (z <= 0 at a corner) counts for every tile; the bins do not change.
+  constexpr int kTile = 8;
+  const int tiles_w = (vol.width + kTile - 1) / kTile, tiles_h = (vol.height + kTile - 1) / kTile;
+  std::vector<double> tile_far(static_cast<size_t>(tiles_w) * tiles_h,
+                               -std::numeric_limits<double>::infinity());
+  {
+    const Eigen::Matrix3d Rt = R.transpose();
+    const double block_m = res * VoxelMap::kSide;
+    double everywhere = -std::numeric_limits<double>::infinity();
+    for (int32_t b = 0; b < voxels.num_blocks(); ++b) {
+      const auto& c = voxels.block_coord(b);
+      if (c[0] < block_lo.x() || c[1] < block_lo.y() || c[2] < block_lo.z() ||
+          c[0] > block_hi.x() || c[1] > block_hi.y() || c[2] > block_hi.z())
+        continue;  // outside the box every ray is clipped to
+      double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
+      double u_min = z_min, u_max = -z_min, v_min = z_min, v_max = -z_min;
+      for (int corner = 0; corner < 8; ++corner) {
+        const Eigen::Vector3d w((c[0] + (corner & 1)) * block_m,
+                                (c[1] + ((corner >> 1) & 1)) * block_m,
+                                (c[2] + (corner >> 2)) * block_m);
+        const Eigen::Vector3d pc = Rt * (w - o);
+        z_min = std::min(z_min, pc.z());
+        z_max = std::max(z_max, pc.z());
+        if (pc.z() > 0) {
+          const double u = cam.fx * pc.x() / pc.z() + cam.cx, v = cam.fy * pc.y() / pc.z() + cam.cy;
+          u_min = std::min(u_min, u), u_max = std::max(u_max, u);
+          v_min = std::min(v_min, v), v_max = std::max(v_max, v);
+        }
+      }
+      if (z_max <= 0) continue;  // behind the camera: rays have z >= near_m > 0
+      if (z_min <= 1e-6) {       // reaches the camera plane: no bounded image
+        everywhere = std::max(everywhere, z_max);
+        continue;
+      }
+      // Rays (u, v) inside the image of the block (the hull of its corners), one ray margin.
+      const double u0 = std::max(std::floor(u_min) - 1, 0.0),
+                   u1 = std::min(std::ceil(u_max) + 1, vol.width - 1.0);
+      const double v0 = std::max(std::floor(v_min) - 1, 0.0),
+                   v1 = std::min(std::ceil(v_max) + 1, vol.height - 1.0);
+      if (!(u0 <= u1 && v0 <= v1)) continue;
+      for (int ty = static_cast<int>(v0) / kTile; ty <= static_cast<int>(v1) / kTile; ++ty)
+        for (int tx = static_cast<int>(u0) / kTile; tx <= static_cast<int>(u1) / kTile; ++tx) {
+          double& f = tile_far[static_cast<size_t>(ty) * tiles_w + tx];
+          f = std::max(f, z_max);
+        }
+    }
+    for (double& f : tile_far) f = std::max(f, everywhere) + res;
+  }
   for (int v = 0; v < vol.height; ++v) {
     for (int u = 0; u < vol.width; ++u) {
       const Eigen::Vector3d d =
           R * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
-      const RayBits r = TraverseCenter(view, o, d, vol.edges_m);
+      const RayBits r = TraverseCenter(
+          view, o, d, vol.edges_m, tile_far[static_cast<size_t>(v / kTile) * tiles_w + u / kTile]);
       const size_t i = static_cast<size_t>(v) * vol.width + u;
       vol.occ[i] = r.occ;
       vol.known[i] = r.known;

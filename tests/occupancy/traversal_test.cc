@@ -140,6 +140,42 @@ int64_t ExpectSameVolume(const OccupancyMap& map, const Camera& cam, const Rigid
   return differing;
 }
 
+// Bin-centre sampling (Traversal::kCenter) against the definition: bin k of a ray is the
+// state of the voxel (OccupancyMap::StateAt) at the ray's point of planar depth
+// (e_k + e_{k+1}) / 2, looked up one by one. Returns the number of differing rays.
+int64_t ExpectCenterIsStateAtBinCentres(const OccupancyMap& map, const Camera& cam,
+                                        const Rigid3d& pose, const BinOptions& bins,
+                                        const std::string& what) {
+  SCOPED_TRACE(what + " (center)");
+  BinOptions center = bins;
+  center.traversal = Traversal::kCenter;
+  const FrustumVolume vol = ProjectToFrustum(map, cam, pose, center);
+  const Camera half = cam.HalfGrid();
+  const std::vector<double>& e = vol.edges_m;
+  int64_t differing = 0;
+  for (int v = 0; v < vol.height; ++v) {
+    for (int u = 0; u < vol.width; ++u) {
+      const Eigen::Vector3d d =
+          pose.linear() * Eigen::Vector3d((u - half.cx) / half.fx, (v - half.cy) / half.fy, 1.0);
+      Bits want;
+      for (int k = 0; k + 1 < static_cast<int>(e.size()); ++k) {
+        const int s = map.StateAt(pose.translation() + 0.5 * (e[k] + e[k + 1]) * d);
+        if (s >= 0) want.known |= uint64_t{1} << k;
+        if (s == 1) want.occ |= uint64_t{1} << k;
+      }
+      const size_t i = static_cast<size_t>(v) * vol.width + u;
+      if (vol.occ[i] != want.occ || vol.known[i] != want.known) {
+        if (differing < 5)
+          ADD_FAILURE() << "ray " << i << ": occ " << std::hex << vol.occ[i] << " vs " << want.occ
+                        << ", known " << vol.known[i] << " vs " << want.known;
+        ++differing;
+      }
+    }
+  }
+  EXPECT_EQ(differing, 0);
+  return differing;
+}
+
 std::vector<BinOptions> SomeBinOptions() {
   std::vector<BinOptions> out(4);
   out[1].spacing = BinSpacing::kLog;
@@ -183,6 +219,9 @@ void ExpectRealPair(const Loaded& l, int64_t n0, int64_t n1, const std::string& 
     for (size_t c = 0; c < frames.size(); ++c) {
       ExpectSameVolume(map, frames[c].camera, frames[c].world_from_cam, bins[b],
                        what + " cam" + std::to_string(c) + " bins" + std::to_string(b));
+      ExpectCenterIsStateAtBinCentres(
+          map, frames[c].camera, frames[c].world_from_cam, bins[b],
+          what + " cam" + std::to_string(c) + " bins" + std::to_string(b));
     }
   }
 }
@@ -256,10 +295,14 @@ TEST(ExactTraversal, SameAsReferenceOnRandomScenes) {
       ExpectSameVolume(map, cam, frames[f].world_from_cam, bins[(trial + f) % bins.size()],
                        name + " cam" + std::to_string(f));
     // Views the map was not fused from (rays enter known space from anywhere).
-    for (int extra = 0; extra < 3; ++extra)
-      ExpectSameVolume(map, TestCamera(100, 80, 70.0), RandomPose(&rng, 1.0),
-                       bins[(trial + extra) % bins.size()],
+    for (int extra = 0; extra < 3; ++extra) {
+      const Rigid3d pose = RandomPose(&rng, 1.0);
+      const BinOptions& b = bins[(trial + extra) % bins.size()];
+      ExpectSameVolume(map, TestCamera(100, 80, 70.0), pose, b,
                        name + " other view " + std::to_string(extra));
+      ExpectCenterIsStateAtBinCentres(map, TestCamera(100, 80, 70.0), pose, b,
+                                      name + " other view " + std::to_string(extra));
+    }
   }
 }
 
