@@ -158,7 +158,8 @@ void VoxelMap::CastMisses(const float origin[3], const float end[3]) {
 }
 
 void VoxelMap::InsertScan(const std::vector<Eigen::Vector3f>& points,
-                          const Eigen::Vector3f& origin_in, double max_range_m, bool discretize) {
+                          const Eigen::Vector3f& origin_in, double max_range_m, bool discretize,
+                          const Eigen::Vector3f* points_lo, const Eigen::Vector3f* points_hi) {
   final_ = false;
   const float origin[3] = {origin_in.x(), origin_in.y(), origin_in.z()};
   // Block window over the scan: every ray stays within the box of its origin and end (one
@@ -168,9 +169,14 @@ void VoxelMap::InsertScan(const std::vector<Eigen::Vector3f>& points,
   for (int a = 0; a < 3; ++a) lo[a] = hi[a] = io[a];
   if (!points.empty()) {  // floor is monotonic: the index box is that of the extreme coordinates
     Eigen::Vector3f p_lo = points[0], p_hi = points[0];
-    for (const auto& p : points) {
-      p_lo = p_lo.cwiseMin(p);
-      p_hi = p_hi.cwiseMax(p);
+    if (points_lo != nullptr && points_hi != nullptr) {
+      p_lo = *points_lo;
+      p_hi = *points_hi;
+    } else {
+      for (const auto& p : points) {
+        p_lo = p_lo.cwiseMin(p);
+        p_hi = p_hi.cwiseMax(p);
+      }
     }
     for (int a = 0; a < 3; ++a) {
       const double l = std::floor(inv_res_ * static_cast<double>(p_lo[a]));

@@ -61,8 +61,10 @@ class VoxelMap {
   const LogOddsModel& model() const { return model_; }
 
   // One scan (world frame, float as OctoMap's Pointcloud); max_range_m < 0: unlimited.
+  // points_lo/points_hi: the points' bounding box if the caller has it (else computed here).
   void InsertScan(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin,
-                  double max_range_m, bool discretize);
+                  double max_range_m, bool discretize, const Eigen::Vector3f* points_lo = nullptr,
+                  const Eigen::Vector3f* points_hi = nullptr);
   // Sets the log-odds of one voxel (used to copy an octree); index inside the key range.
   void SetLogOdds(int ix, int iy, int iz, float log_odds);
   void Finalize();
