@@ -12,8 +12,8 @@
 //   exact:  every finest-resolution voxel the segment crosses (computed by splatting boxes of
 //           known voxels into the rays that cross them, frustum.cc; equal to a 3-D DDA walk
 //           up to rounding ties);
-//   center: only the voxel at the bin's centre z = (e_k + e_{k+1}) / 2 is looked up (faster;
-//           misses voxels thinner than a bin).
+//   center: only the voxel at the bin's centre z = (e_k + e_{k+1}) / 2 is looked up (no faster
+//           than exact since the box splat; misses voxels thinner than a bin).
 //
 // Encoding, per ray: two uint64 words, bit k (value 1 << k) = bin k occupied (`occ`) / bin k
 // known, i.e. occupied or free (`known`); occ is always a subset of known. Arrays are
