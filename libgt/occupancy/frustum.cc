@@ -350,9 +350,12 @@ class EdgeIndex {
     const int D = static_cast<int>(e.size()) - 1;
     double narrowest = e.back() - e.front();
     for (int k = 0; k < D; ++k) narrowest = std::min(narrowest, e[k + 1] - e[k]);
-    const double cells =
-        std::clamp(std::ceil(2.0 * (e.back() - e.front()) / narrowest), 16.0, double{1 << 20});
-    cells_ = static_cast<int>(cells);
+    const double wanted = std::max(std::ceil(2.0 * (e.back() - e.front()) / narrowest), 16.0);
+    // Bins narrower than (far - near) / 2^19 (only from extreme options, e.g. a log spacing
+    // from 1e-6 m): the table is capped and First/Last correct by loops instead.
+    one_step_ = wanted <= double{1 << 20};
+    cells_ = static_cast<int>(std::min(wanted, double{1 << 20}));
+    last_ = D - 1;
     inv_h_ = cells_ / (e.back() - e.front());
     start_.resize(cells_ + 1);
     int k = 0;
@@ -366,6 +369,11 @@ class EdgeIndex {
   // k = 0, e_0 <= z: neither correction leaves [0, D - 1].
   int First(double z) const {
     int k = Start(z);
+    if (!one_step_) {
+      while (k < last_ && e_[k + 1] <= z) ++k;
+      while (k > 0 && e_[k] > z) --k;
+      return k;
+    }
     k += e_[k + 1] <= z;
     k -= e_[k] > z;
     return k;
@@ -373,10 +381,17 @@ class EdgeIndex {
   // Last bin k with e_k < z, for e_0 < z <= e_D.
   int Last(double z) const {
     int k = Start(z);
+    if (!one_step_) {
+      while (k < last_ && e_[k + 1] < z) ++k;
+      while (k > 0 && e_[k] >= z) --k;
+      return k;
+    }
     k += e_[k + 1] < z;
     k -= e_[k] >= z;
     return k;
   }
+  // True when one correction step suffices (the vector kernel needs it).
+  bool one_step() const { return one_step_; }
 
   int Start(double z) const {
     const double c = (z - lo_) * inv_h_;
@@ -386,6 +401,8 @@ class EdgeIndex {
   const double* e_;
   double lo_, inv_h_ = 0;
   int cells_ = 0;
+  int last_ = 0;
+  bool one_step_ = true;
   std::vector<int> start_;
 };
 
@@ -687,7 +704,7 @@ void SplatBox(const Eigen::Vector3d& lo_m, const Eigen::Vector3d& hi_m, bool occ
     if (ua > ub) continue;
     RowArgs args{&rays, &bins, vol,     &a,    &b, e0, eD, occupied, static_cast<size_t>(v) * width,
                  ua,    ub,    k_first, k_last};
-    if (HasAvx2()) {
+    if (HasAvx2() && bins.one_step()) {
       if (k_first < 0) {
         SplatRowAvx2<true>(args);
       } else {

@@ -177,13 +177,17 @@ int64_t ExpectCenterIsStateAtBinCentres(const OccupancyMap& map, const Camera& c
 }
 
 std::vector<BinOptions> SomeBinOptions() {
-  std::vector<BinOptions> out(4);
+  std::vector<BinOptions> out(5);
   out[1].spacing = BinSpacing::kLog;
   out[2].spacing = BinSpacing::kInverse;
   out[2].num_bins = 37;
   out[3].near_m = 0.3;
   out[3].far_m = 5.0;
   out[3].num_bins = 50;
+  // Bins far narrower than the bin table's cap (first bin ~0.3 um): the lookup's loop path.
+  out[4].spacing = BinSpacing::kLog;
+  out[4].near_m = 1e-6;
+  out[4].far_m = 10.0;
   return out;
 }
 
