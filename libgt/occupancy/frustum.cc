@@ -12,6 +12,7 @@
 #include <limits>
 
 #include "libgt/core/error.h"
+#include "libgt/occupancy/edge_index.h"
 #include "libgt/occupancy/voxel_map.h"
 
 namespace gt::occupancy {
@@ -338,73 +339,6 @@ RayBits TraverseCenter(const MapView& m, const Eigen::Vector3d& o, const Eigen::
   }
   return r;
 }
-
-// Bin lookup for the box splat: for planar depths in [e_0, e_D], the bins of MarkBins (first
-// bin with e_{k+1} > z0, last bin with e_k < z1), through a uniform table whose cells are at
-// most half as wide as the narrowest bin (so a cell holds at most one edge), corrected by
-// one comparison with the edge on either side: the result is exactly MarkBins', whatever the
-// spacing.
-class EdgeIndex {
- public:
-  explicit EdgeIndex(const std::vector<double>& e) : e_(e.data()), lo_(e.front()) {
-    const int D = static_cast<int>(e.size()) - 1;
-    double narrowest = e.back() - e.front();
-    for (int k = 0; k < D; ++k) narrowest = std::min(narrowest, e[k + 1] - e[k]);
-    const double wanted = std::max(std::ceil(2.0 * (e.back() - e.front()) / narrowest), 16.0);
-    // Bins narrower than (far - near) / 2^19 (only from extreme options, e.g. a log spacing
-    // from 1e-6 m): the table is capped and First/Last correct by loops instead.
-    one_step_ = wanted <= double{1 << 20};
-    cells_ = static_cast<int>(std::min(wanted, double{1 << 20}));
-    last_ = D - 1;
-    inv_h_ = cells_ / (e.back() - e.front());
-    start_.resize(cells_ + 1);
-    int k = 0;
-    for (int c = 0; c <= cells_; ++c) {
-      const double z = lo_ + c / inv_h_;
-      while (k < D - 1 && e_[k + 1] <= z) ++k;
-      start_[c] = k;
-    }
-  }
-  // First bin k with e_{k+1} > z, for e_0 <= z < e_D. At k = D - 1, e_{k+1} = e_D > z; at
-  // k = 0, e_0 <= z: neither correction leaves [0, D - 1].
-  int First(double z) const {
-    int k = Start(z);
-    if (!one_step_) {
-      while (k < last_ && e_[k + 1] <= z) ++k;
-      while (k > 0 && e_[k] > z) --k;
-      return k;
-    }
-    k += e_[k + 1] <= z;
-    k -= e_[k] > z;
-    return k;
-  }
-  // Last bin k with e_k < z, for e_0 < z <= e_D.
-  int Last(double z) const {
-    int k = Start(z);
-    if (!one_step_) {
-      while (k < last_ && e_[k + 1] < z) ++k;
-      while (k > 0 && e_[k] >= z) --k;
-      return k;
-    }
-    k += e_[k + 1] < z;
-    k -= e_[k] >= z;
-    return k;
-  }
-  // True when one correction step suffices (the vector kernel needs it).
-  bool one_step() const { return one_step_; }
-
-  int Start(double z) const {
-    const double c = (z - lo_) * inv_h_;
-    return start_[c <= 0 ? 0 : (c >= cells_ ? cells_ : static_cast<int>(c))];
-  }
-  // Read by SplatRowAvx2.
-  const double* e_;
-  double lo_, inv_h_ = 0;
-  int cells_ = 0;
-  int last_ = 0;
-  bool one_step_ = true;
-  std::vector<int> start_;
-};
 
 // Per ray of the half grid (row-major), 1 / d per world axis for the slab tests of the box
 // splat; 0 on all three axes for the rays left to TraverseExact (their slab interval is then
