@@ -70,6 +70,9 @@ class ShardOutput {
   virtual void WritePlan(const std::vector<int64_t>& shard_nsamples) = 0;
   virtual bool IsShardComplete(int64_t shard) const = 0;
   // Writes shard `shard` atomically with its completion record; returns its size in bytes.
+  // Called on a writer thread, one call at a time, while RunBuild goes on with the next
+  // shard: it may run concurrently with IsShardComplete of a later shard (and nothing
+  // else), so the two must not share unsynchronised state.
   virtual int64_t WriteShard(int64_t shard, const std::vector<EncodedSample>& samples) = 0;
   // Every shard is complete: validates them and writes index.json and pairs.jsonl.
   virtual void Finish() = 0;
