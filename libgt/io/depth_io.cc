@@ -8,6 +8,7 @@
 #include <ImfInputFile.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -349,9 +350,8 @@ DepthImage DecodeDepth(std::string_view bytes, const DepthSource& source, int ex
 namespace {
 
 // JPEG: walk the marker segments to the first start-of-frame (SOF0..SOF15 except
-// DHT/JPG/DAC = C4, C8, CC).
-bool JpegSize(const std::string& path, ImageSize* size) {
-  std::ifstream in(path, std::ios::binary);
+// DHT/JPG/DAC = C4, C8, CC). Seeks past segments, so a file stream reads only the headers.
+bool JpegSize(std::istream& in, ImageSize* size) {
   unsigned char b[2];
   if (!in.read(reinterpret_cast<char*>(b), 2) || b[0] != 0xFF || b[1] != 0xD8) return false;
   for (int guard = 0; guard < 10000; ++guard) {
@@ -376,25 +376,70 @@ bool JpegSize(const std::string& path, ImageSize* size) {
   return false;
 }
 
+// Netpbm (P1..P6): magic, then width and height as decimal tokens, '#' comments allowed.
+bool PnmSize(std::string_view head, ImageSize* size) {
+  if (head.size() < 2 || head[0] != 'P' || head[1] < '1' || head[1] > '6') return false;
+  size_t i = 2;
+  int64_t v[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    while (i < head.size() &&
+           (std::isspace(static_cast<unsigned char>(head[i])) || head[i] == '#')) {
+      if (head[i] == '#') {
+        while (i < head.size() && head[i] != '\n') ++i;
+      } else {
+        ++i;
+      }
+    }
+    const size_t start = i;
+    while (i < head.size() && head[i] >= '0' && head[i] <= '9' && i - start < 9) {
+      v[k] = v[k] * 10 + (head[i] - '0');
+      ++i;
+    }
+    if (i == start) return false;
+  }
+  if (v[0] <= 0 || v[1] <= 0) return false;
+  size->width = static_cast<int>(v[0]);
+  size->height = static_cast<int>(v[1]);
+  return true;
+}
+
+constexpr size_t kHeadBytes = 512;  // PNG IHDR, a Netpbm header with comments
+
+// The header of `path`'s bytes `head` (its first kHeadBytes or fewer) and, for JPEG, a
+// stream over the whole file.
+ImageSize ImageSizeOf(const std::string& path, std::string_view head, std::istream& whole) {
+  ImageSize size;
+  static const char kPngSig[] = "\x89PNG\r\n\x1a\n";
+  if (head.size() >= 8 && head.compare(0, 8, std::string_view(kPngSig, 8)) == 0) {
+    if (PngSize(head, &size)) return size;
+    throw InputError(path, "PNG file without a valid IHDR header (damaged or cut)");
+  }
+  if (head.size() >= 2 && static_cast<unsigned char>(head[0]) == 0xFF &&
+      static_cast<unsigned char>(head[1]) == 0xD8) {
+    if (JpegSize(whole, &size)) return size;
+    throw InputError(path,
+                     "JPEG file without a frame header (SOF) before its end (damaged or cut)");
+  }
+  if (PnmSize(head, &size)) return size;
+  throw InputError(path, "unsupported image format (expected PNG, JPEG or Netpbm)");
+}
+
 }  // namespace
 
 ImageSize ReadImageSize(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open file (missing or unreadable)");
-  std::string head(32, '\0');
+  std::string head(kHeadBytes, '\0');
   in.read(head.data(), static_cast<std::streamsize>(head.size()));
   head.resize(static_cast<size_t>(in.gcount()));
-  in.close();
-  ImageSize size;
-  if (PngSize(head, &size)) return size;
-  if (head.size() >= 2 && static_cast<unsigned char>(head[0]) == 0xFF &&
-      static_cast<unsigned char>(head[1]) == 0xD8 && JpegSize(path, &size)) {
-    return size;
-  }
-  // Anything else (PGM, BMP, ...): decode.
-  const cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
-  if (m.empty()) throw InputError(path, "cannot decode image (corrupt or unsupported)");
-  return {m.cols, m.rows};
+  in.clear();
+  in.seekg(0);
+  return ImageSizeOf(path, head, in);
+}
+
+ImageSize DecodeImageSize(std::string_view bytes, const std::string& path) {
+  std::istringstream whole{std::string(bytes)};
+  return ImageSizeOf(path, bytes.substr(0, std::min(bytes.size(), kHeadBytes)), whole);
 }
 
 }  // namespace gt::io

@@ -22,11 +22,16 @@ DepthImage ReadDepth(const DepthSource& source, int expected_width = 0, int expe
 DepthImage DecodeDepth(std::string_view bytes, const DepthSource& source, int expected_width = 0,
                        int expected_height = 0);
 
-// Size of an image file (PNG/JPG) without decoding pixels where possible.
+// Size of a colour image file from its header, without decoding pixels: PNG (IHDR), JPEG
+// (the first start-of-frame segment; only the segment headers are read) or Netpbm
+// (P1..P6). Anything else, or a header that is damaged or cut, is an InputError naming the
+// file (no decoder is tried on unknown bytes).
 struct ImageSize {
   int width = 0;
   int height = 0;
 };
 ImageSize ReadImageSize(const std::string& path);
+// The same from the file's bytes in memory (path names it in messages).
+ImageSize DecodeImageSize(std::string_view bytes, const std::string& path);
 
 }  // namespace gt::io

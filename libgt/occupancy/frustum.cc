@@ -3,11 +3,16 @@
 // target.
 #include "libgt/occupancy/frustum.h"
 
+#include <immintrin.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 
 #include "libgt/core/error.h"
+#include "libgt/occupancy/edge_index.h"
 #include "libgt/occupancy/voxel_map.h"
 
 namespace gt::occupancy {
@@ -303,11 +308,12 @@ __attribute__((noinline)) RayBits TraverseExact(const MapView& m, const Eigen::V
 }
 
 // Center: only the voxel at each bin's centre depth.
+// Beyond z_known_max the caller guarantees that the ray meets no known voxel.
 RayBits TraverseCenter(const MapView& m, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                       const std::vector<double>& e) {
+                       const std::vector<double>& e, double z_known_max) {
   RayBits r;
   const int D = static_cast<int>(e.size()) - 1;
-  double z_lo = e.front(), z_hi = e.back();
+  double z_lo = e.front(), z_hi = std::min(e.back(), z_known_max);
   if (!ClipToBox(o, d, m.lo_m, m.hi_m, &z_lo, &z_hi)) return r;
   const double inv = 1.0 / m.res;
   constexpr int S = VoxelMap::kShift;
@@ -316,12 +322,14 @@ RayBits TraverseCenter(const MapView& m, const Eigen::Vector3d& o, const Eigen::
     if (zc < z_lo) continue;
     if (zc > z_hi) break;
     const Eigen::Vector3d p = o + zc * d;
-    const int ix = static_cast<int>(std::floor(p.x() * inv));
-    const int iy = static_cast<int>(std::floor(p.y() * inv));
-    const int iz = static_cast<int>(std::floor(p.z() * inv));
-    if (ix < m.lo.x() || iy < m.lo.y() || iz < m.lo.z() || ix > m.hi.x() || iy > m.hi.y() ||
-        iz > m.hi.z())
+    // floor(s) in [lo, hi] iff s in [lo, hi + 1) (integers); there floor is the truncation
+    // minus one for negative non-integers (std::floor is a libm call on baseline x86-64).
+    const double sx = p.x() * inv, sy = p.y() * inv, sz = p.z() * inv;
+    if (!(sx >= m.lo.x() && sy >= m.lo.y() && sz >= m.lo.z() && sx < m.hi.x() + 1.0 &&
+          sy < m.hi.y() + 1.0 && sz < m.hi.z() + 1.0))
       continue;
+    const int tx = static_cast<int>(sx), ty = static_cast<int>(sy), tz = static_cast<int>(sz);
+    const int ix = tx - (sx < tx), iy = ty - (sy < ty), iz = tz - (sz < tz);
     const int32_t b = m.window->Find(ix >> S, iy >> S, iz >> S);
     if (b < 0) continue;
     const int8_t s = m.map->states(b)[VoxelMap::Local(ix, iy, iz)];
@@ -332,7 +340,387 @@ RayBits TraverseCenter(const MapView& m, const Eigen::Vector3d& o, const Eigen::
   return r;
 }
 
+// Per ray of the half grid (row-major), 1 / d per world axis for the slab tests of the box
+// splat; 0 on all three axes for the rays left to TraverseExact (their slab interval is then
+// empty, so no box marks them).
+struct SplatRays {
+  std::vector<double> inv_x, inv_y, inv_z;
+};
+
+// Convex hull of points (Andrew's monotone chain), counter-clockwise, in place; returns the
+// number of hull vertices.
+__attribute__((noinline)) int ConvexHull(Eigen::Vector2d* p, int n) {
+  std::sort(p, p + n, [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  if (n < 3) return n;
+  Eigen::Vector2d h[2 * 24];
+  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+  };
+  int k = 0;
+  for (int i = 0; i < n; ++i) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  for (int i = n - 2, t = k + 1; i >= 0; --i) {
+    while (k >= t && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  for (int i = 0; i < k - 1; ++i) p[i] = h[i];
+  return k - 1;
+}
+
+// One row of rays [ua, ub] against one box (corners a, b relative to the camera centre).
+struct RowArgs {
+  const SplatRays* rays;
+  const EdgeIndex* bins;
+  FrustumVolume* vol;
+  const Eigen::Vector3d *a, *b;
+  double e0, eD;
+  bool occupied;
+  size_t row;  // index of the row's first ray
+  int ua, ub;
+  // Bins any crossing of the box can overlap, from the planar depths of its corners, when
+  // they are at most two (k_last <= k_first + 1): the bin lookup then reduces to comparing
+  // with the one edge between them. Otherwise k_first = -1 (general lookup).
+  int k_first, k_last;
+};
+
+// Slab test per ray: z-interval inside the box, clipped to [e_0, e_D]; then the bins k0..k1
+// it overlaps (a ray that misses gets no bits: its k0 and k1 are only kept in range).
+// The AVX2 version below computes the same values with the same operations in the same
+// order (min/max as the selects written here), so both give identical bits.
+void SplatRowScalar(const RowArgs& r) {
+  const double* ix = r.rays->inv_x.data() + r.row;
+  const double* iy = r.rays->inv_y.data() + r.row;
+  const double* iz = r.rays->inv_z.data() + r.row;
+  uint64_t* known = r.vol->known.data() + r.row;
+  uint64_t* occ = r.vol->occ.data() + r.row;
+  const uint64_t occ_mask = r.occupied ? ~uint64_t{0} : 0;
+  const Eigen::Vector3d &a = *r.a, &b = *r.b;
+  const double e0 = r.e0, eD = r.eD;
+  for (int u = r.ua; u <= r.ub; ++u) {
+    const double ax = a.x() * ix[u], bx = b.x() * ix[u], ay = a.y() * iy[u], by = b.y() * iy[u],
+                 az = a.z() * iz[u], bz = b.z() * iz[u];
+    const double nx = ax < bx ? ax : bx, fx = bx > ax ? bx : ax;
+    const double ny = ay < by ? ay : by, fy = by > ay ? by : ay;
+    const double nz = az < bz ? az : bz, fz = bz > az ? bz : az;
+    double z0 = nx > ny ? nx : ny;
+    z0 = z0 > nz ? z0 : nz;
+    z0 = z0 > e0 ? z0 : e0;
+    double z1 = fx < fy ? fx : fy;
+    z1 = z1 < fz ? z1 : fz;
+    z1 = z1 < eD ? z1 : eD;
+    uint64_t range;
+    if (r.k_first < 0) {
+      const int k0 = r.bins->First(z0 < eD ? z0 : e0);
+      const int k1 = r.bins->Last(z1 > e0 ? z1 : eD);
+      range = (~uint64_t{0} >> (63 - k1)) & (~uint64_t{0} << k0);
+    } else {  // First(z0) is k_first + (z0 >= edge), Last(z1) is k_first + (z1 > edge)
+      const double edge = r.bins->e_[r.k_first + 1];
+      range =
+          (z0 < edge ? uint64_t{1} << r.k_first : 0) | (z1 > edge ? uint64_t{1} << r.k_last : 0);
+    }
+    const uint64_t m = z1 > z0 ? range : 0;
+    known[u] |= m;
+    occ[u] |= m & occ_mask;
+  }
+}
+
+std::atomic<bool> g_vector_kernels{true};
+
+bool HasAvx2() {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes && g_vector_kernels.load(std::memory_order_relaxed);
+}
+
+// Table start of four z (clamped cell), as EdgeIndex::Start: c <= 0 -> 0, c >= cells -> cells.
+__attribute__((target("avx2"))) inline __m128i TableStart4(const int* start, __m256d z, __m256d lo,
+                                                           __m256d inv_h, __m256d cells) {
+  const __m256d zero = _mm256_setzero_pd();
+  __m256d c = _mm256_mul_pd(_mm256_sub_pd(z, lo), inv_h);
+  c = _mm256_blendv_pd(c, zero, _mm256_cmp_pd(c, zero, _CMP_LE_OQ));
+  c = _mm256_blendv_pd(c, cells, _mm256_cmp_pd(c, cells, _CMP_GE_OQ));
+  // The masked gathers (all lanes) avoid g++ 12's maybe-uninitialized on the plain ones.
+  return _mm_mask_i32gather_epi32(_mm_setzero_si128(), start, _mm256_cvttpd_epi32(c),
+                                  _mm_set1_epi32(-1), 4);
+}
+
+__attribute__((target("avx2"))) inline __m256d Gather4(const double* base, __m128i index) {
+  return _mm256_mask_i32gather_pd(_mm256_setzero_pd(), base, index,
+                                  _mm256_castsi256_pd(_mm256_set1_epi64x(-1)), 8);
+}
+
+// Four 64-bit lane masks (all ones / zero) as 32-bit lanes.
+__attribute__((target("avx2"))) inline __m128i Narrow4(__m256d m) {
+  const __m256i idx = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+  return _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(_mm256_castpd_si256(m), idx));
+}
+
+// The same as SplatRowScalar, four rays at a time (_mm256_min_pd(x, y) is x < y ? x : y and
+// _mm256_max_pd(x, y) is x > y ? x : y, as the selects there). Masked-out lanes load zeros:
+// their inverse directions are 0, so z1 > z0 fails and they would get no bits anyway.
+template <bool kGeneral>
+__attribute__((target("avx2"))) void SplatRowAvx2(const RowArgs& r) {
+  const double* ix = r.rays->inv_x.data() + r.row;
+  const double* iy = r.rays->inv_y.data() + r.row;
+  const double* iz = r.rays->inv_z.data() + r.row;
+  uint64_t* known = r.vol->known.data() + r.row;
+  uint64_t* occ = r.vol->occ.data() + r.row;
+  const EdgeIndex& bins = *r.bins;
+  const __m256d ax = _mm256_set1_pd(r.a->x()), bx = _mm256_set1_pd(r.b->x());
+  const __m256d ay = _mm256_set1_pd(r.a->y()), by = _mm256_set1_pd(r.b->y());
+  const __m256d az = _mm256_set1_pd(r.a->z()), bz = _mm256_set1_pd(r.b->z());
+  const __m256d e0 = _mm256_set1_pd(r.e0), eD = _mm256_set1_pd(r.eD);
+  const __m256d lo = _mm256_set1_pd(bins.lo_), inv_h = _mm256_set1_pd(bins.inv_h_);
+  const __m256d cells = _mm256_set1_pd(bins.cells_);
+  const __m256i ones = _mm256_set1_epi64x(-1), c63 = _mm256_set1_epi64x(63);
+  const __m256i occ_mask = r.occupied ? ones : _mm256_setzero_si256();
+  const __m256d edge = _mm256_set1_pd(kGeneral ? 0.0 : bins.e_[r.k_first + 1]);
+  const __m256i bit_first = _mm256_set1_epi64x(kGeneral ? 0 : int64_t{1} << r.k_first);
+  const __m256i bit_last = _mm256_set1_epi64x(kGeneral ? 0 : int64_t{1} << r.k_last);
+  const int* start = bins.start_.data();
+  const double* e = bins.e_;
+  const __m256i lane = _mm256_setr_epi64x(0, 1, 2, 3);
+  for (int u = r.ua; u <= r.ub; u += 4) {
+    // Lanes past the row's end (the last group only) are neither read nor written.
+    const __m256i live = _mm256_cmpgt_epi64(_mm256_set1_epi64x(r.ub - u + 1), lane);
+    const __m256d vx = _mm256_maskload_pd(ix + u, live), vy = _mm256_maskload_pd(iy + u, live),
+                  vz = _mm256_maskload_pd(iz + u, live);
+    const __m256d tax = _mm256_mul_pd(ax, vx), tbx = _mm256_mul_pd(bx, vx);
+    const __m256d tay = _mm256_mul_pd(ay, vy), tby = _mm256_mul_pd(by, vy);
+    const __m256d taz = _mm256_mul_pd(az, vz), tbz = _mm256_mul_pd(bz, vz);
+    const __m256d nx = _mm256_min_pd(tax, tbx), fx = _mm256_max_pd(tbx, tax);
+    const __m256d ny = _mm256_min_pd(tay, tby), fy = _mm256_max_pd(tby, tay);
+    const __m256d nz = _mm256_min_pd(taz, tbz), fz = _mm256_max_pd(tbz, taz);
+    __m256d z0 = _mm256_max_pd(nx, ny);
+    z0 = _mm256_max_pd(z0, nz);
+    z0 = _mm256_max_pd(z0, e0);
+    __m256d z1 = _mm256_min_pd(fx, fy);
+    z1 = _mm256_min_pd(z1, fz);
+    z1 = _mm256_min_pd(z1, eD);
+    __m256i range;
+    if (kGeneral) {
+      // k0 = First(z0 < eD ? z0 : e0), k1 = Last(z1 > e0 ? z1 : eD).
+      const __m256d q0 = _mm256_blendv_pd(e0, z0, _mm256_cmp_pd(z0, eD, _CMP_LT_OQ));
+      const __m256d q1 = _mm256_blendv_pd(eD, z1, _mm256_cmp_pd(z1, e0, _CMP_GT_OQ));
+      __m128i k0 = TableStart4(start, q0, lo, inv_h, cells),
+              k1 = TableStart4(start, q1, lo, inv_h, cells);
+      // k += e[k + 1] <= z (First) / < z (Last): masks are -1, so subtract them.
+      k0 = _mm_sub_epi32(k0, Narrow4(_mm256_cmp_pd(Gather4(e + 1, k0), q0, _CMP_LE_OQ)));
+      k1 = _mm_sub_epi32(k1, Narrow4(_mm256_cmp_pd(Gather4(e + 1, k1), q1, _CMP_LT_OQ)));
+      // k -= e[k] > z (First) / >= z (Last).
+      k0 = _mm_add_epi32(k0, Narrow4(_mm256_cmp_pd(Gather4(e, k0), q0, _CMP_GT_OQ)));
+      k1 = _mm_add_epi32(k1, Narrow4(_mm256_cmp_pd(Gather4(e, k1), q1, _CMP_GE_OQ)));
+      const __m256i k0l = _mm256_cvtepi32_epi64(k0), k1l = _mm256_cvtepi32_epi64(k1);
+      range = _mm256_and_si256(_mm256_srlv_epi64(ones, _mm256_sub_epi64(c63, k1l)),
+                               _mm256_sllv_epi64(ones, k0l));
+    } else {
+      range = _mm256_or_si256(
+          _mm256_and_si256(bit_first, _mm256_castpd_si256(_mm256_cmp_pd(z0, edge, _CMP_LT_OQ))),
+          _mm256_and_si256(bit_last, _mm256_castpd_si256(_mm256_cmp_pd(z1, edge, _CMP_GT_OQ))));
+    }
+    const __m256i m =
+        _mm256_and_si256(range, _mm256_castpd_si256(_mm256_cmp_pd(z1, z0, _CMP_GT_OQ)));
+    long long* pk = reinterpret_cast<long long*>(known + u);
+    long long* po = reinterpret_cast<long long*>(occ + u);
+    _mm256_maskstore_epi64(pk, live, _mm256_or_si256(_mm256_maskload_epi64(pk, live), m));
+    _mm256_maskstore_epi64(
+        po, live, _mm256_or_si256(_mm256_maskload_epi64(po, live), _mm256_and_si256(m, occ_mask)));
+  }
+}
+
+// Marks the bins of one box (world metres [lo_m, hi_m], one state) in every ray that crosses
+// it. Rays are tried only inside the image of the box's part at camera z >= e_0 (the convex
+// hull of its projected vertices), widened by one ray against rounding; the slab test below
+// decides.
+void SplatBox(const Eigen::Vector3d& lo_m, const Eigen::Vector3d& hi_m, bool occupied,
+              const Eigen::Vector3d& o, const Eigen::Matrix3d& Rt, const Camera& cam,
+              const std::vector<double>& e, const EdgeIndex& bins, const SplatRays& rays,
+              FrustumVolume* vol, std::vector<double>* spans) {
+  const Eigen::Vector3d a = lo_m - o, b = hi_m - o;
+  const double e0 = e.front(), eD = e.back();
+  Eigen::Vector3d pc[8];
+  double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
+  // Corners in the camera frame from the six products Rt.col(k) * {a_k, b_k} (a footprint
+  // only: its rounding is covered by kEps below).
+  const Eigen::Vector3d cx0 = Rt.col(0) * a.x(), cx1 = Rt.col(0) * b.x();
+  const Eigen::Vector3d cy0 = Rt.col(1) * a.y(), cy1 = Rt.col(1) * b.y();
+  const Eigen::Vector3d cz0 = Rt.col(2) * a.z(), cz1 = Rt.col(2) * b.z();
+  for (int c = 0; c < 8; ++c) {
+    pc[c] = ((c & 1) ? cx1 : cx0) + ((c & 2) ? cy1 : cy0) + ((c & 4) ? cz1 : cz0);
+    z_min = std::min(z_min, pc[c].z());
+    z_max = std::max(z_max, pc[c].z());
+  }
+  if (z_max < e0 || z_min >= eD) return;
+  // Bins the box can reach (1e-9 m of margin: far beyond the rounding of these depths, which
+  // are a few ulps of ~10 m): at most two means the cheap lookup (RowArgs).
+  int k_first = -1, k_last = -1;
+  {
+    const double z_lo = std::max(z_min - 1e-9, e0), z_hi = std::min(z_max + 1e-9, eD);
+    if (z_lo < eD && z_hi > e0) {
+      const int f = bins.First(z_lo), l = bins.Last(z_hi);
+      if (l <= f + 1) k_first = f, k_last = l;
+    }
+  }
+  // Vertices of the box's part at z >= e_0: its corners there and the points where its
+  // edges cross z = e_0 (at most 8 + 12), projected.
+  Eigen::Vector2d q[24];
+  int nq = 0;
+  auto add = [&](const Eigen::Vector3d& p) {
+    q[nq++] = Eigen::Vector2d(cam.fx * p.x() / p.z() + cam.cx, cam.fy * p.y() / p.z() + cam.cy);
+  };
+  for (int c = 0; c < 8; ++c) {
+    if (pc[c].z() >= e0) add(pc[c]);
+  }
+  if (z_min < e0) {
+    for (int c = 0; c < 8; ++c) {
+      for (int bit = 1; bit < 8; bit <<= 1) {
+        if (c & bit) continue;
+        const Eigen::Vector3d &p = pc[c], &r = pc[c | bit];
+        if ((p.z() < e0) == (r.z() < e0)) continue;
+        const double f = (e0 - p.z()) / (r.z() - p.z());
+        Eigen::Vector3d x = p + f * (r - p);
+        x.z() = e0;
+        add(x);
+      }
+    }
+  }
+  for (int i = 0; i < nq; ++i) {
+    if (!q[i].allFinite()) return;  // degenerate: no box reaches z >= e_0 with extent
+  }
+  const int nh = ConvexHull(q, nq);
+  if (nh == 0) return;
+  // Rays (u, v) are the image points (u, v): row v is tried over the hull's intersection
+  // with the line y = v, found by walking each edge over the rows it spans; kEps (pixels)
+  // covers the rounding of the projections many times over.
+  constexpr double kEps = 1e-3;
+  double v_min = q[0].y(), v_max = q[0].y();
+  for (int i = 1; i < nh; ++i) v_min = std::min(v_min, q[i].y()), v_max = std::max(v_max, q[i].y());
+  const int v0 = static_cast<int>(std::max(std::ceil(v_min - kEps), 0.0));
+  const int v1 = static_cast<int>(std::min(std::floor(v_max + kEps), vol->height - 1.0));
+  if (v0 > v1) return;
+  const int width = vol->width;
+  const size_t rows = static_cast<size_t>(v1 - v0 + 1);
+  if (spans->size() < 2 * rows) spans->resize(2 * rows);
+  double* lo_u = spans->data();
+  double* hi_u = lo_u + rows;
+  std::fill(lo_u, hi_u, std::numeric_limits<double>::infinity());
+  std::fill(hi_u, hi_u + rows, -std::numeric_limits<double>::infinity());
+  for (int i = 0; i < nh; ++i) {
+    const Eigen::Vector2d& p = q[i];
+    const Eigen::Vector2d& r = q[i + 1 < nh ? i + 1 : 0];
+    const double y_lo = std::min(p.y(), r.y()), y_hi = std::max(p.y(), r.y());
+    const int first = std::max(v0, static_cast<int>(std::ceil(y_lo - kEps)));
+    const int last = std::min(v1, static_cast<int>(std::floor(y_hi + kEps)));
+    if (y_hi - y_lo <= 0) {  // horizontal edge (or a single point)
+      const double x_lo = std::min(p.x(), r.x()), x_hi = std::max(p.x(), r.x());
+      for (int v = first; v <= last; ++v) {
+        lo_u[v - v0] = std::min(lo_u[v - v0], x_lo);
+        hi_u[v - v0] = std::max(hi_u[v - v0], x_hi);
+      }
+      continue;
+    }
+    const double slope = (r.x() - p.x()) / (r.y() - p.y());
+    for (int v = first; v <= last; ++v) {
+      const double y = std::clamp(static_cast<double>(v), y_lo, y_hi);
+      const double x = p.x() + (y - p.y()) * slope;
+      lo_u[v - v0] = std::min(lo_u[v - v0], x);
+      hi_u[v - v0] = std::max(hi_u[v - v0], x);
+    }
+  }
+  for (int v = v0; v <= v1; ++v) {
+    const double u_lo = lo_u[v - v0], u_hi = hi_u[v - v0];
+    if (!(u_lo <= u_hi)) continue;
+    const int ua = static_cast<int>(std::max(std::ceil(u_lo - kEps), 0.0));
+    const int ub = static_cast<int>(std::min(std::floor(u_hi + kEps), width - 1.0));
+    if (ua > ub) continue;
+    RowArgs args{&rays, &bins, vol,     &a,    &b, e0, eD, occupied, static_cast<size_t>(v) * width,
+                 ua,    ub,    k_first, k_last};
+    if (HasAvx2() && bins.one_step()) {
+      if (k_first < 0) {
+        SplatRowAvx2<true>(args);
+      } else {
+        SplatRowAvx2<false>(args);
+      }
+    } else {
+      SplatRowScalar(args);
+    }
+  }
+}
+
+// Exact binning by splatting boxes of known voxels into the rays that cross them: the
+// transpose of the walk (TraverseExact), with the same result up to ties. A ray's bin k is
+// marked by a box when the ray's planar-depth interval inside the (closed) box, clipped to
+// [e_0, e_D], has positive length and overlaps [e_k, e_{k+1}); this is what the walk marks
+// voxel by voxel, as the boxes (VoxelMap::Boxes) are exact unions of voxels of one state.
+// "Up to ties": a crossing shorter than ~1e-6 m, or a ray through a voxel edge, may come
+// out differently by rounding here and in the walk (the walk, for one, starts each mixed
+// block at a point 1e-6 m inside it); tests/occupancy/traversal_test.cc checks that every
+// difference from the reference walk is such a tie.
+// Rays with a zero (or denormal) direction component (a ray in a voxel face plane belongs to
+// the voxel its floor() gives, on one side only) are walked by TraverseExact instead.
+// Cost: per box, its projected hull; per ray it covers, one slab test and one bin lookup
+// (four rays at a time with AVX2); no voxel-by-voxel stepping.
+void SplatExact(const MapView& view, const Camera& cam, const Eigen::Matrix3d& R,
+                const Eigen::Vector3d& o, FrustumVolume* vol) {
+  const std::vector<double>& e = vol->edges_m;
+  const EdgeIndex bins(e);
+  const size_t n = vol->occ.size();
+  SplatRays rays;
+  rays.inv_x.resize(n), rays.inv_y.resize(n), rays.inv_z.resize(n);
+  std::vector<size_t> walk;
+  for (int v = 0; v < vol->height; ++v) {
+    for (int u = 0; u < vol->width; ++u) {
+      const size_t i = static_cast<size_t>(v) * vol->width + u;
+      const Eigen::Vector3d d =
+          R * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
+      const Eigen::Vector3d inv(1.0 / d.x(), 1.0 / d.y(), 1.0 / d.z());
+      if (d.x() == 0 || d.y() == 0 || d.z() == 0 || !inv.allFinite()) {
+        walk.push_back(i);
+        rays.inv_x[i] = rays.inv_y[i] = rays.inv_z[i] = 0.0;  // z-interval empty: no box
+      } else {
+        rays.inv_x[i] = inv.x(), rays.inv_y[i] = inv.y(), rays.inv_z[i] = inv.z();
+      }
+    }
+  }
+  const Eigen::Matrix3d Rt = R.transpose();
+  const VoxelMap& map = *view.map;
+  constexpr int W = VoxelMap::kSide;
+  const double res = view.res;
+  std::vector<double> spans;
+  const VoxelMap::BlockBoxes& boxes = map.Boxes();
+  for (int32_t blk = 0; blk < map.num_blocks(); ++blk) {
+    const auto& c = map.block_coord(blk);
+    const Eigen::Vector3i base(c[0] * W, c[1] * W, c[2] * W);
+    if ((base.array() + W - 1 < view.lo.array()).any() || (base.array() > view.hi.array()).any())
+      continue;
+    for (int32_t k = boxes.first[blk]; k < boxes.first[blk + 1]; ++k) {
+      const VoxelMap::Box& bx = boxes.boxes[k];
+      // Clipped to the voxel box of the view, as the walk clips its rays.
+      const Eigen::Vector3i lo = base + Eigen::Vector3i(bx.x0, bx.y0, bx.z0);
+      const Eigen::Vector3i hi = base + Eigen::Vector3i(bx.x1, bx.y1, bx.z1);  // exclusive
+      const Eigen::Vector3i clo = lo.cwiseMax(view.lo);
+      const Eigen::Vector3i chi = hi.cwiseMin(view.hi + Eigen::Vector3i::Ones());
+      if ((chi.array() <= clo.array()).any()) continue;
+      SplatBox(clo.cast<double>() * res, chi.cast<double>() * res, bx.occupied, o, Rt, cam, e, bins,
+               rays, vol, &spans);
+    }
+  }
+  for (const size_t i : walk) {
+    const int u = static_cast<int>(i % vol->width), v = static_cast<int>(i / vol->width);
+    const Eigen::Vector3d d =
+        R * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
+    const RayBits r = TraverseExact(view, o, d, e, std::numeric_limits<double>::infinity());
+    vol->occ[i] = r.occ;
+    vol->known[i] = r.known;
+  }
+}
+
 }  // namespace
+
+void SetVectorKernelsForTesting(bool enabled) { g_vector_kernels.store(enabled); }
 
 FrustumVolume ProjectToFrustum(const OccupancyMap& map, const Camera& camera_full_res,
                                const Rigid3d& world_from_cam, const BinOptions& options) {
@@ -387,16 +775,20 @@ FrustumVolume ProjectToFrustum(const OccupancyMap& map, const Camera& camera_ful
                      lo.cast<double>() * res,
                      (hi + Eigen::Vector3i::Ones()).cast<double>() * res};
 
+  if (options.traversal == Traversal::kExact) {
+    SplatExact(view, cam, R, o, &vol);
+    return vol;
+  }
   // Farthest planar depth of a block of the map seen through each tile of kTile x kTile rays:
   // a ray meets no known voxel beyond the largest camera z of the corners of the blocks whose
-  // image covers it, so the exact walk stops there (plus one voxel against rounding) instead
+  // image covers it, so the bin-centre lookups stop there (plus one voxel against rounding) instead
   // of crossing absent blocks to the far plane or the box. Conservative: a block reaching
   // the camera plane (z <= 0 at a corner) counts for every tile; the bins do not change.
   constexpr int kTile = 8;
   const int tiles_w = (vol.width + kTile - 1) / kTile, tiles_h = (vol.height + kTile - 1) / kTile;
   std::vector<double> tile_far(static_cast<size_t>(tiles_w) * tiles_h,
                                -std::numeric_limits<double>::infinity());
-  if (options.traversal == Traversal::kExact) {
+  {
     const Eigen::Matrix3d Rt = R.transpose();
     const double block_m = res * VoxelMap::kSide;
     double everywhere = -std::numeric_limits<double>::infinity();
@@ -439,16 +831,12 @@ FrustumVolume ProjectToFrustum(const OccupancyMap& map, const Camera& camera_ful
     }
     for (double& f : tile_far) f = std::max(f, everywhere) + res;
   }
-
   for (int v = 0; v < vol.height; ++v) {
     for (int u = 0; u < vol.width; ++u) {
       const Eigen::Vector3d d =
           R * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
-      const RayBits r =
-          options.traversal == Traversal::kExact
-              ? TraverseExact(view, o, d, vol.edges_m,
-                              tile_far[static_cast<size_t>(v / kTile) * tiles_w + u / kTile])
-              : TraverseCenter(view, o, d, vol.edges_m);
+      const RayBits r = TraverseCenter(
+          view, o, d, vol.edges_m, tile_far[static_cast<size_t>(v / kTile) * tiles_w + u / kTile]);
       const size_t i = static_cast<size_t>(v) * vol.width + u;
       vol.occ[i] = r.occ;
       vol.known[i] = r.known;

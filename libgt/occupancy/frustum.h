@@ -9,10 +9,11 @@
 //   inverse: 1 / e_k = 1/near + k (1/far - 1/near) / D   (uniform in disparity)
 // State of bin k: OCCUPIED if the ray segment inside the bin meets an occupied voxel, else
 // FREE if it meets a known free voxel, else UNKNOWN.
-//   exact:  3-D DDA (Amanatides & Woo 1987) over every finest-resolution voxel the segment
-//           crosses;
-//   center: only the voxel at the bin's centre z = (e_k + e_{k+1}) / 2 is looked up (faster;
-//           misses voxels thinner than a bin).
+//   exact:  every finest-resolution voxel the segment crosses (computed by splatting boxes of
+//           known voxels into the rays that cross them, frustum.cc; equal to a 3-D DDA walk
+//           up to rounding ties);
+//   center: only the voxel at the bin's centre z = (e_k + e_{k+1}) / 2 is looked up (no faster
+//           than exact since the box splat; misses voxels thinner than a bin).
 //
 // Encoding, per ray: two uint64 words, bit k (value 1 << k) = bin k occupied (`occ`) / bin k
 // known, i.e. occupied or free (`known`); occ is always a subset of known. Arrays are
@@ -76,6 +77,10 @@ VolumeCounts CountBins(const FrustumVolume& volume);
 // Bins the map along the rays of camera_full_res.HalfGrid() posed at world_from_cam.
 FrustumVolume ProjectToFrustum(const OccupancyMap& map, const Camera& camera_full_res,
                                const Rigid3d& world_from_cam, const BinOptions& options);
+
+// Testing only: false makes the exact binning use its scalar kernels even where the CPU has
+// AVX2 (both give identical words; tests/occupancy/traversal_test.cc). Default true.
+void SetVectorKernelsForTesting(bool enabled);
 
 // Dense uint8 [num_bins, height, width] (0 free, 1 occupied, 255 unknown).
 std::vector<uint8_t> DenseVolume(const FrustumVolume& volume);

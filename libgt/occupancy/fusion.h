@@ -52,13 +52,13 @@ enum class FusionEngine {
 };
 
 struct FusionOptions {
-  double voxel_size_m = 0.05;    // OctoMap resolution (metres), > 0
-  double max_range_m = 10.0;     // ray truncation (metres); <= 0 means unlimited. 10 m covers
-                                 // indoor depth sensors (ScanNet/7-Scenes read < 10 m).
-  bool downsample = false;       // one centroid per voxel (pcl::VoxelGrid, overflow-guarded);
-                                 // off: with `discretize` every voxel gets one ray anyway
-  bool discretize = true;        // OctoMap's discretized insertion (one ray per end voxel, to its
-                                 // centre); false = one ray per point (the naive baseline)
+  double voxel_size_m = 0.05;  // OctoMap resolution (metres), > 0
+  double max_range_m = 10.0;   // ray truncation (metres); <= 0 means unlimited. 10 m covers
+                               // indoor depth sensors (ScanNet/7-Scenes read < 10 m).
+  bool downsample = false;     // one centroid per voxel (pcl::VoxelGrid, overflow-guarded);
+                               // off: with `discretize` every voxel gets one ray anyway
+  bool discretize = true;      // OctoMap's discretized insertion (one ray per end voxel, to its
+                               // centre); false = one ray per point (the naive baseline)
   FusionEngine engine = FusionEngine::kOwn;
   bool remove_outliers = false;  // pcl::StatisticalOutlierRemoval after downsampling
   int outlier_k = 20;            // neighbours for the mean distance, >= 1

@@ -16,11 +16,15 @@ constexpr int kPackOffset = 1 << 20;
 
 // OctoMap's checked key conversion, as a voxel index: floor(x / res) computed as
 // floor((1 / res) * x) in double from the float coordinate, inside [-2^15, 2^15).
+// floor(s) >= kMinIndex iff s >= kMinIndex, and floor(s) <= kMaxIndex iff s < kMaxIndex + 1
+// (both integers); inside that range floor is the truncation minus one for negative
+// non-integers, exactly (std::floor is a libm call on baseline x86-64).
 inline bool CheckedIndex(const float c[3], double inv_res, int idx[3]) {
   for (int a = 0; a < 3; ++a) {
-    const double f = std::floor(inv_res * static_cast<double>(c[a]));
-    if (!(f >= VoxelMap::kMinIndex && f <= VoxelMap::kMaxIndex)) return false;  // NaN too
-    idx[a] = static_cast<int>(f);
+    const double s = inv_res * static_cast<double>(c[a]);
+    if (!(s >= VoxelMap::kMinIndex && s < VoxelMap::kMaxIndex + 1.0)) return false;  // NaN too
+    const int t = static_cast<int>(s);
+    idx[a] = t - (s < t);
   }
   return true;
 }
@@ -154,7 +158,8 @@ void VoxelMap::CastMisses(const float origin[3], const float end[3]) {
 }
 
 void VoxelMap::InsertScan(const std::vector<Eigen::Vector3f>& points,
-                          const Eigen::Vector3f& origin_in, double max_range_m, bool discretize) {
+                          const Eigen::Vector3f& origin_in, double max_range_m, bool discretize,
+                          const Eigen::Vector3f* points_lo, const Eigen::Vector3f* points_hi) {
   final_ = false;
   const float origin[3] = {origin_in.x(), origin_in.y(), origin_in.z()};
   // Block window over the scan: every ray stays within the box of its origin and end (one
@@ -164,9 +169,14 @@ void VoxelMap::InsertScan(const std::vector<Eigen::Vector3f>& points,
   for (int a = 0; a < 3; ++a) lo[a] = hi[a] = io[a];
   if (!points.empty()) {  // floor is monotonic: the index box is that of the extreme coordinates
     Eigen::Vector3f p_lo = points[0], p_hi = points[0];
-    for (const auto& p : points) {
-      p_lo = p_lo.cwiseMin(p);
-      p_hi = p_hi.cwiseMax(p);
+    if (points_lo != nullptr && points_hi != nullptr) {
+      p_lo = *points_lo;
+      p_hi = *points_hi;
+    } else {
+      for (const auto& p : points) {
+        p_lo = p_lo.cwiseMin(p);
+        p_hi = p_hi.cwiseMax(p);
+      }
     }
     for (int a = 0; a < 3; ++a) {
       const double l = std::floor(inv_res_ * static_cast<double>(p_lo[a]));
@@ -260,6 +270,10 @@ void VoxelMap::SetLogOdds(int ix, int iy, int iz, float log_odds) {
 }
 
 void VoxelMap::Finalize() {
+  {
+    std::lock_guard<std::mutex> lock(boxes_mutex_);
+    boxes_.reset();
+  }
   const size_t n = coords_.size();
   states_.resize(n);
   kinds_.resize(n);
@@ -314,6 +328,70 @@ void VoxelMap::Finalize() {
     }
   }
   final_ = true;
+}
+
+namespace {
+
+// Greedy cut of one mixed block into boxes of one state, on bit rows: rows[s][z][y] has bit x
+// set when voxel (x, y, z) has state s (0 free, 1 occupied) and is not in a box yet.
+void CutBlock(const int8_t* states, std::vector<VoxelMap::Box>* out) {
+  constexpr int W = VoxelMap::kSide;
+  static_assert(W == 8, "one byte per row");
+  uint8_t rows[2][W][W] = {};
+  for (int z = 0; z < W; ++z)
+    for (int y = 0; y < W; ++y)
+      for (int x = 0; x < W; ++x) {
+        const int8_t s = states[(z * W + y) * W + x];
+        if (s != VoxelMap::kUnknown) rows[s == VoxelMap::kOccupied][z][y] |= 1u << x;
+      }
+  for (int z = 0; z < W; ++z) {
+    for (int y = 0; y < W; ++y) {
+      for (int s = 0; s < 2; ++s) {
+        uint8_t(*r)[W] = rows[s];
+        while (r[z][y] != 0) {
+          const unsigned m = r[z][y];
+          const int x0 = __builtin_ctz(m);
+          const int len = __builtin_ctz(~(m >> x0));
+          const unsigned run = ((1u << len) - 1) << x0;
+          int y1 = y + 1;
+          while (y1 < W && (r[z][y1] & run) == run) ++y1;
+          int z1 = z + 1;
+          for (; z1 < W; ++z1) {
+            bool all = true;
+            for (int yy = y; yy < y1 && all; ++yy) all = (r[z1][yy] & run) == run;
+            if (!all) break;
+          }
+          for (int zz = z; zz < z1; ++zz)
+            for (int yy = y; yy < y1; ++yy) r[zz][yy] = static_cast<uint8_t>(r[zz][yy] & ~run);
+          out->push_back({static_cast<uint8_t>(x0), static_cast<uint8_t>(y),
+                          static_cast<uint8_t>(z), static_cast<uint8_t>(x0 + len),
+                          static_cast<uint8_t>(y1), static_cast<uint8_t>(z1), s == 1});
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+const VoxelMap::BlockBoxes& VoxelMap::Boxes() const {
+  GT_ASSERT(final_);
+  std::lock_guard<std::mutex> lock(boxes_mutex_);
+  if (!boxes_) {
+    auto b = std::make_unique<BlockBoxes>();
+    b->first.reserve(coords_.size() + 1);
+    for (size_t i = 0; i < coords_.size(); ++i) {
+      b->first.push_back(static_cast<int32_t>(b->boxes.size()));
+      if (kinds_[i] == Kind::kMixed) {
+        CutBlock(states_[i].data(), &b->boxes);
+      } else {
+        b->boxes.push_back({0, 0, 0, kSide, kSide, kSide, kinds_[i] == Kind::kAllOccupied});
+      }
+    }
+    b->first.push_back(static_cast<int32_t>(b->boxes.size()));
+    boxes_ = std::move(b);
+  }
+  return *boxes_;
 }
 
 int8_t VoxelMap::StateAt(int ix, int iy, int iz) const {

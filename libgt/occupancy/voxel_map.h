@@ -29,6 +29,8 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <unordered_map>
 #include <vector>
 
@@ -59,8 +61,10 @@ class VoxelMap {
   const LogOddsModel& model() const { return model_; }
 
   // One scan (world frame, float as OctoMap's Pointcloud); max_range_m < 0: unlimited.
+  // points_lo/points_hi: the points' bounding box if the caller has it (else computed here).
   void InsertScan(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& origin,
-                  double max_range_m, bool discretize);
+                  double max_range_m, bool discretize, const Eigen::Vector3f* points_lo = nullptr,
+                  const Eigen::Vector3f* points_hi = nullptr);
   // Sets the log-odds of one voxel (used to copy an octree); index inside the key range.
   void SetLogOdds(int ix, int iy, int iz, float log_odds);
   void Finalize();
@@ -81,6 +85,19 @@ class VoxelMap {
   // Inclusive index bounds of the known voxels; false when none is known.
   bool Bounds(Eigen::Vector3i* lo, Eigen::Vector3i* hi) const;
   int64_t num_occupied() const { return num_occupied_; }
+  // Boxes of one state covering exactly the known voxels of each block (a uniform block is
+  // one box; a mixed one is cut greedily: runs along x, grown along y, then along z), for
+  // the exact frustum binning. Block b's boxes are boxes[first[b] .. first[b + 1]).
+  // Computed on the first call after Finalize() (thread-safe) and kept.
+  struct Box {
+    uint8_t x0, y0, z0, x1, y1, z1;  // block-local voxel ranges [x0, x1) etc.
+    bool occupied;
+  };
+  struct BlockBoxes {
+    std::vector<Box> boxes;
+    std::vector<int32_t> first;  // num_blocks() + 1
+  };
+  const BlockBoxes& Boxes() const;
   int64_t num_free() const { return num_free_; }
 
  private:
@@ -119,6 +136,8 @@ class VoxelMap {
   bool has_bounds_ = false;
   Eigen::Vector3i lo_ = Eigen::Vector3i::Zero(), hi_ = Eigen::Vector3i::Zero();
   int64_t num_occupied_ = 0, num_free_ = 0;
+  mutable std::mutex boxes_mutex_;
+  mutable std::unique_ptr<BlockBoxes> boxes_;
 };
 
 // Read-only dense table of the block numbers of a map over a box of block coordinates, for
@@ -126,7 +145,8 @@ class VoxelMap {
 // box larger than a fixed cap (16 M cells) is not tabulated at all.
 class BlockWindow {
  public:
-  BlockWindow(const VoxelMap& map, const Eigen::Vector3i& lo_block, const Eigen::Vector3i& hi_block);
+  BlockWindow(const VoxelMap& map, const Eigen::Vector3i& lo_block,
+              const Eigen::Vector3i& hi_block);
   int32_t Find(int bx, int by, int bz) const {
     const unsigned x = static_cast<unsigned>(bx - lo_[0]), y = static_cast<unsigned>(by - lo_[1]),
                    z = static_cast<unsigned>(bz - lo_[2]);

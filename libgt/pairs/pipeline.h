@@ -81,6 +81,10 @@ class ShardOutput {
   virtual void WritePlan(const std::vector<int64_t>& shard_nsamples) = 0;
   virtual bool IsShardComplete(int64_t shard) const = 0;
   // Writes shard `shard` atomically with its completion record; returns its size in bytes.
+  // Called (through the default OpenShard's Finish) on a writer thread, one call at a
+  // time, while RunBuild goes on computing: it may run concurrently with OpenShard and Add
+  // of the next shard's stream (IsShardComplete is called before the write pipeline), so
+  // these must not share unsynchronised state.
   virtual int64_t WriteShard(int64_t shard, const std::vector<EncodedSample>& samples) = 0;
   // The same as a stream, which the build uses: each sample is written as soon as it is
   // computed, so only the last one and the publication are left when a shard completes.

@@ -135,6 +135,22 @@ def main():
     put("depth_png", "gray8.png", b.getvalue())
     put("depth_png", "small.pgm", b"P5\n4 3\n65535\n" + bytes(range(24)))
 
+    # --- colour image headers: real colour images of the samples, small generated PNG, JPEG
+    # (baseline and progressive) and Netpbm files.
+    copy("image_size", glob.glob(f"{shared}/sevenscenes/rgbd-frames/*.color.png"), 1, "real_")
+    copy("image_size", glob.glob(f"{shared}/scannet_posed_color/*/color/*.png"), 1, "real_scannet_")
+    jpgs = glob.glob(f"{shared}/**/*.jpg", recursive=True)
+    if jpgs:
+        copy("image_size", jpgs, 1, "real_")
+    rgb = np.arange(5 * 7 * 3, dtype=np.uint8).reshape(5, 7, 3)
+    for fmt, opts, name in [("PNG", {}, "small.png"), ("JPEG", {}, "small.jpg"),
+                            ("JPEG", {"progressive": True}, "progressive.jpg"),
+                            ("PPM", {}, "small.ppm")]:
+        b = io.BytesIO()
+        Image.fromarray(rgb).save(b, fmt, **opts)
+        put("image_size", name, b.getvalue())
+    put("image_size", "comment.pgm", b"P5\n# a comment\n7 5\n255\n" + bytes(35))
+
     # --- OpenEXR depth: uncompressed scanline files written by hand (no EXR writer in
     # Debian's python3), with the channel names Blender uses.
     for chans, tag in [(["Z"], "z"), (["View Layer.Depth.Z"], "blender"), (["R", "G", "B"], "rgb"),

@@ -207,6 +207,46 @@ TEST(ImageSize, HeadersMatchDecodedSize) {
   EXPECT_THROW(ReadImageSize(dir + "/none.png"), InputError);
 }
 
+// The in-memory variant gives the same sizes; damaged, cut and unknown files are one
+// InputError naming the file (nothing is decoded).
+TEST(ImageSize, FromMemoryAndBadHeaders) {
+  const std::string dir = test::ScratchDir("imgsize_mem");
+  const cv::Mat img(21, 34, CV_8UC3, cv::Scalar(1, 2, 3));
+  for (const char* name : {"b.png", "b.jpg", "b.ppm"}) {
+    const std::string p = dir + "/" + name;
+    ASSERT_TRUE(cv::imwrite(p, img));
+    const ImageSize s = DecodeImageSize(ReadFileBytes(p), p);
+    EXPECT_EQ(s.width, 34) << name;
+    EXPECT_EQ(s.height, 21) << name;
+  }
+  // Netpbm with a comment between the tokens.
+  const ImageSize pgm = DecodeImageSize("P5\n# made by hand\n7 5\n255\n", "c.pgm");
+  EXPECT_EQ(pgm.width, 7);
+  EXPECT_EQ(pgm.height, 5);
+  const std::string png = ReadFileBytes(dir + "/b.png");
+  const std::string jpg = ReadFileBytes(dir + "/b.jpg");
+  auto expect_error = [](const std::string& bytes, const std::string& path, const char* what) {
+    try {
+      DecodeImageSize(bytes, path);
+      ADD_FAILURE() << "no error for " << path;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  expect_error(png.substr(0, 20), "cut.png", "IHDR");
+  std::string zero = png;
+  for (int i = 16; i < 20; ++i) zero[i] = 0;  // width 0
+  expect_error(zero, "zero.png", "IHDR");
+  expect_error(jpg.substr(0, 40), "cut.jpg", "SOF");
+  expect_error("BM\x36\0\0\0", "a.bmp", "unsupported image format");
+  expect_error("", "empty.png", "unsupported image format");
+  expect_error("P6\n-3 4\n255\n", "neg.ppm", "unsupported image format");
+  // The same through the file reader.
+  WriteFileAtomic(dir + "/cut.jpg", jpg.substr(0, 40));
+  EXPECT_THROW(ReadImageSize(dir + "/cut.jpg"), InputError);
+}
+
 // Bilinear sample of an RGB image at continuous (x, y) under the pixel-centre convention,
 // clamping at the borders.
 double BilinearReference(const ColorImage& im, double x, double y, int c) {

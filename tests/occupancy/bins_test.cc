@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <random>
 
 #include "libgt/core/error.h"
+#include "libgt/occupancy/edge_index.h"
 #include "libgt/occupancy/frustum.h"
 #include "libgt/occupancy/pair_occupancy.h"
 
@@ -163,6 +165,62 @@ TEST(Encoding, FewerBinsLeaveHighBitsUnset) {
   v.known = {0b111};
   v.occ = {0b010};
   EXPECT_EQ(DenseVolume(v), (std::vector<uint8_t>{0, 1, 0}));
+}
+
+// The bin lookup of the exact binning (edge_index.h) against a plain search of the edges,
+// at random depths, at every edge and one ulp either side of it, for every spacing, one bin,
+// and bins far narrower than the lookup table allows (its loop path).
+TEST(EdgeIndex, FirstAndLastMatchASearchOfTheEdges) {
+  std::vector<BinOptions> settings(6);
+  settings[1].spacing = BinSpacing::kLog;
+  settings[2].spacing = BinSpacing::kInverse;
+  settings[2].num_bins = 37;
+  settings[3].num_bins = 1;
+  settings[4].spacing = BinSpacing::kLog;  // first bins ~0.3 um wide
+  settings[4].near_m = 1e-6;
+  settings[5].spacing = BinSpacing::kInverse;
+  settings[5].near_m = 0.3;
+  settings[5].far_m = 5.0;
+  std::mt19937 rng(3);
+  for (const BinOptions& o : settings) {
+    const std::vector<double> e = BinEdges(o);
+    const int D = static_cast<int>(e.size()) - 1;
+    const EdgeIndex index(e);
+    auto first = [&](double z) {  // first k with e_{k+1} > z
+      int k = 0;
+      while (k < D - 1 && e[k + 1] <= z) ++k;
+      return k;
+    };
+    auto last = [&](double z) {  // last k with e_k < z
+      int k = D - 1;
+      while (k > 0 && e[k] >= z) --k;
+      return k;
+    };
+    std::vector<double> zs;
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int i = 0; i < 20000; ++i) {
+      zs.push_back(e.front() + unit(rng) * (e.back() - e.front()));
+      // Log-uniform too: the narrow bins near e_0 get their share.
+      zs.push_back(e.front() * std::pow(e.back() / e.front(), unit(rng)));
+    }
+    for (double edge : e) {
+      zs.push_back(edge);
+      zs.push_back(std::nextafter(edge, 0.0));
+      zs.push_back(std::nextafter(edge, 1e9));
+    }
+    int64_t checked = 0;
+    for (double z : zs) {
+      if (z >= e.front() && z < e.back()) {
+        ASSERT_EQ(index.First(z), first(z)) << "z " << z << " near " << o.near_m;
+        ++checked;
+      }
+      if (z > e.front() && z <= e.back()) {
+        ASSERT_EQ(index.Last(z), last(z)) << "z " << z << " near " << o.near_m;
+        ++checked;
+      }
+    }
+    EXPECT_GT(checked, 70000);
+  }
 }
 
 }  // namespace

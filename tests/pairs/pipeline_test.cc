@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <filesystem>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -33,15 +35,22 @@ class MemoryOutput : public ShardOutput {
   std::map<int64_t, std::vector<EncodedSample>> shards;
   int64_t writes = 0;
   bool finished = false;
+  // Guards shards and writes while RunBuild runs (shared: the tests copy outputs).
+  std::shared_ptr<std::mutex> mutex = std::make_shared<std::mutex>();
 
   std::string SampleKey(const std::string& scene, const std::string& f0,
                         const std::string& f1) const override {
     return constant_key ? "same/key" : scene + "/" + f0 + "_" + f1;
   }
   void WritePlan(const std::vector<int64_t>& sizes) override { plan = sizes; }
-  bool IsShardComplete(int64_t s) const override { return shards.count(s) > 0; }
+  // WriteShard runs on RunBuild's writer thread, concurrently with IsShardComplete.
+  bool IsShardComplete(int64_t s) const override {
+    std::lock_guard<std::mutex> lock(*mutex);
+    return shards.count(s) > 0;
+  }
   int64_t WriteShard(int64_t s, const std::vector<EncodedSample>& samples) override {
     if (s == fail_shard) throw InputError("shard " + std::to_string(s), "disk full (test)");
+    std::lock_guard<std::mutex> lock(*mutex);
     ++writes;
     shards[s] = samples;
     int64_t bytes = 0;
