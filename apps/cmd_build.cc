@@ -119,14 +119,27 @@ class ShardsOutput : public gt::pairs::ShardOutput {
     return gt::shards::IsShardComplete(dir_, split_, shard);
   }
   int64_t WriteShard(int64_t shard, const std::vector<gt::pairs::EncodedSample>& samples) override {
-    gt::shards::SplitShardWriter writer(dir_, split_, shard);
-    for (const auto& s : samples) {
-      gt::shards::Sample sample;
-      sample.key = s.key;
-      for (const auto& [name, bytes] : s.fields) sample.fields.push_back({name, bytes});
-      writer.Add(sample, s.pair_line.dump());
-    }
-    return writer.Finish().info.filesize;
+    auto stream = OpenShard(shard);
+    for (const auto& s : samples) stream->Add(s);
+    return stream->Finish();
+  }
+  std::unique_ptr<gt::pairs::ShardStream> OpenShard(int64_t shard) override {
+    class Stream : public gt::pairs::ShardStream {
+     public:
+      Stream(const std::string& dir, const std::string& split, int64_t shard)
+          : writer_(dir, split, shard) {}
+      void Add(gt::pairs::EncodedSample s) override {
+        gt::shards::Sample sample;
+        sample.key = std::move(s.key);
+        for (auto& [name, bytes] : s.fields) sample.fields.push_back({name, std::move(bytes)});
+        writer_.Add(sample, s.pair_line.dump());
+      }
+      int64_t Finish() override { return writer_.Finish().info.filesize; }
+
+     private:
+      gt::shards::SplitShardWriter writer_;
+    };
+    return std::make_unique<Stream>(dir_, split_, shard);
   }
   void Finish() override {
     gt::shards::MergeOptions options;

@@ -2,6 +2,8 @@
 // the file, numbered text lines, and atomic publication (write X.tmp, fsync, rename).
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -30,6 +32,20 @@ std::vector<std::string> SplitLines(std::string_view text);
 
 // Lower-case hex MD5 of bytes / of a file.
 std::string Md5Hex(std::string_view bytes);
+// The same, incrementally: Update any number of times, then HexDigest once.
+class Md5 {
+ public:
+  Md5();
+  void Update(const void* data, size_t n);
+  std::string HexDigest();
+
+ private:
+  void Transform(const unsigned char* block);
+  std::array<uint32_t, 4> state_;
+  std::array<unsigned char, 64> buffer_{};
+  size_t buffer_len_ = 0;
+  uint64_t total_bytes_ = 0;
+};
 std::string Md5HexOfFile(const std::string& path);
 
 }  // namespace gt::io

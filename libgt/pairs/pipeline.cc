@@ -2,7 +2,8 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
-#include <tbb/parallel_for.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_pipeline.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -366,7 +367,24 @@ occupancy::OccupancyMap FuseFrames(SceneData* d, const std::vector<size_t>& fram
   return occupancy::FuseOccupancy(inputs, spec.fusion);
 }
 
+// ShardOutput::OpenShard's default: the samples in memory, one WriteShard at Finish.
+class BufferedShard : public ShardStream {
+ public:
+  BufferedShard(ShardOutput* output, int64_t shard) : output_(output), shard_(shard) {}
+  void Add(EncodedSample sample) override { samples_.push_back(std::move(sample)); }
+  int64_t Finish() override { return output_->WriteShard(shard_, samples_); }
+
+ private:
+  ShardOutput* output_;
+  int64_t shard_;
+  std::vector<EncodedSample> samples_;
+};
+
 }  // namespace
+
+std::unique_ptr<ShardStream> ShardOutput::OpenShard(int64_t shard) {
+  return std::make_unique<BufferedShard>(this, shard);
+}
 
 bool BuildOptions::Check(std::string* error) const {
   if (out_dir.empty()) return *error = "--out: expected an output folder", false;
@@ -595,11 +613,11 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
     output->WritePlan(shard_sizes);
   }
   const SampleSpec base_spec = RecipeSampleOptions(recipe);
-  std::map<std::string, std::unique_ptr<SceneData>> scene_data;
-  auto scene_of = [&](const std::string& name) -> SceneData& {
+  std::map<std::string, std::shared_ptr<SceneData>> scene_data;
+  auto scene_of = [&](const std::string& name) -> std::shared_ptr<SceneData> {
     auto& d = scene_data[name];
     if (!d) {
-      d = std::make_unique<SceneData>();
+      d = std::make_shared<SceneData>();
       d->scene = reader->ReadScene(recipe.dataset.root, name);
       d->cache = std::make_unique<DepthCache>(d->scene, recipe.width, recipe.height,
                                               options.depth_cache_mb << 20);
@@ -614,27 +632,54 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
         d->spec.fusion.scene_stride = recipe.occupancy.scene_stride;
       }
     }
-    return *d;
+    return d;
   };
-  // Scene data (and its depth cache) is released after the last shard of this task that
-  // uses the scene, so a task over many scenes holds only the current ones in memory.
-  std::map<std::string, int64_t> last_shard_of_scene;
-  for (int64_t s = 0, start = 0; s < static_cast<int64_t>(shard_sizes.size());
-       start += shard_sizes[s], ++s) {
-    if (s % options.tasks != options.task) continue;
-    for (int64_t k = start; k < start + shard_sizes[s]; ++k) last_shard_of_scene[all[k]->scene] = s;
-  }
+  // This task's work: the samples of its incomplete shards, in order (shard s is this
+  // task's when s % tasks == task). Complete shards are skipped (resume).
   int64_t shards_written = 0, shards_skipped = 0, samples_written = 0;
   const int64_t nshards = static_cast<int64_t>(shard_sizes.size());
   int64_t my_samples = 0;  // progress unit of the write stage: pairs (samples)
-  for (int64_t s = 0; s < nshards; ++s) {
-    my_samples += (s % options.tasks == options.task) ? shard_sizes[s] : 0;
-  }
   int64_t done_samples = 0;
-  // Shard s is written (tar, fsync, MD5, part record) on a writer thread while the samples
-  // of the next shard are computed, so the serial write overlaps the parallel compute. At
-  // most one write is in flight; shards are still published in order and byte for byte as
-  // before. `finish_write` waits for it and rethrows its error.
+  struct Job {
+    int64_t shard;   // shard index
+    int64_t sample;  // index into `all` (and `keys`)
+  };
+  std::vector<Job> jobs;
+  std::vector<int64_t> skipped_sizes;
+  for (int64_t s = 0, start = 0; s < nshards; start += shard_sizes[s], ++s) {
+    if (s % options.tasks != options.task) continue;
+    my_samples += shard_sizes[s];
+    if (output->IsShardComplete(s)) {
+      ++shards_skipped;
+      skipped_sizes.push_back(shard_sizes[s]);
+    } else {
+      for (int64_t k = start; k < start + shard_sizes[s]; ++k) jobs.push_back({s, k});
+    }
+  }
+  for (int64_t n : skipped_sizes) {
+    done_samples += n;
+    if (progress) progress({"write", done_samples, my_samples, Seconds(t_write)});
+  }
+  // A scene's data (and its depth cache) is dropped from `scene_data` when its last sample
+  // of this task enters the pipeline; the samples in flight hold it (shared_ptr) until
+  // they are computed, so a task over many scenes holds only the current ones in memory.
+  std::map<std::string, size_t> last_job_of_scene;
+  for (size_t j = 0; j < jobs.size(); ++j) last_job_of_scene[all[jobs[j].sample]->scene] = j;
+
+  // The samples of this task flow through one pipeline without a barrier at shard ends:
+  //   1. serial, in order: the next job; reads its scene when first needed;
+  //   2. parallel: ComputeSample (labels, occupancy, encoding);
+  //   3. serial, in order: adds the sample to its shard's stream (OpenShard: the tar
+  //      member data is written and digested now); when the shard is complete, its
+  //      Finish (close, fsync, rename, part record) is handed to a writer thread while
+  //      the pipeline goes on computing. At most one Finish is in flight (stage 3 waits
+  //      for the previous one before handing over the next), so shards are published in
+  //      order and byte for byte as with any thread count.
+  // At most `tokens` samples are in flight between stages 1 and 3; memory stays bounded.
+  // An exception in any stage (InputError of a sample, a write error) cancels the
+  // pipeline and propagates from here: the stream being filled is dropped (its temporary
+  // file removed, nothing published), and a Finish in flight completes (the future's
+  // destructor waits for it) before RunBuild returns.
   std::future<int64_t> pending_write;
   int64_t pending_samples = 0;
   auto finish_write = [&] {
@@ -643,65 +688,96 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
     ++shards_written;
     samples_written += pending_samples;
   };
-  for (int64_t s = 0, start = 0; s < nshards; start += shard_sizes[s], ++s) {
-    if (s % options.tasks != options.task) continue;
-    if (output->IsShardComplete(s)) {
-      ++shards_skipped;
-    } else {
-      const int64_t n = shard_sizes[s];
-      std::vector<SceneData*> data(n);
-      for (int64_t k = 0; k < n; ++k) data[k] = &scene_of(all[start + k]->scene);
-      std::vector<EncodedSample> samples(n);
-      tbb::parallel_for(int64_t{0}, n, [&](int64_t k) {
-        const SelectedPair& p = *all[start + k];
-        SceneData& d = *data[k];
-        auto i0 = d.index_of_id.find(p.frame0), i1 = d.index_of_id.find(p.frame1);
-        if (i0 == d.index_of_id.end() || i1 == d.index_of_id.end()) {
-          throw InputError(SelectionLinesPath(options, p.scene),
-                           "frame " + p.frame0 + " or " + p.frame1 + " no longer in the dataset");
-        }
-        const auto depth0 = d.cache->Get(i0->second);
-        const auto depth1 = d.cache->Get(i1->second);
-        const occupancy::OccupancyMap* shared = nullptr;
-        std::unique_ptr<occupancy::OccupancyMap> window_map;
-        if (d.spec.occupancy && d.spec.mode == occupancy::OccupancyMode::kOctomap) {
-          if (d.spec.fusion.scope == occupancy::FusionScope::kScene) {
-            std::call_once(d.map_once, [&] {
-              d.scene_map = std::make_unique<occupancy::OccupancyMap>(FuseFrames(
-                  &d, occupancy::ScopeFrameIndices(d.scene, i0->second, i1->second, d.spec.fusion),
-                  d.spec));
-            });
-            shared = d.scene_map.get();
-          } else if (d.spec.fusion.scope == occupancy::FusionScope::kWindow) {
-            window_map = std::make_unique<occupancy::OccupancyMap>(FuseFrames(
-                &d, occupancy::ScopeFrameIndices(d.scene, i0->second, i1->second, d.spec.fusion),
-                d.spec));
-            shared = window_map.get();
-          }
-        }
-        std::shared_ptr<const std::string> image0, image1;
-        const Frame& f0 = d.scene.frames[i0->second];
-        const Frame& f1 = d.scene.frames[i1->second];
-        if (d.spec.image != "none" && !f0.color_path.empty() && !f1.color_path.empty()) {
-          image0 = d.images->Get(d.scene, i0->second, d.spec);
-          image1 = d.images->Get(d.scene, i1->second, d.spec);
-        }
-        samples[k] = ComputeSample(d.scene, i0->second, i1->second, p, keys[start + k], *depth0,
-                                   *depth1, d.spec, shared, image0.get(), image1.get());
-      });
-      finish_write();
-      pending_samples = n;
-      pending_write = std::async(std::launch::async, [output, s, batch = std::move(samples)] {
-        return output->WriteShard(s, batch);
-      });
+  struct Item {
+    size_t job = 0;
+    std::shared_ptr<SceneData> data;
+    EncodedSample sample;
+  };
+  const size_t threads = std::max<size_t>(
+      1, tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  const size_t tokens = 2 * threads;
+  size_t next_job = 0;
+  std::unique_ptr<ShardStream> stream;  // the shard being collected
+  int64_t in_stream = 0;                // its samples so far
+  auto input = [&](tbb::flow_control& fc) -> std::shared_ptr<Item> {
+    if (next_job == jobs.size()) {
+      fc.stop();
+      return nullptr;
     }
-    for (auto it = scene_data.begin(); it != scene_data.end();) {
-      it = last_shard_of_scene[it->first] <= s ? scene_data.erase(it) : std::next(it);
+    auto item = std::make_shared<Item>();
+    item->job = next_job++;
+    const std::string& scene = all[jobs[item->job].sample]->scene;
+    item->data = scene_of(scene);
+    if (last_job_of_scene.at(scene) == item->job) scene_data.erase(scene);
+    return item;
+  };
+  auto compute = [&](std::shared_ptr<Item> item) -> std::shared_ptr<Item> {
+    const int64_t k = jobs[item->job].sample;
+    const SelectedPair& p = *all[k];
+    SceneData& d = *item->data;
+    auto i0 = d.index_of_id.find(p.frame0), i1 = d.index_of_id.find(p.frame1);
+    if (i0 == d.index_of_id.end() || i1 == d.index_of_id.end()) {
+      throw InputError(SelectionLinesPath(options, p.scene),
+                       "frame " + p.frame0 + " or " + p.frame1 + " no longer in the dataset");
     }
-    done_samples += shard_sizes[s];
+    const auto depth0 = d.cache->Get(i0->second);
+    const auto depth1 = d.cache->Get(i1->second);
+    const occupancy::OccupancyMap* shared = nullptr;
+    std::unique_ptr<occupancy::OccupancyMap> window_map;
+    if (d.spec.occupancy && d.spec.mode == occupancy::OccupancyMode::kOctomap) {
+      if (d.spec.fusion.scope == occupancy::FusionScope::kScene) {
+        std::call_once(d.map_once, [&] {
+          d.scene_map = std::make_unique<occupancy::OccupancyMap>(FuseFrames(
+              &d, occupancy::ScopeFrameIndices(d.scene, i0->second, i1->second, d.spec.fusion),
+              d.spec));
+        });
+        shared = d.scene_map.get();
+      } else if (d.spec.fusion.scope == occupancy::FusionScope::kWindow) {
+        window_map = std::make_unique<occupancy::OccupancyMap>(FuseFrames(
+            &d, occupancy::ScopeFrameIndices(d.scene, i0->second, i1->second, d.spec.fusion),
+            d.spec));
+        shared = window_map.get();
+      }
+    }
+    std::shared_ptr<const std::string> image0, image1;
+    const Frame& f0 = d.scene.frames[i0->second];
+    const Frame& f1 = d.scene.frames[i1->second];
+    if (d.spec.image != "none" && !f0.color_path.empty() && !f1.color_path.empty()) {
+      image0 = d.images->Get(d.scene, i0->second, d.spec);
+      image1 = d.images->Get(d.scene, i1->second, d.spec);
+    }
+    item->sample = ComputeSample(d.scene, i0->second, i1->second, p, keys[k], *depth0, *depth1,
+                                 d.spec, shared, image0.get(), image1.get());
+    item->data.reset();  // the last sample of a scene releases its data here
+    return item;
+  };
+  auto collect = [&](std::shared_ptr<Item> item) {
+    const int64_t s = jobs[item->job].shard;
+    if (!stream) stream = output->OpenShard(s);
+    stream->Add(std::move(item->sample));
+    item.reset();
+    const int64_t n = shard_sizes[s];
+    if (++in_stream < n) return;
+    finish_write();
+    pending_samples = n;
+    pending_write =
+        std::async(std::launch::async, [st = std::move(stream)] { return st->Finish(); });
+    stream.reset();
+    in_stream = 0;
+    done_samples += n;
     if (progress) progress({"write", done_samples, my_samples, Seconds(t_write)});
+  };
+  if (!jobs.empty()) {
+    tbb::parallel_pipeline(
+        tokens,
+        tbb::make_filter<void, std::shared_ptr<Item>>(tbb::filter_mode::serial_in_order, input) &
+            tbb::make_filter<std::shared_ptr<Item>, std::shared_ptr<Item>>(
+                tbb::filter_mode::parallel, compute) &
+            tbb::make_filter<std::shared_ptr<Item>, void>(tbb::filter_mode::serial_in_order,
+                                                          collect));
   }
   finish_write();
+  scene_data.clear();
   timings["write_s"] = Seconds(t_write);
   summary["shards_written_this_run"] = shards_written;
   summary["shards_skipped_complete"] = shards_skipped;
@@ -725,7 +801,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
       std::vector<LoftrRow> rows;
       std::map<std::string, std::array<double, 9>> intrinsics;
       for (const SelectedPair* p : all) {
-        SceneData& d = scene_of(p->scene);
+        SceneData& d = *scene_of(p->scene);
         const size_t i0 = d.index_of_id.at(p->frame0), i1 = d.index_of_id.at(p->frame1);
         LoftrRow row;
         row.scene = p->scene;

@@ -31,6 +31,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -59,6 +60,16 @@ struct LoftrRow {
   std::array<double, 12> cam1_from_cam0{};  // T_0to1 row-major 3x4
 };
 
+// A shard being written sample by sample (ShardOutput::OpenShard): Add the samples in
+// order, then Finish publishes the shard atomically with its completion record and returns
+// its size in bytes. Destroyed without Finish (an error), it publishes nothing.
+class ShardStream {
+ public:
+  virtual ~ShardStream() = default;
+  virtual void Add(EncodedSample sample) = 0;
+  virtual int64_t Finish() = 0;
+};
+
 // Where samples go. Implemented above this layer (apps/cmd_build.cc with libgt/shards).
 class ShardOutput {
  public:
@@ -70,10 +81,16 @@ class ShardOutput {
   virtual void WritePlan(const std::vector<int64_t>& shard_nsamples) = 0;
   virtual bool IsShardComplete(int64_t shard) const = 0;
   // Writes shard `shard` atomically with its completion record; returns its size in bytes.
-  // Called on a writer thread, one call at a time, while RunBuild goes on with the next
-  // shard: it may run concurrently with IsShardComplete of a later shard (and nothing
-  // else), so the two must not share unsynchronised state.
+  // Called (through the default OpenShard's Finish) on a writer thread, one call at a
+  // time, while RunBuild goes on computing: it may run concurrently with OpenShard and Add
+  // of the next shard's stream (IsShardComplete is called before the write pipeline), so
+  // these must not share unsynchronised state.
   virtual int64_t WriteShard(int64_t shard, const std::vector<EncodedSample>& samples) = 0;
+  // The same as a stream, which the build uses: each sample is written as soon as it is
+  // computed, so only the last one and the publication are left when a shard completes.
+  // The stream of shard s + 1 may be filled while shard s's Finish runs on another thread.
+  // The default collects the samples and calls WriteShard from Finish.
+  virtual std::unique_ptr<ShardStream> OpenShard(int64_t shard);
   // Every shard is complete: validates them and writes index.json and pairs.jsonl.
   virtual void Finish() = 0;
   // LoFTR-family index ("train" or "test") of every pair, K per scene at W×H.

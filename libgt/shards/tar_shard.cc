@@ -45,6 +45,7 @@ struct TarShardWriter::Impl {
   int write_errno = 0;    // errno of the first failed write(2)
   int64_t nsamples = 0;
   int64_t bytes = 0;
+  io::Md5 md5;  // of the bytes written so far (the published file's digest)
   std::set<std::string> keys;
 
   // libarchive write callback: writes the whole block. A failed write(2) is recorded in
@@ -69,6 +70,7 @@ struct TarShardWriter::Impl {
       left -= static_cast<size_t>(w);
     }
     self->bytes += static_cast<int64_t>(n);
+    self->md5.Update(buf, n);
     return static_cast<la_ssize_t>(n);
   }
 
@@ -190,7 +192,7 @@ ShardInfo TarShardWriter::Finish() {
   info.path = s.path;
   info.nsamples = s.nsamples;
   info.filesize = s.bytes;
-  info.md5sum = io::Md5HexOfFile(s.path);
+  info.md5sum = s.md5.HexDigest();  // computed while writing, not by reading the file back
   struct stat st {};
   if (::stat(s.path.c_str(), &st) != 0 || st.st_size != info.filesize) {
     throw InputError(s.path, "published shard size differs from the bytes written");

@@ -2,7 +2,8 @@
 """End-to-end benchmark of `occgt build` (docs/PERFORMANCE.md, section "Scale").
 
     tests/bench/e2e_bench.py [--build build] [--reps 5] [--scratch /tmp/occgt-e2e-bench]
-                             [--frames 250,1000] [--skip-speedup] [--skip-scene] [--json F]
+                             [--frames 250,1000] [--skip-speedup] [--skip-large]
+                             [--skip-scene] [--json F]
 
 1. speed-up: `occgt build` on the samples (recipes/sevenscenes-sample.yaml,
    tartanair-sample.yaml, demo.yaml with its synthetic data generated beforehand) in a
@@ -10,6 +11,11 @@
    time, CPU time and peak RSS of each process (os.wait4), the stage times of its summary,
    bytes per sample (shards / samples). Reports medians and the median ratio t1 / t2; also
    the same build as 2 tasks of 1 thread running at once (the Slurm layout on one machine).
+   Then the same on larger bench variants of the two sample recipes (not shipped; written
+   into the scratch folder, same sample data): frame_stride 1 and a higher quota, 7-Scenes
+   also overlap [0.1, 1.0] (its 50 frames give 17 pairs in [0.4, 0.9]), so that the run is
+   long enough for the serial parts (process start, selection, the last shard's
+   publication, the index) not to dominate t1 / t2 (--skip-large leaves them out).
 2. one long scene: `occgt synth` rooms of N frames (--frames, 640x480) read by a recipe
    with recipes/scannet-train.yaml's selection (max_frame_gap 60, score_stride 10, overlap
    [0.4, 0.8], jpg, no depth, pair OctoMap occupancy) and a quota of 40 pairs; built with
@@ -22,6 +28,7 @@ The machine load (`uptime`) is printed before and after; other processes inflate
 import argparse
 import json
 import os
+import re
 import shutil
 import statistics
 import subprocess
@@ -102,6 +109,24 @@ def med(rows, key):
     return statistics.median(r[key] for r in rows)
 
 
+def large_recipe(name, changes):
+    """A bench variant of recipes/NAME.yaml in the scratch folder: the dataset root made
+    absolute (${VAR:-default} expanded as the recipe loader does), `changes` (section ->
+    {key: value}) applied, name and split suffixed "-large"."""
+    with open(os.path.join(SOURCE, "recipes", name + ".yaml")) as f:
+        doc = yaml.safe_load(f)
+    root = re.sub(r"\$\{(\w+):-([^}]*)\}", lambda m: os.environ.get(m.group(1), m.group(2)),
+                  doc["dataset"]["root"])
+    doc["dataset"]["root"] = os.path.normpath(os.path.join(SOURCE, "recipes", root))
+    for section, values in changes.items():
+        doc[section].update(values)
+    doc["name"] = doc["split"] = name + "-large"
+    path = os.path.join(ARGS.scratch, name + "-large.yaml")
+    with open(path, "w") as f:
+        yaml.safe_dump(doc, f)
+    return path
+
+
 def speedup(results):
     recipes = [("sevenscenes-sample", os.path.join(SOURCE, "recipes", "sevenscenes-sample.yaml")),
                ("tartanair-sample", os.path.join(SOURCE, "recipes", "tartanair-sample.yaml")),
@@ -110,6 +135,20 @@ def speedup(results):
     if not os.path.exists(os.path.join(demo_data, "data", ".complete")):
         timed([OCCGT, "build", recipes[2][1], "--out", demo_data, "--dry-run"])
     print("\n## speed-up, --threads 1 vs 2 (fresh output folder each run)")
+    speedup_table(results, recipes, demo_data)
+    if not ARGS.skip_large:
+        large = [("sevenscenes-sample-large (bench variant: stride 1, overlap [0.1, 1], quota 48)",
+                  large_recipe("sevenscenes-sample",
+                               {"dataset": {"frame_stride": 1},
+                                "selection": {"overlap": [0.1, 1.0], "quota_per_scene": 48}})),
+                 ("tartanair-sample-large (bench variant: quota 40)",
+                  large_recipe("tartanair-sample", {"selection": {"quota_per_scene": 40}}))]
+        print("\n## speed-up on larger bench variants of the sample recipes (same data, "
+              "more pairs; not shipped recipes)")
+        speedup_table(results, large, demo_data)
+
+
+def speedup_table(results, recipes, demo_data):
     print("| recipe | samples | t1 wall (median) | t2 wall (median) | ratio t1/t2 (median of reps) "
           "| t1 select / write | t2 select / write | 2 tasks x 1 thread wall (ratio) "
           "| CPU t1 / t2 | peak RSS t1 / t2 | bytes/sample |")
@@ -117,11 +156,12 @@ def speedup(results):
     for name, recipe in recipes:
         rows = {1: [], 2: []}
         seed = os.path.join(demo_data, "data") if name == "demo" else None
+        folder = name.split(" ")[0]
         for rep in range(ARGS.reps):
             for t in ((1, 2) if rep % 2 == 0 else (2, 1)):
-                rows[t].append(build(recipe, os.path.join(ARGS.scratch, f"{name}-t{t}"), t,
+                rows[t].append(build(recipe, os.path.join(ARGS.scratch, f"{folder}-t{t}"), t,
                                      seed_data=seed))
-        two = [build_two_tasks(recipe, os.path.join(ARGS.scratch, f"{name}-p2"), seed)
+        two = [build_two_tasks(recipe, os.path.join(ARGS.scratch, f"{folder}-p2"), seed)
                for _ in range(ARGS.reps)]
         ratios = [a["wall_s"] / b["wall_s"] for a, b in zip(rows[1], rows[2])]
         r1, r2 = rows[1], rows[2]
@@ -134,6 +174,7 @@ def speedup(results):
               f"| {med(r1, 'cpu_s'):.2f} / {med(r2, 'cpu_s'):.2f} s "
               f"| {med(r1, 'rss_mb'):.0f} / {med(r2, 'rss_mb'):.0f} MB "
               f"| {r1[0]['bytes'] / r1[0]['samples'] / 1e6:.2f} MB |")
+    print(f"load after the table: {uptime()}")
 
 
 def scene_recipe(data, frames):
@@ -240,6 +281,7 @@ def main():
     ap.add_argument("--scratch", default="/tmp/occgt-e2e-bench")
     ap.add_argument("--frames", default="250,1000")
     ap.add_argument("--skip-speedup", action="store_true")
+    ap.add_argument("--skip-large", action="store_true")
     ap.add_argument("--skip-scene", action="store_true")
     ap.add_argument("--json", default="")
     ap.add_argument("--from-json", nargs="+", default=[],

@@ -56,6 +56,27 @@ TEST(Md5, FileDigestEqualsBytesDigestAcrossBlockBoundaries) {
   EXPECT_EQ(Md5Hex(std::string(1000000, 'a')), "7707d6ae4e027c70eea2a935c2296f21");
 }
 
+TEST(Md5, IncrementalUpdatesEqualOneShot) {
+  // Any split of the input into Update calls (empty pieces, pieces inside one block,
+  // across blocks, whole blocks) gives the digest of the whole.
+  std::mt19937 rng(11);
+  for (int n : {0, 1, 55, 56, 63, 64, 65, 119, 120, 128, 1000, 70000}) {
+    std::string bytes(n, '\0');
+    for (auto& c : bytes) c = static_cast<char>(rng() & 0xff);
+    for (int trial = 0; trial < 8; ++trial) {
+      Md5 md5;
+      size_t at = 0;
+      while (at < bytes.size()) {
+        const size_t piece = std::min<size_t>(bytes.size() - at, rng() % (trial < 4 ? 70 : 9000));
+        md5.Update(bytes.data() + at, piece);
+        at += piece;
+      }
+      md5.Update(nullptr, 0);
+      ASSERT_EQ(md5.HexDigest(), Md5Hex(bytes)) << n << " " << trial;
+    }
+  }
+}
+
 TEST(Md5, MissingFileNamesThePath) {
   try {
     Md5HexOfFile("/nonexistent/occgt/x.bin");

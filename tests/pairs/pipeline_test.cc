@@ -7,12 +7,16 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <string>
+#include <vector>
 
 #include "libgt/core/error.h"
+#include "libgt/io/files.h"
 #include "libgt/io/npy.h"
 #include "libgt/pairs/synthetic.h"
 #include "tests/support/test_support.h"
@@ -26,6 +30,7 @@ namespace fs = std::filesystem;
 class MemoryOutput : public ShardOutput {
  public:
   bool constant_key = false;
+  int64_t fail_shard = -1;  // WriteShard of this shard throws InputError
   std::vector<int64_t> plan;
   std::map<int64_t, std::vector<EncodedSample>> shards;
   int64_t writes = 0;
@@ -44,6 +49,7 @@ class MemoryOutput : public ShardOutput {
     return shards.count(s) > 0;
   }
   int64_t WriteShard(int64_t s, const std::vector<EncodedSample>& samples) override {
+    if (s == fail_shard) throw InputError("shard " + std::to_string(s), "disk full (test)");
     std::lock_guard<std::mutex> lock(*mutex);
     ++writes;
     shards[s] = samples;
@@ -159,6 +165,115 @@ TEST(Pipeline, SameSamplesOnAnyThreadCountAndTaskSplit) {
   EXPECT_EQ(Bytes(one), Bytes(split));
   EXPECT_EQ(split.writes, static_cast<int64_t>(plan.size()));
   EXPECT_TRUE(split.finished);
+}
+
+// One sample per shard: the write pipeline has many shard ends in flight at once (more
+// shards than tokens); 1 thread, 2 threads and 2 threads in 3 tasks give the same bytes,
+// every shard written once, in plan order.
+TEST(Pipeline, OneSampleShardsSameBytesOnOneAndTwoThreads) {
+  Recipe r = SmallRecipe(Dataset());
+  r.shards.samples_per_shard = 1;
+  auto run = [&](int threads, int tasks, const std::string& name) {
+    MemoryOutput out;
+    BuildOptions o;
+    o.out_dir = test::ScratchDir(name);
+    o.tasks = tasks;
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    for (const char* stage : tasks > 1 ? std::vector<const char*>{"select", "write"}
+                                       : std::vector<const char*>{"all"}) {
+      o.stage = stage;
+      for (int k = 0; k < tasks; ++k) {
+        o.task = k;
+        RunBuild(r, o, &out, nullptr);
+      }
+    }
+    return out;
+  };
+  const MemoryOutput one = run(1, 1, "pipeline_sps1_t1");
+  const MemoryOutput two = run(2, 1, "pipeline_sps1_t2");
+  const MemoryOutput tasks = run(2, 3, "pipeline_sps1_tasks");
+  ASSERT_GE(one.plan.size(), 8u);
+  EXPECT_EQ(one.writes, static_cast<int64_t>(one.plan.size()));
+  EXPECT_EQ(two.writes, static_cast<int64_t>(one.plan.size()));
+  EXPECT_EQ(tasks.writes, static_cast<int64_t>(one.plan.size()));
+  for (const auto& [shard, samples] : two.shards) EXPECT_EQ(samples.size(), 1u) << shard;
+  EXPECT_EQ(Bytes(one), Bytes(two));
+  EXPECT_EQ(Bytes(one), Bytes(tasks));
+}
+
+// An InputError in a sample in the middle of the pipeline (a selected frame gone from the
+// dataset) propagates from RunBuild; its shard and every later one are not written, and
+// a re-run after the fix writes exactly the missing shards, byte for byte as one run.
+// A failing shard write propagates the same way.
+TEST(Pipeline, ErrorsMidPipelinePropagateAndWriteNoLaterShard) {
+  const Recipe r = SmallRecipe(Dataset());
+  MemoryOutput good;
+  {
+    BuildOptions o;
+    o.out_dir = test::ScratchDir("pipeline_err_good");
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    RunBuild(r, o, &good, nullptr);
+  }
+  ASSERT_GE(good.plan.size(), 3u);
+  // The selection of the first scene, then one of its pairs in shard 1 made stale.
+  BuildOptions o;
+  o.out_dir = test::ScratchDir("pipeline_err");
+  MemoryOutput out;
+  o.stage = "select";
+  RunBuild(r, o, &out, nullptr);
+  std::vector<std::string> files;
+  for (const auto& e : fs::directory_iterator(o.out_dir + "/selection")) {
+    if (e.path().extension() == ".jsonl") files.push_back(e.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  ASSERT_FALSE(files.empty());
+  std::vector<std::string> lines = io::ReadLines(files[0]);
+  const size_t bad = 3;  // sample 3 = the first sample of shard 1 (shards of 3)
+  ASSERT_GT(lines.size(), bad);
+  const std::string original = io::ReadFileBytes(files[0]);
+  nlohmann::json j = nlohmann::json::parse(lines[bad]);
+  j["frame0"] = "no-such-frame";
+  lines[bad] = j.dump();
+  std::string text;
+  for (const auto& l : lines) text += l + "\n";
+  io::WriteFileAtomic(files[0], text);
+  o.stage = "all";
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    try {
+      RunBuild(r, o, &out, nullptr);
+      FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("no longer in the dataset"), std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_LE(out.shards.size(), 1u);  // shard 0 at most (complete before the error)
+  for (const auto& [shard, samples] : out.shards) EXPECT_EQ(shard, 0);
+  EXPECT_FALSE(out.finished);
+  // A write error of shard 1 (the selection repaired): also propagates, nothing after.
+  io::WriteFileAtomic(files[0], original);
+  out.fail_shard = 1;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    try {
+      RunBuild(r, o, &out, nullptr);
+      FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("disk full (test)"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_FALSE(out.shards.count(1));
+  EXPECT_FALSE(out.finished);
+  // The re-run completes the split: the same bytes as the run without errors.
+  out.fail_shard = -1;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    const nlohmann::json s = RunBuild(r, o, &out, nullptr);
+    EXPECT_TRUE(s["complete"].get<bool>());
+  }
+  EXPECT_TRUE(out.finished);
+  EXPECT_EQ(Bytes(out), Bytes(good));
 }
 
 TEST(Pipeline, ReRunReusesSelectionAndSkipsCompleteShards) {
