@@ -1,5 +1,9 @@
 #include "libgt/pairs/pair_sample.h"
 
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_group.h>
+
+#include <exception>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -130,8 +134,58 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
   const Frame& f1 = scene.frames[i1];
   const Camera cam0 = WorkingCamera(f0, options.width, options.height);
   const Camera cam1 = WorkingCamera(f1, options.width, options.height);
-  const PairLabels labels = LabelPair(depth0, cam0, f0.world_from_cam, depth1, cam1,
-                                      f1.world_from_cam, options.labels, options.patches);
+  // The labels, the occupancy volumes and the two images are independent: computed as
+  // parallel TBB tasks (one thread under --threads 1), so that a sample computed alone, e.g.
+  // the last one of a run, uses every core. Errors are rethrown in this fixed order, so the
+  // one reported does not depend on timing.
+  PairLabels labels;
+  occupancy::PairOccupancy occ;
+  std::string encoded_image[2];
+  const bool with_images =
+      options.image != "none" && !f0.color_path.empty() && !f1.color_path.empty();
+  std::exception_ptr error[4];
+  auto guarded = [](std::exception_ptr* e, auto&& f) {
+    try {
+      f();
+    } catch (...) {
+      *e = std::current_exception();
+    }
+  };
+  // Its own context: a cancellation of the caller's work (another sample of the pipeline
+  // failing) must not silently skip these tasks and leave the results empty.
+  tbb::task_group_context own(tbb::task_group_context::isolated);
+  tbb::parallel_invoke(
+      [&] {
+        guarded(&error[0], [&] {
+          labels = LabelPair(depth0, cam0, f0.world_from_cam, depth1, cam1, f1.world_from_cam,
+                             options.labels, options.patches);
+        });
+      },
+      [&] {
+        guarded(&error[1], [&] {
+          if (!options.occupancy) return;
+          occupancy::FusionInput in0{&depth0, cam0, f0.world_from_cam, options.labels.min_depth_m,
+                                     options.labels.max_depth_m};
+          occupancy::FusionInput in1{&depth1, cam1, f1.world_from_cam, options.labels.min_depth_m,
+                                     options.labels.max_depth_m};
+          occ = occupancy::ComputePairOccupancy(in0, in1, options.fusion, options.bins,
+                                                options.mode, shared_map);
+        });
+      },
+      [&] {
+        guarded(&error[2], [&] {
+          if (with_images) encoded_image[0] = image0 ? *image0 : EncodeFrameImage(f0, options);
+        });
+      },
+      [&] {
+        guarded(&error[3], [&] {
+          if (with_images) encoded_image[1] = image1 ? *image1 : EncodeFrameImage(f1, options);
+        });
+      },
+      own);
+  for (const std::exception_ptr& e : error) {
+    if (e) std::rethrow_exception(e);
+  }
   EncodedSample out;
   out.key = key;
   const int64_t W = options.width, H = options.height;
@@ -157,12 +211,6 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
   }
   json occupancy_json = nullptr;
   if (options.occupancy) {
-    occupancy::FusionInput in0{&depth0, cam0, f0.world_from_cam, options.labels.min_depth_m,
-                               options.labels.max_depth_m};
-    occupancy::FusionInput in1{&depth1, cam1, f1.world_from_cam, options.labels.min_depth_m,
-                               options.labels.max_depth_m};
-    const occupancy::PairOccupancy occ = occupancy::ComputePairOccupancy(
-        in0, in1, options.fusion, options.bins, options.mode, shared_map);
     int cam_index = 0;
     for (const occupancy::FrustumVolume* v : {&occ.cam0, &occ.cam1}) {
       const std::string c = std::to_string(cam_index++);
@@ -188,9 +236,9 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
         {"counts1", {{"occupied", c1.occupied}, {"free", c1.free}, {"unknown", c1.unknown}}}};
   }
   json image_json = nullptr;
-  if (options.image != "none" && !f0.color_path.empty() && !f1.color_path.empty()) {
-    add("image0." + options.image, image0 ? *image0 : EncodeFrameImage(f0, options));
-    add("image1." + options.image, image1 ? *image1 : EncodeFrameImage(f1, options));
+  if (with_images) {
+    add("image0." + options.image, std::move(encoded_image[0]));
+    add("image1." + options.image, std::move(encoded_image[1]));
     const Camera k0 = f0.color_camera.Resized(options.width, options.height);
     const Camera k1 = f1.color_camera.Resized(options.width, options.height);
     image_json = {
