@@ -177,9 +177,7 @@ inline void MarkBins(const std::vector<double>& e, int num_bins, double z0, doub
 // 8^3 blocks first; a block that is absent (all unknown) is skipped, a uniform one (all free /
 // all occupied) contributes its whole z-interval at once, and only inside a mixed block are
 // its voxels stepped through.
-// Not inlined into the pixel loop of ProjectToFrustum: inlined there (next to TraverseCenter)
-// the same code took ~20 % longer (tests/bench/occupancy_bench.cc, BM_ProjectExactBothCams
-// against BM_ProjectExactReferenceBothCams, the same code compiled on its own).
+// Since the box splat (SplatExact) it walks only the rays that lie in a voxel face plane.
 __attribute__((noinline)) RayBits TraverseExact(const MapView& m, const Eigen::Vector3d& o,
                                                 const Eigen::Vector3d& d,
                                                 const std::vector<double>& e, double z_known_max) {
