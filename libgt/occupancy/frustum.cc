@@ -779,9 +779,9 @@ FrustumVolume ProjectToFrustum(const OccupancyMap& map, const Camera& camera_ful
   }
   // Farthest planar depth of a block of the map seen through each tile of kTile x kTile rays:
   // a ray meets no known voxel beyond the largest camera z of the corners of the blocks whose
-  // image covers it, so the bin-centre lookups stop there (plus one voxel against rounding) instead
-  // of crossing absent blocks to the far plane or the box. Conservative: a block reaching
-  // the camera plane (z <= 0 at a corner) counts for every tile; the bins do not change.
+  // image covers it, so the bin-centre lookups stop there (plus one voxel against rounding)
+  // instead of going on to the far plane or the box. Conservative: a block reaching the
+  // camera plane (z <= 0 at a corner) counts for every tile; the bins do not change.
   constexpr int kTile = 8;
   const int tiles_w = (vol.width + kTile - 1) / kTile, tiles_h = (vol.height + kTile - 1) / kTile;
   std::vector<double> tile_far(static_cast<size_t>(tiles_w) * tiles_h,
