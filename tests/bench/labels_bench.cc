@@ -6,44 +6,19 @@
 //    whole-image float32 / int64 / bool tensor (here an Eigen array, each op vectorised by
 //    Eigen). tests/bench/labels_torch_baseline.py runs the same op list in real torch.
 //    The ratio baseline / fast path is the speed-up quoted in docs/PERFORMANCE.md.
-// Scene: the box in front of a wall of tests/geometry, B moved 0.9 m sideways and yawed.
+// Scene: tests/bench/two_view_scene.h (a box in front of a wall, B moved 0.9 m sideways and
+// yawed 9°).
 #include <benchmark/benchmark.h>
 
 #include <Eigen/Dense>
 
 #include "libgt/geometry/labels.h"
-#include "tests/geometry/reference.h"
+#include "tests/bench/two_view_scene.h"
 
 namespace {
 
-struct Scene {
-  gt::Camera cam;
-  gt::DepthImage depth_a, depth_b;
-  gt::Rigid3d b_from_a;
-};
-
-const Scene& GetScene() {
-  static const Scene scene = [] {
-    Scene s;
-    s.cam.width = 640;
-    s.cam.height = 480;
-    s.cam.fx = s.cam.fy = 500;
-    s.cam.cx = 319.5;
-    s.cam.cy = 239.5;
-    std::vector<gt::test::Rect> rects;
-    rects.push_back({2, 5.0, {-1e9, -1e9}, {1e9, 1e9}});
-    rects.push_back({2, 2.5, {-0.5, -0.4}, {0.5, 0.4}});
-    rects.push_back({0, 0.5, {-0.4, 2.5}, {0.4, 3.2}});
-    gt::Rigid3d world_from_b = gt::Rigid3d::Identity();
-    world_from_b.linear() = Eigen::AngleAxisd(-9 * M_PI / 180, Eigen::Vector3d::UnitY()).matrix();
-    world_from_b.translation() = Eigen::Vector3d(0.9, 0.1, -0.2);
-    s.depth_a = gt::test::Render(rects, s.cam, gt::Rigid3d::Identity()).depth;
-    s.depth_b = gt::test::Render(rects, s.cam, world_from_b).depth;
-    s.b_from_a = gt::RelativePose(gt::Rigid3d::Identity(), world_from_b);
-    return s;
-  }();
-  return scene;
-}
+using Scene = gt::bench::TwoViewScene;
+const Scene& GetScene() { return gt::bench::GetTwoViewScene(); }
 
 void BM_LabelDirection(benchmark::State& state) {
   const Scene& s = GetScene();
