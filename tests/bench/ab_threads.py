@@ -19,17 +19,9 @@ import subprocess
 import tempfile
 import time
 
+from e2e_bench import uptime  # load average and CPU pressure, as e2e_bench prints them
+
 SOURCE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-
-def load():
-    text = open("/proc/loadavg").read().strip()
-    try:
-        with open("/proc/pressure/cpu") as f:
-            text += "; cpu pressure " + f.readline().strip()
-    except OSError:
-        pass
-    return text
 
 
 def run(binary, recipe, threads, out):
@@ -54,7 +46,7 @@ def main():
     binaries = {"before": args.base, "after": args.new}
     out = tempfile.mkdtemp(prefix="occgt-ab-")
     res = {}
-    print("load before:", load())
+    print("load before:", uptime())
     for rep in range(args.reps):
         for recipe in args.recipes:
             for name in (("before", "after") if rep % 2 == 0 else ("after", "before")):
@@ -64,7 +56,7 @@ def main():
                     print(f"{rep} {os.path.basename(recipe)} {name} t{t}: {w:.2f} s wall, "
                           f"{c:.2f} s CPU, load {open('/proc/loadavg').read().split()[0]}",
                           flush=True)
-    print("load after:", load())
+    print("load after:", uptime())
     print("| recipe | build | t1 wall | t2 wall | t1/t2 | CPU t1 / t2 |")
     print("|---|---|---|---|---|---|")
     for recipe in args.recipes:
