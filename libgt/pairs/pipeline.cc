@@ -689,7 +689,6 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
     samples_written += pending_samples;
   };
   struct Item {
-    size_t job = 0;
     std::shared_ptr<SceneData> data;
     EncodedSample sample;
   };
@@ -711,15 +710,14 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
     const size_t j = next_job++;
     items[j] = std::make_unique<Item>();
     Item* item = items[j].get();
-    item->job = j;
-    const std::string& scene = all[jobs[item->job].sample]->scene;
+    const std::string& scene = all[jobs[j].sample]->scene;
     item->data = scene_of(scene);
-    if (last_job_of_scene.at(scene) == item->job) scene_data.erase(scene);
+    if (last_job_of_scene.at(scene) == j) scene_data.erase(scene);
     return j;
   };
   auto compute = [&](size_t j) -> size_t {
     Item* item = items[j].get();
-    const int64_t k = jobs[item->job].sample;
+    const int64_t k = jobs[j].sample;
     const SelectedPair& p = *all[k];
     SceneData& d = *item->data;
     auto i0 = d.index_of_id.find(p.frame0), i1 = d.index_of_id.find(p.frame1);
