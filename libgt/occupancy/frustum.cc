@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <utility>
 
 #include "libgt/core/error.h"
 #include "libgt/occupancy/edge_index.h"
@@ -171,20 +172,18 @@ inline void MarkBins(const std::vector<double>& e, int num_bins, double z0, doub
   *k = kk;  // e_kk < z1 <= every later z0
 }
 
-// Exact: every voxel crossed by o + z d, z in [e_0, e_D) (clipped to the box and to
-// z_known_max, beyond which the caller guarantees that the ray meets no known voxel), contributes
+// Exact: every voxel crossed by o + z d, z in [e_0, e_D) (clipped to the box), contributes
 // its state to every bin its z-interval overlaps. Two-level 3-D DDA (Amanatides & Woo 1987): over
 // 8^3 blocks first; a block that is absent (all unknown) is skipped, a uniform one (all free /
 // all occupied) contributes its whole z-interval at once, and only inside a mixed block are
 // its voxels stepped through.
 // Since the box splat (SplatExact) it walks only the rays that lie in a voxel face plane.
-__attribute__((noinline)) RayBits TraverseExact(const MapView& m, const Eigen::Vector3d& o,
-                                                const Eigen::Vector3d& d,
-                                                const std::vector<double>& e, double z_known_max) {
+RayBits TraverseExact(const MapView& m, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                      const std::vector<double>& e) {
   RayBits r;
   const int D = static_cast<int>(e.size()) - 1;
   constexpr int S = VoxelMap::kShift, W = VoxelMap::kSide;
-  double z = e.front(), z_end = std::min(e.back(), z_known_max);
+  double z = e.front(), z_end = e.back();
   if (!(z < z_end) || !ClipToBox(o, d, m.lo_m, m.hi_m, &z, &z_end)) return r;
   const double res = m.res, inv_res = 1.0 / m.res, block_m = res * W;
   int step[3], bc[3], blo[3], bhi[3];
@@ -320,14 +319,11 @@ RayBits TraverseCenter(const MapView& m, const Eigen::Vector3d& o, const Eigen::
     if (zc < z_lo) continue;
     if (zc > z_hi) break;
     const Eigen::Vector3d p = o + zc * d;
-    // floor(s) in [lo, hi] iff s in [lo, hi + 1) (integers); there floor is the truncation
-    // minus one for negative non-integers (std::floor is a libm call on baseline x86-64).
-    const double sx = p.x() * inv, sy = p.y() * inv, sz = p.z() * inv;
-    if (!(sx >= m.lo.x() && sy >= m.lo.y() && sz >= m.lo.z() && sx < m.hi.x() + 1.0 &&
-          sy < m.hi.y() + 1.0 && sz < m.hi.z() + 1.0))
+    int ix, iy, iz;
+    if (!FloorInRange(p.x() * inv, m.lo.x(), m.hi.x(), &ix) ||
+        !FloorInRange(p.y() * inv, m.lo.y(), m.hi.y(), &iy) ||
+        !FloorInRange(p.z() * inv, m.lo.z(), m.hi.z(), &iz))
       continue;
-    const int tx = static_cast<int>(sx), ty = static_cast<int>(sy), tz = static_cast<int>(sz);
-    const int ix = tx - (sx < tx), iy = ty - (sy < ty), iz = tz - (sz < tz);
     const int32_t b = m.window->Find(ix >> S, iy >> S, iz >> S);
     if (b < 0) continue;
     const int8_t s = m.map->states(b)[VoxelMap::Local(ix, iy, iz)];
@@ -668,7 +664,7 @@ void SplatExact(const MapView& view, const Camera& cam, const Eigen::Matrix3d& R
   const size_t n = vol->occ.size();
   SplatRays rays;
   rays.inv_x.resize(n), rays.inv_y.resize(n), rays.inv_z.resize(n);
-  std::vector<size_t> walk;
+  std::vector<std::pair<size_t, Eigen::Vector3d>> walk;  // ray index and direction
   for (int v = 0; v < vol->height; ++v) {
     for (int u = 0; u < vol->width; ++u) {
       const size_t i = static_cast<size_t>(v) * vol->width + u;
@@ -676,7 +672,7 @@ void SplatExact(const MapView& view, const Camera& cam, const Eigen::Matrix3d& R
           R * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
       const Eigen::Vector3d inv(1.0 / d.x(), 1.0 / d.y(), 1.0 / d.z());
       if (d.x() == 0 || d.y() == 0 || d.z() == 0 || !inv.allFinite()) {
-        walk.push_back(i);
+        walk.emplace_back(i, d);
         rays.inv_x[i] = rays.inv_y[i] = rays.inv_z[i] = 0.0;  // z-interval empty: no box
       } else {
         rays.inv_x[i] = inv.x(), rays.inv_y[i] = inv.y(), rays.inv_z[i] = inv.z();
@@ -706,11 +702,8 @@ void SplatExact(const MapView& view, const Camera& cam, const Eigen::Matrix3d& R
                rays, vol, &spans);
     }
   }
-  for (const size_t i : walk) {
-    const int u = static_cast<int>(i % vol->width), v = static_cast<int>(i / vol->width);
-    const Eigen::Vector3d d =
-        R * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
-    const RayBits r = TraverseExact(view, o, d, e, std::numeric_limits<double>::infinity());
+  for (const auto& [i, d] : walk) {
+    const RayBits r = TraverseExact(view, o, d, e);
     vol->occ[i] = r.occ;
     vol->known[i] = r.known;
   }

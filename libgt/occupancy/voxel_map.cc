@@ -16,15 +16,11 @@ constexpr int kPackOffset = 1 << 20;
 
 // OctoMap's checked key conversion, as a voxel index: floor(x / res) computed as
 // floor((1 / res) * x) in double from the float coordinate, inside [-2^15, 2^15).
-// floor(s) >= kMinIndex iff s >= kMinIndex, and floor(s) <= kMaxIndex iff s < kMaxIndex + 1
-// (both integers); inside that range floor is the truncation minus one for negative
-// non-integers, exactly (std::floor is a libm call on baseline x86-64).
 inline bool CheckedIndex(const float c[3], double inv_res, int idx[3]) {
   for (int a = 0; a < 3; ++a) {
-    const double s = inv_res * static_cast<double>(c[a]);
-    if (!(s >= VoxelMap::kMinIndex && s < VoxelMap::kMaxIndex + 1.0)) return false;  // NaN too
-    const int t = static_cast<int>(s);
-    idx[a] = t - (s < t);
+    if (!FloorInRange(inv_res * static_cast<double>(c[a]), VoxelMap::kMinIndex, VoxelMap::kMaxIndex,
+                      &idx[a]))
+      return false;
   }
   return true;
 }

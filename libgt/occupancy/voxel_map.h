@@ -45,6 +45,17 @@ struct LogOddsModel {
   float occupied_threshold = 0.0f;
 };
 
+// floor(s) into *out when it lies in [lo, hi] (integers); false otherwise (NaN too).
+// floor(s) >= lo iff s >= lo, floor(s) <= hi iff s < hi + 1, and inside that range floor is
+// the truncation minus one for negative non-integers: exact, without std::floor's libm call
+// (baseline x86-64 has no rounding instruction). For the per-point and per-bin hot loops.
+inline bool FloorInRange(double s, int lo, int hi, int* out) {
+  if (!(s >= lo && s < hi + 1.0)) return false;
+  const int t = static_cast<int>(s);
+  *out = t - (s < t);
+  return true;
+}
+
 class VoxelMap {
  public:
   static constexpr int kShift = 3;  // block side 2^3 = 8 voxels
