@@ -15,14 +15,13 @@
 #include <fstream>
 #include <memory>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
 
 #include "libgt/core/error.h"
+#include "libgt/io/codec.h"
 #include "libgt/io/files.h"
-#include "libgt/io/image.h"
 #include "libgt/io/npy.h"
 
 namespace gt::io {
@@ -121,26 +120,16 @@ DepthImage DecodePng16Depth(std::string_view bytes, const DepthSource& src, int 
                                      std::to_string(declared.height));
     }
   }
-  if (std::string e = PngDamage(bytes); !e.empty()) throw InputError(src.path, e);
-  // Only PNG and binary/ASCII PGM: cv::imdecode would otherwise try every codec OpenCV
-  // has (JPEG 2000, GDAL with temporary files, ...) on bytes that are none of them.
+  // Only PNG and binary/plain PGM.
   static const char kPngSig[] = "\x89PNG\r\n\x1a\n";
   const bool png = bytes.size() >= 8 && bytes.compare(0, 8, std::string_view(kPngSig, 8)) == 0;
   const bool pgm = bytes.size() >= 2 && bytes[0] == 'P' && (bytes[1] == '5' || bytes[1] == '2');
   if (!png && !pgm) throw InputError(src.path, "not a PNG or PGM file (bad signature)");
-  cv::Mat m;
-  try {
-    const cv::Mat encoded(1, static_cast<int>(std::min<size_t>(bytes.size(), INT32_MAX)), CV_8UC1,
-                          const_cast<char*>(bytes.data()));
-    m = cv::imdecode(encoded, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
-  } catch (const cv::Exception& e) {
-    throw InputError(src.path, std::string("cannot decode image: ") + e.what());
-  }
-  if (m.empty()) throw InputError(src.path, "cannot decode image (corrupt or unsupported)");
+  const cv::Mat m = DecodeImageBytes(bytes, ChannelOrder::kRgb, src.path);
   if (m.type() != CV_16UC1) {
-    throw InputError(src.path, "expected a 16-bit single-channel depth image, got OpenCV type " +
-                                   std::to_string(m.type()) +
-                                   (m.depth() == CV_8U ? " (8-bit)" : ""));
+    throw InputError(src.path, "expected a 16-bit single-channel depth image, got " +
+                                   std::to_string(m.channels()) + " channel(s) of " +
+                                   (m.depth() == CV_8U ? "8" : "16") + " bits");
   }
   DepthImage d(m.cols, m.rows);
   for (int v = 0; v < m.rows; ++v) {

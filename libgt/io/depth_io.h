@@ -17,7 +17,8 @@ namespace gt::io {
 // header, before any pixel buffer is allocated).
 DepthImage ReadDepth(const DepthSource& source, int expected_width = 0, int expected_height = 0);
 // The same from the file's bytes already in memory (source.path names it in messages):
-// ReadDepth is ReadFileBytes + DecodeDepth. PNG/PGM go through cv::imdecode, EXR through
+// ReadDepth is ReadFileBytes + DecodeDepth. PNG/PGM go through libgt/io/codec.h (only 16-bit
+// grey is depth: an 8-bit or colour file is refused), EXR through
 // an in-memory Imf::IStream.
 DepthImage DecodeDepth(std::string_view bytes, const DepthSource& source, int expected_width = 0,
                        int expected_height = 0);

@@ -2,11 +2,11 @@
 
 #include <cstring>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "libgt/core/error.h"
+#include "libgt/io/codec.h"
 #include "libgt/io/depth_io.h"
 #include "libgt/io/files.h"
 
@@ -25,97 +25,12 @@ ColorImage FromRgbMat(const cv::Mat& rgb) {
   return out;
 }
 
-uint32_t BigEndian32At(std::string_view b, size_t i) {
-  return (static_cast<uint32_t>(static_cast<unsigned char>(b[i])) << 24) |
-         (static_cast<uint32_t>(static_cast<unsigned char>(b[i + 1])) << 16) |
-         (static_cast<uint32_t>(static_cast<unsigned char>(b[i + 2])) << 8) |
-         static_cast<uint32_t>(static_cast<unsigned char>(b[i + 3]));
-}
-
 }  // namespace
-
-std::string PngDamage(std::string_view bytes) {
-  static constexpr char kSignature[] = "\x89PNG\r\n\x1a\n";
-  if (bytes.size() < 8 || bytes.compare(0, 8, std::string_view(kSignature, 8)) != 0) return "";
-  size_t pos = 8;
-  uint64_t width = 0, height = 0, bits_per_pixel = 0, idat_bytes = 0;
-  while (true) {
-    if (bytes.size() - pos < 12) {
-      return "truncated PNG (file ends at byte " + std::to_string(bytes.size()) +
-             " before the IEND chunk)";
-    }
-    const uint64_t length = BigEndian32At(bytes, pos);
-    const std::string_view type = bytes.substr(pos + 4, 4);
-    if (length > bytes.size() - pos - 12) {
-      return "truncated PNG (chunk '" + std::string(type) + "' at byte " + std::to_string(pos) +
-             " needs " + std::to_string(length) + " data bytes past the end of the file)";
-    }
-    if (type == "IHDR" && length >= 13) {
-      width = BigEndian32At(bytes, pos + 8);
-      height = BigEndian32At(bytes, pos + 12);
-      const auto bit_depth = static_cast<unsigned char>(bytes[pos + 16]);
-      const auto colour_type = static_cast<unsigned char>(bytes[pos + 17]);
-      static const int kChannels[7] = {1, 0, 3, 1, 2, 0, 4};  // by PNG colour type
-      bits_per_pixel = colour_type < 7 ? uint64_t{bit_depth} * kChannels[colour_type] : 0;
-    } else if (type == "IDAT") {
-      idat_bytes += length;
-    }
-    pos += 12 + length;
-    if (type == "IEND") break;
-  }
-  // Deflate compresses at most ~1032:1, so less IDAT data than raw / 1032 cannot hold the
-  // image (libpng would print "Not enough image data" after a full-size allocation).
-  const uint64_t raw_bytes = height * ((width * bits_per_pixel + 7) / 8);
-  if (raw_bytes / 1032 > idat_bytes + 64) {
-    return "PNG image data too short (" + std::to_string(idat_bytes) + " compressed bytes for " +
-           std::to_string(width) + "x" + std::to_string(height) + ")";
-  }
-  return "";
-}
-
-std::string JpegDamage(std::string_view bytes) {
-  const auto at = [&](size_t i) { return static_cast<unsigned char>(bytes[i]); };
-  if (bytes.size() < 2 || at(0) != 0xFF || at(1) != 0xD8) return "";
-  const std::string truncated = "truncated JPEG (no end-of-image marker in " +
-                                std::to_string(bytes.size()) + " bytes)";
-  size_t pos = 2;
-  while (true) {
-    // A marker: 0xFF (fill bytes allowed), then its code.
-    if (pos >= bytes.size() || at(pos) != 0xFF) return truncated;
-    while (pos < bytes.size() && at(pos) == 0xFF) ++pos;
-    if (pos >= bytes.size()) return truncated;
-    const unsigned char marker = at(pos++);
-    if (marker == 0xD9) return "";  // EOI
-    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) continue;  // no length
-    if (bytes.size() - pos < 2) return truncated;
-    const size_t length = (static_cast<size_t>(at(pos)) << 8) | at(pos + 1);
-    if (length < 2 || length > bytes.size() - pos) return truncated;
-    pos += length;
-    if (marker != 0xDA) continue;
-    // Entropy-coded data after SOS: runs to the next marker other than a stuffed 0xFF00
-    // or a restart marker.
-    while (true) {
-      if (bytes.size() - pos < 2) return truncated;
-      if (at(pos) == 0xFF) {
-        const unsigned char next = at(pos + 1);
-        if (next != 0x00 && next != 0xFF && !(next >= 0xD0 && next <= 0xD7)) break;
-        pos += next == 0xFF ? 1 : 2;
-      } else {
-        ++pos;
-      }
-    }
-  }
-}
 
 ColorImage ReadColor(const std::string& path) {
   if (!FileExists(path)) throw InputError(path, "cannot open file (missing or unreadable)");
   const std::string bytes = ReadFileBytes(path);
-  if (std::string e = PngDamage(bytes); !e.empty()) throw InputError(path, e);
-  if (std::string e = JpegDamage(bytes); !e.empty()) throw InputError(path, e);
-  cv::Mat m = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8U,
-                                    const_cast<char*>(bytes.data())),
-                           cv::IMREAD_UNCHANGED);
-  if (m.empty()) throw InputError(path, "cannot decode image (corrupt or unsupported)");
+  cv::Mat m = DecodeImageBytes(bytes, ChannelOrder::kRgb, path);
   if (m.depth() == CV_16U) {
     m.convertTo(m, CV_8U, 1.0 / 257.0);
   } else if (m.depth() != CV_8U) {
@@ -127,10 +42,10 @@ ColorImage ReadColor(const std::string& path) {
       cv::cvtColor(m, rgb, cv::COLOR_GRAY2RGB);
       break;
     case 3:
-      cv::cvtColor(m, rgb, cv::COLOR_BGR2RGB);
+      rgb = m;
       break;
     case 4:
-      cv::cvtColor(m, rgb, cv::COLOR_BGRA2RGB);
+      cv::cvtColor(m, rgb, cv::COLOR_RGBA2RGB);
       break;
     default:
       throw InputError(path, "expected 1, 3 or 4 channels, got " + std::to_string(m.channels()));

@@ -1,10 +1,10 @@
-// Colour images: loading (PNG/JPG via OpenCV) and bilinear resizing to the working
+// Colour images: loading (PNG, JPEG, Netpbm via libgt/io/codec.h) and bilinear resizing to the working
 // resolution, with K rescaled by Camera::Resized (camera.h: pixel areas stay aligned,
 // which is also what cv::resize with INTER_LINEAR assumes).
 //
 // Layout: ColorImage::rgb is uint8, row-major [height, width, 3], channels in R, G, B
-// order (OpenCV's BGR is swapped on load). Grey and 16-bit inputs are converted to 8-bit
-// RGB; an alpha channel is dropped.
+// order. Grey and 16-bit inputs are converted to 8-bit RGB (16-bit: round(v / 257)); an
+// alpha channel is dropped.
 #pragma once
 
 #include <cstdint>
@@ -26,16 +26,6 @@ struct ColorImage {
   }
   bool empty() const { return rgb.empty(); }
 };
-
-// "" when `bytes` are not a PNG or a structurally complete one (signature, then chunks
-// that fit in the file, ending with IEND); else the problem ("truncated PNG (...)").
-// Checked before decoding so that a cut file is one clear InputError and libpng never
-// prints its own "libpng error: Read Error" line on stderr.
-std::string PngDamage(std::string_view bytes);
-// "" when `bytes` are not a JPEG or one whose scan data reaches the EOI marker (segments
-// walked by their lengths, entropy-coded data scanned for the next marker); else the
-// problem ("truncated JPEG (...)"). OpenCV decodes a cut JPEG silently, grey below the cut.
-std::string JpegDamage(std::string_view bytes);
 
 // Decodes an image file; InputError naming the file when missing or undecodable.
 ColorImage ReadColor(const std::string& path);

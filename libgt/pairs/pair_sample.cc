@@ -5,11 +5,10 @@
 
 #include <exception>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "libgt/core/error.h"
 #include "libgt/geometry/pair.h"
+#include "libgt/io/codec.h"
 #include "libgt/io/image.h"
 #include "libgt/io/npy.h"
 
@@ -38,16 +37,10 @@ json CountsJson(const std::array<int64_t, kNumPixelLabels>& counts) {
 
 std::string EncodeImage(const io::ColorImage& image, const std::string& format,
                         const std::string& what) {
-  cv::Mat rgb(image.height, image.width, CV_8UC3, const_cast<uint8_t*>(image.rgb.data()));
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  std::vector<uchar> buf;
-  std::vector<int> params;
-  if (format == "jpg") params = {cv::IMWRITE_JPEG_QUALITY, 95};
-  if (format == "png") params = {cv::IMWRITE_PNG_COMPRESSION, 1};
-  if (!cv::imencode("." + format, bgr, buf, params))
-    throw InputError(what, "cannot encode " + format);
-  return std::string(buf.begin(), buf.end());
+  const cv::Mat rgb(image.height, image.width, CV_8UC3, const_cast<uint8_t*>(image.rgb.data()));
+  if (format == "jpg") return io::EncodeJpegBytes(rgb, io::ChannelOrder::kRgb, 95, what);
+  if (format == "png") return io::EncodePngBytes(rgb, io::ChannelOrder::kRgb, 1, what);
+  throw InputError(what, "cannot encode " + format + " (expected png or jpg)");
 }
 
 }  // namespace

@@ -3,11 +3,11 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "libgt/core/error.h"
 #include "libgt/geometry/pair.h"
+#include "libgt/io/codec.h"
 #include "libgt/io/depth_io.h"
 #include "libgt/io/files.h"
 #include "libgt/io/image.h"
@@ -100,10 +100,7 @@ std::vector<double> FindEdges(const nlohmann::json& meta, size_t count, const st
 }
 
 cv::Mat DecodeImage(const std::string& bytes, const std::string& name) {
-  const cv::Mat img =
-      cv::imdecode(std::vector<uint8_t>(bytes.begin(), bytes.end()), cv::IMREAD_UNCHANGED);
-  if (img.empty()) throw InputError(name, "expected a PNG or JPEG image");
-  return img;
+  return gt::io::DecodeImageBytes(bytes, gt::io::ChannelOrder::kBgr, name);
 }
 
 cv::Mat FieldImage(const std::map<std::string, std::string>& fields, const std::string& stem,

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "libgt/core/error.h"
+#include "libgt/io/codec.h"
 #include "libgt/report/canvas.h"
 
 namespace gt::report {
@@ -441,11 +441,7 @@ gt::occupancy::FrustumVolume VolumeFromDense(const std::vector<uint8_t>& dense, 
 }
 
 std::string EncodePng(const cv::Mat& image) {
-  std::vector<uint8_t> buf;
-  if (!cv::imencode(".png", image, buf, {cv::IMWRITE_PNG_COMPRESSION, 6})) {
-    throw InputError("png", "OpenCV could not encode the image");
-  }
-  return std::string(buf.begin(), buf.end());
+  return gt::io::EncodePngBytes(image, gt::io::ChannelOrder::kBgr, 6, "png");
 }
 
 }  // namespace gt::report

@@ -8,11 +8,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "libgt/core/error.h"
+#include "libgt/io/codec.h"
 #include "libgt/io/files.h"
 
 namespace gt::report {
@@ -562,9 +562,9 @@ std::vector<std::string> WriteSplitReport(const std::string& split_dir, const st
         cv::Mat small;
         cv::resize(*mat, small, cv::Size(), options.gallery_scale, options.gallery_scale,
                    cv::INTER_AREA);
-        std::vector<uint8_t> buf;
-        cv::imencode(".jpg", small, buf, {cv::IMWRITE_JPEG_QUALITY, 85});
-        item.images.push_back({label, "image/jpeg", std::string(buf.begin(), buf.end())});
+        item.images.push_back(
+            {label, "image/jpeg",
+             gt::io::EncodeJpegBytes(small, gt::io::ChannelOrder::kBgr, 85, label)});
       }
     } catch (const InputError& e) {
       item.caption += " — could not be read: " + std::string(e.what());

@@ -6,10 +6,9 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "libgt/core/error.h"
+#include "libgt/io/codec.h"
 #include "libgt/io/files.h"
 #include "libgt/io/npy.h"
 #include "libgt/synth/random.h"
@@ -56,14 +55,8 @@ std::string DumpOneFramePerLine(const ojson& manifest) {
 }
 
 std::string EncodePngRgb(const io::ColorImage& image, const std::string& path_for_errors) {
-  cv::Mat rgb(image.height, image.width, CV_8UC3, const_cast<uint8_t*>(image.rgb.data()));
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  std::vector<uchar> png;
-  if (!cv::imencode(".png", bgr, png, {cv::IMWRITE_PNG_COMPRESSION, 3})) {
-    throw InputError(path_for_errors, "PNG encoding failed");
-  }
-  return std::string(png.begin(), png.end());
+  const cv::Mat rgb(image.height, image.width, CV_8UC3, const_cast<uint8_t*>(image.rgb.data()));
+  return io::EncodePngBytes(rgb, io::ChannelOrder::kRgb, 3, path_for_errors);
 }
 
 }  // namespace

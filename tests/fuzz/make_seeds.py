@@ -151,6 +151,31 @@ def main():
         put("image_size", name, b.getvalue())
     put("image_size", "comment.pgm", b"P5\n# a comment\n7 5\n255\n" + bytes(35))
 
+    # --- colour image decoding: small files of every layout the decoder handles (real
+    # images are 640x480 and would make each run slow).
+    for fmt, opts, name in [("PNG", {}, "rgb.png"), ("JPEG", {"quality": 90}, "rgb.jpg"),
+                            ("JPEG", {"progressive": True}, "progressive.jpg"),
+                            ("PPM", {}, "rgb.ppm")]:
+        b = io.BytesIO()
+        Image.fromarray(rgb).save(b, fmt, **opts)
+        put("image_decode", name, b.getvalue())
+    grey = np.arange(5 * 7, dtype=np.uint8).reshape(5, 7) * 7
+    for mode, name in [("L", "grey.png"), ("LA", "grey_alpha.png"), ("P", "palette.png"),
+                       ("RGBA", "rgba.png"), ("1", "bilevel.png"), ("L", "grey.jpg")]:
+        img = Image.fromarray(grey).convert(mode) if mode != "RGBA" else Image.fromarray(
+            np.dstack([rgb, grey]))
+        b = io.BytesIO()
+        img.save(b, "JPEG" if name.endswith(".jpg") else "PNG")
+        put("image_decode", name, b.getvalue())
+    b = io.BytesIO()
+    Image.fromarray((np.arange(12, dtype=np.uint16).reshape(3, 4) * 5000)).save(b, "PNG")
+    put("image_decode", "grey16.png", b.getvalue())
+    put("image_decode", "plain.pgm", b"P2\n# c\n3 2\n300\n0 7 300\n15 3 9\n")
+    put("image_decode", "plain.ppm", b"P3 2 1 255  1 2 3  250 128 0\n")
+    put("image_decode", "plain.pbm", b"P1\n3 2\n1 0 1\n001\n")
+    put("image_decode", "raw.pbm", b"P4\n3 2\n\xa0\x3f")
+    put("image_decode", "wide.pgm", b"P5\n4 3\n65535\n" + bytes(range(24)))
+
     # --- OpenEXR depth: uncompressed scanline files written by hand (no EXR writer in
     # Debian's python3), with the channel names Blender uses.
     for chans, tag in [(["Z"], "z"), (["View Layer.Depth.Z"], "blender"), (["R", "G", "B"], "rgb"),

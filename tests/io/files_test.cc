@@ -11,6 +11,7 @@
 #include <random>
 
 #include "libgt/core/error.h"
+#include "libgt/io/codec.h"
 #include "libgt/io/image.h"
 #include "libgt/io/text_parsing.h"
 #include "tests/support/test_support.h"
