@@ -1,6 +1,8 @@
 // Pair facade (pair_occupancy.h).
 #include "libgt/occupancy/pair_occupancy.h"
 
+#include <tbb/parallel_invoke.h>
+
 #include "libgt/core/error.h"
 
 namespace gt::occupancy {
@@ -21,8 +23,8 @@ PairOccupancy ComputePairOccupancy(const FusionInput& frame0, const FusionInput&
                                    const OccupancyMap* shared_map) {
   PairOccupancy out;
   if (mode == OccupancyMode::kTwoPoint) {
-    out.cam0 = TwoPointVolume(frame0, frame1, bin_options);
-    out.cam1 = TwoPointVolume(frame1, frame0, bin_options);
+    tbb::parallel_invoke([&] { out.cam0 = TwoPointVolume(frame0, frame1, bin_options); },
+                         [&] { out.cam1 = TwoPointVolume(frame1, frame0, bin_options); });
     return out;
   }
   OccupancyMap fused;
@@ -31,8 +33,14 @@ PairOccupancy ComputePairOccupancy(const FusionInput& frame0, const FusionInput&
     fused = FuseOccupancy({frame0, frame1}, fusion_options);
     map = &fused;
   }
-  out.cam0 = ProjectToFrustum(*map, frame0.camera, frame0.world_from_cam, bin_options);
-  out.cam1 = ProjectToFrustum(*map, frame1.camera, frame1.world_from_cam, bin_options);
+  // The two cameras' volumes are independent reads of the map: two tasks (a pair's
+  // occupancy is often the last work of a build, when no other sample is left to run
+  // beside it).
+  tbb::parallel_invoke(
+      [&] { out.cam0 = ProjectToFrustum(*map, frame0.camera, frame0.world_from_cam, bin_options); },
+      [&] {
+        out.cam1 = ProjectToFrustum(*map, frame1.camera, frame1.world_from_cam, bin_options);
+      });
   return out;
 }
 
