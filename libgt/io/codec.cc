@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "libgt/core/error.h"
@@ -195,13 +196,16 @@ void JpegOnMessage(j_common_ptr c, int level) {
 
 void JpegSilent(j_common_ptr) {}
 
-void JpegInstallErrors(JpegErrors* e) {
-  jpeg_std_error(&e->mgr);
+// Zeroes a JpegDecodeState or JpegEncodeState (its struct, C data only) and installs the
+// error handlers above in its cinfo.
+template <typename State>
+void JpegInitState(State* s) {
+  std::memset(s, 0, sizeof *s);
+  JpegErrors* e = &s->errors;
+  s->cinfo.err = jpeg_std_error(&e->mgr);
   e->mgr.error_exit = JpegOnError;
   e->mgr.emit_message = JpegOnMessage;
   e->mgr.output_message = JpegSilent;
-  e->message[0] = '\0';
-  e->warning[0] = '\0';
 }
 
 struct JpegDecodeState {
@@ -236,9 +240,7 @@ bool JpegReadRows(JpegDecodeState* s, unsigned char** rows) {
 
 cv::Mat DecodeJpeg(std::string_view bytes, ChannelOrder order, const std::string& what) {
   JpegDecodeState s;
-  std::memset(&s, 0, sizeof s);
-  s.cinfo.err = &s.errors.mgr;
-  JpegInstallErrors(&s.errors);
+  JpegInitState(&s);
   struct Guard {
     jpeg_decompress_struct* cinfo;
     ~Guard() { jpeg_destroy_decompress(cinfo); }
@@ -301,14 +303,19 @@ class PnmParser {
  public:
   PnmParser(std::string_view bytes, const std::string& what) : b_(bytes), what_(what) {}
 
+  // Width and height, the first two header tokens (for NetpbmSize).
+  std::pair<int64_t, int64_t> Size() {
+    pos_ = 2;
+    const int64_t width = HeaderNumber("width");
+    return {width, HeaderNumber("height")};
+  }
+
   cv::Mat Parse(ChannelOrder order) {
     const char kind = b_[1];
     const bool plain = kind <= '3';
     const bool bitmap = kind == '1' || kind == '4';
     const int channels = (kind == '3' || kind == '6') ? 3 : 1;
-    pos_ = 2;
-    const int64_t width = HeaderNumber("width");
-    const int64_t height = HeaderNumber("height");
+    const auto [width, height] = Size();
     const int64_t maxval = bitmap ? 1 : HeaderNumber("maxval");
     if (maxval < 1 || maxval > 65535)
       Fail("maxval must be 1..65535, got " + std::to_string(maxval));
@@ -497,6 +504,19 @@ std::string JpegDamage(std::string_view bytes) {
   }
 }
 
+bool NetpbmSize(std::string_view head, int* width, int* height) {
+  if (head.size() < 2 || head[0] != 'P' || head[1] < '1' || head[1] > '6') return false;
+  try {
+    const auto [w, h] = PnmParser(head, "").Size();
+    if (w <= 0 || h <= 0) return false;
+    *width = static_cast<int>(w);
+    *height = static_cast<int>(h);
+    return true;
+  } catch (const InputError&) {
+    return false;
+  }
+}
+
 cv::Mat DecodeImageBytes(std::string_view bytes, ChannelOrder order, const std::string& what) {
   static const char kPngSig[] = "\x89PNG\r\n\x1a\n";
   if (std::string e = PngDamage(bytes); !e.empty()) throw InputError(what, e);
@@ -561,9 +581,7 @@ std::string EncodeJpegBytes(const cv::Mat& image, ChannelOrder order, int qualit
                      "and a quality 1..100");
   }
   JpegEncodeState s;
-  std::memset(&s, 0, sizeof s);
-  s.cinfo.err = &s.errors.mgr;
-  JpegInstallErrors(&s.errors);
+  JpegInitState(&s);
   struct Guard {
     JpegEncodeState* s;
     ~Guard() {

@@ -43,6 +43,11 @@ std::string JpegDamage(std::string_view bytes);
 // InputError ("unsupported image format ..."). PngDamage and JpegDamage are checked first.
 cv::Mat DecodeImageBytes(std::string_view bytes, ChannelOrder order, const std::string& what);
 
+// Width and height from the first two tokens of a Netpbm header (P1..P6; comments and
+// whitespace as DecodeImageBytes reads them), without reading further; false when `head`
+// is not a Netpbm file or these tokens are missing or malformed. ReadImageSize uses it.
+bool NetpbmSize(std::string_view head, int* width, int* height);
+
 // 8-bit (CV_8UC1 grey, CV_8UC3 colour in `order`, CV_8UC4 with alpha) or 16-bit grey or
 // colour (CV_16UC1 / CV_16UC3) to PNG with zlib level `level` (0..9) and libpng's adaptive
 // row filters.

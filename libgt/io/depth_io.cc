@@ -8,7 +8,6 @@
 #include <ImfInputFile.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -366,31 +365,6 @@ bool JpegSize(std::istream& in, ImageSize* size) {
 }
 
 // Netpbm (P1..P6): magic, then width and height as decimal tokens, '#' comments allowed.
-bool PnmSize(std::string_view head, ImageSize* size) {
-  if (head.size() < 2 || head[0] != 'P' || head[1] < '1' || head[1] > '6') return false;
-  size_t i = 2;
-  int64_t v[2] = {0, 0};
-  for (int k = 0; k < 2; ++k) {
-    while (i < head.size() &&
-           (std::isspace(static_cast<unsigned char>(head[i])) || head[i] == '#')) {
-      if (head[i] == '#') {
-        while (i < head.size() && head[i] != '\n') ++i;
-      } else {
-        ++i;
-      }
-    }
-    const size_t start = i;
-    while (i < head.size() && head[i] >= '0' && head[i] <= '9' && i - start < 9) {
-      v[k] = v[k] * 10 + (head[i] - '0');
-      ++i;
-    }
-    if (i == start) return false;
-  }
-  if (v[0] <= 0 || v[1] <= 0) return false;
-  size->width = static_cast<int>(v[0]);
-  size->height = static_cast<int>(v[1]);
-  return true;
-}
 
 constexpr size_t kHeadBytes = 512;  // PNG IHDR, a Netpbm header with comments
 
@@ -409,7 +383,7 @@ ImageSize ImageSizeOf(const std::string& path, std::string_view head, std::istre
     throw InputError(path,
                      "JPEG file without a frame header (SOF) before its end (damaged or cut)");
   }
-  if (PnmSize(head, &size)) return size;
+  if (NetpbmSize(head, &size.width, &size.height)) return size;
   throw InputError(path, "unsupported image format (expected PNG, JPEG or Netpbm)");
 }
 

@@ -99,15 +99,14 @@ std::vector<double> FindEdges(const nlohmann::json& meta, size_t count, const st
   return edges;
 }
 
-cv::Mat DecodeImage(const std::string& bytes, const std::string& name) {
-  return gt::io::DecodeImageBytes(bytes, gt::io::ChannelOrder::kBgr, name);
-}
-
 cv::Mat FieldImage(const std::map<std::string, std::string>& fields, const std::string& stem,
                    const std::string& source) {
   for (const char* ext : {".png", ".jpg", ".jpeg"}) {
     const auto it = fields.find(stem + ext);
-    if (it != fields.end()) return DecodeImage(it->second, source + ":" + it->first);
+    if (it != fields.end()) {
+      return gt::io::DecodeImageBytes(it->second, gt::io::ChannelOrder::kBgr,
+                                      source + ":" + it->first);
+    }
   }
   return cv::Mat();
 }

@@ -442,6 +442,23 @@ TEST(Netpbm, BadFilesNameTheProblem) {
   }
 }
 
+TEST(Netpbm, HeaderSizeAgreesWithTheDecoder) {
+  for (const std::string& bytes :
+       {std::string("P1\n# c\n3 2\n1 0 1\n001"), std::string("P2 3 2 200\n0 7 200\n15 3 9\n"),
+        std::string("P3 2 1 255  1 2 3  250 128 0"),
+        std::string("P5\n#a\r4 1\n255\n\x01\x02\x03\x04")}) {
+    int w = 0, h = 0;
+    ASSERT_TRUE(NetpbmSize(bytes, &w, &h)) << bytes;
+    const cv::Mat m = DecodeImageBytes(bytes, ChannelOrder::kRgb, "t");
+    EXPECT_EQ(w, m.cols) << bytes;
+    EXPECT_EQ(h, m.rows) << bytes;
+  }
+  int w = 0, h = 0;
+  for (const std::string& bad : {"GIF89a", "P7\n3 2\n", "P5\nx 2\n", "P5\n3", "P5\n0 2\n255\n"}) {
+    EXPECT_FALSE(NetpbmSize(bad, &w, &h)) << bad;
+  }
+}
+
 TEST(Encoders, RefuseWhatTheyCannotWrite) {
   EXPECT_THROW(EncodePngBytes(cv::Mat(), ChannelOrder::kRgb, 1, "t"), InputError);
   EXPECT_THROW(EncodePngBytes(cv::Mat(2, 2, CV_32FC1), ChannelOrder::kRgb, 1, "t"), InputError);
