@@ -3,8 +3,9 @@
 // Format: POSIX ustar, one regular-file member per sample field, named "<key>.<field>",
 // in the order the samples and their fields are given (files of one sample contiguous).
 // Every header has mode 0644, mtime 0, uid/gid 0 and empty uname/gname, and the archive
-// ends right after the two zero end blocks (libarchive's bytes_in_last_block = 1), so the
-// file size is a multiple of 512, not of 10240. Same samples in, same bytes out.
+// ends right after the two zero end blocks (the archive is written unblocked: libarchive's
+// bytes_per_block = 0), so the file size is a multiple of 512, not of 10240. Same samples
+// in, same bytes out.
 // Member data starts on a 512-byte boundary; .npy fields whose header pads the data to a
 // multiple of 64 bytes (gt::io::EncodeNpy does) therefore have 64-byte aligned array data
 // inside the uncompressed shard.
