@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <openssl/evp.h>
+#include <tbb/parallel_for.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -10,9 +11,11 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -88,6 +91,80 @@ void WriteFileAtomic(const std::string& path, std::string_view bytes) {
   if (dfd >= 0) {
     ::fsync(dfd);
     ::close(dfd);
+  }
+}
+
+void RunConcurrently(const std::vector<std::function<void()>>& functions) {
+  std::vector<std::exception_ptr> errors(functions.size());
+  tbb::parallel_for(size_t{0}, functions.size(), size_t{1}, [&](size_t i) {
+    try {
+      functions[i]();
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  });
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
+void WriteFilesAtomic(const std::vector<FileToWrite>& files) {
+  // 1. every temporary written and fsynced, concurrently.
+  std::vector<std::string> problem(files.size());  // empty: staged
+  tbb::parallel_for(size_t{0}, files.size(), size_t{1}, [&](size_t i) {
+    const fs::path target(files[i].path);
+    std::error_code ec;
+    if (target.has_parent_path()) {
+      fs::create_directories(target.parent_path(), ec);
+      if (ec) {
+        problem[i] = "cannot create the parent folder: " + ec.message();
+        return;
+      }
+    }
+    const std::string tmp = files[i].path + ".tmp";
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) {
+      problem[i] = "cannot create " + tmp + ": " + std::strerror(errno);
+      return;
+    }
+    const bool wrote = WriteAll(fd, files[i].bytes);
+    const int write_errno = errno;
+    const bool synced = wrote && ::fsync(fd) == 0;
+    const int sync_errno = errno;
+    const bool closed = ::close(fd) == 0;
+    if (!wrote || !synced || !closed) {
+      const int e = !wrote ? write_errno : (!synced ? sync_errno : errno);
+      problem[i] = std::string("write failed: ") + std::strerror(e);
+    }
+  });
+  auto remove_temporaries = [&](size_t from) {
+    for (size_t i = from; i < files.size(); ++i) ::unlink((files[i].path + ".tmp").c_str());
+  };
+  for (size_t i = 0; i < files.size(); ++i) {
+    if (!problem[i].empty()) {
+      remove_temporaries(0);
+      throw InputError(files[i].path, problem[i]);
+    }
+  }
+  // 2. published in order, then each folder made durable once (best effort).
+  std::set<std::string> folders;
+  for (size_t i = 0; i < files.size(); ++i) {
+    const std::string tmp = files[i].path + ".tmp";
+    if (::rename(tmp.c_str(), files[i].path.c_str()) != 0) {
+      const int e = errno;
+      remove_temporaries(i);
+      throw InputError(files[i].path,
+                       std::string("cannot rename the temporary file: ") + std::strerror(e));
+    }
+    const fs::path target(files[i].path);
+    folders.insert(target.has_parent_path() ? target.parent_path().string() : ".");
+  }
+  for (const std::string& dir : folders) {
+    const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dfd >= 0) {
+      ::fsync(dfd);
+      ::close(dfd);
+    }
   }
 }
 

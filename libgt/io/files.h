@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -21,6 +22,25 @@ bool FileExists(const std::string& path);
 // folders. Throws InputError naming the path on any failure (disk full, permissions) and
 // removes the temporary file, so a reader never sees a half-written output.
 void WriteFileAtomic(const std::string& path, std::string_view bytes);
+
+// Several files at once, for the small indices a run ends with: each is written to
+// "<path>.tmp" and fsynced, all concurrently (their fsyncs overlap); then, when every one
+// of them succeeded, they are renamed onto their paths in the order given (a later file
+// may be the completion marker of an earlier one) and each parent folder is fsynced once.
+// When a file cannot be written, none of the batch is published, every temporary is
+// removed, and the InputError of the first failing file in the list's order is thrown. When
+// a rename fails (the target is a folder, say), the files before it stay published and
+// the temporaries of the rest are removed.
+struct FileToWrite {
+  std::string path;
+  std::string bytes;
+};
+void WriteFilesAtomic(const std::vector<FileToWrite>& files);
+
+// Runs the functions concurrently (TBB tasks) and returns when all have finished; if some
+// threw, rethrows the exception of the first of them in the list's order (so the error
+// reported does not depend on timing).
+void RunConcurrently(const std::vector<std::function<void()>>& functions);
 
 // Whitespace-separated doubles of one text line; accepts "inf", "-inf", "nan" (any case),
 // which ScanNet writes for lost tracking. Throws InputError("<path>:<line>", ...) on a

@@ -93,7 +93,8 @@ class ShardOutput {
   virtual std::unique_ptr<ShardStream> OpenShard(int64_t shard);
   // Every shard is complete: validates them and writes index.json and pairs.jsonl.
   virtual void Finish() = 0;
-  // LoFTR-family index ("train" or "test") of every pair, K per scene at W×H.
+  // LoFTR-family index ("train" or "test") of every pair, K per scene at W×H. Called
+  // concurrently with Finish (another thread): the two must not share unsynchronised state.
   virtual void ExportLoftr(const std::string& kind, const std::vector<LoftrRow>& rows,
                            const std::map<std::string, std::array<double, 9>>& intrinsics) = 0;
 };

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
@@ -59,9 +60,14 @@ void WriteSceneList(const std::string& out_dir, const std::vector<std::string>& 
   io::WriteFileAtomic((fs::path(out_dir) / "scenes.txt").string(), text);
 }
 
-std::set<std::string> ScenesOf(const std::vector<LoftrPair>& pairs) {
+// The scenes of the pairs; each must have intrinsics (checked before anything is written).
+std::set<std::string> ScenesOf(const std::vector<LoftrPair>& pairs,
+                               const SceneIntrinsics& intrinsics) {
   std::set<std::string> scenes;
   for (const LoftrPair& p : pairs) scenes.insert(p.scene);
+  for (const std::string& s : scenes) {
+    if (!intrinsics.count(s)) throw InputError("loftr export", "no intrinsics for scene " + s);
+  }
   return scenes;
 }
 
@@ -96,10 +102,9 @@ bool LoftrExportOptions::Check(std::string* error) const {
 void ExportLoftrTrain(const std::string& out_dir, const std::vector<LoftrPair>& pairs,
                       const SceneIntrinsics& intrinsics, const LoftrExportOptions& options) {
   if (std::string e; !options.Check(&e)) throw InputError("loftr export options", e);
-  const std::set<std::string> scenes = ScenesOf(pairs);
+  const std::set<std::string> scenes = ScenesOf(pairs, intrinsics);
   std::vector<std::string> other_scenes;
   const auto ids = NumberScenes(scenes, &other_scenes);
-  WriteIntrinsics(out_dir, scenes, intrinsics);
   std::string list;
   std::set<std::string> stems;
   for (const std::string& scene : scenes) {
@@ -107,6 +112,9 @@ void ExportLoftrTrain(const std::string& out_dir, const std::vector<LoftrPair>& 
       throw InputError("loftr export", "scene " + scene + " maps to an npz name already used");
     }
   }
+  // The files are independent: written concurrently (their fsyncs overlap).
+  std::vector<std::function<void()>> writes;
+  writes.emplace_back([&] { WriteIntrinsics(out_dir, scenes, intrinsics); });
   for (const std::string& scene : scenes) {
     std::vector<int64_t> names;
     std::vector<float> scores;
@@ -119,24 +127,27 @@ void ExportLoftrTrain(const std::string& out_dir, const std::vector<LoftrPair>& 
     }
     const auto n = static_cast<int64_t>(scores.size());
     const std::string file = NpzStem(scene) + ".npz";
-    io::WriteNpz((fs::path(out_dir) / "scene_data" / options.split / file).string(),
-                 {{"name", io::EncodeNpy<int64_t>({n, 4}, names)},
-                  {"score", io::EncodeNpy<float>({n}, scores)}});
+    writes.emplace_back(
+        [&out_dir, &options, file, n, names = std::move(names), scores = std::move(scores)] {
+          io::WriteNpz((fs::path(out_dir) / "scene_data" / options.split / file).string(),
+                       {{"name", io::EncodeNpy<int64_t>({n, 4}, names)},
+                        {"score", io::EncodeNpy<float>({n}, scores)}});
+        });
     list += file + "\n";
   }
   const std::string list_name =
       options.list_name.empty() ? options.split + "_list.txt" : options.list_name;
-  io::WriteFileAtomic((fs::path(out_dir) / list_name).string(), list);
-  WriteSceneList(out_dir, other_scenes);
+  writes.emplace_back([&] { io::WriteFileAtomic((fs::path(out_dir) / list_name).string(), list); });
+  writes.emplace_back([&] { WriteSceneList(out_dir, other_scenes); });
+  io::RunConcurrently(writes);
 }
 
 void ExportLoftrTest(const std::string& out_dir, const std::vector<LoftrPair>& pairs,
                      const SceneIntrinsics& intrinsics, const LoftrExportOptions& options) {
   if (std::string e; !options.Check(&e)) throw InputError("loftr export options", e);
-  const std::set<std::string> scenes = ScenesOf(pairs);
+  const std::set<std::string> scenes = ScenesOf(pairs, intrinsics);
   std::vector<std::string> other_scenes;
   const auto ids = NumberScenes(scenes, &other_scenes);
-  WriteIntrinsics(out_dir, scenes, intrinsics);
   const auto n = static_cast<int64_t>(pairs.size());
   std::vector<int64_t> names;
   std::vector<float> rel_pose;
@@ -159,12 +170,20 @@ void ExportLoftrTest(const std::string& out_dir, const std::vector<LoftrPair>& p
   } else {
     name_npy = io::EncodeNpy<int64_t>({n, 4}, names);
   }
-  io::WriteNpz((fs::path(out_dir) / "test.npz").string(),
-               {{"name", name_npy}, {"rel_pose", io::EncodeNpy<float>({n, 12}, rel_pose)}});
-  io::WriteFileAtomic((fs::path(out_dir) / "statistics.json").string(), stats.dump(4) + "\n");
   const std::string list_name = options.list_name.empty() ? "test_list.txt" : options.list_name;
-  io::WriteFileAtomic((fs::path(out_dir) / list_name).string(), "test.npz\n");
-  WriteSceneList(out_dir, other_scenes);
+  // The files are independent: written concurrently (their fsyncs overlap).
+  io::RunConcurrently({
+      [&] { WriteIntrinsics(out_dir, scenes, intrinsics); },
+      [&] {
+        io::WriteNpz((fs::path(out_dir) / "test.npz").string(),
+                     {{"name", name_npy}, {"rel_pose", io::EncodeNpy<float>({n, 12}, rel_pose)}});
+      },
+      [&] {
+        io::WriteFileAtomic((fs::path(out_dir) / "statistics.json").string(), stats.dump(4) + "\n");
+      },
+      [&] { io::WriteFileAtomic((fs::path(out_dir) / list_name).string(), "test.npz\n"); },
+      [&] { WriteSceneList(out_dir, other_scenes); },
+  });
 }
 
 }  // namespace gt::shards

@@ -374,14 +374,22 @@ std::string IndexJson(const std::string& name, const std::vector<PartRecord>& pa
   return doc.dump(2) + "\n";
 }
 
-void WriteJsonLines(const std::string& path, const std::vector<std::string>& lines) {
+namespace {
+
+std::string JsonLinesText(const std::vector<std::string>& lines) {
   std::string text;
   for (const std::string& l : lines) {
     GT_ASSERT_MSG(l.find('\n') == std::string::npos, "JSONL line contains a newline");
     text += l;
     text += '\n';
   }
-  io::WriteFileAtomic(path, text);
+  return text;
+}
+
+}  // namespace
+
+void WriteJsonLines(const std::string& path, const std::vector<std::string>& lines) {
+  io::WriteFileAtomic(path, JsonLinesText(lines));
 }
 
 bool MergeOptions::Check(std::string* error) const {
@@ -473,9 +481,10 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
     result.parts.push_back(std::move(r));
   }
   result.nshards = static_cast<int64_t>(result.parts.size());
-  WriteJsonLines((fs::path(dir) / "pairs.jsonl").string(), all_lines);
-  io::WriteFileAtomic((fs::path(dir) / "index.json").string(),
-                      IndexJson(result.split, result.parts));
+  // Both written at once; index.json, which names the shards, is published second.
+  io::WriteFilesAtomic(
+      {{(fs::path(dir) / "pairs.jsonl").string(), JsonLinesText(all_lines)},
+       {(fs::path(dir) / "index.json").string(), IndexJson(result.split, result.parts)}});
   return result;
 }
 

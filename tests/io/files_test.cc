@@ -1,6 +1,6 @@
 // files.h: MD5 against the RFC 1321 test suite and a slow bit-level check over random
 // inputs of every length around the block boundaries, ParseNumbers tokens and errors,
-// ReadLines, and WriteFileAtomic publication.
+// ReadLines, WriteFileAtomic and WriteFilesAtomic publication, RunConcurrently.
 #include "libgt/io/files.h"
 
 #include <gtest/gtest.h>
@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 
 #include "libgt/core/error.h"
@@ -175,6 +176,81 @@ TEST(WriteFileAtomic, FailureNamesThePathAndKeepsTheOldFile) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.where(), dir + "/target");
   }
+}
+
+TEST(WriteFilesAtomic, WritesEveryFileAndLeavesNoTemporary) {
+  const std::string dir = test::ScratchDir("atomic_batch");
+  std::vector<FileToWrite> files;
+  for (int i = 0; i < 6; ++i) {
+    files.push_back({dir + "/d" + std::to_string(i % 2) + "/f" + std::to_string(i) + ".txt",
+                     std::string(1000 * i + 1, static_cast<char>('a' + i))});
+  }
+  WriteFilesAtomic(files);
+  for (const FileToWrite& f : files) {
+    EXPECT_EQ(ReadFileBytes(f.path), f.bytes) << f.path;
+    EXPECT_FALSE(fs::exists(f.path + ".tmp")) << f.path;
+  }
+  WriteFilesAtomic({{files[0].path, "replaced"}});
+  EXPECT_EQ(ReadFileBytes(files[0].path), "replaced");
+}
+
+TEST(WriteFilesAtomic, AWriteFailurePublishesNothingAndNamesTheFirstFailingFile) {
+  const std::string dir = test::ScratchDir("atomic_batch_fail");
+  WriteFileAtomic(dir + "/a.txt", "old");
+  { std::ofstream(dir + "/plain") << "x"; }  // a file where a folder is needed
+  const std::vector<FileToWrite> files = {{dir + "/a.txt", "new"},
+                                          {dir + "/plain/b.txt", "b"},
+                                          {dir + "/c.txt", "c"},
+                                          {dir + "/plain/d.txt", "d"}};
+  for (int repeat = 0; repeat < 20; ++repeat) {  // the same error whatever the timing
+    try {
+      WriteFilesAtomic(files);
+      FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where(), dir + "/plain/b.txt");
+    }
+    EXPECT_EQ(ReadFileBytes(dir + "/a.txt"), "old");  // not published
+    EXPECT_FALSE(fs::exists(dir + "/c.txt"));
+    for (const FileToWrite& f : files) EXPECT_FALSE(fs::exists(f.path + ".tmp")) << f.path;
+  }
+}
+
+TEST(WriteFilesAtomic, ARenameFailureKeepsTheEarlierFilesAndRemovesTheTemporaries) {
+  const std::string dir = test::ScratchDir("atomic_batch_rename");
+  fs::create_directories(dir + "/target/inner");  // rename onto a non-empty folder fails
+  try {
+    WriteFilesAtomic({{dir + "/first.txt", "1"}, {dir + "/target", "2"}, {dir + "/last.txt", "3"}});
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), dir + "/target");
+  }
+  EXPECT_EQ(ReadFileBytes(dir + "/first.txt"), "1");
+  EXPECT_TRUE(fs::is_directory(dir + "/target/inner"));
+  EXPECT_FALSE(fs::exists(dir + "/last.txt"));
+  for (const char* name : {"/first.txt.tmp", "/target.tmp", "/last.txt.tmp"}) {
+    EXPECT_FALSE(fs::exists(dir + name)) << name;
+  }
+}
+
+TEST(RunConcurrently, RunsEveryFunctionAndRethrowsTheFirstErrorInListOrder) {
+  for (int repeat = 0; repeat < 20; ++repeat) {
+    std::vector<int> ran(8, 0);
+    std::vector<std::function<void()>> fns;
+    for (int i = 0; i < 8; ++i) {
+      fns.emplace_back([&ran, i] {
+        ran[i] = 1;
+        if (i == 3 || i == 6) throw InputError("task " + std::to_string(i), "failed");
+      });
+    }
+    try {
+      RunConcurrently(fns);
+      FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where(), "task 3");
+    }
+    for (int i = 0; i < 8; ++i) EXPECT_EQ(ran[i], 1) << i;  // the others still ran
+  }
+  RunConcurrently({});  // nothing to run
 }
 
 TEST(ListNumberedFiles, UnreadableEntriesAndDuplicateNumbersAreErrors) {
