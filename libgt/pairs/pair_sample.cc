@@ -121,16 +121,16 @@ std::string EncodeFrameImage(const Frame& frame, const SampleSpec& options) {
 EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const SelectedPair& pair,
                             const std::string& key, const DepthImage& depth0,
                             const DepthImage& depth1, const SampleSpec& options,
-                            const occupancy::OccupancyMap* shared_map, const std::string* image0,
-                            const std::string* image1) {
+                            const occupancy::OccupancyMap* shared_map, const ImageSource& images) {
   const Frame& f0 = scene.frames[i0];
   const Frame& f1 = scene.frames[i1];
   const Camera cam0 = WorkingCamera(f0, options.width, options.height);
   const Camera cam1 = WorkingCamera(f1, options.width, options.height);
-  // The labels, the occupancy volumes and the two images are independent: computed as
+  // The two images, the occupancy volumes and the labels are independent: computed as
   // parallel TBB tasks (one thread under --threads 1), so that a sample computed alone, e.g.
-  // the last one of a run, uses every core. Errors are rethrown in this fixed order, so the
-  // one reported does not depend on timing.
+  // the last one of a run, uses every core; the images (decoding, resizing and encoding,
+  // ~25 ms each at 640x480 PNG) are the longest and come first. Errors are rethrown in a
+  // fixed order (labels, occupancy, images), so the one reported does not depend on timing.
   PairLabels labels;
   occupancy::PairOccupancy occ;
   std::string encoded_image[2];
@@ -147,11 +147,18 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
   // Its own context: a cancellation of the caller's work (another sample of the pipeline
   // failing) must not silently skip these tasks and leave the results empty.
   tbb::task_group_context own(tbb::task_group_context::isolated);
+  auto image = [&](size_t i, const Frame& f) {
+    return images ? *images(i) : EncodeFrameImage(f, options);
+  };
   tbb::parallel_invoke(
       [&] {
-        guarded(&error[0], [&] {
-          labels = LabelPair(depth0, cam0, f0.world_from_cam, depth1, cam1, f1.world_from_cam,
-                             options.labels, options.patches);
+        guarded(&error[2], [&] {
+          if (with_images) encoded_image[0] = image(i0, f0);
+        });
+      },
+      [&] {
+        guarded(&error[3], [&] {
+          if (with_images) encoded_image[1] = image(i1, f1);
         });
       },
       [&] {
@@ -166,13 +173,9 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
         });
       },
       [&] {
-        guarded(&error[2], [&] {
-          if (with_images) encoded_image[0] = image0 ? *image0 : EncodeFrameImage(f0, options);
-        });
-      },
-      [&] {
-        guarded(&error[3], [&] {
-          if (with_images) encoded_image[1] = image1 ? *image1 : EncodeFrameImage(f1, options);
+        guarded(&error[0], [&] {
+          labels = LabelPair(depth0, cam0, f0.world_from_cam, depth1, cam1, f1.world_from_cam,
+                             options.labels, options.patches);
         });
       },
       own);

@@ -19,6 +19,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
@@ -75,16 +77,19 @@ DirectionMetrics MetricsFromJson(const nlohmann::json& j);
 // Throws InputError naming the file when it cannot be read.
 std::string EncodeFrameImage(const Frame& frame, const SampleSpec& options);
 
-// Computes labels, matches, occupancy and encodes the sample. depth0/1 at W×H. image0/1:
-// EncodeFrameImage of the two frames when the caller caches them (a frame appears in many
-// pairs), else null and they are encoded here. Throws InputError (naming the file) when an
-// input cannot be read.
+// Encoded colour image of a scene's frame (EncodeFrameImage of frame_index), from the
+// caller's cache: a frame appears in many pairs.
+using ImageSource = std::function<std::shared_ptr<const std::string>(size_t frame_index)>;
+
+// Computes labels, matches, occupancy and encodes the sample. depth0/1 at W×H. images: where
+// the two frames' encoded images come from (called from the sample's parallel tasks, so it
+// must be thread-safe); empty: they are encoded here. Throws InputError (naming the file)
+// when an input cannot be read.
 EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const SelectedPair& pair,
                             const std::string& key, const DepthImage& depth0,
                             const DepthImage& depth1, const SampleSpec& options,
                             const occupancy::OccupancyMap* shared_map,
-                            const std::string* image0 = nullptr,
-                            const std::string* image1 = nullptr);
+                            const ImageSource& images = {});
 
 // K (row-major 3×3) of a frame's depth camera at the working resolution.
 Camera WorkingCamera(const Frame& frame, int width, int height);

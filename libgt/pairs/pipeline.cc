@@ -183,13 +183,85 @@ std::vector<Camera> WorkingCameras(const Scene& scene, int w, int h) {
   return cams;
 }
 
+// Encoded colour images of one scene's frames, least recently used dropped beyond
+// max_images (a frame appears in many pairs; decoding + resizing + encoding is ~25 ms).
+class ImageCache {
+ public:
+  explicit ImageCache(size_t max_images) : max_images_(max_images) {}
+  std::shared_ptr<const std::string> Get(const Scene& scene, size_t i, const SampleSpec& spec) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      auto it = images_.find(i);
+      if (it != images_.end()) {
+        lru_.splice(lru_.begin(), lru_, it->second.second);
+        return it->second.first;
+      }
+    }
+    auto bytes = std::make_shared<const std::string>(EncodeFrameImage(scene.frames[i], spec));
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = images_.find(i);
+    if (it != images_.end()) return it->second.first;
+    lru_.push_front(i);
+    images_.emplace(i, std::make_pair(bytes, lru_.begin()));
+    while (images_.size() > max_images_) {
+      images_.erase(lru_.back());
+      lru_.pop_back();
+    }
+    return bytes;
+  }
+
+ private:
+  size_t max_images_;
+  std::mutex mutex_;
+  std::list<size_t> lru_;
+  std::map<size_t, std::pair<std::shared_ptr<const std::string>, std::list<size_t>::iterator>>
+      images_;
+};
+
+// Everything the write stage needs about one scene.
+struct SceneData {
+  std::string name;  // as listed by the reader (the selection's scene name)
+  std::unique_ptr<ImageCache> images = std::make_unique<ImageCache>(128);
+  Scene scene;
+  std::unique_ptr<DepthCache> cache;
+  std::map<std::string, size_t> index_of_id;
+  SampleSpec spec;
+  std::once_flag map_once;
+  std::unique_ptr<occupancy::OccupancyMap> scene_map;  // scope scene
+};
+
+// Reads a scene and sets up its depth cache and per-scene sample options.
+std::shared_ptr<SceneData> LoadSceneData(const Recipe& recipe, const io::DatasetReader& reader,
+                                         const std::string& name, const BuildOptions& options) {
+  auto d = std::make_shared<SceneData>();
+  d->name = name;
+  d->scene = reader.ReadScene(recipe.dataset.root, name);
+  d->cache = std::make_unique<DepthCache>(d->scene, recipe.width, recipe.height,
+                                          options.depth_cache_mb << 20);
+  for (size_t i = 0; i < d->scene.frames.size(); ++i) d->index_of_id[d->scene.frames[i].id] = i;
+  d->spec = RecipeSampleOptions(recipe);
+  d->spec.labels = RecipeLabelOptions(recipe, d->scene);
+  if (recipe.occupancy.scope == "window") {
+    d->spec.fusion.scope = occupancy::FusionScope::kWindow;
+    d->spec.fusion.window = recipe.occupancy.window;
+  } else if (recipe.occupancy.scope == "scene") {
+    d->spec.fusion.scope = occupancy::FusionScope::kScene;
+    d->spec.fusion.scene_stride = recipe.occupancy.scene_stride;
+  }
+  return d;
+}
+
+// The scene's data (scene, depth cache with the maps the selection decoded) is left in
+// *data, for the write stage when it starts with this scene.
 SceneSelection SelectScene(const Recipe& r, const io::DatasetReader& reader,
                            const std::string& scene_name, const BuildOptions& options,
-                           const ImportList* imports) {
-  const Scene scene = reader.ReadScene(r.dataset.root, scene_name);
+                           const ImportList* imports, std::shared_ptr<SceneData>* data) {
+  data->reset();  // one scene's data at a time
+  *data = LoadSceneData(r, reader, scene_name, options);
+  const Scene& scene = (*data)->scene;
+  DepthCache& cache = *(*data)->cache;
   const std::vector<Camera> cams = WorkingCameras(scene, r.width, r.height);
-  DepthCache cache(scene, r.width, r.height, options.depth_cache_mb << 20);
-  const LabelOptions labels = RecipeLabelOptions(r, scene);
+  const LabelOptions& labels = (*data)->spec.labels;
   SceneSelection out;
   out.scene = scene_name;
   DropCounts drops;
@@ -307,52 +379,6 @@ std::optional<SceneSelection> ReadSelection(const BuildOptions& o, const std::st
   }
   return s;
 }
-
-// Encoded colour images of one scene's frames, least recently used dropped beyond
-// max_images (a frame appears in many pairs; decoding + resizing + encoding is ~25 ms).
-class ImageCache {
- public:
-  explicit ImageCache(size_t max_images) : max_images_(max_images) {}
-  std::shared_ptr<const std::string> Get(const Scene& scene, size_t i, const SampleSpec& spec) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      auto it = images_.find(i);
-      if (it != images_.end()) {
-        lru_.splice(lru_.begin(), lru_, it->second.second);
-        return it->second.first;
-      }
-    }
-    auto bytes = std::make_shared<const std::string>(EncodeFrameImage(scene.frames[i], spec));
-    std::lock_guard<std::mutex> lock(mutex_);
-    auto it = images_.find(i);
-    if (it != images_.end()) return it->second.first;
-    lru_.push_front(i);
-    images_.emplace(i, std::make_pair(bytes, lru_.begin()));
-    while (images_.size() > max_images_) {
-      images_.erase(lru_.back());
-      lru_.pop_back();
-    }
-    return bytes;
-  }
-
- private:
-  size_t max_images_;
-  std::mutex mutex_;
-  std::list<size_t> lru_;
-  std::map<size_t, std::pair<std::shared_ptr<const std::string>, std::list<size_t>::iterator>>
-      images_;
-};
-
-// Everything the write stage needs about one scene.
-struct SceneData {
-  std::unique_ptr<ImageCache> images = std::make_unique<ImageCache>(128);
-  Scene scene;
-  std::unique_ptr<DepthCache> cache;
-  std::map<std::string, size_t> index_of_id;
-  SampleSpec spec;
-  std::once_flag map_once;
-  std::unique_ptr<occupancy::OccupancyMap> scene_map;  // scope scene
-};
 
 occupancy::OccupancyMap FuseFrames(SceneData* d, const std::vector<size_t>& frames,
                                    const SampleSpec& spec) {
@@ -486,6 +512,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   const auto t_select = Clock::now();
   std::map<std::string, SceneSelection> selections;
   int64_t scenes_selected = 0, scenes_reused = 0;
+  std::shared_ptr<SceneData> last_selected;  // the data of the scene selected last
   if (options.stage != "write") {
     std::vector<std::string> mine;
     for (size_t i = 0; i < scenes.size(); ++i) {
@@ -497,7 +524,8 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
         selections[scene] = std::move(*s);
         ++scenes_reused;
       } else {
-        SceneSelection sel = SelectScene(recipe, *reader, scene, options, imports.get());
+        SceneSelection sel =
+            SelectScene(recipe, *reader, scene, options, imports.get(), &last_selected);
         if (!options.dry_run) bytes_written += WriteSelection(options, sel);
         selections[scene] = std::move(sel);
         ++scenes_selected;
@@ -612,26 +640,10 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
     FolderLock lock(options.out_dir);
     output->WritePlan(shard_sizes);
   }
-  const SampleSpec base_spec = RecipeSampleOptions(recipe);
   std::map<std::string, std::shared_ptr<SceneData>> scene_data;
   auto scene_of = [&](const std::string& name) -> std::shared_ptr<SceneData> {
     auto& d = scene_data[name];
-    if (!d) {
-      d = std::make_shared<SceneData>();
-      d->scene = reader->ReadScene(recipe.dataset.root, name);
-      d->cache = std::make_unique<DepthCache>(d->scene, recipe.width, recipe.height,
-                                              options.depth_cache_mb << 20);
-      for (size_t i = 0; i < d->scene.frames.size(); ++i) d->index_of_id[d->scene.frames[i].id] = i;
-      d->spec = base_spec;
-      d->spec.labels = RecipeLabelOptions(recipe, d->scene);
-      if (recipe.occupancy.scope == "window") {
-        d->spec.fusion.scope = occupancy::FusionScope::kWindow;
-        d->spec.fusion.window = recipe.occupancy.window;
-      } else if (recipe.occupancy.scope == "scene") {
-        d->spec.fusion.scope = occupancy::FusionScope::kScene;
-        d->spec.fusion.scene_stride = recipe.occupancy.scene_stride;
-      }
-    }
+    if (!d) d = LoadSceneData(recipe, *reader, name, options);
     return d;
   };
   // This task's work: the samples of its incomplete shards, in order (shard s is this
@@ -665,6 +677,12 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   // they are computed, so a task over many scenes holds only the current ones in memory.
   std::map<std::string, size_t> last_job_of_scene;
   for (size_t j = 0; j < jobs.size(); ++j) last_job_of_scene[all[jobs[j].sample]->scene] = j;
+  // The scene selected last is reused (not read and decoded again) when the writing starts
+  // with it, as it does for a task of one scene; else it is dropped now.
+  if (last_selected && !jobs.empty() && all[jobs[0].sample]->scene == last_selected->name) {
+    scene_data[last_selected->name] = std::move(last_selected);
+  }
+  last_selected.reset();
 
   // The samples of this task flow through one pipeline without a barrier at shard ends:
   //   1. serial, in order: the next job; reads its scene when first needed;
@@ -744,15 +762,9 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
         shared = window_map.get();
       }
     }
-    std::shared_ptr<const std::string> image0, image1;
-    const Frame& f0 = d.scene.frames[i0->second];
-    const Frame& f1 = d.scene.frames[i1->second];
-    if (d.spec.image != "none" && !f0.color_path.empty() && !f1.color_path.empty()) {
-      image0 = d.images->Get(d.scene, i0->second, d.spec);
-      image1 = d.images->Get(d.scene, i1->second, d.spec);
-    }
+    const ImageSource images = [&d](size_t i) { return d.images->Get(d.scene, i, d.spec); };
     item->sample = ComputeSample(d.scene, i0->second, i1->second, p, keys[k], *depth0, *depth1,
-                                 d.spec, shared, image0.get(), image1.get());
+                                 d.spec, shared, images);
     item->data.reset();  // the last sample of a scene releases its data here
     return j;
   };
@@ -798,8 +810,9 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
                                io::FileExists(options.out_dir + "/summary.json");
   if (complete && !indices_current) {
     const auto t_index = Clock::now();
-    output->Finish();
-    if (!recipe.loftr_export.empty()) {
+    // The split's indices and the LoFTR export are independent files: written at once.
+    auto loftr = [&] {
+      if (recipe.loftr_export.empty()) return;
       std::vector<LoftrRow> rows;
       std::map<std::string, std::array<double, 9>> intrinsics;
       for (const SelectedPair* p : all) {
@@ -830,7 +843,8 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
         }
       }
       output->ExportLoftr(recipe.loftr_export, rows, intrinsics);
-    }
+    };
+    io::RunConcurrently({[&] { output->Finish(); }, loftr});
     timings["index_s"] = Seconds(t_index);
   }
   timings["total_s"] = Seconds(t_start);
