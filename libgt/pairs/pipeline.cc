@@ -185,37 +185,52 @@ std::vector<Camera> WorkingCameras(const Scene& scene, int w, int h) {
 
 // Encoded colour images of one scene's frames, least recently used dropped beyond
 // max_images (a frame appears in many pairs; decoding + resizing + encoding is ~25 ms).
+// A frame is encoded once: a request for a frame that another thread is encoding waits
+// for that result (samples in flight together often share a frame) instead of encoding
+// it a second time. The encoding itself waits for nothing, so a wait always ends.
 class ImageCache {
  public:
   explicit ImageCache(size_t max_images) : max_images_(max_images) {}
   std::shared_ptr<const std::string> Get(const Scene& scene, size_t i, const SampleSpec& spec) {
+    std::shared_ptr<Slot> slot;
+    bool mine = false;
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      auto it = images_.find(i);
-      if (it != images_.end()) {
+      auto it = slots_.find(i);
+      if (it != slots_.end()) {
         lru_.splice(lru_.begin(), lru_, it->second.second);
-        return it->second.first;
+        slot = it->second.first;
+      } else {
+        slot = std::make_shared<Slot>();
+        lru_.push_front(i);
+        slots_.emplace(i, std::make_pair(slot, lru_.begin()));
+        mine = true;
+        while (slots_.size() > max_images_) {  // holders keep their slot alive
+          slots_.erase(lru_.back());
+          lru_.pop_back();
+        }
       }
     }
-    auto bytes = std::make_shared<const std::string>(EncodeFrameImage(scene.frames[i], spec));
-    std::lock_guard<std::mutex> lock(mutex_);
-    auto it = images_.find(i);
-    if (it != images_.end()) return it->second.first;
-    lru_.push_front(i);
-    images_.emplace(i, std::make_pair(bytes, lru_.begin()));
-    while (images_.size() > max_images_) {
-      images_.erase(lru_.back());
-      lru_.pop_back();
+    if (mine) {
+      try {
+        slot->promise.set_value(
+            std::make_shared<const std::string>(EncodeFrameImage(scene.frames[i], spec)));
+      } catch (...) {
+        slot->promise.set_exception(std::current_exception());
+      }
     }
-    return bytes;
+    return slot->result.get();  // rethrows the encoder's error
   }
 
  private:
+  struct Slot {
+    std::promise<std::shared_ptr<const std::string>> promise;
+    std::shared_future<std::shared_ptr<const std::string>> result = promise.get_future().share();
+  };
   size_t max_images_;
   std::mutex mutex_;
   std::list<size_t> lru_;
-  std::map<size_t, std::pair<std::shared_ptr<const std::string>, std::list<size_t>::iterator>>
-      images_;
+  std::map<size_t, std::pair<std::shared_ptr<Slot>, std::list<size_t>::iterator>> slots_;
 };
 
 // Everything the write stage needs about one scene.
