@@ -358,8 +358,9 @@ int64_t WriteSelection(const BuildOptions& o, const SceneSelection& s) {
   std::string lines;
   for (const auto& p : s.pairs) lines += PairJson(p).dump() + "\n";
   const std::string stats = s.stats.dump(2) + "\n";
-  io::WriteFileAtomic(SelectionLinesPath(o, s.scene), lines);
-  io::WriteFileAtomic(SelectionStatsPath(o, s.scene), stats);  // completion marker, last
+  // Written at once; the stats, the scene's completion marker, are published second.
+  io::WriteFilesAtomic({{SelectionLinesPath(o, s.scene), lines},
+                        {SelectionStatsPath(o, s.scene), stats}});
   return static_cast<int64_t>(lines.size() + stats.size());
 }
 
