@@ -78,7 +78,7 @@ struct TarShardWriter::Impl {
     if (self->write_errno == 0) self->bytes += static_cast<int64_t>(n);
     return static_cast<la_ssize_t>(n);
   }
-  static constexpr size_t kDigestAsideBytes = size_t{1} << 20;
+  static constexpr size_t kDigestAsideBytes = size_t{256} << 10;
 
   // write(2) of the whole buffer; a failure is recorded in write_errno (see Write).
   void WriteAll(const void* buf, size_t n) {

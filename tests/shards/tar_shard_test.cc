@@ -116,7 +116,7 @@ ShardInfo WriteShard(const std::string& path, const std::vector<Sample>& samples
 }
 
 TEST(TarShard, LargeMembersAreWrittenAndDigestedWhole) {
-  // Members of 1 MiB and more are written and digested as two concurrent tasks
+  // Members of 256 KiB and more are written and digested as two concurrent tasks
   // (tar_shard.cc): the digest must still be that of the published bytes, and the members
   // must read back intact, around that size and across it.
   const std::string dir = test::ScratchDir("shards_tar_large");
@@ -125,8 +125,8 @@ TEST(TarShard, LargeMembersAreWrittenAndDigestedWhole) {
   for (int k = 0; k < 3; ++k) {
     Sample s;
     s.key = "scene/large_" + std::to_string(k);
-    for (const size_t n :
-         {size_t{1} << 20, (size_t{1} << 20) - 1, (size_t{3} << 20) + 333, size_t{77}}) {
+    for (const size_t n : {size_t{256} << 10, (size_t{256} << 10) - 1, size_t{1} << 20,
+                           (size_t{3} << 20) + 333, size_t{77}}) {
       std::string bytes(n + static_cast<size_t>(k), '\0');
       for (char& c : bytes) c = static_cast<char>(rng());
       s.fields.push_back({"f" + std::to_string(s.fields.size()) + ".bin", std::move(bytes)});
