@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <openssl/evp.h>
+#include <sys/stat.h>
 #include <tbb/parallel_for.h>
 #include <unistd.h>
 
@@ -26,14 +27,38 @@ namespace gt::io {
 namespace fs = std::filesystem;
 
 std::string ReadFileBytes(const std::string& path) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) throw InputError(path, "expected a file, found a folder");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "cannot open file (missing or unreadable)");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw InputError(path, "read error");
-  return ss.str();
+  // One buffer of the file's size, filled by read(2): no growing copies through a
+  // stringstream (those were most of the page faults of reading depth maps).
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) throw InputError(path, "expected a file, found a folder");
+    throw InputError(path, "cannot open file (missing or unreadable)");
+  }
+  struct FdCloser {
+    int fd;
+    ~FdCloser() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) throw InputError(path, "read error");
+  if (S_ISDIR(st.st_mode)) throw InputError(path, "expected a file, found a folder");
+  std::string bytes;
+  // The size is a hint (a file may grow, and /proc files report 0): read to the end.
+  bytes.resize(S_ISREG(st.st_mode) && st.st_size > 0 ? static_cast<size_t>(st.st_size) + 1
+                                                     : size_t{1} << 16);
+  size_t done = 0;
+  while (true) {
+    if (done == bytes.size()) bytes.resize(bytes.size() * 2);
+    const ssize_t n = ::read(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw InputError(path, "read error");
+    }
+    if (n == 0) break;
+    done += static_cast<size_t>(n);
+  }
+  bytes.resize(done);
+  return bytes;
 }
 
 bool FileExists(const std::string& path) {
