@@ -112,9 +112,11 @@ void ExportLoftrTrain(const std::string& out_dir, const std::vector<LoftrPair>& 
       throw InputError("loftr export", "scene " + scene + " maps to an npz name already used");
     }
   }
-  // The files are independent: written concurrently (their fsyncs overlap).
-  std::vector<std::function<void()>> writes;
-  writes.emplace_back([&] { WriteIntrinsics(out_dir, scenes, intrinsics); });
+  // The files are independent: written concurrently (their fsyncs overlap), except the
+  // .npz files, which one task writes in turn: libzip converts their DOS times with
+  // mktime, whose glibc lock ThreadSanitizer cannot see.
+  std::vector<std::function<void()>> npz_writes;
+  npz_writes.emplace_back([&] { WriteIntrinsics(out_dir, scenes, intrinsics); });
   for (const std::string& scene : scenes) {
     std::vector<int64_t> names;
     std::vector<float> scores;
@@ -127,7 +129,7 @@ void ExportLoftrTrain(const std::string& out_dir, const std::vector<LoftrPair>& 
     }
     const auto n = static_cast<int64_t>(scores.size());
     const std::string file = NpzStem(scene) + ".npz";
-    writes.emplace_back(
+    npz_writes.emplace_back(
         [&out_dir, &options, file, n, names = std::move(names), scores = std::move(scores)] {
           io::WriteNpz((fs::path(out_dir) / "scene_data" / options.split / file).string(),
                        {{"name", io::EncodeNpy<int64_t>({n, 4}, names)},
@@ -137,9 +139,13 @@ void ExportLoftrTrain(const std::string& out_dir, const std::vector<LoftrPair>& 
   }
   const std::string list_name =
       options.list_name.empty() ? options.split + "_list.txt" : options.list_name;
-  writes.emplace_back([&] { io::WriteFileAtomic((fs::path(out_dir) / list_name).string(), list); });
-  writes.emplace_back([&] { WriteSceneList(out_dir, other_scenes); });
-  io::RunConcurrently(writes);
+  io::RunConcurrently({
+      [&] {
+        for (const auto& write : npz_writes) write();
+      },
+      [&] { io::WriteFileAtomic((fs::path(out_dir) / list_name).string(), list); },
+      [&] { WriteSceneList(out_dir, other_scenes); },
+  });
 }
 
 void ExportLoftrTest(const std::string& out_dir, const std::vector<LoftrPair>& pairs,
@@ -171,10 +177,11 @@ void ExportLoftrTest(const std::string& out_dir, const std::vector<LoftrPair>& p
     name_npy = io::EncodeNpy<int64_t>({n, 4}, names);
   }
   const std::string list_name = options.list_name.empty() ? "test_list.txt" : options.list_name;
-  // The files are independent: written concurrently (their fsyncs overlap).
+  // The files are independent: written concurrently (their fsyncs overlap), except the
+  // two .npz files, which one task writes in turn (see ExportLoftrTrain).
   io::RunConcurrently({
-      [&] { WriteIntrinsics(out_dir, scenes, intrinsics); },
       [&] {
+        WriteIntrinsics(out_dir, scenes, intrinsics);
         io::WriteNpz((fs::path(out_dir) / "test.npz").string(),
                      {{"name", name_npy}, {"rel_pose", io::EncodeNpy<float>({n, 12}, rel_pose)}});
       },
