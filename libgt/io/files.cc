@@ -66,9 +66,6 @@ bool FileExists(const std::string& path) {
   return fs::is_regular_file(path, ec);
 }
 
-namespace {
-
-// Writes all bytes to fd; false on error.
 bool WriteAll(int fd, std::string_view bytes) {
   size_t done = 0;
   while (done < bytes.size()) {
@@ -82,41 +79,65 @@ bool WriteAll(int fd, std::string_view bytes) {
   return true;
 }
 
-}  // namespace
+namespace {
 
-void WriteFileAtomic(const std::string& path, std::string_view bytes) {
+// Writes `bytes` to path + ".tmp" (creating missing parent folders) and fsyncs it. Returns
+// "" on success, else the problem, the temporary removed.
+std::string StageTemporary(const std::string& path, std::string_view bytes) {
   const fs::path target(path);
   std::error_code ec;
   if (target.has_parent_path()) {
     fs::create_directories(target.parent_path(), ec);
-    if (ec) throw InputError(path, "cannot create the parent folder: " + ec.message());
+    if (ec) return "cannot create the parent folder: " + ec.message();
   }
   const std::string tmp = path + ".tmp";
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0)
-    throw InputError(path, std::string("cannot create ") + tmp + ": " + std::strerror(errno));
+  if (fd < 0) return "cannot create " + tmp + ": " + std::strerror(errno);
   const bool wrote = WriteAll(fd, bytes);
   const int write_errno = errno;
   const bool synced = wrote && ::fsync(fd) == 0;
   const int sync_errno = errno;
   const bool closed = ::close(fd) == 0;
   if (!wrote || !synced || !closed) {
-    ::unlink(tmp.c_str());
     const int e = !wrote ? write_errno : (!synced ? sync_errno : errno);
-    throw InputError(path, std::string("write failed: ") + std::strerror(e));
+    ::unlink(tmp.c_str());
+    return std::string("write failed: ") + std::strerror(e);
   }
+  return "";
+}
+
+// Renames path + ".tmp" onto path; throws InputError naming path (temporary removed).
+void PublishTemporary(const std::string& path) {
+  const std::string tmp = path + ".tmp";
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
     const int e = errno;
     ::unlink(tmp.c_str());
     throw InputError(path, std::string("cannot rename the temporary file: ") + std::strerror(e));
   }
-  // Make the rename durable: fsync the folder (best effort).
-  const std::string dir = target.has_parent_path() ? target.parent_path().string() : ".";
+}
+
+std::string ParentFolder(const std::string& path) {
+  const fs::path target(path);
+  return target.has_parent_path() ? target.parent_path().string() : ".";
+}
+
+// Makes renames in `dir` durable (best effort).
+void SyncFolder(const std::string& dir) {
   const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dfd >= 0) {
     ::fsync(dfd);
     ::close(dfd);
   }
+}
+
+}  // namespace
+
+void WriteFileAtomic(const std::string& path, std::string_view bytes) {
+  if (std::string problem = StageTemporary(path, bytes); !problem.empty()) {
+    throw InputError(path, problem);
+  }
+  PublishTemporary(path);
+  SyncFolder(ParentFolder(path));
 }
 
 void RunConcurrently(const std::vector<std::function<void()>>& functions) {
@@ -136,32 +157,8 @@ void RunConcurrently(const std::vector<std::function<void()>>& functions) {
 void WriteFilesAtomic(const std::vector<FileToWrite>& files) {
   // 1. every temporary written and fsynced, concurrently.
   std::vector<std::string> problem(files.size());  // empty: staged
-  tbb::parallel_for(size_t{0}, files.size(), size_t{1}, [&](size_t i) {
-    const fs::path target(files[i].path);
-    std::error_code ec;
-    if (target.has_parent_path()) {
-      fs::create_directories(target.parent_path(), ec);
-      if (ec) {
-        problem[i] = "cannot create the parent folder: " + ec.message();
-        return;
-      }
-    }
-    const std::string tmp = files[i].path + ".tmp";
-    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) {
-      problem[i] = "cannot create " + tmp + ": " + std::strerror(errno);
-      return;
-    }
-    const bool wrote = WriteAll(fd, files[i].bytes);
-    const int write_errno = errno;
-    const bool synced = wrote && ::fsync(fd) == 0;
-    const int sync_errno = errno;
-    const bool closed = ::close(fd) == 0;
-    if (!wrote || !synced || !closed) {
-      const int e = !wrote ? write_errno : (!synced ? sync_errno : errno);
-      problem[i] = std::string("write failed: ") + std::strerror(e);
-    }
-  });
+  tbb::parallel_for(size_t{0}, files.size(), size_t{1},
+                    [&](size_t i) { problem[i] = StageTemporary(files[i].path, files[i].bytes); });
   auto remove_temporaries = [&](size_t from) {
     for (size_t i = from; i < files.size(); ++i) ::unlink((files[i].path + ".tmp").c_str());
   };
@@ -171,26 +168,18 @@ void WriteFilesAtomic(const std::vector<FileToWrite>& files) {
       throw InputError(files[i].path, problem[i]);
     }
   }
-  // 2. published in order, then each folder made durable once (best effort).
+  // 2. published in order, then each folder made durable once.
   std::set<std::string> folders;
   for (size_t i = 0; i < files.size(); ++i) {
-    const std::string tmp = files[i].path + ".tmp";
-    if (::rename(tmp.c_str(), files[i].path.c_str()) != 0) {
-      const int e = errno;
-      remove_temporaries(i);
-      throw InputError(files[i].path,
-                       std::string("cannot rename the temporary file: ") + std::strerror(e));
+    try {
+      PublishTemporary(files[i].path);
+    } catch (const InputError&) {
+      remove_temporaries(i + 1);
+      throw;
     }
-    const fs::path target(files[i].path);
-    folders.insert(target.has_parent_path() ? target.parent_path().string() : ".");
+    folders.insert(ParentFolder(files[i].path));
   }
-  for (const std::string& dir : folders) {
-    const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dfd >= 0) {
-      ::fsync(dfd);
-      ::close(dfd);
-    }
-  }
+  for (const std::string& dir : folders) SyncFolder(dir);
 }
 
 namespace {

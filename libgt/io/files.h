@@ -23,6 +23,9 @@ bool FileExists(const std::string& path);
 // removes the temporary file, so a reader never sees a half-written output.
 void WriteFileAtomic(const std::string& path, std::string_view bytes);
 
+// write(2) of all bytes to fd, retrying on EINTR; false on error (errno set).
+bool WriteAll(int fd, std::string_view bytes);
+
 // Several files at once, for the small indices a run ends with: each is written to
 // "<path>.tmp" and fsynced, all concurrently (their fsyncs overlap); then, when every one
 // of them succeeded, they are renamed onto their paths in the order given (a later file

@@ -82,18 +82,7 @@ struct TarShardWriter::Impl {
 
   // write(2) of the whole buffer; a failure is recorded in write_errno (see Write).
   void WriteAll(const void* buf, size_t n) {
-    const char* p = static_cast<const char*>(buf);
-    size_t left = n;
-    while (left > 0) {
-      const ssize_t w = ::write(fd, p, left);
-      if (w < 0) {
-        if (errno == EINTR) continue;
-        write_errno = errno;
-        return;
-      }
-      p += w;
-      left -= static_cast<size_t>(w);
-    }
+    if (!io::WriteAll(fd, std::string_view(static_cast<const char*>(buf), n))) write_errno = errno;
   }
 
   // Fails (abandoning the shard) when a write(2) of the archive has failed.
