@@ -120,7 +120,7 @@ class ShardsOutput : public gt::pairs::ShardOutput {
   }
   int64_t WriteShard(int64_t shard, const std::vector<gt::pairs::EncodedSample>& samples) override {
     auto stream = OpenShard(shard);
-    for (const auto& s : samples) stream->Add(s);
+    for (size_t i = 0; i < samples.size(); ++i) stream->Add(samples[i], i + 1 == samples.size());
     return stream->Finish();
   }
   std::unique_ptr<gt::pairs::ShardStream> OpenShard(int64_t shard) override {
@@ -128,11 +128,15 @@ class ShardsOutput : public gt::pairs::ShardOutput {
      public:
       Stream(const std::string& dir, const std::string& split, int64_t shard)
           : writer_(dir, split, shard) {}
-      void Add(gt::pairs::EncodedSample s) override {
+      // The shard's last sample is digested in Finish, beside the fsync's wait, and freed
+      // with this stream (on the thread that runs Finish).
+      void Add(gt::pairs::EncodedSample s, bool last) override {
         gt::shards::Sample sample;
         sample.key = std::move(s.key);
         for (auto& [name, bytes] : s.fields) sample.fields.push_back({name, std::move(bytes)});
-        writer_.Add(sample, s.pair_line.dump());
+        writer_.Add(std::move(sample), s.pair_line.dump(),
+                    last ? gt::shards::TarShardWriter::Digest::kDeferred
+                         : gt::shards::TarShardWriter::Digest::kNow);
       }
       int64_t Finish() override { return writer_.Finish().info.filesize; }
 

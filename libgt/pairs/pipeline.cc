@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <future>
 #include <list>
 #include <map>
@@ -18,6 +19,7 @@
 #include <mutex>
 #include <optional>
 #include <set>
+#include <thread>
 
 #include "libgt/core/error.h"
 #include "libgt/io/files.h"
@@ -62,6 +64,75 @@ class FolderLock {
 
  private:
   int fd_ = -1;
+};
+
+// Publishes the small files of a build (recipe.json, each scene's selection, the shard
+// plan) on a background thread, one after the other in the order posted, while the caller
+// goes on computing: their fsyncs (several ms each, the first one in a new folder the
+// longest) are then off the build's critical path. Wait() returns when every posted file
+// is published and rethrows the first error (a failed job skips the jobs after it); the
+// build calls it before anything that must come after these files (a shard's
+// publication, the indices, a return). The destructor waits without rethrowing (a build
+// that failed elsewhere).
+class OrderedPublisher {
+ public:
+  OrderedPublisher() = default;
+  OrderedPublisher(const OrderedPublisher&) = delete;
+  OrderedPublisher& operator=(const OrderedPublisher&) = delete;
+  ~OrderedPublisher() {
+    if (last_.valid()) last_.wait();
+  }
+
+  void Post(std::function<void()> job) {
+    last_ = std::async(std::launch::async,
+                       [previous = std::move(last_), job = std::move(job)]() mutable {
+                         if (previous.valid()) previous.get();  // its error skips this job
+                         job();
+                       });
+  }
+  void Wait() {
+    if (last_.valid()) last_.get();
+  }
+
+ private:
+  std::future<void> last_;
+};
+
+// Runs a shard's Finish (close, fsync, rename, part record) on a thread of its own while
+// the build goes on. Get() returns its result (rethrows its error) as soon as Finish has
+// returned; the stream, with the buffers it still holds, is destroyed afterwards on that
+// thread, so freeing them (munmap, slow with several threads) is not on the way to the
+// next publication or to the indices. The thread is joined by the next Start() and by the
+// destructor.
+class ShardFinisher {
+ public:
+  ShardFinisher() = default;
+  ShardFinisher(const ShardFinisher&) = delete;
+  ShardFinisher& operator=(const ShardFinisher&) = delete;
+  ~ShardFinisher() { Join(); }
+
+  void Start(std::unique_ptr<ShardStream> stream) {
+    Join();
+    std::promise<int64_t> promise;
+    result_ = promise.get_future();
+    thread_ = std::thread([st = std::move(stream), promise = std::move(promise)]() mutable {
+      try {
+        promise.set_value(st->Finish());
+      } catch (...) {
+        promise.set_exception(std::current_exception());
+      }
+      st.reset();
+    });
+  }
+  bool pending() const { return result_.valid(); }
+  int64_t Get() { return result_.get(); }
+
+ private:
+  void Join() {
+    if (thread_.joinable()) thread_.join();
+  }
+  std::future<int64_t> result_;
+  std::thread thread_;
 };
 
 // Imported pairs (LoFTR test.npz): scene → (frame number 0, frame number 1) in file order.
@@ -359,8 +430,8 @@ int64_t WriteSelection(const BuildOptions& o, const SceneSelection& s) {
   for (const auto& p : s.pairs) lines += PairJson(p).dump() + "\n";
   const std::string stats = s.stats.dump(2) + "\n";
   // Written at once; the stats, the scene's completion marker, are published second.
-  io::WriteFilesAtomic({{SelectionLinesPath(o, s.scene), lines},
-                        {SelectionStatsPath(o, s.scene), stats}});
+  io::WriteFilesAtomic(
+      {{SelectionLinesPath(o, s.scene), lines}, {SelectionStatsPath(o, s.scene), stats}});
   return static_cast<int64_t>(lines.size() + stats.size());
 }
 
@@ -413,7 +484,7 @@ occupancy::OccupancyMap FuseFrames(SceneData* d, const std::vector<size_t>& fram
 class BufferedShard : public ShardStream {
  public:
   BufferedShard(ShardOutput* output, int64_t shard) : output_(output), shard_(shard) {}
-  void Add(EncodedSample sample) override { samples_.push_back(std::move(sample)); }
+  void Add(EncodedSample sample, bool /*last*/) override { samples_.push_back(std::move(sample)); }
   int64_t Finish() override { return output_->WriteShard(shard_, samples_); }
 
  private:
@@ -519,14 +590,21 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   }
   const std::vector<std::string> scenes = ResolveScenes(recipe, *reader, imports.get());
   summary["scenes"] = static_cast<int64_t>(scenes.size());
+  // recipe.json, the selections and the plan are published in the background, in this
+  // order, and before any shard (publisher.Wait() below).
+  // (Declared before the publisher, whose destructor waits for the jobs that use them.)
+  std::map<std::string, SceneSelection> selections;
+  int64_t selection_bytes = 0;  // written by the publisher's jobs; read after Wait()
+  OrderedPublisher publisher;
   if (!options.dry_run && !io::FileExists(recipe_path)) {
-    FolderLock lock(options.out_dir);
-    if (!io::FileExists(recipe_path)) io::WriteFileAtomic(recipe_path, normalised.dump(2) + "\n");
+    publisher.Post([&options, recipe_path, text = normalised.dump(2) + "\n"] {
+      FolderLock lock(options.out_dir);
+      if (!io::FileExists(recipe_path)) io::WriteFileAtomic(recipe_path, text);
+    });
   }
 
   // ---- phase 1: select ----
   const auto t_select = Clock::now();
-  std::map<std::string, SceneSelection> selections;
   int64_t scenes_selected = 0, scenes_reused = 0;
   std::shared_ptr<SceneData> last_selected;  // the data of the scene selected last
   if (options.stage != "write") {
@@ -540,10 +618,14 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
         selections[scene] = std::move(*s);
         ++scenes_reused;
       } else {
-        SceneSelection sel =
-            SelectScene(recipe, *reader, scene, options, imports.get(), &last_selected);
-        if (!options.dry_run) bytes_written += WriteSelection(options, sel);
-        selections[scene] = std::move(sel);
+        SceneSelection& sel = selections[scene];
+        sel = SelectScene(recipe, *reader, scene, options, imports.get(), &last_selected);
+        // `sel` stays in place (std::map), and is only read from here on.
+        if (!options.dry_run) {
+          publisher.Post([&options, &sel, &selection_bytes] {
+            selection_bytes += WriteSelection(options, sel);
+          });
+        }
         ++scenes_selected;
       }
       if (progress)
@@ -625,6 +707,8 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   summary["estimated_bytes"] = total * EstimatedSampleBytes(recipe);
 
   if (options.dry_run || options.stage == "select") {
+    publisher.Wait();
+    bytes_written += selection_bytes;
     timings["total_s"] = Seconds(t_start);
     summary["timings"] = timings;
     summary["bytes_written"] = bytes_written;
@@ -632,6 +716,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
     return summary;
   }
   if (!all_selected) {
+    publisher.Wait();  // a failed publication is the error to report
     throw InputError("--stage write", "the selection of some scenes is not complete in " +
                                           SelectionDir(options) +
                                           " (run every task with --stage select first)");
@@ -652,10 +737,18 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
       }
     }
   }
-  {
+  publisher.Post([&options, output, shard_sizes] {
     FolderLock lock(options.out_dir);
     output->WritePlan(shard_sizes);
-  }
+  });
+  // Every file posted above is published before the first shard and before the indices.
+  bool published = false;
+  auto wait_published = [&] {
+    if (published) return;
+    publisher.Wait();
+    bytes_written += selection_bytes;
+    published = true;
+  };
   std::map<std::string, std::shared_ptr<SceneData>> scene_data;
   auto scene_of = [&](const std::string& name) -> std::shared_ptr<SceneData> {
     auto& d = scene_data[name];
@@ -714,11 +807,11 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   // pipeline and propagates from here: the stream being filled is dropped (its temporary
   // file removed, nothing published), and a Finish in flight completes (the future's
   // destructor waits for it) before RunBuild returns.
-  std::future<int64_t> pending_write;
+  ShardFinisher pending_write;
   int64_t pending_samples = 0;
   auto finish_write = [&] {
-    if (!pending_write.valid()) return;
-    bytes_written += pending_write.get();
+    if (!pending_write.pending()) return;
+    bytes_written += pending_write.Get();
     ++shards_written;
     samples_written += pending_samples;
   };
@@ -787,14 +880,15 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   auto collect = [&](size_t j) {
     const int64_t s = jobs[j].shard;
     if (!stream) stream = output->OpenShard(s);
-    stream->Add(std::move(items[j]->sample));
-    items[j].reset();
     const int64_t n = shard_sizes[s];
-    if (++in_stream < n) return;
+    const bool last = ++in_stream == n;
+    stream->Add(std::move(items[j]->sample), last);
+    items[j].reset();
+    if (!last) return;
     finish_write();
+    wait_published();
     pending_samples = n;
-    pending_write =
-        std::async(std::launch::async, [st = std::move(stream)] { return st->Finish(); });
+    pending_write.Start(std::move(stream));
     stream.reset();
     in_stream = 0;
     done_samples += n;
@@ -806,16 +900,22 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
                     tbb::make_filter<size_t, size_t>(tbb::filter_mode::parallel, compute) &
                     tbb::make_filter<size_t, void>(tbb::filter_mode::serial_in_order, collect));
   }
-  finish_write();
+  // The scenes' data is released while the last shard's Finish (fsync) runs.
   scene_data.clear();
+  finish_write();
+  wait_published();
   timings["write_s"] = Seconds(t_write);
   summary["shards_written_this_run"] = shards_written;
   summary["shards_skipped_complete"] = shards_skipped;
   summary["samples_written_this_run"] = samples_written;
 
   // ---- indices ----
+  // This task's shards are complete now (found complete above, or just published); only
+  // the other tasks' shards are looked up.
   bool complete = true;
-  for (int64_t s = 0; s < nshards && complete; ++s) complete = output->IsShardComplete(s);
+  for (int64_t s = 0; s < nshards && complete; ++s) {
+    if (s % options.tasks != options.task) complete = output->IsShardComplete(s);
+  }
   summary["complete"] = complete;
   // A re-run that wrote nothing leaves published indices alone (no new inodes or mtimes).
   // Tasks finishing together publish one after the other (the lock is held to the end).

@@ -66,7 +66,9 @@ struct LoftrRow {
 class ShardStream {
  public:
   virtual ~ShardStream() = default;
-  virtual void Add(EncodedSample sample) = 0;
+  // `last`: the shard's final sample (Finish follows). A stream may then leave work on the
+  // sample's bytes (their digest) to Finish, where it overlaps the fsync's wait.
+  virtual void Add(EncodedSample sample, bool last) = 0;
   virtual int64_t Finish() = 0;
 };
 

@@ -313,16 +313,33 @@ SplitShardWriter::SplitShardWriter(const std::string& dir, const std::string& sp
 SplitShardWriter::~SplitShardWriter() = default;
 
 void SplitShardWriter::Add(const Sample& sample, const std::string& pair_line_json) {
-  json line = json::parse(pair_line_json, nullptr, false);
+  json line = ParsePairLine(sample.key, pair_line_json);
+  tar_->Add(sample);
+  Record(sample.key, &line);
+}
+
+void SplitShardWriter::Add(Sample&& sample, const std::string& pair_line_json,
+                           TarShardWriter::Digest digest) {
+  json line = ParsePairLine(sample.key, pair_line_json);
+  const std::string key = sample.key;
+  tar_->Add(std::move(sample), digest);
+  Record(key, &line);
+}
+
+json SplitShardWriter::ParsePairLine(const std::string& key, const std::string& text) const {
+  json line = json::parse(text, nullptr, false);
   if (line.is_discarded() || !line.is_object()) {
-    throw InputError(ShardPath(dir_, record_.split, record_.shard_index) + ": " + sample.key,
+    throw InputError(ShardPath(dir_, record_.split, record_.shard_index) + ": " + key,
                      "pair line is not a JSON object");
   }
-  tar_->Add(sample);
-  line["shard"] = record_.url;
-  line["key"] = sample.key;
-  record_.keys.push_back(sample.key);
-  record_.pair_lines.push_back(line.dump());
+  return line;
+}
+
+void SplitShardWriter::Record(const std::string& key, json* line) {
+  (*line)["shard"] = record_.url;
+  (*line)["key"] = key;
+  record_.keys.push_back(key);
+  record_.pair_lines.push_back(line->dump());
 }
 
 PartRecord SplitShardWriter::Finish() {

@@ -25,6 +25,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
 
@@ -76,9 +77,14 @@ class SplitShardWriter {
   SplitShardWriter(const std::string& dir, const std::string& split, int64_t shard_index);
   ~SplitShardWriter();
   void Add(const Sample& sample, const std::string& pair_line_json);
+  // Taking the sample; TarShardWriter::Digest::kDeferred for a shard's last sample (see
+  // TarShardWriter::Add).
+  void Add(Sample&& sample, const std::string& pair_line_json, TarShardWriter::Digest digest);
   PartRecord Finish();
 
  private:
+  nlohmann::json ParsePairLine(const std::string& key, const std::string& text) const;
+  void Record(const std::string& key, nlohmann::json* line);
   PartRecord record_;
   std::string dir_;
   std::unique_ptr<TarShardWriter> tar_;

@@ -10,8 +10,10 @@
 
 #include <cerrno>
 #include <cstring>
+#include <deque>
 #include <filesystem>
 #include <set>
+#include <thread>
 #include <utility>
 
 #include "libgt/core/error.h"
@@ -48,8 +50,28 @@ struct TarShardWriter::Impl {
   int64_t nsamples = 0;
   int64_t bytes = 0;
   int64_t writeback_from = 0;  // bytes before this offset have been handed to writeback
-  io::Md5 md5;                 // of the bytes written so far (the published file's digest)
+  io::Md5 md5;                 // of the bytes digested so far (the published file's digest)
   std::set<std::string> keys;
+
+  // Deferred digest (Add(sample, kDeferred)): the bytes written since then, in file order,
+  // wait in `pending` for Finish (or the next Add) to digest them. A segment points into a
+  // field of `deferred` (the sample, kept until the writer is destroyed) or at its own copy
+  // (tar headers, padding and end blocks, which come from libarchive's buffers).
+  struct Segment {
+    std::string owned;
+    const char* data = nullptr;
+    size_t n = 0;
+  };
+  bool defer = false;                 // Write records segments instead of digesting (up to Finish)
+  const char* field_begin = nullptr;  // the field being written (its data is kept)
+  const char* field_end = nullptr;
+  std::deque<Segment> pending;  // deque: elements never move, so `data` stays valid
+  Sample deferred;
+
+  void DigestPending() {
+    for (const Segment& seg : pending) md5.Update(seg.data, seg.n);
+    pending.clear();
+  }
 
   // libarchive write callback: writes the whole block. A failed write(2) is recorded in
   // write_errno and the block (and every later one) is reported as written: returning an
@@ -67,7 +89,18 @@ struct TarShardWriter::Impl {
   static la_ssize_t Write(archive* /*a*/, void* client, const void* buf, size_t n) {
     auto* self = static_cast<Impl*>(client);
     if (self->write_errno != 0) return static_cast<la_ssize_t>(n);
-    if (n >= kDigestAsideBytes) {
+    if (self->defer) {
+      self->WriteAll(buf, n);
+      const char* p = static_cast<const char*>(buf);
+      Segment& seg = self->pending.emplace_back();
+      if (p >= self->field_begin && p + n <= self->field_end) {
+        seg.data = p;  // inside the kept sample
+      } else {
+        seg.owned.assign(p, n);
+        seg.data = seg.owned.data();
+      }
+      seg.n = n;
+    } else if (n >= kDigestAsideBytes) {
       tbb::this_task_arena::isolate([&] {
         tbb::parallel_invoke([&] { self->WriteAll(buf, n); }, [&] { self->md5.Update(buf, n); });
       });
@@ -80,10 +113,29 @@ struct TarShardWriter::Impl {
   }
   static constexpr size_t kDigestAsideBytes = size_t{256} << 10;
 
+  // Starts the writeback of the bytes written so far (asynchronous, no wait) once at least
+  // kWritebackBytes of whole pages are pending, so that the fsync of Finish, which
+  // publication waits for, has little left to flush: the last sample's first members are
+  // on their way to the disk while its later ones are written and digested. Whole pages
+  // only (the partial last page would be written twice). Advisory: an error here is
+  // ignored (fsync reports any real one).
+  void StartWriteback() {
+#ifdef __linux__
+    const int64_t upto = bytes & ~int64_t{4095};
+    if (upto - writeback_from < kWritebackBytes) return;
+    (void)::sync_file_range(fd, writeback_from, upto - writeback_from, SYNC_FILE_RANGE_WRITE);
+    writeback_from = upto;
+#endif
+  }
+  static constexpr int64_t kWritebackBytes = int64_t{1} << 20;
+
   // write(2) of the whole buffer; a failure is recorded in write_errno (see Write).
   void WriteAll(const void* buf, size_t n) {
     if (!io::WriteAll(fd, std::string_view(static_cast<const char*>(buf), n))) write_errno = errno;
   }
+
+  void CheckAdd(const Sample& sample);      // throws (and abandons) on a bad sample
+  void WriteMembers(const Sample& sample);  // the sample's members through libarchive
 
   // Fails (abandoning the shard) when a write(2) of the archive has failed.
   void CheckWrites(const std::string& member) {
@@ -139,11 +191,36 @@ TarShardWriter::~TarShardWriter() {
 
 void TarShardWriter::Add(const Sample& sample) {
   Impl& s = *impl_;
-  if (s.dead || s.finished) {
-    throw InputError(s.path, "writer is closed (an earlier write failed or Finish() ran)");
+  s.CheckAdd(sample);
+  s.DigestPending();  // an earlier deferred sample's bytes come first
+  s.defer = false;
+  s.WriteMembers(sample);
+}
+
+void TarShardWriter::Add(Sample&& sample, Digest digest) {
+  Impl& s = *impl_;
+  s.CheckAdd(sample);
+  s.DigestPending();
+  s.defer = false;
+  if (digest == Digest::kNow) {
+    s.WriteMembers(sample);
+    return;
   }
-  if (std::string e = CheckSample(sample); !e.empty()) s.Fail(sample.key, e);
-  if (!s.keys.insert(sample.key).second) s.Fail(sample.key, "sample key repeats in the shard");
+  s.deferred = std::move(sample);  // the field buffers stay where they are
+  s.defer = true;
+  s.WriteMembers(s.deferred);
+}
+
+void TarShardWriter::Impl::CheckAdd(const Sample& sample) {
+  if (dead || finished) {
+    throw InputError(path, "writer is closed (an earlier write failed or Finish() ran)");
+  }
+  if (std::string e = CheckSample(sample); !e.empty()) Fail(sample.key, e);
+  if (!keys.insert(sample.key).second) Fail(sample.key, "sample key repeats in the shard");
+}
+
+void TarShardWriter::Impl::WriteMembers(const Sample& sample) {
+  Impl& s = *this;
   std::unique_ptr<archive_entry, EntryDeleter> entry(archive_entry_new());
   for (const SampleField& field : sample.fields) {
     const std::string member = sample.key + "." + field.name;
@@ -160,6 +237,8 @@ void TarShardWriter::Add(const Sample& sample) {
       s.CheckWrites(member);
       s.Fail(member, "cannot write tar header: " + ArchiveMessage(a));
     }
+    s.field_begin = field.bytes.data();
+    s.field_end = field.bytes.data() + field.bytes.size();
     size_t done = 0;
     while (done < field.bytes.size()) {
       const la_ssize_t w =
@@ -172,19 +251,11 @@ void TarShardWriter::Add(const Sample& sample) {
       s.CheckWrites(member);
       s.Fail(member, "cannot finish member: " + ArchiveMessage(a));
     }
+    s.field_begin = s.field_end = nullptr;
     s.CheckWrites(member);
+    s.StartWriteback();
   }
   ++s.nsamples;
-#ifdef __linux__
-  // Starts the writeback of this sample's bytes now (asynchronous, no wait), so that the
-  // fsync of Finish, which publication waits for, has only the last sample left to flush.
-  // Advisory: an error here is ignored (fsync reports any real one).
-  if (s.bytes > s.writeback_from) {
-    (void)::sync_file_range(s.fd, s.writeback_from, s.bytes - s.writeback_from,
-                            SYNC_FILE_RANGE_WRITE);
-    s.writeback_from = s.bytes;
-  }
-#endif
 }
 
 ShardInfo TarShardWriter::Finish() {
@@ -198,7 +269,20 @@ ShardInfo TarShardWriter::Finish() {
   }
   s.CheckWrites("");
   s.ar.reset();
-  if (::fsync(s.fd) != 0) s.Fail("", std::string("fsync failed: ") + std::strerror(errno));
+  // Every byte is written now. A deferred sample's bytes are digested while the fsync
+  // (data writeback and the journal commit, mostly waiting for the disk) runs on a thread
+  // of its own: the two overlap instead of adding up.
+  int fsync_errno = 0;
+  if (s.pending.empty()) {
+    if (::fsync(s.fd) != 0) fsync_errno = errno;
+  } else {
+    std::thread sync([&s, &fsync_errno] {
+      if (::fsync(s.fd) != 0) fsync_errno = errno;
+    });
+    s.DigestPending();
+    sync.join();
+  }
+  if (fsync_errno != 0) s.Fail("", std::string("fsync failed: ") + std::strerror(fsync_errno));
   if (::close(s.fd) != 0) {
     s.fd = -1;
     s.Fail("", std::string("close failed: ") + std::strerror(errno));

@@ -297,6 +297,61 @@ TEST(Pipeline, ReRunReusesSelectionAndSkipsCompleteShards) {
   EXPECT_THROW(RunBuild(other, o, &out, nullptr), InputError);
 }
 
+// recipe.json, the scenes' selections and the plan are published on a background thread
+// (pipeline.cc, OrderedPublisher) but always before the first shard; an error of one of
+// them is the build's error, and no shard is written after it.
+class CheckingOutput : public MemoryOutput {
+ public:
+  std::string dir;
+  bool refuse_plan = false;
+  bool metadata_before_first_shard = false;
+  void WritePlan(const std::vector<int64_t>& sizes) override {
+    if (refuse_plan) throw InputError("plan", "refused (test)");
+    MemoryOutput::WritePlan(sizes);
+  }
+  int64_t WriteShard(int64_t s, const std::vector<EncodedSample>& samples) override {
+    {
+      std::lock_guard<std::mutex> lock(*mutex);
+      if (writes == 0) {
+        int selections = 0;
+        for (const auto& e : fs::directory_iterator(dir + "/selection")) {
+          selections += e.path().extension() == ".json";
+        }
+        metadata_before_first_shard =
+            fs::exists(dir + "/recipe.json") && selections == 2 && !plan.empty();
+      }
+    }
+    return MemoryOutput::WriteShard(s, samples);
+  }
+};
+
+TEST(Pipeline, MetadataIsPublishedBeforeTheFirstShardAndItsErrorsPropagate) {
+  const Recipe r = SmallRecipe(Dataset());
+  for (const int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    CheckingOutput out;
+    BuildOptions o;
+    o.out_dir = out.dir = test::ScratchDir("pipeline_metadata_" + std::to_string(threads));
+    const nlohmann::json s = RunBuild(r, o, &out, nullptr);
+    EXPECT_TRUE(s["complete"].get<bool>());
+    EXPECT_TRUE(out.metadata_before_first_shard) << threads << " threads";
+    EXPECT_GT(s["bytes_written"].get<int64_t>(), 0);
+
+    CheckingOutput refused;
+    refused.refuse_plan = true;
+    BuildOptions o2;
+    o2.out_dir = refused.dir = test::ScratchDir("pipeline_plan_refused_" + std::to_string(threads));
+    try {
+      RunBuild(r, o2, &refused, nullptr);
+      ADD_FAILURE() << "expected InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("refused (test)"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(refused.writes, 0);
+    EXPECT_TRUE(refused.shards.empty());
+  }
+}
+
 TEST(Pipeline, KeyCollisionFailsBeforeAnyShard) {
   const Recipe r = SmallRecipe(Dataset());
   MemoryOutput out;

@@ -148,6 +148,86 @@ TEST(TarShard, LargeMembersAreWrittenAndDigestedWhole) {
   }
 }
 
+// Samples with members below, at and above the 256 KiB and 1 MiB thresholds of the writer.
+std::vector<Sample> LargeSamples(int count, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::vector<Sample> samples;
+  for (int k = 0; k < count; ++k) {
+    Sample s;
+    s.key = "scene/deferred_" + std::to_string(k);
+    s.fields.push_back({"json", "{\"k\": " + std::to_string(k) + "}"});
+    for (const size_t n : {size_t{256} << 10, size_t{5}, (size_t{1} << 20) + 4097,
+                           static_cast<size_t>(rng() % 3000)}) {
+      std::string bytes(n, '\0');
+      for (char& c : bytes) c = static_cast<char>(rng());
+      s.fields.push_back({"f" + std::to_string(s.fields.size()) + ".bin", std::move(bytes)});
+    }
+    samples.push_back(std::move(s));
+  }
+  return samples;
+}
+
+TEST(TarShard, DeferredDigestGivesTheSameBytesAndMd5) {
+  // Add(sample, kDeferred) writes now and digests in Finish (or in the next Add): the file
+  // and its MD5 must not depend on which samples were deferred.
+  const std::string dir = test::ScratchDir("shards_tar_deferred");
+  const std::vector<Sample> samples = LargeSamples(4, 11);
+  const ShardInfo plain = WriteShard(dir + "/plain-000000.tar", samples);
+  const std::string plain_bytes = io::ReadFileBytes(dir + "/plain-000000.tar");
+  ASSERT_EQ(plain.md5sum, io::Md5Hex(plain_bytes));
+  using D = TarShardWriter::Digest;
+  const std::vector<std::vector<int>> patterns = {
+      {1, 1, 1, 1},  // every sample deferred: each Add first digests the one before
+      {0, 0, 0, 1},  // the build's pattern: only the last
+      {2, 1, 0, 1},  // const& (2), deferred, now, deferred
+      {1, 2, 2, 0},  // deferred, then const& Adds and a kNow one
+  };
+  for (size_t t = 0; t < patterns.size(); ++t) {
+    const std::string path = dir + "/mixed" + std::to_string(t) + "-000000.tar";
+    TarShardWriter writer(path);
+    for (size_t k = 0; k < samples.size(); ++k) {
+      Sample copy = samples[k];
+      if (patterns[t][k] == 2) {
+        writer.Add(copy);
+      } else {
+        writer.Add(std::move(copy), patterns[t][k] == 1 ? D::kDeferred : D::kNow);
+      }
+    }
+    const ShardInfo info = writer.Finish();
+    const std::string bytes = io::ReadFileBytes(path);
+    EXPECT_TRUE(bytes == plain_bytes) << "pattern " << t;
+    EXPECT_EQ(info.md5sum, plain.md5sum) << "pattern " << t;
+    EXPECT_EQ(info.md5sum, io::Md5Hex(bytes)) << "pattern " << t;
+    EXPECT_EQ(info.filesize, plain.filesize);
+    EXPECT_EQ(info.nsamples, 4);
+  }
+}
+
+TEST(TarShard, DeferredSampleOfAnAbandonedOrFailedShardLeavesNothing) {
+  const std::string dir = test::ScratchDir("shards_tar_deferred_fail");
+  {
+    TarShardWriter writer(dir + "/a-000000.tar");
+    writer.Add(std::move(LargeSamples(1, 3)[0]), TarShardWriter::Digest::kDeferred);
+    EXPECT_TRUE(fs::exists(dir + "/a-000000.tar.tmp"));
+  }
+  EXPECT_TRUE(fs::is_empty(dir));
+  // Every write(2) fails (ENOSPC): the deferred Add or Finish throws naming the shard.
+  const std::string path = dir + "/b-000000.tar";
+  fs::create_symlink("/dev/full", path + ".tmp");
+  bool threw = false;
+  try {
+    TarShardWriter writer(path);
+    writer.Add(std::move(LargeSamples(1, 4)[0]), TarShardWriter::Digest::kDeferred);
+    writer.Finish();
+  } catch (const InputError& e) {
+    threw = true;
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(threw);
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_FALSE(fs::is_symlink(path + ".tmp"));
+}
+
 TEST(TarShard, HeadersOrderAndSizesMatchTheSamples) {
   const std::string dir = test::ScratchDir("shards_tar_headers");
   const std::string path = dir + "/train-000000.tar";
