@@ -20,6 +20,7 @@
 #include <optional>
 #include <set>
 #include <thread>
+#include <utility>
 
 #include "libgt/core/error.h"
 #include "libgt/io/files.h"
@@ -90,7 +91,7 @@ class OrderedPublisher {
                          job();
                        });
   }
-  void Wait() {
+  void Wait() {  // a no-op when nothing was posted since the last call
     if (last_.valid()) last_.get();
   }
 
@@ -708,7 +709,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
 
   if (options.dry_run || options.stage == "select") {
     publisher.Wait();
-    bytes_written += selection_bytes;
+    bytes_written += std::exchange(selection_bytes, 0);
     timings["total_s"] = Seconds(t_start);
     summary["timings"] = timings;
     summary["bytes_written"] = bytes_written;
@@ -741,13 +742,11 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
     FolderLock lock(options.out_dir);
     output->WritePlan(shard_sizes);
   });
-  // Every file posted above is published before the first shard and before the indices.
-  bool published = false;
+  // Every file posted above is published before the first shard and before the indices
+  // (a second call returns at once).
   auto wait_published = [&] {
-    if (published) return;
     publisher.Wait();
-    bytes_written += selection_bytes;
-    published = true;
+    bytes_written += std::exchange(selection_bytes, 0);
   };
   std::map<std::string, std::shared_ptr<SceneData>> scene_data;
   auto scene_of = [&](const std::string& name) -> std::shared_ptr<SceneData> {
@@ -805,8 +804,8 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
   // At most `tokens` samples are in flight between stages 1 and 3; memory stays bounded.
   // An exception in any stage (InputError of a sample, a write error) cancels the
   // pipeline and propagates from here: the stream being filled is dropped (its temporary
-  // file removed, nothing published), and a Finish in flight completes (the future's
-  // destructor waits for it) before RunBuild returns.
+  // file removed, nothing published), and a Finish in flight completes (ShardFinisher's
+  // destructor joins its thread) before RunBuild returns.
   ShardFinisher pending_write;
   int64_t pending_samples = 0;
   auto finish_write = [&] {

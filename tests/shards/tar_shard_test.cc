@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -148,6 +149,26 @@ TEST(TarShard, LargeMembersAreWrittenAndDigestedWhole) {
   }
 }
 
+// "<path>.tmp" is a symlink to /dev/full, so every write(2) fails with ENOSPC: `add` and
+// Finish must throw an InputError naming the shard, and nothing may be left published.
+void ExpectDiskFullFailsAndPublishesNothing(const std::string& path,
+                                            const std::function<void(TarShardWriter&)>& add) {
+  ASSERT_TRUE(fs::exists("/dev/full"));
+  fs::create_symlink("/dev/full", path + ".tmp");
+  bool threw = false;
+  try {
+    TarShardWriter writer(path);
+    add(writer);
+    writer.Finish();
+  } catch (const InputError& e) {
+    threw = true;
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(threw);
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_FALSE(fs::is_symlink(path + ".tmp"));
+}
+
 // Samples with members below, at and above the 256 KiB and 1 MiB thresholds of the writer.
 std::vector<Sample> LargeSamples(int count, uint32_t seed) {
   std::mt19937 rng(seed);
@@ -212,20 +233,9 @@ TEST(TarShard, DeferredSampleOfAnAbandonedOrFailedShardLeavesNothing) {
   }
   EXPECT_TRUE(fs::is_empty(dir));
   // Every write(2) fails (ENOSPC): the deferred Add or Finish throws naming the shard.
-  const std::string path = dir + "/b-000000.tar";
-  fs::create_symlink("/dev/full", path + ".tmp");
-  bool threw = false;
-  try {
-    TarShardWriter writer(path);
+  ExpectDiskFullFailsAndPublishesNothing(dir + "/b-000000.tar", [](TarShardWriter& writer) {
     writer.Add(std::move(LargeSamples(1, 4)[0]), TarShardWriter::Digest::kDeferred);
-    writer.Finish();
-  } catch (const InputError& e) {
-    threw = true;
-    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
-  }
-  EXPECT_TRUE(threw);
-  EXPECT_FALSE(fs::exists(path));
-  EXPECT_FALSE(fs::is_symlink(path + ".tmp"));
+  });
 }
 
 TEST(TarShard, HeadersOrderAndSizesMatchTheSamples) {
@@ -446,21 +456,10 @@ TEST(TarShard, DiskFullFailsLoudlyAndPublishesNothing) {
   // "<shard>.tmp" is a symlink to /dev/full: every write(2) fails with ENOSPC.
   ASSERT_TRUE(fs::exists("/dev/full"));
   const std::string dir = test::ScratchDir("shards_tar_disk_full");
-  const std::string path = dir + "/train-000000.tar";
-  fs::create_symlink("/dev/full", path + ".tmp");
-  bool threw = false;
-  try {
-    TarShardWriter writer(path);
+  ExpectDiskFullFailsAndPublishesNothing(dir + "/train-000000.tar", [](TarShardWriter& writer) {
     // More than one 10240-byte block so that libarchive flushes inside Add().
     for (int k = 0; k < 50; ++k) writer.Add(MakeSample("s/" + std::to_string(k), k));
-    writer.Finish();
-  } catch (const InputError& e) {
-    threw = true;
-    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
-  }
-  EXPECT_TRUE(threw);
-  EXPECT_FALSE(fs::exists(path));
-  EXPECT_FALSE(fs::is_symlink(path + ".tmp"));
+  });
 
   // Same with a file-size limit in a child process (SIGXFSZ ignored -> EFBIG).
   const std::string path2 = dir + "/train-000001.tar";
