@@ -7,9 +7,11 @@
 
 1. speed-up: `occgt build` on the samples (recipes/sevenscenes-sample.yaml,
    tartanair-sample.yaml, demo.yaml with its synthetic data generated beforehand) in a
-   fresh output folder, --threads 1 and --threads 2 alternated, `--reps` times each; wall
-   time, CPU time and peak RSS of each process (os.wait4), the stage times of its summary,
-   bytes per sample (shards / samples). Reports medians and the median ratio t1 / t2; also
+   fresh output folder, `--reps` times each of: --threads 1 confined to one CPU ("1 core",
+   sched_setaffinity; the baseline of the speed-up on 2 cores), --threads 1 on the whole
+   machine ("t1") and --threads 2 ("t2"), in a rotating order; wall time, CPU time and peak
+   RSS of each process (os.wait4), the stage times of its summary, bytes per sample (shards /
+   samples). Reports medians and the median ratios 1 core / t2 and t1 / t2; also
    the same build as 2 tasks of 1 thread running at once (the Slurm layout on one machine).
    Then the same on larger bench variants of the two sample recipes (not shipped; written
    into the scratch folder, same sample data): frame_stride 1 and a higher quota, 7-Scenes
@@ -20,9 +22,10 @@
    with recipes/scannet-train.yaml's selection (max_frame_gap 60, score_stride 10, overlap
    [0.4, 0.8], jpg, no depth, pair OctoMap occupancy) and a quota of 40 pairs; built with
    --threads 2 at --depth-cache-mb 512 and 64 (peak RSS against N) and once with --threads 1
+   on one CPU
    (per-core rates of both stages, the inputs of the projection).
 3. projection: hours on 64 cores for the ScanNet train split (from (2)'s per-core rates)
-   and TartanAir (from tartanair-sample's --threads 1 runs); see projection().
+   and TartanAir (from tartanair-sample's one-core runs); see projection().
 The machine load (`uptime`) is printed before and after; other processes inflate wall times.
 """
 import argparse
@@ -51,13 +54,24 @@ def uptime():
     return text
 
 
-def timed(cmd, env=None):
-    """Runs cmd with os.wait4 for its own rusage: (stdout text, wall s, cpu s, max RSS MB)."""
+def one_cpu(confine=True):
+    """preexec_fn: the child may run on one CPU only (the lowest of this process's set), as a
+    Slurm task with --cpus-per-task=1 does; its helper threads share that CPU. With
+    confine=False a no-op, so that every timed run is started the same way (fork + exec:
+    subprocess uses vfork only without a preexec_fn)."""
+    cpu = min(os.sched_getaffinity(0))
+    return (lambda: os.sched_setaffinity(0, {cpu})) if confine else (lambda: None)
+
+
+def timed(cmd, env=None, one_core=False):
+    """Runs cmd with os.wait4 for its own rusage: (stdout text, wall s, cpu s, max RSS MB).
+    one_core: the process and all its threads are confined to one CPU (sched_setaffinity)."""
     t0 = time.perf_counter()
     out_path = os.path.join(ARGS.scratch, ".stdout")
     err_path = os.path.join(ARGS.scratch, ".stderr")
     with open(out_path, "w") as out, open(err_path, "w") as err:
-        p = subprocess.Popen(cmd, stdout=out, stderr=err, env=env)
+        p = subprocess.Popen(cmd, stdout=out, stderr=err, env=env,
+                             preexec_fn=one_cpu(one_core))
         _, status, ru = os.wait4(p.pid, 0)
     wall = time.perf_counter() - t0
     p.returncode = os.waitstatus_to_exitcode(status)
@@ -71,13 +85,13 @@ def shard_bytes(out):
         return sum(s["filesize"] for s in json.load(f)["shardlist"])
 
 
-def build(recipe, out, threads, extra=(), seed_data=None):
+def build(recipe, out, threads, extra=(), seed_data=None, one_core=False):
     shutil.rmtree(out, ignore_errors=True)
     if seed_data:
         os.makedirs(out)
         shutil.copytree(seed_data, os.path.join(out, "data"))
     text, wall, cpu, rss = timed([OCCGT, "build", recipe, "--out", out, "--threads", str(threads),
-                                  *extra])
+                                  *extra], one_core=one_core)
     s = json.loads(text)
     return {"wall_s": wall, "cpu_s": cpu, "rss_mb": rss, "select_s": s["timings"]["select_s"],
             "write_s": s["timings"]["write_s"], "samples": s["samples"],
@@ -134,7 +148,8 @@ def speedup(results):
     demo_data = os.path.join(ARGS.scratch, "demo-data")
     if not os.path.exists(os.path.join(demo_data, "data", ".complete")):
         timed([OCCGT, "build", recipes[2][1], "--out", demo_data, "--dry-run"])
-    print("\n## speed-up, --threads 1 vs 2 (fresh output folder each run)")
+    print("\n## speed-up on 2 cores: --threads 1 on one CPU, --threads 1 and --threads 2 on both "
+          "(fresh output folder each run)")
     speedup_table(results, recipes, demo_data)
     if not ARGS.skip_large:
         large = [("sevenscenes-sample-large (bench variant: stride 1, overlap [0.1, 1], quota 48)",
@@ -149,31 +164,46 @@ def speedup(results):
 
 
 def speedup_table(results, recipes, demo_data):
-    print("| recipe | samples | t1 wall (median) | t2 wall (median) | ratio t1/t2 (median of reps) "
-          "| t1 select / write | t2 select / write | 2 tasks x 1 thread wall (ratio) "
-          "| CPU t1 / t2 | peak RSS t1 / t2 | bytes/sample |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    """Three runs per repetition, in an order that rotates: "1 core" (--threads 1 confined to
+    one CPU: the baseline of the speed-up on 2 cores), "t1" (--threads 1 on the whole machine:
+    its fsync and digest helper threads, and the kernel's writeback, may use the other CPU)
+    and "t2" (--threads 2). Ratios are per repetition, then the median."""
+    print("| recipe | samples | 1 core wall | t1 wall | t2 wall "
+          "| speed-up 1 core / t2 (median of reps) | t1 / t2 "
+          "| t1 select / write | t2 select / write | 2 tasks x 1 thread wall (t1 / that) "
+          "| CPU 1 core / t1 / t2 | peak RSS t1 / t2 | bytes/sample |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    conditions = [("c1", 1, True), ("t1", 1, False), ("t2", 2, False)]
     for name, recipe in recipes:
-        rows = {1: [], 2: []}
+        rows = {c: [] for c, _, _ in conditions}
         seed = os.path.join(demo_data, "data") if name == "demo" else None
         folder = name.split(" ")[0]
         for rep in range(ARGS.reps):
-            for t in ((1, 2) if rep % 2 == 0 else (2, 1)):
-                rows[t].append(build(recipe, os.path.join(ARGS.scratch, f"{folder}-t{t}"), t,
-                                     seed_data=seed))
+            k = rep % len(conditions)
+            for c, threads, one_core in conditions[k:] + conditions[:k]:
+                rows[c].append(build(recipe, os.path.join(ARGS.scratch, f"{folder}-{c}"), threads,
+                                     seed_data=seed, one_core=one_core))
         two = [build_two_tasks(recipe, os.path.join(ARGS.scratch, f"{folder}-p2"), seed)
                for _ in range(ARGS.reps)]
-        ratios = [a["wall_s"] / b["wall_s"] for a, b in zip(rows[1], rows[2])]
-        r1, r2 = rows[1], rows[2]
-        results["speedup"][name] = {"t1": r1, "t2": r2, "ratios": ratios, "tasks2_wall_s": two}
-        print(f"| {name} | {r1[0]['samples']} | {med(r1, 'wall_s'):.2f} s | {med(r2, 'wall_s'):.2f} s "
-              f"| {statistics.median(ratios):.2f} (min {min(ratios):.2f}, max {max(ratios):.2f}) "
+        c1, r1, r2 = rows["c1"], rows["t1"], rows["t2"]
+        core_ratios = [a["wall_s"] / b["wall_s"] for a, b in zip(c1, r2)]
+        ratios = [a["wall_s"] / b["wall_s"] for a, b in zip(r1, r2)]
+        results["speedup"][name] = {"one_core": c1, "t1": r1, "t2": r2,
+                                    "ratios_one_core": core_ratios, "ratios": ratios,
+                                    "tasks2_wall_s": two}
+
+        def rng(v):
+            return f"{statistics.median(v):.2f} ({min(v):.2f}–{max(v):.2f})"
+
+        print(f"| {name} | {r1[0]['samples']} | {med(c1, 'wall_s'):.2f} s "
+              f"| {med(r1, 'wall_s'):.2f} s | {med(r2, 'wall_s'):.2f} s "
+              f"| {rng(core_ratios)} | {rng(ratios)} "
               f"| {med(r1, 'select_s'):.2f} / {med(r1, 'write_s'):.2f} s "
               f"| {med(r2, 'select_s'):.2f} / {med(r2, 'write_s'):.2f} s "
               f"| {statistics.median(two):.2f} s ({med(r1, 'wall_s') / statistics.median(two):.2f}) "
-              f"| {med(r1, 'cpu_s'):.2f} / {med(r2, 'cpu_s'):.2f} s "
+              f"| {med(c1, 'cpu_s'):.2f} / {med(r1, 'cpu_s'):.2f} / {med(r2, 'cpu_s'):.2f} s "
               f"| {med(r1, 'rss_mb'):.0f} / {med(r2, 'rss_mb'):.0f} MB "
-              f"| {r1[0]['bytes'] / r1[0]['samples'] / 1e6:.2f} MB |")
+              f"| {r1[0]['bytes'] / r1[0]['samples'] / 1e6:.2f} MB |", flush=True)
     print(f"load after the table: {uptime()}")
 
 
@@ -206,7 +236,7 @@ def long_scene(results):
         recipe = scene_recipe(data, frames)
         for threads, cache in ((2, 512), (2, 64), (1, 512)):
             r = build(recipe, os.path.join(ARGS.scratch, f"long{frames}-out"), threads,
-                      extra=("--depth-cache-mb", str(cache)))
+                      extra=("--depth-cache-mb", str(cache)), one_core=threads == 1)
             r.update(frames_in=frames, threads=threads, cache_mb=cache)
             results["long_scene"].append(r)
             print(f"| {frames} | {threads} | {cache} MB | {r['wall_s']:.1f} s | {r['select_s']:.1f} s "
@@ -214,7 +244,7 @@ def long_scene(results):
 
 
 def projection(results):
-    """Core-hours of both stages at full size from per-core (--threads 1) medians: ScanNet
+    """Core-hours of both stages at full size from per-core (one-core --threads 1) medians: ScanNet
     from the long synthetic scene (its recipe is scannet-train's selection), TartanAir from
     recipes/tartanair-sample.yaml. Select scales with kept frames (at the measured candidate
     density), write with samples; tasks are independent, so cores divide the time."""
@@ -224,7 +254,7 @@ def projection(results):
 
 
 def projection_on(results, cores, basis):
-    """basis "wall": stage wall times of the --threads 1 run (pessimistic on a loaded
+    """basis "wall": stage wall times of the one-core run (pessimistic on a loaded
     machine); "cpu": the same scaled by the run's CPU time / wall time (the core share the
     process really got), an estimate for idle cores."""
     rates = {}
@@ -240,13 +270,14 @@ def projection_on(results, cores, basis):
                             r["bytes"] / r["samples"], f"long scene, {r['frames_in']} frames")
     t = results["speedup"].get("tartanair-sample")
     if t:
-        f = statistics.median(scale(r) for r in t["t1"])
-        rates["tartanair"] = (f * med(t["t1"], "select_s") / t["t1"][0]["frames"],
-                              f * med(t["t1"], "write_s") / t["t1"][0]["samples"],
-                              t["t1"][0]["bytes"] / t["t1"][0]["samples"], "tartanair-sample")
+        rows1 = t.get("one_core") or t["t1"]  # saved results of older runs have no one-core rows
+        f = statistics.median(scale(r) for r in rows1)
+        rates["tartanair"] = (f * med(rows1, "select_s") / rows1[0]["frames"],
+                              f * med(rows1, "write_s") / rows1[0]["samples"],
+                              rows1[0]["bytes"] / rows1[0]["samples"], "tartanair-sample")
     if not rates:
         return
-    print(f"\n## projection on {cores} cores (per-core rates from --threads 1 runs, {basis} basis)")
+    print(f"\n## projection on {cores} cores (per-core rates from one-core --threads 1 runs, {basis} basis)")
     for k, (sel, wr, b, src) in rates.items():
         print(f"{k} ({src}): select {sel * 1e3:.1f} core-ms per kept frame, write "
               f"{wr * 1e3:.0f} core-ms per sample ({1 / wr:.2f} samples/s per core), "
