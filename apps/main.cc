@@ -15,13 +15,14 @@
 
 namespace {
 
-// glibc's defaults hand every freed block of 128 KiB and more (depth maps, occupancy volumes,
-// encoded tar members: a sample allocates ~20 MB of them) back to the kernel, and the next
-// sample faults fresh zeroed pages in again; with two threads each unmap also interrupts the
-// other core (TLB shootdown). Kept in the process instead, a tartanair-sample build takes
-// ~40 % fewer page faults and its --threads 2 run ~5 % less time (docs/PERFORMANCE.md,
-// "Threads and tasks"). Peak RSS is what the live data needs either way: the freed memory
-// is reused, not added. A user's own GLIBC_TUNABLES malloc settings win.
+// glibc's defaults hand every freed block of 128 KiB and more (depth maps, label maps,
+// occupancy volumes, encoded tar members) back to the kernel, and the next sample faults
+// fresh zeroed pages in again; with two threads an unmap can also interrupt the other core
+// (TLB shootdown). Kept in the process instead, a tartanair-sample build takes ~40 % fewer
+// page faults and its --threads 2 run ~6 % less time (docs/PERFORMANCE.md, "Threads and
+// tasks"). The freed memory is reused, so peak RSS grows only a little (146 vs 134 MB for
+// the long-scene benchmark at a 64 MB depth cache). A user's own GLIBC_TUNABLES malloc
+// settings win.
 void KeepFreedMemory() {
 #if defined(__GLIBC__)
   const char* tunables = std::getenv("GLIBC_TUNABLES");
