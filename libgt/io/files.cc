@@ -26,6 +26,14 @@
 namespace gt::io {
 namespace fs = std::filesystem;
 
+void PrefetchFile(const std::string& path) {
+  if (path.empty()) return;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::posix_fadvise(fd, 0, 0, POSIX_FADV_WILLNEED);
+  ::close(fd);
+}
+
 std::string ReadFileBytes(const std::string& path) {
   // One buffer of the file's size, filled by read(2): no growing copies through a
   // stringstream (those were most of the page faults of reading depth maps).

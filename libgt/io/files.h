@@ -18,6 +18,13 @@ namespace gt::io {
 std::string ReadFileBytes(const std::string& path);
 bool FileExists(const std::string& path);
 
+// Asks the kernel to start reading the whole file into the page cache in the background
+// (posix_fadvise POSIX_FADV_WILLNEED) and returns without waiting, so that a later read of
+// it does not stall a compute thread on the disk. A hint only: a file that cannot be opened
+// is skipped (its reader reports the error when it reads it), and a cached file costs an
+// open/close.
+void PrefetchFile(const std::string& path);
+
 // Writes `bytes` to path + ".tmp", fsyncs, renames onto `path`. Creates missing parent
 // folders. Throws InputError naming the path on any failure (disk full, permissions) and
 // removes the temporary file, so a reader never sees a half-written output.

@@ -10,6 +10,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/io/depth_io.h"
+#include "libgt/io/files.h"
 
 namespace gt::pairs {
 
@@ -56,6 +57,11 @@ std::shared_ptr<const DepthImage> DepthCache::Get(size_t frame_index) {
   return map;
 }
 
+bool DepthCache::Contains(size_t frame_index) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return maps_.count(frame_index) != 0;
+}
+
 int64_t DepthCache::hits() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return hits_;
@@ -87,6 +93,11 @@ bool ScanOptions::Check(std::string* error) const {
   return true;
 }
 
+namespace {
+// Scanned frames whose depth files are read ahead of the scan (ScanFrames).
+constexpr size_t kScanPrefetch = 64;
+}  // namespace
+
 ScanResult ScanFrames(const Scene& scene, const ScanOptions& options, DepthCache* cache) {
   std::string error;
   if (!options.Check(&error)) throw InputError("scan options", error);
@@ -95,11 +106,20 @@ ScanResult ScanFrames(const Scene& scene, const ScanOptions& options, DepthCache
   const size_t n = scene.frames.size();
   std::vector<int> status(n, 0);  // 0 kept, 1 stride, 2 unusable, 3 read error, 4 low depth
   std::vector<double> medians(n, 0.0);
+  // The depth files are read ahead (io::PrefetchFile) kScanPrefetch scanned frames in
+  // advance, so that a file missing from the page cache is read from disk while the
+  // threads work on the frames before it, instead of stalling one of them.
+  const size_t stride = static_cast<size_t>(options.frame_stride);
+  auto prefetch = [&](size_t i) {
+    if (i < n && scene.frames[i].usable) io::PrefetchFile(scene.frames[i].depth.path);
+  };
+  for (size_t k = 0; k < kScanPrefetch; ++k) prefetch(k * stride);
   tbb::parallel_for(size_t{0}, n, [&](size_t i) {
-    if (i % static_cast<size_t>(options.frame_stride) != 0) {
+    if (i % stride != 0) {
       status[i] = 1;
       return;
     }
+    prefetch(i + kScanPrefetch * stride);
     if (!scene.frames[i].usable) {
       status[i] = 2;
       return;

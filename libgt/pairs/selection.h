@@ -46,6 +46,8 @@ class DepthCache {
  public:
   DepthCache(const Scene& scene, int width, int height, size_t max_bytes = size_t{512} << 20);
   std::shared_ptr<const DepthImage> Get(size_t frame_index);
+  // Whether the frame's map is held now (a hint: another thread may add or drop it).
+  bool Contains(size_t frame_index) const;
   int64_t hits() const;
   int64_t misses() const;
   size_t bytes() const;

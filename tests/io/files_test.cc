@@ -1,15 +1,21 @@
 // files.h: MD5 against the RFC 1321 test suite and a slow bit-level check over random
 // inputs of every length around the block boundaries, ParseNumbers tokens and errors,
-// ReadLines, WriteFileAtomic and WriteFilesAtomic publication, RunConcurrently.
+// ReadLines, WriteFileAtomic and WriteFilesAtomic publication, RunConcurrently, PrefetchFile.
 #include "libgt/io/files.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <random>
+#include <thread>
 
 #include "libgt/core/error.h"
 #include "libgt/io/codec.h"
@@ -144,6 +150,51 @@ TEST(ReadLines, StripsCarriageReturnsAndKeepsEmptyLines) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.where(), dir + "/missing.txt");
   }
+}
+
+// Pages of `path` in the page cache (mincore over a mapping of the file).
+size_t ResidentPages(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return 0;
+  struct stat st {};
+  ::fstat(fd, &st);
+  const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
+  const size_t pages = (static_cast<size_t>(st.st_size) + page - 1) / page;
+  void* map = ::mmap(nullptr, static_cast<size_t>(st.st_size), PROT_READ, MAP_SHARED, fd, 0);
+  ::close(fd);
+  if (map == MAP_FAILED) return 0;
+  std::vector<unsigned char> in_core(pages);
+  size_t resident = 0;
+  if (::mincore(map, static_cast<size_t>(st.st_size), in_core.data()) == 0) {
+    for (unsigned char c : in_core) resident += c & 1;
+  }
+  ::munmap(map, static_cast<size_t>(st.st_size));
+  return resident;
+}
+
+TEST(PrefetchFile, ReadsAnEvictedFileBackIntoThePageCacheAndIgnoresMissingFiles) {
+  const std::string dir = test::ScratchDir("prefetch");
+  const std::string p = dir + "/data.bin";
+  WriteFileAtomic(p, std::string(size_t{4} << 20, 'x'));  // fsynced: its pages are clean
+  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  ::posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED);  // evicts the clean pages
+  ::close(fd);
+  if (ResidentPages(p) != 0) {
+    GTEST_SKIP() << "the file system of " << dir << " keeps evicted pages (tmpfs?)";
+  }
+  PrefetchFile(p);
+  const size_t want = (size_t{4} << 20) / static_cast<size_t>(::sysconf(_SC_PAGESIZE));
+  size_t resident = 0;  // the readahead runs in the background: wait up to 5 s
+  for (int i = 0; i < 500 && resident < want; ++i) {
+    resident = ResidentPages(p);
+    if (resident < want) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(resident, want);                                       // all 4 MiB
+  EXPECT_EQ(ReadFileBytes(p), std::string(size_t{4} << 20, 'x'));  // content unchanged
+  EXPECT_NO_THROW(PrefetchFile(dir + "/missing.bin"));             // a hint: its reader reports it
+  EXPECT_NO_THROW(PrefetchFile(""));
+  EXPECT_NO_THROW(PrefetchFile(dir));  // a folder
 }
 
 TEST(WriteFileAtomic, CreatesParentsReplacesAndLeavesNoTemporary) {

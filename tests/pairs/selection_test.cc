@@ -184,8 +184,13 @@ TEST(DepthCache, EvictsLeastRecentlyUsedWithinBudget) {
   EXPECT_EQ(cache.hits(), 1);
   cache.Get(0);  // still cached
   EXPECT_EQ(cache.hits(), 2);
-  cache.Get(1);  // was evicted
+  EXPECT_TRUE(cache.Contains(0));
+  EXPECT_TRUE(cache.Contains(2));
+  EXPECT_FALSE(cache.Contains(1));  // evicted
+  EXPECT_FALSE(cache.Contains(4));  // never read
+  cache.Get(1);                     // was evicted
   EXPECT_EQ(cache.misses(), 4);
+  EXPECT_TRUE(cache.Contains(1));
   // Resizing to another working resolution.
   DepthCache half(scene, kW / 2, kH / 2, map_bytes);
   EXPECT_EQ(half.Get(3)->width, kW / 2);
