@@ -9,9 +9,11 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <condition_variable>
 #include <cstring>
 #include <deque>
 #include <filesystem>
+#include <mutex>
 #include <set>
 #include <thread>
 #include <utility>
@@ -53,23 +55,72 @@ struct TarShardWriter::Impl {
   io::Md5 md5;                 // of the bytes digested so far (the published file's digest)
   std::set<std::string> keys;
 
-  // Deferred digest (Add(sample, kDeferred)): the bytes written since then, in file order,
-  // wait in `pending` for Finish (or the next Add) to digest them. A segment points into a
-  // field of `deferred` (the sample, kept until the writer is destroyed) or at its own copy
-  // (tar headers, padding and end blocks, which come from libarchive's buffers).
+  // Deferred digest (Add(sample, kDeferred)): the bytes written since then are queued in
+  // `pending`, in file order, and digested by a thread of their own (`digester`) as they
+  // arrive, so that the digest of a shard's last sample overlaps its write and then
+  // Finish's fsync instead of following them. A segment points into a field of `deferred`
+  // (the sample, kept until the writer is destroyed) or at its own copy (tar headers,
+  // padding and end blocks, which come from libarchive's buffers). The digester owns `md5`
+  // until DigestPending() has joined it.
   struct Segment {
     std::string owned;
     const char* data = nullptr;
     size_t n = 0;
   };
-  bool defer = false;                 // Write records segments instead of digesting (up to Finish)
+  bool defer = false;                 // Write queues segments instead of digesting (up to Finish)
   const char* field_begin = nullptr;  // the field being written (its data is kept)
   const char* field_end = nullptr;
   std::deque<Segment> pending;  // deque: elements never move, so `data` stays valid
   Sample deferred;
+  std::mutex pending_mutex;  // guards `pending` (its size and new elements) and `closed`
+  std::condition_variable pending_added;
+  bool closed = true;  // no more segments will be queued
+  std::thread digester;
 
+  ~Impl() { DigestPending(); }  // a writer dropped mid-shard: the digester ends first
+
+  void StartDigester() {
+    closed = false;
+    digester = std::thread([this] {
+      for (size_t next = 0;; ++next) {
+        const Segment* seg = nullptr;
+        {
+          std::unique_lock<std::mutex> lock(pending_mutex);
+          pending_added.wait(lock, [&] { return next < pending.size() || closed; });
+          if (next == pending.size()) return;  // closed, and every segment digested
+          seg = &pending[next];
+        }
+        md5.Update(seg->data, seg->n);
+      }
+    });
+  }
+  void Queue(const char* p, size_t n) {
+    {
+      std::lock_guard<std::mutex> lock(pending_mutex);
+      Segment& seg = pending.emplace_back();
+      if (p >= field_begin && p + n <= field_end) {
+        seg.data = p;  // inside the kept sample
+      } else {
+        seg.owned.assign(p, n);
+        seg.data = seg.owned.data();
+      }
+      seg.n = n;
+    }
+    pending_added.notify_one();
+  }
+  // No more segments: the digester finishes the queued ones and returns.
+  void ClosePending() {
+    {
+      std::lock_guard<std::mutex> lock(pending_mutex);
+      closed = true;
+    }
+    pending_added.notify_one();
+  }
+  // Returns when every queued byte is digested (joins the digester); a no-op without one.
   void DigestPending() {
-    for (const Segment& seg : pending) md5.Update(seg.data, seg.n);
+    if (!digester.joinable()) return;
+    ClosePending();
+    digester.join();
     pending.clear();
   }
 
@@ -90,16 +141,8 @@ struct TarShardWriter::Impl {
     auto* self = static_cast<Impl*>(client);
     if (self->write_errno != 0) return static_cast<la_ssize_t>(n);
     if (self->defer) {
+      self->Queue(static_cast<const char*>(buf), n);  // digested meanwhile
       self->WriteAll(buf, n);
-      const char* p = static_cast<const char*>(buf);
-      Segment& seg = self->pending.emplace_back();
-      if (p >= self->field_begin && p + n <= self->field_end) {
-        seg.data = p;  // inside the kept sample
-      } else {
-        seg.owned.assign(p, n);
-        seg.data = seg.owned.data();
-      }
-      seg.n = n;
     } else if (n >= kDigestAsideBytes) {
       tbb::this_task_arena::isolate([&] {
         tbb::parallel_invoke([&] { self->WriteAll(buf, n); }, [&] { self->md5.Update(buf, n); });
@@ -150,6 +193,7 @@ struct TarShardWriter::Impl {
   // Drops the archive and removes the temporary file (idempotent).
   void Abandon() {
     dead = true;
+    DigestPending();  // the digester reads the kept sample: joined before anything goes
     ar.reset();
     if (fd >= 0) {
       ::close(fd);
@@ -208,6 +252,7 @@ void TarShardWriter::Add(Sample&& sample, Digest digest) {
   }
   s.deferred = std::move(sample);  // the field buffers stay where they are
   s.defer = true;
+  s.StartDigester();
   s.WriteMembers(s.deferred);
 }
 
@@ -269,19 +314,13 @@ ShardInfo TarShardWriter::Finish() {
   }
   s.CheckWrites("");
   s.ar.reset();
-  // Every byte is written now. A deferred sample's bytes are digested while the fsync
-  // (data writeback and the journal commit, mostly waiting for the disk) runs on a thread
-  // of its own: the two overlap instead of adding up.
+  // Every byte is written now. A deferred sample's digest goes on on its thread while the
+  // fsync (data writeback and the journal commit, mostly waiting for the disk) runs here:
+  // the two overlap instead of adding up.
+  s.ClosePending();
   int fsync_errno = 0;
-  if (s.pending.empty()) {
-    if (::fsync(s.fd) != 0) fsync_errno = errno;
-  } else {
-    std::thread sync([&s, &fsync_errno] {
-      if (::fsync(s.fd) != 0) fsync_errno = errno;
-    });
-    s.DigestPending();
-    sync.join();
-  }
+  if (::fsync(s.fd) != 0) fsync_errno = errno;
+  s.DigestPending();
   if (fsync_errno != 0) s.Fail("", std::string("fsync failed: ") + std::strerror(fsync_errno));
   if (::close(s.fd) != 0) {
     s.fd = -1;

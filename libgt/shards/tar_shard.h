@@ -48,11 +48,12 @@ class TarShardWriter {
   // sample fails CheckSample, when a key repeats within the shard, or when the write fails;
   // after a throw the writer is dead (further calls throw) and nothing is published.
   void Add(const Sample& sample);
-  // The same, taking the sample. With Digest::kDeferred its bytes are written now but
-  // digested in Finish(), while the fsync's writeback runs, instead of here; the writer keeps
-  // the sample until it is destroyed. Meant for a shard's last sample, whose Add and
-  // Finish are otherwise both on the way to the shard's publication. A later Add digests
-  // the deferred bytes first (same MD5 in every case).
+  // The same, taking the sample. With Digest::kDeferred its bytes are written now and
+  // digested on a thread of the writer's own as they are written, a digest that goes on
+  // through Finish()'s fsync instead of preceding it; the writer keeps the sample until it
+  // is destroyed. Meant for a shard's last sample, whose Add and Finish are otherwise both
+  // on the way to the shard's publication. A later Add waits for the deferred digest first
+  // (same MD5 in every case).
   enum class Digest { kNow, kDeferred };
   void Add(Sample&& sample, Digest digest);
   // Closes the archive, fsyncs, renames onto the final path; returns its size and MD5.
