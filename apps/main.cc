@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <opencv2/core/utility.hpp>
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
@@ -36,6 +37,12 @@ void KeepFreedMemory() {
 
 int main(int argc, char** argv) {
   KeepFreedMemory();
+  // occgt runs its own work in parallel (TBB tasks over scenes, samples and a sample's
+  // parts, --threads); OpenCV's loops (cv::resize, colour conversions) stay sequential
+  // inside them instead of opening a second level of parallelism in a task arena of
+  // OpenCV's own. (That arena's TBB code is inlined into Debian's uninstrumented
+  // libopencv_core, whose synchronisation ThreadSanitizer cannot see.)
+  cv::setNumThreads(1);
   // Past a file-size limit (ulimit -f) write(2) raises SIGXFSZ, whose default action kills
   // the process and leaves its *.tmp behind. Ignored, the write fails with EFBIG instead:
   // the writers remove their temporary file and report one line naming it.
