@@ -12,7 +12,9 @@
    machine ("t1") and --threads 2 ("t2"), in a rotating order; wall time, CPU time and peak
    RSS of each process (os.wait4), the stage times of its summary, bytes per sample (shards /
    samples). Reports medians and the median ratios 1 core / t2 and t1 / t2; also
-   the same build as 2 tasks of 1 thread running at once (the Slurm layout on one machine).
+   the same build as 2 tasks of 1 thread running at once (the Slurm layout on one machine),
+   and the machine's own 2-core ceiling for the build: 2 x (1 core wall) / (wall of two
+   independent one-core runs of it at once, one per CPU).
    Then the same on larger bench variants of the two sample recipes (not shipped; written
    into the scratch folder, same sample data): frame_stride 1 and a higher quota, 7-Scenes
    also overlap [0.1, 1.0] (its 50 frames give 17 pairs in [0.4, 0.9]), so that the run is
@@ -78,6 +80,35 @@ def timed(cmd, env=None, one_core=False):
     if p.returncode != 0:
         sys.exit(f"e2e_bench: {' '.join(cmd)} failed ({p.returncode}):\n{open(err_path).read()}")
     return open(out_path).read(), wall, ru.ru_utime + ru.ru_stime, ru.ru_maxrss / 1024.0
+
+
+def pair_of_one_core_runs(recipe, outs, seed_data=None):
+    """The machine's own 2-core ceiling for this build: the same `--threads 1` build twice at
+    once, each process confined to its own CPU (the two lowest of this process's set), into
+    two fresh folders. Returns (wall s of the pair = the later of the two, [cpu s of each]).
+    2 x (one-core wall) / (pair wall) is the throughput two cores give two independent jobs,
+    the most any threading of one job can reach on this machine at that moment (shared
+    caches, memory bandwidth, the host's scheduling of the two vCPUs)."""
+    cpus = sorted(os.sched_getaffinity(0))[:2]
+    procs = []
+    for out in outs:
+        shutil.rmtree(out, ignore_errors=True)
+        if seed_data:
+            os.makedirs(out)
+            shutil.copytree(seed_data, os.path.join(out, "data"))
+    t0 = time.perf_counter()
+    for out, cpu in zip(outs, cpus):
+        procs.append(subprocess.Popen(
+            [OCCGT, "build", recipe, "--out", out, "--threads", "1"],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            preexec_fn=(lambda c=cpu: os.sched_setaffinity(0, {c}))))
+    cpu_s = []
+    for p in procs:
+        _, status, ru = os.wait4(p.pid, 0)
+        if os.waitstatus_to_exitcode(status) != 0:
+            sys.exit(f"e2e_bench: pair of one-core builds of {recipe} failed")
+        cpu_s.append(ru.ru_utime + ru.ru_stime)
+    return time.perf_counter() - t0, cpu_s
 
 
 def shard_bytes(out):
@@ -164,32 +195,44 @@ def speedup(results):
 
 
 def speedup_table(results, recipes, demo_data):
-    """Three runs per repetition, in an order that rotates: "1 core" (--threads 1 confined to
+    """Four runs per repetition, in an order that rotates: "1 core" (--threads 1 confined to
     one CPU: the baseline of the speed-up on 2 cores), "t1" (--threads 1 on the whole machine:
-    its fsync and digest helper threads, and the kernel's writeback, may use the other CPU)
-    and "t2" (--threads 2). Ratios are per repetition, then the median."""
+    its fsync and digest helper threads, and the kernel's writeback, may use the other CPU),
+    "t2" (--threads 2) and "pair" (two one-core runs at once, one per CPU: the ceiling
+    2 x 1 core / pair, see pair_of_one_core_runs). Ratios are per repetition, then the
+    median."""
     print("| recipe | samples | 1 core wall | t1 wall | t2 wall "
-          "| speed-up 1 core / t2 (median of reps) | t1 / t2 "
+          "| speed-up 1 core / t2 (median of reps) | ceiling 2 x 1 core / pair | t1 / t2 "
           "| t1 select / write | t2 select / write | 2 tasks x 1 thread wall (t1 / that) "
           "| CPU 1 core / t1 / t2 | peak RSS t1 / t2 | bytes/sample |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     conditions = [("c1", 1, True), ("t1", 1, False), ("t2", 2, False)]
     for name, recipe in recipes:
         rows = {c: [] for c, _, _ in conditions}
         seed = os.path.join(demo_data, "data") if name == "demo" else None
         folder = name.split(" ")[0]
+        pairs = []  # (wall, [cpu, cpu]) of the pair of one-core runs, one per repetition
+        actions = conditions + [("pair", 1, True)]
         for rep in range(ARGS.reps):
-            k = rep % len(conditions)
-            for c, threads, one_core in conditions[k:] + conditions[:k]:
+            k = rep % len(actions)
+            for c, threads, one_core in actions[k:] + actions[:k]:
+                if c == "pair":
+                    pairs.append(pair_of_one_core_runs(
+                        recipe, [os.path.join(ARGS.scratch, f"{folder}-pair{i}") for i in (0, 1)],
+                        seed))
+                    continue
                 rows[c].append(build(recipe, os.path.join(ARGS.scratch, f"{folder}-{c}"), threads,
                                      seed_data=seed, one_core=one_core))
         two = [build_two_tasks(recipe, os.path.join(ARGS.scratch, f"{folder}-p2"), seed)
                for _ in range(ARGS.reps)]
         c1, r1, r2 = rows["c1"], rows["t1"], rows["t2"]
         core_ratios = [a["wall_s"] / b["wall_s"] for a, b in zip(c1, r2)]
+        ceilings = [2 * a["wall_s"] / w for a, (w, _) in zip(c1, pairs)]
         ratios = [a["wall_s"] / b["wall_s"] for a, b in zip(r1, r2)]
         results["speedup"][name] = {"one_core": c1, "t1": r1, "t2": r2,
                                     "ratios_one_core": core_ratios, "ratios": ratios,
+                                    "pair_wall_s": [w for w, _ in pairs],
+                                    "pair_cpu_s": [c for _, c in pairs], "ceilings": ceilings,
                                     "tasks2_wall_s": two}
 
         def rng(v):
@@ -197,7 +240,7 @@ def speedup_table(results, recipes, demo_data):
 
         print(f"| {name} | {r1[0]['samples']} | {med(c1, 'wall_s'):.2f} s "
               f"| {med(r1, 'wall_s'):.2f} s | {med(r2, 'wall_s'):.2f} s "
-              f"| {rng(core_ratios)} | {rng(ratios)} "
+              f"| {rng(core_ratios)} | {rng(ceilings)} | {rng(ratios)} "
               f"| {med(r1, 'select_s'):.2f} / {med(r1, 'write_s'):.2f} s "
               f"| {med(r2, 'select_s'):.2f} / {med(r2, 'write_s'):.2f} s "
               f"| {statistics.median(two):.2f} s ({med(r1, 'wall_s') / statistics.median(two):.2f}) "
