@@ -27,6 +27,7 @@
 #include "libgt/io/files.h"
 #include "libgt/io/npy.h"
 #include "libgt/io/reader.h"
+#include "libgt/pairs/image_cache.h"
 #include "libgt/pairs/synthetic.h"
 
 namespace gt::pairs {
@@ -263,60 +264,10 @@ std::vector<Camera> WorkingCameras(const Scene& scene, int w, int h) {
   return cams;
 }
 
-// Encoded colour images of one scene's frames, least recently used dropped beyond
-// max_images (a frame appears in many pairs; decoding + resizing + encoding is ~25 ms).
-// A frame is encoded once: a request for a frame that another thread is encoding waits
-// for that result (samples in flight together often share a frame) instead of encoding
-// it a second time. The encoding itself waits for nothing, so a wait always ends.
-class ImageCache {
- public:
-  explicit ImageCache(size_t max_images) : max_images_(max_images) {}
-  std::shared_ptr<const std::string> Get(const Scene& scene, size_t i, const SampleSpec& spec) {
-    std::shared_ptr<Slot> slot;
-    bool mine = false;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      auto it = slots_.find(i);
-      if (it != slots_.end()) {
-        lru_.splice(lru_.begin(), lru_, it->second.second);
-        slot = it->second.first;
-      } else {
-        slot = std::make_shared<Slot>();
-        lru_.push_front(i);
-        slots_.emplace(i, std::make_pair(slot, lru_.begin()));
-        mine = true;
-        while (slots_.size() > max_images_) {  // holders keep their slot alive
-          slots_.erase(lru_.back());
-          lru_.pop_back();
-        }
-      }
-    }
-    if (mine) {
-      try {
-        slot->promise.set_value(
-            std::make_shared<const std::string>(EncodeFrameImage(scene.frames[i], spec)));
-      } catch (...) {
-        slot->promise.set_exception(std::current_exception());
-      }
-    }
-    return slot->result.get();  // rethrows the encoder's error
-  }
-
- private:
-  struct Slot {
-    std::promise<std::shared_ptr<const std::string>> promise;
-    std::shared_future<std::shared_ptr<const std::string>> result = promise.get_future().share();
-  };
-  size_t max_images_;
-  std::mutex mutex_;
-  std::list<size_t> lru_;
-  std::map<size_t, std::pair<std::shared_ptr<Slot>, std::list<size_t>::iterator>> slots_;
-};
-
 // Everything the write stage needs about one scene.
 struct SceneData {
-  std::string name;  // as listed by the reader (the selection's scene name)
-  std::unique_ptr<ImageCache> images = std::make_unique<ImageCache>(128);
+  std::string name;                    // as listed by the reader (the selection's scene name)
+  std::unique_ptr<ImageCache> images;  // encoded colour images (128 frames)
   Scene scene;
   std::unique_ptr<DepthCache> cache;
   std::map<std::string, size_t> index_of_id;
@@ -336,6 +287,8 @@ std::shared_ptr<SceneData> LoadSceneData(const Recipe& recipe, const io::Dataset
                                           options.depth_cache_mb << 20);
   for (size_t i = 0; i < d->scene.frames.size(); ++i) d->index_of_id[d->scene.frames[i].id] = i;
   d->prefetched.assign(d->scene.frames.size(), false);
+  d->images = std::make_unique<ImageCache>(
+      128, [s = d.get()](size_t i) { return EncodeFrameImage(s->scene.frames[i], s->spec); });
   d->spec = RecipeSampleOptions(recipe);
   d->spec.labels = RecipeLabelOptions(recipe, d->scene);
   if (recipe.occupancy.scope == "window") {
@@ -856,7 +809,10 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
         if (it == d->index_of_id.end() || d->prefetched[it->second]) continue;
         d->prefetched[it->second] = true;
         const Frame& f = d->scene.frames[it->second];
-        if (d->spec.image != "none") io::PrefetchFile(f.color_path);
+        if (d->spec.image != "none" && !f.color_path.empty()) {
+          io::PrefetchFile(f.color_path);
+          d->images->Expect(it->second);  // a thread waiting for an image may encode it
+        }
         if (!d->cache->Contains(it->second)) io::PrefetchFile(f.depth.path);
       }
     }
@@ -904,7 +860,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, ShardOutput*
         shared = window_map.get();
       }
     }
-    const ImageSource images = [&d](size_t i) { return d.images->Get(d.scene, i, d.spec); };
+    const ImageSource images = [&d](size_t i) { return d.images->Get(i); };
     item->sample = ComputeSample(d.scene, i0->second, i1->second, p, keys[k], *depth0, *depth1,
                                  d.spec, shared, images);
     item->data.reset();  // the last sample of a scene releases its data here
