@@ -1,6 +1,7 @@
 #include "libgt/io/files.h"
 
 #include <fcntl.h>
+#include <openssl/crypto.h>
 #include <openssl/evp.h>
 #include <sys/stat.h>
 #include <tbb/parallel_for.h>
@@ -283,8 +284,23 @@ std::vector<std::string> SplitLines(std::string_view bytes) {
 
 // ---------------------------------------------------------------------------------------
 // MD5 through OpenSSL's EVP interface.
+namespace {
+// OpenSSL's MD5 implementation, fetched once for the process (EVP_md5() is fetched again at
+// every digest's start). The machine's openssl.cnf is not loaded: a digest must not depend
+// on it, and reading it (~0.5 ms, more when the file has left the page cache) was on the
+// serial start of every build.
+const EVP_MD* Md5Method() {
+  static const EVP_MD* const md = [] {
+    OPENSSL_init_crypto(OPENSSL_INIT_NO_LOAD_CONFIG, nullptr);
+    return EVP_MD_fetch(nullptr, "MD5", nullptr);
+  }();
+  return md;
+}
+}  // namespace
+
 Md5::Md5() : ctx_(EVP_MD_CTX_new()) {
-  if (ctx_ == nullptr || EVP_DigestInit_ex(ctx_, EVP_md5(), nullptr) != 1) {
+  const EVP_MD* md = Md5Method();
+  if (ctx_ == nullptr || md == nullptr || EVP_DigestInit_ex(ctx_, md, nullptr) != 1) {
     throw std::runtime_error("OpenSSL: cannot start an MD5 digest");
   }
 }
