@@ -14,7 +14,6 @@
 #include <filesystem>
 #include <functional>
 #include <future>
-#include <list>
 #include <map>
 #include <memory>
 #include <mutex>
