@@ -1,10 +1,10 @@
 // occgt build RECIPE --out DIR [--dry-run] [--threads N] [--task K --tasks N]
 //                   [--stage select|write|all] [--root PATH] [--depth-cache-mb MB]
 // Turns a dataset and a YAML recipe into a filtered pair index and WebDataset shards
-// (docs/USER_GUIDE.md, docs/RECIPES.md, docs/CLI.md). The job is libgt/pairs/pipeline.h;
-// this file parses flags, connects the pipeline's ShardOutput to libgt/shards, prints
-// progress on stderr and the summary on stdout. Without --task/--tasks, a Slurm array
-// task takes its place from SLURM_ARRAY_TASK_{ID,MIN,MAX,COUNT} (docs/SCALE.md).
+// (docs/USER_GUIDE.md, docs/RECIPES.md, docs/CLI.md). The job is libgt/build/build.h;
+// this file parses flags, prints progress on stderr and the summary on stdout. Without
+// --task/--tasks, a Slurm array task takes its place from SLURM_ARRAY_TASK_{ID,MIN,MAX,COUNT}
+// (docs/SCALE.md).
 #include <tbb/global_control.h>
 #include <unistd.h>
 
@@ -19,12 +19,9 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "libgt/build/build.h"
+#include "libgt/build/recipe.h"
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
-#include "libgt/pairs/pipeline.h"
-#include "libgt/pairs/recipe.h"
-#include "libgt/shards/loftr_export.h"
-#include "libgt/shards/sample.h"
 #include "libgt/shards/split.h"
 
 namespace occgt {
@@ -34,8 +31,9 @@ struct BuildArgs {
   std::string recipe;
   std::string root;
   int threads = 0;
+  std::string stage = "all";
   bool task_given = false;  // --task or --tasks on the command line (then Slurm's env is ignored)
-  gt::pairs::BuildOptions build;
+  gt::build::BuildOptions build;
 };
 
 // The value of environment variable `name` as an integer >= 0, nullopt when unset or empty;
@@ -56,7 +54,7 @@ std::optional<int> EnvIndex(const char* name) {
 // Task layout of a Slurm array task: task = SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN,
 // tasks = SLURM_ARRAY_TASK_COUNT. The array must be contiguous with step 1 (0-7, or 1-8),
 // so that the tasks cover 0..tasks-1 exactly once. False when not in an array job.
-bool TaskFromSlurm(gt::pairs::BuildOptions* build) {
+bool TaskFromSlurm(gt::build::BuildOptions* build) {
   const std::optional<int> id = EnvIndex("SLURM_ARRAY_TASK_ID");
   if (!id) return false;
   const int min = EnvIndex("SLURM_ARRAY_TASK_MIN").value_or(0);
@@ -90,104 +88,18 @@ bool TaskFromSlurm(gt::pairs::BuildOptions* build) {
   return true;
 }
 
-// ShardOutput over libgt/shards: tar shards + part records, plan, merge, LoFTR export.
-class ShardsOutput : public gt::pairs::ShardOutput {
- public:
-  ShardsOutput(std::string dir, std::string split)
-      : dir_(std::move(dir)), split_(std::move(split)) {}
-
-  std::string SampleKey(const std::string& scene, const std::string& frame0,
-                        const std::string& frame1) const override {
-    return gt::shards::MakeSampleKey(scene, frame0, frame1);
-  }
-  void WritePlan(const std::vector<int64_t>& shard_nsamples) override {
-    const std::string path = gt::shards::PlanPath(dir_, split_);
-    if (gt::io::FileExists(path)) {
-      const gt::shards::SplitPlan existing = gt::shards::ReadPlan(dir_, split_);
-      if (existing.shard_nsamples != shard_nsamples) {
-        throw gt::InputError(path,
-                             "holds another shard plan than this recipe's; use a fresh --out");
-      }
-      return;
-    }
-    gt::shards::SplitPlan plan;
-    plan.split = split_;
-    plan.shard_nsamples = shard_nsamples;
-    gt::shards::WritePlan(dir_, plan);
-  }
-  bool IsShardComplete(int64_t shard) const override {
-    return gt::shards::IsShardComplete(dir_, split_, shard);
-  }
-  int64_t WriteShard(int64_t shard, const std::vector<gt::pairs::EncodedSample>& samples) override {
-    auto stream = OpenShard(shard);
-    for (size_t i = 0; i < samples.size(); ++i) stream->Add(samples[i], i + 1 == samples.size());
-    return stream->Finish();
-  }
-  std::unique_ptr<gt::pairs::ShardStream> OpenShard(int64_t shard) override {
-    class Stream : public gt::pairs::ShardStream {
-     public:
-      Stream(const std::string& dir, const std::string& split, int64_t shard)
-          : writer_(dir, split, shard) {}
-      // The shard's last sample is digested in Finish, beside the fsync's wait, and freed
-      // with this stream (on the thread that runs Finish).
-      void Add(gt::pairs::EncodedSample s, bool last) override {
-        gt::shards::Sample sample;
-        sample.key = std::move(s.key);
-        for (auto& [name, bytes] : s.fields) sample.fields.push_back({name, std::move(bytes)});
-        writer_.Add(std::move(sample), s.pair_line.dump(),
-                    last ? gt::shards::TarShardWriter::Digest::kDeferred
-                         : gt::shards::TarShardWriter::Digest::kNow);
-      }
-      int64_t Finish() override { return writer_.Finish().info.filesize; }
-
-     private:
-      gt::shards::SplitShardWriter writer_;
-    };
-    return std::make_unique<Stream>(dir_, split_, shard);
-  }
-  void Finish() override {
-    gt::shards::MergeOptions options;
-    options.split = split_;
-    options.verify_md5 = false;  // just written (or verified by size) by this command
-    options.read_tars = false;
-    gt::shards::MergeSplit(dir_, options);
-  }
-  void ExportLoftr(const std::string& kind, const std::vector<gt::pairs::LoftrRow>& rows,
-                   const std::map<std::string, std::array<double, 9>>& intrinsics) override {
-    std::vector<gt::shards::LoftrPair> pairs;
-    for (const auto& r : rows) {
-      gt::shards::LoftrPair p;
-      p.scene = r.scene;
-      p.frame0 = r.frame0;
-      p.frame1 = r.frame1;
-      p.score = r.score;
-      p.cam1_from_cam0 = r.cam1_from_cam0;
-      pairs.push_back(p);
-    }
-    gt::shards::LoftrExportOptions options;
-    options.split = split_;
-    if (kind == "test") {
-      gt::shards::ExportLoftrTest(dir_ + "/loftr", pairs, intrinsics, options);
-    } else {
-      gt::shards::ExportLoftrTrain(dir_ + "/loftr", pairs, intrinsics, options);
-    }
-  }
-
- private:
-  std::string dir_, split_;
-};
-
-void PrintProgress(const gt::pairs::Progress& p) {
+void PrintProgress(const gt::build::Progress& p) {
   static const bool tty = ::isatty(STDERR_FILENO);
   const double rate = p.elapsed_s > 0 ? p.done / p.elapsed_s : 0.0;
   const double eta = rate > 0 ? (p.total - p.done) / rate : 0.0;
-  const char* unit = p.stage == "select" ? "scenes" : "pairs";
+  const char* unit = p.stage == gt::build::Stage::kSelect ? "scenes" : "pairs";
+  const char* stage = gt::build::StageName(p.stage);
   if (tty) {
-    std::fprintf(stderr, "\r[%s] %lld/%lld %s  %.2f/s  ETA %.0fs   ", p.stage.c_str(),
+    std::fprintf(stderr, "\r[%s] %lld/%lld %s  %.2f/s  ETA %.0fs   ", stage,
                  static_cast<long long>(p.done), static_cast<long long>(p.total), unit, rate, eta);
     if (p.done == p.total) std::fprintf(stderr, "\n");
   } else {
-    std::fprintf(stderr, "[%s] %lld/%lld %s %.2f/s ETA %.0fs\n", p.stage.c_str(),
+    std::fprintf(stderr, "[%s] %lld/%lld %s %.2f/s ETA %.0fs\n", stage,
                  static_cast<long long>(p.done), static_cast<long long>(p.total), unit, rate, eta);
   }
   std::fflush(stderr);
@@ -195,10 +107,11 @@ void PrintProgress(const gt::pairs::Progress& p) {
 
 void Run(const BuildArgs& args_in) {
   BuildArgs args = args_in;
+  args.build.stage = gt::build::ParseStage(args.stage, "--stage");
   const bool from_slurm = !args.task_given && TaskFromSlurm(&args.build);
-  gt::pairs::RecipeOverrides overrides;
+  gt::build::RecipeOverrides overrides;
   overrides.root = args.root;
-  const gt::pairs::Recipe recipe = gt::pairs::LoadRecipe(args.recipe, overrides);
+  const gt::build::Recipe recipe = gt::build::LoadRecipe(args.recipe, overrides);
   if (args.threads < 0)
     throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
   std::unique_ptr<tbb::global_control> limit;
@@ -215,8 +128,7 @@ void Run(const BuildArgs& args_in) {
     std::fprintf(stderr, "[build] task %d of %d (from SLURM_ARRAY_TASK_ID %s)\n", args.build.task,
                  args.build.tasks, std::getenv("SLURM_ARRAY_TASK_ID"));
   }
-  ShardsOutput output(args.build.out_dir, recipe.split);
-  const nlohmann::json summary = gt::pairs::RunBuild(recipe, args.build, &output, PrintProgress);
+  const nlohmann::json summary = gt::build::RunBuild(recipe, args.build, PrintProgress);
   std::cout << summary.dump(2) << std::endl;
 }
 
@@ -237,7 +149,7 @@ void AddBuildCommand(CLI::App& app) {
   auto* tasks = cmd->add_option(
       "--tasks", args->build.tasks,
       "Number of tasks the run is split into (default: SLURM_ARRAY_TASK_COUNT, else 1)");
-  cmd->add_option("--stage", args->build.stage, "select | write | all (default all)");
+  cmd->add_option("--stage", args->stage, "select | write | all (default all)");
   cmd->add_option("--depth-cache-mb", args->build.depth_cache_mb,
                   "Budget of decoded depth maps held per scene (LRU, default 512)");
   cmd->add_option(

@@ -10,6 +10,7 @@
 #include "libgt/core/error.h"
 #include "libgt/report/pair_source.h"
 #include "libgt/report/split_report.h"
+#include "libgt/truth/working_frame.h"
 
 namespace occgt {
 namespace {
@@ -55,20 +56,14 @@ void RunInspectPair(const InspectPairArgs& a) {
     if (a.root.empty() || a.format.empty() || a.scene.empty() || a.frames.empty()) {
       throw gt::InputError("--root/--format/--scene/--frames", "expected all four");
     }
-    const size_t comma = a.frames.find(',');
-    if (comma == std::string::npos || comma == 0 || comma + 1 == a.frames.size()) {
-      throw gt::InputError("--frames", "expected two frame ids: A,B");
-    }
+    const auto [id0, id1] = gt::truth::ParseFramePair(a.frames);
     gt::report::ComputePairOptions o;
     o.preset = a.preset;
-    char extra = 0;
-    if (std::sscanf(a.resolution.c_str(), "%dx%d%c", &o.width, &o.height, &extra) != 2 ||
-        o.width < 1 || o.height < 1 || o.width > 8192 || o.height > 8192) {
-      throw gt::InputError("--resolution", "expected WxH with integers in 1..8192, e.g. 640x480");
-    }
+    const gt::truth::Resolution r = gt::truth::ParseResolution(a.resolution, "--resolution");
+    o.width = r.width;
+    o.height = r.height;
     o.occupancy = !a.no_occupancy;
-    pair = gt::report::ComputePairFromScene(a.root, a.format, a.scene, a.frames.substr(0, comma),
-                                            a.frames.substr(comma + 1), o);
+    pair = gt::report::ComputePairFromScene(a.root, a.format, a.scene, id0, id1, o);
   }
   gt::report::PairPictureOptions po;
   po.matches.max_lines = a.max_lines;
@@ -84,8 +79,8 @@ void RunInspectPair(const InspectPairArgs& a) {
 
 void RunInspectSplit(const InspectSplitArgs& a) {
   gt::report::SplitReportOptions o;
-  o.aggregate = gt::report::ParseAggregate(a.aggregate);
-  o.occlusion_metric = a.occlusion_metric;
+  o.aggregate = gt::ParseAggregate(a.aggregate, "--aggregate");
+  o.occlusion_metric = gt::ParseOcclusionMetric(a.occlusion_metric, "--occlusion-metric");
   o.gallery_pairs = a.gallery;
   o.seed = a.seed;
   o.histogram_bins = a.bins;

@@ -2,41 +2,14 @@
 #include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <exception>
 #include <opencv2/core/utility.hpp>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
 
 #include "apps/commands.h"
 #include "gt/core/version.h"
 #include "libgt/core/error.h"
 
-namespace {
-
-// glibc's defaults hand every freed block of 128 KiB and more (depth maps, label maps,
-// occupancy volumes, encoded tar members) back to the kernel, and the next sample faults
-// fresh zeroed pages in again; with two threads an unmap can also interrupt the other core
-// (TLB shootdown). Kept in the process instead, a tartanair-sample build takes ~40 % fewer
-// page faults and its --threads 2 run ~6 % less time (docs/PERFORMANCE.md, "Threads and
-// tasks"). The freed memory is reused, so peak RSS grows only a little (146 vs 134 MB for
-// the long-scene benchmark at a 64 MB depth cache). A user's own GLIBC_TUNABLES malloc
-// settings win.
-void KeepFreedMemory() {
-#if defined(__GLIBC__)
-  const char* tunables = std::getenv("GLIBC_TUNABLES");
-  if (tunables != nullptr && std::strstr(tunables, "glibc.malloc.") != nullptr) return;
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest (half a 64 MiB arena heap)
-  mallopt(M_TRIM_THRESHOLD, 1 << 30);
-#endif
-}
-
-}  // namespace
-
 int main(int argc, char** argv) {
-  KeepFreedMemory();
   // occgt runs its own work in parallel (TBB tasks over scenes, samples and a sample's
   // parts, --threads); OpenCV's loops (cv::resize, colour conversions) stay sequential
   // inside them instead of opening a second level of parallelism in a task arena of

@@ -127,4 +127,22 @@ PatchMatches ComputePatchMatches(const DirectionLabels& l01, const DirectionLabe
   return out;
 }
 
+MatchTypeCounts CountMatchTypes(const PatchMatches& matches) {
+  MatchTypeCounts c;
+  for (uint8_t t : matches.match_type) {
+    switch (static_cast<MatchType>(t)) {
+      case MatchType::kVisibleVisible:
+        ++c.vv;
+        break;
+      case MatchType::kVisibleOccluded:
+        ++c.vo;
+        break;
+      case MatchType::kOccludedVisible:
+        ++c.ov;
+        break;
+    }
+  }
+  return c;
+}
+
 }  // namespace gt

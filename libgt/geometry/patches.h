@@ -58,6 +58,12 @@ struct PatchMatches {
   size_t size() const { return match_type.size(); }
 };
 
+// Matches of each type (vv, vo, ov).
+struct MatchTypeCounts {
+  int64_t vv = 0, vo = 0, ov = 0;
+};
+MatchTypeCounts CountMatchTypes(const PatchMatches& matches);
+
 // l01: labels of image 0 towards 1 (on image 0's grid); l10 the reverse. Throws
 // InputError("patch options", ...) when options fail Check or an image is smaller than a
 // cell.

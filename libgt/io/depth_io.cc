@@ -20,7 +20,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/io/codec.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
 
 namespace gt::io {

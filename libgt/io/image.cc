@@ -8,7 +8,7 @@
 #include "libgt/core/error.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/depth_io.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
 
 namespace gt::io {
 namespace {

@@ -11,7 +11,8 @@
 #include <memory>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/file_read.h"
 
 namespace gt::io {
 namespace {

@@ -17,10 +17,10 @@
 namespace gt::io {
 
 struct NpyArray {
-  std::string descr;             // e.g. "<f4" (always little-endian or '|')
-  std::vector<int64_t> shape;    // C order
+  std::string descr;           // e.g. "<f4" (always little-endian or '|')
+  std::vector<int64_t> shape;  // C order
   bool fortran_order = false;
-  std::string data;              // raw bytes, size = product(shape) * item size
+  std::string data;  // raw bytes, size = product(shape) * item size
 
   int64_t NumElements() const;
   size_t ItemSize() const;
@@ -55,13 +55,13 @@ NpyArray ParseNpy(std::string_view bytes, const std::string& name);
 NpyArray ReadNpy(const std::string& path);
 
 // Encode an array as .npy bytes (see rules above).
-std::string EncodeNpy(const std::string& descr, const std::vector<int64_t>& shape,
-                      const void* data, size_t nbytes);
+std::string EncodeNpy(const std::string& descr, const std::vector<int64_t>& shape, const void* data,
+                      size_t nbytes);
 template <typename T>
 std::string EncodeNpy(const std::vector<int64_t>& shape, const std::vector<T>& values) {
   return EncodeNpy(NpyDescr<T>(), shape, values.data(), values.size() * sizeof(T));
 }
-// Atomic write (files.h WriteFileAtomic) of EncodeNpy.
+// Atomic write (atomic_file.h WriteFileAtomic) of EncodeNpy.
 template <typename T>
 void WriteNpy(const std::string& path, const std::vector<int64_t>& shape,
               const std::vector<T>& values);

@@ -12,7 +12,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/io/depth_io.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/readers.h"
 #include "libgt/io/text_parsing.h"
 

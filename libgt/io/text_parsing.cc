@@ -1,12 +1,15 @@
 #include "libgt/io/text_parsing.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
 
 namespace gt::io {
 namespace fs = std::filesystem;
@@ -269,6 +272,79 @@ void MarkUnusable(Frame* frame, const std::string& reason) {
   if (!frame->usable) return;
   frame->usable = false;
   frame->unusable_reason = reason;
+}
+
+namespace {
+
+bool EqualsNoCase(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    char x = a[i], y = b[i];
+    if (x >= 'A' && x <= 'Z') x = static_cast<char>(x - 'A' + 'a');
+    if (y >= 'A' && y <= 'Z') y = static_cast<char>(y - 'A' + 'a');
+    if (x != y) return false;
+  }
+  return true;
+}
+
+// One token as a double: decimal/scientific notation, or inf/-inf/+inf/infinity/nan.
+bool ParseToken(std::string_view tok, double* value) {
+  std::string_view body = tok;
+  double sign = 1.0;
+  if (!body.empty() && (body[0] == '-' || body[0] == '+')) {
+    sign = body[0] == '-' ? -1.0 : 1.0;
+    body.remove_prefix(1);
+  }
+  if (EqualsNoCase(body, "inf") || EqualsNoCase(body, "infinity")) {
+    *value = sign * std::numeric_limits<double>::infinity();
+    return true;
+  }
+  if (EqualsNoCase(body, "nan")) {
+    *value = std::numeric_limits<double>::quiet_NaN();
+    return true;
+  }
+  // strtod also accepts hex floats and "nan(...)": only allow plain decimal characters.
+  for (char c : body) {
+    if (!((c >= '0' && c <= '9') || c == '.' || c == 'e' || c == 'E' || c == '-' || c == '+')) {
+      return false;
+    }
+  }
+  if (body.empty()) return false;
+  const std::string s(tok);
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(s.c_str(), &end);
+  if (end != s.c_str() + s.size()) return false;
+  *value = v;  // overflow gives +-HUGE_VAL (inf), which callers treat as non-finite
+  return true;
+}
+
+}  // namespace
+
+std::vector<double> ParseNumbers(std::string_view line, const std::string& path, int line_no) {
+  std::vector<double> out;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r' ||
+                               line[i] == '\n' || line[i] == ',')) {
+      ++i;
+    }
+    if (i >= line.size()) break;
+    size_t j = i;
+    while (j < line.size() && line[j] != ' ' && line[j] != '\t' && line[j] != '\r' &&
+           line[j] != '\n' && line[j] != ',') {
+      ++j;
+    }
+    const std::string_view tok = line.substr(i, j - i);
+    double v = 0;
+    if (!ParseToken(tok, &v)) {
+      throw InputError(path + ":" + std::to_string(line_no),
+                       "expected a number, found '" + std::string(tok) + "'");
+    }
+    out.push_back(v);
+    i = j;
+  }
+  return out;
 }
 
 }  // namespace gt::io

@@ -19,6 +19,11 @@
 
 namespace gt::io {
 
+// Whitespace-separated doubles of one text line; accepts "inf", "-inf", "nan" (any case),
+// which ScanNet writes for lost tracking. Throws InputError("<path>:<line>", ...) on a
+// token that is not a number.
+std::vector<double> ParseNumbers(std::string_view line, const std::string& path, int line_no);
+
 // Stable reasons for unusable frames (counted by `occgt scan`).
 inline constexpr const char* kReasonDepthMissing = "depth: missing file";
 // "pose: " + PoseProblem(...) text, e.g. "pose: non-finite pose entries (lost tracking)".

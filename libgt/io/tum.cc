@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/readers.h"
 #include "libgt/io/text_parsing.h"
 

@@ -24,7 +24,7 @@
 #include <sstream>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
 #include "libgt/occupancy/voxel_map.h"
 
 namespace gt::occupancy {

@@ -9,8 +9,8 @@
 #include <random>
 
 #include "libgt/core/error.h"
-#include "libgt/io/depth_io.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
+#include "libgt/truth/working_frame.h"
 
 namespace gt::pairs {
 
@@ -35,11 +35,8 @@ std::shared_ptr<const DepthImage> DepthCache::Get(size_t frame_index) {
     }
     ++misses_;
   }
-  const Frame& frame = scene_.frames[frame_index];
-  DepthImage full = io::ReadDepth(frame.depth, frame.depth_camera.width, frame.depth_camera.height);
-  auto map = std::make_shared<const DepthImage>((full.width == width_ && full.height == height_)
-                                                    ? std::move(full)
-                                                    : ResizeDepthNearest(full, width_, height_));
+  auto map = std::make_shared<const DepthImage>(
+      truth::LoadWorkingDepth(scene_.frames[frame_index], {width_, height_}));
   const size_t map_bytes = map->values_m.size() * sizeof(float);
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = maps_.find(frame_index);
@@ -82,7 +79,7 @@ size_t DepthCache::CapacityMaps() const {
 
 // ---- scan -------------------------------------------------------------------------
 
-bool ScanOptions::Check(std::string* error) const {
+bool FrameScanOptions::Check(std::string* error) const {
   if (frame_stride < 1) return *error = "frame_stride: expected an integer >= 1", false;
   if (!(min_valid_depth_fraction >= 0 && min_valid_depth_fraction <= 1)) {
     return *error = "min_valid_depth_fraction: expected a number in [0, 1]", false;
@@ -98,7 +95,7 @@ namespace {
 constexpr size_t kScanPrefetch = 64;
 }  // namespace
 
-ScanResult ScanFrames(const Scene& scene, const ScanOptions& options, DepthCache* cache) {
+ScanResult ScanFrames(const Scene& scene, const FrameScanOptions& options, DepthCache* cache) {
   std::string error;
   if (!options.Check(&error)) throw InputError("scan options", error);
   ScanResult result;
@@ -285,27 +282,12 @@ std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>
 
 // ---- filters and sampling ------------------------------------------------------------
 
-double Combine(double a, double b, Aggregate aggregate) {
-  switch (aggregate) {
-    case Aggregate::kMin:
-      return std::min(a, b);
-    case Aggregate::kMax:
-      return std::max(a, b);
-    case Aggregate::kMean:
-      return 0.5 * (a + b);
-  }
-  return 0.5 * (a + b);
-}
-
 double PairOverlap(const ScoredPair& p, Aggregate aggregate) {
   return Combine(p.m01.overlap, p.m10.overlap, aggregate);
 }
 
-double PairOcclusion(const ScoredPair& p, Aggregate aggregate, const std::string& metric) {
-  if (metric == "visible") {
-    return Combine(p.m01.occlusion_ratio_visible, p.m10.occlusion_ratio_visible, aggregate);
-  }
-  return Combine(p.m01.occlusion_ratio, p.m10.occlusion_ratio, aggregate);
+double PairOcclusion(const ScoredPair& p, Aggregate aggregate, OcclusionMetric metric) {
+  return Combine(OcclusionOf(p.m01, metric), OcclusionOf(p.m10, metric), aggregate);
 }
 
 uint64_t SceneSeed(uint64_t recipe_seed, const std::string& scene_name) {
@@ -409,6 +391,34 @@ std::vector<size_t> FilterAndSample(const std::vector<ScoredPair>& scored,
     return pa.i0 != pb.i0 ? pa.i0 < pb.i0 : pa.i1 < pb.i1;
   });
   return chosen;
+}
+
+bool PruningOptions::Check(std::string* error) const {
+  if (!(max_distance_m >= 0))
+    return *error = "selection.pruning.max_distance_m: expected >= 0", false;
+  if (!(max_view_angle_deg >= 0 && max_view_angle_deg <= 180)) {
+    return *error = "selection.pruning.max_view_angle_deg: expected a number in [0, 180]", false;
+  }
+  return true;
+}
+
+bool SelectionOptions::Check(std::string* error) const {
+  auto range_ok = [](double lo, double hi) { return 0 <= lo && lo <= hi && hi <= 1; };
+  if (max_frame_gap < 0) return *error = "selection.max_frame_gap: expected an integer >= 0", false;
+  if (!pruning.Check(error)) return false;
+  if (score_stride < 1) return *error = "selection.score_stride: expected an integer >= 1", false;
+  if (!range_ok(overlap_lo, overlap_hi)) {
+    return *error = "selection.overlap: expected [lo, hi] with 0 <= lo <= hi <= 1", false;
+  }
+  if (!range_ok(occlusion_lo, occlusion_hi)) {
+    return *error = "selection.occlusion: expected [lo, hi] with 0 <= lo <= hi <= 1", false;
+  }
+  if (quota_per_scene < 0) return *error = "selection.quota_per_scene: expected >= 0", false;
+  if (balance_bins < 0) return *error = "selection.balance_bins: expected >= 0", false;
+  if (!import_pairs.path.empty() && import_pairs.format != "loftr-npz") {
+    return *error = "selection.import_pairs.format: expected loftr-npz", false;
+  }
+  return true;
 }
 
 }  // namespace gt::pairs

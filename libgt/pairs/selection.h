@@ -29,10 +29,41 @@
 #include "libgt/core/camera.h"
 #include "libgt/core/depth.h"
 #include "libgt/core/frame.h"
+#include "libgt/geometry/aggregate.h"
 #include "libgt/geometry/labels.h"
-#include "libgt/pairs/recipe.h"
 
 namespace gt::pairs {
+
+// Cheap tests before scoring (recipe key selection.pruning).
+struct PruningOptions {
+  double max_distance_m = 0.0;        // camera centre distance; 0 = no limit
+  double max_view_angle_deg = 180.0;  // angle between optical axes; 180 = no limit
+  bool frustum = true;                // drop pairs whose frustums do not intersect
+
+  bool Check(std::string* error) const;
+};
+
+// A pair list imported instead of candidates (recipe key selection.import_pairs).
+struct ImportPairsOptions {
+  std::string format = "loftr-npz";
+  std::string path;  // absolute after loading; "" = no import
+};
+
+// Recipe key selection (docs/RECIPES.md).
+struct SelectionOptions {
+  int max_frame_gap = 0;  // pairs (i < j) with j - i <= gap in kept-frame order; 0 = all pairs
+  PruningOptions pruning;
+  int score_stride = 8;                       // score on every n-th pixel in x and y
+  double overlap_lo = 0.0, overlap_hi = 1.0;  // aggregated overlap must lie in [lo, hi]
+  double occlusion_lo = 0.0, occlusion_hi = 1.0;
+  OcclusionMetric occlusion_metric = OcclusionMetric::kImage;
+  Aggregate aggregate = Aggregate::kMean;  // how the two directions are combined
+  int quota_per_scene = 0;                 // max pairs per scene after filters; 0 = all
+  int balance_bins = 0;                    // sample evenly across overlap bins; 0 = off
+  ImportPairsOptions import_pairs;
+
+  bool Check(std::string* error) const;
+};
 
 // Ordered, so that printing and JSON are deterministic.
 using DropCounts = std::map<std::string, int64_t>;
@@ -67,7 +98,7 @@ class DepthCache {
   int64_t hits_ = 0, misses_ = 0;
 };
 
-struct ScanOptions {
+struct FrameScanOptions {
   int frame_stride = 1;                   // keep frames at positions 0, s, 2s, ... of the scene
   double min_valid_depth_fraction = 0.1;  // at the working resolution
   double min_depth_m = 0.0;               // validity range (depth.h IsValidDepth)
@@ -85,7 +116,7 @@ struct ScanResult {
 };
 // Decodes each frame after the stride (through the cache). A frame whose depth cannot be
 // read is skipped and counted, never fatal.
-ScanResult ScanFrames(const Scene& scene, const ScanOptions& options, DepthCache* cache);
+ScanResult ScanFrames(const Scene& scene, const FrameScanOptions& options, DepthCache* cache);
 
 struct CandidatePair {
   size_t i0 = 0, i1 = 0;  // indices into scene.frames, i0 < i1
@@ -127,10 +158,9 @@ std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>
                                    const LabelOptions& label_options, int score_stride,
                                    DepthCache* cache, DropCounts* drops);
 
-double Combine(double a, double b, Aggregate aggregate);
+// The two directions combined (geometry/aggregate.h).
 double PairOverlap(const ScoredPair& p, Aggregate aggregate);
-// metric "image" (OCCLUDED / sampled) or "visible" (OCCLUDED / (VISIBLE + OCCLUDED)).
-double PairOcclusion(const ScoredPair& p, Aggregate aggregate, const std::string& metric);
+double PairOcclusion(const ScoredPair& p, Aggregate aggregate, OcclusionMetric metric);
 
 // Seed of a scene: FNV-1a 64 of the name mixed with the recipe seed (SplitMix64).
 uint64_t SceneSeed(uint64_t recipe_seed, const std::string& scene_name);

@@ -6,15 +6,14 @@
 #include <opencv2/imgproc.hpp>
 
 #include "libgt/core/error.h"
-#include "libgt/geometry/pair.h"
+#include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
-#include "libgt/io/depth_io.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/image.h"
 #include "libgt/io/npy.h"
 #include "libgt/io/reader.h"
-#include "libgt/occupancy/pair_occupancy.h"
 #include "libgt/shards/tar_shard.h"
+#include "libgt/truth/pair_truth.h"
 
 namespace gt::report {
 namespace {
@@ -325,35 +324,25 @@ PairData ComputePairFromScene(const std::string& root, const std::string& format
                               const std::string& id1, const ComputePairOptions& options) {
   std::string error;
   if (!options.Check(&error)) throw InputError("inspect options", error);
-  const auto reader = gt::io::MakeReader(format);
-  const gt::Scene scene = reader->ReadScene(root, scene_name);
-  auto find = [&](const std::string& id) -> const gt::Frame& {
-    for (const auto& f : scene.frames) {
-      if (f.id == id) {
-        if (!f.usable)
-          throw InputError("--frames", "frame " + id + " is unusable: " + f.unusable_reason);
-        return f;
-      }
-    }
-    throw InputError("--frames", "scene " + scene_name + " has no frame " + id);
-  };
-  const gt::Frame& f0 = find(id0);
-  const gt::Frame& f1 = find(id1);
-  const int w = options.width, h = options.height;
-  const gt::DepthImage d0 = gt::ResizeDepthNearest(gt::io::ReadDepth(f0.depth), w, h);
-  const gt::DepthImage d1 = gt::ResizeDepthNearest(gt::io::ReadDepth(f1.depth), w, h);
-  const gt::Camera c0 = f0.depth_camera.Resized(w, h);
-  const gt::Camera c1 = f1.depth_camera.Resized(w, h);
-  gt::LabelOptions lo = gt::LabelPreset(options.preset);
-  lo.min_depth_m = scene.min_depth_m;
-  lo.max_depth_m = scene.max_depth_m;
-  const gt::PairLabels pl =
-      gt::LabelPair(d0, c0, f0.world_from_cam, d1, c1, f1.world_from_cam, lo, options.patches);
-
+  const gt::Scene scene = gt::io::MakeReader(format)->ReadScene(root, scene_name);
+  const gt::Frame& f0 = scene.frames[gt::truth::FindFrame(scene, id0)];
+  const gt::Frame& f1 = scene.frames[gt::truth::FindFrame(scene, id1)];
+  const gt::truth::Resolution resolution{options.width, options.height};
+  gt::truth::PairTruthOptions o;
+  o.labels = gt::LabelPreset(options.preset);
+  o.labels.min_depth_m = scene.min_depth_m;
+  o.labels.max_depth_m = scene.max_depth_m;
+  o.patches = options.patches;
+  o.occupancy = options.occupancy;
+  o.fusion.voxel_size_m = options.voxel_size_m;
+  o.bins = options.bins;
+  const gt::truth::PairTruth truth = gt::truth::ComputePairTruth(
+      gt::truth::LoadWorkingFrame(f0, resolution), gt::truth::LoadWorkingFrame(f1, resolution), o);
+  const gt::PairLabels& pl = truth.labels;
   PairData p;
   p.name = scene_name + " " + id0 + "," + id1;
-  p.width = w;
-  p.height = h;
+  p.width = options.width;
+  p.height = options.height;
   p.labels01 = {pl.l01.width, pl.l01.height, pl.l01.labels};
   p.labels10 = {pl.l10.width, pl.l10.height, pl.l10.labels};
   p.matches = pl.patches;
@@ -363,19 +352,11 @@ PairData ComputePairFromScene(const std::string& root, const std::string& format
   if (!f0.color_path.empty()) img0 = BgrFromColor(gt::io::ReadColor(f0.color_path));
   if (!f1.color_path.empty()) img1 = BgrFromColor(gt::io::ReadColor(f1.color_path));
   p.has_images = !img0.empty() && !img1.empty();
-  p.image0 = PrepareImage(img0, w, h);
-  p.image1 = PrepareImage(img1, w, h);
-  if (options.occupancy) {
-    gt::occupancy::FusionInput in0{&d0, c0, f0.world_from_cam, scene.min_depth_m,
-                                   scene.max_depth_m};
-    gt::occupancy::FusionInput in1{&d1, c1, f1.world_from_cam, scene.min_depth_m,
-                                   scene.max_depth_m};
-    gt::occupancy::FusionOptions fo;
-    fo.voxel_size_m = options.voxel_size_m;
-    const auto occ = gt::occupancy::ComputePairOccupancy(in0, in1, fo, options.bins,
-                                                         gt::occupancy::OccupancyMode::kOctomap);
-    p.occ0 = occ.cam0;
-    p.occ1 = occ.cam1;
+  p.image0 = PrepareImage(img0, p.width, p.height);
+  p.image1 = PrepareImage(img1, p.width, p.height);
+  if (truth.occupancy) {
+    p.occ0 = truth.occupancy->cam0;
+    p.occ1 = truth.occupancy->cam1;
     p.has_occupancy = true;
   }
   return p;

@@ -12,8 +12,9 @@
 #include <sstream>
 
 #include "libgt/core/error.h"
+#include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
 
 namespace gt::report {
 namespace {
@@ -35,22 +36,6 @@ uint64_t Fnv1a64(std::string_view s) {
     h *= 0x100000001b3ULL;
   }
   return h;
-}
-
-double Combine(double a, double b, Aggregate agg) {
-  switch (agg) {
-    case Aggregate::kMin:
-      return std::min(a, b);
-    case Aggregate::kMax:
-      return std::max(a, b);
-    case Aggregate::kMean:
-      break;
-  }
-  return 0.5 * (a + b);
-}
-
-const char* AggregateName(Aggregate agg) {
-  return agg == Aggregate::kMin ? "min" : agg == Aggregate::kMax ? "max" : "mean";
 }
 
 double NeedNumber(const json& j, const char* key, const std::string& where) {
@@ -150,18 +135,7 @@ std::string ImgTag(const NamedImage& im, const std::string& alt) {
 
 }  // namespace
 
-Aggregate ParseAggregate(const std::string& name) {
-  if (name == "min") return Aggregate::kMin;
-  if (name == "mean") return Aggregate::kMean;
-  if (name == "max") return Aggregate::kMax;
-  throw InputError("--aggregate", "expected one of min, mean, max; got '" + name + "'");
-}
-
 bool SplitReportOptions::Check(std::string* error) const {
-  if (occlusion_metric != "image" && occlusion_metric != "visible") {
-    *error = "occlusion_metric: expected image or visible";
-    return false;
-  }
   if (histogram_bins < 1 || histogram_bins > 200) {
     *error = "histogram_bins: expected 1..200";
     return false;
@@ -196,8 +170,7 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
     throw InputError(pairs_path, "missing: expected the pairs.jsonl of an `occgt build` folder");
   }
   const std::vector<std::string> lines = gt::io::ReadLines(pairs_path);
-  const char* occ_key =
-      options.occlusion_metric == "image" ? "occlusion_ratio" : "occlusion_ratio_visible";
+  const char* occ_key = OcclusionMetricField(options.occlusion_metric);
   for (size_t n = 0; n < lines.size(); ++n) {
     if (lines[n].find_first_not_of(" \t") == std::string::npos) continue;
     const std::string where = pairs_path + ":" + std::to_string(n + 1);
@@ -298,7 +271,7 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
   write("scenes.dat", scene_text);
 
   const std::string agg = AggregateName(options.aggregate);
-  const std::string occ_name = options.occlusion_metric == "image"
+  const std::string occ_name = options.occlusion_metric == OcclusionMetric::kImage
                                    ? "occlusion ratio (OCCLUDED / W*H)"
                                    : "occlusion ratio (OCCLUDED / (VISIBLE+OCCLUDED))";
   const std::string count = std::to_string(n) + " pairs";
@@ -447,8 +420,8 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
     << HtmlEscape(split.dir) << " &middot; " << split.pairs.size() << " pairs &middot; "
     << "pair values are the " << AggregateName(options.aggregate)
     << " of both directions; occlusion ratio = "
-    << (options.occlusion_metric == "image" ? "OCCLUDED / (W&middot;H)"
-                                            : "OCCLUDED / (VISIBLE + OCCLUDED)")
+    << (options.occlusion_metric == OcclusionMetric::kImage ? "OCCLUDED / (W&middot;H)"
+                                                            : "OCCLUDED / (VISIBLE + OCCLUDED)")
     << "</p>\n";
 
   // Summary tables.

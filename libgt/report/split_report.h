@@ -28,12 +28,10 @@
 #include <string_view>
 #include <vector>
 
+#include "libgt/geometry/aggregate.h"
 #include "libgt/report/pair_source.h"
 
 namespace gt::report {
-
-enum class Aggregate { kMin, kMean, kMax };
-Aggregate ParseAggregate(const std::string& name);  // InputError("--aggregate", ...)
 
 struct SplitPair {
   std::string scene, frame0, frame1, shard, key;
@@ -50,12 +48,12 @@ struct SplitData {
 
 struct SplitReportOptions {
   Aggregate aggregate = Aggregate::kMean;
-  std::string occlusion_metric = "image";  // "image" | "visible"
-  int histogram_bins = 20;                 // bins over [0, 1], 1..200
-  int gallery_pairs = 6;                   // pairs rendered in the gallery, 0..100
-  uint64_t seed = 0;                       // gallery choice
-  double gallery_scale = 0.5;              // gallery pictures resized by this (0, 1]
-  std::string gnuplot = "gnuplot";         // executable (PATH lookup)
+  OcclusionMetric occlusion_metric = OcclusionMetric::kImage;
+  int histogram_bins = 20;          // bins over [0, 1], 1..200
+  int gallery_pairs = 6;            // pairs rendered in the gallery, 0..100
+  uint64_t seed = 0;                // gallery choice
+  double gallery_scale = 0.5;       // gallery pictures resized by this (0, 1]
+  std::string gnuplot = "gnuplot";  // executable (PATH lookup)
   int plot_width_px = 800, plot_height_px = 480;
   PairPictureOptions pictures;
   bool Check(std::string* error) const;

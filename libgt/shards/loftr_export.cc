@@ -8,12 +8,17 @@
 #include <set>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
 #include "libgt/io/npy.h"
 #include "libgt/shards/sample.h"
 
 namespace gt::shards {
 namespace {
+
+// The export's files, one after the other (a few small files: no thread pays here).
+void RunInOrder(const std::vector<std::function<void()>>& writes) {
+  for (const auto& write : writes) write();
+}
 
 namespace fs = std::filesystem;
 
@@ -112,9 +117,7 @@ void ExportLoftrTrain(const std::string& out_dir, const std::vector<LoftrPair>& 
       throw InputError("loftr export", "scene " + scene + " maps to an npz name already used");
     }
   }
-  // The files are independent: written concurrently (their fsyncs overlap), except the
-  // .npz files, which one task writes in turn: libzip converts their DOS times with
-  // mktime, whose glibc lock ThreadSanitizer cannot see.
+  // The .npz files, then the list files.
   std::vector<std::function<void()>> npz_writes;
   npz_writes.emplace_back([&] { WriteIntrinsics(out_dir, scenes, intrinsics); });
   for (const std::string& scene : scenes) {
@@ -139,7 +142,7 @@ void ExportLoftrTrain(const std::string& out_dir, const std::vector<LoftrPair>& 
   }
   const std::string list_name =
       options.list_name.empty() ? options.split + "_list.txt" : options.list_name;
-  io::RunConcurrently({
+  RunInOrder({
       [&] {
         for (const auto& write : npz_writes) write();
       },
@@ -177,9 +180,7 @@ void ExportLoftrTest(const std::string& out_dir, const std::vector<LoftrPair>& p
     name_npy = io::EncodeNpy<int64_t>({n, 4}, names);
   }
   const std::string list_name = options.list_name.empty() ? "test_list.txt" : options.list_name;
-  // The files are independent: written concurrently (their fsyncs overlap), except the
-  // two .npz files, which one task writes in turn (see ExportLoftrTrain).
-  io::RunConcurrently({
+  RunInOrder({
       [&] {
         WriteIntrinsics(out_dir, scenes, intrinsics);
         io::WriteNpz((fs::path(out_dir) / "test.npz").string(),

@@ -8,8 +8,8 @@
 #include <opencv2/core.hpp>
 
 #include "libgt/core/error.h"
+#include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
-#include "libgt/io/files.h"
 #include "libgt/io/npy.h"
 #include "libgt/synth/random.h"
 #include "libgt/synth/render.h"

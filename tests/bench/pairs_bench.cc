@@ -1,14 +1,12 @@
 // Throughput of the build pipeline on the real 7-Scenes sample (640×480, 50 frames):
 // scoring a candidate pair (both directions, score_stride 8, depth cached), the frame scan
-// (decode + resize + valid fraction + median), and one full sample (labels, patch matches,
-// pair-scope OctoMap occupancy, PNG images, depth) as `occgt build` writes it.
+// (decode + resize + valid fraction + median). One full sample: build_bench.cc.
 // Figures and commands: docs/PERFORMANCE.md.
 #include <benchmark/benchmark.h>
 
 #include "libgt/io/reader.h"
-#include "libgt/pairs/pair_sample.h"
-#include "libgt/pairs/recipe.h"
 #include "libgt/pairs/selection.h"
+#include "libgt/truth/working_frame.h"
 #include "tests/support/test_support.h"
 
 namespace gt::pairs {
@@ -25,7 +23,7 @@ const Scene& SevenScenes() {
 
 std::vector<Camera> Cameras(const Scene& scene) {
   std::vector<Camera> cams;
-  for (const auto& f : scene.frames) cams.push_back(WorkingCamera(f, 640, 480));
+  for (const auto& f : scene.frames) cams.push_back(truth::WorkingCamera(f, {640, 480}));
   return cams;
 }
 
@@ -51,7 +49,7 @@ BENCHMARK(BM_ScorePair)->Arg(8)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealT
 
 void BM_ScanFrames(benchmark::State& state) {
   const Scene& scene = SevenScenes();
-  ScanOptions o;
+  FrameScanOptions o;
   o.min_depth_m = scene.min_depth_m;
   o.max_depth_m = scene.max_depth_m;
   for (auto _ : state) {
@@ -62,29 +60,6 @@ void BM_ScanFrames(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(scene.frames.size()));
 }
 BENCHMARK(BM_ScanFrames)->Unit(benchmark::kMillisecond)->UseRealTime();
-
-void BM_ComputeSample(benchmark::State& state) {
-  const Scene& scene = SevenScenes();
-  Recipe recipe = ParseRecipe(
-      "name: b\ndataset: {format: sevenscenes, root: /x}\nsample: {depth: true}\n"
-      "occupancy: {far_m: 8.0}\n",
-      "bench.yaml", "/");
-  SampleSpec spec = RecipeSampleOptions(recipe);
-  spec.labels = RecipeLabelOptions(recipe, scene);
-  // 0: everything; 1: without occupancy; 2: without occupancy and images.
-  if (state.range(0) >= 1) spec.occupancy = false;
-  if (state.range(0) >= 2) spec.image = "none";
-  DepthCache cache(scene, 640, 480);
-  const auto d0 = cache.Get(0);
-  const auto d1 = cache.Get(8);
-  SelectedPair pair;
-  for (auto _ : state) {
-    EncodedSample s = ComputeSample(scene, 0, 8, pair, "k/0_8", *d0, *d1, spec, nullptr);
-    benchmark::DoNotOptimize(s.bytes);
-  }
-  state.SetItemsProcessed(state.iterations());
-}
-BENCHMARK(BM_ComputeSample)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace gt::pairs

@@ -16,7 +16,8 @@
 #include <random>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/image.h"
 #include "libgt/io/npy.h"
 #include "tests/support/test_support.h"

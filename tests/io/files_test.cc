@@ -1,8 +1,7 @@
-// files.h: MD5 against the RFC 1321 test suite and a slow bit-level check over random
-// inputs of every length around the block boundaries, ParseNumbers tokens and errors,
-// ReadLines, WriteFileAtomic and WriteFilesAtomic publication, RunConcurrently, PrefetchFile.
-#include "libgt/io/files.h"
-
+// file_read.h, atomic_file.h, md5.h, text_parsing.h: MD5 against the RFC 1321 test suite
+// and a slow bit-level check over random inputs of every length around the block boundaries,
+// ParseNumbers tokens and errors, ReadLines, WriteFileAtomic and WriteFilesAtomic publication,
+// PrefetchFile.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/mman.h>
@@ -18,8 +17,11 @@
 #include <thread>
 
 #include "libgt/core/error.h"
+#include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/image.h"
+#include "libgt/io/md5.h"
 #include "libgt/io/text_parsing.h"
 #include "tests/support/test_support.h"
 
@@ -281,27 +283,6 @@ TEST(WriteFilesAtomic, ARenameFailureKeepsTheEarlierFilesAndRemovesTheTemporarie
   for (const char* name : {"/first.txt.tmp", "/target.tmp", "/last.txt.tmp"}) {
     EXPECT_FALSE(fs::exists(dir + name)) << name;
   }
-}
-
-TEST(RunConcurrently, RunsEveryFunctionAndRethrowsTheFirstErrorInListOrder) {
-  for (int repeat = 0; repeat < 20; ++repeat) {
-    std::vector<int> ran(8, 0);
-    std::vector<std::function<void()>> fns;
-    for (int i = 0; i < 8; ++i) {
-      fns.emplace_back([&ran, i] {
-        ran[i] = 1;
-        if (i == 3 || i == 6) throw InputError("task " + std::to_string(i), "failed");
-      });
-    }
-    try {
-      RunConcurrently(fns);
-      FAIL() << "expected InputError";
-    } catch (const InputError& e) {
-      EXPECT_EQ(e.where(), "task 3");
-    }
-    for (int i = 0; i < 8; ++i) EXPECT_EQ(ran[i], 1) << i;  // the others still ran
-  }
-  RunConcurrently({});  // nothing to run
 }
 
 TEST(ListNumberedFiles, UnreadableEntriesAndDuplicateNumbersAreErrors) {

@@ -6,8 +6,9 @@
 #include <string>
 
 #include "libgt/core/error.h"
+#include "libgt/io/atomic_file.h"
 #include "libgt/io/depth_io.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
 #include "libgt/io/readers.h"
 #include "libgt/io/text_parsing.h"

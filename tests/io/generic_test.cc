@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
 #include "libgt/io/reader.h"
 #include "tests/support/test_support.h"
 

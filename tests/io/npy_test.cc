@@ -17,7 +17,8 @@
 #include <thread>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/file_read.h"
 #include "tests/support/test_support.h"
 
 namespace gt::io {

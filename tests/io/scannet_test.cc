@@ -9,8 +9,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "libgt/core/error.h"
+#include "libgt/io/atomic_file.h"
 #include "libgt/io/depth_io.h"
-#include "libgt/io/files.h"
 #include "libgt/io/reader.h"
 #include "tests/support/test_support.h"
 

@@ -8,8 +8,9 @@
 #include <sstream>
 
 #include "libgt/core/error.h"
+#include "libgt/io/atomic_file.h"
 #include "libgt/io/depth_io.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
 #include "libgt/io/reader.h"
 #include "tests/io/consistency.h"

@@ -155,7 +155,7 @@ TEST(Scan, StrideUnusableAndLowDepthAreCounted) {
   Scene low = PlaneScene(dir + "/low", {0}, 2.0, 0.05);
   scene.frames[6].depth = low.frames[0].depth;
   DepthCache cache(scene, kW, kH);
-  ScanOptions o;
+  FrameScanOptions o;
   o.min_valid_depth_fraction = 0.5;
   ScanResult r = ScanFrames(scene, o, &cache);
   EXPECT_EQ(r.kept, (std::vector<size_t>{0, 1, 3, 5}));
@@ -225,9 +225,9 @@ TEST(Filters, AggregationMinMeanMax) {
   ScoredPair v = Fake(0, 1, 0.5, 0.5, 0.1, 0.3);
   v.m01.occlusion_ratio_visible = 0.5;
   v.m10.occlusion_ratio_visible = 0.7;
-  EXPECT_DOUBLE_EQ(PairOcclusion(v, Aggregate::kMean, "image"), 0.2);
-  EXPECT_DOUBLE_EQ(PairOcclusion(v, Aggregate::kMean, "visible"), 0.6);
-  EXPECT_DOUBLE_EQ(PairOcclusion(v, Aggregate::kMax, "image"), 0.3);
+  EXPECT_DOUBLE_EQ(PairOcclusion(v, Aggregate::kMean, OcclusionMetric::kImage), 0.2);
+  EXPECT_DOUBLE_EQ(PairOcclusion(v, Aggregate::kMean, OcclusionMetric::kVisible), 0.6);
+  EXPECT_DOUBLE_EQ(PairOcclusion(v, Aggregate::kMax, OcclusionMetric::kImage), 0.3);
 }
 
 std::vector<ScoredPair> RandomScored(size_t n, uint64_t seed) {
@@ -263,7 +263,7 @@ TEST(Filters, PropertyDropsAddUpQuotaHoldsAndFiltersAreRespected) {
       const double ov = PairOverlap(scored[k], o.aggregate);
       EXPECT_GE(ov, o.overlap_lo);
       EXPECT_LE(ov, o.overlap_hi);
-      EXPECT_GE(PairOcclusion(scored[k], o.aggregate, "image"), o.occlusion_lo);
+      EXPECT_GE(PairOcclusion(scored[k], o.aggregate, OcclusionMetric::kImage), o.occlusion_lo);
     }
     for (size_t i = 1; i < chosen.size(); ++i) {
       const auto& a = scored[chosen[i - 1]].pair;

@@ -11,7 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
 #include "libgt/synth/render.h"
 #include "tests/support/test_support.h"

@@ -20,7 +20,20 @@
 #include <string>
 #include <vector>
 
-namespace gt::pairs {
+#include "libgt/build/sample.h"
+#include "libgt/core/frame.h"
+#include "libgt/geometry/labels.h"
+#include "libgt/geometry/patches.h"
+#include "libgt/occupancy/frustum.h"
+#include "libgt/occupancy/fusion.h"
+#include "libgt/occupancy/pair_occupancy.h"
+#include "libgt/pairs/selection.h"
+
+namespace gt::build {
+
+// loftr_export.kind: the LoFTR-family index written beside the shards (DIR/loftr/).
+enum class LoftrExportKind { kNone, kTrain, kTest };  // "" | "train" | "test"
+const char* LoftrExportKindName(LoftrExportKind kind);
 
 // dataset.synthetic: the procedural sample generated into <out>/data when missing.
 struct SyntheticDatasetOptions {
@@ -54,65 +67,30 @@ struct LabelRecipe {
   std::optional<double> max_depth_m;
 };
 
-struct PatchRecipe {
-  int stride = 8;                 // pixels per cell side at the working resolution
-  std::string anchor = "center";  // center | corner
-  bool mutual = true;             // vv matches must loop back (LoFTR)
-};
-
-struct PruningOptions {
-  double max_distance_m = 0.0;        // camera centre distance; 0 = no limit
-  double max_view_angle_deg = 180.0;  // angle between optical axes; 180 = no limit
-  bool frustum = true;                // drop pairs whose frustums do not intersect
-
-  bool Check(std::string* error) const;
-};
-
-enum class Aggregate { kMin, kMean, kMax };
-const char* AggregateName(Aggregate a);
-
-struct ImportPairsOptions {
-  std::string format = "loftr-npz";
-  std::string path;  // absolute after loading; "" = no import
-};
-
-struct SelectionOptions {
-  int max_frame_gap = 0;  // pairs (i < j) with j - i <= gap in kept-frame order; 0 = all pairs
-  PruningOptions pruning;
-  int score_stride = 8;                       // score on every n-th pixel in x and y
-  double overlap_lo = 0.0, overlap_hi = 1.0;  // aggregated overlap must lie in [lo, hi]
-  double occlusion_lo = 0.0, occlusion_hi = 1.0;
-  std::string occlusion_metric = "image";  // image: OCCLUDED/(W*H); visible: /(VIS+OCC)
-  Aggregate aggregate = Aggregate::kMean;  // how the two directions are combined
-  int quota_per_scene = 0;                 // max pairs per scene after filters; 0 = all
-  int balance_bins = 0;                    // sample evenly across overlap bins; 0 = off
-  ImportPairsOptions import_pairs;
-
-  bool Check(std::string* error) const;
-};
-
+// occupancy: maps onto occupancy::FusionOptions and BinOptions (RecipeSampleOptions);
+// far_m is both the last bin edge and the fusion's ray range.
 struct OccupancyRecipe {
   bool enabled = true;
-  double voxel_m = 0.05;            // OctoMap resolution (metres)
-  int bins = 64;                    // depth bins per ray
-  double near_m = 0.1;              // first bin edge (metres)
-  double far_m = 10.0;              // last bin edge (metres)
-  std::string spacing = "linear";   // linear | log | inverse
-  std::string traversal = "exact";  // exact | center
-  std::string scope = "pair";       // pair | window | scene
-  int window = 2;                   // scope window: usable neighbours on each side of the pair
-  int scene_stride = 10;            // scope scene: fuse every n-th frame (one map per scene)
-  std::string mode = "octomap";     // octomap | two_point
-  std::string encoding = "packed";  // packed | dense | both
+  double voxel_m = 0.05;  // OctoMap resolution (metres)
+  int bins = 64;          // depth bins per ray
+  double near_m = 0.1;    // first bin edge (metres)
+  double far_m = 10.0;    // last bin edge and ray range (metres)
+  occupancy::BinSpacing spacing = occupancy::BinSpacing::kLinear;  // linear | log | inverse
+  occupancy::Traversal traversal = occupancy::Traversal::kExact;   // exact | center
+  occupancy::FusionScope scope = occupancy::FusionScope::kPair;    // pair | window | scene
+  int window = 2;         // scope window: usable neighbours on each side of the pair
+  int scene_stride = 10;  // scope scene: fuse every n-th frame (one map per scene)
+  occupancy::OccupancyMode mode = occupancy::OccupancyMode::kOctomap;  // octomap | two_point
+  VolumeEncoding encoding = VolumeEncoding::kPacked;                   // packed | dense | both
 
   bool Check(std::string* error) const;
 };
 
-struct SampleOptions {
-  std::string image = "png";  // png | jpg | none
-  bool depth = false;         // depth0/1.npy (float32 metres)
-  bool labels = true;         // label01/10.npy and cells0/1.npy
-  bool occupancy = true;      // occ/known (or dense) volumes (also needs occupancy.enabled)
+struct SampleRecipe {
+  ImageFormat image = ImageFormat::kPng;  // png | jpg | none
+  bool depth = false;                     // depth0/1.npy (float32 metres)
+  bool labels = true;                     // label01/10.npy and cells0/1.npy
+  bool occupancy = true;  // occ/known (or dense) volumes (also needs occupancy.enabled)
 };
 
 struct ShardOptions {
@@ -131,12 +109,12 @@ struct Recipe {
   int width = 640, height = 480;  // working resolution
   DatasetOptions dataset;
   LabelRecipe labels;
-  PatchRecipe patches;
-  SelectionOptions selection;
+  PatchOptions patches;  // stride must divide W and H
+  pairs::SelectionOptions selection;
   OccupancyRecipe occupancy;
-  SampleOptions sample;
+  SampleRecipe sample;
   ShardOptions shards;
-  std::string loftr_export;  // "" | train | test
+  LoftrExportKind loftr_export = LoftrExportKind::kNone;
 
   // Cross-field checks after the schema (ranges lo <= hi, stride divides the resolution,
   // near < far ...). On failure *error is "<field>: expected ...".
@@ -146,6 +124,13 @@ struct Recipe {
   nlohmann::json ToJson() const;
   std::string Digest() const;
 };
+
+// The algorithm options a recipe selects, converted once (sample.h SampleOptions); labels
+// with LabelPresetOf(scene) per scene.
+SampleOptions RecipeSampleOptions(const Recipe& recipe);
+// Label options of a recipe for a scene: preset, then dataset depth range (recipe's
+// dataset.min/max_depth_m, else the scene's), then labels.overrides.
+LabelOptions RecipeLabelOptions(const Recipe& recipe, const Scene& scene);
 
 // Overrides applied from the command line after parsing (before Check).
 struct RecipeOverrides {
@@ -168,4 +153,4 @@ const std::string& RecipeSchemaText();
 // ${VAR} / ${VAR:-default} expansion; throws InputError(field, ...) for an unset VAR.
 std::string ExpandEnv(const std::string& text, const std::string& field);
 
-}  // namespace gt::pairs
+}  // namespace gt::build

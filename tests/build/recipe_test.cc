@@ -1,7 +1,7 @@
 // Recipe loading: schema validation (unknown keys, wrong types, missing sections) gives one
 // line naming the recipe file and the field; defaults, env expansion, relative paths; every
 // shipped recipe loads; docs/RECIPES.md documents exactly the schema's keys.
-#include "libgt/pairs/recipe.h"
+#include "libgt/build/recipe.h"
 
 #include <gtest/gtest.h>
 
@@ -12,10 +12,11 @@
 #include <set>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/file_read.h"
 #include "tests/support/test_support.h"
 
-namespace gt::pairs {
+namespace gt::build {
 namespace {
 
 namespace fs = std::filesystem;
@@ -88,7 +89,7 @@ loftr_export: {kind: test}
   EXPECT_FALSE(r.dataset.min_depth_m.has_value());
   EXPECT_EQ(r.labels.preset, "loftr");
   EXPECT_DOUBLE_EQ(*r.labels.abs_tol_m, 0.05);
-  EXPECT_EQ(r.patches.anchor, "corner");
+  EXPECT_EQ(r.patches.anchor, Anchor::kCorner);
   EXPECT_FALSE(r.patches.mutual);
   EXPECT_EQ(r.selection.max_frame_gap, 5);
   EXPECT_DOUBLE_EQ(r.selection.pruning.max_distance_m, 3.5);
@@ -96,13 +97,14 @@ loftr_export: {kind: test}
   EXPECT_DOUBLE_EQ(r.selection.overlap_lo, 0.4);
   EXPECT_DOUBLE_EQ(r.selection.occlusion_lo, 0.3);
   EXPECT_EQ(r.selection.aggregate, Aggregate::kMin);
+  EXPECT_EQ(r.selection.occlusion_metric, OcclusionMetric::kVisible);
   EXPECT_EQ(r.selection.quota_per_scene, 50);
-  EXPECT_EQ(r.occupancy.spacing, "log");
-  EXPECT_EQ(r.occupancy.encoding, "both");
-  EXPECT_EQ(r.sample.image, "jpg");
+  EXPECT_EQ(r.occupancy.spacing, occupancy::BinSpacing::kLog);
+  EXPECT_EQ(r.occupancy.encoding, VolumeEncoding::kBoth);
+  EXPECT_EQ(r.sample.image, ImageFormat::kJpg);
   EXPECT_TRUE(r.sample.depth);
   EXPECT_EQ(r.shards.samples_per_shard, 10);
-  EXPECT_EQ(r.loftr_export, "test");
+  EXPECT_EQ(r.loftr_export, LoftrExportKind::kTest);
 }
 
 TEST(Recipe, UnknownKeyNamesFileAndField) {
@@ -328,4 +330,4 @@ TEST(Recipe, FuzzFoundIntegersMustFitTheirField) {
 }
 
 }  // namespace
-}  // namespace gt::pairs
+}  // namespace gt::build

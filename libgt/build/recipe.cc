@@ -1,4 +1,4 @@
-#include "libgt/pairs/recipe.h"
+#include "libgt/build/recipe.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -15,16 +15,17 @@
 #include <valijson/validator.hpp>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
+#include "libgt/io/md5.h"
 
-namespace gt::pairs {
+namespace gt::build {
 namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 const char kSchemaText[] =
-#include "gt/pairs/recipe_schema.inc"
+#include "gt/build/recipe_schema.inc"
     ;
 
 // ---- YAML -> JSON -------------------------------------------------------------------
@@ -270,6 +271,26 @@ void GetOpt(const json& o, const char* key, std::optional<double>* out) {
   if (o.contains(key) && !o[key].is_null()) *out = o[key].get<double>();
 }
 
+// occupancy.scope: the kind only; window and scene_stride are their own keys.
+const char* ScopeName(occupancy::FusionScope scope) {
+  switch (scope) {
+    case occupancy::FusionScope::kWindow:
+      return "window";
+    case occupancy::FusionScope::kScene:
+      return "scene";
+    case occupancy::FusionScope::kPair:
+      break;
+  }
+  return "pair";
+}
+
+occupancy::FusionScope ParseScope(const std::string& text, const std::string& file) {
+  if (text == "window") return occupancy::FusionScope::kWindow;
+  if (text == "scene") return occupancy::FusionScope::kScene;
+  if (text == "pair") return occupancy::FusionScope::kPair;
+  throw InputError(file + ": occupancy.scope", "expected pair, window or scene");
+}
+
 std::string ResolvePath(const std::string& raw, const std::string& field,
                         const std::string& base_dir) {
   std::string p = ExpandEnv(raw, field);
@@ -280,16 +301,16 @@ std::string ResolvePath(const std::string& raw, const std::string& field,
 
 }  // namespace
 
-const char* AggregateName(Aggregate a) {
-  switch (a) {
-    case Aggregate::kMin:
-      return "min";
-    case Aggregate::kMean:
-      return "mean";
-    case Aggregate::kMax:
-      return "max";
+const char* LoftrExportKindName(LoftrExportKind kind) {
+  switch (kind) {
+    case LoftrExportKind::kTrain:
+      return "train";
+    case LoftrExportKind::kTest:
+      return "test";
+    case LoftrExportKind::kNone:
+      break;
   }
-  return "mean";
+  return "";
 }
 
 const std::string& RecipeSchemaText() {
@@ -428,37 +449,6 @@ bool DatasetOptions::Check(std::string* error) const {
   return true;
 }
 
-bool PruningOptions::Check(std::string* error) const {
-  if (!(max_distance_m >= 0))
-    return *error = "selection.pruning.max_distance_m: expected >= 0", false;
-  if (!(max_view_angle_deg >= 0 && max_view_angle_deg <= 180)) {
-    return *error = "selection.pruning.max_view_angle_deg: expected a number in [0, 180]", false;
-  }
-  return true;
-}
-
-bool SelectionOptions::Check(std::string* error) const {
-  auto range_ok = [](double lo, double hi) { return 0 <= lo && lo <= hi && hi <= 1; };
-  if (max_frame_gap < 0) return *error = "selection.max_frame_gap: expected an integer >= 0", false;
-  if (!pruning.Check(error)) return false;
-  if (score_stride < 1) return *error = "selection.score_stride: expected an integer >= 1", false;
-  if (!range_ok(overlap_lo, overlap_hi)) {
-    return *error = "selection.overlap: expected [lo, hi] with 0 <= lo <= hi <= 1", false;
-  }
-  if (!range_ok(occlusion_lo, occlusion_hi)) {
-    return *error = "selection.occlusion: expected [lo, hi] with 0 <= lo <= hi <= 1", false;
-  }
-  if (occlusion_metric != "image" && occlusion_metric != "visible") {
-    return *error = "selection.occlusion_metric: expected image or visible", false;
-  }
-  if (quota_per_scene < 0) return *error = "selection.quota_per_scene: expected >= 0", false;
-  if (balance_bins < 0) return *error = "selection.balance_bins: expected >= 0", false;
-  if (!import_pairs.path.empty() && import_pairs.format != "loftr-npz") {
-    return *error = "selection.import_pairs.format: expected loftr-npz", false;
-  }
-  return true;
-}
-
 bool OccupancyRecipe::Check(std::string* error) const {
   if (!(voxel_m > 0)) return *error = "occupancy.voxel_m: expected a number > 0 (metres)", false;
   if (bins < 1 || bins > 64)
@@ -491,7 +481,7 @@ bool Recipe::Check(std::string* error) const {
     return *error = "resolution: expected even W and H when occupancy.enabled (H/2 x W/2 rays)",
            false;
   }
-  if (loftr_export == "test" && !sample.depth) {
+  if (loftr_export == LoftrExportKind::kTest && !sample.depth) {
     return *error =
                "sample.depth: expected true for loftr_export.kind test (Occ2Net's test step reads "
                "depth)",
@@ -530,8 +520,9 @@ json Recipe::ToJson() const {
                    {"rel_tol", opt(labels.rel_tol)},
                    {"min_depth_m", opt(labels.min_depth_m)},
                    {"max_depth_m", opt(labels.max_depth_m)}}}};
-  j["patches"] = {
-      {"stride", patches.stride}, {"anchor", patches.anchor}, {"mutual", patches.mutual}};
+  j["patches"] = {{"stride", patches.stride},
+                  {"anchor", AnchorName(patches.anchor)},
+                  {"mutual", patches.mutual}};
   j["selection"] = {
       {"max_frame_gap", selection.max_frame_gap},
       {"pruning",
@@ -541,24 +532,30 @@ json Recipe::ToJson() const {
       {"score_stride", selection.score_stride},
       {"overlap", {selection.overlap_lo, selection.overlap_hi}},
       {"occlusion", {selection.occlusion_lo, selection.occlusion_hi}},
-      {"occlusion_metric", selection.occlusion_metric},
+      {"occlusion_metric", OcclusionMetricName(selection.occlusion_metric)},
       {"aggregate", AggregateName(selection.aggregate)},
       {"quota_per_scene", selection.quota_per_scene},
       {"balance_bins", selection.balance_bins},
       {"import_pairs",
        {{"format", selection.import_pairs.format}, {"path", selection.import_pairs.path}}}};
-  j["occupancy"] = {{"enabled", occupancy.enabled},     {"voxel_m", occupancy.voxel_m},
-                    {"bins", occupancy.bins},           {"near_m", occupancy.near_m},
-                    {"far_m", occupancy.far_m},         {"spacing", occupancy.spacing},
-                    {"traversal", occupancy.traversal}, {"scope", occupancy.scope},
-                    {"window", occupancy.window},       {"scene_stride", occupancy.scene_stride},
-                    {"mode", occupancy.mode},           {"encoding", occupancy.encoding}};
-  j["sample"] = {{"image", sample.image},
+  j["occupancy"] = {{"enabled", occupancy.enabled},
+                    {"voxel_m", occupancy.voxel_m},
+                    {"bins", occupancy.bins},
+                    {"near_m", occupancy.near_m},
+                    {"far_m", occupancy.far_m},
+                    {"spacing", occupancy::BinSpacingName(occupancy.spacing)},
+                    {"traversal", occupancy::TraversalName(occupancy.traversal)},
+                    {"scope", ScopeName(occupancy.scope)},
+                    {"window", occupancy.window},
+                    {"scene_stride", occupancy.scene_stride},
+                    {"mode", occupancy::OccupancyModeName(occupancy.mode)},
+                    {"encoding", VolumeEncodingName(occupancy.encoding)}};
+  j["sample"] = {{"image", ImageFormatName(sample.image)},
                  {"depth", sample.depth},
                  {"labels", sample.labels},
                  {"occupancy", sample.occupancy}};
   j["shards"] = {{"samples_per_shard", shards.samples_per_shard}, {"target_mb", shards.target_mb}};
-  j["loftr_export"] = loftr_export;
+  j["loftr_export"] = LoftrExportKindName(loftr_export);
   return j;
 }
 
@@ -625,12 +622,12 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   if (j.contains("patches")) {
     const json& p = j["patches"];
     Get(p, "stride", &r.patches.stride, file);
-    Get(p, "anchor", &r.patches.anchor, file);
+    if (p.contains("anchor")) r.patches.anchor = ParseAnchor(p["anchor"].get<std::string>());
     Get(p, "mutual", &r.patches.mutual, file);
   }
   if (j.contains("selection")) {
     const json& s = j["selection"];
-    SelectionOptions& o = r.selection;
+    pairs::SelectionOptions& o = r.selection;
     Get(s, "max_frame_gap", &o.max_frame_gap, file);
     if (s.contains("pruning")) {
       Get(s["pruning"], "max_distance_m", &o.pruning.max_distance_m, file);
@@ -646,10 +643,13 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
       o.occlusion_lo = s["occlusion"][0].get<double>();
       o.occlusion_hi = s["occlusion"][1].get<double>();
     }
-    Get(s, "occlusion_metric", &o.occlusion_metric, file);
+    if (s.contains("occlusion_metric")) {
+      o.occlusion_metric = ParseOcclusionMetric(s["occlusion_metric"].get<std::string>(),
+                                                file + ": selection.occlusion_metric");
+    }
     if (s.contains("aggregate")) {
-      std::string a = s["aggregate"].get<std::string>();
-      o.aggregate = a == "min" ? Aggregate::kMin : a == "max" ? Aggregate::kMax : Aggregate::kMean;
+      o.aggregate =
+          ParseAggregate(s["aggregate"].get<std::string>(), file + ": selection.aggregate");
     }
     Get(s, "quota_per_scene", &o.quota_per_scene, file);
     Get(s, "balance_bins", &o.balance_bins, file);
@@ -666,17 +666,25 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     Get(o, "bins", &r.occupancy.bins, file);
     Get(o, "near_m", &r.occupancy.near_m, file);
     Get(o, "far_m", &r.occupancy.far_m, file);
-    Get(o, "spacing", &r.occupancy.spacing, file);
-    Get(o, "traversal", &r.occupancy.traversal, file);
-    Get(o, "scope", &r.occupancy.scope, file);
+    if (o.contains("spacing"))
+      r.occupancy.spacing = occupancy::ParseBinSpacing(o["spacing"].get<std::string>());
+    if (o.contains("traversal")) {
+      r.occupancy.traversal = occupancy::ParseTraversal(o["traversal"].get<std::string>());
+    }
+    if (o.contains("scope")) r.occupancy.scope = ParseScope(o["scope"].get<std::string>(), file);
     Get(o, "window", &r.occupancy.window, file);
     Get(o, "scene_stride", &r.occupancy.scene_stride, file);
-    Get(o, "mode", &r.occupancy.mode, file);
-    Get(o, "encoding", &r.occupancy.encoding, file);
+    if (o.contains("mode"))
+      r.occupancy.mode = occupancy::ParseOccupancyMode(o["mode"].get<std::string>());
+    if (o.contains("encoding")) {
+      r.occupancy.encoding =
+          ParseVolumeEncoding(o["encoding"].get<std::string>(), file + ": occupancy.encoding");
+    }
   }
   if (j.contains("sample")) {
     const json& s = j["sample"];
-    Get(s, "image", &r.sample.image, file);
+    if (s.contains("image"))
+      r.sample.image = ParseImageFormat(s["image"].get<std::string>(), file + ": sample.image");
     Get(s, "depth", &r.sample.depth, file);
     Get(s, "labels", &r.sample.labels, file);
     Get(s, "occupancy", &r.sample.occupancy, file);
@@ -685,7 +693,10 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     Get(j["shards"], "samples_per_shard", &r.shards.samples_per_shard, file);
     Get(j["shards"], "target_mb", &r.shards.target_mb, file);
   }
-  if (j.contains("loftr_export")) r.loftr_export = j["loftr_export"]["kind"].get<std::string>();
+  if (j.contains("loftr_export")) {
+    const std::string kind = j["loftr_export"]["kind"].get<std::string>();
+    r.loftr_export = kind == "test" ? LoftrExportKind::kTest : LoftrExportKind::kTrain;
+  }
   std::string error;
   if (!r.Check(&error)) throw InputError(file, error);
   return r;
@@ -713,4 +724,49 @@ Recipe LoadRecipe(const std::string& path, const RecipeOverrides& overrides) {
   return r;
 }
 
-}  // namespace gt::pairs
+LabelOptions RecipeLabelOptions(const Recipe& recipe, const Scene& scene) {
+  LabelOptions o = LabelPreset(recipe.labels.preset);
+  o.min_depth_m = recipe.dataset.min_depth_m.value_or(scene.min_depth_m);
+  o.max_depth_m = recipe.dataset.max_depth_m.value_or(scene.max_depth_m);
+  if (recipe.labels.abs_tol_m) o.abs_tol_m = *recipe.labels.abs_tol_m;
+  if (recipe.labels.rel_tol) o.rel_tol = *recipe.labels.rel_tol;
+  if (recipe.labels.min_depth_m) o.min_depth_m = *recipe.labels.min_depth_m;
+  if (recipe.labels.max_depth_m) o.max_depth_m = *recipe.labels.max_depth_m;
+  std::string error;
+  if (!o.Check(&error)) throw InputError(recipe.file, "labels: " + error);
+  return o;
+}
+
+SampleOptions RecipeSampleOptions(const Recipe& recipe) {
+  SampleOptions s;
+  s.resolution = {recipe.width, recipe.height};
+  truth::PairTruthOptions& t = s.truth;
+  t.patches = recipe.patches;
+  t.occupancy = recipe.occupancy.enabled && recipe.sample.occupancy;
+  t.fusion.voxel_size_m = recipe.occupancy.voxel_m;
+  t.fusion.max_range_m = recipe.occupancy.far_m;
+  t.fusion.scope = recipe.occupancy.scope;
+  if (t.fusion.scope == occupancy::FusionScope::kWindow) t.fusion.window = recipe.occupancy.window;
+  if (t.fusion.scope == occupancy::FusionScope::kScene) {
+    t.fusion.scene_stride = recipe.occupancy.scene_stride;
+  }
+  t.bins.num_bins = recipe.occupancy.bins;
+  t.bins.near_m = recipe.occupancy.near_m;
+  t.bins.far_m = recipe.occupancy.far_m;
+  t.bins.spacing = recipe.occupancy.spacing;
+  t.bins.traversal = recipe.occupancy.traversal;
+  t.mode = recipe.occupancy.mode;
+  s.encoding = recipe.occupancy.encoding;
+  s.image = recipe.sample.image;
+  s.depth = recipe.sample.depth;
+  s.label_maps = recipe.sample.labels;
+  s.digest = recipe.Digest();
+  s.recipe_name = recipe.name;
+  s.split = recipe.split;
+  std::string error;
+  if (!t.patches.Check(&error)) throw InputError(recipe.file, "patches: " + error);
+  if (t.occupancy && !t.bins.Check(&error)) throw InputError(recipe.file, "occupancy: " + error);
+  return s;
+}
+
+}  // namespace gt::build

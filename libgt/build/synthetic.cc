@@ -1,12 +1,13 @@
-#include "libgt/pairs/synthetic.h"
+#include "libgt/build/synthetic.h"
 
 #include <nlohmann/json.hpp>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/file_read.h"
 #include "libgt/synth/dataset.h"
 
-namespace gt::pairs {
+namespace gt::build {
 
 void EnsureSyntheticDataset(const std::string& root, const SyntheticDatasetOptions& options) {
   const nlohmann::json wanted = {{"generator", "occgt synth"}, {"scenes", options.scenes},
@@ -39,4 +40,4 @@ void EnsureSyntheticDataset(const std::string& root, const SyntheticDatasetOptio
   io::WriteFileAtomic(marker, wanted.dump(2) + "\n");
 }
 
-}  // namespace gt::pairs
+}  // namespace gt::build

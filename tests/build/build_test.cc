@@ -1,8 +1,8 @@
-// The build pipeline against an in-memory ShardOutput: the same samples (bytes) whatever
-// the thread count and task split; re-runs reuse selections and skip complete shards; a
-// key collision after sanitising fails before any shard is written; a dry run writes
-// nothing; counts in the summary add up.
-#include "libgt/pairs/pipeline.h"
+// The build job with the real shard writer: the same bytes (shards, pairs.jsonl) whatever
+// the thread count and task split; re-runs reuse selections and skip complete shards; errors
+// mid-pipeline publish nothing later; a key collision after sanitising is an error naming
+// both scenes; a dry run writes nothing; counts in the summary add up.
+#include "libgt/build/build.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -15,52 +15,45 @@
 #include <string>
 #include <vector>
 
+#include "libgt/build/select.h"
+#include "libgt/build/synthetic.h"
+#include "libgt/build/write.h"
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
-#include "libgt/pairs/synthetic.h"
+#include "libgt/shards/split.h"
+#include "libgt/shards/tar_shard.h"
 #include "tests/support/test_support.h"
 
-namespace gt::pairs {
+namespace gt::build {
 namespace {
 
 namespace fs = std::filesystem;
 
-// Stores shards in memory; keys are "<scene>/<f0>_<f1>" (or one constant key on request).
-class MemoryOutput : public ShardOutput {
- public:
-  bool constant_key = false;
-  int64_t fail_shard = -1;  // WriteShard of this shard throws InputError
-  std::vector<int64_t> plan;
-  std::map<int64_t, std::vector<EncodedSample>> shards;
-  int64_t writes = 0;
-  bool finished = false;
-  // Guards shards and writes while RunBuild runs (shared: the tests copy outputs).
-  std::shared_ptr<std::mutex> mutex = std::make_shared<std::mutex>();
-
-  std::string SampleKey(const std::string& scene, const std::string& f0,
-                        const std::string& f1) const override {
-    return constant_key ? "same/key" : scene + "/" + f0 + "_" + f1;
-  }
-  void WritePlan(const std::vector<int64_t>& sizes) override { plan = sizes; }
-  // WriteShard runs on RunBuild's writer thread, concurrently with IsShardComplete.
-  bool IsShardComplete(int64_t s) const override {
-    std::lock_guard<std::mutex> lock(*mutex);
-    return shards.count(s) > 0;
-  }
-  int64_t WriteShard(int64_t s, const std::vector<EncodedSample>& samples) override {
-    if (s == fail_shard) throw InputError("shard " + std::to_string(s), "disk full (test)");
-    std::lock_guard<std::mutex> lock(*mutex);
-    ++writes;
-    shards[s] = samples;
-    int64_t bytes = 0;
-    for (const auto& x : samples) bytes += x.bytes;
-    return bytes;
-  }
-  void Finish() override { finished = true; }
-  void ExportLoftr(const std::string&, const std::vector<LoftrRow>&,
-                   const std::map<std::string, std::array<double, 9>>&) override {}
+// A split as written on disk by RunBuild (the real shard writer).
+struct Written {
+  std::vector<int64_t> plan;                              // shard sizes (parts/<split>.plan.json)
+  std::map<int64_t, std::vector<shards::Sample>> shards;  // complete shards only
+  std::string bytes;     // every complete shard's tar bytes in order, then pairs.jsonl
+  bool indexed = false;  // index.json published
 };
+
+Written Read(const std::string& dir, const std::string& split = "small") {
+  Written w;
+  if (io::FileExists(shards::PlanPath(dir, split))) {
+    w.plan = shards::ReadPlan(dir, split).shard_nsamples;
+  }
+  for (int64_t s = 0; s < static_cast<int64_t>(w.plan.size()); ++s) {
+    if (!shards::IsShardComplete(dir, split, s)) continue;
+    const std::string path = shards::ShardPath(dir, split, s);
+    w.shards[s] = shards::ReadShardSamples(path);
+    w.bytes += io::ReadFileBytes(path);
+  }
+  w.indexed = io::FileExists(dir + "/index.json");
+  if (w.indexed) w.bytes += io::ReadFileBytes(dir + "/pairs.jsonl");
+  return w;
+}
 
 Recipe SmallRecipe(const std::string& data_root) {
   const std::string yaml = R"(
@@ -98,30 +91,18 @@ std::string Dataset() {
   return root;
 }
 
-std::string Bytes(const MemoryOutput& out) {
-  std::string all;
-  for (const auto& [s, samples] : out.shards) {
-    for (const auto& x : samples) {
-      all += x.key + "\n";
-      for (const auto& [name, bytes] : x.fields) all += name + ":" + bytes;
-      all += x.pair_line.dump();
-    }
-  }
-  return all;
-}
-
 TEST(Pipeline, SameSamplesOnAnyThreadCountAndTaskSplit) {
   const Recipe r = SmallRecipe(Dataset());
-  MemoryOutput one;
   BuildOptions o;
   o.out_dir = test::ScratchDir("pipeline_one");
   nlohmann::json summary;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    summary = RunBuild(r, o, &one, nullptr);
+    summary = RunBuild(r, o, nullptr);
   }
   ASSERT_TRUE(summary["complete"].get<bool>());
-  EXPECT_TRUE(one.finished);
+  const Written one = Read(o.out_dir);
+  EXPECT_TRUE(one.indexed);
   // Quota 5 per scene; the plan is the equal cut of the samples into shards of 3.
   const int64_t n = summary["samples"].get<int64_t>();
   int64_t per_scene_total = 0;
@@ -150,21 +131,22 @@ TEST(Pipeline, SameSamplesOnAnyThreadCountAndTaskSplit) {
   EXPECT_EQ(c["scored"].get<int64_t>(), c["selected"].get<int64_t>() + later);
 
   // Two threads, three tasks (select for all, then write for all), into another folder.
-  MemoryOutput split;
   BuildOptions t;
   t.out_dir = test::ScratchDir("pipeline_tasks");
   t.tasks = 3;
-  for (const char* stage : {"select", "write"}) {
+  int64_t shards_written = 0;
+  for (const Stage stage : {Stage::kSelect, Stage::kWrite}) {
     for (int k = 2; k >= 0; --k) {
       t.task = k;
       t.stage = stage;
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-      RunBuild(r, t, &split, nullptr);
+      shards_written += RunBuild(r, t, nullptr).value("shards_written_this_run", int64_t{0});
     }
   }
-  EXPECT_EQ(Bytes(one), Bytes(split));
-  EXPECT_EQ(split.writes, static_cast<int64_t>(plan.size()));
-  EXPECT_TRUE(split.finished);
+  const Written split = Read(t.out_dir);
+  EXPECT_EQ(one.bytes, split.bytes);
+  EXPECT_EQ(shards_written, static_cast<int64_t>(plan.size()));
+  EXPECT_TRUE(split.indexed);
 }
 
 // One sample per shard: the write pipeline has many shard ends in flight at once (more
@@ -173,32 +155,32 @@ TEST(Pipeline, SameSamplesOnAnyThreadCountAndTaskSplit) {
 TEST(Pipeline, OneSampleShardsSameBytesOnOneAndTwoThreads) {
   Recipe r = SmallRecipe(Dataset());
   r.shards.samples_per_shard = 1;
-  auto run = [&](int threads, int tasks, const std::string& name) {
-    MemoryOutput out;
+  auto run = [&](int threads, int tasks, const std::string& name, int64_t* writes) {
     BuildOptions o;
     o.out_dir = test::ScratchDir(name);
     o.tasks = tasks;
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    for (const char* stage : tasks > 1 ? std::vector<const char*>{"select", "write"}
-                                       : std::vector<const char*>{"all"}) {
+    for (const Stage stage : tasks > 1 ? std::vector<Stage>{Stage::kSelect, Stage::kWrite}
+                                       : std::vector<Stage>{Stage::kAll}) {
       o.stage = stage;
       for (int k = 0; k < tasks; ++k) {
         o.task = k;
-        RunBuild(r, o, &out, nullptr);
+        *writes += RunBuild(r, o, nullptr).value("shards_written_this_run", int64_t{0});
       }
     }
-    return out;
+    return Read(o.out_dir);
   };
-  const MemoryOutput one = run(1, 1, "pipeline_sps1_t1");
-  const MemoryOutput two = run(2, 1, "pipeline_sps1_t2");
-  const MemoryOutput tasks = run(2, 3, "pipeline_sps1_tasks");
+  int64_t w1 = 0, w2 = 0, w3 = 0;
+  const Written one = run(1, 1, "pipeline_sps1_t1", &w1);
+  const Written two = run(2, 1, "pipeline_sps1_t2", &w2);
+  const Written tasks = run(2, 3, "pipeline_sps1_tasks", &w3);
   ASSERT_GE(one.plan.size(), 8u);
-  EXPECT_EQ(one.writes, static_cast<int64_t>(one.plan.size()));
-  EXPECT_EQ(two.writes, static_cast<int64_t>(one.plan.size()));
-  EXPECT_EQ(tasks.writes, static_cast<int64_t>(one.plan.size()));
+  EXPECT_EQ(w1, static_cast<int64_t>(one.plan.size()));
+  EXPECT_EQ(w2, static_cast<int64_t>(one.plan.size()));
+  EXPECT_EQ(w3, static_cast<int64_t>(one.plan.size()));
   for (const auto& [shard, samples] : two.shards) EXPECT_EQ(samples.size(), 1u) << shard;
-  EXPECT_EQ(Bytes(one), Bytes(two));
-  EXPECT_EQ(Bytes(one), Bytes(tasks));
+  EXPECT_EQ(one.bytes, two.bytes);
+  EXPECT_EQ(one.bytes, tasks.bytes);
 }
 
 // An InputError in a sample in the middle of the pipeline (a selected frame gone from the
@@ -207,20 +189,20 @@ TEST(Pipeline, OneSampleShardsSameBytesOnOneAndTwoThreads) {
 // A failing shard write propagates the same way.
 TEST(Pipeline, ErrorsMidPipelinePropagateAndWriteNoLaterShard) {
   const Recipe r = SmallRecipe(Dataset());
-  MemoryOutput good;
+  Written good;
   {
     BuildOptions o;
     o.out_dir = test::ScratchDir("pipeline_err_good");
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-    RunBuild(r, o, &good, nullptr);
+    RunBuild(r, o, nullptr);
+    good = Read(o.out_dir);
   }
   ASSERT_GE(good.plan.size(), 3u);
   // The selection of the first scene, then one of its pairs in shard 1 made stale.
   BuildOptions o;
   o.out_dir = test::ScratchDir("pipeline_err");
-  MemoryOutput out;
-  o.stage = "select";
-  RunBuild(r, o, &out, nullptr);
+  o.stage = Stage::kSelect;
+  RunBuild(r, o, nullptr);
   std::vector<std::string> files;
   for (const auto& e : fs::directory_iterator(o.out_dir + "/selection")) {
     if (e.path().extension() == ".jsonl") files.push_back(e.path().string());
@@ -237,155 +219,146 @@ TEST(Pipeline, ErrorsMidPipelinePropagateAndWriteNoLaterShard) {
   std::string text;
   for (const auto& l : lines) text += l + "\n";
   io::WriteFileAtomic(files[0], text);
-  o.stage = "all";
+  o.stage = Stage::kAll;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
     try {
-      RunBuild(r, o, &out, nullptr);
+      RunBuild(r, o, nullptr);
       FAIL() << "expected InputError";
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find("no longer in the dataset"), std::string::npos)
           << e.what();
     }
   }
+  Written out = Read(o.out_dir);
   EXPECT_LE(out.shards.size(), 1u);  // shard 0 at most (complete before the error)
   for (const auto& [shard, samples] : out.shards) EXPECT_EQ(shard, 0);
-  EXPECT_FALSE(out.finished);
-  // A write error of shard 1 (the selection repaired): also propagates, nothing after.
+  EXPECT_FALSE(out.indexed);
+  // A write error of shard 1 (the selection repaired): also propagates, nothing after. A
+  // folder where the shard's temporary file goes makes its writer fail.
   io::WriteFileAtomic(files[0], original);
-  out.fail_shard = 1;
+  const std::string blocker = shards::ShardPath(o.out_dir, "small", 1) + ".tmp";
+  fs::create_directories(blocker);
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
     try {
-      RunBuild(r, o, &out, nullptr);
+      RunBuild(r, o, nullptr);
       FAIL() << "expected InputError";
     } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("disk full (test)"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(shards::ShardPath(o.out_dir, "small", 1)),
+                std::string::npos)
+          << e.what();
     }
   }
+  out = Read(o.out_dir);
   EXPECT_FALSE(out.shards.count(1));
-  EXPECT_FALSE(out.finished);
+  for (const auto& [shard, samples] : out.shards) EXPECT_LT(shard, 1);
+  EXPECT_FALSE(out.indexed);
   // The re-run completes the split: the same bytes as the run without errors.
-  out.fail_shard = -1;
+  fs::remove_all(blocker);
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-    const nlohmann::json s = RunBuild(r, o, &out, nullptr);
+    const nlohmann::json s = RunBuild(r, o, nullptr);
     EXPECT_TRUE(s["complete"].get<bool>());
   }
-  EXPECT_TRUE(out.finished);
-  EXPECT_EQ(Bytes(out), Bytes(good));
+  out = Read(o.out_dir);
+  EXPECT_TRUE(out.indexed);
+  EXPECT_EQ(out.bytes, good.bytes);
 }
 
 TEST(Pipeline, ReRunReusesSelectionAndSkipsCompleteShards) {
   const Recipe r = SmallRecipe(Dataset());
-  MemoryOutput out;
   BuildOptions o;
   o.out_dir = test::ScratchDir("pipeline_rerun");
-  RunBuild(r, o, &out, nullptr);
-  const std::string first = Bytes(out);
-  out.shards.erase(2);
-  const int64_t writes = out.writes;
-  nlohmann::json s = RunBuild(r, o, &out, nullptr);
-  EXPECT_EQ(out.writes, writes + 1);
+  RunBuild(r, o, nullptr);
+  const Written first = Read(o.out_dir);
+  fs::remove(shards::PartRecordPath(o.out_dir, "small", 2));  // shard 2 not complete now
+  nlohmann::json s = RunBuild(r, o, nullptr);
   EXPECT_EQ(s["shards_written_this_run"], 1);
-  EXPECT_EQ(s["shards_skipped_complete"], static_cast<int64_t>(out.plan.size()) - 1);
+  EXPECT_EQ(s["shards_skipped_complete"], static_cast<int64_t>(first.plan.size()) - 1);
   EXPECT_EQ(s["scenes_reused"], 2);
-  EXPECT_EQ(Bytes(out), first);
+  EXPECT_EQ(Read(o.out_dir).bytes, first.bytes);
+  // A re-run that has nothing to do writes nothing.
+  s = RunBuild(r, o, nullptr);
+  EXPECT_EQ(s["shards_written_this_run"], 0);
+  EXPECT_EQ(s["bytes_written"], 0);
   // Another recipe (options digest) into the same folder is refused.
   Recipe other = r;
   other.seed = 99;
-  EXPECT_THROW(RunBuild(other, o, &out, nullptr), InputError);
+  EXPECT_THROW(RunBuild(other, o, nullptr), InputError);
 }
 
-// recipe.json, the scenes' selections and the plan are published on a background thread
-// (pipeline.cc, OrderedPublisher) but always before the first shard; an error of one of
-// them is the build's error, and no shard is written after it.
-class CheckingOutput : public MemoryOutput {
- public:
-  std::string dir;
-  bool refuse_plan = false;
-  bool metadata_before_first_shard = false;
-  void WritePlan(const std::vector<int64_t>& sizes) override {
-    if (refuse_plan) throw InputError("plan", "refused (test)");
-    MemoryOutput::WritePlan(sizes);
-  }
-  int64_t WriteShard(int64_t s, const std::vector<EncodedSample>& samples) override {
-    {
-      std::lock_guard<std::mutex> lock(*mutex);
-      if (writes == 0) {
-        int selections = 0;
-        for (const auto& e : fs::directory_iterator(dir + "/selection")) {
-          selections += e.path().extension() == ".json";
-        }
-        metadata_before_first_shard =
-            fs::exists(dir + "/recipe.json") && selections == 2 && !plan.empty();
-      }
-    }
-    return MemoryOutput::WriteShard(s, samples);
-  }
-};
-
+// recipe.json, the scenes' selections and the plan are published before the first shard;
+// an error publishing the plan is the build's error, and no shard is written after it.
 TEST(Pipeline, MetadataIsPublishedBeforeTheFirstShardAndItsErrorsPropagate) {
   const Recipe r = SmallRecipe(Dataset());
   for (const int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    CheckingOutput out;
     BuildOptions o;
-    o.out_dir = out.dir = test::ScratchDir("pipeline_metadata_" + std::to_string(threads));
-    const nlohmann::json s = RunBuild(r, o, &out, nullptr);
+    o.out_dir = test::ScratchDir("pipeline_metadata_" + std::to_string(threads));
+    // Stop after the first shard: progress of the write stage fires once it is complete.
+    bool metadata_before_first_shard = false;
+    const nlohmann::json s = RunBuild(r, o, [&](const Progress& p) {
+      if (p.stage != Stage::kWrite || metadata_before_first_shard) return;
+      int selections = 0;
+      for (const auto& e : fs::directory_iterator(o.out_dir + "/selection")) {
+        selections += e.path().extension() == ".json";
+      }
+      metadata_before_first_shard = fs::exists(o.out_dir + "/recipe.json") && selections == 2 &&
+                                    fs::exists(shards::PlanPath(o.out_dir, "small"));
+    });
     EXPECT_TRUE(s["complete"].get<bool>());
-    EXPECT_TRUE(out.metadata_before_first_shard) << threads << " threads";
+    EXPECT_TRUE(metadata_before_first_shard) << threads << " threads";
     EXPECT_GT(s["bytes_written"].get<int64_t>(), 0);
 
-    CheckingOutput refused;
-    refused.refuse_plan = true;
     BuildOptions o2;
-    o2.out_dir = refused.dir = test::ScratchDir("pipeline_plan_refused_" + std::to_string(threads));
+    o2.out_dir = test::ScratchDir("pipeline_plan_refused_" + std::to_string(threads));
+    fs::create_directories(shards::PlanPath(o2.out_dir, "small"));  // a folder: not writable
     try {
-      RunBuild(r, o2, &refused, nullptr);
+      RunBuild(r, o2, nullptr);
       ADD_FAILURE() << "expected InputError";
     } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("refused (test)"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("plan.json"), std::string::npos) << e.what();
     }
-    EXPECT_EQ(refused.writes, 0);
-    EXPECT_TRUE(refused.shards.empty());
+    EXPECT_FALSE(fs::exists(shards::ShardPath(o2.out_dir, "small", 0)));
   }
 }
 
-TEST(Pipeline, KeyCollisionFailsBeforeAnyShard) {
-  const Recipe r = SmallRecipe(Dataset());
-  MemoryOutput out;
-  out.constant_key = true;
-  BuildOptions o;
-  o.out_dir = test::ScratchDir("pipeline_collision");
+TEST(Pipeline, KeyCollisionIsAnErrorNamingBothScenes) {
+  SelectedPair a, b;
+  a.scene = "seq.01";
+  b.scene = "seq_01";
+  a.frame0 = b.frame0 = "000001";
+  a.frame1 = b.frame1 = "000002";
   try {
-    RunBuild(r, o, &out, nullptr);
+    SampleKeys({&a, &b});
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("same key after sanitising"), std::string::npos)
-        << e.what();
+    const std::string m = e.what();
+    EXPECT_NE(m.find("same key after sanitising"), std::string::npos) << m;
+    EXPECT_NE(m.find("seq.01"), std::string::npos) << m;
+    EXPECT_NE(m.find("seq_01"), std::string::npos) << m;
   }
-  EXPECT_EQ(out.writes, 0);
-  EXPECT_TRUE(out.plan.empty());
+  b.frame1 = "000003";
+  EXPECT_EQ(SampleKeys({&a, &b}),
+            (std::vector<std::string>{"seq_01/000001_000002", "seq_01/000001_000003"}));
 }
 
 TEST(Pipeline, DryRunWritesNothing) {
   const Recipe r = SmallRecipe(Dataset());
-  MemoryOutput out;
   BuildOptions o;
   o.out_dir = test::ScratchDir("pipeline_dry") + "/out";
   o.dry_run = true;
-  nlohmann::json s = RunBuild(r, o, &out, nullptr);
-  MemoryOutput real;
+  nlohmann::json s = RunBuild(r, o, nullptr);
   BuildOptions w;
   w.out_dir = test::ScratchDir("pipeline_dry_real");
-  const nlohmann::json written = RunBuild(r, w, &real, nullptr);
+  const nlohmann::json written = RunBuild(r, w, nullptr);
   EXPECT_EQ(s["samples"], written["samples"]);
   EXPECT_EQ(s["shards_planned"], written["shards_planned"]);
   EXPECT_EQ(s["drops"], written["drops"]);
   EXPECT_EQ(s["selected_overlap"], written["selected_overlap"]);
   EXPECT_FALSE(s["complete"].get<bool>());
-  EXPECT_EQ(out.writes, 0);
+  EXPECT_EQ(s["bytes_written"], 0);
   EXPECT_FALSE(fs::exists(o.out_dir));
 }
 
@@ -402,11 +375,14 @@ TEST(Pipeline, SceneFileNamesAreSafeAndOptionsChecked) {
   o.task = 2;
   EXPECT_FALSE(o.Check(&error));
   o.task = 1;
-  o.stage = "merge";
+  EXPECT_TRUE(o.Check(&error));
+  o.depth_cache_mb = 0;
   EXPECT_FALSE(o.Check(&error));
+  EXPECT_EQ(ParseStage("write", "--stage"), Stage::kWrite);
+  EXPECT_THROW(ParseStage("merge", "--stage"), InputError);
 }
 
-int64_t KnownBits(const MemoryOutput& out) {
+int64_t KnownBits(const Written& out) {
   int64_t bits = 0;
   for (const auto& [shard, samples] : out.shards) {
     for (const auto& x : samples) {
@@ -425,30 +401,31 @@ int64_t KnownBits(const MemoryOutput& out) {
 // pair) see more of the room than the pair alone; two_point marks few bins.
 TEST(Pipeline, OccupancyScopesAndModes) {
   Recipe r = SmallRecipe(Dataset());
-  auto run = [&](const std::string& scope, const std::string& mode, const std::string& name) {
+  using occupancy::FusionScope;
+  using occupancy::OccupancyMode;
+  auto run = [&](FusionScope scope, OccupancyMode mode, const std::string& name) {
     Recipe x = r;
     x.occupancy.scope = scope;
     x.occupancy.mode = mode;
     x.occupancy.window = 2;
     x.occupancy.scene_stride = 2;
-    MemoryOutput out;
     BuildOptions o;
     o.out_dir = test::ScratchDir("pipeline_scope_" + name);
-    RunBuild(x, o, &out, nullptr);
-    return out;
+    RunBuild(x, o, nullptr);
+    return Read(o.out_dir);
   };
-  const MemoryOutput pair = run("pair", "octomap", "pair");
-  const MemoryOutput window = run("window", "octomap", "window");
-  const MemoryOutput scene = run("scene", "octomap", "scene");
-  const MemoryOutput two = run("pair", "two_point", "two");
+  const Written pair = run(FusionScope::kPair, OccupancyMode::kOctomap, "pair");
+  const Written window = run(FusionScope::kWindow, OccupancyMode::kOctomap, "window");
+  const Written scene = run(FusionScope::kScene, OccupancyMode::kOctomap, "scene");
+  const Written two = run(FusionScope::kPair, OccupancyMode::kTwoPoint, "two");
   const int64_t k_pair = KnownBits(pair);
   EXPECT_GT(k_pair, 0);
   EXPECT_GE(KnownBits(window), k_pair);
   EXPECT_GT(KnownBits(scene), 0);
-  EXPECT_NE(Bytes(scene), Bytes(pair));
+  EXPECT_NE(scene.bytes, pair.bytes);
   EXPECT_GT(KnownBits(two), 0);
-  EXPECT_NE(Bytes(two), Bytes(pair));
+  EXPECT_NE(two.bytes, pair.bytes);
 }
 
 }  // namespace
-}  // namespace gt::pairs
+}  // namespace gt::build

@@ -8,10 +8,10 @@
 
 #include <string>
 
-#include "libgt/pairs/recipe.h"
+#include "libgt/build/recipe.h"
 
-namespace gt::pairs {
+namespace gt::build {
 
 void EnsureSyntheticDataset(const std::string& root, const SyntheticDatasetOptions& options);
 
-}  // namespace gt::pairs
+}  // namespace gt::build

@@ -1,0 +1,276 @@
+#include "libgt/build/select.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <set>
+
+#include "libgt/core/error.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/file_read.h"
+#include "libgt/io/npy.h"
+#include "libgt/truth/pair_files.h"
+#include "libgt/truth/working_frame.h"
+
+namespace gt::build {
+namespace {
+
+using nlohmann::json;
+
+std::vector<int64_t> IntegerValues(const io::NpyArray& a, const std::string& what) {
+  std::vector<int64_t> out(static_cast<size_t>(a.NumElements()));
+  auto copy = [&](auto tag) {
+    using T = decltype(tag);
+    const T* p = a.As<T>(what);
+    for (size_t i = 0; i < out.size(); ++i) out[i] = static_cast<int64_t>(p[i]);
+  };
+  if (a.descr == "<u2")
+    copy(uint16_t{});
+  else if (a.descr == "<i4")
+    copy(int32_t{});
+  else if (a.descr == "<i8")
+    copy(int64_t{});
+  else if (a.descr == "<u4")
+    copy(uint32_t{});
+  else if (a.descr == "<u8")
+    copy(uint64_t{});
+  else
+    throw InputError(what, "dtype '" + a.descr + "', expected an integer array");
+  return out;
+}
+
+}  // namespace
+
+ImportList ReadImportList(const std::string& path) {
+  const auto members = io::ReadNpz(path);
+  auto it = members.find("name");
+  if (it == members.end())
+    throw InputError(path, "no member 'name' (expected LoFTR's [N, 4] pair names)");
+  const io::NpyArray& name = it->second;
+  if (name.shape.size() != 2 || name.shape[1] != 4) {
+    throw InputError(path + ":name", "expected shape [N, 4] (scene, sub-scene, frame0, frame1)");
+  }
+  const std::vector<int64_t> v = IntegerValues(name, path + ":name");
+  ImportList list;
+  for (int64_t r = 0; r < name.shape[0]; ++r) {
+    char scene[64];
+    std::snprintf(scene, sizeof(scene), "scene%04lld_%02lld", static_cast<long long>(v[r * 4]),
+                  static_cast<long long>(v[r * 4 + 1]));
+    list[scene].emplace_back(v[r * 4 + 2], v[r * 4 + 3]);
+  }
+  return list;
+}
+
+std::vector<std::string> ResolveScenes(const Recipe& r, const io::DatasetReader& reader,
+                                       const ImportList* imports) {
+  std::vector<std::string> scenes;
+  if (!r.dataset.scenes.empty()) {
+    scenes = r.dataset.scenes;
+  } else if (!r.dataset.split_file.empty()) {
+    for (std::string line : io::ReadLines(r.dataset.split_file)) {
+      while (!line.empty() && std::isspace(static_cast<unsigned char>(line.back())))
+        line.pop_back();
+      if (line.empty() || line[0] == '#') continue;
+      scenes.push_back(line);
+    }
+    if (scenes.empty())
+      throw InputError(r.file, "dataset.split_file: expected at least one scene name");
+  } else if (imports) {
+    for (const auto& [scene, pairs] : *imports) scenes.push_back(scene);
+  }
+  const std::vector<std::string> available = reader.ListScenes(r.dataset.root);
+  if (scenes.empty()) scenes = available;
+  std::sort(scenes.begin(), scenes.end());
+  scenes.erase(std::unique(scenes.begin(), scenes.end()), scenes.end());
+  const std::set<std::string> have(available.begin(), available.end());
+  for (const auto& s : scenes) {
+    if (!have.count(s)) {
+      throw InputError(r.file, "dataset: scene '" + s + "' not found under " + r.dataset.root);
+    }
+  }
+  if (scenes.empty())
+    throw InputError(r.file, "dataset.root: no scenes found under " + r.dataset.root);
+  std::map<std::string, std::string> files;
+  for (const auto& s : scenes) {
+    auto [it, inserted] = files.emplace(SceneFileName(s), s);
+    if (!inserted) {
+      throw InputError(r.file, "dataset: scenes '" + it->second + "' and '" + s +
+                                   "' have the same file name after sanitising");
+    }
+  }
+  return scenes;
+}
+
+namespace {
+
+json PairJson(const SelectedPair& p) {
+  return {{"scene", p.scene},
+          {"frame0", p.frame0},
+          {"frame1", p.frame1},
+          {"number0", p.number0},
+          {"number1", p.number1},
+          {"score_metrics",
+           {{"01", truth::MetricsJson(p.score01)}, {"10", truth::MetricsJson(p.score10)}}}};
+}
+
+SelectedPair PairFromJson(const json& j) {
+  SelectedPair p;
+  p.scene = j.at("scene").get<std::string>();
+  p.frame0 = j.at("frame0").get<std::string>();
+  p.frame1 = j.at("frame1").get<std::string>();
+  p.number0 = j.at("number0").get<int64_t>();
+  p.number1 = j.at("number1").get<int64_t>();
+  p.score01 = truth::MetricsFromJson(j.at("score_metrics").at("01"));
+  p.score10 = truth::MetricsFromJson(j.at("score_metrics").at("10"));
+  return p;
+}
+
+}  // namespace
+
+SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCache* cache,
+                           const ImportList* imports) {
+  using namespace pairs;  // NOLINT(google-build-using-namespace): the stage's vocabulary
+  const std::string& scene_name = scene.name;
+  std::vector<Camera> cams;
+  cams.reserve(scene.frames.size());
+  for (const Frame& f : scene.frames) cams.push_back(truth::WorkingCamera(f, {r.width, r.height}));
+  const LabelOptions labels = RecipeLabelOptions(r, scene);
+  SceneSelection out;
+  out.scene = scene_name;
+  DropCounts drops;
+  std::vector<CandidatePair> candidates, pruned;
+  int64_t frames_kept = 0;
+  if (imports) {
+    std::map<int64_t, size_t> by_number;
+    for (size_t i = 0; i < scene.frames.size(); ++i) by_number[scene.frames[i].number] = i;
+    auto it = imports->find(scene_name);
+    if (it != imports->end()) {
+      for (const auto& [n0, n1] : it->second) {
+        auto a = by_number.find(n0), b = by_number.find(n1);
+        if (a == by_number.end() || b == by_number.end()) {
+          ++drops["import.missing_frame"];
+        } else if (!scene.frames[a->second].usable || !scene.frames[b->second].usable) {
+          ++drops["import.unusable_frame"];
+        } else {
+          candidates.push_back({a->second, b->second});
+        }
+      }
+    }
+    pruned = candidates;
+    frames_kept = static_cast<int64_t>(scene.NumUsable());
+  } else {
+    FrameScanOptions scan;
+    scan.frame_stride = r.dataset.frame_stride;
+    scan.min_valid_depth_fraction = r.dataset.min_valid_depth_fraction;
+    scan.min_depth_m = labels.min_depth_m;
+    scan.max_depth_m = labels.max_depth_m;
+    const ScanResult scanned = ScanFrames(scene, scan, cache);
+    AddCounts(scanned.drops, &drops);
+    frames_kept = static_cast<int64_t>(scanned.kept.size());
+    candidates = GenerateCandidates(scanned.kept, r.selection.max_frame_gap);
+    pruned = PruneCandidates(scene, cams, candidates, scanned.median_depth_m, r.selection.pruning,
+                             &drops);
+  }
+  // Imported pairs may list (i0 > i1); scoring and labels keep the file's order.
+  const std::vector<ScoredPair> scored =
+      ScorePairs(scene, cams, pruned, labels, r.selection.score_stride, cache, &drops);
+  std::vector<size_t> chosen;
+  if (imports) {
+    for (size_t k = 0; k < scored.size(); ++k) chosen.push_back(k);
+  } else {
+    chosen = FilterAndSample(scored, r.selection, SceneSeed(r.seed, scene_name), &drops);
+  }
+  for (size_t k : chosen) {
+    const ScoredPair& s = scored[k];
+    SelectedPair p;
+    p.scene = scene_name;
+    p.frame0 = scene.frames[s.pair.i0].id;
+    p.frame1 = scene.frames[s.pair.i1].id;
+    p.number0 = scene.frames[s.pair.i0].number;
+    p.number1 = scene.frames[s.pair.i1].number;
+    p.score01 = s.m01;
+    p.score10 = s.m10;
+    out.pairs.push_back(p);
+  }
+  out.stats = {{"scene", scene_name},
+               {"frames_total", static_cast<int64_t>(scene.frames.size())},
+               {"frames_kept", frames_kept},
+               {"candidates", static_cast<int64_t>(candidates.size())},
+               {"after_pruning", static_cast<int64_t>(pruned.size())},
+               {"scored", static_cast<int64_t>(scored.size())},
+               {"selected", static_cast<int64_t>(out.pairs.size())},
+               {"drops", drops},
+               {"options_digest", r.Digest()}};
+  return out;
+}
+
+namespace {
+
+std::string SelectionLinesPath(const std::string& out_dir, const std::string& scene) {
+  return SelectionDir(out_dir) + "/" + SceneFileName(scene) + ".jsonl";
+}
+std::string SelectionStatsPath(const std::string& out_dir, const std::string& scene) {
+  return SelectionDir(out_dir) + "/" + SceneFileName(scene) + ".json";
+}
+
+}  // namespace
+
+std::string SelectionDir(const std::string& out_dir) { return out_dir + "/selection"; }
+
+int64_t WriteSelection(const std::string& o, const SceneSelection& s) {
+  std::string lines;
+  for (const auto& p : s.pairs) lines += PairJson(p).dump() + "\n";
+  const std::string stats = s.stats.dump(2) + "\n";
+  // Written at once; the stats, the scene's completion marker, are published second.
+  io::WriteFilesAtomic(
+      {{SelectionLinesPath(o, s.scene), lines}, {SelectionStatsPath(o, s.scene), stats}});
+  return static_cast<int64_t>(lines.size() + stats.size());
+}
+
+// Reads a completed selection; nullopt when the scene is not complete.
+std::optional<SceneSelection> ReadSelection(const std::string& o, const std::string& scene,
+                                            const std::string& digest) {
+  const std::string stats_path = SelectionStatsPath(o, scene);
+  if (!io::FileExists(stats_path)) return std::nullopt;
+  SceneSelection s;
+  s.scene = scene;
+  try {
+    s.stats = json::parse(io::ReadFileBytes(stats_path));
+  } catch (const json::exception& e) {
+    throw InputError(stats_path, std::string("not valid JSON: ") + e.what());
+  }
+  if (s.stats.value("options_digest", "") != digest) {
+    throw InputError(stats_path, "was selected with other options (digest " +
+                                     s.stats.value("options_digest", "?") + ", recipe " + digest +
+                                     "); use a fresh --out folder");
+  }
+  const std::string lines_path = SelectionLinesPath(o, scene);
+  for (const std::string& line : io::ReadLines(lines_path)) {
+    if (line.empty()) continue;
+    try {
+      s.pairs.push_back(PairFromJson(json::parse(line)));
+    } catch (const json::exception& e) {
+      throw InputError(lines_path, std::string("bad selection line: ") + e.what());
+    }
+  }
+  if (static_cast<int64_t>(s.pairs.size()) != s.stats.value("selected", int64_t{-1})) {
+    throw InputError(lines_path, "line count differs from " + stats_path);
+  }
+  return s;
+}
+
+std::string SceneFileName(const std::string& scene) {
+  std::string out;
+  for (unsigned char c : scene) {
+    if (c == '/') {
+      out += "__";
+    } else if (std::isalnum(c) || c == '-' || c == '_') {
+      out += static_cast<char>(c);
+    } else {
+      out += '_';
+    }
+  }
+  return out.empty() ? "_" : out;
+}
+
+}  // namespace gt::build

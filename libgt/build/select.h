@@ -1,0 +1,59 @@
+// The select stage of `occgt build` (docs/USER_GUIDE.md, SCALE.md): per scene, frame scan →
+// candidates (or imported pairs) → pruning → scoring → filters → seeded sampling
+// (libgt/pairs/selection.h), recorded under the output folder DIR:
+//   DIR/selection/<scene>.jsonl   selected pairs in selection order, one JSON object each
+//                                 {scene, frame0, frame1, number0, number1, score_metrics}
+//   DIR/selection/<scene>.json    per-scene counts and drops; written last, it is the
+//                                 scene's completion marker (a re-run skips the scene)
+// (<scene> is SceneFileName(scene name); two scenes with the same file name are an error.)
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "libgt/build/recipe.h"
+#include "libgt/build/sample.h"
+#include "libgt/io/reader.h"
+#include "libgt/pairs/selection.h"
+
+namespace gt::build {
+
+// Imported pairs (LoFTR test.npz `name` [N, 4]): scene → (frame number 0, frame number 1)
+// in file order.
+using ImportList = std::map<std::string, std::vector<std::pair<int64_t, int64_t>>>;
+ImportList ReadImportList(const std::string& path);
+
+// The recipe's scenes (dataset.scenes, the split file, the imported scenes or every scene
+// under the root), sorted, each checked to exist; throws InputError naming the recipe.
+std::vector<std::string> ResolveScenes(const Recipe& recipe, const io::DatasetReader& reader,
+                                       const ImportList* imports);
+
+// Scene file name under DIR/selection: every byte outside [A-Za-z0-9_-] replaced by '_'
+// and '/' by "__".
+std::string SceneFileName(const std::string& scene);
+
+struct SceneSelection {
+  std::string scene;
+  std::vector<SelectedPair> pairs;
+  nlohmann::json stats;  // counts, drops, options_digest
+};
+
+// Selects the pairs of one scene (decoding depth through `cache`).
+SceneSelection SelectScene(const Recipe& recipe, const Scene& scene, pairs::DepthCache* cache,
+                           const ImportList* imports);
+
+std::string SelectionDir(const std::string& out_dir);
+// Publishes the scene's lines and then its stats (the completion marker); returns the bytes
+// written.
+int64_t WriteSelection(const std::string& out_dir, const SceneSelection& selection);
+// A completed selection; nullopt when the scene is not complete. A selection made with
+// another options digest is an InputError (use a fresh --out).
+std::optional<SceneSelection> ReadSelection(const std::string& out_dir, const std::string& scene,
+                                            const std::string& digest);
+
+}  // namespace gt::build

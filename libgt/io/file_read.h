@@ -1,0 +1,27 @@
+// Reading files: whole-file reads with errors that name the file, text lines, and a
+// read-ahead hint for the frame scan.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace gt::io {
+
+// Whole file as bytes; throws InputError("<path>", "cannot open ...") when unreadable.
+std::string ReadFileBytes(const std::string& path);
+bool FileExists(const std::string& path);
+
+// Lines of a text file (without '\n', '\r' stripped).
+std::vector<std::string> ReadLines(const std::string& path);
+// The same split of text already in memory.
+std::vector<std::string> SplitLines(std::string_view text);
+
+// Asks the kernel to start reading the whole file into the page cache in the background
+// (posix_fadvise POSIX_FADV_WILLNEED) and returns without waiting, so that a later read of
+// it does not stall a compute thread on the disk (the frame scan reads ahead with it). A
+// hint only: a file that cannot be opened is skipped (its reader reports the error when it
+// reads it), and a cached file costs an open/close.
+void PrefetchFile(const std::string& path);
+
+}  // namespace gt::io

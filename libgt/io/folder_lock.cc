@@ -1,0 +1,32 @@
+#include "libgt/io/folder_lock.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+
+#include "libgt/core/error.h"
+
+namespace gt::io {
+
+FolderLock::FolderLock(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError(dir, "cannot create the output folder: " + ec.message());
+  const std::string path = dir + "/.lock";
+  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw InputError(path, std::string("cannot open: ") + std::strerror(errno));
+  while (::flock(fd_, LOCK_EX) != 0) {
+    if (errno == EINTR) continue;
+    const int e = errno;
+    ::close(fd_);
+    throw InputError(path, std::string("cannot lock: ") + std::strerror(e));
+  }
+}
+
+FolderLock::~FolderLock() { ::close(fd_); }  // releases the lock
+
+}  // namespace gt::io

@@ -1,0 +1,67 @@
+// JSON records and output folders of one pair's ground truth: the metrics object used by
+// every output (sample .json, pairs.jsonl, selection lines, meta.json), and the folders
+// that `occgt pair` and `occgt occupancy` write (docs/GROUND_TRUTH.md, docs/OCCUPANCY.md).
+//
+// `occgt pair` folder: label01.npy, label10.npy (uint8 [H, W]), matches.npy (int32 [M, 2]),
+// match_type.npy (uint8 [M]), match_xy.npy (float32 [M, 2]), cells0.npy, cells1.npy (uint8
+// [H/s, W/s]) and meta.json (schemas/pair_meta.schema.json).
+// `occgt occupancy` folder: occ0.npy, known0.npy, occ1.npy, known1.npy (uint64 [H/2, W/2]),
+// with `dense` also occupancy0.npy, occupancy1.npy (uint8 [D, H/2, W/2]: 0 free, 1 occupied,
+// 255 unknown) and occupancy.json (schemas/occupancy.schema.json).
+// Every file is published atomically (io/atomic_file.h).
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "libgt/geometry/labels.h"
+#include "libgt/truth/pair_truth.h"
+
+namespace gt::truth {
+
+// {sampled, valid, counts: {NO_DEPTH: n, ...}, overlap, consistent_overlap, occlusion_ratio,
+//  occlusion_ratio_visible} (GROUND_TRUTH.md §3).
+template <typename Json = nlohmann::json>
+Json MetricsJson(const DirectionMetrics& m) {
+  Json counts = Json::object();
+  for (int k = 0; k < kNumPixelLabels; ++k) {
+    counts[PixelLabelName(static_cast<PixelLabel>(k))] = m.counts[k];
+  }
+  return Json{{"sampled", m.sampled},
+              {"valid", m.valid},
+              {"counts", counts},
+              {"overlap", m.overlap},
+              {"consistent_overlap", m.consistent_overlap},
+              {"occlusion_ratio", m.occlusion_ratio},
+              {"occlusion_ratio_visible", m.occlusion_ratio_visible}};
+}
+// Inverse of MetricsJson (the ratios recomputed from the counts); throws
+// nlohmann::json::exception on a missing field.
+DirectionMetrics MetricsFromJson(const nlohmann::json& j);
+
+// Rows of a matrix as nested arrays.
+nlohmann::json MatrixJson(const Eigen::MatrixXd& m);
+
+// Where a pair came from, for the records.
+struct PairSource {
+  std::string format;     // dataset format
+  std::string scene;      // scene name
+  std::string id0, id1;   // frame ids
+  std::string preset;     // label preset name the options started from
+  Resolution resolution;  // working resolution
+};
+
+// Writes the `occgt pair` folder. score_stride: the metrics of meta.json on every n-th
+// pixel (1 = the labels' own metrics).
+void WritePairFolder(const std::string& dir, const PairSource& source, const WorkingFrame& frame0,
+                     const WorkingFrame& frame1, const PairTruthOptions& options,
+                     const PairTruth& truth, int score_stride);
+
+// Writes the `occgt occupancy` folder. scope: the fused map and its frames for mode octomap
+// (null for two_point).
+void WriteOccupancyFolder(const std::string& dir, const PairSource& source,
+                          const PairTruthOptions& options, const occupancy::PairOccupancy& volumes,
+                          const ScopeMap* scope, bool dense);
+
+}  // namespace gt::truth
