@@ -2,14 +2,39 @@
 #include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <opencv2/core/utility.hpp>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "apps/commands.h"
 #include "gt/core/version.h"
 #include "libgt/core/error.h"
 
+namespace {
+
+// glibc's defaults hand every freed block of 128 KiB and more (depth maps, label maps,
+// occupancy volumes, encoded tar members) back to the kernel, and the next sample faults
+// fresh zeroed pages in again. Kept in the process instead (never more than the process's
+// own peak, which the depth cache bounds), a --threads 1 build on one CPU of the
+// tartanair-sample bench variant spends half the system time and ~8 % less wall time
+// (docs/PERFORMANCE.md, "Redesign check"). A user's own GLIBC_TUNABLES malloc settings win.
+void KeepFreedMemory() {
+#if defined(__GLIBC__)
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  if (tunables != nullptr && std::strstr(tunables, "glibc.malloc.") != nullptr) return;
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest (half a 64 MiB arena heap)
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
+#endif
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  KeepFreedMemory();
   // occgt runs its own work in parallel (TBB tasks over scenes, samples and a sample's
   // parts, --threads); OpenCV's loops (cv::resize, colour conversions) stay sequential
   // inside them instead of opening a second level of parallelism in a task arena of
