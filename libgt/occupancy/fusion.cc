@@ -5,9 +5,9 @@
 // PCL's filters are compiled here from its template headers (VoxelGrid and
 // StatisticalOutlierRemoval of PointXYZ, with their k-d tree search) instead of being
 // loaded from libpcl_filters: that library and its dependencies (sample consensus,
-// search, k-d tree, octree) hold ~56000 symbol relocations, ~27 ms of dynamic loading at
-// every start of occgt (docs/PERFORMANCE.md, "Threads and tasks"). Only libpcl_common
-// is linked.
+// search, k-d tree, octree) hold ~56000 symbol relocations, dynamic loading at every start
+// of occgt (the start-up row of docs/PERFORMANCE.md, "Threads and tasks"). Only
+// libpcl_common is linked.
 #define PCL_NO_PRECOMPILE
 #include <octomap/OcTree.h>
 #include <pcl/filters/statistical_outlier_removal.h>
