@@ -1,13 +1,22 @@
 #include "libgt/shards/split.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <tbb/parallel_for.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <exception>
 #include <filesystem>
+#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <string_view>
+#include <unordered_map>
 #include <utility>
 #include <valijson/adapters/nlohmann_json_adapter.hpp>
 #include <valijson/schema.hpp>
@@ -16,7 +25,9 @@
 #include <valijson/validator.hpp>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/file_read.h"
+#include "libgt/io/md5.h"
 #include "libgt/io/npy.h"
 
 namespace gt::shards {
@@ -50,6 +61,12 @@ std::string StringMember(const json& obj, const std::string& name, const std::st
   const json& v = Member(obj, name, path);
   if (!v.is_string()) throw InputError(path, "field \"" + name + "\": expected a string");
   return v.get<std::string>();
+}
+
+bool IsMd5Hex(const std::string& s) {
+  return s.size() == 32 && std::all_of(s.begin(), s.end(), [](char c) {
+           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+         });
 }
 
 int64_t FileSize(const std::string& path) {
@@ -266,7 +283,11 @@ std::vector<std::string> ListPlannedSplits(const std::string& dir) {
   return splits;
 }
 
-PartRecord ReadPartRecord(const std::string& dir, const std::string& split, int64_t shard_index) {
+namespace {
+
+// ReadPartRecord, also returning the scene of every pair line (for the merge summary).
+PartRecord ReadPartRecordAndScenes(const std::string& dir, const std::string& split,
+                                   int64_t shard_index, std::vector<std::string>* scenes) {
   const std::string path = PartRecordPath(dir, split, shard_index);
   const json doc = ParseJsonFile(path);
   PartRecord r;
@@ -281,6 +302,9 @@ PartRecord ReadPartRecord(const std::string& dir, const std::string& split, int6
   r.info.path = ShardPath(dir, split, shard_index);
   r.info.nsamples = IntMember(doc, "nsamples", path);
   r.info.md5sum = StringMember(doc, "md5sum", path);
+  if (!IsMd5Hex(r.info.md5sum)) {
+    throw InputError(path, "field \"md5sum\": expected 32 lower-case hex digits");
+  }
   r.info.filesize = IntMember(doc, "filesize", path);
   const json& keys = Member(doc, "keys", path);
   const json& pairs = Member(doc, "pairs", path);
@@ -289,15 +313,32 @@ PartRecord ReadPartRecord(const std::string& dir, const std::string& split, int6
       static_cast<int64_t>(pairs.size()) != r.info.nsamples) {
     throw InputError(path, "fields \"keys\" and \"pairs\": expected nsamples entries each");
   }
+  r.keys.reserve(keys.size());
+  r.pair_lines.reserve(keys.size());
+  if (scenes != nullptr) scenes->reserve(keys.size());
   for (size_t i = 0; i < keys.size(); ++i) {
     if (!keys[i].is_string() || !pairs[i].is_object()) {
       throw InputError(path, "keys[" + std::to_string(i) + "]/pairs[" + std::to_string(i) +
                                  "]: expected a string and an object");
     }
-    r.keys.push_back(keys[i].get<std::string>());
+    const std::string& key = keys[i].get_ref<const std::string&>();
+    const auto k = pairs[i].find("key");
+    const auto u = pairs[i].find("shard");
+    if (k == pairs[i].end() || *k != key || u == pairs[i].end() || *u != r.url) {
+      throw InputError(path, "pairs[" + std::to_string(i) + "]: \"key\"/\"shard\" do not name " +
+                                 key + " in " + r.url);
+    }
+    if (scenes != nullptr) scenes->push_back(SceneOfLine(pairs[i], key));
+    r.keys.push_back(key);
     r.pair_lines.push_back(pairs[i].dump());
   }
   return r;
+}
+
+}  // namespace
+
+PartRecord ReadPartRecord(const std::string& dir, const std::string& split, int64_t shard_index) {
+  return ReadPartRecordAndScenes(dir, split, shard_index, nullptr);
 }
 
 SplitShardWriter::SplitShardWriter(const std::string& dir, const std::string& split,
@@ -318,11 +359,10 @@ void SplitShardWriter::Add(const Sample& sample, const std::string& pair_line_js
   Record(sample.key, &line);
 }
 
-void SplitShardWriter::Add(Sample&& sample, const std::string& pair_line_json,
-                           TarShardWriter::Digest digest) {
+void SplitShardWriter::Add(Sample&& sample, const std::string& pair_line_json) {
   json line = ParsePairLine(sample.key, pair_line_json);
   const std::string key = sample.key;
-  tar_->Add(std::move(sample), digest);
+  tar_->Add(std::move(sample));
   Record(key, &line);
 }
 
@@ -423,6 +463,133 @@ bool MergeOptions::Check(std::string* error) const {
   return true;
 }
 
+namespace {
+
+// The full check of one recorded shard (MergeOptions::verify): MD5 of the file against
+// the record, then the tar read back (member names, .npy headers, sample JSON) and its
+// keys against the record's. Returns "" or the shard's problem (one line).
+std::string VerifyShard(const std::string& shard, const PartRecord& r,
+                        const std::string& record_path, const SchemaChecker* sample_schema) {
+  try {
+    const std::string md5 = io::Md5HexOfFile(shard);
+    if (md5 != r.info.md5sum) return "md5 " + md5 + " differs from the recorded " + r.info.md5sum;
+  } catch (const InputError& e) {
+    return std::string("unreadable: ") + e.what();
+  }
+  std::vector<std::string> keys;
+  std::vector<std::string> problems;
+  try {
+    problems = CheckTarContents(shard, sample_schema, &keys);
+  } catch (const InputError& e) {
+    return std::string("unreadable: ") + e.what();
+  }
+  if (!problems.empty()) return FirstLines(problems);
+  if (keys != r.keys) return "sample keys in the tar differ from " + record_path;
+  return "";
+}
+
+// One shard of the plan as the trusted merge reads it: its part record (parsed, its pair
+// lines naming their keys and shard, against `line_schema` when given), the stat of its
+// tar, the plan's sample count. `error` holds the shard's first problem (an InputError
+// naming the shard); needs no other shard, so shards load in parallel.
+struct LoadedShard {
+  PartRecord record;
+  std::vector<std::string> scenes;  // scene of every pair line
+  std::exception_ptr error;
+};
+
+LoadedShard LoadShard(const std::string& dir, const std::string& split, int64_t idx,
+                      int64_t planned_nsamples, const SchemaChecker* line_schema) {
+  LoadedShard out;
+  try {
+    const std::string shard = ShardPath(dir, split, idx);
+    const std::string record_path = PartRecordPath(dir, split, idx);
+    if (!io::FileExists(record_path)) {
+      throw InputError(
+          shard, "missing part record " + record_path + " (shard not written or not finished)");
+    }
+    try {
+      out.record = ReadPartRecordAndScenes(dir, split, idx, &out.scenes);
+    } catch (const InputError& e) {
+      throw InputError(shard, std::string("bad part record: ") + e.what());
+    }
+    const PartRecord& r = out.record;
+    const int64_t size = FileSize(shard);
+    if (size < 0) throw InputError(shard, "missing shard");
+    if (size != r.info.filesize) {
+      throw InputError(shard, "size " + std::to_string(size) + " differs from the recorded " +
+                                  std::to_string(r.info.filesize));
+    }
+    if (r.info.nsamples != planned_nsamples) {
+      throw InputError(shard, "holds " + std::to_string(r.info.nsamples) +
+                                  " samples, the plan says " + std::to_string(planned_nsamples));
+    }
+    for (size_t i = 0; i < r.keys.size(); ++i) {
+      if (std::string e = CheckSampleKey(r.keys[i]); !e.empty()) {
+        throw InputError(shard, "bad part record: keys[" + std::to_string(i) + "]: " + e);
+      }
+      if (line_schema != nullptr) {
+        const auto p = line_schema->Check(json::parse(r.pair_lines[i]));
+        if (!p.empty()) {
+          throw InputError(record_path, "pairs[" + std::to_string(i) +
+                                            "]: pairs_line.schema.json: " + FirstLines(p));
+        }
+      }
+    }
+  } catch (const InputError&) {
+    out.error = std::current_exception();
+  }
+  return out;
+}
+
+// "<path>.tmp" written as it goes, published by Publish() (fsync, rename); removed when
+// dropped unpublished, so a failed merge leaves nothing.
+class StreamedFile {
+ public:
+  explicit StreamedFile(std::string path) : path_(std::move(path)), tmp_(path_ + ".tmp") {
+    fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw InputError(path_, std::string("cannot open: ") + std::strerror(errno));
+  }
+  ~StreamedFile() {
+    if (fd_ >= 0) ::close(fd_);
+    if (!published_) ::unlink(tmp_.c_str());
+  }
+  StreamedFile(const StreamedFile&) = delete;
+  StreamedFile& operator=(const StreamedFile&) = delete;
+  void Append(std::string_view bytes) {
+    if (!io::WriteAll(fd_, bytes)) {
+      throw InputError(path_, std::string("write failed: ") + std::strerror(errno));
+    }
+  }
+  // fsync, close and rename onto the path (the caller makes the folder durable).
+  void Publish() {
+    if (::fsync(fd_) != 0) {
+      throw InputError(path_, std::string("fsync failed: ") + std::strerror(errno));
+    }
+    const int fd = fd_;
+    fd_ = -1;
+    if (::close(fd) != 0) {
+      throw InputError(path_, std::string("close failed: ") + std::strerror(errno));
+    }
+    if (::rename(tmp_.c_str(), path_.c_str()) != 0) {
+      throw InputError(path_,
+                       std::string("cannot rename the temporary file: ") + std::strerror(errno));
+    }
+    published_ = true;
+  }
+
+ private:
+  std::string path_, tmp_;
+  int fd_ = -1;
+  bool published_ = false;
+};
+
+// Shards whose part records are loaded at once (bounds the memory to a few chunks of
+// records, whatever the split's size).
+constexpr size_t kMergeChunkShards = 64;
+
+}  // namespace
+
 MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
   if (std::string error; !options.Check(&error)) throw InputError("merge options", error);
   MergeResult result;
@@ -437,71 +604,67 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
     result.split = splits[0];
   }
   const SplitPlan plan = ReadPlan(dir, result.split);
-  const auto sample_schema = LoadSchema(options.schemas_dir, "sample.schema.json");
-  const auto line_schema = LoadSchema(options.schemas_dir, "pairs_line.schema.json");
-  std::vector<std::string> all_lines;
-  std::set<std::string> all_keys;
-  for (size_t s = 0; s < plan.shard_nsamples.size(); ++s) {
-    const auto idx = static_cast<int64_t>(s);
-    const std::string shard = ShardPath(dir, result.split, idx);
-    const std::string record_path = PartRecordPath(dir, result.split, idx);
-    if (!io::FileExists(record_path)) {
-      throw InputError(
-          shard, "missing part record " + record_path + " (shard not written or not finished)");
-    }
-    PartRecord r = ReadPartRecord(dir, result.split, idx);
-    const int64_t size = FileSize(shard);
-    if (size < 0) throw InputError(shard, "missing shard");
-    if (size != r.info.filesize) {
-      throw InputError(shard, "size " + std::to_string(size) + " differs from the recorded " +
-                                  std::to_string(r.info.filesize));
-    }
-    if (r.info.nsamples != plan.shard_nsamples[s]) {
-      throw InputError(shard, "holds " + std::to_string(r.info.nsamples) +
-                                  " samples, the plan says " +
-                                  std::to_string(plan.shard_nsamples[s]));
-    }
-    if (options.verify_md5) {
-      const std::string md5 = io::Md5HexOfFile(shard);
-      if (md5 != r.info.md5sum) {
-        throw InputError(shard, "md5 " + md5 + " differs from the recorded " + r.info.md5sum);
-      }
-    }
-    if (options.read_tars) {
-      std::vector<std::string> keys;
-      std::vector<std::string> problems;
-      try {
-        problems = CheckTarContents(shard, sample_schema.get(), &keys);
-      } catch (const InputError& e) {
-        throw InputError(shard, std::string("unreadable: ") + e.what());
-      }
-      if (!problems.empty()) throw InputError(shard, FirstLines(problems));
-      if (keys != r.keys) {
-        throw InputError(shard, "sample keys in the tar differ from " + record_path);
-      }
-    }
-    for (size_t i = 0; i < r.keys.size(); ++i) {
-      if (!all_keys.insert(r.keys[i]).second) {
-        throw InputError(shard, "sample key " + r.keys[i] + " appears in an earlier shard");
-      }
-      if (line_schema) {
-        const auto p = line_schema->Check(json::parse(r.pair_lines[i]));
-        if (!p.empty()) {
-          throw InputError(record_path, "pairs[" + std::to_string(i) +
-                                            "]: pairs_line.schema.json: " + FirstLines(p));
+  // Pair lines against their schema only with `verify`: a per-line cost of its own.
+  const auto line_schema =
+      options.verify ? LoadSchema(options.schemas_dir, "pairs_line.schema.json") : nullptr;
+  const size_t nshards = plan.shard_nsamples.size();
+  StreamedFile pairs_jsonl((fs::path(dir) / "pairs.jsonl").string());
+  std::unordered_map<std::string, int64_t> shard_of_key;
+  // 1. Trusted checks, shards loaded in parallel by chunk, then taken in shard order: the
+  //    first problem in shard order is the error, whatever the thread count.
+  for (size_t begin = 0; begin < nshards; begin += kMergeChunkShards) {
+    const size_t end = std::min(nshards, begin + kMergeChunkShards);
+    std::vector<LoadedShard> chunk(end - begin);
+    tbb::parallel_for(begin, end, size_t{1}, [&](size_t s) {
+      chunk[s - begin] = LoadShard(dir, result.split, static_cast<int64_t>(s),
+                                   plan.shard_nsamples[s], line_schema.get());
+    });
+    for (LoadedShard& loaded : chunk) {
+      if (loaded.error) std::rethrow_exception(loaded.error);
+      PartRecord& r = loaded.record;
+      std::string text;
+      for (size_t i = 0; i < r.keys.size(); ++i) {
+        const std::string& key = r.keys[i];
+        if (const auto [it, inserted] = shard_of_key.emplace(key, r.shard_index); !inserted) {
+          throw InputError(r.info.path, "sample key " + key +
+                                            (it->second == r.shard_index
+                                                 ? " appears twice in the shard"
+                                                 : " appears in an earlier shard, " +
+                                                       ShardFileName(result.split, it->second)));
         }
+        GT_ASSERT_MSG(r.pair_lines[i].find('\n') == std::string::npos,
+                      "JSONL line contains a newline");
+        text += r.pair_lines[i];
+        text += '\n';
+        ++result.pairs_per_scene[loaded.scenes[i]];
       }
-      all_lines.push_back(r.pair_lines[i]);
+      pairs_jsonl.Append(text);
+      r.pair_lines.clear();  // in pairs.jsonl now
+      r.pair_lines.shrink_to_fit();
+      result.nsamples += r.info.nsamples;
+      result.total_bytes += r.info.filesize;
+      result.parts.push_back(std::move(r));
     }
-    result.nsamples += r.info.nsamples;
-    result.total_bytes += r.info.filesize;
-    result.parts.push_back(std::move(r));
   }
   result.nshards = static_cast<int64_t>(result.parts.size());
-  // Both written at once; index.json, which names the shards, is published second.
-  io::WriteFilesAtomic(
-      {{(fs::path(dir) / "pairs.jsonl").string(), JsonLinesText(all_lines)},
-       {(fs::path(dir) / "index.json").string(), IndexJson(result.split, result.parts)}});
+  // 2. Opt-in full check of every byte, shards in parallel; the first problem in shard order.
+  if (options.verify) {
+    const auto sample_schema = LoadSchema(options.schemas_dir, "sample.schema.json");
+    std::vector<std::string> problem(result.parts.size());
+    tbb::parallel_for(size_t{0}, result.parts.size(), size_t{1}, [&](size_t s) {
+      const PartRecord& r = result.parts[s];
+      problem[s] = VerifyShard(r.info.path, r, PartRecordPath(dir, r.split, r.shard_index),
+                               sample_schema.get());
+    });
+    for (size_t s = 0; s < problem.size(); ++s) {
+      if (!problem[s].empty()) throw InputError(result.parts[s].info.path, problem[s]);
+    }
+  }
+  // pairs.jsonl first; index.json, which names the shards, is published second (its
+  // atomic write also makes the folder, and so both renames, durable).
+  pairs_jsonl.Publish();
+  io::WriteFileAtomic((fs::path(dir) / "index.json").string(),
+                      IndexJson(result.split, result.parts));
   return result;
 }
 
@@ -513,12 +676,7 @@ std::string MergeSummaryJson(const MergeResult& result) {
   doc["nsamples"] = result.nsamples;
   doc["bytes"] = result.total_bytes;
   json per_scene = json::object();
-  for (const PartRecord& p : result.parts) {
-    for (size_t i = 0; i < p.keys.size(); ++i) {
-      const std::string scene = SceneOfLine(json::parse(p.pair_lines[i]), p.keys[i]);
-      per_scene[scene] = per_scene.value(scene, 0) + 1;
-    }
-  }
+  for (const auto& [scene, n] : result.pairs_per_scene) per_scene[scene] = n;
   doc["pairs_per_scene"] = std::move(per_scene);
   return doc.dump(2) + "\n";
 }
@@ -535,6 +693,75 @@ bool WriteMergeSummary(const std::string& dir, const MergeResult& result) {
   io::WriteFileAtomic(path, MergeSummaryJson(result));
   return true;
 }
+
+namespace {
+
+// What ValidateSplit finds in one shard of index.json's shardlist.
+struct ShardProblems {
+  std::vector<std::string> problems;  // "<file>: <problem>", in the order found
+  std::string url;                    // as listed
+  std::string shard;                  // DIR/url
+  bool read = false;                  // the tar was read through: `keys` are its keys
+  std::vector<std::string> keys;
+};
+
+// Checks shardlist[i] (`e`) against its file: size, MD5, contents (CheckTarContents) and
+// sample count. Reads the whole shard twice (MD5, then libarchive); never throws.
+ShardProblems CheckListedShard(const std::string& dir, const std::string& index_path, size_t i,
+                               const json& e, const SchemaChecker* sample_schema) {
+  ShardProblems out;
+  auto problem = [&](const std::string& where, const std::string& what) {
+    out.problems.push_back(where + ": " + what);
+  };
+  const std::string where = index_path + ": shardlist[" + std::to_string(i) + "]";
+  if (!e.is_object() || !e.contains("url") || !e["url"].is_string() || !e.contains("nsamples") ||
+      !e["nsamples"].is_number_integer() || !e.contains("md5sum") || !e["md5sum"].is_string() ||
+      !e.contains("filesize") || !e["filesize"].is_number_integer()) {
+    problem(where, "expected {url, nsamples, md5sum, filesize}");
+    return out;
+  }
+  out.url = e["url"].get<std::string>();
+  if (out.url.empty() || out.url.front() == '/' || out.url.find("..") != std::string::npos) {
+    problem(where, "url \"" + out.url + "\" is not a relative path inside the folder");
+    return out;
+  }
+  out.shard = (fs::path(dir) / out.url).string();
+  const std::string& shard = out.shard;
+  const int64_t size = FileSize(shard);
+  if (size < 0) {
+    problem(shard, "missing shard");
+    return out;
+  }
+  if (size != e["filesize"].get<int64_t>()) {
+    problem(shard, "size " + std::to_string(size) + " differs from index.json's " +
+                       std::to_string(e["filesize"].get<int64_t>()));
+  }
+  try {
+    const std::string md5 = io::Md5HexOfFile(shard);
+    if (md5 != e["md5sum"].get<std::string>()) {
+      problem(shard, "md5 " + md5 + " differs from index.json's " + e["md5sum"].get<std::string>());
+    }
+  } catch (const InputError& err) {
+    problem(shard, std::string("unreadable: ") + err.what());
+    return out;
+  }
+  try {
+    for (const std::string& p : CheckTarContents(shard, sample_schema, &out.keys)) {
+      problem(shard, p);
+    }
+  } catch (const InputError& err) {
+    problem(shard, std::string("unreadable: ") + err.what());
+    return out;
+  }
+  if (static_cast<int64_t>(out.keys.size()) != e["nsamples"].get<int64_t>()) {
+    problem(shard, "holds " + std::to_string(out.keys.size()) + " samples, index.json says " +
+                       std::to_string(e["nsamples"].get<int64_t>()));
+  }
+  out.read = true;
+  return out;
+}
+
+}  // namespace
 
 bool ValidateOptions::Check(std::string* error) const {
   if (!schemas_dir.empty() && !fs::is_directory(schemas_dir)) {
@@ -576,54 +803,24 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
     problem(index_path, "expected a wids-shard-index-v1 object with a shardlist");
     return problems;
   }
-  // key -> shard url, for the pairs.jsonl check.
+  // Every shard listed, in parallel: its problems and keys, by shard index.
+  const json& shardlist = index["shardlist"];
+  std::vector<ShardProblems> checked(shardlist.size());
+  tbb::parallel_for(size_t{0}, shardlist.size(), size_t{1}, [&](size_t i) {
+    checked[i] = CheckListedShard(dir, index_path, i, shardlist[i], sample_schema.get());
+  });
+  // Then in shard order, the same whatever the thread count: key -> shard url, for the
+  // repeat and the pairs.jsonl checks.
   std::map<std::string, std::string> shard_of_key;
   int64_t total = 0;
-  for (size_t i = 0; i < index["shardlist"].size(); ++i) {
-    const json& e = index["shardlist"][i];
-    const std::string where = index_path + ": shardlist[" + std::to_string(i) + "]";
-    if (!e.is_object() || !e.contains("url") || !e["url"].is_string() || !e.contains("nsamples") ||
-        !e["nsamples"].is_number_integer() || !e.contains("md5sum") || !e["md5sum"].is_string() ||
-        !e.contains("filesize") || !e["filesize"].is_number_integer()) {
-      problem(where, "expected {url, nsamples, md5sum, filesize}");
-      continue;
+  for (ShardProblems& c : checked) {
+    problems.insert(problems.end(), std::make_move_iterator(c.problems.begin()),
+                    std::make_move_iterator(c.problems.end()));
+    if (!c.read) continue;
+    for (const std::string& k : c.keys) {
+      if (!shard_of_key.emplace(k, c.url).second) problem(c.shard, "sample " + k + " repeats");
     }
-    const std::string url = e["url"].get<std::string>();
-    if (url.empty() || url.front() == '/' || url.find("..") != std::string::npos) {
-      problem(where, "url \"" + url + "\" is not a relative path inside the folder");
-      continue;
-    }
-    const std::string shard = (fs::path(dir) / url).string();
-    const int64_t size = FileSize(shard);
-    if (size < 0) {
-      problem(shard, "missing shard");
-      continue;
-    }
-    if (size != e["filesize"].get<int64_t>()) {
-      problem(shard, "size " + std::to_string(size) + " differs from index.json's " +
-                         std::to_string(e["filesize"].get<int64_t>()));
-    }
-    const std::string md5 = io::Md5HexOfFile(shard);
-    if (md5 != e["md5sum"].get<std::string>()) {
-      problem(shard, "md5 " + md5 + " differs from index.json's " + e["md5sum"].get<std::string>());
-    }
-    std::vector<std::string> keys;
-    try {
-      for (const std::string& p : CheckTarContents(shard, sample_schema.get(), &keys)) {
-        problem(shard, p);
-      }
-    } catch (const InputError& err) {
-      problem(shard, std::string("unreadable: ") + err.what());
-      continue;
-    }
-    if (static_cast<int64_t>(keys.size()) != e["nsamples"].get<int64_t>()) {
-      problem(shard, "holds " + std::to_string(keys.size()) + " samples, index.json says " +
-                         std::to_string(e["nsamples"].get<int64_t>()));
-    }
-    for (const std::string& k : keys) {
-      if (!shard_of_key.emplace(k, url).second) problem(shard, "sample " + k + " repeats");
-    }
-    total += static_cast<int64_t>(keys.size());
+    total += static_cast<int64_t>(c.keys.size());
   }
   // Shards (and leftovers) in the folder that index.json does not list: a reader globbing
   // *.tar would see samples the index does not count.

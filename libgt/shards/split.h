@@ -9,7 +9,9 @@
 //                                 "nsamples": [n_0, ..., n_{N-1}]}
 //   DIR/S-000000.tar ...          shard s = "S-{s:06d}.tar" (TarShardWriter)
 //   DIR/parts/S-000000.json       part record of shard s, written right after the shard is
-//                                 published; it is the shard's completion marker:
+//                                 published; it is the shard's completion marker, and
+//                                 its md5sum / filesize (computed while writing) are what
+//                                 the merge trusts and copies into index.json:
 //                                 {"split", "shard_index", "url", "nsamples", "md5sum",
 //                                  "filesize", "keys": [...], "pairs": [{...}, ...]}
 //   DIR/index.json                (merge) wids index: {"__kind__": "wids-shard-index-v1",
@@ -24,6 +26,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
@@ -64,6 +67,9 @@ struct PartRecord {
   std::vector<std::string> keys;        // sample keys in tar order
   std::vector<std::string> pair_lines;  // compact JSON objects, one per key, same order
 };
+// Parses DIR/parts/S-{s:06d}.json; throws InputError("<record path>", ...) unless it names
+// shard s of the split, has a 32-digit lower-case hex md5sum, non-negative sizes, and one
+// key and one pair line per sample, each line's "key" and "shard" naming its key and url.
 PartRecord ReadPartRecord(const std::string& dir, const std::string& split, int64_t shard_index);
 
 // Writes shard s of a split and then its part record. Usage (one per shard, any thread):
@@ -77,9 +83,10 @@ class SplitShardWriter {
   SplitShardWriter(const std::string& dir, const std::string& split, int64_t shard_index);
   ~SplitShardWriter();
   void Add(const Sample& sample, const std::string& pair_line_json);
-  // Taking the sample; TarShardWriter::Digest::kDeferred for a shard's last sample (see
-  // TarShardWriter::Add).
-  void Add(Sample&& sample, const std::string& pair_line_json, TarShardWriter::Digest digest);
+  // The same, taking the sample (its buffers are released when Add returns).
+  void Add(Sample&& sample, const std::string& pair_line_json);
+  // Publishes the tar (TarShardWriter::Finish), then writes its part record with the size
+  // and the MD5 computed while writing; returns the record.
   PartRecord Finish();
 
  private:
@@ -103,10 +110,12 @@ void WriteJsonLines(const std::string& path, const std::vector<std::string>& lin
 
 struct MergeOptions {
   std::string split;        // "" = the only split planned in DIR/parts (error if several)
-  bool verify_md5 = true;   // recompute the MD5 of every shard
-  bool read_tars = true;    // read every tar: keys, member names, sample count
-  std::string schemas_dir;  // folder with sample.schema.json / pairs_line.schema.json;
-                            // "" = no JSON Schema checks of sample JSON and pair lines
+  bool verify = false;      // also re-hash every shard and read every tar back (keys,
+                            // member names, .npy headers), and check sample JSON and
+                            // pair lines against the schemas; shards in parallel; reads
+                            // every byte
+  std::string schemas_dir;  // folder with sample.schema.json / pairs_line.schema.json, used
+                            // by `verify`; "" = no JSON Schema checks
   bool Check(std::string* error) const;
 };
 
@@ -115,14 +124,24 @@ struct MergeResult {
   int64_t nshards = 0;
   int64_t nsamples = 0;
   int64_t total_bytes = 0;
-  std::vector<PartRecord> parts;
+  std::vector<PartRecord> parts;  // in shard order; pair_lines left empty (in pairs.jsonl)
+  std::map<std::string, int64_t> pairs_per_scene;  // pair lines' "scene" (else key folder)
 };
 
-// Validates every shard of the plan (part record present, tar present, size, MD5,
-// sample count = plan = record, keys and member names as recorded, sample .json fields
-// against sample.schema.json when present) and then writes DIR/index.json and
-// DIR/pairs.jsonl atomically. The first missing or corrupt shard throws
-// InputError("<shard path>", reason); nothing is written then.
+// Publishes a split whose shards the tasks have written: checks every shard of the plan
+// and then writes DIR/pairs.jsonl and DIR/index.json atomically (index.json second).
+// By default the digests and sizes the tasks recorded while writing are TRUSTED: the merge
+// reads the plan and every part record (ReadPartRecord's checks), stats every tar (present,
+// the recorded size) and checks sample count = plan = record, valid keys, and that no key
+// repeats in the split. It never opens a tar: its cost is one small-file read and parse
+// per shard (JSON of its pair lines, records parsed in parallel) and one stat, whatever
+// the shards' bytes; pairs.jsonl is streamed, so memory is a few chunks of records plus
+// the split's keys. A shard whose bytes changed with its size kept is therefore not caught
+// here; ValidateSplit and `verify` (MD5 of every shard, tars read back) catch it.
+// The first missing or corrupt shard throws InputError("<shard path>", reason) (a pair line
+// breaking pairs_line.schema.json: "<record path>: pairs[i]: ..."), the first in shard
+// order whatever the thread count (with `verify`, the record checks of every shard come
+// before the tar reads); nothing is published then.
 MergeResult MergeSplit(const std::string& dir, const MergeOptions& options);
 // summary.json content of a merge: {"kind": "occgt-merge-summary", "split", "nshards",
 // "nsamples", "bytes", "pairs_per_scene": {scene: n} (from the pair lines' "scene" field)}.
@@ -140,8 +159,11 @@ struct ValidateOptions {
 // Re-checks a published split from DIR/index.json: schema of index.json, every shard's
 // size and MD5, sample counts and member names read back from the tars, every .npy
 // member's header, every .json member parses (and matches sample.schema.json), pairs.jsonl
-// has one line per sample naming an existing shard/key. Returns one line per problem
-// ("<file>: <problem>"); empty = valid. Never throws for bad content.
+// has one line per sample naming an existing shard/key. Reads every byte of every shard;
+// shards are checked in parallel (TBB, as many threads as tbb::global_control allows) and
+// their problems collected by shard index, so the lines and their order do not depend on
+// the thread count. Returns one line per problem ("<file>: <problem>"); empty = valid.
+// Never throws for bad content.
 std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOptions& options);
 
 // Validates `document` (JSON text) against the JSON Schema file `schema_path` (valijson;

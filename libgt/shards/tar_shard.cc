@@ -4,22 +4,17 @@
 #include <archive_entry.h>
 #include <fcntl.h>
 #include <sys/stat.h>
-#include <tbb/parallel_invoke.h>
-#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <cerrno>
-#include <condition_variable>
 #include <cstring>
-#include <deque>
 #include <filesystem>
-#include <mutex>
 #include <set>
-#include <thread>
 #include <utility>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/md5.h"
 
 namespace gt::shards {
 namespace {
@@ -55,113 +50,31 @@ struct TarShardWriter::Impl {
   io::Md5 md5;                 // of the bytes digested so far (the published file's digest)
   std::set<std::string> keys;
 
-  // Deferred digest (Add(sample, kDeferred)): the bytes written since then are queued in
-  // `pending`, in file order, and digested by a thread of their own (`digester`) as they
-  // arrive, so that the digest of a shard's last sample overlaps its write and then
-  // Finish's fsync instead of following them. A segment points into a field of `deferred`
-  // (the sample, kept until the writer is destroyed) or at its own copy (tar headers,
-  // padding and end blocks, which come from libarchive's buffers). The digester owns `md5`
-  // until DigestPending() has joined it.
-  struct Segment {
-    std::string owned;
-    const char* data = nullptr;
-    size_t n = 0;
-  };
-  bool defer = false;                 // Write queues segments instead of digesting (up to Finish)
-  const char* field_begin = nullptr;  // the field being written (its data is kept)
-  const char* field_end = nullptr;
-  std::deque<Segment> pending;  // deque: elements never move, so `data` stays valid
-  Sample deferred;
-  std::mutex pending_mutex;  // guards `pending` (its size and new elements) and `closed`
-  std::condition_variable pending_added;
-  bool closed = true;  // no more segments will be queued
-  std::thread digester;
-
-  ~Impl() { DigestPending(); }  // a writer dropped mid-shard: the digester ends first
-
-  void StartDigester() {
-    closed = false;
-    digester = std::thread([this] {
-      for (size_t next = 0;; ++next) {
-        const Segment* seg = nullptr;
-        {
-          std::unique_lock<std::mutex> lock(pending_mutex);
-          pending_added.wait(lock, [&] { return next < pending.size() || closed; });
-          if (next == pending.size()) return;  // closed, and every segment digested
-          seg = &pending[next];
-        }
-        md5.Update(seg->data, seg->n);
-      }
-    });
-  }
-  void Queue(const char* p, size_t n) {
-    {
-      std::lock_guard<std::mutex> lock(pending_mutex);
-      Segment& seg = pending.emplace_back();
-      if (p >= field_begin && p + n <= field_end) {
-        seg.data = p;  // inside the kept sample
-      } else {
-        seg.owned.assign(p, n);
-        seg.data = seg.owned.data();
-      }
-      seg.n = n;
-    }
-    pending_added.notify_one();
-  }
-  // No more segments: the digester finishes the queued ones and returns.
-  void ClosePending() {
-    {
-      std::lock_guard<std::mutex> lock(pending_mutex);
-      closed = true;
-    }
-    pending_added.notify_one();
-  }
-  // Returns when every queued byte is digested (joins the digester); a no-op without one.
-  void DigestPending() {
-    if (!digester.joinable()) return;
-    ClosePending();
-    digester.join();
-    pending.clear();
-  }
-
   // libarchive write callback: writes the whole block. A failed write(2) is recorded in
   // write_errno and the block (and every later one) is reported as written: returning an
   // error would put the archive into libarchive's fatal state, from which
   // archive_write_free no longer releases the client buffers of archive_write_open2 (a
-  // leak LeakSanitizer showed on the disk-full path). Callers check WriteError() after
+  // leak LeakSanitizer showed on the disk-full path). Callers call CheckWrites() after
   // every libarchive call instead.
   //
   // The archive is unblocked (bytes_per_block 0), so a member's data arrives here in one
   // piece: one write(2) for the whole buffer instead of one per 10240-byte block, and no
-  // copy into libarchive's block buffer. A large buffer is written and digested at once
-  // (two TBB tasks, isolated so that this thread runs nothing else meanwhile): the last
-  // sample of a build is collected while no other work is left, and its digest is then
-  // no longer added to its write.
+  // copy into libarchive's block buffer. The bytes are then digested (the MD5 of the file
+  // is the digest of every block, in order).
   static la_ssize_t Write(archive* /*a*/, void* client, const void* buf, size_t n) {
     auto* self = static_cast<Impl*>(client);
     if (self->write_errno != 0) return static_cast<la_ssize_t>(n);
-    if (self->defer) {
-      self->Queue(static_cast<const char*>(buf), n);  // digested meanwhile
-      self->WriteAll(buf, n);
-    } else if (n >= kDigestAsideBytes) {
-      tbb::this_task_arena::isolate([&] {
-        tbb::parallel_invoke([&] { self->WriteAll(buf, n); }, [&] { self->md5.Update(buf, n); });
-      });
-    } else {
-      self->WriteAll(buf, n);
-      self->md5.Update(buf, n);
-    }
+    self->WriteAll(buf, n);
+    self->md5.Update(buf, n);
     if (self->write_errno == 0) self->bytes += static_cast<int64_t>(n);
     return static_cast<la_ssize_t>(n);
   }
-  static constexpr size_t kDigestAsideBytes = size_t{256} << 10;
 
   // Starts the writeback of the bytes written so far (asynchronous, no wait) once at least
   // kWritebackBytes of whole pages are pending, so that the fsync of Finish, which
-  // publication waits for, has little left to flush: the last sample's first members are
-  // on their way to the disk while its later ones are written and digested. Whole pages
-  // only (the partial last page would be written twice). Advisory: an error here is
-  // ignored (fsync reports any real one).
+  // publication waits for, has little left to flush. Whole pages only (the partial last
+  // page would be written twice). Advisory: an error here is ignored (fsync reports any
+  // real one).
   void StartWriteback() {
 #ifdef __linux__
     const int64_t upto = bytes & ~int64_t{4095};
@@ -193,7 +106,6 @@ struct TarShardWriter::Impl {
   // Drops the archive and removes the temporary file (idempotent).
   void Abandon() {
     dead = true;
-    DigestPending();  // the digester reads the kept sample: joined before anything goes
     ar.reset();
     if (fd >= 0) {
       ::close(fd);
@@ -234,26 +146,13 @@ TarShardWriter::~TarShardWriter() {
 }
 
 void TarShardWriter::Add(const Sample& sample) {
-  Impl& s = *impl_;
-  s.CheckAdd(sample);
-  s.DigestPending();  // an earlier deferred sample's bytes come first
-  s.defer = false;
-  s.WriteMembers(sample);
+  impl_->CheckAdd(sample);
+  impl_->WriteMembers(sample);
 }
 
-void TarShardWriter::Add(Sample&& sample, Digest digest) {
-  Impl& s = *impl_;
-  s.CheckAdd(sample);
-  s.DigestPending();
-  s.defer = false;
-  if (digest == Digest::kNow) {
-    s.WriteMembers(sample);
-    return;
-  }
-  s.deferred = std::move(sample);  // the field buffers stay where they are
-  s.defer = true;
-  s.StartDigester();
-  s.WriteMembers(s.deferred);
+void TarShardWriter::Add(Sample&& sample) {
+  const Sample taken = std::move(sample);  // released on return
+  Add(taken);
 }
 
 void TarShardWriter::Impl::CheckAdd(const Sample& sample) {
@@ -282,8 +181,6 @@ void TarShardWriter::Impl::WriteMembers(const Sample& sample) {
       s.CheckWrites(member);
       s.Fail(member, "cannot write tar header: " + ArchiveMessage(a));
     }
-    s.field_begin = field.bytes.data();
-    s.field_end = field.bytes.data() + field.bytes.size();
     size_t done = 0;
     while (done < field.bytes.size()) {
       const la_ssize_t w =
@@ -296,7 +193,6 @@ void TarShardWriter::Impl::WriteMembers(const Sample& sample) {
       s.CheckWrites(member);
       s.Fail(member, "cannot finish member: " + ArchiveMessage(a));
     }
-    s.field_begin = s.field_end = nullptr;
     s.CheckWrites(member);
     s.StartWriteback();
   }
@@ -314,14 +210,7 @@ ShardInfo TarShardWriter::Finish() {
   }
   s.CheckWrites("");
   s.ar.reset();
-  // Every byte is written now. A deferred sample's digest goes on on its thread while the
-  // fsync (data writeback and the journal commit, mostly waiting for the disk) runs here:
-  // the two overlap instead of adding up.
-  s.ClosePending();
-  int fsync_errno = 0;
-  if (::fsync(s.fd) != 0) fsync_errno = errno;
-  s.DigestPending();
-  if (fsync_errno != 0) s.Fail("", std::string("fsync failed: ") + std::strerror(fsync_errno));
+  if (::fsync(s.fd) != 0) s.Fail("", std::string("fsync failed: ") + std::strerror(errno));
   if (::close(s.fd) != 0) {
     s.fd = -1;
     s.Fail("", std::string("close failed: ") + std::strerror(errno));

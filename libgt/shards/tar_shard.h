@@ -14,6 +14,8 @@
 // <path>. A writer destroyed without Finish(), or one whose write failed, removes the
 // temporary file, so a reader never sees a partial shard. Errors (disk full, bad key,
 // over-long member path) throw gt::InputError naming the shard and the member.
+// A writer starts no thread or task of its own and is used by one thread at a time;
+// writers of different shards may run on different threads.
 #pragma once
 
 #include <cstdint>
@@ -44,19 +46,15 @@ class TarShardWriter {
   TarShardWriter(const TarShardWriter&) = delete;
   TarShardWriter& operator=(const TarShardWriter&) = delete;
 
-  // Appends the sample's fields in order. Throws InputError("<path>: <key>...") when the
-  // sample fails CheckSample, when a key repeats within the shard, or when the write fails;
-  // after a throw the writer is dead (further calls throw) and nothing is published.
+  // Appends the sample's fields in order: each member is written and then MD5-digested,
+  // in that order, on the calling thread. Throws InputError("<path>: <key>...") when the
+  // sample fails CheckSample, when a key repeats within the shard, or when the write
+  // fails; after a throw the writer is dead (further calls throw) and nothing is published.
   void Add(const Sample& sample);
-  // The same, taking the sample. With Digest::kDeferred its bytes are written now and
-  // digested on a thread of the writer's own as they are written, a digest that goes on
-  // through Finish()'s fsync instead of preceding it; the writer keeps the sample until it
-  // is destroyed. Meant for a shard's last sample, whose Add and Finish are otherwise both
-  // on the way to the shard's publication. A later Add waits for the deferred digest first
-  // (same MD5 in every case).
-  enum class Digest { kNow, kDeferred };
-  void Add(Sample&& sample, Digest digest);
-  // Closes the archive, fsyncs, renames onto the final path; returns its size and MD5.
+  // The same, taking the sample: its buffers are released when Add returns (same bytes).
+  void Add(Sample&& sample);
+  // Closes the archive, fsyncs, renames onto the final path; returns its size and the MD5
+  // of the bytes written (computed while writing, not by reading the file back).
   ShardInfo Finish();
 
   int64_t num_samples() const;

@@ -1,6 +1,7 @@
 // Shard throughput: writing a shard of build-sized samples (TarShardWriter, including
 // fsync, rename and the MD5 of the published file) and reading one back (libarchive
-// member walk + MD5, what merge and validate do per shard).
+// member walk + MD5, what `occgt validate` and `occgt merge --verify` do per shard; the
+// default merge reads no tar).
 // Sample: two uint8 label maps 640x480 and two float32 depth maps 640x480 (~3.1 MB), 16
 // samples per shard (~49 MB). Output folder: $OCCGT_BENCH_DIR or /tmp.
 #include <benchmark/benchmark.h>
@@ -10,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "libgt/io/files.h"
+#include "libgt/io/md5.h"
 #include "libgt/io/npy.h"
 #include "libgt/shards/tar_shard.h"
 

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
 #include "tests/support/test_support.h"
 

@@ -8,6 +8,7 @@
 #include "libgt/shards/split.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -21,7 +22,9 @@
 #include <vector>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/file_read.h"
+#include "libgt/io/md5.h"
 #include "libgt/io/npy.h"
 #include "libgt/shards/loftr_export.h"
 #include "tests/support/test_support.h"
@@ -94,10 +97,13 @@ std::vector<DemoPair> DemoPairs() {
   return pairs;
 }
 
-// Writes a 3-shard split (4 + 4 + 3 samples) with plan and part records.
-void WriteSplit(const std::string& dir, const std::string& split = "train") {
+// Writes a 3-shard split (4 + 4 + 3 samples; 11 shards with samples_per_shard 1) with plan
+// and part records.
+void WriteSplit(const std::string& dir, const std::string& split = "train",
+                int64_t samples_per_shard = 4) {
   const auto pairs = DemoPairs();
-  const SplitPlan plan = PlanEqualShards(split, static_cast<int64_t>(pairs.size()), 4);
+  const SplitPlan plan =
+      PlanEqualShards(split, static_cast<int64_t>(pairs.size()), samples_per_shard);
   WritePlan(dir, plan);
   std::mt19937 rng(5);
   size_t next = 0;
@@ -198,19 +204,40 @@ TEST(Split, MergeWritesIndexAndPairsMatchingTheFiles) {
   }
 }
 
-// Expects MergeSplit to throw an InputError whose message contains `needle`, and no index.
-void ExpectMergeFails(const std::string& dir, const std::string& needle) {
+// Expects MergeSplit (with MergeOptions::verify = `verify`) to throw an InputError whose
+// message is one line containing `needle`, and no index.
+void ExpectMergeFails(const std::string& dir, const std::string& needle, bool verify = false) {
   fs::remove(dir + "/index.json");
+  fs::remove(dir + "/pairs.jsonl");
   try {
     MergeOptions options;
     options.schemas_dir = SchemasDir();
+    options.verify = verify;
     MergeSplit(dir, options);
     ADD_FAILURE() << "merge accepted a broken split; expected " << needle;
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
     EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos);
   }
-  EXPECT_FALSE(fs::exists(dir + "/index.json"));
+  for (const char* f : {"/index.json", "/pairs.jsonl", "/pairs.jsonl.tmp", "/index.json.tmp"}) {
+    EXPECT_FALSE(fs::exists(dir + f)) << f;
+  }
+}
+
+// Merges (trusting the records) and expects success with an index.
+void ExpectMergeSucceeds(const std::string& dir) {
+  fs::remove(dir + "/index.json");
+  MergeOptions options;
+  options.schemas_dir = SchemasDir();
+  EXPECT_NO_THROW(MergeSplit(dir, options));
+  EXPECT_TRUE(fs::exists(dir + "/index.json"));
+}
+
+json ReadRecord(const std::string& dir, int64_t shard) {
+  return json::parse(io::ReadFileBytes(PartRecordPath(dir, "train", shard)));
+}
+void WriteRecord(const std::string& dir, int64_t shard, const json& record) {
+  io::WriteFileAtomic(PartRecordPath(dir, "train", shard), record.dump(1) + "\n");
 }
 
 TEST(Split, MergeFailsNamingAMissingOrCorruptShard) {
@@ -218,28 +245,68 @@ TEST(Split, MergeFailsNamingAMissingOrCorruptShard) {
     const std::string dir = test::ScratchDir("shards_merge_missing_tar");
     WriteSplit(dir);
     fs::remove(dir + "/train-000001.tar");
-    ExpectMergeFails(dir, "train-000001.tar");
+    ExpectMergeFails(dir, "train-000001.tar: missing shard");
   }
   {
     const std::string dir = test::ScratchDir("shards_merge_missing_part");
     WriteSplit(dir);
     fs::remove(dir + "/parts/train-000002.json");
-    ExpectMergeFails(dir, "train-000002.tar");
+    ExpectMergeFails(dir, "train-000002.tar: missing part record");
   }
   {
-    const std::string dir = test::ScratchDir("shards_merge_flipped_byte");
+    const std::string dir = test::ScratchDir("shards_merge_corrupt_part");
     WriteSplit(dir);
-    const std::string path = dir + "/train-000001.tar";
-    std::string bytes = io::ReadFileBytes(path);
-    bytes[700] ^= 0x01;  // inside the first member's data: same size, other MD5
-    io::WriteFileAtomic(path, bytes);
-    ExpectMergeFails(dir, "train-000001.tar: md5");
+    const std::string record = PartRecordPath(dir, "train", 2);
+    io::WriteFileAtomic(record, io::ReadFileBytes(record).substr(0, 100));  // cut mid-JSON
+    ExpectMergeFails(dir, "train-000002.tar: bad part record: " + record + ": not valid JSON");
+  }
+  {
+    const std::string dir = test::ScratchDir("shards_merge_bad_md5_field");
+    WriteSplit(dir);
+    json rec = ReadRecord(dir, 0);
+    rec["md5sum"] = "not-a-digest";
+    WriteRecord(dir, 0, rec);
+    ExpectMergeFails(dir, "train-000000.tar: bad part record: ");
+    rec["md5sum"] = 12;
+    WriteRecord(dir, 0, rec);
+    ExpectMergeFails(dir, "train-000000.tar: bad part record: ");
+  }
+  {
+    // A record whose sample count disagrees with its own keys.
+    const std::string dir = test::ScratchDir("shards_merge_record_counts");
+    WriteSplit(dir);
+    json rec = ReadRecord(dir, 1);
+    rec["nsamples"] = 3;
+    WriteRecord(dir, 1, rec);
+    ExpectMergeFails(dir, "train-000001.tar: bad part record: ");
+  }
+  {
+    // A pair line that does not name its key, and a key another shard holds.
+    const std::string dir = test::ScratchDir("shards_merge_record_keys");
+    WriteSplit(dir);
+    const json good = ReadRecord(dir, 1);
+    json rec = good;
+    rec["pairs"][2]["key"] = rec["keys"][1];
+    WriteRecord(dir, 1, rec);
+    ExpectMergeFails(dir, "train-000001.tar: bad part record: " + PartRecordPath(dir, "train", 1) +
+                              ": pairs[2]");
+    rec = good;
+    rec["keys"][3] = ReadRecord(dir, 0)["keys"][0];
+    rec["pairs"][3]["key"] = rec["keys"][3];
+    WriteRecord(dir, 1, rec);
+    ExpectMergeFails(dir,
+                     "train-000001.tar: sample key scene0707_00/0_300 appears in an earlier "
+                     "shard, train-000000.tar");
   }
   {
     const std::string dir = test::ScratchDir("shards_merge_truncated");
     WriteSplit(dir);
     const std::string path = dir + "/train-000000.tar";
     io::WriteFileAtomic(path, io::ReadFileBytes(path).substr(0, 2048));
+    ExpectMergeFails(dir, "train-000000.tar: size 2048 differs from the recorded");
+    // One byte more is caught as well.
+    WriteSplit(dir);
+    io::WriteFileAtomic(path, io::ReadFileBytes(path) + "x");
     ExpectMergeFails(dir, "train-000000.tar: size");
   }
   {
@@ -252,22 +319,75 @@ TEST(Split, MergeFailsNamingAMissingOrCorruptShard) {
     ExpectMergeFails(dir, "train-000002.tar: holds 3 samples, the plan says 5");
   }
   {
-    // A tar replaced by a different valid shard with a matching record is caught by keys.
-    const std::string dir = test::ScratchDir("shards_merge_swapped");
-    WriteSplit(dir);
-    fs::copy_file(dir + "/train-000000.tar", dir + "/train-000001.tar",
-                  fs::copy_options::overwrite_existing);
-    json rec = json::parse(io::ReadFileBytes(PartRecordPath(dir, "train", 1)));
-    rec["md5sum"] = io::Md5HexOfFile(dir + "/train-000001.tar");
-    rec["filesize"] = fs::file_size(dir + "/train-000001.tar");
-    io::WriteFileAtomic(PartRecordPath(dir, "train", 1), rec.dump());
-    ExpectMergeFails(dir, "train-000001.tar");
-  }
-  {
     const std::string dir = test::ScratchDir("shards_merge_no_plan");
     WriteSplit(dir);
     fs::remove(PlanPath(dir, "train"));
     ExpectMergeFails(dir, "parts");
+  }
+}
+
+TEST(Split, MergeTrustsRecordedDigestsAndVerifyAndValidateDoNot) {
+  {
+    // Same size, other bytes: the merge trusts the record (it reads no tar) and publishes
+    // the recorded MD5; --verify and validate re-hash and catch it.
+    const std::string dir = test::ScratchDir("shards_merge_flipped_byte");
+    WriteSplit(dir);
+    const std::string path = dir + "/train-000001.tar";
+    const std::string recorded_md5 = ReadRecord(dir, 1)["md5sum"];
+    std::string bytes = io::ReadFileBytes(path);
+    bytes[700] ^= 0x01;  // inside the first member's data: same size, other MD5
+    io::WriteFileAtomic(path, bytes);
+    ExpectMergeSucceeds(dir);
+    const json index = json::parse(io::ReadFileBytes(dir + "/index.json"));
+    EXPECT_EQ(index["shardlist"][1]["md5sum"], recorded_md5);
+    EXPECT_NE(recorded_md5, io::Md5Hex(bytes));
+    std::string all;
+    for (const auto& p : ValidateSplit(dir, ValidateOptions{SchemasDir()})) all += p + "\n";
+    EXPECT_NE(all.find(path + ": md5 " + io::Md5Hex(bytes) + " differs from index.json's " +
+                       recorded_md5),
+              std::string::npos)
+        << all;
+    ExpectMergeFails(
+        dir,
+        "train-000001.tar: md5 " + io::Md5Hex(bytes) + " differs from the recorded " + recorded_md5,
+        /*verify=*/true);
+  }
+  {
+    // A tar replaced by a different valid shard with a matching record: only reading the
+    // tar (verify, validate) finds that its keys are not the record's.
+    const std::string dir = test::ScratchDir("shards_merge_swapped");
+    WriteSplit(dir);
+    fs::copy_file(dir + "/train-000000.tar", dir + "/train-000001.tar",
+                  fs::copy_options::overwrite_existing);
+    json rec = ReadRecord(dir, 1);
+    rec["md5sum"] = io::Md5HexOfFile(dir + "/train-000001.tar");
+    rec["filesize"] = fs::file_size(dir + "/train-000001.tar");
+    WriteRecord(dir, 1, rec);
+    ExpectMergeSucceeds(dir);
+    EXPECT_FALSE(ValidateSplit(dir, ValidateOptions{SchemasDir()}).empty());
+    ExpectMergeFails(dir, "train-000001.tar: sample keys in the tar differ from", true);
+  }
+  {
+    // Verify on a good split passes and writes the same index as the trusted merge.
+    const std::string dir = test::ScratchDir("shards_merge_verify_good");
+    WriteSplit(dir);
+    ExpectMergeSucceeds(dir);
+    const std::string trusted = io::ReadFileBytes(dir + "/index.json");
+    MergeOptions options;
+    options.schemas_dir = SchemasDir();
+    options.verify = true;
+    EXPECT_NO_THROW(MergeSplit(dir, options));
+    EXPECT_EQ(io::ReadFileBytes(dir + "/index.json"), trusted);
+    // A problem in two shards: verify names the first one in shard order.
+    for (const char* name : {"train-000002.tar", "train-000001.tar"}) {
+      std::string bytes = io::ReadFileBytes(dir + "/" + name);
+      bytes[1000] ^= 0x10;
+      io::WriteFileAtomic(dir + "/" + name, bytes);
+    }
+    for (int threads : {1, 2}) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+      ExpectMergeFails(dir, "train-000001.tar: md5", true);
+    }
   }
 }
 
@@ -339,7 +459,7 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   EXPECT_NE(p3[0].find("index.schema.json"), std::string::npos) << p3[0];
 }
 
-TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasWhenPresent) {
+TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasByVerifyAndValidate) {
   const std::string schemas = test::ScratchDir("shards_schemas_strict");
   fs::copy_file(SchemasDir() + "/index.schema.json", schemas + "/index.schema.json");
   auto write_schema = [&](const std::string& file, const std::string& frame_type) {
@@ -354,12 +474,18 @@ TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasWhenPresent) {
   options.schemas_dir = schemas;
   write_schema("sample.schema.json", "integer");
   write_schema("pairs_line.schema.json", "integer");
+  MergeOptions verify = options;
+  verify.verify = true;
   EXPECT_NO_THROW(MergeSplit(dir, options));
+  EXPECT_NO_THROW(MergeSplit(dir, verify));
   EXPECT_TRUE(ValidateSplit(dir, ValidateOptions{schemas}).empty());
 
+  // Content against the schemas is checked by --verify and validate; the default merge
+  // trusts what the tasks wrote (it reads no tar and checks no line against a schema).
   write_schema("sample.schema.json", "string");  // the samples hold integers
+  EXPECT_NO_THROW(MergeSplit(dir, options));
   try {
-    MergeSplit(dir, options);
+    MergeSplit(dir, verify);
     ADD_FAILURE() << "sample JSON not checked";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("train-000000.tar: scene0707_00/0_300.json: "
@@ -372,8 +498,9 @@ TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasWhenPresent) {
 
   write_schema("sample.schema.json", "integer");
   write_schema("pairs_line.schema.json", "string");
+  EXPECT_NO_THROW(MergeSplit(dir, options));
   try {
-    MergeSplit(dir, options);
+    MergeSplit(dir, verify);
     ADD_FAILURE() << "pair lines not checked";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("parts/train-000000.json: pairs[0]: "
@@ -410,10 +537,84 @@ TEST(Split, CommandsMergeAndValidate) {
   r = test::RunOccgt("validate --schemas '" + SchemasDir() + "' '" + dir + "'");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.stdout_text.find("train-000002.tar: md5"), std::string::npos) << r.stdout_text;
+  // The default merge trusts the recorded digest (same size): it passes; --verify fails
+  // with one line naming the shard.
+  r = test::RunOccgt("merge --schemas '" + SchemasDir() + "' '" + dir + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.stderr_text;
+  r = test::RunOccgt("merge --verify --threads 2 --schemas '" + SchemasDir() + "' '" + dir + "'");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.stderr_text.find("train-000002.tar: md5"), std::string::npos) << r.stderr_text;
+  EXPECT_EQ(std::count(r.stderr_text.begin(), r.stderr_text.end(), '\n'), 1) << r.stderr_text;
+  // A missing tar fails the default merge with one line naming it.
+  fs::remove(dir + "/train-000001.tar");
   r = test::RunOccgt("merge --schemas '" + SchemasDir() + "' '" + dir + "'");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.stderr_text.find("train-000002.tar"), std::string::npos) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("train-000001.tar: missing shard"), std::string::npos)
+      << r.stderr_text;
   EXPECT_EQ(std::count(r.stderr_text.begin(), r.stderr_text.end(), '\n'), 1) << r.stderr_text;
+}
+
+TEST(Split, DeprecatedMergeFlagsAreAcceptedWithANote) {
+  const std::string dir = test::ScratchDir("shards_merge_old_flags");
+  WriteSplit(dir);
+  auto r =
+      test::RunOccgt("merge --no-md5 --no-read --schemas '" + SchemasDir() + "' '" + dir + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
+  EXPECT_NE(r.stdout_text.find("11 samples"), std::string::npos) << r.stdout_text;
+  EXPECT_NE(r.stderr_text.find("--no-md5 is ignored"), std::string::npos) << r.stderr_text;
+  EXPECT_NE(r.stderr_text.find("use --verify"), std::string::npos) << r.stderr_text;
+  r = test::RunOccgt("merge --verify --no-md5 '" + dir + "'");
+  EXPECT_NE(r.exit_code, 0);
+}
+
+TEST(Split, ValidateOutputDoesNotDependOnTheThreadCount) {
+  // 11 one-sample shards, several of them broken in different ways.
+  const std::string dir = test::ScratchDir("shards_validate_threads");
+  WriteSplit(dir, "train", 1);
+  MergeSplit(dir, MergeOptions{});
+  for (int s : {2, 6, 9}) {
+    const std::string path = dir + "/" + ShardFileName("train", s);
+    std::string bytes = io::ReadFileBytes(path);
+    bytes[600 + s] ^= 0x08;
+    io::WriteFileAtomic(path, bytes);
+  }
+  fs::remove(dir + "/" + ShardFileName("train", 4));
+  fs::copy_file(dir + "/train-000000.tar", dir + "/train-000007.tar",
+                fs::copy_options::overwrite_existing);  // keys repeat, size and md5 differ
+  const std::string shard8 = dir + "/train-000008.tar";
+  io::WriteFileAtomic(shard8, io::ReadFileBytes(shard8).substr(0, 1024 + 100));
+  std::vector<std::vector<std::string>> runs;
+  for (int threads : {1, 2, 1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    runs.push_back(ValidateSplit(dir, ValidateOptions{SchemasDir()}));
+  }
+  ASSERT_GE(runs[0].size(), 7u);
+  for (size_t k = 1; k < runs.size(); ++k) EXPECT_EQ(runs[k], runs[0]) << "run " << k;
+  // Problems come in shard order.
+  std::string all;
+  for (const auto& p : runs[0]) all += p + "\n";
+  size_t last = 0;
+  for (int s : {2, 4, 6, 7, 8, 9}) {
+    const size_t at = all.find(ShardFileName("train", s) + ":");
+    ASSERT_NE(at, std::string::npos) << s << "\n" << all;
+    EXPECT_GE(at, last) << s << "\n" << all;
+    last = at;
+  }
+  EXPECT_NE(all.find("train-000007.tar: sample scene0707_00/0_300 repeats"), std::string::npos)
+      << all;
+  // The command: the same stdout with 1 and 2 threads.
+  const auto one =
+      test::RunOccgt("validate --threads 1 --schemas '" + SchemasDir() + "' '" + dir + "'");
+  const auto two =
+      test::RunOccgt("validate --threads 2 --schemas '" + SchemasDir() + "' '" + dir + "'");
+  EXPECT_EQ(one.exit_code, 1);
+  EXPECT_EQ(two.exit_code, 1);
+  EXPECT_EQ(one.stdout_text, two.stdout_text);
+  EXPECT_EQ(one.stderr_text, two.stderr_text);
+  std::string expected;
+  for (const auto& p : runs[0]) expected += p + "\n";
+  EXPECT_EQ(one.stdout_text, expected);
+  EXPECT_NE(test::RunOccgt("validate --threads -1 '" + dir + "'").exit_code, 0);
 }
 
 // Leaves a demo split (shards, merged indices, LoFTR export) in $OCCGT_SHARDS_DEMO_OUT for

@@ -19,7 +19,9 @@
 #include <vector>
 
 #include "libgt/core/error.h"
-#include "libgt/io/files.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/file_read.h"
+#include "libgt/io/md5.h"
 #include "libgt/io/npy.h"
 #include "libgt/shards/sample.h"
 #include "tests/support/test_support.h"
@@ -116,10 +118,10 @@ ShardInfo WriteShard(const std::string& path, const std::vector<Sample>& samples
   return writer.Finish();
 }
 
-TEST(TarShard, LargeMembersAreWrittenAndDigestedWhole) {
-  // Members of 256 KiB and more are written and digested as two concurrent tasks
-  // (tar_shard.cc): the digest must still be that of the published bytes, and the members
-  // must read back intact, around that size and across it.
+TEST(TarShard, LargeMembersReadBackIntactAndTheDigestIsTheFiles) {
+  // Members of several MiB reach the writer's write callback in one piece (unblocked
+  // archive): the MD5 computed while writing must be that of the published bytes, and
+  // the members must read back intact, whatever their size mod 512.
   const std::string dir = test::ScratchDir("shards_tar_large");
   std::mt19937 rng(7);
   std::vector<Sample> samples;
@@ -169,13 +171,13 @@ void ExpectDiskFullFailsAndPublishesNothing(const std::string& path,
   EXPECT_FALSE(fs::is_symlink(path + ".tmp"));
 }
 
-// Samples with members below, at and above the 256 KiB and 1 MiB thresholds of the writer.
+// Samples with small and large members (up to 1 MiB + 4097 bytes, past the writeback step).
 std::vector<Sample> LargeSamples(int count, uint32_t seed) {
   std::mt19937 rng(seed);
   std::vector<Sample> samples;
   for (int k = 0; k < count; ++k) {
     Sample s;
-    s.key = "scene/deferred_" + std::to_string(k);
+    s.key = "scene/large_sample_" + std::to_string(k);
     s.fields.push_back({"json", "{\"k\": " + std::to_string(k) + "}"});
     for (const size_t n : {size_t{256} << 10, size_t{5}, (size_t{1} << 20) + 4097,
                            static_cast<size_t>(rng() % 3000)}) {
@@ -188,30 +190,28 @@ std::vector<Sample> LargeSamples(int count, uint32_t seed) {
   return samples;
 }
 
-TEST(TarShard, DeferredDigestGivesTheSameBytesAndMd5) {
-  // Add(sample, kDeferred) writes now and digests in Finish (or in the next Add): the file
-  // and its MD5 must not depend on which samples were deferred.
-  const std::string dir = test::ScratchDir("shards_tar_deferred");
+TEST(TarShard, MovedAndCopiedSamplesGiveTheSameBytesAndMd5) {
+  // Add(const Sample&) and Add(Sample&&), in any mix: the file and its MD5 must not depend
+  // on which samples were handed over.
+  const std::string dir = test::ScratchDir("shards_tar_moved");
   const std::vector<Sample> samples = LargeSamples(4, 11);
   const ShardInfo plain = WriteShard(dir + "/plain-000000.tar", samples);
   const std::string plain_bytes = io::ReadFileBytes(dir + "/plain-000000.tar");
   ASSERT_EQ(plain.md5sum, io::Md5Hex(plain_bytes));
-  using D = TarShardWriter::Digest;
   const std::vector<std::vector<int>> patterns = {
-      {1, 1, 1, 1},  // every sample deferred: each Add first digests the one before
-      {0, 0, 0, 1},  // the build's pattern: only the last
-      {2, 1, 0, 1},  // const& (2), deferred, now, deferred
-      {1, 2, 2, 0},  // deferred, then const& Adds and a kNow one
+      {1, 1, 1, 1},  // every sample moved
+      {0, 0, 0, 1},  // only the last
+      {0, 1, 0, 1},  // alternating
   };
   for (size_t t = 0; t < patterns.size(); ++t) {
     const std::string path = dir + "/mixed" + std::to_string(t) + "-000000.tar";
     TarShardWriter writer(path);
     for (size_t k = 0; k < samples.size(); ++k) {
       Sample copy = samples[k];
-      if (patterns[t][k] == 2) {
-        writer.Add(copy);
+      if (patterns[t][k] == 1) {
+        writer.Add(std::move(copy));
       } else {
-        writer.Add(std::move(copy), patterns[t][k] == 1 ? D::kDeferred : D::kNow);
+        writer.Add(copy);
       }
     }
     const ShardInfo info = writer.Finish();
@@ -224,17 +224,17 @@ TEST(TarShard, DeferredDigestGivesTheSameBytesAndMd5) {
   }
 }
 
-TEST(TarShard, DeferredSampleOfAnAbandonedOrFailedShardLeavesNothing) {
-  const std::string dir = test::ScratchDir("shards_tar_deferred_fail");
+TEST(TarShard, MovedSampleOfAnAbandonedOrFailedShardLeavesNothing) {
+  const std::string dir = test::ScratchDir("shards_tar_moved_fail");
   {
     TarShardWriter writer(dir + "/a-000000.tar");
-    writer.Add(std::move(LargeSamples(1, 3)[0]), TarShardWriter::Digest::kDeferred);
+    writer.Add(std::move(LargeSamples(1, 3)[0]));
     EXPECT_TRUE(fs::exists(dir + "/a-000000.tar.tmp"));
   }
   EXPECT_TRUE(fs::is_empty(dir));
-  // Every write(2) fails (ENOSPC): the deferred Add or Finish throws naming the shard.
+  // Every write(2) fails (ENOSPC): Add or Finish throws naming the shard.
   ExpectDiskFullFailsAndPublishesNothing(dir + "/b-000000.tar", [](TarShardWriter& writer) {
-    writer.Add(std::move(LargeSamples(1, 4)[0]), TarShardWriter::Digest::kDeferred);
+    writer.Add(std::move(LargeSamples(1, 4)[0]));
   });
 }
 
