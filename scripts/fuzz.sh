@@ -53,7 +53,7 @@ build="${OCCGT_FUZZ_BUILD_DIR:-$here/build-fuzz}"
 if [[ ! -f "$build/CMakeCache.txt" ]]; then
   cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_CXX_COMPILER_LAUNCHER=ccache \
-    -DOCCGT_SANITIZE=address,undefined -DOCCGT_BUILD_FUZZ=ON -DOCCGT_BUILD_BENCH=OFF >&2
+    -DOCCGT_SANITIZE=address,undefined -DOCCGT_BUILD_FUZZ=ON -DOCCGT_BUILD_BENCH=OFF -DOCCGT_BUILD_PYTHON=OFF >&2
 fi
 jobs="${OCCGT_FUZZ_JOBS:-$(nproc)}"
 ((jobs > 2)) && jobs=2
