@@ -242,9 +242,9 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
     return summary;
   }
   if (!all_selected) {
-    throw InputError("--stage write", "the selection of some scenes is not complete in " +
-                                          SelectionDir(options.out_dir) +
-                                          " (run every task with --stage select first)");
+    throw InputError(SelectionDir(options.out_dir),
+                     "the selection of some scenes is not complete (run every task with --stage "
+                     "select first)");
   }
 
   const auto t_write = Clock::now();

@@ -140,6 +140,20 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
   DropCounts drops;
   std::vector<CandidatePair> candidates, pruned;
   int64_t frames_kept = 0;
+  // A recipe that stores images needs both frames' colour: frames without it are skipped
+  // and counted (scan.no_color, import.no_color); a scene with none at all is an error.
+  const bool need_color = r.sample.image != ImageFormat::kNone;
+  auto has_color = [&](size_t i) { return !scene.frames[i].color_path.empty(); };
+  if (need_color) {
+    bool any = false;
+    for (size_t i = 0; i < scene.frames.size(); ++i) any = any || has_color(i);
+    if (!any && scene.NumUsable() > 0) {
+      throw InputError(r.file + ": sample.image",
+                       std::string("expected colour images (") + ImageFormatName(r.sample.image) +
+                           "), but no frame of scene " + scene_name +
+                           " has one; set sample.image: none to build without images");
+    }
+  }
   if (imports) {
     std::map<int64_t, size_t> by_number;
     for (size_t i = 0; i < scene.frames.size(); ++i) by_number[scene.frames[i].number] = i;
@@ -151,6 +165,8 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
           ++drops["import.missing_frame"];
         } else if (!scene.frames[a->second].usable || !scene.frames[b->second].usable) {
           ++drops["import.unusable_frame"];
+        } else if (need_color && (!has_color(a->second) || !has_color(b->second))) {
+          ++drops["import.no_color"];
         } else {
           candidates.push_back({a->second, b->second});
         }
@@ -164,7 +180,16 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
     scan.min_valid_depth_fraction = r.dataset.min_valid_depth_fraction;
     scan.min_depth_m = labels.min_depth_m;
     scan.max_depth_m = labels.max_depth_m;
-    const ScanResult scanned = ScanFrames(scene, scan, cache);
+    ScanResult scanned = ScanFrames(scene, scan, cache);
+    if (need_color) {
+      const size_t before = scanned.kept.size();
+      scanned.kept.erase(std::remove_if(scanned.kept.begin(), scanned.kept.end(),
+                                        [&](size_t i) { return !has_color(i); }),
+                         scanned.kept.end());
+      if (scanned.kept.size() < before) {
+        scanned.drops["scan.no_color"] += static_cast<int64_t>(before - scanned.kept.size());
+      }
+    }
     AddCounts(scanned.drops, &drops);
     frames_kept = static_cast<int64_t>(scanned.kept.size());
     candidates = GenerateCandidates(scanned.kept, r.selection.max_frame_gap);

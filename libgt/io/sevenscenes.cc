@@ -76,9 +76,13 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
     f.depth.scale_m_per_unit = 0.001;
     f.depth.invalid_value = kInvalidRaw;
     f.depth_camera = camera;
-    if (FileExists(base + ".color.png")) {
-      f.color_path = base + ".color.png";
-      f.color_camera = camera;
+    // Colour as the releases have it: frame-NNNNNN.color.png, or .color.jpg.
+    for (const char* ext : {".color.png", ".color.jpg"}) {
+      if (FileExists(base + ext)) {
+        f.color_path = base + ext;
+        f.color_camera = camera;
+        break;
+      }
     }
     const Eigen::Matrix4d m = ReadMatrixText(p.path, 4, 4);
     if (const auto problem = PoseProblem(m)) {

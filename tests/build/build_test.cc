@@ -427,5 +427,47 @@ TEST(Pipeline, OccupancyScopesAndModes) {
   EXPECT_NE(two.bytes, pair.bytes);
 }
 
+// A recipe that stores images skips (and counts) frames without colour, and refuses a
+// scene without any: nothing requested is silently dropped.
+TEST(Pipeline, FramesWithoutColourAreCountedAndAColourlessSceneIsAnError) {
+  const std::string real = test::SharedData("sevenscenes/rgbd-frames");
+  ASSERT_FALSE(real.empty());
+  auto copy = [&](const std::string& name, bool colour_of_151) {
+    const std::string dir = test::ScratchDir(name);
+    for (const char* id : {"000150", "000151", "000152"}) {
+      const std::string base = std::string("/frame-") + id;
+      for (const char* f : {".pose.txt", ".depth.png"}) {
+        io::WriteFileAtomic(dir + "/seq-01" + base + f, io::ReadFileBytes(real + base + f));
+      }
+    }
+    if (colour_of_151) {
+      io::WriteFileAtomic(dir + "/seq-01/frame-000151.color.png",
+                          io::ReadFileBytes(real + "/frame-000151.color.png"));
+      io::WriteFileAtomic(dir + "/seq-01/frame-000152.color.png",
+                          io::ReadFileBytes(real + "/frame-000152.color.png"));
+    }
+    return dir;
+  };
+  auto recipe = [](const std::string& root) {
+    return ParseRecipe("name: c\nsplit: c\ndataset: {format: sevenscenes, root: " + root +
+                           "}\nselection: {score_stride: 8}\noccupancy: {enabled: false}\n",
+                       "c.yaml", "/");
+  };
+  BuildOptions o;
+  o.dry_run = true;
+  o.out_dir = test::ScratchDir("pipeline_colour_out") + "/out";
+  const nlohmann::json s = RunBuild(recipe(copy("pipeline_colour_some", true)), o, nullptr);
+  EXPECT_EQ(s["drops"].value("scan.no_color", 0), 1) << s["drops"].dump();  // frame 150
+  EXPECT_EQ(s["counts"]["frames_kept"], 2);
+  try {
+    RunBuild(recipe(copy("pipeline_colour_none", false)), o, nullptr);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("c.yaml: sample.image"), std::string::npos) << m;
+    EXPECT_NE(m.find("set sample.image: none"), std::string::npos) << m;
+  }
+}
+
 }  // namespace
 }  // namespace gt::build

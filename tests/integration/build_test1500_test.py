@@ -40,12 +40,15 @@ def make_fixture(root, names):
     depth[20:40, 30:50] = 1700
     depth[0:3, 0:5] = 0  # a hole of missing depth
     k = np.array([[FX, 0, (W - 1) / 2, 0], [0, FX, (H - 1) / 2, 0], [0, 0, 1, 0], [0, 0, 0, 1]])
+    # Colour as ScanNet's export has it (the shipped recipe stores images).
+    colour = Image.fromarray(np.dstack([(depth // 10).astype(np.uint8)] * 3))
     for scene, frames in scenes.items():
-        for sub in ("depth", "pose", "intrinsic"):
+        for sub in ("color", "depth", "pose", "intrinsic"):
             os.makedirs(os.path.join(root, scene, sub), exist_ok=True)
         np.savetxt(os.path.join(root, scene, "intrinsic", "intrinsic_depth.txt"), k, fmt="%f")
         for f in frames:
             Image.fromarray(depth).save(os.path.join(root, scene, "depth", f"{f}.png"))
+            colour.save(os.path.join(root, scene, "color", f"{f}.jpg"))
             np.savetxt(os.path.join(root, scene, "pose", f"{f}.txt"), pose_of(f), fmt="%.9f")
     return scenes
 

@@ -9,6 +9,8 @@
 #include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/depth_io.h"
+#include "libgt/io/file_read.h"
+#include "libgt/io/image.h"
 #include "libgt/io/reader.h"
 #include "tests/io/consistency.h"
 #include "tests/support/test_support.h"
@@ -149,6 +151,36 @@ TEST(SevenScenes, MissingDepthIsUnusableNotFatal) {
   EXPECT_FALSE(s.frames[0].usable);
   EXPECT_EQ(s.frames[0].unusable_reason, "depth: missing file");
   EXPECT_EQ(s.frames[0].depth_camera.fx, 585.0);  // default K without camera-intrinsics.txt
+}
+
+// Releases ship colour as frame-NNNNNN.color.png or .color.jpg: both are read; a frame
+// with neither has no colour (and is counted by a build that asks for images).
+TEST(SevenScenes, ColourAsPngOrJpgAndFramesWithout) {
+  const std::string real = test::SharedData("sevenscenes/rgbd-frames");
+  ASSERT_FALSE(real.empty());
+  const std::string dir = test::ScratchDir("7s_color_jpg");
+  for (const char* id : {"000150", "000151", "000152"}) {
+    const std::string base = std::string("/frame-") + id;
+    for (const char* f : {".pose.txt", ".depth.png"}) {
+      WriteFileAtomic(dir + "/seq-01" + base + f, ReadFileBytes(real + base + f));
+    }
+  }
+  const cv::Mat bgr = cv::imread(real + "/frame-000150.color.png", cv::IMREAD_COLOR);
+  ASSERT_FALSE(bgr.empty());
+  std::vector<uint8_t> jpg;
+  ASSERT_TRUE(cv::imencode(".jpg", bgr, jpg));
+  WriteFileAtomic(dir + "/seq-01/frame-000150.color.jpg", std::string(jpg.begin(), jpg.end()));
+  WriteFileAtomic(dir + "/seq-01/frame-000151.color.png",
+                  ReadFileBytes(real + "/frame-000151.color.png"));
+  const Scene s = MakeReader("sevenscenes")->ReadScene(dir, "seq-01");
+  ASSERT_EQ(s.frames.size(), 3u);
+  EXPECT_EQ(s.frames[0].color_path, dir + "/seq-01/frame-000150.color.jpg");
+  EXPECT_EQ(s.frames[1].color_path, dir + "/seq-01/frame-000151.color.png");
+  EXPECT_TRUE(s.frames[2].color_path.empty());
+  EXPECT_EQ(s.frames[0].color_camera.width, 640);
+  const ColorImage c = ReadColor(s.frames[0].color_path);
+  EXPECT_EQ(c.width, 640);
+  EXPECT_EQ(c.height, 480);
 }
 
 }  // namespace
