@@ -24,9 +24,11 @@ packages=(
   libeigen3-dev libopencv-dev libopenexr-dev libpcl-dev liboctomap-dev libpng-dev libjpeg-dev liblz4-dev libssl-dev
   nlohmann-json3-dev libcli11-dev libyaml-cpp-dev libarchive-dev libzip-dev libtbb-dev
   libgtest-dev libbenchmark-dev libvalijson-dev gnuplot-nox
+  pybind11-dev python3-dev
 )
 if [[ $want_tests == 1 ]]; then
-  packages+=(python3 python3-numpy python3-jsonschema python3-yaml python3-pil chromium)
+  packages+=(python3 python3-numpy python3-jsonschema python3-yaml python3-pil chromium python3-torch
+    python3-venv python3-pip python3-setuptools python3-wheel)
 fi
 if [[ -n "${OCCGT_EXTRA_PACKAGES:-}" ]]; then
   read -r -a extra <<<"$OCCGT_EXTRA_PACKAGES"

@@ -1,0 +1,261 @@
+"""occgt: ground truth for occlusion-aware image matching, from Python.
+
+The numerics are occgt's C++ library (the extension module ``occgt._occgt``, pybind11); this
+package adds type hints and documentation. Conventions (docs/GROUND_TRUTH.md and ../shared/design/GROUND_TRUTH.md §1): OpenCV camera
+axes (x right, y down, z forward), depth = planar z in metres (0, NaN, inf = invalid), pixel
+(u, v) = column u, row v with its centre at the continuous point (u, v), poses
+``world_from_cam`` (camera to world, 4x4, metres), images [height, width].
+
+Functions:
+    pair_ground_truth  labels, metrics, patch matches (and occupancy) of one pair of frames,
+                       the same arrays as ``occgt pair`` / ``occgt occupancy`` write
+    dense_volume       occupancy words -> uint8 [bins, H/2, W/2] (0 free, 1 occupied, 255 unknown)
+    open_dataset       occgt's dataset readers: scenes, frames, frames at a working resolution
+    pair_from_scene    pair_ground_truth of two frames of a scene, as ``occgt pair`` computes it
+
+Bad arguments raise ValueError naming the argument (``"depth0: expected ..."``). The work runs
+without the GIL, so threads calling these functions run in parallel. Docs: docs/PYTHON.md.
+"""
+from __future__ import annotations
+
+import os
+from typing import Any, Dict, Optional, Tuple, TypedDict, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from . import _occgt
+from ._occgt import FORMATS, LABEL_NAMES, MATCH_TYPE_NAMES, PRESETS, Dataset, Frame, Scene
+
+__version__: str = _occgt.__version__
+
+__all__ = [
+    "__version__",
+    "FORMATS",
+    "LABEL_NAMES",
+    "MATCH_TYPE_NAMES",
+    "PRESETS",
+    "Dataset",
+    "Frame",
+    "Scene",
+    "LoadedFrame",
+    "Metrics",
+    "NO_DEPTH",
+    "OUT_OF_VIEW",
+    "VISIBLE",
+    "OCCLUDED",
+    "INCONSISTENT",
+    "UNKNOWN",
+    "VV",
+    "VO",
+    "OV",
+    "PairGroundTruth",
+    "dense_volume",
+    "open_dataset",
+    "pair_from_scene",
+    "pair_ground_truth",
+]
+
+#: Label codes (uint8) of label01/label10/cells0/cells1 (LABEL_NAMES[code] is the name):
+#: NO_DEPTH the source depth is invalid; OUT_OF_VIEW behind the other camera or outside its
+#: image; VISIBLE the other view sees the same surface (within tolerance); OCCLUDED a surface
+#: of the other view lies in front of the point; INCONSISTENT the other view sees past it
+#: (depth or pose error, motion); UNKNOWN it projects into the other view, which has no depth.
+NO_DEPTH: int = LABEL_NAMES.index("NO_DEPTH")
+OUT_OF_VIEW: int = LABEL_NAMES.index("OUT_OF_VIEW")
+VISIBLE: int = LABEL_NAMES.index("VISIBLE")
+OCCLUDED: int = LABEL_NAMES.index("OCCLUDED")
+INCONSISTENT: int = LABEL_NAMES.index("INCONSISTENT")
+UNKNOWN: int = LABEL_NAMES.index("UNKNOWN")
+#: Match type codes (uint8) of match_type (MATCH_TYPE_NAMES[code]): VV visible in both
+#: images, VO visible in image 0 and occluded in image 1, OV the reverse.
+VV: int = MATCH_TYPE_NAMES.index("vv")
+VO: int = MATCH_TYPE_NAMES.index("vo")
+OV: int = MATCH_TYPE_NAMES.index("ov")
+
+#: What Scene.load returns: (depth float32 [H, W] metres, K float64 [3, 3], world_from_cam
+#: float64 [4, 4]).
+LoadedFrame = Tuple[npt.NDArray[np.float32], npt.NDArray[np.float64], npt.NDArray[np.float64]]
+
+
+class Metrics(TypedDict):
+    """Metrics of one direction A->B at stride 1 (docs/GROUND_TRUTH.md §3); the same fields
+    and values as ``metrics01``/``metrics10`` of ``occgt pair``'s meta.json."""
+
+    sampled: int  # pixels of A (H * W)
+    valid: int  # pixels of A with valid depth
+    counts: Dict[str, int]  # per label name (LABEL_NAMES): NO_DEPTH ... UNKNOWN
+    overlap: float  # (VISIBLE + OCCLUDED + INCONSISTENT + UNKNOWN) / valid
+    consistent_overlap: float  # VISIBLE / sampled
+    occlusion_ratio: float  # OCCLUDED / sampled (the paper's)
+    occlusion_ratio_visible: float  # OCCLUDED / (VISIBLE + OCCLUDED) (the released code's)
+
+
+class _PairGroundTruthBase(TypedDict):
+    label01: npt.NDArray[np.uint8]
+    label10: npt.NDArray[np.uint8]
+    matches: npt.NDArray[np.int32]
+    match_type: npt.NDArray[np.uint8]
+    match_xy: npt.NDArray[np.float32]
+    cells0: npt.NDArray[np.uint8]
+    cells1: npt.NDArray[np.uint8]
+    T_0to1: npt.NDArray[np.float64]
+    metrics01: Metrics
+    metrics10: Metrics
+
+
+class PairGroundTruth(_PairGroundTruthBase, total=False):
+    """What pair_ground_truth returns; the occupancy keys only with ``occupancy=True``."""
+
+    occ0: npt.NDArray[np.uint64]
+    known0: npt.NDArray[np.uint64]
+    occ1: npt.NDArray[np.uint64]
+    known1: npt.NDArray[np.uint64]
+    bin_edges_m: npt.NDArray[np.float64]
+
+
+def pair_ground_truth(
+    depth0: npt.ArrayLike,
+    depth1: npt.ArrayLike,
+    K0: npt.ArrayLike,
+    K1: npt.ArrayLike,
+    world_from_cam0: npt.ArrayLike,
+    world_from_cam1: npt.ArrayLike,
+    preset: str = "default",
+    *,
+    abs_tol_m: Optional[float] = None,
+    rel_tol: Optional[float] = None,
+    min_depth_m: Optional[float] = None,
+    max_depth_m: Optional[float] = None,
+    relative_to: Optional[str] = None,
+    bounds: Optional[str] = None,
+    target_lookup: Optional[str] = None,
+    missing_target: Optional[str] = None,
+    stride: int = 8,
+    anchor: str = "center",
+    mutual: bool = True,
+    occupancy: bool = False,
+    voxel_m: float = 0.05,
+    max_range_m: float = 10.0,
+    near_m: float = 0.1,
+    far_m: float = 10.0,
+    bins: int = 64,
+    spacing: str = "linear",
+    traversal: str = "exact",
+    occupancy_mode: str = "octomap",
+) -> PairGroundTruth:
+    """The ground truth of one pair of posed depth frames (C++ ``truth::ComputePairTruth``).
+
+    The depth maps define the working resolution: every output is at their size (resize them
+    first, e.g. with ``Scene.load(id, width, height)``). The two frames may have different
+    sizes; each K must be the intrinsics of its own depth map.
+
+    Args:
+        depth0, depth1: depth maps [H, W], float32 or float64 (rounded to float32), planar z in
+            metres along the camera's optical axis; 0, NaN, inf or outside
+            [min_depth_m, max_depth_m] = no depth. Any strides. 2 <= H, W <= 8192.
+        K0, K1: intrinsics [3, 3] (float or integer) of depth0 / depth1 at their size, pixels:
+            [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] with fx, fy > 0 and finite, the pixel centre
+            convention of the module docstring (ScanNet's cx = 319.5 at width 640).
+        world_from_cam0, world_from_cam1: camera-to-world poses [4, 4] (float or integer),
+            OpenCV camera axes, metres: finite, last row [0, 0, 0, 1], rotation orthonormal to
+            |R^T R - I| <= 1e-3 with det R > 0. Used as given (not re-orthonormalised).
+        preset: label preset (PRESETS): "default", "occ2net", "occ2net-compat", "loftr",
+            "superglue" (docs/GROUND_TRUTH.md §2); the options below override its fields.
+        abs_tol_m: absolute depth tolerance (metres); None = the preset's.
+        rel_tol: relative depth tolerance (fraction of z or of B's depth); None = the preset's.
+        min_depth_m: minimum valid depth (metres), also the cheirality threshold; None = the
+            preset's (0). ``occgt pair`` uses the dataset's (``Scene.min_depth_m``).
+        max_depth_m: maximum valid depth (metres); None = the preset's (1000). ``occgt pair``
+            uses the dataset's (``Scene.max_depth_m``).
+        relative_to: "projected" | "observed": what rel_tol multiplies; None = the preset's.
+        bounds: "pixel-area" | "strict": which projections lie inside B; None = the preset's.
+        target_lookup: "nearest" | "truncate": B's pixel of a projection; None = the preset's.
+        missing_target: "unknown" | "as-zero-depth": a projection onto B's missing depth;
+            None = the preset's.
+        stride: patch cell size in pixels at the working resolution (LoFTR's coarse level: 8).
+        anchor: "center" | "corner": the anchor pixel of a cell (docs/GROUND_TRUTH.md §4).
+        mutual: keep a visible-visible match only if it warps back into its cell.
+        occupancy: also compute the 64-bin occupancy volumes of both cameras (the pair's two
+            depth maps fused into one OctoMap-equivalent voxel map, docs/GROUND_TRUTH.md §5).
+        voxel_m: voxel size of the fused map (metres).
+        max_range_m: ray truncation of the fusion (metres; <= 0 unlimited).
+        near_m, far_m: first and last bin edge (planar depth, metres).
+        bins: number of depth bins D, 1..64 (one uint64 word per ray).
+        spacing: "linear" | "log" | "inverse": the bin edges.
+        traversal: "exact" | "center": which voxels a bin's ray segment looks at.
+        occupancy_mode: "octomap" (fused map) | "two_point" (the released Occ²Net target).
+
+    Returns:
+        A dict (PairGroundTruth) of NumPy arrays that own their memory, with the names, dtypes
+        and values of the files of ``occgt pair`` (and ``occgt occupancy``):
+        label01 uint8 [H0, W0], label10 uint8 [H1, W1] (codes: LABEL_NAMES),
+        matches int32 [M, 2] (cell in image 0, cell in image 1; cells row-major, W/stride per
+        row), match_type uint8 [M] (MATCH_TYPE_NAMES: 0 vv, 1 vo, 2 ov),
+        match_xy float32 [M, 2] (the warped anchor in the other image, pixels),
+        cells0 uint8 [H0/stride, W0/stride], cells1 uint8 [H1/stride, W1/stride] (the label of
+        each cell's anchor), T_0to1 float64 [4, 4] (cam1_from_cam0 = inverse(world_from_cam1)
+        @ world_from_cam0), metrics01, metrics10 (Metrics); with occupancy=True also occ0,
+        known0 uint64 [H0/2, W0/2], occ1, known1 uint64 [H1/2, W1/2] (bit k: bin k occupied /
+        known) and bin_edges_m float64 [bins + 1] (metres).
+
+    Raises:
+        ValueError: an argument of the wrong type, dtype, shape or value, naming it.
+    """
+    result: PairGroundTruth = _occgt.pair_ground_truth(
+        depth0, depth1, K0, K1, world_from_cam0, world_from_cam1, preset,
+        abs_tol_m=abs_tol_m, rel_tol=rel_tol, min_depth_m=min_depth_m, max_depth_m=max_depth_m,
+        relative_to=relative_to, bounds=bounds, target_lookup=target_lookup,
+        missing_target=missing_target, stride=stride, anchor=anchor, mutual=mutual,
+        occupancy=occupancy, voxel_m=voxel_m, max_range_m=max_range_m, near_m=near_m,
+        far_m=far_m, bins=bins, spacing=spacing, traversal=traversal,
+        occupancy_mode=occupancy_mode)
+    return result
+
+
+def dense_volume(occ: npt.ArrayLike, known: npt.ArrayLike, bins: int = 64) -> npt.NDArray[np.uint8]:
+    """The dense occupancy volume of one camera (C++ ``occupancy::DenseVolume``).
+
+    Args:
+        occ: uint64 [H/2, W/2] words of pair_ground_truth's occ0/occ1 (bit k: bin k occupied).
+        known: uint64 [H/2, W/2], known0/known1 (bit k: bin k occupied or free).
+        bins: number of depth bins D used for them, 1..64.
+
+    Returns:
+        uint8 [bins, H/2, W/2]: 0 free, 1 occupied, 255 unknown (bin k covers planar depth
+        [bin_edges_m[k], bin_edges_m[k + 1])), like ``occgt occupancy --dense``.
+    """
+    return _occgt.dense_volume(occ, known, bins)
+
+
+def open_dataset(root: Union[str, "os.PathLike[str]"], format: str) -> Dataset:
+    """A dataset read by occgt's own readers (docs/DATASETS.md).
+
+    Args:
+        root: the dataset folder (or a scene folder / generic manifest folder).
+        format: one of FORMATS: "scannet", "tartanair", "sevenscenes", "tum", "generic".
+
+    Returns:
+        A Dataset: ``.scenes()`` lists the scene names, ``.scene(name)`` reads one scene
+        (``.frames``: id, number, usable, reason, K at the depth resolution, world_from_cam;
+        ``.load(frame_id, width=640, height=480)`` -> (depth float32 [H, W] metres,
+        K float64 [3, 3] at W x H, world_from_cam float64 [4, 4])).
+    """
+    return Dataset(os.fspath(root), format)
+
+
+def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = 640, height: int = 480,
+                    preset: str = "default", **options: Any) -> PairGroundTruth:
+    """pair_ground_truth of frames id0, id1 of a scene at width x height, with the scene's
+    depth range unless ``min_depth_m``/``max_depth_m`` are given: the arrays and metrics that
+    ``occgt pair --root R --format F --scene S --frames id0,id1 --resolution WxH`` writes.
+
+    ``options`` are the keyword arguments of pair_ground_truth.
+    """
+    depth0, K0, world_from_cam0 = scene.load(id0, width, height)
+    depth1, K1, world_from_cam1 = scene.load(id1, width, height)
+    options.setdefault("min_depth_m", scene.min_depth_m)
+    options.setdefault("max_depth_m", scene.max_depth_m)
+    return pair_ground_truth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1, preset,
+                             **options)
+

@@ -1,0 +1,103 @@
+"""Type stubs of the extension module occgt._occgt (python/src/*.cc). Use the package
+``occgt``: its functions document every argument (python/occgt/__init__.py)."""
+from typing import Any, List, Optional, Tuple
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+LABEL_NAMES: Tuple[str, ...]  # index = uint8 label code
+MATCH_TYPE_NAMES: Tuple[str, ...]  # index = uint8 match type code ("vv", "vo", "ov")
+PRESETS: Tuple[str, ...]  # label presets
+FORMATS: Tuple[str, ...]  # dataset formats of open_dataset
+
+def pair_ground_truth(
+    depth0: npt.ArrayLike,
+    depth1: npt.ArrayLike,
+    K0: npt.ArrayLike,
+    K1: npt.ArrayLike,
+    world_from_cam0: npt.ArrayLike,
+    world_from_cam1: npt.ArrayLike,
+    preset: str = "default",
+    *,
+    abs_tol_m: Optional[float] = None,
+    rel_tol: Optional[float] = None,
+    min_depth_m: Optional[float] = None,
+    max_depth_m: Optional[float] = None,
+    relative_to: Optional[str] = None,
+    bounds: Optional[str] = None,
+    target_lookup: Optional[str] = None,
+    missing_target: Optional[str] = None,
+    stride: int = 8,
+    anchor: str = "center",
+    mutual: bool = True,
+    occupancy: bool = False,
+    voxel_m: float = 0.05,
+    max_range_m: float = 10.0,
+    near_m: float = 0.1,
+    far_m: float = 10.0,
+    bins: int = 64,
+    spacing: str = "linear",
+    traversal: str = "exact",
+    occupancy_mode: str = "octomap",
+) -> Any: ...  # occgt.PairGroundTruth
+def dense_volume(occ: npt.ArrayLike, known: npt.ArrayLike, bins: int = 64) -> npt.NDArray[np.uint8]: ...
+
+class Frame:
+    """One frame of a scene as its reader lists it (metadata only)."""
+
+    @property
+    def id(self) -> str: ...
+    @property
+    def number(self) -> int: ...
+    @property
+    def usable(self) -> bool: ...
+    @property
+    def reason(self) -> str: ...  # why unusable ('' when usable)
+    @property
+    def width(self) -> int: ...  # of the depth map, pixels
+    @property
+    def height(self) -> int: ...
+    @property
+    def K(self) -> npt.NDArray[np.float64]: ...  # [3, 3] at width x height, pixels
+    @property
+    def world_from_cam(self) -> npt.NDArray[np.float64]: ...  # [4, 4], OpenCV axes, metres
+    @property
+    def depth_path(self) -> str: ...
+    @property
+    def color_path(self) -> str: ...
+
+class Scene:
+    """One scene of a dataset: its frames and how to load them at a working resolution."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def format(self) -> str: ...
+    @property
+    def path(self) -> str: ...
+    @property
+    def min_depth_m(self) -> float: ...  # the dataset's valid depth range, metres
+    @property
+    def max_depth_m(self) -> float: ...
+    @property
+    def frames(self) -> List[Frame]: ...
+    def load(
+        self, frame_id: str, width: int = 640, height: int = 480
+    ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """(depth float32 [height, width] planar metres, 0 = invalid; K float64 [3, 3] at
+        width x height; world_from_cam float64 [4, 4]) of a usable frame: depth resized with
+        nearest neighbour, K rescaled with the pixel-area rule. ValueError for an unknown or
+        unusable frame_id or an unreadable depth file."""
+        ...
+
+class Dataset:
+    """A dataset root read by one of occgt's readers."""
+
+    def __init__(self, root: str, format: str) -> None: ...
+    @property
+    def root(self) -> str: ...
+    @property
+    def format(self) -> str: ...
+    def scenes(self) -> List[str]: ...
+    def scene(self, name: str) -> Scene: ...

@@ -1,0 +1,167 @@
+#include "python/src/convert.h"
+
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "libgt/truth/working_frame.h"
+
+namespace occgt_py {
+
+using namespace pybind11::literals;
+
+void ThrowValue(const std::string& argument, const std::string& problem) {
+  throw py::value_error(argument + ": " + problem);
+}
+
+py::array AsArray(py::handle obj, const std::string& argument) {
+  if (py::isinstance<py::array>(obj)) return py::reinterpret_borrow<py::array>(obj);
+  try {
+    return py::module_::import("numpy").attr("asarray")(obj);
+  } catch (py::error_already_set& e) {
+    ThrowValue(argument, std::string("expected a NumPy array, got ") +
+                             std::string(py::str(py::type::of(obj).attr("__name__"))));
+  }
+}
+
+std::string ShapeText(const py::array& a) { return py::str(a.attr("shape")); }
+std::string DtypeText(const py::array& a) { return py::str(a.dtype()); }
+
+namespace {
+
+// dtype kind 'f' (floating, not complex) of 4 or 8 bytes.
+bool IsFloat32Or64(const py::array& a) {
+  const char kind = a.dtype().kind();
+  return kind == 'f' && (a.itemsize() == 4 || a.itemsize() == 8);
+}
+
+// Real numbers: floating or integer (not bool, complex, object, strings).
+bool IsRealNumber(const py::array& a) {
+  const char kind = a.dtype().kind();
+  return kind == 'f' || kind == 'i' || kind == 'u';
+}
+
+// A [rows, cols] real array as float64, row-major.
+Eigen::MatrixXd RealMatrix(py::handle obj, int rows, int cols, const std::string& argument,
+                           const std::string& expected) {
+  py::array a = AsArray(obj, argument);
+  if (!IsRealNumber(a)) {
+    ThrowValue(argument, "expected a float array " + expected + ", got dtype " + DtypeText(a));
+  }
+  if (a.ndim() != 2 || a.shape(0) != rows || a.shape(1) != cols) {
+    ThrowValue(argument, "expected shape (" + std::to_string(rows) + ", " + std::to_string(cols) +
+                             ") " + expected + ", got " + ShapeText(a));
+  }
+  auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+  if (!d) throw py::error_already_set();
+  Eigen::MatrixXd m(rows, cols);
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) m(r, c) = d.at(r, c);
+  }
+  return m;
+}
+
+}  // namespace
+
+std::shared_ptr<const gt::DepthImage> DepthFromArray(py::handle obj, const std::string& argument) {
+  py::array a = AsArray(obj, argument);
+  if (!IsFloat32Or64(a)) {
+    ThrowValue(argument,
+               "expected a depth map of dtype float32 or float64 (planar metres), got dtype " +
+                   DtypeText(a));
+  }
+  if (a.ndim() != 2) {
+    ThrowValue(argument, "expected a depth map of shape (H, W), got shape " + ShapeText(a));
+  }
+  gt::truth::Resolution size;
+  size.width = static_cast<int>(std::min<py::ssize_t>(a.shape(1), gt::truth::kMaxResolution + 1));
+  size.height = static_cast<int>(std::min<py::ssize_t>(a.shape(0), gt::truth::kMaxResolution + 1));
+  std::string error;
+  if (!size.Check(&error)) ThrowValue(argument, error + " (shape " + ShapeText(a) + ")");
+  auto depth = std::make_shared<gt::DepthImage>(size.width, size.height);
+  // One copy (and the float64 -> float32 rounding, as a C cast) straight into the image:
+  // numpy.copyto into a view of its buffer, whatever the strides of the input.
+  py::capsule no_owner(depth.get(), [](void*) {});
+  py::array_t<float> view({a.shape(0), a.shape(1)}, depth->values_m.data(), no_owner);
+  py::module_::import("numpy").attr("copyto")(view, a, "casting"_a = "same_kind");
+  return depth;
+}
+
+gt::Camera CameraFromArray(py::handle obj, int width, int height, const std::string& argument) {
+  const char* expected = "[[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (pixels)";
+  const Eigen::MatrixXd K = RealMatrix(obj, 3, 3, argument, expected);
+  if (K(0, 1) != 0 || K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0 || K(2, 2) != 1) {
+    std::ostringstream got;
+    got << "expected " << expected << " (no skew, last row 0 0 1), got [[" << K(0, 0) << ", "
+        << K(0, 1) << ", " << K(0, 2) << "], [" << K(1, 0) << ", " << K(1, 1) << ", " << K(1, 2)
+        << "], [" << K(2, 0) << ", " << K(2, 1) << ", " << K(2, 2) << "]]";
+    ThrowValue(argument, got.str());
+  }
+  const gt::Camera camera = gt::Camera::FromK(K, width, height);
+  std::string error;
+  if (!camera.Check(&error)) ThrowValue(argument, error);
+  return camera;
+}
+
+gt::Rigid3d PoseFromArray(py::handle obj, const std::string& argument) {
+  const Eigen::Matrix4d m =
+      RealMatrix(obj, 4, 4, argument, "(rigid world_from_cam: [[R, t], [0, 0, 0, 1]], metres)");
+  if (const auto problem = gt::PoseProblem(m)) ThrowValue(argument, *problem);
+  gt::Rigid3d pose = gt::Rigid3d::Identity();
+  pose.linear() = m.topLeftCorner<3, 3>();
+  pose.translation() = m.topRightCorner<3, 1>();
+  return pose;
+}
+
+std::vector<uint64_t> WordsFromArray(py::handle obj, const std::string& argument,
+                                     std::vector<py::ssize_t>* shape) {
+  py::array a = AsArray(obj, argument);
+  if (a.dtype().kind() != 'u' || a.itemsize() != 8) {
+    ThrowValue(argument,
+               "expected dtype uint64 (one bit per depth bin), got dtype " + DtypeText(a));
+  }
+  if (a.ndim() != 2) ThrowValue(argument, "expected shape (H/2, W/2), got shape " + ShapeText(a));
+  *shape = {a.shape(0), a.shape(1)};
+  auto c = py::array_t<uint64_t, py::array::c_style | py::array::forcecast>::ensure(a);
+  if (!c) throw py::error_already_set();
+  return std::vector<uint64_t>(c.data(), c.data() + c.size());
+}
+
+py::array_t<double> MatrixToArray(const Eigen::MatrixXd& m) {
+  py::array_t<double> out({static_cast<py::ssize_t>(m.rows()), static_cast<py::ssize_t>(m.cols())});
+  auto w = out.mutable_unchecked<2>();
+  for (Eigen::Index r = 0; r < m.rows(); ++r) {
+    for (Eigen::Index c = 0; c < m.cols(); ++c) w(r, c) = m(r, c);
+  }
+  return out;
+}
+
+py::object JsonToPython(const nlohmann::ordered_json& j) {
+  switch (j.type()) {
+    case nlohmann::ordered_json::value_t::object: {
+      py::dict d;
+      for (const auto& [key, value] : j.items()) d[py::str(key)] = JsonToPython(value);
+      return std::move(d);
+    }
+    case nlohmann::ordered_json::value_t::array: {
+      py::list l;
+      for (const auto& value : j) l.append(JsonToPython(value));
+      return std::move(l);
+    }
+    case nlohmann::ordered_json::value_t::string:
+      return py::str(j.get<std::string>());
+    case nlohmann::ordered_json::value_t::boolean:
+      return py::bool_(j.get<bool>());
+    case nlohmann::ordered_json::value_t::number_integer:
+      return py::int_(j.get<int64_t>());
+    case nlohmann::ordered_json::value_t::number_unsigned:
+      return py::int_(j.get<uint64_t>());
+    case nlohmann::ordered_json::value_t::number_float:
+      return py::float_(j.get<double>());
+    default:
+      return py::none();
+  }
+}
+
+}  // namespace occgt_py

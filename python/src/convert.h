@@ -1,0 +1,81 @@
+// Conversions between NumPy arrays and the plain types of libgt, shared by the binding files
+// of the module `occgt._occgt` (docs/PYTHON.md). Every input is checked here, at the
+// boundary: a wrong dtype, shape or value raises ValueError("<argument>: <what was expected>,
+// got ..."), never a crash. Outputs take ownership of the C++ vectors (no copy).
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <cstdint>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "libgt/core/camera.h"
+#include "libgt/core/depth.h"
+#include "libgt/core/error.h"
+#include "libgt/core/pose.h"
+
+namespace occgt_py {
+
+namespace py = pybind11;
+
+// ValueError("<argument>: <problem>").
+[[noreturn]] void ThrowValue(const std::string& argument, const std::string& problem);
+
+// Runs f; an InputError of a parser (whose field is a CLI flag such as "--preset") becomes
+// ValueError("<argument>: <problem>").
+template <typename F>
+auto Named(const std::string& argument, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const gt::InputError& e) {
+    std::string problem = e.what();
+    const std::string prefix = e.where() + ": ";
+    if (problem.compare(0, prefix.size(), prefix) == 0) problem.erase(0, prefix.size());
+    ThrowValue(argument, problem);
+  }
+}
+
+// An array-like as a NumPy array (numpy.asarray), or ValueError naming the argument.
+py::array AsArray(py::handle obj, const std::string& argument);
+// "(480, 640)" / "float64" for messages.
+std::string ShapeText(const py::array& a);
+std::string DtypeText(const py::array& a);
+
+// Depth map [H, W] float32 or float64 (any strides; float64 is rounded to float32), planar
+// metres; 2 <= H, W <= 8192 (truth::Resolution). One copy into the DepthImage.
+std::shared_ptr<const gt::DepthImage> DepthFromArray(py::handle obj, const std::string& argument);
+// K [3, 3] (float or integer) = [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] for an image of
+// width x height; fx, fy > 0 and finite (Camera::Check).
+gt::Camera CameraFromArray(py::handle obj, int width, int height, const std::string& argument);
+// world_from_cam [4, 4] (float or integer), rigid (core/pose.h PoseProblem: finite, last row
+// 0 0 0 1, |R^T R - I| <= 1e-3, det R > 0). Used as given (R is not re-orthonormalised), so a
+// pose from Scene.load gives the same bits as the CLI.
+gt::Rigid3d PoseFromArray(py::handle obj, const std::string& argument);
+// A uint64 array of shape [H, W] (occupancy words), copied into a vector.
+std::vector<uint64_t> WordsFromArray(py::handle obj, const std::string& argument,
+                                     std::vector<py::ssize_t>* shape);
+
+// The vector as an array of the given shape, owning it through a capsule (no copy).
+template <typename T>
+py::array_t<T> ToArray(std::vector<T>&& values, const std::vector<py::ssize_t>& shape) {
+  size_t n = 1;
+  for (py::ssize_t s : shape) n *= static_cast<size_t>(s);
+  if (n != values.size()) throw std::logic_error("occgt: array size does not match its shape");
+  auto owned = std::make_unique<std::vector<T>>(std::move(values));
+  T* data = owned->data();
+  py::capsule base(owned.get(), [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  owned.release();  // the capsule owns it now
+  return py::array_t<T>(shape, data, base);
+}
+
+py::array_t<double> MatrixToArray(const Eigen::MatrixXd& m);  // [rows, cols] float64 (a copy)
+
+// A JSON value as Python objects (objects → dict in their order, arrays → list).
+py::object JsonToPython(const nlohmann::ordered_json& j);
+
+}  // namespace occgt_py

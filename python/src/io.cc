@@ -1,0 +1,159 @@
+// Bindings of libgt/io (the dataset readers) and of the working-frame loading of libgt/truth:
+// open_dataset(root, format) -> Dataset; Dataset.scenes(), Dataset.scene(name) -> Scene;
+// Scene.frames (gt::Frame metadata), Scene.load(frame_id, width, height) -> (depth, K,
+// world_from_cam) at the working resolution (truth::LoadWorkingDepth / WorkingCamera, the
+// two halves of truth::LoadWorkingFrame). Files are read without the GIL.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "libgt/core/frame.h"
+#include "libgt/io/reader.h"
+#include "libgt/truth/working_frame.h"
+#include "python/src/convert.h"
+
+namespace occgt_py {
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace {
+
+class PyScene {
+ public:
+  explicit PyScene(gt::Scene scene) : scene_(std::make_shared<const gt::Scene>(std::move(scene))) {}
+
+  const gt::Scene& scene() const { return *scene_; }
+
+  py::tuple Load(const std::string& frame_id, int width, int height) const {
+    const gt::truth::Resolution resolution{width, height};
+    std::string error;
+    if (!resolution.Check(&error)) ThrowValue("width, height", error);
+    gt::DepthImage depth;
+    gt::Camera camera;
+    gt::Rigid3d world_from_cam;
+    {
+      py::gil_scoped_release no_gil;
+      const gt::Frame& frame = scene_->frames[gt::truth::FindFrame(*scene_, frame_id, "frame_id")];
+      depth = gt::truth::LoadWorkingDepth(frame, resolution);
+      camera = gt::truth::WorkingCamera(frame, resolution);
+      world_from_cam = frame.world_from_cam;
+    }
+    const int h = depth.height, w = depth.width;
+    return py::make_tuple(ToArray(std::move(depth.values_m), {h, w}), MatrixToArray(camera.K()),
+                          MatrixToArray(world_from_cam.matrix()));
+  }
+
+ private:
+  std::shared_ptr<const gt::Scene> scene_;
+};
+
+class PyDataset {
+ public:
+  PyDataset(std::string root, std::string format)
+      : root_(std::move(root)),
+        format_(std::move(format)),
+        reader_(Named("format", [&] { return gt::io::MakeReader(format_); })) {}
+
+  const std::string& root() const { return root_; }
+  const std::string& format() const { return format_; }
+
+  std::vector<std::string> Scenes() const {
+    py::gil_scoped_release no_gil;
+    return reader_->ListScenes(root_);
+  }
+  PyScene Scene(const std::string& name) const {
+    py::gil_scoped_release no_gil;
+    return PyScene(reader_->ReadScene(root_, name));
+  }
+
+ private:
+  std::string root_, format_;
+  std::shared_ptr<const gt::io::DatasetReader> reader_;
+};
+
+}  // namespace
+
+void BindIo(py::module_& m) {
+  m.attr("FORMATS") = py::tuple(py::cast(gt::io::KnownFormats()));
+
+  py::class_<gt::Frame>(m, "Frame",
+                        "One frame of a scene as its reader lists it (metadata only; "
+                        "Scene.load reads the depth).")
+      .def_property_readonly(
+          "id", [](const gt::Frame& f) { return f.id; }, "stable id within the scene")
+      .def_property_readonly(
+          "number", [](const gt::Frame& f) { return f.number; }, "numeric order in the scene")
+      .def_property_readonly(
+          "usable", [](const gt::Frame& f) { return f.usable; },
+          "False when the frame must not be used (lost tracking, non-rigid pose, no depth)")
+      .def_property_readonly(
+          "reason", [](const gt::Frame& f) { return f.unusable_reason; },
+          "why the frame is unusable ('' when usable)")
+      .def_property_readonly(
+          "width", [](const gt::Frame& f) { return f.depth_camera.width; },
+          "width of the depth map (pixels)")
+      .def_property_readonly(
+          "height", [](const gt::Frame& f) { return f.depth_camera.height; },
+          "height of the depth map (pixels)")
+      .def_property_readonly(
+          "K", [](const gt::Frame& f) { return MatrixToArray(f.depth_camera.K()); },
+          "float64 [3, 3] intrinsics at the depth map's resolution (width x height), pixels")
+      .def_property_readonly(
+          "world_from_cam",
+          [](const gt::Frame& f) { return MatrixToArray(f.world_from_cam.matrix()); },
+          "float64 [4, 4] camera-to-world pose, OpenCV camera axes, metres")
+      .def_property_readonly(
+          "depth_path", [](const gt::Frame& f) { return f.depth.path; }, "depth file")
+      .def_property_readonly(
+          "color_path", [](const gt::Frame& f) { return f.color_path; },
+          "colour image ('' when the dataset has none)")
+      .def("__repr__", [](const gt::Frame& f) {
+        return "<occgt.Frame " + f.id + (f.usable ? "" : " unusable: " + f.unusable_reason) + ">";
+      });
+
+  py::class_<PyScene>(m, "Scene", "One scene of a dataset: its frames and how to load them.")
+      .def_property_readonly(
+          "name", [](const PyScene& s) { return s.scene().name; }, "scene name")
+      .def_property_readonly(
+          "format", [](const PyScene& s) { return s.scene().format; }, "reader format")
+      .def_property_readonly(
+          "path", [](const PyScene& s) { return s.scene().path; }, "folder or manifest read")
+      .def_property_readonly(
+          "min_depth_m", [](const PyScene& s) { return s.scene().min_depth_m; },
+          "the dataset's minimum valid depth (metres; `occgt pair` uses it unless overridden)")
+      .def_property_readonly(
+          "max_depth_m", [](const PyScene& s) { return s.scene().max_depth_m; },
+          "the dataset's maximum valid depth (metres)")
+      .def_property_readonly(
+          "frames", [](const PyScene& s) { return s.scene().frames; },
+          "list[Frame], sorted by number (usable or not)")
+      .def("load", &PyScene::Load, "frame_id"_a, "width"_a = 640, "height"_a = 480,
+           "(depth float32 [height, width] planar metres (0 = invalid), K float64 [3, 3] at "
+           "width x height, world_from_cam float64 [4, 4]) of a usable frame at the working "
+           "resolution: depth resized with nearest neighbour, K rescaled with the pixel-area "
+           "rule (truth::LoadWorkingFrame). ValueError for an unknown or unusable frame_id or "
+           "an unreadable depth file.")
+      .def("__repr__", [](const PyScene& s) {
+        return "<occgt.Scene " + s.scene().name + " (" + s.scene().format + ", " +
+               std::to_string(s.scene().frames.size()) + " frames)>";
+      });
+
+  py::class_<PyDataset>(m, "Dataset", "A dataset root read by one of occgt's readers.")
+      .def(py::init<std::string, std::string>(), "root"_a, "format"_a)
+      .def_property_readonly("root", &PyDataset::root, "dataset root folder")
+      .def_property_readonly("format", &PyDataset::format, "reader format")
+      .def("scenes", &PyDataset::Scenes, "scene names under the root, sorted")
+      .def("scene", &PyDataset::Scene, "name"_a,
+           "the scene's frames (ValueError naming the file for a bad or missing one)")
+      .def("__repr__", [](const PyDataset& d) {
+        return "<occgt.Dataset " + d.format() + " " + d.root() + ">";
+      });
+}
+
+}  // namespace occgt_py

@@ -1,0 +1,214 @@
+"""Bad arguments raise ValueError naming the argument and what was expected, and never crash
+the interpreter (each case runs in this process: a crash fails the test). Covers dtypes,
+shapes, non-finite and non-rigid poses, bad K, option values and names, the readers and
+dense_volume."""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import unittest
+from typing import Any, Dict
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+import common  # noqa: E402
+
+import occgt  # noqa: E402
+
+H, W = 48, 64
+
+
+def good() -> Dict[str, Any]:
+    """A valid pair: a fronto-parallel wall 2 m away, the second camera 10 cm to the right."""
+    K = np.array([[50.0, 0, 31.5], [0, 50.0, 23.5], [0, 0, 1]])
+    T1 = np.eye(4)
+    T1[0, 3] = 0.1
+    return dict(depth0=np.full((H, W), 2.0, np.float32), depth1=np.full((H, W), 2.0, np.float32),
+                K0=K, K1=K.copy(), world_from_cam0=np.eye(4), world_from_cam1=T1)
+
+
+def rot_z(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    T = np.eye(4)
+    T[:2, :2] = [[c, -s], [s, c]]
+    return T
+
+
+class BadInput(unittest.TestCase):
+    def check(self, pattern: str, **changes: Any) -> None:
+        args = good()
+        kwargs = {k: changes.pop(k) for k in list(changes) if k not in args}
+        args.update(changes)
+        with self.assertRaisesRegex(ValueError, pattern):
+            occgt.pair_ground_truth(**args, **kwargs)
+
+    def test_good_pair_works(self) -> None:
+        # The stable codes of design/GROUND_TRUTH.md §2, §4.
+        self.assertEqual((occgt.NO_DEPTH, occgt.OUT_OF_VIEW, occgt.VISIBLE, occgt.OCCLUDED,
+                          occgt.INCONSISTENT, occgt.UNKNOWN), (0, 1, 2, 3, 4, 5))
+        self.assertEqual((occgt.VV, occgt.VO, occgt.OV), (0, 1, 2))
+        r = occgt.pair_ground_truth(**good(), occupancy=True)
+        self.assertEqual(r["label01"].shape, (H, W))
+        self.assertGreater(r["metrics01"]["counts"]["VISIBLE"], 0.8 * H * W)
+        self.assertEqual(r["occ0"].shape, (H // 2, W // 2))
+        self.assertEqual(r["bin_edges_m"].shape, (65,))
+        # A list of lists (float64) is a valid depth map; so are differently sized frames.
+        occgt.pair_ground_truth(**{**good(), "depth0": np.full((H, W), 2.0).tolist()})
+        K_small = np.array([[25.0, 0, 15.5], [0, 25.0, 11.5], [0, 0, 1]])
+        r = occgt.pair_ground_truth(**{**good(), "depth1": np.full((24, 32), 2.0), "K1": K_small})
+        self.assertEqual(r["label10"].shape, (24, 32))
+
+    def test_depth(self) -> None:
+        self.check(r"^depth0: .*float32 or float64.*got dtype int32",
+                   depth0=np.full((H, W), 2, np.int32))
+        self.check(r"^depth1: .*float32 or float64.*got dtype complex64",
+                   depth1=np.full((H, W), 2, np.complex64))
+        self.check(r"^depth0: .*float32 or float64.*float16", depth0=np.ones((H, W), np.float16))
+        self.check(r"^depth0: .*dtype bool", depth0=np.ones((H, W), bool))
+        self.check(r"^depth0: .*dtype object", depth0=None)
+        self.check(r"^depth0: .*dtype <U", depth0="depth.png")
+        self.check(r"^depth0: .*shape \(H, W\), got shape \(48, 64, 1\)",
+                   depth0=np.ones((H, W, 1), np.float32))
+        self.check(r"^depth1: .*shape \(H, W\), got shape \(3072,\)",
+                   depth1=np.ones(H * W, np.float32))
+        self.check(r"^depth0: expected width and height in 2\.\.8192", depth0=np.ones((1, 1)))
+        self.check(r"^depth0: expected width and height", depth0=np.ones((0, 5), np.float32))
+        self.check(r"^depth1: expected width and height", depth1=np.ones((2, 9000), np.float32))
+        # A depth map smaller than one patch cell: an error of the patch options.
+        self.check(r"stride|cell", depth0=np.ones((4, 4), np.float32),
+                   K0=np.array([[5.0, 0, 1.5], [0, 5.0, 1.5], [0, 0, 1]]))
+
+    def test_K(self) -> None:
+        K = good()["K0"]
+        self.check(r"^K0: expected shape \(3, 3\)", K0=np.zeros((3, 4)))
+        self.check(r"^K1: expected shape \(3, 3\)", K1=K[:2])
+        self.check(r"^K0: focal lengths must be > 0, got fx=0", K0=np.diag([0.0, 50.0, 1.0]))
+        bad = K.copy()
+        bad[1, 1] = -50
+        self.check(r"^K1: focal lengths must be > 0", K1=bad)
+        bad = K.copy()
+        bad[0, 2] = np.nan
+        self.check(r"^K0: K must be finite", K0=bad)
+        bad = K.copy()
+        bad[0, 0] = np.inf
+        self.check(r"^K1: K must be finite", K1=bad)
+        bad = K.copy()
+        bad[2, 2] = 2
+        self.check(r"^K0: expected \[\[fx, 0, cx\], \[0, fy, cy\], \[0, 0, 1\]\]", K0=bad)
+        bad = K.copy()
+        bad[0, 1] = 0.5
+        self.check(r"^K0: .*no skew", K0=bad)
+        self.check(r"^K0: expected a float array .*got dtype complex128", K0=K.astype(complex))
+        self.check(r"^K1: expected a float array .*got dtype bool", K1=np.eye(3, dtype=bool))
+        self.check(r"^K0: expected a float array", K0="K")
+
+    def test_pose(self) -> None:
+        bad = np.eye(4)
+        bad[0, 3] = -np.inf
+        self.check(r"^world_from_cam0: non-finite pose entries", world_from_cam0=bad)
+        bad = np.eye(4)
+        bad[1, 1] = np.nan
+        self.check(r"^world_from_cam1: non-finite", world_from_cam1=bad)
+        self.check(r"^world_from_cam1: rotation is not orthonormal",
+                   world_from_cam1=np.diag([2.0, 2.0, 2.0, 1.0]))
+        sheared = np.eye(4)
+        sheared[0, 1] = 0.01
+        self.check(r"^world_from_cam0: rotation is not orthonormal", world_from_cam0=sheared)
+        self.check(r"^world_from_cam0: rotation has det < 0",
+                   world_from_cam0=np.diag([1.0, 1.0, -1.0, 1.0]))
+        bad = np.eye(4)
+        bad[3, 0] = 1
+        self.check(r"^world_from_cam1: last row of the pose is not \[0 0 0 1\]",
+                   world_from_cam1=bad)
+        self.check(r"^world_from_cam0: expected shape \(4, 4\)", world_from_cam0=np.eye(4)[:3])
+        self.check(r"^world_from_cam1: expected a float array", world_from_cam1=np.eye(4) * 1j)
+        # Within the tolerance (1e-3): accepted, as a float32 pose of a dataset would be.
+        near = rot_z(0.3).astype(np.float32)
+        near[0, 1] += 5e-4
+        occgt.pair_ground_truth(**{**good(), "world_from_cam0": near})
+        # A camera centre outside the fused map's key range (2^15 voxels per half axis).
+        far = np.eye(4)
+        far[0, 3] = 1e5
+        with self.assertRaisesRegex(ValueError, "key range"):
+            occgt.pair_ground_truth(**{**good(), "world_from_cam1": far}, occupancy=True)
+
+    def test_options(self) -> None:
+        self.check(r"^preset: expected one of default, occ2net", preset="occ2")
+        self.check(r"^anchor: expected one of center, corner, got 'middle'", anchor="middle")
+        self.check(r"^relative_to: expected one of", relative_to="z")
+        self.check(r"^bounds: expected one of", bounds="inside")
+        self.check(r"^target_lookup: expected one of", target_lookup="round")
+        self.check(r"^missing_target: expected one of", missing_target="zero")
+        self.check(r"^spacing: expected linear, log or inverse", spacing="exp", occupancy=True)
+        self.check(r"^traversal: expected exact or center", traversal="dda", occupancy=True)
+        self.check(r"^occupancy_mode: expected octomap or two_point", occupancy_mode="x",
+                   occupancy=True)
+        self.check(r"abs_tol_m must be finite and >= 0", abs_tol_m=-0.1)
+        self.check(r"rel_tol must be finite and >= 0", rel_tol=float("nan"))
+        self.check(r"min_depth_m must be finite", min_depth_m=-1.0)
+        self.check(r"max_depth_m must be > min_depth_m", min_depth_m=5.0, max_depth_m=1.0)
+        self.check(r"stride", stride=0)
+        self.check(r"num_bins must be in 1\.\.64", bins=65, occupancy=True)
+        self.check(r"num_bins must be in 1\.\.64", bins=0, occupancy=True)
+        self.check(r"far_m must be > near_m", near_m=5.0, far_m=1.0, occupancy=True)
+        self.check(r"near_m must be > 0", near_m=0.0, occupancy=True)
+        self.check(r"voxel_size_m must be > 0", voxel_m=0.0, occupancy=True)
+        self.check(r"max_range_m must be finite", max_range_m=float("inf"), occupancy=True)
+        # A wrong Python type is pybind11's TypeError (not a crash either).
+        with self.assertRaises(TypeError):
+            occgt.pair_ground_truth(**good(), stride="8")  # type: ignore[arg-type]
+
+    def test_readers(self) -> None:
+        with self.assertRaisesRegex(ValueError, r"^format: unknown format .colmap., expected one of"):
+            occgt.open_dataset("/nonexistent", "colmap")
+        with self.assertRaisesRegex(ValueError, "nonexistent"):
+            occgt.open_dataset("/nonexistent", "sevenscenes").scenes()
+        root = common.shared("sevenscenes")
+        ds = occgt.open_dataset(root, "sevenscenes")
+        with self.assertRaises(ValueError):
+            ds.scene("no-such-scene")
+        scene = ds.scene(ds.scenes()[0])
+        with self.assertRaisesRegex(ValueError, r"^frame_id: no frame with id '999999'"):
+            scene.load("999999")
+        with self.assertRaisesRegex(ValueError, r"^width, height: expected width and height"):
+            scene.load(scene.frames[0].id, width=1, height=480)
+        with self.assertRaisesRegex(ValueError, r"^width, height:"):
+            scene.load(scene.frames[0].id, width=640, height=100000)
+
+    def test_unusable_frame(self) -> None:
+        """A frame the reader marks unusable (a non-rigid pose) cannot be loaded."""
+        root = common.synth_dataset("synth_badpose", frames=3, resolution="64x48")
+        manifest = os.path.join(root, "synth_000", "scene.json")
+        with open(manifest) as f:
+            doc = json.load(f)
+        pose = doc["frames"][1]["world_from_cam"]
+        doc["frames"][1]["world_from_cam"] = [[2 * v for v in row[:3]] + row[3:] for row in pose[:3]] \
+            + pose[3:]
+        with open(manifest, "w") as f:
+            json.dump(doc, f)
+        scene = occgt.open_dataset(root, "generic").scene("synth_000")
+        bad = scene.frames[1]
+        self.assertFalse(bad.usable)
+        self.assertIn("orthonormal", bad.reason)
+        with self.assertRaisesRegex(ValueError, r"^frame_id: frame .* is unusable"):
+            scene.load(bad.id)
+
+    def test_dense_volume(self) -> None:
+        words = np.zeros((4, 5), np.uint64)
+        with self.assertRaisesRegex(ValueError, r"^occ: expected dtype uint64"):
+            occgt.dense_volume(words.astype(np.int64), words)
+        with self.assertRaisesRegex(ValueError, r"^known: expected dtype uint64"):
+            occgt.dense_volume(words, words.astype(np.float64))
+        with self.assertRaisesRegex(ValueError, r"^occ: expected shape \(H/2, W/2\)"):
+            occgt.dense_volume(words.ravel(), words)
+        with self.assertRaisesRegex(ValueError, r"^known: expected the shape of occ \(4, 5\)"):
+            occgt.dense_volume(words, words[:3])
+        with self.assertRaisesRegex(ValueError, r"^bins: num_bins must be in 1\.\.64"):
+            occgt.dense_volume(words, words, bins=0)
+        self.assertEqual(occgt.dense_volume(words, words, 2).shape, (2, 4, 5))
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
