@@ -93,8 +93,7 @@ std::map<std::string, SceneSelection> SelectStage(
         const Scene scene = reader.ReadScene(recipe.dataset.root, name);
         pairs::DepthCache cache(scene, recipe.width, recipe.height, options.depth_cache_mb << 20);
         SceneSelection& sel = selections[name];
-        sel = SelectScene(recipe, scene, &cache, imports.get());
-        sel.scene = name;
+        sel = SelectScene(recipe, scene, &cache, imports.get());  // scene.name == name
         if (!options.dry_run) bytes += WriteSelection(options.out_dir, sel);
         ++selected;
       }

@@ -9,19 +9,11 @@
 #include "libgt/io/reader.h"
 #include "libgt/pairs/selection.h"
 #include "libgt/truth/pair_truth.h"
+#include "tests/bench/seven_scenes_sample.h"
 #include "tests/support/test_support.h"
 
 namespace gt::build {
 namespace {
-
-const Scene& SevenScenes() {
-  static const Scene scene = [] {
-    const std::string root = std::string(OCCGT_SHARED_DATA) + "/sevenscenes";
-    auto reader = io::MakeReader("sevenscenes");
-    return reader->ReadScene(root, reader->ListScenes(root).at(0));
-  }();
-  return scene;
-}
 
 SampleOptions Options(const Scene& scene) {
   Recipe recipe = ParseRecipe(
@@ -34,7 +26,7 @@ SampleOptions Options(const Scene& scene) {
 }
 
 void BM_ComputeSample(benchmark::State& state) {
-  const Scene& scene = SevenScenes();
+  const Scene& scene = bench::SevenScenesSample();
   SampleOptions options = Options(scene);
   // 0: everything; 1: without occupancy; 2: without occupancy and images.
   if (state.range(0) >= 1) options.truth.occupancy = false;
@@ -55,7 +47,7 @@ BENCHMARK(BM_ComputeSample)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecon
 
 // The ground truth of one pair: 0 labels, metrics and matches; 1 with occupancy.
 void BM_PairTruth(benchmark::State& state) {
-  const Scene& scene = SevenScenes();
+  const Scene& scene = bench::SevenScenesSample();
   truth::PairTruthOptions o = Options(scene).truth;
   o.occupancy = state.range(0) == 1;
   const truth::WorkingFrame f0 = truth::LoadWorkingFrame(scene.frames[0], {640, 480});

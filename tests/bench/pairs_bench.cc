@@ -7,19 +7,11 @@
 #include "libgt/io/reader.h"
 #include "libgt/pairs/selection.h"
 #include "libgt/truth/working_frame.h"
+#include "tests/bench/seven_scenes_sample.h"
 #include "tests/support/test_support.h"
 
 namespace gt::pairs {
 namespace {
-
-const Scene& SevenScenes() {
-  static const Scene scene = [] {
-    const std::string root = std::string(OCCGT_SHARED_DATA) + "/sevenscenes";
-    auto reader = io::MakeReader("sevenscenes");
-    return reader->ReadScene(root, reader->ListScenes(root).at(0));
-  }();
-  return scene;
-}
 
 std::vector<Camera> Cameras(const Scene& scene) {
   std::vector<Camera> cams;
@@ -28,7 +20,7 @@ std::vector<Camera> Cameras(const Scene& scene) {
 }
 
 void BM_ScorePair(benchmark::State& state) {
-  const Scene& scene = SevenScenes();
+  const Scene& scene = bench::SevenScenesSample();
   const auto cams = Cameras(scene);
   DepthCache cache(scene, 640, 480);
   LabelOptions labels = LabelPreset("default");
@@ -48,7 +40,7 @@ void BM_ScorePair(benchmark::State& state) {
 BENCHMARK(BM_ScorePair)->Arg(8)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_ScanFrames(benchmark::State& state) {
-  const Scene& scene = SevenScenes();
+  const Scene& scene = bench::SevenScenesSample();
   FrameScanOptions o;
   o.min_depth_m = scene.min_depth_m;
   o.max_depth_m = scene.max_depth_m;
