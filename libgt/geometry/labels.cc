@@ -149,8 +149,10 @@ struct Columns {
 // contraction, which g++ does by default whenever FMA is enabled, even with -std=c++17) and
 // -fno-trapping-math (lets the selects be vectorised; values are unchanged), so every clone
 // gives bit-identical results.
+// The body is a template inlined into two non-template clone sets (clang refuses
+// target_clones on a function template; g++ inlines the body and vectorises each clone).
 template <bool kMaps>
-__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRowKernel(
+inline __attribute__((always_inline)) void LabelRowBody(
     const Kernel& kn, const Columns& cols, const float* __restrict dep, int n, int v,
     int32_t* __restrict codes, float* __restrict xy, int64_t* __restrict counts) {
   const float* __restrict col_x = cols.x.data();
@@ -215,6 +217,18 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRo
     counts[4] += c4;
     counts[5] += n - (c0 + c1 + c2 + c3 + c4);
   }
+}
+
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRowMaps(
+    const Kernel& kn, const Columns& cols, const float* __restrict dep, int n, int v,
+    int32_t* __restrict codes, float* __restrict xy) {
+  LabelRowBody<true>(kn, cols, dep, n, v, codes, xy, nullptr);
+}
+
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRowCounts(
+    const Kernel& kn, const Columns& cols, const float* __restrict dep, int n, int v,
+    int64_t* __restrict counts) {
+  LabelRowBody<false>(kn, cols, dep, n, v, nullptr, nullptr, counts);
 }
 
 // labels[i] = codes[i] for i < n.
@@ -368,8 +382,8 @@ DirectionLabels LabelDirection(const DepthImage& depth_a, const Camera& cam_a,
   std::vector<uint8_t> row_labels(w);
   std::vector<float> row_xy(2 * w);
   for (int v = 0; v < out.height; ++v) {
-    LabelRowKernel<true>(kn, cols, depth_a.values_m.data() + v * w, out.width, v, codes.data(),
-                         row_xy.data(), nullptr);
+    LabelRowMaps(kn, cols, depth_a.values_m.data() + v * w, out.width, v, codes.data(),
+                 row_xy.data());
     StoreLabels(codes.data(), out.width, row_labels.data());
     out.labels.insert(out.labels.end(), row_labels.begin(), row_labels.end());
     out.warped_xy.insert(out.warped_xy.end(), row_xy.begin(), row_xy.end());
@@ -413,7 +427,7 @@ DirectionMetrics ScoreDirection(const DepthImage& depth_a, const Camera& cam_a,
       for (int i = 0; i < n; ++i) row_depth[i] = depth_row[static_cast<size_t>(i) * score_stride];
       depth_row = row_depth.data();
     }
-    LabelRowKernel<false>(kn, cols, depth_row, n, v, nullptr, nullptr, m.counts.data());
+    LabelRowCounts(kn, cols, depth_row, n, v, m.counts.data());
     m.sampled += n;
   }
   FinishMetrics(&m);
