@@ -1,0 +1,24 @@
+"""occgt.torch: torch Datasets, a collate function and LoFTR / Occ²Net supervision over occgt.
+
+Pure Python over the C++ module (``occgt._occgt``); torch is Debian's ``python3-torch``.
+Docs: docs/PYTHON.md, "Training with torch".
+
+A sample (a dict) has the same keys whichever dataset yields it:
+
+- LoFTR's keys (its ScanNet dataset's names, dtypes and layouts): ``image0``, ``image1``
+  float32 [1, H, W] grey in [0, 1] (when the images exist); ``depth0``, ``depth1`` float32
+  [H, W] planar metres, 0 = invalid; ``K0``, ``K1`` float32 [3, 3] at H×W; ``T_0to1``
+  (= cam1_from_cam0), ``T_1to0`` float32 [4, 4]; ``dataset_name``, ``scene_id`` str,
+  ``pair_id`` int, ``pair_names`` (str, str).
+- occgt's ground truth, named as the ``.npy`` members of a shard without the extension:
+  ``label01``, ``label10`` uint8 [H, W]; ``cells0``, ``cells1`` uint8 [H/s, W/s];
+  ``matches`` int64 [M, 2]; ``match_type`` int64 [M]; ``match_xy`` float32 [M, 2];
+  ``occ0``, ``known0``, ``occ1``, ``known1`` int64 [H/2, W/2] (the uint64 words' bits,
+  reinterpreted: torch has no uint64) or, on request, ``occupancy0``, ``occupancy1`` uint8
+  [D, H/2, W/2] (0 free, 1 occupied, 255 unknown); ``metrics01``, ``metrics10`` dicts.
+"""
+from __future__ import annotations
+
+from ._convert import to_tensor
+
+__all__ = ["to_tensor"]
