@@ -16,9 +16,11 @@ A sample (a dict) has the same keys whichever dataset yields it:
   ``occ0``, ``known0``, ``occ1``, ``known1`` int64 [H/2, W/2] (the uint64 words' bits,
   reinterpreted: torch has no uint64) or, on request, ``occupancy0``, ``occupancy1`` uint8
   [D, H/2, W/2] (0 free, 1 occupied, 255 unknown); ``metrics01``, ``metrics10`` dicts.
+- On request, ``color0``, ``color1`` uint8 [3, H, W] RGB (``ShardDataset(color=True)``).
 """
 from __future__ import annotations
 
 from ._convert import to_tensor
+from .shards import ShardDataset
 
-__all__ = ["to_tensor"]
+__all__ = ["ShardDataset", "to_tensor"]

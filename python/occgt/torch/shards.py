@@ -1,0 +1,418 @@
+"""ShardDataset: map-style random access into the shards of one split built by ``occgt build``.
+
+The split folder's ``index.json`` lists the shards (docs/READING_SHARDS.md). At construction
+every shard's tar headers are read once (one pass, seeking past the data) to find the byte
+range of every member of every sample; nothing else is kept. A sample's members are
+consecutive in its tar, so ``ds[i]`` reads them with one ``os.preadv`` into one buffer, parses
+the ``.npy`` members in place (``np.frombuffer``, no copy), the ``json`` member with ``json`` and
+the images with OpenCV (``python3-opencv``), and yields the sample contract of
+``occgt.torch`` (see its docstring). Files are opened lazily in each process, so a
+``DataLoader`` with worker processes never shares a file handle across ``fork``.
+"""
+from __future__ import annotations
+
+import ast
+import json
+import os
+from typing import Any, Dict, List, Optional, Tuple, Union
+
+import numpy as np
+import torch.utils.data
+
+from ._convert import to_tensor
+
+__all__ = ["ShardDataset"]
+
+_BLOCK = 512
+_OCCUPANCY_MODES = ("words", "dense", "none")
+
+class _Sample:
+    """Where one sample's members are: shard number, byte range and the members in it."""
+
+    __slots__ = ("shard", "start", "length", "members")
+
+    def __init__(self, shard: int, start: int) -> None:
+        self.shard = shard
+        self.start = start
+        self.length = 0
+        self.members: Dict[str, Tuple[int, int]] = {}
+
+
+def _octal(field: bytes, what: str) -> int:
+    text = field.split(b"\0", 1)[0].strip()
+    try:
+        return int(text, 8) if text else 0
+    except ValueError:
+        raise ValueError(f"{what}: expected an octal number, got {field!r}") from None
+
+
+def _index_shard(path: str, shard: int, expected_size: int,
+                 samples: List[_Sample], keys: List[str]) -> int:
+    """Appends the samples of one shard to samples/keys; returns how many it holds."""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except FileNotFoundError:
+        raise ValueError(f"{path}: shard missing (index.json lists it)") from None
+    try:
+        size = os.fstat(fd).st_size
+        if size != expected_size:
+            how = "shorter" if size < expected_size else "longer"
+            raise ValueError(f"{path}: {size} bytes, {how} than index.json's filesize "
+                             f"{expected_size}")
+        seen = set()
+        count = 0
+        current: Optional[_Sample] = None
+        offset = 0
+        while True:
+            header = os.pread(fd, _BLOCK, offset)
+            if len(header) < _BLOCK:
+                raise ValueError(f"{path}: ends at byte {offset} inside the archive (expected "
+                                 f"a 512-byte tar header or the two zero end blocks)")
+            if header == bytes(_BLOCK):
+                break
+            where = f"{path}: tar header at byte {offset}"
+            checksum = _octal(header[148:156], where + ", checksum")
+            if checksum != sum(header[:148]) + 8 * 32 + sum(header[156:]):
+                raise ValueError(f"{where}: checksum mismatch (expected a POSIX ustar header)")
+            kind = header[156:157]
+            name = header[:100].split(b"\0", 1)[0]
+            if header[257:263] == b"ustar\0" and header[345] != 0:
+                name = header[345:500].split(b"\0", 1)[0] + b"/" + name
+            member = name.decode("utf-8")
+            member_size = _octal(header[124:136], where + ", size")
+            data = offset + _BLOCK
+            offset = data + (member_size + _BLOCK - 1) // _BLOCK * _BLOCK
+            if offset > size:
+                raise ValueError(f"{path}: member {member} needs {member_size} bytes at byte "
+                                 f"{data}, past the end of the file ({size} bytes)")
+            if kind in (b"x", b"g", b"L", b"K"):
+                raise ValueError(f"{where}: pax/GNU extension record (occgt shards have only "
+                                 f"plain ustar members)")
+            if kind not in (b"0", b"\0"):
+                continue  # directories, links: not sample members
+            folder, _, base = member.rpartition("/")
+            stem, dot, field = base.partition(".")
+            if not dot or stem.startswith("__"):
+                continue  # not a sample member (e.g. __meta__.json)
+            key = folder + "/" + stem if folder else stem
+            if current is None or keys[-1] != key:
+                if key in seen:
+                    raise ValueError(f"{path}: members of sample {key} are not consecutive")
+                seen.add(key)
+                current = _Sample(shard, data)
+                samples.append(current)
+                keys.append(key)
+                count += 1
+            if field in current.members:
+                raise ValueError(f"{path}: sample {key} has two {field} members")
+            current.members[field] = (data - current.start, member_size)
+            current.length = data + member_size - current.start
+        return count
+    finally:
+        os.close(fd)
+
+
+def _npy(buf: bytearray, offset: int, size: int, where: str) -> np.ndarray:
+    """The array of a ``.npy`` member at buf[offset:offset + size], sharing buf's memory."""
+    view = memoryview(buf)
+    if size < 10 or view[offset:offset + 6] != b"\x93NUMPY":
+        raise ValueError(f"{where}: expected a .npy file (magic \\x93NUMPY)")
+    major = buf[offset + 6]
+    if major == 1:
+        start = 10 + int.from_bytes(buf[offset + 8:offset + 10], "little")
+    elif major in (2, 3) and size >= 12:
+        start = 12 + int.from_bytes(buf[offset + 8:offset + 12], "little")
+    else:
+        raise ValueError(f"{where}: unsupported .npy version {major}")
+    if start > size:
+        raise ValueError(f"{where}: .npy header longer than the member")
+    # The header is a Python dict literal (numpy's format); parsed with ast.literal_eval as
+    # numpy does, minus numpy's tokenize pass for Python-2 writers (occgt's writer is C++).
+    text = bytes(view[offset + (10 if major == 1 else 12):offset + start])
+    try:
+        header = ast.literal_eval(text.decode("utf-8" if major == 3 else "latin1"))
+        if not isinstance(header, dict) or set(header) != {"descr", "fortran_order", "shape"}:
+            raise ValueError("expected a dict with descr, fortran_order and shape")
+        shape = tuple(int(n) for n in header["shape"])
+        fortran = bool(header["fortran_order"])
+        dtype = np.lib.format.descr_to_dtype(header["descr"])
+    except (SyntaxError, ValueError, TypeError) as e:
+        raise ValueError(f"{where}: bad .npy header {text!r} ({e})") from None
+    if dtype.hasobject:
+        raise ValueError(f"{where}: expected a plain dtype, got {dtype} (objects are refused)")
+    count = int(np.prod(shape, dtype=np.int64))
+    if start + count * dtype.itemsize > size:
+        raise ValueError(f"{where}: {shape} {dtype} needs {count * dtype.itemsize} bytes, "
+                         f"the member holds {size - start}")
+    array = np.frombuffer(buf, dtype=dtype, count=count, offset=offset + start)
+    return array.reshape(shape, order="F" if fortran else "C")
+
+
+class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
+    """Map-style dataset over the shards of one split (``torch.utils.data.Dataset`` protocol).
+
+    Args:
+        split_dir: the split folder written by ``occgt build`` / ``occgt merge`` (holds
+            ``index.json``, the ``.tar`` shards and ``pairs.jsonl``).
+        occupancy: ``"words"``: ``occ0``, ``known0``, ``occ1``, ``known1`` int64 [H/2, W/2]
+            (the uint64 words' bits); ``"dense"``: ``occupancy0``, ``occupancy1`` uint8
+            [D, H/2, W/2] (0 free, 1 occupied, 255 unknown), the ``occ*_dense.npy`` member when
+            the split stores it, else ``occgt.dense_volume`` of the words (C++); ``"none"``:
+            no occupancy keys.
+        images: ``image0``, ``image1`` float32 [1, H, W] grey in [0, 1]: the ``image0.png`` /
+            ``.jpg`` member decoded by OpenCV, ``cv2.COLOR_BGR2GRAY``, divided by 255 (the
+            contract's grey, as ``PairIndexDataset``'s).
+        color: also ``color0``, ``color1`` uint8 [3, H, W] RGB.
+        depth: ``depth0``, ``depth1`` float32 [H, W] metres, 0 = invalid.
+        labels: ``label01``, ``label10`` uint8 [H, W] and ``cells0``, ``cells1`` uint8
+            [H/s, W/s] (``matches``, ``match_type``, ``match_xy``, ``metrics01``,
+            ``metrics10`` and the LoFTR keys are always there).
+        dataset_name: the ``dataset_name`` value of every sample (shards do not record the
+            dataset's format; LoFTR's evaluation picks thresholds by this name, e.g.
+            ``"ScanNet"``).
+
+    Raises:
+        ValueError: naming the file and what was expected, when ``index.json`` is missing or
+            malformed, a shard is missing, has another size than index.json says, is not a
+            plain ustar archive or holds another number of samples, or a sample lacks a member
+            the options ask for.
+    """
+
+    def __init__(self, split_dir: Union[str, "os.PathLike[str]"], *,
+                 occupancy: str = "words", images: bool = True, color: bool = False,
+                 depth: bool = True, labels: bool = True, dataset_name: str = "occgt") -> None:
+        if occupancy not in _OCCUPANCY_MODES:
+            raise ValueError(f"occupancy: expected one of {', '.join(_OCCUPANCY_MODES)}, got "
+                             f"{occupancy!r}")
+        self.split_dir = os.fspath(split_dir)
+        self.occupancy = occupancy
+        self.images = bool(images)
+        self.color = bool(color)
+        self.depth = bool(depth)
+        self.labels = bool(labels)
+        self.dataset_name = dataset_name
+        index_path = os.path.join(self.split_dir, "index.json")
+        try:
+            with open(index_path) as f:
+                index = json.load(f)
+        except FileNotFoundError:
+            raise ValueError(f"{index_path}: missing (expected the split's wids shard index "
+                             f"written by occgt build / occgt merge)") from None
+        except json.JSONDecodeError as e:
+            raise ValueError(f"{index_path}: not JSON ({e})") from None
+        shardlist = index.get("shardlist") if isinstance(index, dict) else None
+        if not isinstance(shardlist, list):
+            raise ValueError(f"{index_path}: expected an object with a \"shardlist\" array")
+        self._paths: List[str] = []
+        self._samples: List[_Sample] = []
+        self._keys: List[str] = []
+        for n, entry in enumerate(shardlist):
+            try:
+                url, nsamples, filesize = entry["url"], entry["nsamples"], entry["filesize"]
+            except (KeyError, TypeError):
+                raise ValueError(f"{index_path}: shardlist[{n}]: expected url, nsamples and "
+                                 f"filesize") from None
+            path = os.path.join(self.split_dir, url)
+            got = _index_shard(path, n, int(filesize), self._samples, self._keys)
+            if got != nsamples:
+                raise ValueError(f"{path}: {got} samples, index.json says {nsamples}")
+            self._paths.append(path)
+        for i, sample in enumerate(self._samples):
+            missing = self._missing(sample.members)
+            if missing:
+                raise ValueError(f"{self._paths[sample.shard]}: sample {self._keys[i]} has no "
+                                 f"{' or '.join(missing)} member (asked for by "
+                                 f"{self._reason(missing[0])})")
+        self._pairs: Optional[List[str]] = None
+        self._pid = -1
+        self._fds: Dict[int, int] = {}
+
+    def _missing(self, members: Dict[str, Tuple[int, int]]) -> List[str]:
+        need = ["json", "matches.npy", "match_type.npy", "match_xy.npy"]
+        if self.labels:
+            need += ["label01.npy", "label10.npy", "cells0.npy", "cells1.npy"]
+        if self.depth:
+            need += ["depth0.npy", "depth1.npy"]
+        missing = [m for m in need if m not in members]
+        if missing:
+            return missing[:1]
+        for c in "01":
+            words = [f"occ{c}.npy", f"known{c}.npy"]
+            if self.occupancy == "words" or (self.occupancy == "dense" and
+                                             f"occ{c}_dense.npy" not in members):
+                for m in words:
+                    if m not in members:
+                        return [m] if self.occupancy == "words" else [f"occ{c}_dense.npy", m]
+            if (self.images or self.color) and not (f"image{c}.png" in members or
+                                                    f"image{c}.jpg" in members):
+                return [f"image{c}.png", f"image{c}.jpg"]
+        return []
+
+    def _reason(self, member: str) -> str:
+        if member.startswith(("occ", "known")):
+            return f"occupancy={self.occupancy!r}"
+        if member.startswith("image"):
+            return "images=True / color=True"
+        if member.startswith("depth"):
+            return "depth=True"
+        if member.startswith(("label", "cells")):
+            return "labels=True"
+        return "every sample"
+
+    def __len__(self) -> int:
+        return len(self._samples)
+
+    def _index(self, i: int) -> int:
+        n = len(self._samples)
+        j = int(i)
+        if j < 0:
+            j += n
+        if not 0 <= j < n:
+            raise IndexError(f"sample index {i} out of range for {n} samples")
+        return j
+
+    def key(self, i: int) -> str:
+        """The sample key (``<scene>/<frame0>_<frame1>``) of sample i."""
+        return self._keys[self._index(i)]
+
+    def pair(self, i: int) -> Dict[str, Any]:
+        """Sample i's line of ``pairs.jsonl`` (scene, frame ids, metrics, shard, key)."""
+        j = self._index(i)
+        if self._pairs is None:
+            path = os.path.join(self.split_dir, "pairs.jsonl")
+            try:
+                with open(path) as f:
+                    lines = f.read().splitlines()
+            except FileNotFoundError:
+                raise ValueError(f"{path}: missing (expected one line per sample)") from None
+            if len(lines) != len(self._samples):
+                raise ValueError(f"{path}: {len(lines)} lines, expected {len(self._samples)} "
+                                 f"(one per sample of index.json's shards)")
+            self._pairs = lines
+        line = json.loads(self._pairs[j])
+        if not isinstance(line, dict) or line.get("key") != self._keys[j]:
+            raise ValueError(f"{os.path.join(self.split_dir, 'pairs.jsonl')}: line {j + 1}: "
+                             f"expected key {self._keys[j]!r}")
+        return line
+
+    def _fd(self, shard: int) -> int:
+        pid = os.getpid()
+        if pid != self._pid:  # first use in this process (e.g. a forked DataLoader worker)
+            self._fds = {}
+            self._pid = pid
+        fd = self._fds.get(shard)
+        if fd is None:
+            fd = os.open(self._paths[shard], os.O_RDONLY)
+            self._fds[shard] = fd
+        return fd
+
+    def read_raw(self, i: int) -> Tuple[bytearray, Dict[str, Tuple[int, int]]]:
+        """The bytes of sample i's members (one read) and each member's (offset, size) in them."""
+        sample = self._samples[self._index(i)]
+        buf = bytearray(sample.length)
+        got = os.preadv(self._fd(sample.shard), [buf], sample.start)
+        if got != sample.length:
+            raise ValueError(f"{self._paths[sample.shard]}: read {got} of {sample.length} bytes "
+                             f"at byte {sample.start} (the shard changed since it was indexed)")
+        return buf, sample.members
+
+    def __getitem__(self, i: int) -> Dict[str, Any]:
+        j = self._index(i)
+        buf, members = self.read_raw(j)
+        where = f"{self._paths[self._samples[j].shard]}: {self._keys[j]}"
+
+        def npy(field: str) -> np.ndarray:
+            offset, size = members[field]
+            return _npy(buf, offset, size, f"{where}.{field}")
+
+        offset, size = members["json"]
+        meta = json.loads(bytes(memoryview(buf)[offset:offset + size]))
+        T_0to1 = np.asarray(meta["T_0to1"], dtype=np.float64)
+        out: Dict[str, Any] = {}
+        if self.images or self.color:
+            W, H = meta["resolution"]
+            for c in "01":
+                field = f"image{c}.png" if f"image{c}.png" in members else f"image{c}.jpg"
+                offset, size = members[field]
+                data = np.frombuffer(buf, dtype=np.uint8, count=size, offset=offset)
+                bgr = _decode(data, f"{where}.{field}", H, W)
+                if self.images:
+                    grey = _cv2().cvtColor(bgr, _cv2().COLOR_BGR2GRAY)
+                    out["image" + c] = to_tensor(grey.astype(np.float32)[None] / 255.0)
+                if self.color:
+                    out["color" + c] = to_tensor(np.ascontiguousarray(
+                        bgr[:, :, ::-1].transpose(2, 0, 1)))
+        if self.depth:
+            out["depth0"] = to_tensor(npy("depth0.npy"))
+            out["depth1"] = to_tensor(npy("depth1.npy"))
+        out["K0"] = to_tensor(np.asarray(meta["K0"], dtype=np.float32))
+        out["K1"] = to_tensor(np.asarray(meta["K1"], dtype=np.float32))
+        out["T_0to1"] = to_tensor(T_0to1.astype(np.float32))
+        out["T_1to0"] = to_tensor(np.linalg.inv(T_0to1).astype(np.float32))
+        out["dataset_name"] = self.dataset_name
+        out["scene_id"] = meta["scene"]
+        out["pair_id"] = j
+        scene = meta["scene"]
+        out["pair_names"] = (f"{scene}/{meta['frame0']['id']}", f"{scene}/{meta['frame1']['id']}")
+        if self.labels:
+            for name in ("label01", "label10", "cells0", "cells1"):
+                out[name] = to_tensor(npy(name + ".npy"))
+        out["matches"] = to_tensor(npy("matches.npy").astype(np.int64))
+        out["match_type"] = to_tensor(npy("match_type.npy").astype(np.int64))
+        out["match_xy"] = to_tensor(npy("match_xy.npy"))
+        if self.occupancy == "words":
+            for name in ("occ0", "known0", "occ1", "known1"):
+                out[name] = to_tensor(npy(name + ".npy"))
+        elif self.occupancy == "dense":
+            for c in "01":
+                if f"occ{c}_dense.npy" in members:
+                    volume = npy(f"occ{c}_dense.npy")
+                else:
+                    from .. import dense_volume  # the C++ unpacking
+
+                    bins = len(meta["occupancy"]["bin_edges_m"]) - 1
+                    volume = dense_volume(npy(f"occ{c}.npy"), npy(f"known{c}.npy"), bins)
+                out["occupancy" + c] = to_tensor(volume)
+        out["metrics01"] = meta["metrics"]["01"]
+        out["metrics10"] = meta["metrics"]["10"]
+        return out
+
+    def __getstate__(self) -> Dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_fds"] = {}  # file descriptors never travel to another process
+        state["_pid"] = -1
+        return state
+
+    def close(self) -> None:
+        """Closes the files this process opened (they reopen on the next read)."""
+        if self._pid == os.getpid():
+            for fd in self._fds.values():
+                os.close(fd)
+        self._fds = {}
+
+    def __del__(self) -> None:
+        try:
+            self.close()
+        except (OSError, AttributeError):
+            pass
+
+
+def _cv2() -> Any:
+    try:
+        import cv2
+    except ImportError:  # pragma: no cover - depends on the machine
+        raise ImportError("occgt.torch.ShardDataset decodes images with OpenCV: install "
+                          "python3-opencv, or pass images=False, color=False") from None
+    return cv2
+
+
+def _decode(data: np.ndarray, where: str, H: int, W: int) -> np.ndarray:
+    """An encoded PNG/JPEG member -> uint8 [H, W, 3] BGR (OpenCV's order)."""
+    cv2 = _cv2()
+    image = cv2.imdecode(data, cv2.IMREAD_COLOR)
+    if image is None:
+        raise ValueError(f"{where}: not a decodable PNG/JPEG image")
+    if image.shape[:2] != (H, W):
+        raise ValueError(f"{where}: image is {image.shape[1]}x{image.shape[0]}, expected the "
+                         f"sample's resolution {W}x{H}")
+    return image

@@ -1,0 +1,334 @@
+"""occgt.torch.ShardDataset against the plain tarfile reader of docs/READING_SHARDS.md.
+
+Two small synthetic splits are built with the occgt binary (160x120, images, depth, packed
+occupancy words; and one with packed + dense occupancy, no images, no depth). Every sample read
+through ShardDataset, in a random order, equals the same sample read with the documented NumPy
+reader (every key of the sample contract, arrays bit-equal after the contract's dtype rules); a
+DataLoader with 2 worker processes, shuffled, batches of 4, occgt.torch.collate, returns the
+tensors of direct reads; dense occupancy equals occgt.dense_volume of the words, the split's
+own dense members and a bit-by-bit reference written here; broken folders raise ValueError
+naming the file and what was expected."""
+from __future__ import annotations
+
+import json
+import os
+import random
+import re
+import shutil
+import sys
+import unittest
+from typing import Any, Dict, List
+
+import cv2
+import numpy as np
+import torch
+from torch.utils.data import DataLoader
+
+sys.path.insert(0, os.path.dirname(__file__))
+import common  # noqa: E402
+
+import occgt  # noqa: E402
+from occgt.torch import ShardDataset  # noqa: E402
+from occgt.torch.collate import collate  # noqa: E402
+
+RECIPE = """name: shard-dataset-test
+split: {split}
+seed: 0
+resolution: [160, 120]
+dataset:
+  format: synthetic
+  synthetic: {{scenes: 2, frames: 12, width: 160, height: 120, seed: 3}}
+  frame_stride: 1
+  min_valid_depth_fraction: 0.3
+labels: {{preset: default}}
+patches: {{stride: 8, anchor: center, mutual: true}}
+selection:
+  max_frame_gap: 4
+  pruning: {{max_distance_m: 3.0, max_view_angle_deg: 90, frustum: true}}
+  score_stride: 4
+  overlap: [0.2, 0.98]
+  occlusion: [0.0, 1.0]
+  aggregate: mean
+  quota_per_scene: 7
+occupancy:
+  enabled: true
+  voxel_m: 0.1
+  bins: 32
+  near_m: 0.1
+  far_m: 8.0
+  scope: pair
+  mode: octomap
+  encoding: {encoding}
+sample: {{image: {image}, depth: {depth}, labels: true, occupancy: true}}
+shards: {{samples_per_shard: 4}}
+"""
+
+#: The keys of the sample contract (occgt/torch/__init__.py) with occupancy="words".
+CONTRACT_KEYS = ["image0", "image1", "depth0", "depth1", "K0", "K1", "T_0to1", "T_1to0",
+                 "dataset_name", "scene_id", "pair_id", "pair_names", "label01", "label10",
+                 "cells0", "cells1", "matches", "match_type", "match_xy", "occ0", "known0",
+                 "occ1", "known1", "metrics01", "metrics10"]
+
+
+def build(name: str, **fields: str) -> str:
+    folder = common.scratch(name)
+    recipe = os.path.join(folder, "recipe.yaml")
+    with open(recipe, "w") as f:
+        f.write(RECIPE.format(split=name.replace("_", "-"), **fields))
+    out = os.path.join(folder, "split")
+    common.occgt("build", recipe, "--out", out)
+    return out
+
+
+def doc_reader() -> Dict[str, Any]:
+    """The NumPy reader block of docs/READING_SHARDS.md, executed as printed."""
+    with open(os.path.join(common.SOURCE, "docs", "READING_SHARDS.md")) as f:
+        text = f.read()
+    m = re.search(r"<!-- reader:numpy -->\s*```python\n(.*?)```\s*<!-- /reader:numpy -->", text,
+                  re.S)
+    assert m is not None, "docs/READING_SHARDS.md: no <!-- reader:numpy --> block"
+    namespace: Dict[str, Any] = {}
+    exec(compile(m.group(1), "READING_SHARDS.md:reader", "exec"), namespace)
+    return namespace
+
+
+def dense_reference(occ: np.ndarray, known: np.ndarray, bins: int) -> np.ndarray:
+    """Bit k of the words -> bin k (0 free, 1 occupied, 255 unknown), plainly."""
+    k = np.arange(bins, dtype=np.uint64)[:, None, None]
+    occupied = (occ[None] >> k) & np.uint64(1)
+    is_known = (known[None] >> k) & np.uint64(1)
+    return np.where(is_known == 1, occupied, 255).astype(np.uint8)
+
+
+def copy_split(src: str, name: str) -> str:
+    dst = common.scratch(name)
+    for f in os.listdir(src):
+        if f.endswith((".tar", ".json", ".jsonl")):
+            shutil.copy(os.path.join(src, f), dst)
+    return dst
+
+
+class ShardDatasetTest(unittest.TestCase):
+    full: str
+    dense: str
+    reader: Dict[str, Any]
+    plain: List[Dict[str, Any]]
+    lines: List[Dict[str, Any]]
+
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.full = build("sd_full", encoding="packed", image="png", depth="true")
+        cls.dense = build("sd_dense", encoding="both", image="none", depth="false")
+        cls.reader = doc_reader()
+        cls.plain = list(cls.reader["iter_split"](cls.full))
+        with open(os.path.join(cls.full, "pairs.jsonl")) as f:
+            cls.lines = [json.loads(line) for line in f]
+
+    def expected(self, i: int) -> Dict[str, Any]:
+        """Sample i of the plain reader in the contract's names, dtypes and layouts."""
+        s = self.plain[i]
+        meta = s["json"]
+        # The contract's grey: the decoded colour through cv2's RGB -> grey weights.
+        grey = [cv2.cvtColor(cv2.imdecode(np.frombuffer(s[f"image{c}.png"], np.uint8),
+                                          cv2.IMREAD_COLOR), cv2.COLOR_BGR2GRAY)
+                for c in "01"]
+        T = np.array(meta["T_0to1"], dtype=np.float64)
+        return {
+            "image0": torch.from_numpy(grey[0]).float()[None] / 255,
+            "image1": torch.from_numpy(grey[1]).float()[None] / 255,
+            "depth0": torch.from_numpy(s["depth0.npy"]),
+            "depth1": torch.from_numpy(s["depth1.npy"]),
+            "K0": torch.tensor(meta["K0"], dtype=torch.float32),
+            "K1": torch.tensor(meta["K1"], dtype=torch.float32),
+            "T_0to1": torch.from_numpy(T.astype(np.float32)),
+            "T_1to0": torch.from_numpy(np.linalg.inv(T).astype(np.float32)),
+            "dataset_name": "occgt",
+            "scene_id": meta["scene"],
+            "pair_id": i,
+            "pair_names": (meta["scene"] + "/" + meta["frame0"]["id"],
+                           meta["scene"] + "/" + meta["frame1"]["id"]),
+            "label01": torch.from_numpy(s["label01.npy"]),
+            "label10": torch.from_numpy(s["label10.npy"]),
+            "cells0": torch.from_numpy(s["cells0.npy"]),
+            "cells1": torch.from_numpy(s["cells1.npy"]),
+            "matches": torch.from_numpy(s["matches.npy"].astype(np.int64)),
+            "match_type": torch.from_numpy(s["match_type.npy"].astype(np.int64)),
+            "match_xy": torch.from_numpy(s["match_xy.npy"]),
+            "occ0": torch.from_numpy(s["occ0.npy"].view(np.int64)),
+            "known0": torch.from_numpy(s["known0.npy"].view(np.int64)),
+            "occ1": torch.from_numpy(s["occ1.npy"].view(np.int64)),
+            "known1": torch.from_numpy(s["known1.npy"].view(np.int64)),
+            "metrics01": meta["metrics"]["01"],
+            "metrics10": meta["metrics"]["10"],
+        }
+
+    def assert_same(self, got: Dict[str, Any], want: Dict[str, Any], where: str) -> None:
+        self.assertEqual(list(got), list(want), where)
+        for k, w in want.items():
+            g = got[k]
+            if isinstance(w, torch.Tensor):
+                self.assertIsInstance(g, torch.Tensor, f"{where}: {k}")
+                self.assertEqual((g.dtype, tuple(g.shape)), (w.dtype, tuple(w.shape)),
+                                 f"{where}: {k}")
+                self.assertTrue(torch.equal(g, w), f"{where}: {k} differs")
+            else:
+                self.assertEqual(g, w, f"{where}: {k}")
+
+    def test_every_sample_equals_the_plain_reader_in_random_order(self) -> None:
+        ds = ShardDataset(self.full)
+        self.assertEqual(len(ds), len(self.plain))
+        self.assertGreaterEqual(len(ds), 8)
+        with open(os.path.join(self.full, "index.json")) as f:
+            self.assertEqual(len(ds), sum(e["nsamples"] for e in json.load(f)["shardlist"]))
+        order = list(range(len(ds)))
+        random.Random(5).shuffle(order)
+        for i in order:
+            where = f"sample {i} ({self.plain[i]['__key__']})"
+            got = ds[i]
+            self.assertEqual(list(got), CONTRACT_KEYS, where)
+            self.assert_same(got, self.expected(i), where)
+            self.assertEqual(ds.key(i), self.plain[i]["__key__"], where)
+            self.assertEqual(ds.pair(i), self.lines[i], where)
+            self.assertTrue(got["label01"].numpy().flags.writeable, where)
+        T = ds[0]["T_1to0"].double() @ ds[0]["T_0to1"].double()
+        self.assertTrue(torch.allclose(T, torch.eye(4, dtype=torch.float64), atol=1e-5))
+        # Python indexing: negative indices, IndexError past the end (ends iteration).
+        self.assertEqual(ds[-1]["pair_id"], len(ds) - 1)
+        self.assertEqual(ds.key(-len(ds)), self.plain[0]["__key__"])
+        with self.assertRaises(IndexError):
+            ds[len(ds)]
+        self.assertEqual(sum(1 for _ in ds), len(ds))
+
+    def test_color_and_options(self) -> None:
+        ds = ShardDataset(self.full, color=True, depth=False, occupancy="none")
+        s = ds[3]
+        for c in "01":
+            bgr = cv2.imdecode(np.frombuffer(self.plain[3][f"image{c}.png"], np.uint8),
+                               cv2.IMREAD_COLOR)
+            want = torch.from_numpy(np.ascontiguousarray(bgr[:, :, ::-1].transpose(2, 0, 1)))
+            self.assertEqual(s["color" + c].dtype, torch.uint8)
+            self.assertTrue(torch.equal(s["color" + c], want), "color" + c)
+        self.assertTrue(torch.equal(s["image0"], self.expected(3)["image0"]))
+        for k in ("depth0", "occ0", "known1", "occupancy0"):
+            self.assertNotIn(k, s)
+        s = ShardDataset(self.full, images=False, labels=False, dataset_name="ScanNet")[2]
+        for k in ("image0", "label01", "cells1"):
+            self.assertNotIn(k, s)
+        self.assertEqual(s["dataset_name"], "ScanNet")
+        with self.assertRaisesRegex(ValueError, r"occupancy: expected one of words, dense, none"):
+            ShardDataset(self.full, occupancy="packed")
+
+    def test_dataloader_two_workers_shuffled(self) -> None:
+        ds = ShardDataset(self.full)
+        ds[0]  # files opened in the parent before the fork: workers must reopen their own
+        torch.manual_seed(11)
+        loader = DataLoader(ds, batch_size=4, shuffle=True, num_workers=2, collate_fn=collate)
+        seen: List[int] = []
+        for batch in loader:
+            ids = batch["pair_id"].tolist()
+            seen += ids
+            for b, i in enumerate(ids):
+                want = ds[i]
+                where = f"batch sample {b} (pair {i})"
+                rows = int(batch["match_mask"][b].sum())
+                self.assertEqual(rows, want["matches"].shape[0], where)
+                for k, w in want.items():
+                    if k in ("matches", "match_type", "match_xy"):
+                        self.assertTrue(torch.equal(batch[k][b, :rows], w), f"{where}: {k}")
+                    elif isinstance(w, torch.Tensor):
+                        self.assertTrue(torch.equal(batch[k][b], w), f"{where}: {k}")
+                self.assertEqual(batch["scene_id"][b], want["scene_id"], where)
+                self.assertEqual((batch["pair_names"][0][b], batch["pair_names"][1][b]),
+                                 want["pair_names"], where)
+                self.assertEqual(batch["metrics01"]["overlap"][b].item(),
+                                 want["metrics01"]["overlap"], where)
+        self.assertEqual(sorted(seen), list(range(len(ds))))
+        self.assertNotEqual(seen, list(range(len(ds))), "shuffle=True gave the identity order")
+
+    def test_dense_occupancy(self) -> None:
+        # Words only in the split: unpacked by occgt.dense_volume (C++).
+        ds = ShardDataset(self.full, occupancy="dense")
+        bins = len(self.plain[0]["json"]["occupancy"]["bin_edges_m"]) - 1
+        self.assertEqual(bins, 32)
+        for i in (0, len(ds) - 1):
+            s, p = ds[i], self.plain[i]
+            self.assertNotIn("occ0", s)
+            for c in "01":
+                occ, known = p[f"occ{c}.npy"], p[f"known{c}.npy"]
+                want = occgt.dense_volume(occ, known, bins)
+                got = s["occupancy" + c]
+                self.assertEqual((got.dtype, tuple(got.shape)),
+                                 (torch.uint8, (bins,) + occ.shape), f"{i}: occupancy{c}")
+                self.assertTrue(np.array_equal(got.numpy(), want), f"{i}: occupancy{c}")
+                self.assertTrue(np.array_equal(want, dense_reference(occ, known, bins)))
+                self.assertTrue((got == 1).any() and (got == 0).any() and (got == 255).any())
+        # A split storing both encodings: its dense members, equal to the unpacked words.
+        plain = list(self.reader["iter_split"](self.dense))
+        ds = ShardDataset(self.dense, occupancy="dense", images=False, depth=False)
+        words = ShardDataset(self.dense, occupancy="words", images=False, depth=False)
+        self.assertEqual(len(ds), len(plain))
+        for i in range(len(ds)):
+            s, w, p = ds[i], words[i], plain[i]
+            for c in "01":
+                self.assertTrue(np.array_equal(s["occupancy" + c].numpy(), p[f"occ{c}_dense.npy"]))
+                self.assertTrue(np.array_equal(
+                    s["occupancy" + c].numpy(),
+                    occgt.dense_volume(w["occ" + c].numpy().view(np.uint64),
+                                       w["known" + c].numpy().view(np.uint64), bins)))
+
+    def test_bad_folders(self) -> None:
+        empty = common.scratch("sd_no_index")
+        with self.assertRaisesRegex(ValueError, re.escape(os.path.join(empty, "index.json")) +
+                                    r": missing \(expected the split's wids shard index"):
+            ShardDataset(empty)
+        with open(os.path.join(empty, "index.json"), "w") as f:
+            f.write('{"shardlist": 3}')
+        with self.assertRaisesRegex(ValueError, r"index.json: expected an object with a "
+                                    r"\"shardlist\" array"):
+            ShardDataset(empty)
+
+        missing = copy_split(self.full, "sd_missing_shard")
+        os.remove(os.path.join(missing, "sd-full-000001.tar"))
+        with self.assertRaisesRegex(ValueError, re.escape(os.path.join(
+                missing, "sd-full-000001.tar")) + r": shard missing \(index.json lists it\)"):
+            ShardDataset(missing)
+
+        short = copy_split(self.full, "sd_short_shard")
+        tar = os.path.join(short, "sd-full-000000.tar")
+        size = os.path.getsize(tar)
+        os.truncate(tar, size - 1024)
+        with self.assertRaisesRegex(ValueError, re.escape(tar) + rf": {size - 1024} bytes, "
+                                    rf"shorter than index.json's filesize {size}"):
+            ShardDataset(short)
+
+        count = copy_split(self.full, "sd_count")
+        with open(os.path.join(count, "index.json")) as f:
+            index = json.load(f)
+        index["shardlist"][0]["nsamples"] += 1
+        with open(os.path.join(count, "index.json"), "w") as f:
+            json.dump(index, f)
+        with self.assertRaisesRegex(ValueError, r"sd-full-000000.tar: 4 samples, index.json "
+                                    r"says 5"):
+            ShardDataset(count)
+
+        garbled = copy_split(self.full, "sd_garbled")
+        with open(os.path.join(garbled, "sd-full-000000.tar"), "r+b") as f:
+            f.seek(10)
+            f.write(b"X")  # inside the first member name: the header checksum fails
+        with self.assertRaisesRegex(ValueError, r"sd-full-000000.tar: tar header at byte 0: "
+                                    r"checksum mismatch"):
+            ShardDataset(garbled)
+
+        # The dense split has no images and no depth: asking for them names the member.
+        first = ShardDataset(self.dense, images=False, depth=False).key(0)
+        with self.assertRaisesRegex(ValueError, r"sd-dense-000000.tar: sample " +
+                                    re.escape(first) + r" has no image0.png or image0.jpg "
+                                    r"member \(asked for by images=True / color=True\)"):
+            ShardDataset(self.dense, depth=False)
+        with self.assertRaisesRegex(ValueError, r"has no depth0.npy member \(asked for by "
+                                    r"depth=True\)"):
+            ShardDataset(self.dense, images=False)
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
