@@ -276,6 +276,34 @@ class ShardDatasetTest(unittest.TestCase):
                     occgt.dense_volume(w["occ" + c].numpy().view(np.uint64),
                                        w["known" + c].numpy().view(np.uint64), bins)))
 
+    def test_npy_members(self) -> None:
+        """The in-place .npy parser: numpy.save's headers (the matched form), any other valid
+        header (literal_eval), Fortran order, empty and 0-d arrays; bad ones raise."""
+        from occgt.torch.shards import _npy
+
+        arrays = [np.arange(12, dtype=np.uint64).reshape(3, 4), np.arange(5, dtype=np.uint8),
+                  np.asfortranarray(np.arange(24, dtype=">f4").reshape(2, 3, 4)),
+                  np.array(7, dtype=np.int32), np.zeros((0, 2), np.int32)]
+        for a in arrays:
+            data = bytearray(b"pad" + common.npy_bytes(a))
+            got = _npy(data, 3, len(data) - 3, "x")
+            self.assertEqual((got.dtype, got.shape), (a.dtype, a.shape))
+            self.assertTrue(np.array_equal(got, a))
+        header = b"{'shape': (2, 2), 'descr': '<i2', 'fortran_order': False}"
+        header += b" " * (63 - len(header)) + b"\n"
+        data = bytearray(b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header +
+                         np.array([[1, 2], [3, 4]], "<i2").tobytes())
+        self.assertTrue(np.array_equal(_npy(data, 0, len(data), "x"), [[1, 2], [3, 4]]))
+        with self.assertRaisesRegex(ValueError, r"x: \(2, 2\) int16 needs 8 bytes, the member "
+                                                r"holds 6"):
+            _npy(data, 0, len(data) - 2, "x")
+        with self.assertRaisesRegex(ValueError, r"x: expected a plain dtype, got object"):
+            _npy(bytearray(data.replace(b"'<i2'", b"'|O8'")), 0, len(data), "x")
+        with self.assertRaisesRegex(ValueError, r"x: bad .npy header"):
+            _npy(bytearray(data.replace(b"'shape'", b"'shope'")), 0, len(data), "x")
+        with self.assertRaisesRegex(ValueError, r"x: expected a .npy file"):
+            _npy(bytearray(b"PK\x03\x04" + bytes(20)), 0, 24, "x")
+
     def test_bad_folders(self) -> None:
         empty = common.scratch("sd_no_index")
         with self.assertRaisesRegex(ValueError, re.escape(os.path.join(empty, "index.json")) +

@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import ast
 import json
+import math
 import os
+import re
 from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
@@ -24,6 +26,8 @@ from ._convert import to_tensor
 __all__ = ["ShardDataset"]
 
 _BLOCK = 512
+_PLAIN_HEADER = re.compile(rb"\{'descr': '([<>|=][a-zA-Z]\d*)', 'fortran_order': (True|False), "
+                           rb"'shape': \(((?:\d+, ?)*\d*)\), ?\} *\n")
 _OCCUPANCY_MODES = ("words", "dense", "none")
 
 class _Sample:
@@ -126,21 +130,30 @@ def _npy(buf: bytearray, offset: int, size: int, where: str) -> np.ndarray:
         raise ValueError(f"{where}: unsupported .npy version {major}")
     if start > size:
         raise ValueError(f"{where}: .npy header longer than the member")
-    # The header is a Python dict literal (numpy's format); parsed with ast.literal_eval as
-    # numpy does, minus numpy's tokenize pass for Python-2 writers (occgt's writer is C++).
+    # The header is a Python dict literal (numpy's format). The form numpy and occgt write
+    # ({'descr': '<u8', 'fortran_order': False, 'shape': (240, 320), }) is matched directly;
+    # any other is parsed with ast.literal_eval as numpy does (minus numpy's tokenize pass
+    # for Python-2 writers, which costs more than the rest of a sample's parsing).
     text = bytes(view[offset + (10 if major == 1 else 12):offset + start])
     try:
-        header = ast.literal_eval(text.decode("utf-8" if major == 3 else "latin1"))
-        if not isinstance(header, dict) or set(header) != {"descr", "fortran_order", "shape"}:
-            raise ValueError("expected a dict with descr, fortran_order and shape")
-        shape = tuple(int(n) for n in header["shape"])
-        fortran = bool(header["fortran_order"])
-        dtype = np.lib.format.descr_to_dtype(header["descr"])
+        m = _PLAIN_HEADER.fullmatch(text)
+        if m is not None:
+            descr = m.group(1).decode("latin1")
+            fortran = m.group(2) == b"True"
+            shape = tuple(int(n) for n in m.group(3).split(b",") if n.strip())
+        else:
+            header = ast.literal_eval(text.decode("utf-8" if major == 3 else "latin1"))
+            if not isinstance(header, dict) or set(header) != {"descr", "fortran_order",
+                                                               "shape"}:
+                raise ValueError("expected a dict with descr, fortran_order and shape")
+            descr, fortran = header["descr"], bool(header["fortran_order"])
+            shape = tuple(int(n) for n in header["shape"])
+        dtype = np.lib.format.descr_to_dtype(descr)
     except (SyntaxError, ValueError, TypeError) as e:
         raise ValueError(f"{where}: bad .npy header {text!r} ({e})") from None
     if dtype.hasobject:
         raise ValueError(f"{where}: expected a plain dtype, got {dtype} (objects are refused)")
-    count = int(np.prod(shape, dtype=np.int64))
+    count = math.prod(shape)
     if start + count * dtype.itemsize > size:
         raise ValueError(f"{where}: {shape} {dtype} needs {count * dtype.itemsize} bytes, "
                          f"the member holds {size - start}")
