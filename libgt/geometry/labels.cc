@@ -434,19 +434,49 @@ DirectionMetrics ScoreDirection(const DepthImage& depth_a, const Camera& cam_a,
   return m;
 }
 
+namespace {
+
+// Sets *counts to the number of codes 0 .. 5 among row[0], row[stride], … (n values); true if a
+// value is not a label code. kStride 1: the stride is 1 (a contiguous, vectorised loop).
+template <int kStride>
+bool CountLabelCodes(const uint8_t* __restrict row, int n, int stride,
+                     std::array<int32_t, kNumPixelLabels>* counts) {
+  static_assert(kNumPixelLabels == 6, "one counter per label code below");
+  int32_t c0 = 0, c1 = 0, c2 = 0, c3 = 0, c4 = 0, c5 = 0;
+  uint8_t max_code = 0;
+  for (int i = 0; i < n; ++i) {
+    const uint8_t l = row[static_cast<size_t>(i) * (kStride == 1 ? 1 : stride)];
+    c0 += l == 0;
+    c1 += l == 1;
+    c2 += l == 2;
+    c3 += l == 3;
+    c4 += l == 4;
+    c5 += l == 5;
+    max_code = std::max(max_code, l);
+  }
+  *counts = {c0, c1, c2, c3, c4, c5};
+  return max_code >= kNumPixelLabels;
+}
+
+}  // namespace
+
 DirectionMetrics MetricsFromLabels(const DirectionLabels& labels, int score_stride) {
   if (score_stride < 1) throw InputError("score_stride", "expected >= 1");
   if (labels.labels.size() != static_cast<size_t>(labels.width) * labels.height) {
     throw InputError("labels", "label map size does not match width x height");
   }
   DirectionMetrics m;
+  const int n = (labels.width + score_stride - 1) / score_stride;
   for (int v = 0; v < labels.height; v += score_stride) {
-    for (int u = 0; u < labels.width; u += score_stride) {
-      const uint8_t l = labels.labels[static_cast<size_t>(v) * labels.width + u];
-      if (l >= kNumPixelLabels) throw InputError("labels", "label code out of range");
-      ++m.counts[l];
-      ++m.sampled;
-    }
+    const uint8_t* row = labels.labels.data() + static_cast<size_t>(v) * labels.width;
+    // Branch-free counts, one check of the codes per row; the contiguous loop of
+    // score_stride 1 (every pixel) is vectorised.
+    std::array<int32_t, kNumPixelLabels> c{};
+    const bool bad = score_stride == 1 ? CountLabelCodes<1>(row, n, 1, &c)
+                                       : CountLabelCodes<0>(row, n, score_stride, &c);
+    if (bad) throw InputError("labels", "label code out of range");
+    for (int k = 0; k < kNumPixelLabels; ++k) m.counts[k] += c[k];
+    m.sampled += n;
   }
   FinishMetrics(&m);
   return m;

@@ -90,6 +90,13 @@ class Scene:
         nearest neighbour, K rescaled with the pixel-area rule. ValueError for an unknown or
         unusable frame_id or an unreadable depth file."""
         ...
+    def load_color(
+        self, frame_id: str, width: int = 640, height: int = 480
+    ) -> npt.NDArray[np.uint8]:
+        """Colour of a frame at width x height: uint8 [height, width, 3], R G B, resized
+        bilinearly from the colour camera (the pixels of a shard's image0/image1). ValueError
+        when the frame has no colour image or it cannot be read."""
+        ...
 
 class Dataset:
     """A dataset root read by one of occgt's readers."""

@@ -2,7 +2,9 @@
 // open_dataset(root, format) -> Dataset; Dataset.scenes(), Dataset.scene(name) -> Scene;
 // Scene.frames (gt::Frame metadata), Scene.load(frame_id, width, height) -> (depth, K,
 // world_from_cam) at the working resolution (truth::LoadWorkingDepth / WorkingCamera, the
-// two halves of truth::LoadWorkingFrame). Files are read without the GIL.
+// two halves of truth::LoadWorkingFrame), Scene.load_color(frame_id, width, height) -> RGB
+// at the working resolution (io::ReadColorResized, the image of a shard sample). Files are
+// read without the GIL.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -12,7 +14,9 @@
 #include <utility>
 #include <vector>
 
+#include "libgt/core/error.h"
 #include "libgt/core/frame.h"
+#include "libgt/io/image.h"
 #include "libgt/io/reader.h"
 #include "libgt/truth/working_frame.h"
 #include "python/src/convert.h"
@@ -47,6 +51,24 @@ class PyScene {
     const int h = depth.height, w = depth.width;
     return py::make_tuple(ToArray(std::move(depth.values_m), {h, w}), MatrixToArray(camera.K()),
                           MatrixToArray(world_from_cam.matrix()));
+  }
+
+  py::array_t<uint8_t> LoadColor(const std::string& frame_id, int width, int height) const {
+    const gt::truth::Resolution resolution{width, height};
+    std::string error;
+    if (!resolution.Check(&error)) ThrowValue("width, height", error);
+    gt::io::ColorImage image;
+    {
+      py::gil_scoped_release no_gil;
+      const gt::Frame& frame = scene_->frames[gt::truth::FindFrame(*scene_, frame_id, "frame_id")];
+      if (frame.color_path.empty()) {
+        throw gt::InputError("frame_id", "frame " + frame.id + " of scene " + scene_->name +
+                                             " has no colour image");
+      }
+      image = gt::io::ReadColorResized(frame.color_path, frame.color_camera, width, height);
+    }
+    const int h = image.height, w = image.width;
+    return ToArray(std::move(image.rgb), {h, w, 3});
   }
 
  private:
@@ -139,6 +161,11 @@ void BindIo(py::module_& m) {
            "resolution: depth resized with nearest neighbour, K rescaled with the pixel-area "
            "rule (truth::LoadWorkingFrame). ValueError for an unknown or unusable frame_id or "
            "an unreadable depth file.")
+      .def("load_color", &PyScene::LoadColor, "frame_id"_a, "width"_a = 640, "height"_a = 480,
+           "colour of a frame at the working resolution: uint8 [height, width, 3], channels R, "
+           "G, B, resized bilinearly from the colour camera's size (io::ReadColorResized: the "
+           "pixels of a shard's image0/image1). ValueError when the frame has no colour image "
+           "or it cannot be read.")
       .def("__repr__", [](const PyScene& s) {
         return "<occgt.Scene " + s.scene().name + " (" + s.scene().format + ", " +
                std::to_string(s.scene().frames.size()) + " frames)>";

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 
 #include "libgt/core/error.h"
@@ -354,6 +355,30 @@ TEST(Inputs, SizeMismatchThrows) {
   Camera bad = cam;
   bad.fx = 0;
   EXPECT_THROW(LabelDirection(a, bad, a, cam, Rigid3d::Identity(), {}), InputError);
+}
+
+TEST(Metrics, CountsOfAHandMadeLabelMap) {
+  // 7×3 map, label of pixel (u, v) = (u + v) % 6: every code appears; counts in closed form.
+  DirectionLabels l;
+  l.width = 7;
+  l.height = 3;
+  for (int v = 0; v < l.height; ++v) {
+    for (int u = 0; u < l.width; ++u) l.labels.push_back(static_cast<uint8_t>((u + v) % 6));
+  }
+  for (int stride : {1, 2, 3, 7, 8}) {
+    std::array<int64_t, kNumPixelLabels> expect{};
+    int64_t sampled = 0;
+    for (int v = 0; v < l.height; v += stride) {
+      for (int u = 0; u < l.width; u += stride) ++expect[(u + v) % 6], ++sampled;
+    }
+    const DirectionMetrics m = MetricsFromLabels(l, stride);
+    EXPECT_EQ(m.sampled, sampled) << stride;
+    for (int k = 0; k < kNumPixelLabels; ++k) EXPECT_EQ(m.counts[k], expect[k]) << stride;
+  }
+  l.labels[9] = kNumPixelLabels;  // (2, 1): not a code
+  EXPECT_THROW(MetricsFromLabels(l, 1), InputError);
+  EXPECT_NO_THROW(MetricsFromLabels(l, 2));  // (2, 1) is not sampled at stride 2
+  EXPECT_THROW(MetricsFromLabels(l, 0), InputError);
 }
 
 TEST(Symmetry, MirroredCamerasGiveMirroredLabels) {

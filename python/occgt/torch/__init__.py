@@ -16,11 +16,25 @@ A sample (a dict) has the same keys whichever dataset yields it:
   ``occ0``, ``known0``, ``occ1``, ``known1`` int64 [H/2, W/2] (the uint64 words' bits,
   reinterpreted: torch has no uint64) or, on request, ``occupancy0``, ``occupancy1`` uint8
   [D, H/2, W/2] (0 free, 1 occupied, 255 unknown); ``metrics01``, ``metrics10`` dicts.
+- The grey images are the library's colour at the working resolution (a shard's
+  ``image0.png``) converted with ``cv2.COLOR_RGB2GRAY``, divided by 255; ``pair_names`` are
+  ``("<scene>/<frame id>", "<scene>/<frame id>")``.
 - On request, ``color0``, ``color1`` uint8 [3, H, W] RGB (``ShardDataset(color=True)``).
 """
 from __future__ import annotations
 
 from ._convert import to_tensor
+from .collate import VARIABLE_KEYS, Collate, collate
+from .pairs import PairIndexDataset, PairRef, read_pair_index
 from .shards import ShardDataset
 
-__all__ = ["ShardDataset", "to_tensor"]
+__all__ = [
+    "VARIABLE_KEYS",
+    "Collate",
+    "PairIndexDataset",
+    "PairRef",
+    "ShardDataset",
+    "collate",
+    "read_pair_index",
+    "to_tensor",
+]

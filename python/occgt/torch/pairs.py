@@ -1,0 +1,314 @@
+"""PairIndexDataset: ground truth computed on the fly from a pair index and the dataset on disk.
+
+No shard is needed: each ``__getitem__`` reads the pair's two frames with occgt's readers (at
+the working resolution) and computes occgt's ground truth with ``occgt.pair_ground_truth``
+(the C++ library, GIL released), in the DataLoader worker. docs/PYTHON.md, "Training with torch".
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import cv2
+import numpy as np
+
+import occgt
+
+from ._convert import to_tensor
+
+#: LoFTR's dataset_name for occgt's reader formats (its evaluation picks thresholds by it).
+_DATASET_NAMES = {"scannet": "ScanNet", "megadepth": "MegaDepth"}
+
+
+@dataclasses.dataclass(frozen=True)
+class PairRef:
+    """One pair of an index: the scene and both frames, by id or by number (LoFTR's indices
+    name frames by number)."""
+
+    scene: str
+    frame0: Optional[str]
+    frame1: Optional[str]
+    number0: Optional[int] = None
+    number1: Optional[int] = None
+    score: Optional[float] = None
+
+
+def _scene_names_file(npz_path: str) -> Optional[str]:
+    """scenes.txt of occgt's LoFTR export: beside test.npz, or two folders above
+    scene_data/{split}/<scene>.npz."""
+    here = os.path.dirname(os.path.abspath(npz_path))
+    for folder in (here, os.path.dirname(os.path.dirname(here))):
+        path = os.path.join(folder, "scenes.txt")
+        if os.path.isfile(path):
+            return path
+    return None
+
+
+def _read_lines(path: str) -> List[str]:
+    with open(path) as f:
+        return [line.strip() for line in f if line.strip() and not line.startswith("#")]
+
+
+def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> List[PairRef]:
+    """LoFTR's scene_info npz (``name`` [N, 4], ``score``) or test.npz (``name``,
+    ``rel_pose``): name = (scene number, sub-scene, frame number 0, frame number 1)."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if "name" not in z.files:
+                raise ValueError(f"{path}: no member 'name' (expected LoFTR's [N, 4] pair names)")
+            name = z["name"]
+            score = z["score"] if "score" in z.files else None
+    except (OSError, ValueError) as e:
+        if str(e).startswith(path):
+            raise
+        raise ValueError(f"{path}: cannot read as an npz pair index ({e})") from None
+    if name.ndim != 2 or name.shape[1] != 4 or name.dtype.kind not in "iu":
+        raise ValueError(f"{path}:name: expected integers of shape [N, 4] (scene, sub-scene, "
+                         f"frame0, frame1), got {name.dtype} {list(name.shape)}")
+    if score is not None and score.shape != (name.shape[0],):
+        raise ValueError(f"{path}:score: expected shape [{name.shape[0]}], got {list(score.shape)}")
+    if scene_names is None:
+        names_file = _scene_names_file(path)
+        scene_names = _read_lines(names_file) if names_file else None
+    refs = []
+    for r, (s, sub, n0, n1) in enumerate(name.astype(np.int64).tolist()):
+        if scene_names is not None:
+            if not 0 <= s < len(scene_names) or sub != 0:
+                raise ValueError(f"{path}:name[{r}]: scene ({s}, {sub}) is not in the scene list "
+                                 f"({len(scene_names)} names, sub-scene 0)")
+            scene = scene_names[s]
+        else:
+            scene = f"scene{s:04d}_{sub:02d}"
+        refs.append(PairRef(scene, None, None, int(n0), int(n1),
+                            None if score is None else float(score[r])))
+    return refs
+
+
+def _read_jsonl(path: str) -> List[PairRef]:
+    """occgt's pairs.jsonl or selection/<scene>.jsonl lines (schemas/pairs_line.schema.json)."""
+    refs = []
+    with open(path) as f:
+        for number, line in enumerate(f, 1):
+            if not line.strip():
+                continue
+            try:
+                p = json.loads(line)
+                refs.append(PairRef(p["scene"], p["frame0"], p["frame1"], p.get("number0"),
+                                    p.get("number1")))
+            except (ValueError, KeyError, TypeError) as e:
+                raise ValueError(f"{path}:{number}: expected a pair line with scene, frame0, "
+                                 f"frame1 ({e})") from None
+    return refs
+
+
+def read_pair_index(pairs: Union[str, os.PathLike],
+                    scene_names: Optional[Union[str, Sequence[str]]] = None,
+                    npz_root: Optional[str] = None) -> List[PairRef]:
+    """The pairs of an index, in its order.
+
+    ``pairs`` is one of: occgt's ``pairs.jsonl`` or a selection ``<scene>.jsonl``; a split
+    folder (its ``pairs.jsonl``, else its ``selection/*.jsonl``); a LoFTR ``.npz`` (scene_info
+    with ``name`` and ``score``, or test-1500's ``test.npz``); a folder of such npz files (LoFTR's
+    ``scene_data/{split}``, sorted); a LoFTR list ``.txt`` (one npz name per line, in
+    ``npz_root``, default the list's folder). LoFTR names scenes by number: ``scene_names`` (a
+    list, or a file with one name per line: line i = scene i) maps them; default: occgt's
+    export's ``scenes.txt`` when found next to the npz, else ScanNet's ``sceneXXXX_YY``.
+    """
+    path = os.fspath(pairs)
+    names = _read_lines(scene_names) if isinstance(scene_names, str) else scene_names
+    if os.path.isdir(path):
+        jsonl = os.path.join(path, "pairs.jsonl")
+        if os.path.isfile(jsonl):
+            return _read_jsonl(jsonl)
+        selection = os.path.join(path, "selection")
+        if os.path.isdir(selection):
+            files = sorted(f for f in os.listdir(selection) if f.endswith(".jsonl"))
+            return [r for f in files for r in _read_jsonl(os.path.join(selection, f))]
+        npz = sorted(f for f in os.listdir(path) if f.endswith(".npz"))
+        if not npz:
+            raise ValueError(f"{path}: expected pairs.jsonl, selection/*.jsonl or LoFTR *.npz files")
+        return [r for f in npz for r in _read_npz(os.path.join(path, f), names)]
+    if not os.path.isfile(path):
+        raise ValueError(f"{path}: no such pair index (expected a .jsonl, .npz, .txt or a folder)")
+    if path.endswith(".jsonl"):
+        return _read_jsonl(path)
+    if path.endswith(".npz"):
+        return _read_npz(path, names)
+    if path.endswith(".txt"):
+        root = npz_root if npz_root is not None else os.path.dirname(path)
+        return [r for f in _read_lines(path) for r in _read_npz(os.path.join(root, f), names)]
+    raise ValueError(f"{path}: unknown pair index type (expected .jsonl, .npz or .txt)")
+
+
+class PairIndexDataset:
+    """A map-style torch Dataset: item i = pair i of ``pairs`` with occgt's ground truth,
+    computed on the fly from the dataset on disk (no shards).
+
+    Args:
+        pairs: the pair index (``read_pair_index``: pairs.jsonl, a split folder, a LoFTR npz,
+            a folder of npz, a list file).
+        root, format: the dataset (``occgt.open_dataset``; ``occgt.FORMATS``).
+        width, height: the working resolution (pixels) of depth, images, K and labels.
+        preset: label preset (``occgt.PRESETS``); ``**options`` are ``pair_ground_truth``'s
+            keyword options (tolerances, ``stride``, ``anchor``, ``mutual``, occupancy
+            settings); the depth range defaults to the scene's (as ``occgt pair``).
+        images: also ``image0``/``image1``, grey [1, H, W] in [0, 1]: the library's colour at
+            the working resolution (``Scene.load_color``, a shard's pixels) converted with
+            ``cv2.COLOR_RGB2GRAY``. A frame without colour raises ValueError.
+        occupancy: ``None`` (none), ``"words"`` (occ0/known0/occ1/known1, int64 views of the
+            uint64 words) or ``"dense"`` (occupancy0/occupancy1 uint8 [D, H/2, W/2]).
+        scene_names, npz_root: see ``read_pair_index``.
+
+    Items are dicts with the keys of the sample contract (``occgt.torch``): LoFTR's keys
+    (``T_0to1`` = cam1_from_cam0 computed from the two poses) and occgt's ground truth, plus
+    ``pair_score`` (the index's score, NaN when it has none). ``pair_names`` are
+    ``("<scene>/<frame id>", ...)``. Scenes are opened lazily, once per process (worker).
+    """
+
+    def __init__(self, pairs: Union[str, os.PathLike, Sequence[PairRef]], root: str, format: str,
+                 *, width: int = 640, height: int = 480, preset: str = "default",
+                 images: bool = True, occupancy: Optional[str] = None,
+                 scene_names: Optional[Union[str, Sequence[str]]] = None,
+                 npz_root: Optional[str] = None, **options: Any) -> None:
+        if occupancy not in (None, "words", "dense"):
+            raise ValueError(f"occupancy: expected None, 'words' or 'dense', got {occupancy!r}")
+        self.pairs: List[PairRef] = (list(pairs) if isinstance(pairs, (list, tuple))
+                                     else read_pair_index(pairs, scene_names, npz_root))
+        self.root, self.format = root, format
+        self.width, self.height = int(width), int(height)
+        self.preset, self.images, self.occupancy = preset, bool(images), occupancy
+        self.options = dict(options)
+        self.bins = int(self.options.get("bins", 64))
+        self.dataset_name = _DATASET_NAMES.get(format, format)
+        self._dataset: Optional[occgt.Dataset] = None
+        self._pid = -1
+        self._scenes: Dict[str, Tuple[occgt.Scene, Dict[int, str]]] = {}
+        occgt.open_dataset(root, format)  # fail here, not in a worker, on a bad root/format
+
+    @classmethod
+    def from_split(cls, split_dir: str, *, root: Optional[str] = None,
+                   images: Optional[bool] = None, occupancy: Optional[str] = "recipe",
+                   **overrides: Any) -> "PairIndexDataset":
+        """The pairs of a built split (its ``pairs.jsonl``, else its ``selection/``) with the
+        options of its recipe (``recipe.json``: resolution, label preset and overrides, depth
+        range, patches, occupancy), so that item i has the arrays of the split's sample i.
+
+        ``root`` replaces the recipe's dataset root (a synthetic recipe reads
+        ``split_dir/data``). ``images`` defaults to the recipe's (``sample.image`` not
+        ``none``); ``occupancy="recipe"`` to its encoding (packed/both → ``"words"``, dense →
+        ``"dense"``, none when the recipe has no occupancy). Other keyword arguments override
+        options. Occupancy fused over a window or a scene (``occupancy.scope``) is not offered
+        here: ValueError.
+        """
+        path = os.path.join(split_dir, "recipe.json")
+        try:
+            with open(path) as f:
+                recipe = json.load(f)
+            dataset, labels, patches = recipe["dataset"], recipe["labels"], recipe["patches"]
+            occ, sample = recipe["occupancy"], recipe["sample"]
+            width, height = recipe["resolution"]
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            raise ValueError(f"{path}: expected the recipe.json of a built split ({e})") from None
+        fmt = dataset["format"]
+        if root is None:
+            root = dataset["root"] or os.path.join(split_dir, "data")
+        if fmt == "synthetic":
+            fmt = "generic"  # the build generated it as generic manifests
+        options: Dict[str, Any] = {
+            "stride": patches["stride"], "anchor": patches["anchor"], "mutual": patches["mutual"]}
+        for name in ("min_depth_m", "max_depth_m"):
+            value = labels["overrides"].get(name)
+            value = dataset.get(name) if value is None else value
+            if value is not None:
+                options[name] = value
+        for name in ("abs_tol_m", "rel_tol"):
+            if labels["overrides"].get(name) is not None:
+                options[name] = labels["overrides"][name]
+        with_occupancy = bool(occ["enabled"] and sample["occupancy"])
+        if occupancy == "recipe":
+            occupancy = ({"dense": "dense"}.get(occ["encoding"], "words")
+                         if with_occupancy else None)
+        if occupancy is not None:
+            if occ["scope"] != "pair":
+                raise ValueError(f"{path}: occupancy.scope '{occ['scope']}': only 'pair' "
+                                 "occupancy is computed from Python (pass occupancy=None)")
+            options.update({"voxel_m": occ["voxel_m"], "max_range_m": occ["far_m"],
+                            "near_m": occ["near_m"], "far_m": occ["far_m"], "bins": occ["bins"],
+                            "spacing": occ["spacing"], "traversal": occ["traversal"],
+                            "occupancy_mode": occ["mode"]})
+        options.update(overrides)
+        return cls(split_dir, root, fmt, width=width, height=height, preset=labels["preset"],
+                   images=sample["image"] != "none" if images is None else images,
+                   occupancy=occupancy, **options)
+
+    def __len__(self) -> int:
+        return len(self.pairs)
+
+    def _scene(self, name: str) -> Tuple[occgt.Scene, Dict[int, str]]:
+        if self._pid != os.getpid():  # a forked worker opens its own readers
+            self._dataset, self._scenes, self._pid = occgt.open_dataset(self.root, self.format), {}, os.getpid()
+        if name not in self._scenes:
+            assert self._dataset is not None
+            scene = self._dataset.scene(name)
+            self._scenes[name] = (scene, {f.number: f.id for f in scene.frames})
+        return self._scenes[name]
+
+    def frame_ids(self, index: int) -> Tuple[str, str]:
+        """The frame ids of pair ``index`` (an index given by numbers is resolved in its scene)."""
+        ref = self.pairs[index]
+        scene, by_number = self._scene(ref.scene)
+
+        def resolve(frame_id: Optional[str], number: Optional[int]) -> str:
+            if frame_id is not None:
+                return frame_id
+            if number not in by_number:
+                raise ValueError(f"pair {index}: scene {ref.scene} has no frame number {number}")
+            return by_number[number]
+
+        return resolve(ref.frame0, ref.number0), resolve(ref.frame1, ref.number1)
+
+    def __getitem__(self, index: int) -> Dict[str, Any]:
+        if not -len(self.pairs) <= index < len(self.pairs):
+            raise IndexError(f"index {index} out of range for {len(self.pairs)} pairs")
+        index %= len(self.pairs)
+        ref = self.pairs[index]
+        scene, _ = self._scene(ref.scene)
+        id0, id1 = self.frame_ids(index)
+        depth0, K0, world_from_cam0 = scene.load(id0, self.width, self.height)
+        depth1, K1, world_from_cam1 = scene.load(id1, self.width, self.height)
+        options = {"min_depth_m": scene.min_depth_m, "max_depth_m": scene.max_depth_m}
+        options.update(self.options)
+        truth = occgt.pair_ground_truth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1,
+                                        self.preset, occupancy=self.occupancy is not None,
+                                        **options)
+        sample: Dict[str, Any] = {}
+        if self.images:
+            for k, frame_id in (("image0", id0), ("image1", id1)):
+                rgb = scene.load_color(frame_id, self.width, self.height)
+                grey = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
+                sample[k] = to_tensor(grey[None])
+        T_0to1 = truth["T_0to1"]
+        sample.update({
+            "depth0": to_tensor(depth0), "depth1": to_tensor(depth1),
+            "K0": to_tensor(K0.astype(np.float32)), "K1": to_tensor(K1.astype(np.float32)),
+            "T_0to1": to_tensor(T_0to1.astype(np.float32)),
+            "T_1to0": to_tensor(np.linalg.inv(T_0to1).astype(np.float32)),
+            "dataset_name": self.dataset_name, "scene_id": ref.scene, "pair_id": index,
+            "pair_names": (f"{ref.scene}/{id0}", f"{ref.scene}/{id1}"),
+            "pair_score": float("nan") if ref.score is None else ref.score,
+        })
+        for k in ("label01", "label10", "cells0", "cells1", "match_xy"):
+            sample[k] = to_tensor(truth[k])
+        sample["matches"] = to_tensor(truth["matches"].astype(np.int64))
+        sample["match_type"] = to_tensor(truth["match_type"].astype(np.int64))
+        sample["metrics01"], sample["metrics10"] = truth["metrics01"], truth["metrics10"]
+        if self.occupancy == "words":
+            for k in ("occ0", "known0", "occ1", "known1"):
+                sample[k] = to_tensor(truth[k])
+        elif self.occupancy == "dense":
+            for c in "01":
+                sample["occupancy" + c] = to_tensor(
+                    occgt.dense_volume(truth["occ" + c], truth["known" + c], self.bins))
+        return sample

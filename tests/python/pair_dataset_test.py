@@ -1,0 +1,320 @@
+"""occgt.torch.PairIndexDataset and occgt.torch.collate: ground truth computed on the fly from
+a pair index and the dataset on disk.
+
+- PairIndexDataset.from_split(split) gives, item by item, the arrays of the split's shards
+  (every .npy member bit-equal, the grey of image0/1.png), for the demo and both real samples
+  (7-Scenes and TartanAir from ../shared/data; the shards are read here with tarfile, not with
+  occgt's ShardDataset);
+- the index readers: occgt's pairs.jsonl and selection/, occgt's LoFTR test.npz (scenes.txt),
+  LoFTR's real test-1500 test.npz, a scene_info folder and a list file;
+- LoFTR's keys, dtypes and layouts; a DataLoader with 2 workers, shuffled, batch 4, gives the
+  tensors of direct reads, in both collate layouts;
+- bad indices and options raise ValueError naming the file and what was expected.
+"""
+from __future__ import annotations
+
+import io
+import json
+import os
+import sys
+import tarfile
+import unittest
+from typing import Any, Dict, Iterator, List, Tuple
+
+import cv2
+import numpy as np
+import torch
+from torch.utils.data import DataLoader
+
+sys.path.insert(0, os.path.dirname(__file__))
+import common  # noqa: E402
+
+import occgt  # noqa: E402
+from occgt.torch import Collate, PairIndexDataset, PairRef, collate, read_pair_index  # noqa: E402
+
+_SPLITS: Dict[str, str] = {}
+
+
+def built_split(recipe: str) -> str:
+    """recipes/<recipe>.yaml built once into scratch (shared by the tests of this file)."""
+    if recipe not in _SPLITS:
+        out = common.scratch("pair_dataset_" + recipe)
+        common.occgt("build", os.path.join(common.SOURCE, "recipes", recipe + ".yaml"), "--out",
+                     out)
+        _SPLITS[recipe] = out
+    return _SPLITS[recipe]
+
+
+def shard_samples(split: str) -> Iterator[Dict[str, bytes]]:
+    """{field: bytes} of every sample of the split, in index.json order (plain tarfile)."""
+    index = common.read_json(os.path.join(split, "index.json"))
+    for shard in index["shardlist"]:
+        sample: Dict[str, bytes] = {}
+        with tarfile.open(os.path.join(split, shard["url"]), "r:") as tar:
+            for member in tar:
+                folder, _, base = member.name.rpartition("/")
+                stem, _, field = base.partition(".")
+                key = folder + "/" + stem
+                if sample and sample["__key__"] != key.encode():
+                    yield sample
+                    sample = {}
+                sample["__key__"] = key.encode()
+                data = tar.extractfile(member)
+                assert data is not None
+                sample[field] = data.read()
+        if sample:
+            yield sample
+
+
+class FromSplit(unittest.TestCase):
+    """Item i of from_split(split) has the arrays of the split's sample i."""
+
+    def check_split(self, recipe: str) -> None:
+        split = built_split(recipe)
+        ds = PairIndexDataset.from_split(split)
+        samples = list(shard_samples(split))
+        self.assertEqual(len(ds), len(samples), recipe)
+        self.assertGreater(len(samples), 0, recipe)
+        for i, s in enumerate(samples):
+            item = ds[i]
+            meta = json.loads(s["json"])
+            self.assertEqual(s["__key__"].decode(), meta["key"], recipe)
+            id0, id1 = ds.frame_ids(i)
+            self.assertEqual(meta["key"], f"{item['scene_id']}/{id0}_{id1}", recipe)
+            self.assertEqual(item["K0"].numpy().tolist(),
+                             np.array(meta["K0"], np.float32).tolist(), recipe)
+            self.assertTrue(np.allclose(item["T_0to1"].numpy(), np.array(meta["T_0to1"]),
+                                        atol=1e-6), recipe)
+            for c in "01":
+                self.assertEqual(item["metrics" + c + ("1" if c == "0" else "0")],
+                                 meta["metrics"][c + ("1" if c == "0" else "0")], recipe)
+            arrays = 0
+            for field, data in s.items():
+                where = f"{recipe} sample {i} {field}"
+                if field.endswith(".npy"):
+                    want = np.load(io.BytesIO(data), allow_pickle=False)
+                    got = item[field[:-4]].numpy()
+                    if want.dtype == np.uint64:
+                        got = got.view(np.uint64)
+                    self.assertEqual(got.shape, want.shape, where)
+                    self.assertTrue(np.array_equal(got.astype(want.dtype), want), where)
+                    arrays += 1
+                elif field in ("image0.png", "image1.png"):
+                    bgr = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+                    grey = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY).astype(np.float32) / 255
+                    self.assertTrue(torch.equal(item["image" + field[5]], torch.from_numpy(grey[None])),
+                                    where)
+            self.assertGreaterEqual(arrays, 7, f"{recipe} sample {i}: too few arrays compared")
+
+    def test_demo(self) -> None:
+        self.check_split("demo")
+
+    def test_sevenscenes_sample(self) -> None:
+        common.shared("sevenscenes")
+        self.check_split("sevenscenes-sample")
+
+    def test_tartanair_sample(self) -> None:
+        common.shared("tartanair")
+        self.check_split("tartanair-sample")
+
+
+class Indices(unittest.TestCase):
+    def test_jsonl_selection_and_loftr_export_agree(self) -> None:
+        split = built_split("demo")
+        from_pairs = read_pair_index(os.path.join(split, "pairs.jsonl"))
+        self.assertEqual(read_pair_index(split), from_pairs)
+        lines = [json.loads(line) for line in open(os.path.join(split, "pairs.jsonl"))]
+        self.assertEqual([(r.scene, r.frame0, r.frame1) for r in from_pairs],
+                         [(p["scene"], p["frame0"], p["frame1"]) for p in lines])
+        # selection/ holds the same pairs (scene by scene).
+        os.rename(os.path.join(split, "pairs.jsonl"), os.path.join(split, "pairs.jsonl.away"))
+        try:
+            from_selection = read_pair_index(split)
+        finally:
+            os.rename(os.path.join(split, "pairs.jsonl.away"), os.path.join(split, "pairs.jsonl"))
+        self.assertEqual(sorted((r.scene, r.frame0, r.frame1) for r in from_selection),
+                         sorted((r.scene, r.frame0, r.frame1) for r in from_pairs))
+        # occgt's LoFTR test export names scenes by number (scenes.txt) and frames by number.
+        loftr = read_pair_index(os.path.join(split, "loftr", "test.npz"))
+        self.assertEqual(sorted((r.scene, r.number0, r.number1) for r in loftr),
+                         sorted((r.scene, r.number0, r.number1) for r in from_pairs))
+        ds_loftr = PairIndexDataset(os.path.join(split, "loftr", "test.npz"),
+                                    os.path.join(split, "data"), "generic", width=320, height=240)
+        ds_pairs = PairIndexDataset(split, os.path.join(split, "data"), "generic", width=320,
+                                    height=240)
+        by_names = {ds_pairs[i]["pair_names"]: i for i in range(len(ds_pairs))}
+        for i in range(len(ds_loftr)):
+            a = ds_loftr[i]
+            b = ds_pairs[by_names[a["pair_names"]]]
+            self.assertTrue(torch.equal(a["label01"], b["label01"]))
+            self.assertTrue(torch.equal(a["matches"], b["matches"]))
+
+    def test_loftr_test_1500(self) -> None:
+        path = common.shared("loftr_scannet_test_1500/test.npz")
+        refs = read_pair_index(path)
+        name = np.load(path)["name"].astype(np.int64)
+        self.assertEqual(len(refs), len(name))
+        for r, (s, sub, n0, n1) in zip(refs, name.tolist()):
+            self.assertEqual((r.scene, r.frame0, r.number0, r.number1),
+                             (f"scene{s:04d}_{sub:02d}", None, n0, n1))
+        scenes = sorted({r.scene for r in refs})
+        self.assertEqual(len(scenes), 100)
+        self.assertEqual((scenes[0], scenes[-1]), ("scene0707_00", "scene0806_00"))
+
+    def test_scene_info_folder_and_list(self) -> None:
+        out = common.scratch("pair_dataset_scene_info")
+        np.savez(os.path.join(out, "scene0002_01.npz"), name=np.array([[2, 1, 30, 60]]),
+                 score=np.array([0.5], np.float32))
+        np.savez(os.path.join(out, "scene0001_00.npz"),
+                 name=np.array([[1, 0, 0, 15], [1, 0, 15, 45]]), score=np.array([0.4, 0.7]))
+        with open(os.path.join(out, "train_list.txt"), "w") as f:
+            f.write("scene0002_01.npz\nscene0001_00.npz\n")
+        want_sorted = [PairRef("scene0001_00", None, None, 0, 15, 0.4),
+                       PairRef("scene0001_00", None, None, 15, 45, 0.7),
+                       PairRef("scene0002_01", None, None, 30, 60, 0.5)]
+        self.assertEqual(read_pair_index(out), want_sorted)
+        self.assertEqual(read_pair_index(os.path.join(out, "train_list.txt")),
+                         want_sorted[2:] + want_sorted[:2])
+        self.assertEqual([r.scene for r in read_pair_index(os.path.join(out, "scene0001_00.npz"),
+                                                           scene_names=["a", "b"])], ["b", "b"])
+
+    def test_bad_indices(self) -> None:
+        out = common.scratch("pair_dataset_bad")
+        cases: List[Tuple[str, str]] = []
+        p = os.path.join(out, "no_name.npz")
+        np.savez(p, score=np.zeros(2))
+        cases.append((p, "no member 'name'"))
+        p = os.path.join(out, "shape.npz")
+        np.savez(p, name=np.zeros((2, 3), np.int64))
+        cases.append((p, "expected integers of shape [N, 4]"))
+        p = os.path.join(out, "score.npz")
+        np.savez(p, name=np.zeros((2, 4), np.int64), score=np.zeros(3))
+        cases.append((p, "score: expected shape [2]"))
+        p = os.path.join(out, "bad.jsonl")
+        with open(p, "w") as f:
+            f.write('{"scene": "s", "frame0": "1", "frame1": "2"}\n{"scene": "s"}\n')
+        cases.append((p, "bad.jsonl:2: expected a pair line"))
+        p = os.path.join(out, "garbage.npz")
+        with open(p, "wb") as f:
+            f.write(b"not a zip")
+        cases.append((p, "cannot read as an npz pair index"))
+        cases.append((os.path.join(out, "missing.jsonl"), "no such pair index"))
+        cases.append((out, "expected pairs.jsonl, selection/*.jsonl or LoFTR *.npz"))
+        for path, message in cases:
+            if path == out:
+                for f in os.listdir(out):
+                    os.remove(os.path.join(out, f))
+            with self.assertRaises(ValueError, msg=path) as e:
+                read_pair_index(path)
+            self.assertIn(message, str(e.exception))
+            self.assertIn(os.path.basename(path), str(e.exception))
+
+    def test_bad_options_and_frames(self) -> None:
+        split = built_split("demo")
+        data = os.path.join(split, "data")
+        with self.assertRaisesRegex(ValueError, "occupancy: expected None, 'words' or 'dense'"):
+            PairIndexDataset(split, data, "generic", occupancy="packed")
+        with self.assertRaisesRegex(ValueError, "occupancy: expected None, 'words' or 'dense'"):
+            PairIndexDataset(split, data, "generic", occupancy=True)  # type: ignore[arg-type]
+        with self.assertRaisesRegex(ValueError, "format"):
+            PairIndexDataset(split, data, "no-such-format")
+        ds = PairIndexDataset([PairRef("synth_000", None, None, 0, 999)], data, "generic",
+                              width=320, height=240)
+        with self.assertRaisesRegex(ValueError, "scene synth_000 has no frame number 999"):
+            ds[0]
+        with self.assertRaises(IndexError):
+            ds[1]
+        with self.assertRaisesRegex(ValueError, "recipe.json"):
+            PairIndexDataset.from_split(data)
+
+
+class LoftrKeysAndLoader(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.split = built_split("sevenscenes-sample")
+        cls.ds = PairIndexDataset.from_split(cls.split)
+
+    def test_loftr_keys(self) -> None:
+        s = self.ds[0]
+        scene = occgt.open_dataset(common.shared("sevenscenes"), "sevenscenes").scene(s["scene_id"])
+        id0, id1 = self.ds.frame_ids(0)
+        self.assertEqual(s["pair_names"], (f"{s['scene_id']}/{id0}", f"{s['scene_id']}/{id1}"))
+        self.assertEqual((s["dataset_name"], s["pair_id"]), ("sevenscenes", 0))
+        self.assertEqual((s["image0"].dtype, tuple(s["image0"].shape)), (torch.float32, (1, 480, 640)))
+        self.assertGreaterEqual(float(s["image0"].min()), 0.0)
+        self.assertLessEqual(float(s["image0"].max()), 1.0)
+        depth0, K0, world_from_cam0 = scene.load(id0)
+        _, _, world_from_cam1 = scene.load(id1)
+        self.assertTrue(torch.equal(s["depth0"], torch.from_numpy(depth0)))
+        self.assertTrue(torch.equal(s["K0"], torch.from_numpy(K0.astype(np.float32))))
+        T = np.linalg.inv(world_from_cam1) @ world_from_cam0
+        self.assertTrue(np.allclose(s["T_0to1"].numpy(), T, atol=1e-5))
+        self.assertTrue(np.allclose((s["T_1to0"] @ s["T_0to1"]).numpy(), np.eye(4), atol=1e-5))
+        for k, dtype in (("matches", torch.int64), ("match_type", torch.int64),
+                         ("match_xy", torch.float32), ("label01", torch.uint8),
+                         ("occ0", torch.int64)):
+            self.assertEqual(s[k].dtype, dtype, k)
+
+    def test_dataloader_two_workers(self) -> None:
+        direct = [self.ds[i] for i in range(len(self.ds))]
+        for layout in ("pad", "concat"):
+            loader = DataLoader(self.ds, batch_size=4, shuffle=True, num_workers=2,
+                                collate_fn=Collate(layout),
+                                generator=torch.Generator().manual_seed(3))
+            seen = []
+            for batch in loader:
+                ids = batch["pair_id"].tolist()
+                seen += ids
+                for b, i in enumerate(ids):
+                    want = direct[i]
+                    for k in ("image0", "depth1", "K1", "T_0to1", "label01", "cells1", "occ1"):
+                        self.assertTrue(torch.equal(batch[k][b], want[k]), f"{layout} {k} {i}")
+                    m = want["matches"].shape[0]
+                    if layout == "pad":
+                        rows = batch["match_mask"][b]
+                        self.assertEqual(int(rows.sum()), m)
+                        self.assertTrue(bool(rows[:m].all()))
+                        got = batch["matches"][b][:m]
+                        self.assertFalse(bool(batch["matches"][b][m:].any()))
+                    else:
+                        got = batch["matches"][batch["match_b_ids"] == b]
+                    self.assertTrue(torch.equal(got, want["matches"]), f"{layout} {i}")
+                self.assertEqual(batch["pair_names"][0][0], direct[ids[0]]["pair_names"][0])
+            self.assertEqual(sorted(seen), list(range(len(self.ds))), layout)
+
+
+class CollateRules(unittest.TestCase):
+    def sample(self, m: int) -> Dict[str, Any]:
+        return {"x": torch.ones(2), "matches": torch.arange(2 * m).reshape(m, 2),
+                "match_type": torch.zeros(m, dtype=torch.int64),
+                "match_xy": torch.zeros(m, 2)}
+
+    def test_pad_and_concat(self) -> None:
+        b = collate([self.sample(3), self.sample(0), self.sample(1)])
+        self.assertEqual(tuple(b["matches"].shape), (3, 3, 2))
+        self.assertEqual(b["match_mask"].tolist(),
+                         [[True, True, True], [False, False, False], [True, False, False]])
+        self.assertEqual(tuple(b["x"].shape), (3, 2))
+        c = Collate("concat")([self.sample(3), self.sample(0), self.sample(1)])
+        self.assertEqual(tuple(c["matches"].shape), (4, 2))
+        self.assertEqual(c["match_b_ids"].tolist(), [0, 0, 0, 2])
+        empty = collate([self.sample(0), self.sample(0)])
+        self.assertEqual(tuple(empty["matches"].shape), (2, 0, 2))
+
+    def test_errors(self) -> None:
+        with self.assertRaisesRegex(ValueError, "expected 'pad' or 'concat'"):
+            Collate("stack")  # type: ignore[arg-type]
+        with self.assertRaisesRegex(ValueError, "at least one sample"):
+            collate([])
+        bad = self.sample(2)
+        bad["match_xy"] = torch.zeros(3, 2)
+        with self.assertRaisesRegex(ValueError, r"samples\[1\]\['match_xy'\]: expected 2 rows"):
+            collate([self.sample(1), bad])
+        other = self.sample(1)
+        del other["x"]
+        with self.assertRaisesRegex(ValueError, r"samples\[1\]: expected the keys"):
+            collate([self.sample(1), other])
+
+
+if __name__ == "__main__":
+    unittest.main()
