@@ -43,6 +43,31 @@ def pair_ground_truth(
 ) -> Any: ...  # occgt.PairGroundTruth
 def dense_volume(occ: npt.ArrayLike, known: npt.ArrayLike, bins: int = 64) -> npt.NDArray[np.uint8]: ...
 
+WARP_STATUS_NAMES: Tuple[str, ...]  # index = uint8 code of status0/status1
+def loftr_coarse_supervision(
+    depth0: npt.ArrayLike,
+    depth1: npt.ArrayLike,
+    K0: npt.ArrayLike,
+    K1: npt.ArrayLike,
+    T_0to1: npt.ArrayLike,
+    T_1to0: Optional[npt.ArrayLike] = None,
+    *,
+    coarse_stride: int = 8,
+    scale0: Tuple[float, float] = (1.0, 1.0),
+    scale1: Tuple[float, float] = (1.0, 1.0),
+    image_size0: Optional[Tuple[int, int]] = None,
+    image_size1: Optional[Tuple[int, int]] = None,
+    compat: bool = False,
+) -> Any:
+    """LoFTR's coarse supervision of one pair (libgt/truth/loftr_supervision.h): a dict with
+    cells_shape0/1 (h_c, w_c), grid0/1 float32 [L, 2] (corner grid points, depth-map
+    pixels), warped0/1 float32 [L, 2] (into the other image; NaN without depth or behind),
+    target0/1 int32 [L] (target cell, -1 none; compat 0), status0/1 uint8 [L]
+    (WARP_STATUS_NAMES) and matches int32 [M, 2] (i, j). image_size: (height, width) of the
+    image the grid covers (default the depth map's); scale: (sx, sy) depth-map pixels per
+    image pixel. Batched torch form: occgt.torch.loftr_supervision."""
+    ...
+
 class Frame:
     """One frame of a scene as its reader lists it (metadata only)."""
 

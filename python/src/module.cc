@@ -19,6 +19,7 @@ namespace py = pybind11;
 void BindGeometry(py::module_& m);
 void BindTruth(py::module_& m);
 void BindIo(py::module_& m);
+void BindSupervision(py::module_& m);
 
 // One pair's ground truth allocates ~8 MB at 640x480 (depth copies, label and warp maps) and
 // frees it on return. With glibc's dynamic thresholds that memory goes back to the kernel
@@ -53,4 +54,5 @@ PYBIND11_MODULE(_occgt, m) {
   occgt_py::BindGeometry(m);
   occgt_py::BindTruth(m);
   occgt_py::BindIo(m);
+  occgt_py::BindSupervision(m);
 }

@@ -27,6 +27,7 @@ from ._convert import to_tensor
 from .collate import VARIABLE_KEYS, Collate, collate
 from .pairs import PairIndexDataset, PairRef, read_pair_index
 from .shards import ShardDataset
+from .supervision import loftr_supervision
 
 __all__ = [
     "VARIABLE_KEYS",
@@ -35,6 +36,7 @@ __all__ = [
     "PairRef",
     "ShardDataset",
     "collate",
+    "loftr_supervision",
     "read_pair_index",
     "to_tensor",
 ]

@@ -1,0 +1,302 @@
+"""LoFTR's coarse supervision, and Occ²Net's vv/vo/ov supervision, over a collated batch.
+
+``loftr_supervision(batch)`` is a drop-in for LoFTR's ``compute_supervision_coarse`` (its
+``spvs_coarse``) plus the fine target of ``spvs_fine`` at the ground-truth matches; the
+per-pair numerics are occgt's C++ (``occgt._occgt.loftr_coarse_supervision``, libgt/truth/
+loftr_supervision.h; ``occgt.pair_ground_truth`` for ``mode="occ2net"``). Docs:
+docs/PYTHON.md, "Supervision".
+"""
+from __future__ import annotations
+
+from typing import Any, Dict, List, Literal, Mapping, Tuple
+
+import numpy as np
+import torch
+
+from .. import _occgt
+from .. import pair_ground_truth
+
+Mode = Literal["loftr", "occ2net"]
+
+#: Codes of spv_status0/spv_status1 (uint8): WARP_STATUS_NAMES[code] is the name.
+WARP_STATUS_NAMES: Tuple[str, ...] = tuple(_occgt.WARP_STATUS_NAMES)
+IN_GRID, NO_DEPTH, BEHIND, OUT_OF_GRID = 0, 1, 2, 3
+
+
+def _numpy(t: Any, name: str) -> np.ndarray:
+    if isinstance(t, torch.Tensor):
+        return t.detach().cpu().numpy()
+    if isinstance(t, np.ndarray):
+        return t
+    raise ValueError(f"batch[{name!r}]: expected a tensor, got {type(t).__name__}")
+
+
+def _require(batch: Mapping[str, Any], keys: List[str], mode: str) -> None:
+    for k in keys:
+        if k not in batch:
+            raise ValueError(f"batch: mode {mode!r} needs the key {k!r} (the sample contract "
+                             f"of occgt.torch), got keys {sorted(batch.keys())}")
+
+
+def _batched(batch: Mapping[str, Any], key: str, shape: Tuple[int, ...]) -> np.ndarray:
+    """batch[key] as NumPy [N, *shape] (shape entries < 0: any size)."""
+    a = _numpy(batch[key], key)
+    ok = a.ndim == len(shape) + 1 and all(s < 0 or a.shape[i + 1] == s for i, s in enumerate(shape))
+    if not ok:
+        want = ", ".join(["N"] + [str(s) if s >= 0 else "?" for s in shape])
+        raise ValueError(f"batch[{key!r}]: expected shape [{want}] (a collated batch), "
+                         f"got {list(a.shape)}")
+    return a
+
+
+def _scales(batch: Mapping[str, Any], n: int) -> Tuple[np.ndarray, np.ndarray]:
+    """LoFTR's data['scale0'] / ['scale1'] [N, 2] (present only together, as LoFTR tests
+    'scale0' for both), else ones."""
+    if "scale0" not in batch:
+        return np.ones((n, 2), np.float32), np.ones((n, 2), np.float32)
+    _require(batch, ["scale1"], "loftr")
+    s0 = _batched(batch, "scale0", (2,)).astype(np.float32)
+    s1 = _batched(batch, "scale1", (2,)).astype(np.float32)
+    return s0, s1
+
+
+def _image_size(batch: Mapping[str, Any], k: int, depth: np.ndarray) -> Tuple[int, int]:
+    """(H, W) of image k: of batch['image<k>'] [N, 1, H, W] (LoFTR's H0, W0), else of the
+    depth maps."""
+    key = f"image{k}"
+    if key in batch:
+        shape = tuple(batch[key].shape)
+        if len(shape) != 4:
+            raise ValueError(f"batch[{key!r}]: expected shape [N, 1, H, W], got {list(shape)}")
+        return int(shape[2]), int(shape[3])
+    return int(depth.shape[1]), int(depth.shape[2])
+
+
+def _conf_matrix(n: int, l0: int, l1: int, b: torch.Tensor, i: torch.Tensor, j: torch.Tensor,
+                 dense: bool) -> torch.Tensor:
+    if dense:
+        conf = torch.zeros(n, l0, l1, dtype=torch.float32)
+        conf[b, i, j] = 1.0
+        return conf
+    idx = torch.stack([b, i, j]) if b.numel() else torch.zeros((3, 0), dtype=torch.int64)
+    return torch.sparse_coo_tensor(idx, torch.ones(idx.shape[1]), (n, l0, l1)).coalesce()
+
+
+def loftr_supervision(
+    batch: Mapping[str, Any],
+    mode: Mode = "loftr",
+    *,
+    coarse_stride: int = 8,
+    fine_stride: int = 2,
+    fine_window: int = 5,
+    compat: bool = False,
+    dense_conf_matrix: bool = True,
+    preset: str = "default",
+    anchor: str = "center",
+    **label_options: Any,
+) -> Dict[str, torch.Tensor]:
+    """Coarse and fine supervision of a collated batch (docs/PYTHON.md, "Supervision").
+
+    Use it where LoFTR calls ``compute_supervision_coarse``: ``batch.update(
+    loftr_supervision(batch))``. The batch holds the keys of the sample contract
+    (occgt.torch) stacked on dim 0: ``depth0``, ``depth1`` [N, H, W] planar metres (0 =
+    none), ``K0``, ``K1`` [N, 3, 3] at the depth maps' size, ``T_0to1`` (cam1_from_cam0)
+    [N, 4, 4] and, when present, ``T_1to0``, ``image0``/``image1`` [N, 1, H, W] (their size
+    sets the grid), LoFTR's ``scale0``/``scale1`` [N, 2] (depth-map pixels per image pixel).
+    Work is on the CPU, one pair at a time without the GIL; the outputs are on the device
+    of ``depth0``.
+
+    mode="loftr": LoFTR's ``spvs_coarse`` (corner grid points (c, r)·8·scale, both-way
+    warps of the depth at the nearest pixel, division by z + 1e-4, the nearest cell, the
+    mutual loop-back, no depth-consistency test), except three fixes: a grid point without
+    depth, one behind the other camera and one whose cell is outside the other grid give no
+    match (LoFTR sends them to a corner or to cell 0), and cell 0 is an ordinary cell.
+    ``compat=True`` gives LoFTR exactly (also its dummy match (0, 0, 0) for a batch without
+    any). Keys: ``conf_matrix_gt`` float32 [N, L0, L1] (1 at every match; a sparse COO
+    tensor with ``dense_conf_matrix=False``), ``spv_b_ids``, ``spv_i_ids``, ``spv_j_ids``
+    int64 [M] (by pair, then by i), ``spv_w_pt0_i`` float32 [N, L0, 2] (image 0's grid
+    warped into image 1, its pixels; NaN without depth or behind camera 1), ``spv_pt1_i``
+    [N, L1, 2] (image 1's grid), ``expec_f_gt`` [M, 2] = (w_pt0_i[b, i] − pt1_i[b, j]) /
+    (fine_stride · scale1[b]) / (fine_window // 2) at these matches (LoFTR's ``spvs_fine``
+    computes it at the coarse matcher's ids: index spv_w_pt0_i and spv_pt1_i there), and
+    occgt's ``spv_w_pt1_i``, ``spv_pt0_i`` and ``spv_status0``/``spv_status1`` uint8
+    [N, L] (WARP_STATUS_NAMES: in_grid, no_depth, behind, out_of_grid).
+
+    mode="occ2net": occgt's vv, vo and ov patch matches (docs/GROUND_TRUTH.md §4): those of
+    the batch (``matches``/``match_type``/``match_xy``, padded with ``match_mask`` or
+    concatenated with ``match_b_ids``, occgt.torch.collate) when present, else computed per
+    pair with occgt.pair_ground_truth(depth0, depth1, K0, K1, I, inverse(T_0to1), preset,
+    stride=coarse_stride, anchor=anchor, **label_options). Keys: ``spv_b_ids``,
+    ``spv_i_ids``, ``spv_j_ids``, ``spv_type`` int64 [M] (0 vv, 1 vo, 2 ov), ``spv_xy``
+    float32 [M, 2] (match_xy: the warped anchor, in image 1 for vv/vo, in image 0 for ov),
+    ``expec_f_gt`` [M, 2] = (spv_xy − the anchor of the target cell, j in image 1 for vv/vo,
+    i in image 0 for ov) / fine_stride / (fine_window // 2) (``anchor`` and ``coarse_stride``
+    must be those the matches were computed with), ``spv_vv_ids``, ``spv_vo_ids``,
+    ``spv_ov_ids`` int64 (rows of each type), ``conf_matrix_gt`` (1 at every match of any
+    type) and, when computed here, ``spv_cells0``/``spv_cells1`` uint8 [N, L] (each cell's
+    anchor label, LABEL_NAMES).
+
+    Raises:
+        ValueError: a missing key or a tensor of the wrong shape, a bad option, LoFTR's padded
+            MegaDepth batches (``mask0``, not supported), or the C++ checks (naming them).
+    """
+    if mode not in ("loftr", "occ2net"):
+        raise ValueError(f"mode: expected 'loftr' or 'occ2net', got {mode!r}")
+    for name, v in (("coarse_stride", coarse_stride), ("fine_stride", fine_stride),
+                    ("fine_window", fine_window)):
+        if not isinstance(v, int) or v < 1:
+            raise ValueError(f"{name}: expected an integer >= 1, got {v!r}")
+    if fine_window < 3:
+        raise ValueError(f"fine_window: expected >= 3 (radius fine_window // 2 >= 1), got "
+                         f"{fine_window}")
+    if "mask0" in batch or "mask1" in batch:
+        raise ValueError("batch: padded images (LoFTR's MegaDepth 'mask0'/'mask1') are not "
+                         "supported")
+    _require(batch, ["depth0", "depth1", "K0", "K1", "T_0to1"], mode)
+    device = batch["depth0"].device if isinstance(batch["depth0"], torch.Tensor) else "cpu"
+    if mode == "loftr":
+        if label_options:
+            raise ValueError(f"{sorted(label_options)[0]}: not an option of mode 'loftr'")
+        out = _loftr(batch, coarse_stride, fine_stride, fine_window, compat, dense_conf_matrix)
+    else:
+        if compat:
+            raise ValueError("compat: an option of mode 'loftr' (use preset='occ2net-compat')")
+        out = _occ2net(batch, coarse_stride, fine_stride, fine_window, dense_conf_matrix, preset,
+                       anchor, label_options)
+    return {k: v.to(device) for k, v in out.items()}
+
+
+def _loftr(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_window: int,
+           compat: bool, dense: bool) -> Dict[str, torch.Tensor]:
+    depth0 = _batched(batch, "depth0", (-1, -1))
+    depth1 = _batched(batch, "depth1", (-1, -1))
+    n = depth0.shape[0]
+    K0 = _batched(batch, "K0", (3, 3))
+    K1 = _batched(batch, "K1", (3, 3))
+    T01 = _batched(batch, "T_0to1", (4, 4))
+    T10 = _batched(batch, "T_1to0", (4, 4)) if "T_1to0" in batch else None
+    for key, a in (("depth1", depth1), ("K0", K0), ("K1", K1), ("T_0to1", T01), ("T_1to0", T10)):
+        if a is not None and a.shape[0] != n:
+            raise ValueError(f"batch[{key!r}]: expected {n} pairs (as depth0), got {a.shape[0]}")
+    scale0, scale1 = _scales(batch, n)
+    size0 = _image_size(batch, 0, depth0)
+    size1 = _image_size(batch, 1, depth1)
+    per_pair = []
+    for b in range(n):
+        per_pair.append(_occgt.loftr_coarse_supervision(
+            depth0[b], depth1[b], K0[b], K1[b], T01[b], None if T10 is None else T10[b],
+            coarse_stride=stride, scale0=tuple(float(v) for v in scale0[b]),
+            scale1=tuple(float(v) for v in scale1[b]), image_size0=size0, image_size1=size1,
+            compat=compat))
+    stack = lambda key: torch.from_numpy(np.stack([p[key] for p in per_pair]))  # noqa: E731
+    w_pt0_i, pt1_i = stack("warped0"), stack("grid1")
+    l0, l1 = w_pt0_i.shape[1], pt1_i.shape[1]
+    b_ids = torch.cat([torch.full((p["matches"].shape[0],), b, dtype=torch.int64)
+                       for b, p in enumerate(per_pair)])
+    ij = torch.from_numpy(np.concatenate([p["matches"] for p in per_pair])).to(torch.int64)
+    i_ids, j_ids = ij[:, 0].contiguous(), ij[:, 1].contiguous()
+    conf = _conf_matrix(n, l0, l1, b_ids, i_ids, j_ids, dense)
+    if compat and b_ids.numel() == 0:  # LoFTR's dummy match; conf_matrix_gt stays zero
+        b_ids = i_ids = j_ids = torch.zeros(1, dtype=torch.int64)
+    radius = fine_window // 2
+    fine_scale = fine_stride * torch.from_numpy(scale1)[b_ids]  # [M, 2]
+    expec_f_gt = (w_pt0_i[b_ids, i_ids] - pt1_i[b_ids, j_ids]) / fine_scale / radius
+    return {
+        "conf_matrix_gt": conf,
+        "spv_b_ids": b_ids,
+        "spv_i_ids": i_ids,
+        "spv_j_ids": j_ids,
+        "spv_w_pt0_i": w_pt0_i,
+        "spv_pt1_i": pt1_i,
+        "expec_f_gt": expec_f_gt,
+        "spv_w_pt1_i": stack("warped1"),
+        "spv_pt0_i": stack("grid0"),
+        "spv_status0": stack("status0"),
+        "spv_status1": stack("status1"),
+    }
+
+
+def _batch_matches(batch: Mapping[str, Any], n: int) -> Tuple[torch.Tensor, ...]:
+    """(b_ids, matches [M, 2], match_type [M], match_xy [M, 2]) of a batch's ground truth."""
+    _require(batch, ["match_type", "match_xy"], "occ2net")
+    matches = torch.as_tensor(batch["matches"])
+    types = torch.as_tensor(batch["match_type"])
+    xy = torch.as_tensor(batch["match_xy"])
+    if "match_mask" in batch:
+        mask = torch.as_tensor(batch["match_mask"]).bool()
+        if matches.dim() != 3 or mask.shape != matches.shape[:2] or mask.shape[0] != n:
+            raise ValueError(f"batch['matches']: expected [N, M, 2] with match_mask [N, M] "
+                             f"(N = {n}), got {list(matches.shape)} and {list(mask.shape)}")
+        b_ids = torch.nonzero(mask)[:, 0]
+        return b_ids, matches[mask], types[mask], xy[mask]
+    if "match_b_ids" in batch:
+        b_ids = torch.as_tensor(batch["match_b_ids"]).to(torch.int64)
+        if matches.dim() != 2 or b_ids.shape[0] != matches.shape[0]:
+            raise ValueError(f"batch['matches']: expected [ΣM, 2] with match_b_ids [ΣM], got "
+                             f"{list(matches.shape)} and {list(b_ids.shape)}")
+        return b_ids, matches, types, xy
+    raise ValueError("batch['matches']: expected match_mask (padded) or match_b_ids "
+                     "(concatenated) with it (occgt.torch.collate)")
+
+
+def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_window: int,
+             dense: bool, preset: str, anchor: str,
+             label_options: Dict[str, Any]) -> Dict[str, torch.Tensor]:
+    if anchor not in ("center", "corner"):
+        raise ValueError(f"anchor: expected 'center' or 'corner', got {anchor!r}")
+    if "scale0" in batch:
+        raise ValueError("batch: mode 'occ2net' works at the depth maps' resolution; "
+                         "'scale0'/'scale1' (resized images) are not supported")
+    depth0 = _batched(batch, "depth0", (-1, -1))
+    depth1 = _batched(batch, "depth1", (-1, -1))
+    n = depth0.shape[0]
+    w0, w1 = depth0.shape[2] // stride, depth1.shape[2] // stride
+    l0, l1 = (depth0.shape[1] // stride) * w0, (depth1.shape[1] // stride) * w1
+    out: Dict[str, torch.Tensor] = {}
+    if "matches" in batch:
+        b_ids, matches, types, xy = _batch_matches(batch, n)
+    else:
+        K0 = _batched(batch, "K0", (3, 3))
+        K1 = _batched(batch, "K1", (3, 3))
+        T01 = _batched(batch, "T_0to1", (4, 4)).astype(np.float64)
+        eye = np.eye(4)
+        results = [pair_ground_truth(depth0[b], depth1[b], K0[b], K1[b], eye,
+                                     np.linalg.inv(T01[b]), preset, stride=stride,
+                                     anchor=anchor, **label_options) for b in range(n)]
+        b_ids = torch.cat([torch.full((r["matches"].shape[0],), b, dtype=torch.int64)
+                           for b, r in enumerate(results)])
+        matches = torch.from_numpy(np.concatenate([r["matches"] for r in results]))
+        types = torch.from_numpy(np.concatenate([r["match_type"] for r in results]))
+        xy = torch.from_numpy(np.concatenate([r["match_xy"] for r in results]))
+        out["spv_cells0"] = torch.from_numpy(np.stack([r["cells0"].reshape(-1) for r in results]))
+        out["spv_cells1"] = torch.from_numpy(np.stack([r["cells1"].reshape(-1) for r in results]))
+    b_ids = b_ids.to(torch.int64)
+    i_ids = matches[:, 0].to(torch.int64).contiguous()
+    j_ids = matches[:, 1].to(torch.int64).contiguous()
+    types = types.to(torch.int64)
+    xy = xy.to(torch.float32)
+    # The anchor pixel of a cell (geometry/patches.h AnchorPixel): the target cell is j in
+    # image 1 for vv/vo and i in image 0 for ov.
+    half = stride // 2 if anchor == "center" else 0
+    ov = types == 2
+    cell = torch.where(ov, i_ids, j_ids)
+    width = torch.where(ov, torch.tensor(w0), torch.tensor(w1))
+    anchor_xy = torch.stack([(cell % width) * stride + half, (cell // width) * stride + half], 1)
+    expec_f_gt = (xy - anchor_xy.to(torch.float32)) / fine_stride / (fine_window // 2)
+    out.update({
+        "conf_matrix_gt": _conf_matrix(n, l0, l1, b_ids, i_ids, j_ids, dense),
+        "spv_b_ids": b_ids,
+        "spv_i_ids": i_ids,
+        "spv_j_ids": j_ids,
+        "spv_type": types,
+        "spv_xy": xy,
+        "expec_f_gt": expec_f_gt,
+        "spv_vv_ids": torch.nonzero(types == 0)[:, 0],
+        "spv_vo_ids": torch.nonzero(types == 1)[:, 0],
+        "spv_ov_ids": torch.nonzero(ov)[:, 0],
+    })
+    return out
+
+
+__all__ = ["WARP_STATUS_NAMES", "IN_GRID", "NO_DEPTH", "BEHIND", "OUT_OF_GRID",
+           "loftr_supervision"]

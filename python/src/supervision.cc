@@ -1,0 +1,134 @@
+// Bindings of libgt/truth/loftr_supervision.h: LoFTR's coarse supervision of one pair
+// (truth::ComputeLoftrSupervision) from NumPy arrays. Arguments are converted and checked
+// (convert.h), the work runs without the GIL, every output array owns its C++ vector. The
+// batched torch function over it is occgt.torch.loftr_supervision (python/occgt/torch).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <array>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "libgt/core/error.h"
+#include "libgt/core/pose.h"
+#include "libgt/truth/loftr_supervision.h"
+#include "python/src/convert.h"
+
+namespace occgt_py {
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace {
+
+// A relative pose b_from_a [4, 4] (float or integer), rigid (core/pose.h PoseProblem).
+Eigen::Matrix4d RelativePoseFromArray(py::handle obj, const std::string& argument) {
+  py::array a = AsArray(obj, argument);
+  const char kind = a.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u') {
+    ThrowValue(argument, "expected a float array [4, 4] (rigid [[R, t], [0, 0, 0, 1]], metres), "
+                         "got dtype " + DtypeText(a));
+  }
+  if (a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4) {
+    ThrowValue(argument, "expected shape (4, 4) (rigid [[R, t], [0, 0, 0, 1]], metres), got " +
+                             ShapeText(a));
+  }
+  auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+  if (!d) throw py::error_already_set();
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) m(r, c) = d.at(r, c);
+  }
+  if (const auto problem = gt::PoseProblem(m)) ThrowValue(argument, *problem);
+  return m;
+}
+
+void CheckScale(const std::array<double, 2>& s, const std::string& argument) {
+  for (double v : s) {
+    if (!(std::isfinite(v) && v > 0)) {
+      ThrowValue(argument, "expected (sx, sy), finite and > 0 (depth-map pixels per image "
+                           "pixel), got (" + std::to_string(s[0]) + ", " + std::to_string(s[1]) +
+                               ")");
+    }
+  }
+}
+
+py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle K0,
+                                py::handle K1, py::handle T_0to1, py::handle T_1to0,
+                                int coarse_stride, std::array<double, 2> scale0,
+                                std::array<double, 2> scale1,
+                                std::optional<std::array<int, 2>> image_size0,
+                                std::optional<std::array<int, 2>> image_size1, bool compat) {
+  gt::truth::LoftrSupervisionOptions options;
+  options.coarse_stride = coarse_stride;
+  options.compat = compat;
+  std::string error;
+  if (!options.Check(&error)) ThrowValue("coarse_stride", error);
+  const auto d0 = DepthFromArray(depth0, "depth0");
+  const auto d1 = DepthFromArray(depth1, "depth1");
+  CheckScale(scale0, "scale0");
+  CheckScale(scale1, "scale1");
+  const auto view = [&](const std::shared_ptr<const gt::DepthImage>& d, py::handle K,
+                        const std::array<double, 2>& scale,
+                        const std::optional<std::array<int, 2>>& size, const std::string& index) {
+    gt::truth::LoftrView v;
+    v.depth = d.get();
+    v.K = CameraFromArray(K, d->width, d->height, "K" + index).K();
+    v.scale_x = scale[0];
+    v.scale_y = scale[1];
+    v.image_height = size ? (*size)[0] : d->height;
+    v.image_width = size ? (*size)[1] : d->width;
+    if (v.image_height < coarse_stride || v.image_width < coarse_stride) {
+      ThrowValue("image_size" + index,
+                 "expected (height, width) of at least one coarse cell (" +
+                     std::to_string(coarse_stride) + " pixels), got (" +
+                     std::to_string(v.image_height) + ", " + std::to_string(v.image_width) + ")");
+    }
+    return v;
+  };
+  const gt::truth::LoftrView v0 = view(d0, K0, scale0, image_size0, "0");
+  const gt::truth::LoftrView v1 = view(d1, K1, scale1, image_size1, "1");
+  const Eigen::Matrix4d cam1_from_cam0 = RelativePoseFromArray(T_0to1, "T_0to1");
+  const Eigen::Matrix4d cam0_from_cam1 =
+      T_1to0.is_none() ? Eigen::Matrix4d(gt::Rigid3d(cam1_from_cam0).inverse().matrix())
+                       : RelativePoseFromArray(T_1to0, "T_1to0");
+  gt::truth::LoftrCoarseSupervision s;
+  {
+    py::gil_scoped_release no_gil;
+    s = Named("depth", [&] {
+      return gt::truth::ComputeLoftrSupervision(v0, v1, cam1_from_cam0, cam0_from_cam1, options);
+    });
+  }
+  const py::ssize_t l0 = static_cast<py::ssize_t>(s.target0.size());
+  const py::ssize_t l1 = static_cast<py::ssize_t>(s.target1.size());
+  const py::ssize_t m = static_cast<py::ssize_t>(s.size());
+  py::dict out;
+  out["cells_shape0"] = py::make_tuple(s.cells_h0, s.cells_w0);
+  out["cells_shape1"] = py::make_tuple(s.cells_h1, s.cells_w1);
+  out["grid0"] = ToArray(std::move(s.grid0), {l0, 2});
+  out["grid1"] = ToArray(std::move(s.grid1), {l1, 2});
+  out["warped0"] = ToArray(std::move(s.warped0), {l0, 2});
+  out["warped1"] = ToArray(std::move(s.warped1), {l1, 2});
+  out["target0"] = ToArray(std::move(s.target0), {l0});
+  out["target1"] = ToArray(std::move(s.target1), {l1});
+  out["status0"] = ToArray(std::move(s.status0), {l0});
+  out["status1"] = ToArray(std::move(s.status1), {l1});
+  out["matches"] = ToArray(std::move(s.matches), {m, 2});
+  return out;
+}
+
+}  // namespace
+
+void BindSupervision(py::module_& m) {
+  m.attr("WARP_STATUS_NAMES") = py::make_tuple("in_grid", "no_depth", "behind", "out_of_grid");
+  m.def("loftr_coarse_supervision", &LoftrCoarseSupervision, "depth0"_a, "depth1"_a, "K0"_a,
+        "K1"_a, "T_0to1"_a, "T_1to0"_a = py::none(), py::kw_only(), "coarse_stride"_a = 8,
+        "scale0"_a = std::array<double, 2>{1.0, 1.0}, "scale1"_a = std::array<double, 2>{1.0, 1.0},
+        "image_size0"_a = py::none(), "image_size1"_a = py::none(), "compat"_a = false,
+        "LoFTR's coarse supervision of one pair (truth::ComputeLoftrSupervision); see "
+        "occgt.torch.loftr_supervision and docs/PYTHON.md, \"Supervision\".");
+}
+
+}  // namespace occgt_py

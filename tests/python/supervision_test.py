@@ -1,0 +1,428 @@
+"""occgt.torch.loftr_supervision against a straightforward re-implementation of LoFTR's
+coarse supervision in torch (written here from the facts of LoFTR's `spvs_coarse` and
+`warp_kpts`; docs/PYTHON.md, "Supervision"), on the real 7-Scenes and TartanAir samples
+(../shared/data, required) and on synthetic scenes of `occgt synth`:
+- compat=True: every id bit-equal, every warped point within float tolerance, on every pair;
+- default: equal to the reference wherever no fix applies; the cells the fixes change are
+  exactly those without depth, behind the other camera or out of the grid (plus cell 0,
+  which LoFTR ignores);
+- mode="occ2net": the vv/vo/ov matches of occgt.pair_ground_truth, from padded and from
+  concatenated batches (occgt.torch.collate) and computed on the fly, with their fine targets.
+The reference runs in float64 (LoFTR's float32 depends on the BLAS's summation order; occgt
+computes in double), then rounds the warped points to float32 as LoFTR's tensors are."""
+from __future__ import annotations
+
+import os
+import sys
+import unittest
+from typing import Any, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+import torch
+
+sys.path.insert(0, os.path.dirname(__file__))
+import common  # noqa: E402
+
+import occgt  # noqa: E402
+from occgt.torch import loftr_supervision  # noqa: E402
+from occgt.torch.collate import Collate  # noqa: E402
+
+torch.set_num_threads(1)
+
+
+# ---- The reference: LoFTR's coarse supervision, re-implemented from its facts. ----
+
+def _grid(n: int, h: int, w: int, spacing: torch.Tensor) -> torch.Tensor:
+    """Corner grid points (c, r) · spacing [N, 2] (float32), [N, h·w, 2], row-major."""
+    rows, cols = torch.meshgrid(torch.arange(h), torch.arange(w), indexing="ij")
+    cells = torch.stack([cols, rows], -1).reshape(1, h * w, 2).to(torch.float32)
+    return spacing[:, None, :] * cells.expand(n, -1, -1)
+
+
+def _warp(pts: torch.Tensor, depth_a: torch.Tensor, b_from_a: torch.Tensor, K_a: torch.Tensor,
+          K_b: torch.Tensor) -> Tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """LoFTR's warp_kpts without its mask: (warped float32 [N, L, 2], z in B [N, L], the
+    source depth [N, L])."""
+    f64 = torch.float64
+    pix = pts.round().long()
+    d = torch.stack([depth_a[b, pix[b, :, 1], pix[b, :, 0]] for b in range(pts.shape[0])])
+    homog = torch.cat([pts.to(f64), torch.ones_like(pts[..., :1], dtype=f64)], -1)
+    in_a = torch.linalg.inv(K_a.to(f64)) @ (homog * d.to(f64)[..., None]).transpose(1, 2)
+    in_b = b_from_a[:, :3, :3].to(f64) @ in_a + b_from_a[:, :3, 3:].to(f64)
+    proj = (K_b.to(f64) @ in_b).transpose(1, 2)
+    warped = proj[..., :2] / (proj[..., 2:] + 1e-4)
+    return warped.to(torch.float32), in_b[:, 2, :], d
+
+
+def _nearest(warped: torch.Tensor, spacing: torch.Tensor, h: int, w: int
+             ) -> Tuple[torch.Tensor, torch.Tensor]:
+    """(cell index, in-grid mask) of the nearest corner: round(warped / spacing) in float32.
+    Bounds are tested on the rounded floats (LoFTR converts to int64 first; the same for
+    every finite value in range, and NaN/huge values are out of bounds either way)."""
+    r = (warped / spacing[:, None, :]).round()
+    inside = (r[..., 0] >= 0) & (r[..., 0] < w) & (r[..., 1] >= 0) & (r[..., 1] < h)
+    r = torch.where(inside[..., None], r, torch.zeros_like(r)).long()
+    return r[..., 0] + r[..., 1] * w, inside
+
+
+def reference_supervision(batch: Dict[str, torch.Tensor], fixes: bool,
+                          stride: int = 8) -> Dict[str, Any]:
+    """fixes=False: LoFTR's spvs_coarse. fixes=True: the same with occgt's three fixes
+    (no depth, behind, out of grid → no target; cell 0 an ordinary cell)."""
+    depth0, depth1 = batch["depth0"], batch["depth1"]
+    n = depth0.shape[0]
+    H0, W0 = batch["image0"].shape[2:] if "image0" in batch else depth0.shape[1:]
+    H1, W1 = batch["image1"].shape[2:] if "image1" in batch else depth1.shape[1:]
+    h0, w0, h1, w1 = H0 // stride, W0 // stride, H1 // stride, W1 // stride
+    ones = torch.ones(n, 2)
+    s0 = stride * batch.get("scale0", ones).to(torch.float32)
+    s1 = stride * batch.get("scale1", ones).to(torch.float32)
+    pt0, pt1 = _grid(n, h0, w0, s0), _grid(n, h1, w1, s1)
+    w_pt0, z0, d0 = _warp(pt0, depth0, batch["T_0to1"], batch["K0"], batch["K1"])
+    w_pt1, z1, d1 = _warp(pt1, depth1, batch["T_1to0"], batch["K1"], batch["K0"])
+    idx1, in1 = _nearest(w_pt0, s1, h1, w1)
+    idx0, in0 = _nearest(w_pt1, s0, h0, w0)
+    status = []
+    for d, z, inside in ((d0, z0, in1), (d1, z1, in0)):
+        s = torch.full(d.shape, 3, dtype=torch.uint8)
+        s[inside] = 0
+        s[z <= 0] = 2
+        s[~(torch.isfinite(d) & (d > 0))] = 1
+        status.append(s)
+    if fixes:
+        idx1 = torch.where(status[0] == 0, idx1, torch.full_like(idx1, -1))
+        idx0 = torch.where(status[1] == 0, idx0, torch.full_like(idx0, -1))
+        back = torch.gather(idx0, 1, idx1.clamp(min=0))
+        correct = (idx1 >= 0) & (back == torch.arange(h0 * w0)[None])
+    else:
+        back = torch.stack([idx0[b][idx1[b]] for b in range(n)])
+        correct = back == torch.arange(h0 * w0)[None].repeat(n, 1)
+        correct[:, 0] = False  # LoFTR ignores the top-left cell
+    b_ids, i_ids = torch.where(correct)
+    j_ids = idx1[b_ids, i_ids]
+    conf = torch.zeros(n, h0 * w0, h1 * w1)
+    conf[b_ids, i_ids, j_ids] = 1
+    if not fixes and b_ids.numel() == 0:
+        b_ids = i_ids = j_ids = torch.zeros(1, dtype=torch.int64)
+    return {"conf_matrix_gt": conf, "spv_b_ids": b_ids, "spv_i_ids": i_ids, "spv_j_ids": j_ids,
+            "spv_w_pt0_i": w_pt0, "spv_pt1_i": pt1, "spv_w_pt1_i": w_pt1, "spv_pt0_i": pt0,
+            "status0": status[0], "status1": status[1], "target0": idx1, "target1": idx0}
+
+
+# ---- Batches from the datasets. ----
+
+def make_batch(frames: Sequence[Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                      np.ndarray]]) -> Dict[str, torch.Tensor]:
+    """LoFTR's batch of pairs (d0, K0, world_from_cam0, d1, K1, world_from_cam1): float32
+    tensors, T_0to1 = cam1_from_cam0 (float64 product rounded), T_1to0 its float32 inverse
+    (as LoFTR's ScanNet dataset)."""
+    keys: Dict[str, List[torch.Tensor]] = {k: [] for k in ("depth0", "depth1", "K0", "K1",
+                                                            "T_0to1", "T_1to0")}
+    for d0, K0, P0, d1, K1, P1 in frames:
+        T = torch.from_numpy(np.linalg.inv(P1) @ P0).to(torch.float32)
+        keys["depth0"].append(torch.from_numpy(d0))
+        keys["depth1"].append(torch.from_numpy(d1))
+        keys["K0"].append(torch.from_numpy(K0).to(torch.float32))
+        keys["K1"].append(torch.from_numpy(K1).to(torch.float32))
+        keys["T_0to1"].append(T)
+        keys["T_1to0"].append(torch.linalg.inv(T))
+    return {k: torch.stack(v) for k, v in keys.items()}
+
+
+def scene_pairs(scene: occgt.Scene, pairs: Sequence[Tuple[str, str]], width: int = 640,
+                height: int = 480) -> List[Tuple[np.ndarray, ...]]:
+    out = []
+    for a, b in pairs:
+        d0, K0, P0 = scene.load(a, width, height)
+        d1, K1, P1 = scene.load(b, width, height)
+        out.append((d0, K0, P0, d1, K1, P1))
+    return out
+
+
+def ids(out: Dict[str, Any]) -> List[Tuple[int, int, int]]:
+    return list(zip(out["spv_b_ids"].tolist(), out["spv_i_ids"].tolist(),
+                    out["spv_j_ids"].tolist()))
+
+
+class Checks:
+    """Assertions shared by the data sets (a mixin of unittest.TestCase)."""
+
+    def check_batch(self: Any, batch: Dict[str, torch.Tensor], where: str) -> Dict[str, int]:
+        ref = reference_supervision(batch, fixes=False)
+        got = loftr_supervision(batch, compat=True)
+        # compat: LoFTR exactly.
+        self.assertEqual(ids(got), ids(ref), f"{where}: compat ids")
+        for key in ("spv_pt1_i", "spv_pt0_i"):
+            self.assertTrue(torch.equal(got[key], ref[key]), f"{where}: {key}")
+        for key in ("spv_w_pt0_i", "spv_w_pt1_i"):
+            finite = torch.isfinite(ref[key])
+            self.assertTrue(torch.equal(finite, torch.isfinite(got[key])), f"{where}: {key}")
+            err = (got[key][finite] - ref[key][finite]).abs()
+            tol = 1e-5 * ref[key][finite].abs().clamp(min=1.0)
+            self.assertTrue(bool((err <= tol).all()), f"{where}: {key} max err {err.max()}")
+        self.assertTrue(torch.equal(got["conf_matrix_gt"], ref["conf_matrix_gt"]), where)
+        self.assertTrue(torch.equal(got["spv_status0"], ref["status0"]), f"{where}: status0")
+        self.assertTrue(torch.equal(got["spv_status1"], ref["status1"]), f"{where}: status1")
+        # Default: the reference with the fixes, and the difference from LoFTR is exactly the
+        # matches that touch a fixed cell or cell 0.
+        fixed_ref = reference_supervision(batch, fixes=True)
+        fixed = loftr_supervision(batch)
+        self.assertEqual(ids(fixed), ids(fixed_ref), f"{where}: default ids")
+        self.assertTrue(torch.equal(fixed["spv_status0"], ref["status0"]), where)
+        ok0 = fixed["spv_status0"] == 0
+        ok1 = fixed["spv_status1"] == 0
+        for key, ok in (("spv_w_pt0_i", ok0), ("spv_w_pt1_i", ok1)):
+            # Untouched cells: LoFTR's warped points, bit for bit with compat.
+            self.assertTrue(torch.equal(fixed[key][ok], got[key][ok]), f"{where}: {key}")
+        nd_or_behind = (fixed["spv_status0"] == 1) | (fixed["spv_status0"] == 2)
+        self.assertTrue(bool(torch.isnan(fixed["spv_w_pt0_i"][nd_or_behind]).all()), where)
+        loftr_set, occgt_set = set(ids(ref)), set(ids(fixed))
+        if ref["spv_b_ids"].numel() == 1 and not ref["conf_matrix_gt"].any():
+            loftr_set = set()  # LoFTR's dummy match
+        for b, i, j in loftr_set - occgt_set:  # dropped: a fixed cell on either side
+            self.assertTrue(not ok0[b, i] or not ok1[b, j], f"{where}: dropped ({b}, {i}, {j})")
+        for b, i, j in occgt_set - loftr_set:  # added: only cell 0, which LoFTR ignores
+            self.assertEqual(i, 0, f"{where}: added ({b}, {i}, {j})")
+        for b, i, j in occgt_set:
+            self.assertTrue(ok0[b, i] and ok1[b, j], where)
+        for b, i, j in loftr_set & set((b, i, j) for b, i, j in loftr_set
+                                       if ok0[b, i] and ok1[b, j]):
+            self.assertIn((b, i, j), occgt_set, where)
+        # Fine target: within the window (|w − corner| <= 4 px → <= 1 with scale 1).
+        if "scale1" not in batch and fixed["spv_b_ids"].numel():
+            self.assertLessEqual(float(fixed["expec_f_gt"].abs().max()), 1.0 + 1e-6, where)
+        st = torch.cat([fixed["spv_status0"].flatten(), fixed["spv_status1"].flatten()])
+        return {"matches": len(occgt_set), "loftr": len(loftr_set),
+                "no_depth": int((st == 1).sum()), "behind": int((st == 2).sum()),
+                "out_of_grid": int((st == 3).sum())}
+
+
+class SevenScenes(unittest.TestCase, Checks):
+    @classmethod
+    def setUpClass(cls) -> None:
+        ds = occgt.open_dataset(common.shared("sevenscenes"), "sevenscenes")
+        cls.scene = ds.scene(ds.scenes()[0])
+        ids_ = [f.id for f in cls.scene.frames]
+        cls.pairs = [(ids_[k], ids_[k + g]) for k, g in ((0, 5), (0, 10), (10, 20), (20, 25),
+                                                           (30, 19), (5, 40), (45, 4))]
+        cls.frames = scene_pairs(cls.scene, cls.pairs)
+
+    def test_every_pair(self) -> None:
+        total: Dict[str, int] = {}
+        for k, frames in enumerate(self.frames):
+            c = self.check_batch(make_batch([frames]), f"7-Scenes {self.pairs[k]}")
+            for key, v in c.items():
+                total[key] = total.get(key, 0) + v
+        self.assertGreater(total["matches"], 5000)  # not vacuous
+        self.assertGreater(total["no_depth"], 100)  # the no-depth fix is exercised
+        self.assertGreater(total["out_of_grid"], 100)
+        self.assertNotEqual(total["matches"], total["loftr"])
+
+    def test_batched_equals_per_pair(self) -> None:
+        batch = make_batch(self.frames[:4])
+        self.check_batch(batch, "7-Scenes batch of 4")
+        whole = loftr_supervision(batch)
+        for b in range(4):
+            one = loftr_supervision(make_batch([self.frames[b]]))
+            sel = whole["spv_b_ids"] == b
+            self.assertTrue(torch.equal(whole["spv_i_ids"][sel], one["spv_i_ids"]))
+            self.assertTrue(torch.equal(whole["spv_j_ids"][sel], one["spv_j_ids"]))
+            self.assertTrue(torch.equal(whole["expec_f_gt"][sel], one["expec_f_gt"]))
+            self.assertTrue(torch.equal(whole["conf_matrix_gt"][b], one["conf_matrix_gt"][0]))
+
+    def test_behind_the_camera(self) -> None:
+        """Camera 1 turned by 90 degrees about y and moved back: part of the scene lies
+        behind it; LoFTR mirrors those points into view, occgt gives them no match."""
+        d0, K0, P0, _, _, _ = self.frames[0]
+        turn = np.eye(4)
+        turn[:3, :3] = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]
+        turn[:3, 3] = [0.5, 0.0, -1.0]
+        P1 = P0 @ turn
+        batch = make_batch([(d0, K0, P0, d0, K0, P1)])
+        c = self.check_batch(batch, "7-Scenes turned")
+        self.assertGreater(c["behind"], 500)
+
+    def test_image_scale(self) -> None:
+        """LoFTR's resized images: depth 640x480, image 320x240, scale (2, 2): grid points
+        every 16 depth pixels, cells of the 40x30 grid, the fine target divided by 2·2."""
+        batch = make_batch(self.frames[:2])
+        batch["image0"] = torch.zeros(2, 1, 240, 320)
+        batch["image1"] = torch.zeros(2, 1, 240, 320)
+        batch["scale0"] = torch.full((2, 2), 2.0)
+        batch["scale1"] = torch.full((2, 2), 2.0)
+        self.check_batch(batch, "7-Scenes scale 2")
+        out = loftr_supervision(batch)
+        self.assertEqual(tuple(out["conf_matrix_gt"].shape), (2, 1200, 1200))
+        self.assertEqual(out["spv_pt1_i"][0, 41].tolist(), [16.0, 16.0])
+        b, i, j = out["spv_b_ids"], out["spv_i_ids"], out["spv_j_ids"]
+        want = (out["spv_w_pt0_i"][b, i] - out["spv_pt1_i"][b, j]) / 4.0 / 2
+        self.assertTrue(torch.allclose(out["expec_f_gt"], want))
+        self.assertLessEqual(float(out["expec_f_gt"].abs().max()), 1.0 + 1e-6)
+
+    def test_options_and_bad_input(self) -> None:
+        batch = make_batch(self.frames[:1])
+        sparse = loftr_supervision(batch, dense_conf_matrix=False)
+        dense = loftr_supervision(batch)
+        self.assertTrue(sparse["conf_matrix_gt"].is_sparse)
+        self.assertTrue(torch.equal(sparse["conf_matrix_gt"].to_dense(), dense["conf_matrix_gt"]))
+        coarse16 = loftr_supervision(batch, coarse_stride=16)
+        self.assertEqual(coarse16["spv_pt1_i"].shape[1], 40 * 30)
+        self.assertEqual(coarse16["spv_pt1_i"][0, 1].tolist(), [16.0, 0.0])
+        ref16 = reference_supervision(batch, fixes=True, stride=16)
+        self.assertEqual(ids(coarse16), ids(ref16))
+        fine = loftr_supervision(batch, fine_stride=4, fine_window=7)
+        self.assertTrue(torch.allclose(fine["expec_f_gt"] * 4 * 3, dense["expec_f_gt"] * 2 * 2))
+        # No match at all: empty ids; compat gives LoFTR's dummy (0, 0, 0).
+        far = dict(batch)
+        far["T_0to1"] = batch["T_0to1"].clone()
+        far["T_0to1"][:, 0, 3] += 100.0
+        far["T_1to0"] = torch.linalg.inv(far["T_0to1"])
+        self.assertEqual(loftr_supervision(far)["spv_b_ids"].numel(), 0)
+        dummy = loftr_supervision(far, compat=True)
+        self.assertEqual(ids(dummy), [(0, 0, 0)])
+        self.assertFalse(bool(dummy["conf_matrix_gt"].any()))
+        # Without T_1to0 the exact inverse of T_0to1 is used.
+        no_inv = {k: v for k, v in batch.items() if k != "T_1to0"}
+        self.assertGreater(loftr_supervision(no_inv)["spv_b_ids"].numel(), 1000)
+        cases = [
+            (dict(mode="superglue"), None, "mode"),
+            (dict(coarse_stride=0), None, "coarse_stride"),
+            (dict(fine_window=2), None, "fine_window"),
+            (dict(abs_tol_m=0.1), None, "abs_tol_m"),
+            ({}, {"depth0": None}, "depth0"),
+            ({}, {"K0": torch.zeros(1, 3, 3)}, "K0"),
+            ({}, {"K1": torch.eye(4)[None]}, "K1"),
+            ({}, {"T_0to1": torch.full((1, 4, 4), float("nan"))}, "T_0to1"),
+            ({}, {"T_1to0": 2 * torch.eye(4)[None]}, "T_1to0"),
+            ({}, {"mask0": torch.ones(1, 60, 80)}, "mask0"),
+            ({}, {"depth1": torch.zeros(2, 480, 640)}, "depth1"),
+        ]
+        for kwargs, change, name in cases:
+            with self.subTest(name=name):
+                b = dict(batch)
+                for k, v in (change or {}).items():
+                    if v is None:
+                        del b[k]
+                    else:
+                        b[k] = v
+                with self.assertRaises(ValueError) as e:
+                    loftr_supervision(b, **kwargs)
+                self.assertIn(name, str(e.exception))
+
+    def test_occ2net_mode(self) -> None:
+        samples, results = [], []
+        for d0, K0, P0, d1, K1, P1 in self.frames[:3]:
+            r = occgt.pair_ground_truth(d0, d1, K0, K1, P0, P1, "occ2net")
+            results.append(r)
+            s = {"depth0": torch.from_numpy(d0), "depth1": torch.from_numpy(d1),
+                 "K0": torch.from_numpy(K0).float(), "K1": torch.from_numpy(K1).float(),
+                 "T_0to1": torch.from_numpy(r["T_0to1"]).float(),
+                 "matches": torch.from_numpy(r["matches"]).long(),
+                 "match_type": torch.from_numpy(r["match_type"]).long(),
+                 "match_xy": torch.from_numpy(r["match_xy"])}
+            samples.append(s)
+        want_b = np.concatenate([np.full(len(r["match_type"]), b) for b, r in enumerate(results)])
+        want_m = np.concatenate([r["matches"] for r in results])
+        want_t = np.concatenate([r["match_type"] for r in results])
+        want_xy = np.concatenate([r["match_xy"] for r in results])
+        self.assertGreater(int((want_t == occgt.VO).sum()), 10)
+        self.assertGreater(int((want_t == occgt.OV).sum()), 10)
+        for layout in ("pad", "concat"):
+            with self.subTest(layout=layout):
+                out = loftr_supervision(Collate(layout)(samples), "occ2net")
+                self.check_occ2net(out, want_b, want_m, want_t, want_xy, anchor="center")
+        # Computed here from depth/K/T (world_from_cam0 = I, world_from_cam1 = inv(T_0to1)).
+        batch = Collate("pad")(samples)
+        del batch["matches"], batch["match_type"], batch["match_xy"], batch["match_mask"]
+        for preset, anchor in (("occ2net", "center"), ("default", "corner")):
+            with self.subTest(preset=preset, anchor=anchor):
+                out = loftr_supervision(batch, "occ2net", preset=preset, anchor=anchor,
+                                        mutual=True)
+                rs = [occgt.pair_ground_truth(
+                    batch["depth0"][b].numpy(), batch["depth1"][b].numpy(),
+                    batch["K0"][b].numpy(), batch["K1"][b].numpy(), np.eye(4),
+                    np.linalg.inv(batch["T_0to1"][b].numpy().astype(np.float64)), preset,
+                    anchor=anchor) for b in range(3)]
+                self.check_occ2net(
+                    out, np.concatenate([np.full(len(r["match_type"]), b)
+                                         for b, r in enumerate(rs)]),
+                    np.concatenate([r["matches"] for r in rs]),
+                    np.concatenate([r["match_type"] for r in rs]),
+                    np.concatenate([r["match_xy"] for r in rs]), anchor=anchor)
+                self.assertTrue(np.array_equal(out["spv_cells0"].numpy(),
+                                               np.stack([r["cells0"].ravel() for r in rs])))
+                self.assertTrue(np.array_equal(out["spv_cells1"].numpy(),
+                                               np.stack([r["cells1"].ravel() for r in rs])))
+        with self.assertRaises(ValueError):
+            loftr_supervision(batch, "occ2net", preset="nonsense")
+        with self.assertRaises(ValueError):
+            loftr_supervision(batch, "occ2net", compat=True)
+        bad = Collate("pad")(samples)
+        del bad["match_mask"]
+        with self.assertRaises(ValueError):
+            loftr_supervision(bad, "occ2net")
+
+    def check_occ2net(self, out: Dict[str, torch.Tensor], b: np.ndarray, m: np.ndarray,
+                      t: np.ndarray, xy: np.ndarray, anchor: str) -> None:
+        self.assertTrue(np.array_equal(out["spv_b_ids"].numpy(), b))
+        self.assertTrue(np.array_equal(out["spv_i_ids"].numpy(), m[:, 0]))
+        self.assertTrue(np.array_equal(out["spv_j_ids"].numpy(), m[:, 1]))
+        self.assertTrue(np.array_equal(out["spv_type"].numpy(), t))
+        self.assertTrue(np.array_equal(out["spv_xy"].numpy(), xy))
+        for name, code in (("spv_vv_ids", occgt.VV), ("spv_vo_ids", occgt.VO),
+                           ("spv_ov_ids", occgt.OV)):
+            self.assertTrue(np.array_equal(out[name].numpy(), np.nonzero(t == code)[0]))
+        # The fine target: (xy − the target cell's anchor) / 2 / 2, anchor (8c + 4, 8r + 4)
+        # or (8c, 8r), the target cell j in image 1 (vv, vo) or i in image 0 (ov).
+        cell = np.where(t == occgt.OV, m[:, 0], m[:, 1])
+        half = 4 if anchor == "center" else 0
+        anchor_xy = np.stack([(cell % 80) * 8 + half, (cell // 80) * 8 + half], 1)
+        want = (xy - anchor_xy.astype(np.float32)) / 4
+        self.assertTrue(np.allclose(out["expec_f_gt"].numpy(), want, atol=1e-6))
+        vv = t == occgt.VV
+        if anchor == "center":  # x in [8c − 0.5, 8c + 7.5): target in [−1.125, 0.875)
+            f = out["expec_f_gt"].numpy()[vv]
+            self.assertTrue(bool(((f >= -1.125) & (f < 0.875)).all()))
+        conf = out["conf_matrix_gt"]
+        self.assertEqual(int(conf.sum()), len(set(zip(b.tolist(), m[:, 0].tolist(),
+                                                      m[:, 1].tolist()))))
+        self.assertTrue(bool((conf[torch.from_numpy(b), torch.from_numpy(m[:, 0]).long(),
+                                   torch.from_numpy(m[:, 1]).long()] == 1).all()))
+
+
+class TartanAir(unittest.TestCase, Checks):
+    def test_every_pair(self) -> None:
+        ds = occgt.open_dataset(common.shared("tartanair/hospital_sample"), "tartanair")
+        scene = ds.scene(ds.scenes()[0])
+        ids_ = [f.id for f in scene.frames]
+        pairs = [(ids_[k], ids_[k + g]) for k, g in ((0, 3), (2, 8), (5, 12), (10, 13), (1, 22))]
+        total = {"matches": 0, "out_of_grid": 0}
+        for k, frames in enumerate(scene_pairs(scene, pairs)):
+            c = self.check_batch(make_batch([frames]), f"TartanAir {pairs[k]}")
+            total["matches"] += c["matches"]
+            total["out_of_grid"] += c["out_of_grid"]
+        self.assertGreater(total["matches"], 3000)
+        self.assertGreater(total["out_of_grid"], 100)
+
+
+class Synthetic(unittest.TestCase, Checks):
+    def test_every_pair(self) -> None:
+        # 32 frames of an orbit: neighbours overlap; far frames look away (behind points).
+        root = common.synth_dataset("synth_supervision", frames=32, resolution="320x240")
+        scene = occgt.open_dataset(root, "generic").scene("synth_000")
+        ids_ = [f.id for f in scene.frames]
+        pairs = [(ids_[a], ids_[b]) for a, b in ((0, 1), (0, 2), (5, 6), (10, 12), (20, 21),
+                                                 (30, 31), (3, 5), (0, 8))]
+        frames = scene_pairs(scene, pairs, 320, 240)
+        total = {"matches": 0, "behind": 0}
+        for k, f in enumerate(frames):
+            c = self.check_batch(make_batch([f]), f"synthetic {pairs[k]}")
+            total["matches"] += c["matches"]
+            total["behind"] += c["behind"]
+        self.assertGreater(total["matches"], 3000)
+        self.assertGreater(total["behind"], 100)
+        self.check_batch(make_batch(frames), "synthetic batch")
+
+
+if __name__ == "__main__":
+    unittest.main()
