@@ -10,12 +10,14 @@ own dense members and a bit-by-bit reference written here; broken folders raise 
 naming the file and what was expected."""
 from __future__ import annotations
 
+import io
 import json
 import os
 import random
 import re
 import shutil
 import sys
+import tarfile
 import unittest
 from typing import Any, Dict, List
 
@@ -346,6 +348,32 @@ class ShardDatasetTest(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, r"sd-full-000000.tar: tar header at byte 0: "
                                     r"checksum mismatch"):
             ShardDataset(garbled)
+
+        # A sample json without K0 (shard rewritten with tarfile, index.json's size updated):
+        # indexing works, reading that sample names the json member and the field.
+        nok = copy_split(self.full, "sd_json")
+        tar = os.path.join(nok, "sd-full-000000.tar")
+        with tarfile.open(tar) as src:
+            members = [(m, src.extractfile(m).read()) for m in src.getmembers()]
+        with tarfile.open(tar, "w", format=tarfile.USTAR_FORMAT) as dst:
+            for k, (m, data) in enumerate(members):
+                if k == 0:
+                    meta = json.loads(data)
+                    del meta["K0"]
+                    data = json.dumps(meta).encode()
+                    m.size = len(data)
+                dst.addfile(m, io.BytesIO(data))
+        with open(os.path.join(nok, "index.json")) as f:
+            index = json.load(f)
+        index["shardlist"][0]["filesize"] = os.path.getsize(tar)
+        with open(os.path.join(nok, "index.json"), "w") as f:
+            json.dump(index, f)
+        ds = ShardDataset(nok)
+        self.assertTrue(torch.equal(ds[1]["K0"], self.expected(1)["K0"]))
+        with self.assertRaisesRegex(ValueError, re.escape(f"{tar}: {ds.key(0)}.json: expected "
+                                                          f"the sample fields") +
+                                    r".*KeyError: 'K0'"):
+            ds[0]
 
         # The dense split has no images and no depth: asking for them names the member.
         first = ShardDataset(self.dense, images=False, depth=False).key(0)

@@ -311,6 +311,11 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     def _fd(self, shard: int) -> int:
         pid = os.getpid()
         if pid != self._pid:  # first use in this process (e.g. a forked DataLoader worker)
+            for inherited in self._fds.values():  # this process's copies of the parent's
+                try:
+                    os.close(inherited)
+                except OSError:
+                    pass
             self._fds = {}
             self._pid = pid
         fd = self._fds.get(shard)
@@ -339,11 +344,24 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             return _npy(buf, offset, size, f"{where}.{field}")
 
         offset, size = members["json"]
-        meta = json.loads(bytes(memoryview(buf)[offset:offset + size]))
-        T_0to1 = np.asarray(meta["T_0to1"], dtype=np.float64)
+        try:
+            meta = json.loads(bytes(memoryview(buf)[offset:offset + size]))
+            T_0to1 = np.asarray(meta["T_0to1"], dtype=np.float64).reshape(4, 4)
+            K0 = np.asarray(meta["K0"], dtype=np.float32).reshape(3, 3)
+            K1 = np.asarray(meta["K1"], dtype=np.float32).reshape(3, 3)
+            W, H = (int(n) for n in meta["resolution"])
+            scene = str(meta["scene"])
+            names = (f"{scene}/{meta['frame0']['id']}", f"{scene}/{meta['frame1']['id']}")
+            metrics01, metrics10 = meta["metrics"]["01"], meta["metrics"]["10"]
+            bins = (len(meta["occupancy"]["bin_edges_m"]) - 1 if self.occupancy == "dense"
+                    else 0)
+        except (KeyError, TypeError, ValueError) as e:
+            raise ValueError(f"{where}.json: expected the sample fields of "
+                             f"schemas/sample.schema.json (T_0to1 4x4, K0/K1 3x3, resolution, "
+                             f"scene, frame0/frame1 id, metrics 01/10, occupancy bin_edges_m "
+                             f"for occupancy='dense'): {type(e).__name__}: {e}") from None
         out: Dict[str, Any] = {}
         if self.images or self.color:
-            W, H = meta["resolution"]
             for c in "01":
                 field = f"image{c}.png" if f"image{c}.png" in members else f"image{c}.jpg"
                 offset, size = members[field]
@@ -358,15 +376,14 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         if self.depth:
             out["depth0"] = to_tensor(npy("depth0.npy"))
             out["depth1"] = to_tensor(npy("depth1.npy"))
-        out["K0"] = to_tensor(np.asarray(meta["K0"], dtype=np.float32))
-        out["K1"] = to_tensor(np.asarray(meta["K1"], dtype=np.float32))
+        out["K0"] = to_tensor(K0)
+        out["K1"] = to_tensor(K1)
         out["T_0to1"] = to_tensor(T_0to1.astype(np.float32))
         out["T_1to0"] = to_tensor(np.linalg.inv(T_0to1).astype(np.float32))
         out["dataset_name"] = self.dataset_name
-        out["scene_id"] = meta["scene"]
+        out["scene_id"] = scene
         out["pair_id"] = j
-        scene = meta["scene"]
-        out["pair_names"] = (f"{scene}/{meta['frame0']['id']}", f"{scene}/{meta['frame1']['id']}")
+        out["pair_names"] = names
         if self.labels:
             for name in ("label01", "label10", "cells0", "cells1"):
                 out[name] = to_tensor(npy(name + ".npy"))
@@ -383,11 +400,10 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                 else:
                     from .. import dense_volume  # the C++ unpacking
 
-                    bins = len(meta["occupancy"]["bin_edges_m"]) - 1
                     volume = dense_volume(npy(f"occ{c}.npy"), npy(f"known{c}.npy"), bins)
                 out["occupancy" + c] = to_tensor(volume)
-        out["metrics01"] = meta["metrics"]["01"]
-        out["metrics10"] = meta["metrics"]["10"]
+        out["metrics01"] = metrics01
+        out["metrics10"] = metrics10
         return out
 
     def __getstate__(self) -> Dict[str, Any]:
