@@ -40,10 +40,10 @@ def _grid(n: int, h: int, w: int, spacing: torch.Tensor) -> torch.Tensor:
 
 
 def _warp(pts: torch.Tensor, depth_a: torch.Tensor, b_from_a: torch.Tensor, K_a: torch.Tensor,
-          K_b: torch.Tensor) -> Tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+          K_b: torch.Tensor, f64: torch.dtype = torch.float64
+          ) -> Tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
     """LoFTR's warp_kpts without its mask: (warped float32 [N, L, 2], z in B [N, L], the
-    source depth [N, L])."""
-    f64 = torch.float64
+    source depth [N, L]), computed in f64 (float32: LoFTR's own arithmetic)."""
     pix = pts.round().long()
     d = torch.stack([depth_a[b, pix[b, :, 1], pix[b, :, 0]] for b in range(pts.shape[0])])
     homog = torch.cat([pts.to(f64), torch.ones_like(pts[..., :1], dtype=f64)], -1)
@@ -65,10 +65,14 @@ def _nearest(warped: torch.Tensor, spacing: torch.Tensor, h: int, w: int
     return r[..., 0] + r[..., 1] * w, inside
 
 
-def reference_supervision(batch: Dict[str, torch.Tensor], fixes: bool,
-                          stride: int = 8) -> Dict[str, Any]:
+def reference_supervision(batch: Dict[str, torch.Tensor], fixes: bool, stride: int = 8,
+                          dtype: torch.dtype = torch.float64,
+                          with_status: bool = True, dense: bool = True) -> Dict[str, Any]:
     """fixes=False: LoFTR's spvs_coarse. fixes=True: the same with occgt's three fixes
-    (no depth, behind, out of grid → no target; cell 0 an ordinary cell)."""
+    (no depth, behind, out of grid → no target; cell 0 an ordinary cell). dtype: of the
+    warp; with_status=False (only with fixes=False) skips the per-cell status, which LoFTR
+    does not compute (tests/bench/supervision_bench.py times LoFTR's work in float32);
+    dense=False skips conf_matrix_gt (None)."""
     depth0, depth1 = batch["depth0"], batch["depth1"]
     n = depth0.shape[0]
     H0, W0 = batch["image0"].shape[2:] if "image0" in batch else depth0.shape[1:]
@@ -78,12 +82,12 @@ def reference_supervision(batch: Dict[str, torch.Tensor], fixes: bool,
     s0 = stride * batch.get("scale0", ones).to(torch.float32)
     s1 = stride * batch.get("scale1", ones).to(torch.float32)
     pt0, pt1 = _grid(n, h0, w0, s0), _grid(n, h1, w1, s1)
-    w_pt0, z0, d0 = _warp(pt0, depth0, batch["T_0to1"], batch["K0"], batch["K1"])
-    w_pt1, z1, d1 = _warp(pt1, depth1, batch["T_1to0"], batch["K1"], batch["K0"])
+    w_pt0, z0, d0 = _warp(pt0, depth0, batch["T_0to1"], batch["K0"], batch["K1"], dtype)
+    w_pt1, z1, d1 = _warp(pt1, depth1, batch["T_1to0"], batch["K1"], batch["K0"], dtype)
     idx1, in1 = _nearest(w_pt0, s1, h1, w1)
     idx0, in0 = _nearest(w_pt1, s0, h0, w0)
     status = []
-    for d, z, inside in ((d0, z0, in1), (d1, z1, in0)):
+    for d, z, inside in ((d0, z0, in1), (d1, z1, in0)) if with_status or fixes else ():
         s = torch.full(d.shape, 3, dtype=torch.uint8)
         s[inside] = 0
         s[z <= 0] = 2
@@ -100,13 +104,14 @@ def reference_supervision(batch: Dict[str, torch.Tensor], fixes: bool,
         correct[:, 0] = False  # LoFTR ignores the top-left cell
     b_ids, i_ids = torch.where(correct)
     j_ids = idx1[b_ids, i_ids]
-    conf = torch.zeros(n, h0 * w0, h1 * w1)
-    conf[b_ids, i_ids, j_ids] = 1
+    conf = torch.zeros(n, h0 * w0, h1 * w1) if dense else None
+    if conf is not None:
+        conf[b_ids, i_ids, j_ids] = 1
     if not fixes and b_ids.numel() == 0:
         b_ids = i_ids = j_ids = torch.zeros(1, dtype=torch.int64)
     return {"conf_matrix_gt": conf, "spv_b_ids": b_ids, "spv_i_ids": i_ids, "spv_j_ids": j_ids,
             "spv_w_pt0_i": w_pt0, "spv_pt1_i": pt1, "spv_w_pt1_i": w_pt1, "spv_pt0_i": pt0,
-            "status0": status[0], "status1": status[1], "target0": idx1, "target1": idx0}
+            "status": status, "target0": idx1, "target1": idx0}
 
 
 # ---- Batches from the datasets. ----
@@ -161,14 +166,14 @@ class Checks:
             tol = 1e-5 * ref[key][finite].abs().clamp(min=1.0)
             self.assertTrue(bool((err <= tol).all()), f"{where}: {key} max err {err.max()}")
         self.assertTrue(torch.equal(got["conf_matrix_gt"], ref["conf_matrix_gt"]), where)
-        self.assertTrue(torch.equal(got["spv_status0"], ref["status0"]), f"{where}: status0")
-        self.assertTrue(torch.equal(got["spv_status1"], ref["status1"]), f"{where}: status1")
+        self.assertTrue(torch.equal(got["spv_status0"], ref["status"][0]), f"{where}: status0")
+        self.assertTrue(torch.equal(got["spv_status1"], ref["status"][1]), f"{where}: status1")
         # Default: the reference with the fixes, and the difference from LoFTR is exactly the
         # matches that touch a fixed cell or cell 0.
         fixed_ref = reference_supervision(batch, fixes=True)
         fixed = loftr_supervision(batch)
         self.assertEqual(ids(fixed), ids(fixed_ref), f"{where}: default ids")
-        self.assertTrue(torch.equal(fixed["spv_status0"], ref["status0"]), where)
+        self.assertTrue(torch.equal(fixed["spv_status0"], ref["status"][0]), where)
         ok0 = fixed["spv_status0"] == 0
         ok1 = fixed["spv_status1"] == 0
         for key, ok in (("spv_w_pt0_i", ok0), ("spv_w_pt1_i", ok1)):

@@ -73,13 +73,17 @@ def _image_size(batch: Mapping[str, Any], k: int, depth: np.ndarray) -> Tuple[in
 
 
 def _conf_matrix(n: int, l0: int, l1: int, b: torch.Tensor, i: torch.Tensor, j: torch.Tensor,
-                 dense: bool) -> torch.Tensor:
+                 dense: bool, unique: bool) -> torch.Tensor:
+    """1 at every (b, i, j). Dense: NumPy's zeros (calloc: the kernel's zero pages, so only
+    the pages holding a match are written here; LoFTR's torch.zeros writes all N·L0·L1
+    floats). Sparse: COO; ``unique`` = the ids are sorted and distinct (no coalesce pass)."""
     if dense:
-        conf = torch.zeros(n, l0, l1, dtype=torch.float32)
+        conf = torch.from_numpy(np.zeros((n, l0, l1), np.float32))
         conf[b, i, j] = 1.0
         return conf
     idx = torch.stack([b, i, j]) if b.numel() else torch.zeros((3, 0), dtype=torch.int64)
-    return torch.sparse_coo_tensor(idx, torch.ones(idx.shape[1]), (n, l0, l1)).coalesce()
+    coo = torch.sparse_coo_tensor(idx, torch.ones(idx.shape[1]), (n, l0, l1))
+    return coo._coalesced_(True) if unique else coo.coalesce()
 
 
 def loftr_supervision(
@@ -195,7 +199,7 @@ def _loftr(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_window:
                        for b, p in enumerate(per_pair)])
     ij = torch.from_numpy(np.concatenate([p["matches"] for p in per_pair])).to(torch.int64)
     i_ids, j_ids = ij[:, 0].contiguous(), ij[:, 1].contiguous()
-    conf = _conf_matrix(n, l0, l1, b_ids, i_ids, j_ids, dense)
+    conf = _conf_matrix(n, l0, l1, b_ids, i_ids, j_ids, dense, unique=True)
     if compat and b_ids.numel() == 0:  # LoFTR's dummy match; conf_matrix_gt stays zero
         b_ids = i_ids = j_ids = torch.zeros(1, dtype=torch.int64)
     radius = fine_window // 2
@@ -284,7 +288,8 @@ def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_windo
     anchor_xy = torch.stack([(cell % width) * stride + half, (cell // width) * stride + half], 1)
     expec_f_gt = (xy - anchor_xy.to(torch.float32)) / fine_stride / (fine_window // 2)
     out.update({
-        "conf_matrix_gt": _conf_matrix(n, l0, l1, b_ids, i_ids, j_ids, dense),
+        "conf_matrix_gt": _conf_matrix(n, l0, l1, b_ids, i_ids, j_ids, dense,
+                                       unique=False),
         "spv_b_ids": b_ids,
         "spv_i_ids": i_ids,
         "spv_j_ids": j_ids,
