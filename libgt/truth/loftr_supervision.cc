@@ -90,10 +90,10 @@ void WarpGrid(const LoftrView& a, const LoftrView& b, const Eigen::Matrix4d& b_f
       (*grid_a)[2 * i] = gx;
       (*grid_a)[2 * i + 1] = gy;
       (*target_a)[i] = none;
-      // The depth at the nearest pixel (torch's round: half to even, the default rounding
-      // mode of nearbyint).
-      const double u = std::nearbyint(static_cast<double>(gx));
-      const double v = std::nearbyint(static_cast<double>(gy));
+      // The depth at the nearest pixel (torch's round: half to even, rint in the default
+      // rounding mode; nearbyint is the same but saves and restores the FP environment).
+      const double u = std::rint(static_cast<double>(gx));
+      const double v = std::rint(static_cast<double>(gy));
       const bool inside = u >= 0 && u < depth.width && v >= 0 && v < depth.height;
       if (!inside && compat) {
         std::ostringstream m;
@@ -120,8 +120,8 @@ void WarpGrid(const LoftrView& a, const LoftrView& b, const Eigen::Matrix4d& b_f
       (*warped_a)[2 * i + 1] = y;
       // Target cell: float32 division and rounding, as LoFTR's w_pt / scale; tested in
       // floating point first, so that non-finite or huge values are out of the grid.
-      const float cx = std::nearbyint(x / sb.x);
-      const float cy = std::nearbyint(y / sb.y);
+      const float cx = std::rint(x / sb.x);
+      const float cy = std::rint(y / sb.y);
       const bool in_grid = cx >= 0 && cx < static_cast<float>(wb) && cy >= 0 &&
                            cy < static_cast<float>(hb);
       if (status == WarpStatus::kInGrid && !in_grid) status = WarpStatus::kOutOfGrid;
