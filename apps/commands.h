@@ -19,5 +19,6 @@ void AddValidateCommand(CLI::App& app);   // cmd_validate.cc
 std::string DefaultSchemasDir();
 void AddBuildCommand(CLI::App& app);      // cmd_build.cc
 void AddInspectCommand(CLI::App& app);    // cmd_inspect.cc
+void AddEvalCommand(CLI::App& app);       // cmd_eval.cc
 
 }  // namespace occgt

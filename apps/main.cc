@@ -56,6 +56,7 @@ int main(int argc, char** argv) {
   occgt::AddValidateCommand(app);
   occgt::AddBuildCommand(app);
   occgt::AddInspectCommand(app);
+  occgt::AddEvalCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

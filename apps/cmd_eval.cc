@@ -1,0 +1,177 @@
+// occgt eval SPLIT_DIR --predictions P [--predictions Q ...] --out eval.json: scores a
+// matcher's predictions against the split's ground truth (docs/EVAL.md): relative pose AUC
+// (LoFTR's protocol, one or more RANSAC settings), epipolar precision, per-type precision
+// and recall, all stratified by occlusion ratio and visible overlap. Prints a one-screen
+// summary; writes eval.json (schemas/eval.schema.json) atomically.
+#include <tbb/global_control.h>
+
+#include <cstdio>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "apps/commands.h"
+#include "libgt/core/error.h"
+#include "libgt/eval/evaluate.h"
+#include "libgt/io/atomic_file.h"
+
+namespace occgt {
+namespace {
+
+std::vector<double> ParseList(const std::string& text, const std::string& flag) {
+  std::vector<double> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (item.empty() || used != item.size()) {
+      throw gt::InputError(flag, "expected comma-separated numbers, got '" + text + "'");
+    }
+    out.push_back(v);
+  }
+  if (out.empty()) throw gt::InputError(flag, "expected comma-separated numbers, got ''");
+  return out;
+}
+
+struct Args {
+  std::string split_dir, out;
+  std::vector<std::string> predictions;
+  std::string ransac_px = "0.5", occlusion = "image,visible", occlusion_bins, overlap_bins,
+              auc = "5,10,20", aggregate = "mean";
+  double ransac_conf = 0.99999, min_confidence = 0;
+  gt::eval::EvalOptions options;
+  int threads = 0;
+};
+
+void Run(const Args& args) {
+  gt::eval::EvalOptions options = args.options;
+  options.estimators.clear();
+  for (const double px : ParseList(args.ransac_px, "--ransac-px")) {
+    gt::eval::PoseEstimatorOptions e;
+    e.ransac_px = px;
+    e.confidence = args.ransac_conf;
+    options.estimators.push_back(e);
+  }
+  options.auc_thresholds_deg = ParseList(args.auc, "--auc");
+  if (!args.occlusion_bins.empty()) {
+    options.occlusion_bins = ParseList(args.occlusion_bins, "--occlusion-bins");
+  }
+  if (!args.overlap_bins.empty()) {
+    options.overlap_bins = ParseList(args.overlap_bins, "--overlap-bins");
+  }
+  options.occlusion_definitions.clear();
+  std::stringstream defs(args.occlusion);
+  for (std::string d; std::getline(defs, d, ',');) {
+    options.occlusion_definitions.push_back(gt::eval::ParseOcclusionDefinition(d, "--occlusion"));
+  }
+  options.aggregate = gt::ParseAggregate(args.aggregate, "--aggregate");
+  std::string error;
+  if (!options.Check(&error)) throw gt::InputError("--" + error.substr(0, error.find(':')), error);
+  if (args.threads < 0) throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
+  std::unique_ptr<tbb::global_control> limit;
+  if (args.threads > 0) {
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                  args.threads);
+  }
+  const gt::eval::SplitIndex split = gt::eval::LoadSplitIndex(args.split_dir);
+  const std::set<std::string> keys(split.keys.begin(), split.keys.end());
+  std::vector<gt::eval::PredictionSet> sets;
+  std::vector<std::string> problems;
+  std::set<std::string> names;
+  for (const std::string& arg : args.predictions) {
+    // NAME=PATH names the set; else its file or folder name without ".npz".
+    std::string name, path = arg;
+    const size_t eq = arg.find('=');
+    if (eq != std::string::npos && arg.find('/') > eq) {
+      name = arg.substr(0, eq);
+      path = arg.substr(eq + 1);
+    } else {
+      std::string base = arg;
+      while (base.size() > 1 && base.back() == '/') base.pop_back();
+      base = base.substr(base.rfind('/') == std::string::npos ? 0 : base.rfind('/') + 1);
+      if (base.size() > 4 && base.compare(base.size() - 4, 4, ".npz") == 0) {
+        base.resize(base.size() - 4);
+      }
+      name = base;
+    }
+    if (name.empty() || !names.insert(name).second) {
+      throw gt::InputError("--predictions", "set name '" + name +
+                                                "' is empty or repeats (use NAME=PATH)");
+    }
+    sets.push_back(gt::eval::ReadPredictions(name, path, keys, split.width, split.height,
+                                             &problems));
+    gt::eval::FilterByConfidence(args.min_confidence, &sets.back(), &problems);
+  }
+  if (!problems.empty()) {
+    if (problems.size() == 1) throw gt::InputError("predictions", problems[0]);
+    for (const std::string& p : problems) std::fprintf(stderr, "occgt: error: %s\n", p.c_str());
+    throw gt::InputError("predictions", std::to_string(problems.size()) +
+                                            " problems (listed above); nothing written");
+  }
+  for (const gt::eval::PredictionSet& s : sets) {
+    const size_t missing = keys.size() - s.pairs.size();
+    if (missing == 0) continue;
+    std::string first;
+    for (const std::string& k : split.keys) {
+      if (s.pairs.count(k) == 0) {
+        first = k;
+        break;
+      }
+    }
+    std::fprintf(stderr,
+                 "occgt: warning: %s: %zu of %zu pairs have no prediction (first: %s), counted "
+                 "as failures (pose error inf, no matches); listed in eval.json\n",
+                 s.path.c_str(), missing, keys.size(), first.c_str());
+  }
+  const gt::eval::EvalResult result = gt::eval::Evaluate(split, sets, options);
+  gt::io::WriteFileAtomic(args.out, gt::eval::EvalJson(result));
+  std::fputs(gt::eval::EvalSummary(result).c_str(), stdout);
+  std::printf("wrote %s\n", args.out.c_str());
+}
+
+}  // namespace
+
+void AddEvalCommand(CLI::App& app) {
+  auto args = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand("eval", "Score a matcher's predictions on a split (docs/EVAL.md)");
+  cmd->add_option("split_dir", args->split_dir, "Split folder (index.json, pairs.jsonl, shards)")
+      ->required();
+  cmd->add_option("--predictions", args->predictions,
+                  "[NAME=]PATH: a .npz keyed by sample key, or a folder of <key>.npz; repeat "
+                  "to compare sets")
+      ->required()
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  cmd->add_option("--out", args->out, "eval.json to write")->required();
+  cmd->add_option("--ransac-px", args->ransac_px,
+                  "RANSAC thresholds in pixels, one estimator each (e.g. 0.5,1.0)");
+  cmd->add_option("--ransac-conf", args->ransac_conf, "RANSAC confidence (default 0.99999)");
+  cmd->add_option("--auc", args->auc, "AUC thresholds in degrees (default 5,10,20)");
+  cmd->add_option("--epipolar-threshold", args->options.epipolar_threshold,
+                  "Symmetric epipolar distance threshold (default 5e-4; MegaDepth 1e-4)");
+  cmd->add_option("--px", args->options.quality.px,
+                  "Per-type precision/recall: correct within this many pixels (default 8)");
+  cmd->add_option("--occlusion", args->occlusion,
+                  "Occlusion-ratio definitions to stratify by: image,visible,valid");
+  cmd->add_option("--occlusion-bins", args->occlusion_bins, "Occlusion bin edges (comma list)");
+  cmd->add_option("--overlap-bins", args->overlap_bins, "Visible-overlap bin edges (comma list)");
+  cmd->add_option("--aggregate", args->aggregate, "Both directions -> pair value: min|mean|max");
+  cmd->add_option("--curve-step", args->options.curve_step,
+                  "Cumulative curve step over the occlusion ratio (default 0.05)");
+  cmd->add_option("--failure-error", args->options.failure_error_deg,
+                  "Error (deg) of a failed pair inside means (default 180)");
+  cmd->add_option("--min-confidence", args->min_confidence,
+                  "Drop matches with confidence below this (needs 'confidence')");
+  cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)");
+  cmd->callback([args] { Run(*args); });
+}
+
+}  // namespace occgt

@@ -1,0 +1,103 @@
+// `occgt eval`: a matcher's predictions on a split scored against occgt's ground truth
+// (docs/EVAL.md; GROUND_TRUTH.md §7). Composes the pieces of this folder:
+//  - relative pose by each estimator setting (pose.h), AUC at the thresholds;
+//  - epipolar precision (symmetric epipolar distance < threshold, normalised points);
+//  - per-type precision and recall against the shards' labels and depth (match_quality.h);
+//  - all of it per occlusion-ratio bin (each definition asked for), per visible-overlap bin,
+//    and the cumulative curve over the occlusion ratio (mean/median pose error, pairs).
+// Split input: DIR/index.json (shards), DIR/pairs.jsonl (keys), DIR/recipe.json
+// ("resolution"), and per sample its json (K0, K1, T_0to1, metrics), label01/label10,
+// depth0/depth1, matches, match_type members (per-type scores need labels and depth; a
+// split without them gets "match_quality": null with the reason).
+// Work: shards are read in parallel (TBB) and each sample is scored as it streams by; then
+// every (pair, prediction set, estimator) pose is estimated in parallel. Results are
+// stored by index and summed in pair order: the output is the same at any thread count.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "libgt/eval/match_quality.h"
+#include "libgt/eval/pose.h"
+#include "libgt/eval/predictions.h"
+#include "libgt/geometry/aggregate.h"
+
+namespace gt::eval {
+
+// How a pair's occlusion ratio is read from its sample metrics (both directions combined
+// with EvalOptions::aggregate).
+enum class OcclusionDefinition {
+  kImage,    // "image": OCCLUDED / (W*H), the paper's (metrics occlusion_ratio)
+  kVisible,  // "visible": OCCLUDED / (VISIBLE + OCCLUDED), the released training code's
+  kValid,    // "valid": OCCLUDED / valid-depth pixels, the released test code's
+};
+OcclusionDefinition ParseOcclusionDefinition(const std::string& text, const std::string& field);
+const char* OcclusionDefinitionName(OcclusionDefinition d);
+
+struct EvalOptions {
+  std::vector<PoseEstimatorOptions> estimators{PoseEstimatorOptions{}};  // >= 1
+  std::vector<double> auc_thresholds_deg{5, 10, 20};  // increasing, > 0
+  double epipolar_threshold = 5e-4;  // symmetric epipolar distance (LoFTR ScanNet; 1e-4 MegaDepth)
+  QualityOptions quality;            // px for per-type precision/recall
+  std::vector<OcclusionDefinition> occlusion_definitions{OcclusionDefinition::kImage,
+                                                         OcclusionDefinition::kVisible};
+  std::vector<double> occlusion_bins{0, 0.05, 0.1, 0.15, 0.2, 0.3, 1.0};  // edges, increasing
+  std::vector<double> overlap_bins{0, 0.2, 0.4, 0.6, 0.8, 1.0};  // visible overlap edges
+  Aggregate aggregate = Aggregate::kMean;  // both directions of a metric -> the pair's value
+  double curve_step = 0.05;         // cumulative curve sampled at step, 2*step, ... (ratio)
+  double failure_error_deg = 180;   // a failed pair's error inside means (medians use +inf)
+  bool Check(std::string* error) const;
+};
+
+// What the evaluation needs of a split before reading any shard.
+struct SplitIndex {
+  std::string dir, name;
+  std::vector<std::string> shard_urls;  // index.json order
+  std::vector<std::string> keys;        // pairs.jsonl order
+  int width = 0, height = 0;            // recipe.json "resolution"
+};
+// Throws InputError naming the file and field.
+SplitIndex LoadSplitIndex(const std::string& dir);
+
+struct SetPairResult {
+  bool predicted = false;  // false: missing from the set (a failure)
+  int64_t matches = 0;
+  std::vector<PoseError> pose;  // one per estimator
+  std::vector<int> inliers;     // one per estimator (0 without pose)
+  double epipolar_precision = 0;  // share of matches under the threshold (0 without matches)
+  PairQuality quality;
+  double occluded_share = 0;  // (vo + ov) / matches: Occ²Net's test-time statistic
+};
+
+struct PairInfo {
+  std::string key, scene;
+  std::vector<double> occlusion;  // one per EvalOptions::occlusion_definitions
+  double visible_overlap = 0;     // consistent_overlap, aggregated
+  double overlap = 0;             // overlap, aggregated
+  std::vector<SetPairResult> sets;  // one per prediction set
+};
+
+struct EvalResult {
+  SplitIndex split;
+  EvalOptions options;
+  std::vector<std::string> set_names, set_paths, set_layouts;
+  std::vector<PairInfo> pairs;  // the split's order
+  bool has_quality = false;     // labels and depth in every sample
+  std::string quality_missing_reason;
+};
+
+// Scores every prediction set on the split. Throws InputError on a broken shard or sample.
+EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& sets,
+                    const EvalOptions& options);
+
+// eval.json (schemas/eval.schema.json): sorted keys, deterministic.
+std::string EvalJson(const EvalResult& result);
+// The one-screen summary printed by `occgt eval`.
+std::string EvalSummary(const EvalResult& result);
+
+}  // namespace gt::eval

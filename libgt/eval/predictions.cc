@@ -1,0 +1,274 @@
+#include "libgt/eval/predictions.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "libgt/core/error.h"
+#include "libgt/io/npy.h"
+
+namespace gt::eval {
+namespace {
+
+std::string ShapeText(const std::vector<int64_t>& shape) {
+  std::string s = "[";
+  for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
+  return s + "]";
+}
+
+bool IsIntegerDescr(const std::string& d) {
+  return d == "|i1" || d == "|u1" || d == "<i2" || d == "<u2" || d == "<i4" || d == "<u4" ||
+         d == "<i8" || d == "<u8";
+}
+
+// Values of an integer array as int64 (the supported integer dtypes only).
+std::vector<int64_t> IntegerValues(const io::NpyArray& a) {
+  std::vector<int64_t> out(static_cast<size_t>(a.NumElements()));
+  const char* p = a.data.data();
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (a.descr == "|i1") out[i] = reinterpret_cast<const int8_t*>(p)[i];
+    if (a.descr == "|u1") out[i] = reinterpret_cast<const uint8_t*>(p)[i];
+    if (a.descr == "<i2") out[i] = reinterpret_cast<const int16_t*>(p)[i];
+    if (a.descr == "<u2") out[i] = reinterpret_cast<const uint16_t*>(p)[i];
+    if (a.descr == "<i4") out[i] = reinterpret_cast<const int32_t*>(p)[i];
+    if (a.descr == "<u4") out[i] = reinterpret_cast<const uint32_t*>(p)[i];
+    if (a.descr == "<i8") out[i] = reinterpret_cast<const int64_t*>(p)[i];
+    if (a.descr == "<u8") {
+      const uint64_t v = reinterpret_cast<const uint64_t*>(p)[i];
+      out[i] = v > static_cast<uint64_t>(INT64_MAX) ? -1 : static_cast<int64_t>(v);
+    }
+  }
+  return out;
+}
+
+// float32/float64 values as float (float64 narrowed), "" or a problem.
+std::string FloatValues(const io::NpyArray& a, std::vector<float>* out) {
+  if (a.descr != "<f4" && a.descr != "<f8") {
+    return "expected dtype float32 (or float64), got '" + a.descr + "'";
+  }
+  const size_t n = static_cast<size_t>(a.NumElements());
+  out->resize(n);
+  if (a.descr == "<f4") {
+    std::copy_n(reinterpret_cast<const float*>(a.data.data()), n, out->data());
+  } else {
+    const double* d = reinterpret_cast<const double*>(a.data.data());
+    for (size_t i = 0; i < n; ++i) (*out)[i] = static_cast<float>(d[i]);
+  }
+  for (size_t i = 0; i < n; ++i) {
+    if (!std::isfinite((*out)[i])) {
+      std::ostringstream s;
+      s << "expected finite values, element " << i << " is " << (*out)[i];
+      return s.str();
+    }
+  }
+  return "";
+}
+
+// The members of one pair: name -> array.
+using Members = std::map<std::string, const io::NpyArray*>;
+
+// [W, H] per image from a resolution member; "" or a problem.
+std::string ParseResolution(const io::NpyArray& a, int64_t wh[2][2]) {
+  if (!IsIntegerDescr(a.descr)) {
+    return "expected an integer dtype, got '" + a.descr + "'";
+  }
+  const bool one = a.shape == std::vector<int64_t>{2};
+  const bool two = a.shape == std::vector<int64_t>{2, 2};
+  if (!one && !two) {
+    return "expected shape [2] ([W, H]) or [2, 2] (per image), got " + ShapeText(a.shape);
+  }
+  const std::vector<int64_t> v = IntegerValues(a);
+  for (const int64_t x : v) {
+    if (x < 1 || x > 1000000) return "expected sizes in pixels between 1 and 1000000";
+  }
+  for (int img = 0; img < 2; ++img) {
+    wh[img][0] = one ? v[0] : v[2 * img];
+    wh[img][1] = one ? v[1] : v[2 * img + 1];
+  }
+  return "";
+}
+
+// Checks and converts one pair. `where` is "<file>:<prefix>" (prefix "" or "<key>/").
+// `default_wh`: the resolution in force (top-level member or the working resolution).
+bool ReadPair(const std::string& where, const Members& members, const int64_t default_wh[2][2],
+              int width, int height, PairPrediction* out, std::vector<std::string>* problems) {
+  bool ok = true;
+  auto problem = [&](const std::string& member, const std::string& text) {
+    problems->push_back(where + member + ": " + text);
+    ok = false;
+  };
+  for (const auto& [name, array] : members) {
+    if (name != "kpts0" && name != "kpts1" && name != "confidence" && name != "resolution") {
+      problem(name, "unknown member (expected kpts0, kpts1, confidence, resolution)");
+    }
+  }
+  int64_t wh[2][2] = {{default_wh[0][0], default_wh[0][1]}, {default_wh[1][0], default_wh[1][1]}};
+  if (auto it = members.find("resolution"); it != members.end()) {
+    const std::string p = ParseResolution(*it->second, wh);
+    if (!p.empty()) problem("resolution", p);
+  }
+  std::vector<float>* kpts[2] = {&out->kpts0, &out->kpts1};
+  int64_t n[2] = {-1, -1};
+  for (int img = 0; img < 2; ++img) {
+    const std::string name = img == 0 ? "kpts0" : "kpts1";
+    auto it = members.find(name);
+    if (it == members.end()) {
+      problem(name, "missing (expected float32 [N, 2] pixels)");
+      continue;
+    }
+    const io::NpyArray& a = *it->second;
+    if (a.shape.size() != 2 || a.shape[1] != 2) {
+      problem(name, "expected shape [N, 2], got " + ShapeText(a.shape));
+      continue;
+    }
+    const std::string p = FloatValues(a, kpts[img]);
+    if (!p.empty()) {
+      problem(name, p);
+      continue;
+    }
+    n[img] = a.shape[0];
+    // Inside the pixel area of the stated resolution, then rescaled to the working one.
+    const double w = static_cast<double>(wh[img][0]), h = static_cast<double>(wh[img][1]);
+    std::vector<float>& k = *kpts[img];
+    for (int64_t i = 0; i < n[img]; ++i) {
+      const float x = k[2 * i], y = k[2 * i + 1];
+      if (x < -0.5 || x >= w - 0.5 || y < -0.5 || y >= h - 0.5) {
+        std::ostringstream s;
+        s << "point " << i << " (" << x << ", " << y << ") is outside the " << wh[img][0] << "x"
+          << wh[img][1] << " image (pixel area [-0.5, W-0.5) x [-0.5, H-0.5); state the "
+          << "resolution with a 'resolution' member)";
+        problem(name, s.str());
+        break;
+      }
+    }
+    if (wh[img][0] != width || wh[img][1] != height) {
+      const double sx = width / w, sy = height / h;
+      for (int64_t i = 0; i < n[img]; ++i) {
+        k[2 * i] = static_cast<float>(sx * (k[2 * i] + 0.5) - 0.5);
+        k[2 * i + 1] = static_cast<float>(sy * (k[2 * i + 1] + 0.5) - 0.5);
+      }
+    }
+  }
+  if (n[0] >= 0 && n[1] >= 0 && n[0] != n[1]) {
+    problem("kpts1", "expected as many points as kpts0 (" + std::to_string(n[0]) + "), got " +
+                         std::to_string(n[1]));
+  }
+  if (auto it = members.find("confidence"); it != members.end()) {
+    const io::NpyArray& a = *it->second;
+    if (a.shape.size() != 1 || (n[0] >= 0 && a.shape[0] != n[0])) {
+      problem("confidence", "expected shape [N] with N = " + std::to_string(n[0]) + ", got " +
+                                ShapeText(a.shape));
+    } else {
+      const std::string p = FloatValues(a, &out->confidence);
+      if (!p.empty()) problem("confidence", p);
+      out->has_confidence = true;
+    }
+  }
+  return ok;
+}
+
+}  // namespace
+
+PredictionSet ReadPredictions(const std::string& name, const std::string& path,
+                              const std::set<std::string>& split_keys, int width, int height,
+                              std::vector<std::string>* problems) {
+  namespace fs = std::filesystem;
+  PredictionSet set;
+  set.name = name;
+  set.path = path;
+  const int64_t working[2][2] = {{width, height}, {width, height}};
+  // `label`: the file (folder layout) or "<file>:<key>" (one .npz); `where`: the prefix of
+  // member names in problem lines.
+  auto keep = [&](const std::string& label, const std::string& where, const std::string& key,
+                  const Members& members, const int64_t wh[2][2]) {
+    if (split_keys.count(key) == 0) {
+      problems->push_back(label + ": pair " + key + " is not a sample of the split");
+      return;
+    }
+    PairPrediction pair;
+    if (ReadPair(where, members, wh, width, height, &pair, problems)) {
+      set.pairs.emplace(key, std::move(pair));
+    }
+  };
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    set.layout = "folder";
+    std::vector<std::string> files;
+    for (fs::recursive_directory_iterator it(path, ec), end; !ec && it != end; it.increment(ec)) {
+      if (it->is_directory(ec)) continue;
+      files.push_back(fs::relative(it->path(), path, ec).generic_string());
+    }
+    if (ec) problems->push_back(path + ": cannot list the folder: " + ec.message());
+    std::sort(files.begin(), files.end());
+    for (const std::string& rel : files) {
+      const std::string file = (fs::path(path) / rel).string();
+      if (rel.size() <= 4 || rel.compare(rel.size() - 4, 4, ".npz") != 0) {
+        problems->push_back(file + ": not a .npz (a predictions folder holds <key>.npz only)");
+        continue;
+      }
+      std::map<std::string, io::NpyArray> arrays;
+      try {
+        arrays = io::ReadNpz(file);
+      } catch (const InputError& e) {
+        problems->push_back(e.what());
+        continue;
+      }
+      Members members;
+      for (const auto& [member, array] : arrays) members[member] = &array;
+      keep(file, file + ":", rel.substr(0, rel.size() - 4), members, working);
+    }
+    if (files.empty()) problems->push_back(path + ": no .npz file in the folder");
+    return set;
+  }
+  set.layout = "npz";
+  std::map<std::string, io::NpyArray> arrays;
+  try {
+    arrays = io::ReadNpz(path);
+  } catch (const InputError& e) {
+    problems->push_back(e.what());
+    return set;
+  }
+  int64_t top[2][2] = {{width, height}, {width, height}};
+  std::map<std::string, Members> by_key;
+  for (const auto& [member, array] : arrays) {
+    const size_t slash = member.rfind('/');
+    if (slash == std::string::npos) {
+      if (member == "resolution") {
+        const std::string p = ParseResolution(array, top);
+        if (!p.empty()) problems->push_back(path + ":resolution: " + p);
+      } else {
+        problems->push_back(path + ":" + member +
+                            ": unknown member (expected '<key>/kpts0', '<key>/kpts1', "
+                            "'<key>/confidence', '<key>/resolution' or 'resolution')");
+      }
+      continue;
+    }
+    by_key[member.substr(0, slash)][member.substr(slash + 1)] = &array;
+  }
+  for (const auto& [key, members] : by_key) keep(path + ":" + key, path + ":" + key + "/", key, members, top);
+  return set;
+}
+
+void FilterByConfidence(double min_confidence, PredictionSet* set,
+                        std::vector<std::string>* problems) {
+  if (!(min_confidence > 0)) return;
+  for (auto& [key, pair] : set->pairs) {
+    if (!pair.has_confidence) {
+      problems->push_back(set->path + ":" + key +
+                          ": no 'confidence' member, which --min-confidence needs");
+      continue;
+    }
+    PairPrediction kept;
+    kept.has_confidence = true;
+    for (int64_t i = 0; i < pair.size(); ++i) {
+      if (pair.confidence[i] < min_confidence) continue;
+      kept.kpts0.insert(kept.kpts0.end(), {pair.kpts0[2 * i], pair.kpts0[2 * i + 1]});
+      kept.kpts1.insert(kept.kpts1.end(), {pair.kpts1[2 * i], pair.kpts1[2 * i + 1]});
+      kept.confidence.push_back(pair.confidence[i]);
+    }
+    pair = std::move(kept);
+  }
+}
+
+}  // namespace gt::eval

@@ -1,0 +1,57 @@
+// A matcher's predictions on a split, read from NumPy files (docs/EVAL.md "Predictions").
+//
+// Two layouts, both keyed by occgt's sample key "<scene>/<frame0>_<frame1>":
+//  - one .npz for the whole split, members "<key>/kpts0", "<key>/kpts1", optional
+//    "<key>/confidence" and "<key>/resolution", and an optional top-level "resolution"
+//    (np.savez(path, **{key + "/kpts0": ..., ...}));
+//  - a folder of one .npz per pair, DIR/<key>.npz (DIR/<scene>/<frame0>_<frame1>.npz),
+//    members "kpts0", "kpts1", optional "confidence" and "resolution".
+// kpts0, kpts1: float32 (float64 accepted) [N, 2] pixels (x, y), pixel centres at integer
+// coordinates, at `resolution` = [W, H] (integer dtype; [2, 2] gives image 0's and image
+// 1's rows) or, without one, at the split's working resolution. Every point must lie in
+// the pixel area [-0.5, W - 0.5) x [-0.5, H - 0.5) of its stated resolution. Points are
+// rescaled to the working resolution with x' = s (x + 0.5) - 0.5 (GROUND_TRUTH.md §1).
+// confidence: float32/float64 [N], finite; kept, and used only for --min-confidence.
+// Every problem (unreadable file, unknown member, wrong dtype or shape, NaN/inf, point out
+// of the image, key not in the split) is one line "<file>[:<member>]: <problem>"; a pair
+// with a problem is left out of the set, and the caller stops when any line was written.
+// Pairs of the split without a prediction are not a problem here: the evaluation counts
+// them as failures (pose error +inf, no matches).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace gt::eval {
+
+struct PairPrediction {
+  std::vector<float> kpts0;       // [N, 2] pixels at the working resolution
+  std::vector<float> kpts1;       // [N, 2]
+  std::vector<float> confidence;  // [N], empty when the file has none
+  bool has_confidence = false;
+  int64_t size() const { return static_cast<int64_t>(kpts0.size() / 2); }
+};
+
+struct PredictionSet {
+  std::string name;  // label in outputs (unique among the sets of one evaluation)
+  std::string path;  // the .npz or folder it was read from
+  std::string layout;  // "npz" (one file) or "folder" (one .npz per pair)
+  std::map<std::string, PairPrediction> pairs;  // by sample key
+};
+
+// Reads `path` (a .npz file or a folder of per-pair .npz). `split_keys`: the split's
+// sample keys; `width`, `height`: its working resolution. Appends one line per problem
+// to `problems` (in a deterministic order: members sorted by name).
+PredictionSet ReadPredictions(const std::string& name, const std::string& path,
+                              const std::set<std::string>& split_keys, int width, int height,
+                              std::vector<std::string>* problems);
+
+// Keeps the matches with confidence >= min_confidence (a pair without confidence is a
+// problem line when min_confidence > 0).
+void FilterByConfidence(double min_confidence, PredictionSet* set,
+                        std::vector<std::string>* problems);
+
+}  // namespace gt::eval
