@@ -120,7 +120,10 @@ void Run(const BuildArgs& args_in) {
                                                   args.threads);
   }
   std::string error;
-  if (!args.build.Check(&error)) throw gt::InputError("occgt build", error);
+  if (!args.build.Check(&error)) {  // "--flag: expected ...": a usage error naming the flag
+    const size_t colon = error.find(": ");
+    throw gt::InputError(error.substr(0, colon), error.substr(colon + 2));
+  }
   if (std::string e = gt::shards::CheckSplitName(recipe.split); !e.empty()) {
     throw gt::InputError(args.recipe, "split: " + e);
   }

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/report/pair_source.h"
 #include "libgt/report/split_report.h"
@@ -40,7 +41,7 @@ void RunInspectPair(const InspectPairArgs& a) {
       !a.scene.empty() || !a.frames.empty() || (!a.root.empty() && a.pair_dir.empty());
   const int sources = (!a.shard.empty() || !a.key.empty()) + !a.pair_dir.empty() + scene_source;
   if (sources != 1) {
-    throw gt::InputError("occgt inspect pair",
+    throw gt::InputError("--shard/--pair-dir/--root",
                          "expected exactly one source: --shard/--key, --pair-dir, or "
                          "--root/--format/--scene/--frames");
   }
@@ -85,7 +86,10 @@ void RunInspectSplit(const InspectSplitArgs& a) {
   o.seed = a.seed;
   o.histogram_bins = a.bins;
   std::string error;
-  if (!o.Check(&error)) throw gt::InputError("occgt inspect split", error);
+  if (!o.Check(&error)) {  // the defaults pass: a failure comes from a flag
+    ThrowOptionsError(error, "occgt inspect split",
+                      {{"histogram_bins", "--bins", true}, {"gallery_pairs", "--gallery", true}});
+  }
   const std::string out = a.out.empty() ? a.dir + "/inspect" : a.out;
   const auto written = gt::report::WriteSplitReport(a.dir, out, o);
   std::printf("inspect split %s\n", a.dir.c_str());

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/io/folder_lock.h"
 #include "libgt/shards/split.h"
@@ -50,12 +51,16 @@ void AddMergeCommand(CLI::App& app) {
       ->excludes(verify);
   cmd->callback([args] {
     gt::shards::MergeOptions options = args->options;
+    const bool schemas_given = !options.schemas_dir.empty();
     if (options.schemas_dir.empty()) options.schemas_dir = DefaultSchemasDir();
     if (args->threads < 0) {
       throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
     }
     std::string error;
-    if (!options.Check(&error)) throw gt::InputError("occgt merge", error);
+    if (!options.Check(&error)) {
+      ThrowOptionsError(error, "occgt merge",
+                        {{"split", "--split", true}, {"schemas_dir", "--schemas", schemas_given}});
+    }
     for (const char* flag :
          {args->no_md5 ? "--no-md5" : nullptr, args->no_read ? "--no-read" : nullptr}) {
       if (flag != nullptr) {

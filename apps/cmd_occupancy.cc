@@ -10,6 +10,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/io/reader.h"
 #include "libgt/truth/pair_files.h"
@@ -44,13 +45,23 @@ void RunOccupancy(const OccupancyArgs& args) {
   fo.remove_outliers = args.remove_outliers;
   occ::ParseFusionScope(args.scope, &fo);
   std::string error;
-  if (!fo.Check(&error)) throw gt::InputError("fusion options", error);
+  if (!fo.Check(&error)) {  // the defaults pass: a failure comes from a flag
+    ThrowOptionsError(error, "fusion options",
+                      {{"voxel_size_m", "--voxel-m", true},
+                       {"max_range_m", "--max-range-m", true},
+                       {"window", "--scope", true},
+                       {"scene", "--scope", true}});
+  }
   o.bins.num_bins = args.bins;
   o.bins.near_m = args.near_m;
   o.bins.far_m = args.far_m;
   o.bins.spacing = occ::ParseBinSpacing(args.spacing);
   o.bins.traversal = occ::ParseTraversal(args.traversal);
-  if (!o.bins.Check(&error)) throw gt::InputError("bin options", error);
+  if (!o.bins.Check(&error)) {
+    ThrowOptionsError(error, "bin options",
+                      {{"num_bins", "--bins", true}, {"near_m", "--near-m", true},
+                       {"far_m", "--far-m", true}});
+  }
   o.mode = occ::ParseOccupancyMode(args.mode);
   if (o.mode == occ::OccupancyMode::kTwoPoint && !args.save_octree.empty())
     throw gt::InputError("--save-octree", "needs --mode octomap");

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/io/reader.h"
 #include "libgt/truth/pair_files.h"
@@ -53,7 +54,13 @@ void RunPair(const PairArgs& args) {
   source.scene = scene.name;
   lo.min_depth_m = args.min_depth_m.value_or(scene.min_depth_m);  // dataset range unless set
   lo.max_depth_m = args.max_depth_m.value_or(scene.max_depth_m);
-  if (!lo.Check(&error)) throw gt::InputError("label options", error);
+  if (!lo.Check(&error)) {
+    ThrowOptionsError(error, "label options",
+                      {{"min_depth_m", "--min-depth-m", args.min_depth_m.has_value()},
+                       {"max_depth_m", "--max-depth-m", args.max_depth_m.has_value()},
+                       {"abs_tol_m", "--abs-tol-m", args.abs_tol_m.has_value()},
+                       {"rel_tol", "--rel-tol", args.rel_tol.has_value()}});
+  }
   const gt::Frame& f0 = scene.frames[gt::truth::FindFrame(scene, source.id0)];
   const gt::Frame& f1 = scene.frames[gt::truth::FindFrame(scene, source.id1)];
   const gt::truth::WorkingFrame w0 = gt::truth::LoadWorkingFrame(f0, source.resolution);

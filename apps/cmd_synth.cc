@@ -31,6 +31,15 @@ void RunSynth(SynthArgs& args) {
   args.options.width = std::stoi(m[1]);
   args.options.height = std::stoi(m[2]);
   args.options.holes = !args.no_holes;
+  // Each flag's range first, so that the usage error names the flag (exit 2).
+  const gt::synth::SynthOptions& o = args.options;
+  if (o.scenes < 1 || o.scenes > 1000) throw gt::InputError("--scenes", "expected 1..1000");
+  if (o.frames_per_scene < 1 || o.frames_per_scene > 100000) {
+    throw gt::InputError("--frames", "expected 1..100000 frames per scene");
+  }
+  if (o.width < 16 || o.height < 16 || o.width > 8192 || o.height > 8192) {
+    throw gt::InputError("--resolution", "expected 16..8192 pixels per side");
+  }
   std::string error;
   if (!args.options.Check(&error)) throw gt::InputError("occgt synth", error);
 

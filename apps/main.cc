@@ -6,11 +6,15 @@
 #include <cstring>
 #include <exception>
 #include <opencv2/core/utility.hpp>
+#include <optional>
+#include <string>
+#include <vector>
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
 
 #include "apps/commands.h"
+#include "apps/usage.h"
 #include "gt/core/version.h"
 #include "libgt/core/error.h"
 
@@ -56,14 +60,22 @@ int main(int argc, char** argv) {
   occgt::AddValidateCommand(app);
   occgt::AddBuildCommand(app);
   occgt::AddInspectCommand(app);
-  occgt::AddEvalCommand(app);
+  // Usage errors (docs/CLI.md): one line, exit 2. Bad input (files, data): one line, exit 1.
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  if (const std::optional<int> code = occgt::HandleHelpOrUnknownCommand(app, args)) return *code;
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    return occgt::UsageError(occgt::DescribeParseError(app, args, e));
   } catch (const gt::InputError& e) {
     std::fprintf(stderr, "occgt: error: %s\n", e.what());
-    return 1;
+    return e.where().rfind("--", 0) == 0 ? occgt::kUsageExit : 1;  // a flag's value
   } catch (const std::exception& e) {
     std::fprintf(stderr, "occgt: error: %s\n", e.what());
     return 1;

@@ -1,5 +1,6 @@
 #include "libgt/truth/working_frame.h"
 
+#include <cstdlib>
 #include <sstream>
 #include <utility>
 
@@ -56,8 +57,19 @@ size_t FindFrame(const Scene& scene, const std::string& id, const std::string& f
     if (!f.usable) throw InputError(field, "frame " + id + " is unusable: " + f.unusable_reason);
     return i;
   }
+  // A frame number given for an id ("40" for TartanAir's "000040"): name the id.
   std::string example;
-  if (!scene.frames.empty()) example = " (ids look like '" + scene.frames.front().id + "')";
+  char* end = nullptr;
+  const long long number = std::strtoll(id.c_str(), &end, 10);
+  for (const Frame& f : scene.frames) {
+    if (!id.empty() && *end == '\0' && f.number == number) {
+      example = " (did you mean '" + f.id + "'?)";
+      break;
+    }
+  }
+  if (example.empty() && !scene.frames.empty()) {
+    example = " (ids look like '" + scene.frames.front().id + "')";
+  }
   throw InputError(field, "no frame with id '" + id + "' in scene " + scene.name + example);
 }
 

@@ -83,12 +83,13 @@ def main():
     assert meta4["grid"] == [160, 120]
     assert len(meta4["fusion"]["fused_frames"]) == 8, meta4["fusion"]["fused_frames"]
 
-    # Bad input: one line, exit 1, nothing written.
+    # Usage errors (docs/CLI.md): one `occgt: error: --flag` line, exit 2, nothing written.
     out5 = common.scratch("occupancy_bad")
     r = common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
                      "--frames", "000000,000020", "--out", out5, "--scope", "window:0",
                      check=False)
-    assert r.returncode == 1 and "--scope" in r.stderr and r.stderr.count("\n") == 1, r.stderr
+    assert r.returncode == 2 and r.stderr.startswith("occgt: error: --scope: "), r.stderr
+    assert r.stderr.count("\n") == 1, r.stderr
     assert os.listdir(out5) == []
     print("occupancy integration: ok")
 

@@ -101,15 +101,21 @@ def main():
     _, mt = check(out_t, stride=16)
     assert mt["resolution"] == [320, 240]
 
-    # Bad input: one line, exit 1, nothing written.
+    # Usage errors (docs/CLI.md): one `occgt: error: --flag` line, exit 2, nothing written.
     out_bad = common.scratch("pair_bad")
     r = common.occgt("pair", "--root", root7, "--format", "sevenscenes", "--scene", "rgbd-frames",
                      "--frames", "000150,123456", "--out", out_bad, check=False)
-    assert r.returncode == 1 and "--frames" in r.stderr and r.stderr.count("\n") == 1, r.stderr
+    assert r.returncode == 2 and r.stderr.startswith("occgt: error: --frames: "), r.stderr
+    assert r.stderr.count("\n") == 1, r.stderr
     assert os.listdir(out_bad) == []
     r = common.occgt("pair", "--root", root7, "--format", "sevenscenes", "--scene", "rgbd-frames",
                      "--frames", "000150,000190", "--preset", "nope", "--out", out_bad, check=False)
-    assert r.returncode == 1 and "--preset" in r.stderr
+    assert r.returncode == 2 and r.stderr.startswith("occgt: error: --preset: "), r.stderr
+    # A frame number given for TartanAir's zero-padded id names the id.
+    r = common.occgt("pair", "--root", roott, "--format", "tartanair", "--scene", "hospital_sample",
+                     "--frames", "0,20", "--out", out_bad, check=False)
+    assert r.returncode == 2 and "(did you mean '000000'?)" in r.stderr, r.stderr
+    assert os.listdir(out_bad) == []
     print("1 passed, 0 failed")
 
 

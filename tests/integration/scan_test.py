@@ -84,7 +84,8 @@ for root, fmt, named in bad:
     assert r.stdout == "", r.stdout
 
 r = common.occgt("scan", common.shared("sevenscenes"), "--format", "nope", check=False)
-assert r.returncode == 1 and "--format" in r.stderr
+assert r.returncode == 2 and r.stderr.startswith("occgt: error: --format: "), r.stderr
+assert r.stderr.count("\n") == 1, r.stderr
 
 # --check-depth: a depth file of the wrong size is counted, not fatal.
 import numpy as np  # noqa: E402

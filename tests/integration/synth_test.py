@@ -98,9 +98,10 @@ def main():
         assert s["depth_check"]["files_bad"] == 0
         assert 0.8 < s["depth_check"]["mean_valid_fraction"] < 1.0
 
-    # Bad flags: one line on stderr, exit 1.
+    # Usage errors (docs/CLI.md): one `occgt: error: --flag` line on stderr, exit 2.
     bad = common.occgt("synth", "--out", out, "--resolution", "160", check=False)
-    assert bad.returncode == 1 and "--resolution" in bad.stderr, bad.stderr
+    assert bad.returncode == 2 and bad.stderr.startswith("occgt: error: --resolution: "), bad.stderr
+    assert bad.stderr.count("\n") == 1, bad.stderr
     print("ok")
 
 

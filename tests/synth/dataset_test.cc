@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -177,11 +178,16 @@ TEST(SynthCli, WritesDeterministicallyAndRejectsBadFlags) {
   EXPECT_EQ(io::ReadNpy(a + "/synth_000/depth/000002.npy").shape, (std::vector<int64_t>{60, 80}));
 
   const auto bad = test::RunOccgt("synth --out '" + a + "' --resolution 80by60");
-  EXPECT_EQ(bad.exit_code, 1);
-  EXPECT_NE(bad.stderr_text.find("--resolution"), std::string::npos) << bad.stderr_text;
+  // Usage errors (docs/CLI.md): one `occgt: error: --flag: ...` line, exit 2.
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_EQ(bad.stderr_text.rfind("occgt: error: --resolution: ", 0), 0) << bad.stderr_text;
+  EXPECT_EQ(std::count(bad.stderr_text.begin(), bad.stderr_text.end(), '\n'), 1);
   const auto zero = test::RunOccgt("synth --out '" + a + "' --frames 0");
-  EXPECT_EQ(zero.exit_code, 1);
-  EXPECT_NE(zero.stderr_text.find("frames"), std::string::npos) << zero.stderr_text;
+  EXPECT_EQ(zero.exit_code, 2);
+  EXPECT_EQ(zero.stderr_text.rfind("occgt: error: --frames: ", 0), 0) << zero.stderr_text;
+  const auto tiny = test::RunOccgt("synth --out '" + a + "' --resolution 8x8");
+  EXPECT_EQ(tiny.exit_code, 2);
+  EXPECT_EQ(tiny.stderr_text.rfind("occgt: error: --resolution: ", 0), 0) << tiny.stderr_text;
 }
 
 }  // namespace

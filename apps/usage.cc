@@ -1,0 +1,139 @@
+#include "apps/usage.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+
+#include "libgt/core/error.h"
+
+namespace occgt {
+namespace {
+
+size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1] ? 1 : 0)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// " (did you mean 'x'?)" for the nearest candidate within a third of the word, else "".
+std::string Nearest(const std::string& word, const std::vector<std::string>& candidates) {
+  std::string best;
+  size_t best_distance = std::max<size_t>(2, word.size() / 3) + 1;
+  for (const std::string& c : candidates) {
+    const size_t d = EditDistance(word, c);
+    if (d < best_distance) best = c, best_distance = d;
+  }
+  return best.empty() ? "" : " (did you mean '" + best + "'?)";
+}
+
+std::vector<std::string> CommandNames(const CLI::App& app) {
+  std::vector<std::string> names{"help"};
+  for (const CLI::App* sub : app.get_subcommands({})) names.push_back(sub->get_name());
+  return names;
+}
+
+// The flags (long and short names with their dashes) of a subcommand and its own
+// subcommands' names.
+std::vector<std::string> FlagNames(const CLI::App* sub) {
+  std::vector<std::string> names;
+  for (const CLI::Option* o : sub->get_options({})) {
+    for (const std::string& n : o->get_lnames()) names.push_back("--" + n);
+    for (const std::string& n : o->get_snames()) names.push_back("-" + n);
+  }
+  return names;
+}
+
+}  // namespace
+
+void ThrowOptionsError(const std::string& error, const std::string& what,
+                       std::initializer_list<FieldFlag> fields) {
+  for (const FieldFlag& f : fields) {
+    const std::string field = f.field;
+    const bool leads = error.rfind(field, 0) == 0 &&
+                       (error.size() == field.size() || error[field.size()] == ' ' ||
+                        error[field.size()] == ':');
+    if (leads && f.given) throw gt::InputError(f.flag, error);
+  }
+  throw gt::InputError(what, error);
+}
+
+int UsageError(const std::string& message) {
+  std::fprintf(stderr, "occgt: error: %s\n", message.c_str());
+  return kUsageExit;
+}
+
+std::optional<int> HandleHelpOrUnknownCommand(CLI::App& app, const std::vector<std::string>& args) {
+  if (args.empty() || args[0].empty() || args[0][0] == '-') return std::nullopt;
+  const std::vector<std::string> names = CommandNames(app);
+  if (args[0] == "help") {
+    if (args.size() == 1) {
+      std::cout << app.help();
+      return 0;
+    }
+    CLI::App* sub = nullptr;
+    try {
+      sub = app.get_subcommand(args[1]);
+    } catch (const CLI::OptionNotFound&) {
+      return UsageError("help " + args[1] + ": unknown command" + Nearest(args[1], names));
+    }
+    std::cout << sub->help();
+    return 0;
+  }
+  if (std::find(names.begin(), names.end(), args[0]) != names.end()) return std::nullopt;
+  return UsageError(args[0] + ": unknown command" + Nearest(args[0], names) +
+                    "; `occgt help` lists the commands");
+}
+
+std::string DescribeParseError(const CLI::App& app, const std::vector<std::string>& args,
+                               const CLI::ParseError& error) {
+  // The subcommand chain named by the arguments, and the first unknown flag after it.
+  const CLI::App* sub = &app;
+  std::string path = "occgt";
+  for (const std::string& a : args) {
+    if (!a.empty() && a[0] == '-') {
+      const std::string flag = a.substr(0, a.find('='));
+      const std::vector<std::string> known = FlagNames(sub);
+      if (flag != "--help" && flag != "-h" &&
+          std::find(known.begin(), known.end(), flag) == known.end()) {
+        return flag + ": unknown flag of `" + path + "`" + Nearest(flag, known);
+      }
+      continue;
+    }
+    const std::vector<const CLI::App*> children = sub->get_subcommands({});
+    const CLI::App* next = nullptr;
+    std::vector<std::string> child_names;
+    for (const CLI::App* child : children) {
+      child_names.push_back(child->get_name());
+      if (child->get_name() == a) next = child;
+    }
+    if (next != nullptr) {
+      sub = next;
+      path += " " + a;
+    } else if (!children.empty()) {
+      return a + ": unknown command of `" + path + "`" + Nearest(a, child_names);
+    }
+  }
+  std::string what = error.what();
+  if (const size_t newline = what.find('\n'); newline != std::string::npos) what.resize(newline);
+  // CLI11: "Could not convert: --threads = abc".
+  const std::string convert = "Could not convert: ";
+  if (what.rfind(convert, 0) == 0) {
+    const std::string rest = what.substr(convert.size());
+    const size_t eq = rest.find(" = ");
+    if (eq != std::string::npos) {
+      what = rest.substr(0, eq) + ": expected a number, got '" + rest.substr(eq + 3) + "'";
+    }
+  }
+  return what + " (`" + path + " --help` lists the flags)";
+}
+
+}  // namespace occgt

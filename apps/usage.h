@@ -1,0 +1,41 @@
+// The command line's contract for usage errors (docs/CLI.md): every one is a single line
+// `occgt: error: <flag or command>: <problem>` on stderr and exit code 2; `occgt help [CMD]`
+// prints the help of the binary or of a subcommand; an unknown subcommand is named with
+// the nearest known one.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <initializer_list>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace occgt {
+
+inline constexpr int kUsageExit = 2;
+
+// Prints `occgt: error: <message>` and returns kUsageExit.
+int UsageError(const std::string& message);
+
+// `occgt help`, `occgt help CMD` (exit 0) and an unknown first word (exit 2); nullopt when
+// the arguments are for CLI11 to parse.
+std::optional<int> HandleHelpOrUnknownCommand(CLI::App& app, const std::vector<std::string>& args);
+
+// One line for a CLI11 parse error that names the flag: an unknown flag of a subcommand is
+// reported first (CLI11 reports a missing required argument before it), with the nearest
+// known flag.
+std::string DescribeParseError(const CLI::App& app, const std::vector<std::string>& args,
+                               const CLI::ParseError& error);
+
+// An Options::Check failure "<field> ...": a usage error naming the flag (exit 2) when the
+// field leading the message was set by a flag given on the command line (`given`), else bad
+// input under `what` (exit 1: the value came from a recipe, a dataset or a default).
+struct FieldFlag {
+  const char* field;  // the Options field, e.g. "voxel_size_m"
+  const char* flag;   // its flag, e.g. "--voxel-m"
+  bool given;         // the flag is on the command line
+};
+[[noreturn]] void ThrowOptionsError(const std::string& error, const std::string& what,
+                                    std::initializer_list<FieldFlag> fields);
+
+}  // namespace occgt
