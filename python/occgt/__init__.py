@@ -25,7 +25,8 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _occgt
-from ._occgt import FORMATS, LABEL_NAMES, MATCH_TYPE_NAMES, PRESETS, Dataset, Frame, Scene
+from ._occgt import (FORMATS, LABEL_NAMES, MATCH_TYPE_NAMES, PRESETS, Dataset, Frame, Scene,
+                     ScopeMap)
 
 __version__: str = _occgt.__version__
 
@@ -38,6 +39,7 @@ __all__ = [
     "Dataset",
     "Frame",
     "Scene",
+    "ScopeMap",
     "LoadedFrame",
     "Metrics",
     "NO_DEPTH",
@@ -143,6 +145,7 @@ def pair_ground_truth(
     spacing: str = "linear",
     traversal: str = "exact",
     occupancy_mode: str = "octomap",
+    scope_map: Optional[ScopeMap] = None,
 ) -> PairGroundTruth:
     """The ground truth of one pair of posed depth frames (C++ ``truth::ComputePairTruth``).
 
@@ -185,6 +188,9 @@ def pair_ground_truth(
         spacing: "linear" | "log" | "inverse": the bin edges.
         traversal: "exact" | "center": which voxels a bin's ray segment looks at.
         occupancy_mode: "octomap" (fused map) | "two_point" (the released Occ²Net target).
+        scope_map: a map fused over a window of frames or the whole scene (``Scene.fuse``;
+            its voxel_m and max_range_m must be the ones given here): the volumes are read
+            from it instead of fusing the two depth maps. None = fuse the pair.
 
     Returns:
         A dict (PairGroundTruth) of NumPy arrays that own their memory, with the names, dtypes
@@ -209,7 +215,7 @@ def pair_ground_truth(
         missing_target=missing_target, stride=stride, anchor=anchor, mutual=mutual,
         occupancy=occupancy, voxel_m=voxel_m, max_range_m=max_range_m, near_m=near_m,
         far_m=far_m, bins=bins, spacing=spacing, traversal=traversal,
-        occupancy_mode=occupancy_mode)
+        occupancy_mode=occupancy_mode, scope_map=scope_map)
     return result
 
 
@@ -245,17 +251,27 @@ def open_dataset(root: Union[str, "os.PathLike[str]"], format: str) -> Dataset:
 
 
 def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = 640, height: int = 480,
-                    preset: str = "default", **options: Any) -> PairGroundTruth:
+                    preset: str = "default", scope: str = "pair",
+                    **options: Any) -> PairGroundTruth:
     """pair_ground_truth of frames id0, id1 of a scene at width x height, with the scene's
     depth range unless ``min_depth_m``/``max_depth_m`` are given: the arrays and metrics that
-    ``occgt pair --root R --format F --scene S --frames id0,id1 --resolution WxH`` writes.
+    ``occgt pair --root R --format F --scene S --frames id0,id1 --resolution WxH`` writes (and,
+    with ``occupancy=True``, ``occgt occupancy ... --scope SCOPE``).
 
-    ``options`` are the keyword arguments of pair_ground_truth.
+    ``scope``: the frames fused for the occupancy volumes: "pair", "window:N" or "scene:S"
+    (``Scene.fuse``; a scene map is fused again at each call: to share one map between the
+    pairs of a scene, call ``Scene.fuse`` once and pass ``scope_map``). ``options`` are the
+    keyword arguments of pair_ground_truth.
     """
     depth0, K0, world_from_cam0 = scene.load(id0, width, height)
     depth1, K1, world_from_cam1 = scene.load(id1, width, height)
     options.setdefault("min_depth_m", scene.min_depth_m)
     options.setdefault("max_depth_m", scene.max_depth_m)
+    if scope != "pair" and options.get("occupancy") and "scope_map" not in options:
+        options["scope_map"] = scene.fuse(
+            id0, id1, width, height, scope=scope, voxel_m=options.get("voxel_m", 0.05),
+            max_range_m=options.get("max_range_m", 10.0), min_depth_m=options["min_depth_m"],
+            max_depth_m=options["max_depth_m"])
     return pair_ground_truth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1, preset,
                              **options)
 

@@ -40,6 +40,7 @@ def pair_ground_truth(
     spacing: str = "linear",
     traversal: str = "exact",
     occupancy_mode: str = "octomap",
+    scope_map: Optional[ScopeMap] = None,
 ) -> Any: ...  # occgt.PairGroundTruth
 def dense_volume(occ: npt.ArrayLike, known: npt.ArrayLike, bins: int = 64) -> npt.NDArray[np.uint8]: ...
 
@@ -92,6 +93,22 @@ class Frame:
     @property
     def color_path(self) -> str: ...
 
+class ScopeMap:
+    """An occupancy map fused over a scope of a scene (Scene.fuse)."""
+
+    @property
+    def scene(self) -> str: ...
+    @property
+    def scope(self) -> str: ...  # "pair", "window:N" or "scene:S"
+    @property
+    def fused_ids(self) -> List[str]: ...
+    @property
+    def skipped(self) -> List[Tuple[str, str]]: ...  # (frame id, reason)
+    @property
+    def voxel_m(self) -> float: ...
+    @property
+    def max_range_m(self) -> float: ...
+
 class Scene:
     """One scene of a dataset: its frames and how to load them at a working resolution."""
 
@@ -114,6 +131,14 @@ class Scene:
         width x height; world_from_cam float64 [4, 4]) of a usable frame: depth resized with
         nearest neighbour, K rescaled with the pixel-area rule. ValueError for an unknown or
         unusable frame_id or an unreadable depth file."""
+        ...
+    def fuse(
+        self, id0: str, id1: str, width: int = 640, height: int = 480, *, scope: str = "pair",
+        voxel_m: float = 0.05, max_range_m: float = 10.0, min_depth_m: Optional[float] = None,
+        max_depth_m: Optional[float] = None
+    ) -> ScopeMap:
+        """The occupancy map of the pair fused over scope ("pair", "window:N", "scene:S"), for
+        pair_ground_truth(..., occupancy=True, scope_map=...)."""
         ...
     def load_color(
         self, frame_id: str, width: int = 640, height: int = 480

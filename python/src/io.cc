@@ -10,6 +10,7 @@
 #include <pybind11/stl.h>
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -18,8 +19,11 @@
 #include "libgt/core/frame.h"
 #include "libgt/io/image.h"
 #include "libgt/io/reader.h"
+#include "libgt/occupancy/fusion.h"
+#include "libgt/truth/pair_truth.h"
 #include "libgt/truth/working_frame.h"
 #include "python/src/convert.h"
+#include "python/src/scope_map.h"
 
 namespace occgt_py {
 
@@ -69,6 +73,43 @@ class PyScene {
     }
     const int h = image.height, w = image.width;
     return ToArray(std::move(image.rgb), {h, w, 3});
+  }
+
+  PyScopeMap Fuse(const std::string& id0, const std::string& id1, int width, int height,
+                  const std::string& scope, double voxel_m, double max_range_m,
+                  std::optional<double> min_depth_m, std::optional<double> max_depth_m) const {
+    const gt::truth::Resolution resolution{width, height};
+    std::string error;
+    if (!resolution.Check(&error)) ThrowValue("width, height", error);
+    gt::truth::PairTruthOptions o;
+    o.occupancy = true;
+    o.labels_and_matches = false;
+    o.labels.min_depth_m = min_depth_m.value_or(scene_->min_depth_m);
+    o.labels.max_depth_m = max_depth_m.value_or(scene_->max_depth_m);
+    o.fusion.voxel_size_m = voxel_m;
+    o.fusion.max_range_m = max_range_m;
+    Named("scope", [&] { gt::occupancy::ParseFusionScope(scope, &o.fusion); });
+    if (!o.Check(&error)) ThrowValue("options", error);
+    PyScopeMap out;
+    {
+      py::gil_scoped_release no_gil;
+      const size_t i0 = gt::truth::FindFrame(*scene_, id0, "id0");
+      const size_t i1 = gt::truth::FindFrame(*scene_, id1, "id1");
+      const gt::Scene& scene = *scene_;
+      out.fused = std::make_shared<const gt::truth::ScopeMap>(gt::truth::FuseScope(
+          scene, i0, i1, o, [&](size_t i) {
+            return gt::truth::LoadWorkingFrame(scene.frames[i], resolution);
+          }));
+    }
+    out.scene = scene_->name;
+    out.scope = gt::occupancy::FusionScopeName(o.fusion);
+    out.voxel_m = voxel_m;
+    out.max_range_m = max_range_m;
+    out.min_depth_m = o.labels.min_depth_m;
+    out.max_depth_m = o.labels.max_depth_m;
+    out.width = width;
+    out.height = height;
+    return out;
   }
 
  private:
@@ -161,6 +202,16 @@ void BindIo(py::module_& m) {
            "resolution: depth resized with nearest neighbour, K rescaled with the pixel-area "
            "rule (truth::LoadWorkingFrame). ValueError for an unknown or unusable frame_id or "
            "an unreadable depth file.")
+      .def("fuse", &PyScene::Fuse, "id0"_a, "id1"_a, "width"_a = 640, "height"_a = 480,
+           py::kw_only(), "scope"_a = "pair", "voxel_m"_a = 0.05, "max_range_m"_a = 10.0,
+           "min_depth_m"_a = py::none(), "max_depth_m"_a = py::none(),
+           "ScopeMap: the occupancy map of the pair (id0, id1) fused over a scope (truth::"
+           "FuseScope, `occgt occupancy --scope`): 'pair', 'window:N' (the usable frames within "
+           "N positions of either frame) or 'scene:S' (every S-th usable frame: one map for all "
+           "pairs of the scene), depth at width x height, voxel_m and max_range_m in metres, "
+           "the depth range the scene's unless given. Frames of the scope that cannot be read "
+           "are skipped and listed in ScopeMap.skipped. Pass it to "
+           "pair_ground_truth(..., occupancy=True, scope_map=...).")
       .def("load_color", &PyScene::LoadColor, "frame_id"_a, "width"_a = 640, "height"_a = 480,
            "colour of a frame at the working resolution: uint8 [height, width, 3], channels R, "
            "G, B, resized bilinearly from the colour camera's size (io::ReadColorResized: the "

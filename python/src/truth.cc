@@ -8,6 +8,7 @@
 #include <pybind11/stl.h>
 
 #include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -19,6 +20,7 @@
 #include "libgt/truth/pair_files.h"
 #include "libgt/truth/pair_truth.h"
 #include "python/src/convert.h"
+#include "python/src/scope_map.h"
 
 namespace occgt_py {
 
@@ -37,6 +39,7 @@ struct PairArguments {
   double voxel_m, max_range_m, near_m, far_m;
   int bins;
   std::string spacing, traversal, occupancy_mode;
+  const PyScopeMap* scope_map = nullptr;  // Scene.fuse's map, or none (fuse the pair here)
 };
 
 gt::truth::PairTruthOptions MakeOptions(const PairArguments& a) {
@@ -86,10 +89,23 @@ py::dict PairGroundTruth(py::handle depth0, py::handle depth1, py::handle K0, py
   const gt::truth::PairTruthOptions options = MakeOptions(args);
   const gt::truth::WorkingFrame f0 = MakeFrame(depth0, K0, world_from_cam0, "0");
   const gt::truth::WorkingFrame f1 = MakeFrame(depth1, K1, world_from_cam1, "1");
+  const PyScopeMap* scope = args.scope_map;
+  if (scope) {
+    std::ostringstream problem;
+    if (!options.occupancy) problem << "given without occupancy=True";
+    else if (options.mode != gt::occupancy::OccupancyMode::kOctomap)
+      problem << "used by occupancy_mode 'octomap' only";
+    else if (scope->voxel_m != options.fusion.voxel_size_m ||
+             scope->max_range_m != options.fusion.max_range_m)
+      problem << "fused with voxel_m " << scope->voxel_m << ", max_range_m " << scope->max_range_m
+              << "; expected the same here, got voxel_m " << options.fusion.voxel_size_m
+              << ", max_range_m " << options.fusion.max_range_m;
+    if (!problem.str().empty()) ThrowValue("scope_map", problem.str());
+  }
   gt::truth::PairTruth truth;
   {
     py::gil_scoped_release no_gil;
-    truth = gt::truth::ComputePairTruth(f0, f1, options);
+    truth = gt::truth::ComputePairTruth(f0, f1, options, scope ? &scope->fused->map : nullptr);
   }
   gt::PairLabels& p = truth.labels;
   gt::PatchMatches& pm = p.patches;
@@ -145,6 +161,33 @@ py::array_t<uint8_t> DenseVolume(py::handle occ, py::handle known, int bins) {
 }  // namespace
 
 void BindTruth(py::module_& m) {
+  py::class_<PyScopeMap>(m, "ScopeMap",
+                         "An occupancy map fused over a scope of a scene (Scene.fuse), for "
+                         "pair_ground_truth(..., occupancy=True, scope_map=...).")
+      .def_property_readonly(
+          "scene", [](const PyScopeMap& s) { return s.scene; }, "scene name")
+      .def_property_readonly(
+          "scope", [](const PyScopeMap& s) { return s.scope; }, "'pair', 'window:N' or 'scene:S'")
+      .def_property_readonly(
+          "fused_ids", [](const PyScopeMap& s) { return s.fused->fused_ids; },
+          "ids of the frames fused, in fusion order")
+      .def_property_readonly(
+          "skipped",
+          [](const PyScopeMap& s) {
+            py::list out;
+            for (const auto& k : s.fused->skipped) out.append(py::make_tuple(k.frame_id, k.reason));
+            return out;
+          },
+          "[(frame id, reason)] of the scope's frames that could not be read (not fused)")
+      .def_property_readonly(
+          "voxel_m", [](const PyScopeMap& s) { return s.voxel_m; }, "voxel size (metres)")
+      .def_property_readonly(
+          "max_range_m", [](const PyScopeMap& s) { return s.max_range_m; },
+          "ray truncation (metres)")
+      .def("__repr__", [](const PyScopeMap& s) {
+        return "<occgt.ScopeMap " + s.scene + " " + s.scope + " (" +
+               std::to_string(s.fused->fused_ids.size()) + " frames)>";
+      });
   m.def(
       "pair_ground_truth",
       [](py::handle depth0, py::handle depth1, py::handle K0, py::handle K1,
@@ -155,7 +198,7 @@ void BindTruth(py::module_& m) {
          std::optional<std::string> target_lookup, std::optional<std::string> missing_target,
          int stride, std::string anchor, bool mutual, bool occupancy, double voxel_m,
          double max_range_m, double near_m, double far_m, int bins, std::string spacing,
-         std::string traversal, std::string occupancy_mode) {
+         std::string traversal, std::string occupancy_mode, const PyScopeMap* scope_map) {
         const PairArguments args{std::move(preset),
                                  abs_tol_m,
                                  rel_tol,
@@ -176,7 +219,8 @@ void BindTruth(py::module_& m) {
                                  bins,
                                  std::move(spacing),
                                  std::move(traversal),
-                                 std::move(occupancy_mode)};
+                                 std::move(occupancy_mode),
+                                 scope_map};
         return PairGroundTruth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1, args);
       },
       "depth0"_a, "depth1"_a, "K0"_a, "K1"_a, "world_from_cam0"_a, "world_from_cam1"_a,
@@ -186,6 +230,7 @@ void BindTruth(py::module_& m) {
       "stride"_a = 8, "anchor"_a = "center", "mutual"_a = true, "occupancy"_a = false,
       "voxel_m"_a = 0.05, "max_range_m"_a = 10.0, "near_m"_a = 0.1, "far_m"_a = 10.0, "bins"_a = 64,
       "spacing"_a = "linear", "traversal"_a = "exact", "occupancy_mode"_a = "octomap",
+      "scope_map"_a = py::none(),
       "The ground truth of one pair (truth::ComputePairTruth); see occgt.pair_ground_truth.");
   m.def("dense_volume", &DenseVolume, "occ"_a, "known"_a, "bins"_a = 64,
         "uint8 [bins, H/2, W/2] (0 free, 1 occupied, 255 unknown) of occupancy words "

@@ -118,6 +118,37 @@ class FromSplit(unittest.TestCase):
         self.check_split("tartanair-sample")
 
 
+    def test_window_and_scene_scopes(self) -> None:
+        """A demo recipe whose occupancy fuses a window / the scene: from_split keeps the scope
+        (Scene.fuse) and reproduces the shards' occupancy words."""
+        with open(os.path.join(common.SOURCE, "recipes", "demo.yaml")) as f:
+            text = f.read()
+        self.assertIn("  scope: pair\n", text)
+        for name, scope in (("window", "  scope: window\n  window: 1\n"),
+                            ("scene", "  scope: scene\n  scene_stride: 3\n")):
+            out = common.scratch("pair_dataset_scope_" + name)
+            recipe = os.path.join(out, "recipe.yaml")
+            with open(recipe, "w") as f:
+                f.write(text.replace("  scope: pair\n", scope).replace("quota_per_scene: 12",
+                                                                         "quota_per_scene: 3"))
+            split = os.path.join(out, "split")
+            common.occgt("build", recipe, "--out", split)
+            ds = PairIndexDataset.from_split(split)
+            self.assertEqual(ds.scope, {"window": "window:1", "scene": "scene:3"}[name])
+            samples = list(shard_samples(split))
+            self.assertEqual(len(ds), len(samples))
+            for i, s in enumerate(samples):
+                item = ds[i]
+                for k in ("occ0", "known0", "occ1", "known1"):
+                    want = np.load(io.BytesIO(s[k + ".npy"]))
+                    self.assertTrue(np.array_equal(item[k].numpy().view(np.uint64), want),
+                                    f"{name} sample {i} {k}")
+            # Fusing the window differs from fusing the pair (else the test proves nothing).
+            pair_only = PairIndexDataset.from_split(split, scope="pair")
+            self.assertFalse(all(torch.equal(pair_only[i]["occ0"], ds[i]["occ0"])
+                                 for i in range(len(ds))), name)
+
+
 class Indices(unittest.TestCase):
     def test_jsonl_selection_and_loftr_export_agree(self) -> None:
         split = built_split("demo")

@@ -159,6 +159,9 @@ class PairIndexDataset:
             ``cv2.COLOR_RGB2GRAY``. A frame without colour raises ValueError.
         occupancy: ``None`` (none), ``"words"`` (occ0/known0/occ1/known1, int64 views of the
             uint64 words) or ``"dense"`` (occupancy0/occupancy1 uint8 [D, H/2, W/2]).
+        scope: the frames fused for occupancy (``Scene.fuse``): ``"pair"``, ``"window:N"``
+            (fused for each item) or ``"scene:S"`` (fused once per scene and process, then
+            shared by the scene's pairs, as ``occgt build`` does).
         scene_names, npz_root: see ``read_pair_index``.
 
     Items are dicts with the keys of the sample contract (``occgt.torch``): LoFTR's keys
@@ -169,7 +172,7 @@ class PairIndexDataset:
 
     def __init__(self, pairs: Union[str, os.PathLike, Sequence[PairRef]], root: str, format: str,
                  *, width: int = 640, height: int = 480, preset: str = "default",
-                 images: bool = True, occupancy: Optional[str] = None,
+                 images: bool = True, occupancy: Optional[str] = None, scope: str = "pair",
                  scene_names: Optional[Union[str, Sequence[str]]] = None,
                  npz_root: Optional[str] = None, **options: Any) -> None:
         if occupancy not in (None, "words", "dense"):
@@ -179,6 +182,10 @@ class PairIndexDataset:
         self.root, self.format = root, format
         self.width, self.height = int(width), int(height)
         self.preset, self.images, self.occupancy = preset, bool(images), occupancy
+        if not (scope == "pair" or scope.startswith("window:") or scope.startswith("scene:")):
+            raise ValueError(f"scope: expected 'pair', 'window:N' or 'scene:S', got {scope!r}")
+        self.scope = scope
+        self._scene_map: Optional[Tuple[str, occgt.ScopeMap]] = None
         self.options = dict(options)
         self.bins = int(self.options.get("bins", 64))
         self.dataset_name = _DATASET_NAMES.get(format, format)
@@ -199,8 +206,7 @@ class PairIndexDataset:
         ``split_dir/data``). ``images`` defaults to the recipe's (``sample.image`` not
         ``none``); ``occupancy="recipe"`` to its encoding (packed/both → ``"words"``, dense →
         ``"dense"``, none when the recipe has no occupancy). Other keyword arguments override
-        options. Occupancy fused over a window or a scene (``occupancy.scope``) is not offered
-        here: ValueError.
+        options; the recipe's ``occupancy.scope`` is kept (``scope``).
         """
         path = os.path.join(split_dir, "recipe.json")
         try:
@@ -230,10 +236,10 @@ class PairIndexDataset:
         if occupancy == "recipe":
             occupancy = ({"dense": "dense"}.get(occ["encoding"], "words")
                          if with_occupancy else None)
+        scope = {"window": f"window:{occ.get('window')}",
+                 "scene": f"scene:{occ.get('scene_stride')}"}.get(occ["scope"], "pair")
         if occupancy is not None:
-            if occ["scope"] != "pair":
-                raise ValueError(f"{path}: occupancy.scope '{occ['scope']}': only 'pair' "
-                                 "occupancy is computed from Python (pass occupancy=None)")
+            options["scope"] = scope
             options.update({"voxel_m": occ["voxel_m"], "max_range_m": occ["far_m"],
                             "near_m": occ["near_m"], "far_m": occ["far_m"], "bins": occ["bins"],
                             "spacing": occ["spacing"], "traversal": occ["traversal"],
@@ -248,7 +254,8 @@ class PairIndexDataset:
 
     def _scene(self, name: str) -> Tuple[occgt.Scene, Dict[int, str]]:
         if self._pid != os.getpid():  # a forked worker opens its own readers
-            self._dataset, self._scenes, self._pid = occgt.open_dataset(self.root, self.format), {}, os.getpid()
+            self._dataset, self._scenes = occgt.open_dataset(self.root, self.format), {}
+            self._pid, self._scene_map = os.getpid(), None
         if name not in self._scenes:
             assert self._dataset is not None
             scene = self._dataset.scene(name)
@@ -269,6 +276,19 @@ class PairIndexDataset:
 
         return resolve(ref.frame0, ref.number0), resolve(ref.frame1, ref.number1)
 
+    def _fused(self, scene: occgt.Scene, id0: str, id1: str,
+               options: Dict[str, Any]) -> occgt.ScopeMap:
+        """The scope's map of the pair; a scene scope's map is kept for the scene's next pairs."""
+        if self.scope.startswith("scene:") and self._scene_map and self._scene_map[0] == scene.name:
+            return self._scene_map[1]
+        fused = scene.fuse(id0, id1, self.width, self.height, scope=self.scope,
+                           voxel_m=options.get("voxel_m", 0.05),
+                           max_range_m=options.get("max_range_m", 10.0),
+                           min_depth_m=options["min_depth_m"], max_depth_m=options["max_depth_m"])
+        if self.scope.startswith("scene:"):
+            self._scene_map = (scene.name, fused)
+        return fused
+
     def __getitem__(self, index: int) -> Dict[str, Any]:
         if not -len(self.pairs) <= index < len(self.pairs):
             raise IndexError(f"index {index} out of range for {len(self.pairs)} pairs")
@@ -280,6 +300,8 @@ class PairIndexDataset:
         depth1, K1, world_from_cam1 = scene.load(id1, self.width, self.height)
         options = {"min_depth_m": scene.min_depth_m, "max_depth_m": scene.max_depth_m}
         options.update(self.options)
+        if self.occupancy is not None and self.scope != "pair":
+            options["scope_map"] = self._fused(scene, id0, id1, options)
         truth = occgt.pair_ground_truth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1,
                                         self.preset, occupancy=self.occupancy is not None,
                                         **options)

@@ -1,0 +1,73 @@
+"""Occupancy fused over a window of frames or a whole scene from Python (Scene.fuse,
+pair_ground_truth(scope_map=...), pair_from_scene(scope=...)): the occupancy words equal
+`occgt occupancy --scope` byte for byte on the real 7-Scenes sample; the map lists what it
+fused; mismatched options and bad scopes raise ValueError."""
+from __future__ import annotations
+
+import os
+import sys
+import unittest
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+import common  # noqa: E402
+
+import occgt  # noqa: E402
+
+PAIR = ("000150", "000160")
+
+
+class Scopes(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.root = common.shared("sevenscenes")
+        cls.scene = occgt.open_dataset(cls.root, "sevenscenes").scene("rgbd-frames")
+
+    def test_equal_to_cli(self) -> None:
+        words = {}
+        for scope in ("pair", "window:2", "scene:10"):
+            out = common.scratch("scope_" + scope.replace(":", "_"))
+            common.occgt("occupancy", "--root", self.root, "--format", "sevenscenes", "--scene",
+                         "rgbd-frames", "--frames", ",".join(PAIR), "--scope", scope, "--out",
+                         out, "--resolution", "320x240")
+            got = occgt.pair_from_scene(self.scene, *PAIR, width=320, height=240, occupancy=True,
+                                        scope=scope)
+            common.assert_same_as_folder(self, got, out, common.OCCUPANCY_ARRAYS, scope)
+            meta = common.read_json(os.path.join(out, "occupancy.json"))
+            fused = self.scene.fuse(*PAIR, 320, 240, scope=scope)
+            self.assertEqual(fused.scope, scope)
+            self.assertEqual(fused.fused_ids, meta["fusion"]["fused_frames"])
+            self.assertEqual(fused.skipped, meta["fusion"]["skipped_frames"])
+            self.assertIn(PAIR[0], fused.fused_ids)
+            self.assertIn(PAIR[1], fused.fused_ids)
+            words[scope] = got["occ0"]
+        self.assertEqual(len(self.scene.fuse(*PAIR, 320, 240, scope="pair").fused_ids), 2)
+        self.assertGreater(len(self.scene.fuse(*PAIR, 320, 240, scope="window:2").fused_ids), 2)
+        # A wider scope knows more of the volume than the pair alone.
+        self.assertFalse(np.array_equal(words["pair"], words["window:2"]))
+
+    def test_shared_map_and_errors(self) -> None:
+        fused = self.scene.fuse(*PAIR, 160, 120, scope="scene:20", voxel_m=0.1)
+        d0, K0, T0 = self.scene.load(PAIR[0], 160, 120)
+        d1, K1, T1 = self.scene.load(PAIR[1], 160, 120)
+        depth_range = {"min_depth_m": self.scene.min_depth_m, "max_depth_m": self.scene.max_depth_m}
+        a = occgt.pair_ground_truth(d0, d1, K0, K1, T0, T1, occupancy=True, voxel_m=0.1,
+                                    scope_map=fused, **depth_range)
+        b = occgt.pair_from_scene(self.scene, *PAIR, width=160, height=120, occupancy=True,
+                                  voxel_m=0.1, scope="scene:20")
+        self.assertTrue(np.array_equal(a["known1"], b["known1"]))
+        with self.assertRaisesRegex(ValueError, "scope_map: fused with voxel_m 0.1"):
+            occgt.pair_ground_truth(d0, d1, K0, K1, T0, T1, occupancy=True, scope_map=fused)
+        with self.assertRaisesRegex(ValueError, "scope_map: given without occupancy=True"):
+            occgt.pair_ground_truth(d0, d1, K0, K1, T0, T1, voxel_m=0.1, scope_map=fused)
+        with self.assertRaisesRegex(ValueError, "^scope: "):
+            self.scene.fuse(*PAIR, 160, 120, scope="window")
+        with self.assertRaisesRegex(ValueError, "id1"):
+            self.scene.fuse(PAIR[0], "999999", 160, 120)
+        with self.assertRaises(TypeError):
+            occgt.pair_ground_truth(d0, d1, K0, K1, T0, T1, occupancy=True, scope_map="scene")
+
+
+if __name__ == "__main__":
+    unittest.main()
