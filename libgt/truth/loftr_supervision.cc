@@ -64,8 +64,8 @@ void CheckView(const LoftrView& v, int stride, const std::string& name) {
 }
 
 // One direction A -> B: fills grid_a, warped_a, target_a, status_a.
-void WarpGrid(const LoftrView& a, const LoftrView& b, const Eigen::Matrix4d& b_from_a,
-              int stride, bool compat, const std::string& name_a, std::vector<float>* grid_a,
+void WarpGrid(const LoftrView& a, const LoftrView& b, const Eigen::Matrix4d& b_from_a, int stride,
+              bool compat, const std::string& name_a, std::vector<float>* grid_a,
               std::vector<float>* warped_a, std::vector<int32_t>* target_a,
               std::vector<uint8_t>* status_a) {
   const int wa = a.image_width / stride, ha = a.image_height / stride;
@@ -122,8 +122,8 @@ void WarpGrid(const LoftrView& a, const LoftrView& b, const Eigen::Matrix4d& b_f
       // floating point first, so that non-finite or huge values are out of the grid.
       const float cx = std::rint(x / sb.x);
       const float cy = std::rint(y / sb.y);
-      const bool in_grid = cx >= 0 && cx < static_cast<float>(wb) && cy >= 0 &&
-                           cy < static_cast<float>(hb);
+      const bool in_grid =
+          cx >= 0 && cx < static_cast<float>(wb) && cy >= 0 && cy < static_cast<float>(hb);
       if (status == WarpStatus::kInGrid && !in_grid) status = WarpStatus::kOutOfGrid;
       (*status_a)[i] = static_cast<uint8_t>(status);
       if (in_grid && (compat || status == WarpStatus::kInGrid)) {

@@ -55,16 +55,16 @@ struct LoftrSupervisionOptions {
 
 // One image of the pair.
 struct LoftrView {
-  const DepthImage* depth = nullptr;  // [H, W] planar metres, in the pixels of K
+  const DepthImage* depth = nullptr;                // [H, W] planar metres, in the pixels of K
   Eigen::Matrix3d K = Eigen::Matrix3d::Identity();  // intrinsics of the depth map (invertible)
-  int image_width = 0, image_height = 0;  // the image the grid covers (>= coarse_stride)
-  double scale_x = 1.0, scale_y = 1.0;    // depth-map pixels per image pixel (> 0, finite)
+  int image_width = 0, image_height = 0;            // the image the grid covers (>= coarse_stride)
+  double scale_x = 1.0, scale_y = 1.0;  // depth-map pixels per image pixel (> 0, finite)
 };
 
 struct LoftrCoarseSupervision {
   int cells_w0 = 0, cells_h0 = 0, cells_w1 = 0, cells_h1 = 0;  // L_k = cells_w_k · cells_h_k
-  std::vector<float> grid0, grid1;      // [L_k · 2]: grid points (x, y), depth-map pixels
-  std::vector<float> warped0, warped1;  // [L_k · 2]: warp into the other image (its pixels)
+  std::vector<float> grid0, grid1;        // [L_k · 2]: grid points (x, y), depth-map pixels
+  std::vector<float> warped0, warped1;    // [L_k · 2]: warp into the other image (its pixels)
   std::vector<int32_t> target0, target1;  // [L_k]: target cell in the other grid; -1 none
                                           // (compat: 0 for every non-target)
   std::vector<uint8_t> status0, status1;  // [L_k]: WarpStatus (also filled with compat)

@@ -28,12 +28,14 @@ Eigen::Matrix4d RelativePoseFromArray(py::handle obj, const std::string& argumen
   py::array a = AsArray(obj, argument);
   const char kind = a.dtype().kind();
   if (kind != 'f' && kind != 'i' && kind != 'u') {
-    ThrowValue(argument, "expected a float array [4, 4] (rigid [[R, t], [0, 0, 0, 1]], metres), "
-                         "got dtype " + DtypeText(a));
+    ThrowValue(argument,
+               "expected a float array [4, 4] (rigid [[R, t], [0, 0, 0, 1]], metres), "
+               "got dtype " +
+                   DtypeText(a));
   }
   if (a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4) {
-    ThrowValue(argument, "expected shape (4, 4) (rigid [[R, t], [0, 0, 0, 1]], metres), got " +
-                             ShapeText(a));
+    ThrowValue(argument,
+               "expected shape (4, 4) (rigid [[R, t], [0, 0, 0, 1]], metres), got " + ShapeText(a));
   }
   auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
   if (!d) throw py::error_already_set();
@@ -48,17 +50,17 @@ Eigen::Matrix4d RelativePoseFromArray(py::handle obj, const std::string& argumen
 void CheckScale(const std::array<double, 2>& s, const std::string& argument) {
   for (double v : s) {
     if (!(std::isfinite(v) && v > 0)) {
-      ThrowValue(argument, "expected (sx, sy), finite and > 0 (depth-map pixels per image "
-                           "pixel), got (" + std::to_string(s[0]) + ", " + std::to_string(s[1]) +
-                               ")");
+      ThrowValue(argument,
+                 "expected (sx, sy), finite and > 0 (depth-map pixels per image "
+                 "pixel), got (" +
+                     std::to_string(s[0]) + ", " + std::to_string(s[1]) + ")");
     }
   }
 }
 
-py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle K0,
-                                py::handle K1, py::handle T_0to1, py::handle T_1to0,
-                                int coarse_stride, std::array<double, 2> scale0,
-                                std::array<double, 2> scale1,
+py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle K0, py::handle K1,
+                                py::handle T_0to1, py::handle T_1to0, int coarse_stride,
+                                std::array<double, 2> scale0, std::array<double, 2> scale1,
                                 std::optional<std::array<int, 2>> image_size0,
                                 std::optional<std::array<int, 2>> image_size1, bool compat) {
   gt::truth::LoftrSupervisionOptions options;
@@ -81,10 +83,10 @@ py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle
     v.image_height = size ? (*size)[0] : d->height;
     v.image_width = size ? (*size)[1] : d->width;
     if (v.image_height < coarse_stride || v.image_width < coarse_stride) {
-      ThrowValue("image_size" + index,
-                 "expected (height, width) of at least one coarse cell (" +
-                     std::to_string(coarse_stride) + " pixels), got (" +
-                     std::to_string(v.image_height) + ", " + std::to_string(v.image_width) + ")");
+      ThrowValue("image_size" + index, "expected (height, width) of at least one coarse cell (" +
+                                           std::to_string(coarse_stride) + " pixels), got (" +
+                                           std::to_string(v.image_height) + ", " +
+                                           std::to_string(v.image_width) + ")");
     }
     return v;
   };
@@ -123,8 +125,8 @@ py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle
 
 void BindSupervision(py::module_& m) {
   m.attr("WARP_STATUS_NAMES") = py::make_tuple("in_grid", "no_depth", "behind", "out_of_grid");
-  m.def("loftr_coarse_supervision", &LoftrCoarseSupervision, "depth0"_a, "depth1"_a, "K0"_a,
-        "K1"_a, "T_0to1"_a, "T_1to0"_a = py::none(), py::kw_only(), "coarse_stride"_a = 8,
+  m.def("loftr_coarse_supervision", &LoftrCoarseSupervision, "depth0"_a, "depth1"_a, "K0"_a, "K1"_a,
+        "T_0to1"_a, "T_1to0"_a = py::none(), py::kw_only(), "coarse_stride"_a = 8,
         "scale0"_a = std::array<double, 2>{1.0, 1.0}, "scale1"_a = std::array<double, 2>{1.0, 1.0},
         "image_size0"_a = py::none(), "image_size1"_a = py::none(), "compat"_a = false,
         "LoFTR's coarse supervision of one pair (truth::ComputeLoftrSupervision); see "
