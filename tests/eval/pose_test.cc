@@ -1,0 +1,176 @@
+// libgt/eval: the AUC, pose-error, epipolar-distance and per-type scoring functions on
+// cases whose answers are known in closed form (GROUND_TRUTH.md §7; docs/EVAL.md). The
+// whole protocol is also checked against a cv2 reference in tests/eval/cli_test.py.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <random>
+
+#include "libgt/eval/match_quality.h"
+#include "libgt/eval/pose.h"
+
+namespace gt::eval {
+namespace {
+
+TEST(PoseAuc, TrapezoidByHand) {
+  // errors 1, 3: points (0,0) (1,0.5) (3,1), then flat to the threshold.
+  // At 2: area 0.25 + (2-1)*0.5 = 0.75 -> 0.375. At 4: 0.25 + 1.5 + 1 = 2.75 -> 0.6875.
+  const std::vector<double> auc = PoseAuc({3, 1}, {2, 4});
+  ASSERT_EQ(auc.size(), 2u);
+  EXPECT_DOUBLE_EQ(auc[0], 0.375);
+  EXPECT_DOUBLE_EQ(auc[1], 0.6875);
+  // All zero errors -> 1; all failures -> 0; a failure halves the recall.
+  EXPECT_DOUBLE_EQ(PoseAuc({0, 0, 0}, {5})[0], 1.0);
+  EXPECT_DOUBLE_EQ(PoseAuc({kInfiniteError, kInfiniteError}, {5})[0], 0.0);
+  EXPECT_DOUBLE_EQ(PoseAuc({0, kInfiniteError}, {5})[0], 0.5);
+  EXPECT_DOUBLE_EQ(PoseAuc({}, {5})[0], 0.0);
+  // An error equal to the threshold is not counted (LoFTR's searchsorted, side left).
+  EXPECT_DOUBLE_EQ(PoseAuc({5}, {5})[0], 0.0);
+}
+
+Eigen::Matrix3d Rot(double deg, const Eigen::Vector3d& axis) {
+  return Eigen::AngleAxisd(deg * M_PI / 180.0, axis.normalized()).toRotationMatrix();
+}
+
+TEST(RelativePoseError, KnownAngles) {
+  const Eigen::Matrix3d R_gt = Rot(20, {0, 1, 0});
+  const Eigen::Vector3d t_gt(1, 0, 0);
+  PoseError e = RelativePoseError(R_gt, t_gt, Rot(7, {1, 2, 3}) * R_gt, t_gt);
+  EXPECT_NEAR(e.rotation_deg, 7, 1e-9);
+  EXPECT_NEAR(e.translation_deg, 0, 1e-6);
+  EXPECT_NEAR(e.max_deg, 7, 1e-9);
+  // The sign of t is not observable: folded to 0; orthogonal: 90; 30 deg -> 30, 150 -> 30.
+  EXPECT_NEAR(RelativePoseError(R_gt, t_gt, R_gt, -t_gt).translation_deg, 0, 1e-6);
+  EXPECT_NEAR(RelativePoseError(R_gt, t_gt, R_gt, {0, 0, 2}).translation_deg, 90, 1e-9);
+  EXPECT_NEAR(RelativePoseError(R_gt, t_gt, R_gt, Rot(30, {0, 0, 1}) * t_gt).translation_deg, 30,
+              1e-9);
+  EXPECT_NEAR(RelativePoseError(R_gt, t_gt, R_gt, Rot(150, {0, 0, 1}) * t_gt).translation_deg,
+              30, 1e-9);
+  // A pure rotation in the ground truth: only the rotation is scored.
+  EXPECT_EQ(RelativePoseError(R_gt, Eigen::Vector3d::Zero(), R_gt, t_gt).translation_deg, 0);
+  EXPECT_TRUE(std::isinf(NoPoseError().max_deg));
+}
+
+struct Scene {
+  Eigen::Matrix3d K, R;
+  Eigen::Vector3d t;
+  std::vector<float> kpts0, kpts1;
+};
+
+// Random points in front of both cameras, projected exactly.
+Scene MakeScene(int n, uint32_t seed) {
+  Scene s;
+  s.K << 500, 0, 319.5, 0, 520, 239.5, 0, 0, 1;
+  s.R = Rot(10, {0.2, 1, 0.1});
+  s.t = Eigen::Vector3d(-0.5, 0.05, 0.1);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.5, 1.5), z(2, 6);
+  while (static_cast<int>(s.kpts0.size() / 2) < n) {
+    const Eigen::Vector3d p0(u(rng), u(rng), z(rng));
+    const Eigen::Vector3d p1 = s.R * p0 + s.t;
+    const Eigen::Vector3d x0 = s.K * p0 / p0.z(), x1 = s.K * p1 / p1.z();
+    if (p1.z() <= 0.5 || x0.x() < 0 || x0.x() > 639 || x0.y() < 0 || x0.y() > 479 ||
+        x1.x() < 0 || x1.x() > 639 || x1.y() < 0 || x1.y() > 479) {
+      continue;
+    }
+    s.kpts0.insert(s.kpts0.end(), {static_cast<float>(x0.x()), static_cast<float>(x0.y())});
+    s.kpts1.insert(s.kpts1.end(), {static_cast<float>(x1.x()), static_cast<float>(x1.y())});
+  }
+  return s;
+}
+
+TEST(EstimateRelativePose, ExactMatchesGiveTheTruePose) {
+  const Scene s = MakeScene(300, 1);
+  const auto pose = EstimateRelativePose(s.kpts0, s.kpts1, s.K, s.K, PoseEstimatorOptions{});
+  ASSERT_TRUE(pose.has_value());
+  const PoseError e = RelativePoseError(s.R, s.t, pose->cam1_from_cam0_R, pose->cam1_from_cam0_t);
+  EXPECT_LT(e.max_deg, 0.05);
+  EXPECT_GT(pose->inliers, 290);
+  // Same input, same answer (OpenCV seeds its RANSAC per call).
+  const auto again = EstimateRelativePose(s.kpts0, s.kpts1, s.K, s.K, PoseEstimatorOptions{});
+  EXPECT_EQ(again->cam1_from_cam0_R, pose->cam1_from_cam0_R);
+  // Fewer than 5 matches: no pose.
+  const std::vector<float> four0(s.kpts0.begin(), s.kpts0.begin() + 8);
+  const std::vector<float> four1(s.kpts1.begin(), s.kpts1.begin() + 8);
+  EXPECT_FALSE(EstimateRelativePose(four0, four1, s.K, s.K, PoseEstimatorOptions{}).has_value());
+  std::string error;
+  PoseEstimatorOptions bad;
+  bad.min_matches = 4;
+  EXPECT_FALSE(bad.Check(&error));
+  bad = PoseEstimatorOptions{};
+  bad.confidence = 1;
+  EXPECT_FALSE(bad.Check(&error));
+}
+
+TEST(SymmetricEpipolarDistances, ZeroOnExactMatchesKnownOffEpipolar) {
+  const Scene s = MakeScene(50, 2);
+  for (const double d : SymmetricEpipolarDistances(s.kpts0, s.kpts1, s.K, s.K, s.R, s.t)) {
+    EXPECT_LT(d, 1e-9);
+  }
+  // R = I, t = x: epipolar lines are rows; a point moved by dy pixels in image 1 with
+  // fx = fy = f has distance (dy/f)^2 * 2 (same line length in both images).
+  Eigen::Matrix3d K;
+  K << 400, 0, 320, 0, 400, 240, 0, 0, 1;
+  const std::vector<double> d = SymmetricEpipolarDistances({100, 200}, {150, 204}, K, K,
+                                                           Eigen::Matrix3d::Identity(),
+                                                           Eigen::Vector3d(1, 0, 0));
+  EXPECT_NEAR(d[0], 2 * std::pow(4.0 / 400.0, 2), 1e-12);
+}
+
+TEST(ScoreMatches, FrontoParallelPlane) {
+  // Both cameras look at a plane z = 2 m; camera 1 moved by 0.2 m along x: a point moves by
+  // -f * 0.2 / 2 = -20 px in x. Right half of image 0: label VISIBLE; left: OCCLUDED.
+  const int w = 64, h = 48;
+  PairTruthView t;
+  t.width = w;
+  t.height = h;
+  t.patch_stride = 8;
+  std::vector<uint8_t> l01(w * h), l10(w * h, 2);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) l01[v * w + u] = u >= 32 ? 2 : 3;
+  }
+  std::vector<float> depth(w * h, 2.0f);
+  t.label01 = l01.data();
+  t.label10 = l10.data();
+  t.depth0 = depth.data();
+  t.depth1 = depth.data();
+  t.K0 << 200, 0, 31.5, 0, 200, 23.5, 0, 0, 1;
+  t.K1 = t.K0;
+  t.cam1_from_cam0_R.setIdentity();
+  t.cam1_from_cam0_t = Eigen::Vector3d(-0.2, 0, 0);
+  // Ground truth: one vv match from cell (5, 2) and one vo from cell (1, 2).
+  const std::vector<int32_t> gt_matches{2 * 8 + 5, 2 * 8 + 3, 2 * 8 + 1, 0};
+  const std::vector<uint8_t> gt_types{0, 1};
+  t.matches = gt_matches.data();
+  t.match_type = gt_types.data();
+  t.num_matches = 2;
+  // vv exact; vv 5 px off (correct at 8, wrong at 4); vo exact; vo 30 px off.
+  const std::vector<float> k0{44, 20, 50, 30, 12, 20, 10, 10};
+  const std::vector<float> k1{24, 20, 30, 35, 0, 20, 20, 10};
+  PairQuality q = ScoreMatches(t, k0, k1, QualityOptions{});
+  EXPECT_EQ(q.types[kClassVV].predicted, 2);
+  EXPECT_EQ(q.types[kClassVV].correct, 2);
+  EXPECT_EQ(q.types[kClassVO].predicted, 2);
+  EXPECT_EQ(q.types[kClassVO].correct, 1);
+  EXPECT_EQ(q.types[kClassVV].truth, 1);
+  EXPECT_EQ(q.types[kClassVV].recalled, 1);  // (44, 20) is in cell (5, 2)
+  EXPECT_EQ(q.types[kClassVO].recalled, 1);  // (12, 20) is in cell (1, 2)
+  QualityOptions tight;
+  tight.px = 4;
+  q = ScoreMatches(t, k0, k1, tight);
+  EXPECT_EQ(q.types[kClassVV].correct, 1);
+  EXPECT_EQ(q.types[kClassVV].recalled, 1);
+  // Without the exact vo match its cell is not recalled.
+  q = ScoreMatches(t, {10, 10}, {20, 10}, QualityOptions{});
+  EXPECT_EQ(q.types[kClassVO].predicted, 1);
+  EXPECT_EQ(q.types[kClassVO].recalled, 0);
+  // A source pixel without depth: unscored, counted by its label.
+  l01[20 * w + 44] = 0;
+  q = ScoreMatches(t, {44, 20}, {24, 20}, QualityOptions{});
+  EXPECT_EQ(q.unscored, 1);
+  EXPECT_EQ(q.unscored_by_label[0], 1);
+}
+
+}  // namespace
+}  // namespace gt::eval
