@@ -60,6 +60,7 @@ int main(int argc, char** argv) {
   occgt::AddValidateCommand(app);
   occgt::AddBuildCommand(app);
   occgt::AddInspectCommand(app);
+  occgt::AddEvalCommand(app);
   // Usage errors (docs/CLI.md): one line, exit 2. Bad input (files, data): one line, exit 1.
   const std::vector<std::string> args(argv + 1, argv + argc);
   if (const std::optional<int> code = occgt::HandleHelpOrUnknownCommand(app, args)) return *code;
