@@ -41,6 +41,11 @@ class Docs(unittest.TestCase):
         self.assertRegex(printed, r"overlap 0->1 0\.\d+, occlusion 0\.\d+")
         self.assertIn("OUT_OF_VIEW VISIBLE", printed)
         self.assertIn("depth0: expected a depth map of dtype float32 or float64", printed)
+        # The training loop over a LoFTR index saw all 4 pairs, with matches and a finite loss.
+        losses = re.findall(r"batch \[(\d+), (\d+)\]: (\d+) matches \((\d+) vv\), loss ([0-9.]+)",
+                            printed)
+        self.assertEqual(sorted(int(i) for row in losses for i in row[:2]), [0, 1, 2, 3])
+        self.assertTrue(all(int(row[2]) > 0 and float(row[4]) > 0 for row in losses), losses)
 
 
 if __name__ == "__main__":
