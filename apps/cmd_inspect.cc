@@ -1,6 +1,7 @@
 // occgt inspect pair | split: pictures of one pair and a report of a split (libgt/report).
 //   occgt inspect pair (--shard X.tar --key K | --pair-dir D | --root R --format F --scene S
 //                      --frames A,B) --out DIR
+//   (--pair-dir: a folder of `occgt pair`, of `occgt occupancy`, or of both)
 //   occgt inspect split DIR [--out OUT]
 #include <cstdio>
 #include <memory>
@@ -72,9 +73,14 @@ void RunInspectPair(const InspectPairArgs& a) {
   po.labels.alpha = a.alpha;
   po.occupancy.slice_row = a.slice_row;
   const auto written = gt::report::WritePairPictures(gt::report::RenderPair(pair, po), a.out);
-  std::printf("inspect pair %s: %d x %d, %zu matches%s%s\n", pair.name.c_str(), pair.width,
-              pair.height, pair.matches.size(), pair.has_images ? "" : " (no colour images)",
-              pair.has_occupancy ? ", occupancy" : "");
+  if (pair.has_labels) {
+    std::printf("inspect pair %s: %d x %d, %zu matches%s%s\n", pair.name.c_str(), pair.width,
+                pair.height, pair.matches.size(), pair.has_images ? "" : " (no colour images)",
+                pair.has_occupancy ? ", occupancy" : "");
+  } else {
+    std::printf("inspect pair %s: %d x %d, occupancy only (no labels or matches)\n",
+                pair.name.c_str(), pair.width, pair.height);
+  }
   for (const auto& p : written) std::printf("  wrote %s\n", p.c_str());
 }
 
@@ -109,7 +115,8 @@ void AddInspectCommand(CLI::App& app) {
       "`occgt pair` folder, or a scene and two frames)");
   pair->add_option("--shard", pa->shard, "WebDataset shard (.tar) holding the sample");
   pair->add_option("--key", pa->key, "sample key in the shard, e.g. scene/000010_000020");
-  pair->add_option("--pair-dir", pa->pair_dir, "output folder of `occgt pair`");
+  pair->add_option("--pair-dir", pa->pair_dir,
+                   "output folder of `occgt pair` and/or `occgt occupancy`");
   pair->add_option("--image0", pa->image0, "colour image of frame 0 (with --pair-dir)");
   pair->add_option("--image1", pa->image1, "colour image of frame 1 (with --pair-dir)");
   pair->add_option("--root", pa->root,

@@ -171,6 +171,25 @@ PairData PairFromFields(const std::map<std::string, std::string>& fields, const 
       throw InputError(source + ":" + j, std::string("expected JSON: ") + e.what());
     }
   }
+  const bool occ0 = fields.count("occ0.npy") || fields.count("occ0_dense.npy");
+  const bool occ1 = fields.count("occ1.npy") || fields.count("occ1_dense.npy");
+  if (!fields.count("label01.npy") && occ0 && occ1) {  // occupancy only
+    p.has_labels = false;
+    p.occ0 = VolumeFromFields(fields, 0, p.meta, source);
+    p.occ1 = VolumeFromFields(fields, 1, p.meta, source);
+    p.has_occupancy = true;
+    p.width = 2 * p.occ0.width;
+    p.height = 2 * p.occ0.height;
+    const nlohmann::json* r = FindJson(p.meta, [](const std::string& k, const nlohmann::json& v) {
+      return k == "resolution" && v.is_array() && v.size() == 2 && v[0].is_number_integer() &&
+             v[1].is_number_integer();
+    });
+    if (r != nullptr) {
+      p.width = (*r)[0].get<int>();
+      p.height = (*r)[1].get<int>();
+    }
+    return p;
+  }
   p.labels01 = LabelsFrom(NeedArray(fields, "label01.npy", source, "|u1", 2), source);
   p.labels10 = LabelsFrom(NeedArray(fields, "label10.npy", source, "|u1", 2), source);
   p.width = p.labels01.width;
@@ -217,8 +236,6 @@ PairData PairFromFields(const std::map<std::string, std::string>& fields, const 
   p.image0 = PrepareImage(img0, p.width, p.height);
   p.image1 = PrepareImage(img1, p.labels10.width, p.labels10.height);
 
-  const bool occ0 = fields.count("occ0.npy") || fields.count("occ0_dense.npy");
-  const bool occ1 = fields.count("occ1.npy") || fields.count("occ1_dense.npy");
   if (occ0 && occ1) {
     p.occ0 = VolumeFromFields(fields, 0, p.meta, source);
     p.occ1 = VolumeFromFields(fields, 1, p.meta, source);
@@ -245,6 +262,41 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
   for (const std::string& name : names) {
     const std::string path = (fs::path(dir) / name).string();
     if (gt::io::FileExists(path)) fields[name] = gt::io::ReadFileBytes(path);
+  }
+  // `occgt occupancy` files: its dense volumes under the shard's names, and occupancy.json
+  // (the bin edges) as meta.json's "occupancy" entry, or as the metadata of a folder without
+  // meta.json.
+  for (int cam = 0; cam < 2; ++cam) {
+    const std::string c = std::to_string(cam);
+    const std::string path = (fs::path(dir) / ("occupancy" + c + ".npy")).string();
+    if (!fields.count("occ" + c + "_dense.npy") && gt::io::FileExists(path)) {
+      fields["occ" + c + "_dense.npy"] = gt::io::ReadFileBytes(path);
+    }
+  }
+  if (const std::string occ_path = (fs::path(dir) / "occupancy.json").string();
+      gt::io::FileExists(occ_path)) {
+    nlohmann::json occupancy;
+    try {
+      occupancy = nlohmann::json::parse(gt::io::ReadFileBytes(occ_path));
+    } catch (const nlohmann::json::exception& e) {
+      throw InputError(occ_path, std::string("expected JSON: ") + e.what());
+    }
+    nlohmann::json meta = nlohmann::json::object();
+    if (fields.count("meta.json")) {
+      try {
+        meta = nlohmann::json::parse(fields["meta.json"]);
+      } catch (const nlohmann::json::exception& e) {
+        throw InputError((fs::path(dir) / "meta.json").string(),
+                         std::string("expected JSON: ") + e.what());
+      }
+      if (!meta.is_object()) {
+        throw InputError((fs::path(dir) / "meta.json").string(), "expected an object");
+      }
+      meta["occupancy"] = std::move(occupancy);
+    } else {
+      meta = std::move(occupancy);
+    }
+    fields["meta.json"] = meta.dump();
   }
   cv::Mat img0, img1;
   std::string p0 = image0_path, p1 = image1_path;
@@ -373,8 +425,11 @@ PairPictures RenderPair(const PairData& pair, const PairPictureOptions& options)
   MatchPictureOptions mo = options.matches;
   mo.stride = pair.stride;
   mo.anchor = pair.anchor;
-  out.matches = RenderMatches(pair.image0, pair.image1, pair.matches, mo);
-  out.labels = RenderLabels(pair.image0, pair.labels01, pair.image1, pair.labels10, options.labels);
+  if (pair.has_labels) {
+    out.matches = RenderMatches(pair.image0, pair.image1, pair.matches, mo);
+    out.labels =
+        RenderLabels(pair.image0, pair.labels01, pair.image1, pair.labels10, options.labels);
+  }
   if (pair.has_occupancy) out.occupancy = RenderOccupancy(pair.occ0, &pair.occ1, options.occupancy);
   return out;
 }

@@ -8,9 +8,12 @@
 //    "cells1.npy" (uint8 [H/s, W/s]), optional "image0.png"/"image1.png" (or .jpg) and
 //    optional occupancy "occ0.npy"/"known0.npy"/"occ1.npy"/"known1.npy" (uint64 [H/2, W/2])
 //    or dense "occ0_dense.npy"/"occ1_dense.npy" (uint8 [D, H/2, W/2]);
-//  - an `occgt pair` output folder: the same arrays as files, "meta.json" instead of the
-//    sample json, colour images as image0.png/image1.png in the folder or through the
-//    "color_path" entries of meta.json (or given explicitly);
+//  - an `occgt pair` and/or `occgt occupancy` output folder: the same arrays as files,
+//    "meta.json" instead of the sample json (its "occupancy" entry: the folder's
+//    occupancy.json, whose "bins.edges_m" are the bin edges), dense volumes as
+//    occupancy0/1.npy, colour images as image0.png/image1.png in the folder or through the
+//    "color_path" entries of meta.json (or given explicitly). A folder of `occgt occupancy`
+//    alone has no labels or matches: only its occupancy is rendered;
 //  - a scene and two frame ids: computed here with libgt/geometry (labels, matches) and,
 //    when asked, libgt/occupancy (pair fusion, 64 bins).
 // Metadata lookups: the patch stride is W / (columns of cells0); the anchor rule is the
@@ -38,6 +41,7 @@ struct PairData {
   int width = 0, height = 0;  // working resolution (size of label01)
   cv::Mat image0, image1;     // BGR CV_8UC3 at the working resolution (grey when absent)
   bool has_images = false;    // false when grey placeholders stand in for the colour
+  bool has_labels = true;     // false for an `occgt occupancy` folder alone
   LabelMap labels01, labels10;
   gt::PatchMatches matches;  // cells_w*/cells_h* filled
   int stride = 8;
@@ -85,8 +89,8 @@ struct PairPictureOptions {
 };
 
 struct PairPictures {
-  cv::Mat matches;    // RenderMatches
-  cv::Mat labels;     // RenderLabels
+  cv::Mat matches;    // RenderMatches; empty when the pair has no labels
+  cv::Mat labels;     // RenderLabels; empty when the pair has no labels
   cv::Mat occupancy;  // RenderOccupancy; empty when the pair has none
 };
 PairPictures RenderPair(const PairData& pair, const PairPictureOptions& options);

@@ -183,6 +183,43 @@ def main():
     check(err <= 1.0, f"pair-dir labels.png differs from the documented blend by {err}")
     check(not os.path.exists(os.path.join(out, "occupancy.png")), "occupancy.png without occupancy")
 
+    # --- `occgt occupancy` outputs: with the `occgt pair` files in one folder, alone, and
+    # alone with only the dense volumes. The occupancy picture is the one of the same pair
+    # computed from the scene (same defaults: pair scope, 5 cm voxels, 64 bins in [0.1, 10] m).
+    computed = os.path.join(tmp, "pair_computed_020")
+    common.occgt("inspect", "pair", "--root", root, "--format", "tartanair", "--scene",
+                 "hospital_sample", "--frames", "000000,000020", "--out", computed)
+    reference = open(os.path.join(computed, "occupancy.png"), "rb").read()
+    common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene",
+                 "hospital_sample", "--frames", "000000,000020", "--out", pair_dir)
+    out = os.path.join(tmp, "pair_occ_dir_pictures")
+    r = common.occgt("inspect", "pair", "--pair-dir", pair_dir, "--root", root, "--out", out)
+    check(sorted(os.listdir(out)) == ["labels.png", "matches.png", "occupancy.png"],
+          f"pair + occupancy folder: {sorted(os.listdir(out))}")
+    check(open(os.path.join(out, "occupancy.png"), "rb").read() == reference,
+          "pair + occupancy folder: occupancy.png differs from the computed pair's")
+    check(np.array_equal(png(os.path.join(out, "labels.png")), labels),
+          "pair + occupancy folder: labels.png differs from the pair folder's")
+    occ_dir = os.path.join(tmp, "occgt_occupancy")
+    common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene",
+                 "hospital_sample", "--frames", "000000,000020", "--dense", "--out", occ_dir)
+    out = os.path.join(tmp, "occ_dir_pictures")
+    r = common.occgt("inspect", "pair", "--pair-dir", occ_dir, "--out", out)
+    check("occupancy only" in r.stdout, f"occupancy-only folder: {r.stdout!r}")
+    check(sorted(os.listdir(out)) == ["occupancy.png"], f"occupancy folder: {os.listdir(out)}")
+    check(open(os.path.join(out, "occupancy.png"), "rb").read() == reference,
+          "occupancy folder: occupancy.png differs from the computed pair's")
+    for name in ["occ0.npy", "known0.npy", "occ1.npy", "known1.npy"]:
+        os.remove(os.path.join(occ_dir, name))
+    out = os.path.join(tmp, "occ_dense_dir_pictures")
+    common.occgt("inspect", "pair", "--pair-dir", occ_dir, "--out", out)
+    check(open(os.path.join(out, "occupancy.png"), "rb").read() == reference,
+          "dense-only occupancy folder: occupancy.png differs from the computed pair's")
+    os.remove(os.path.join(occ_dir, "occupancy.json"))
+    r = common.occgt("inspect", "pair", "--pair-dir", occ_dir, "--out", out, check=False)
+    check(r.returncode == 1 and "edges_m" in r.stderr and len(r.stderr.strip().splitlines()) == 1,
+          f"occupancy folder without occupancy.json: exit {r.returncode}, {r.stderr!r}")
+
     # --- split written by the test: no pairs at all, and a malformed line.
     empty = os.path.join(tmp, "empty_split")
     os.makedirs(empty)
