@@ -45,6 +45,16 @@ LoftrSupervisionOptions Compat(bool compat) {
 
 int Cell(int c, int r) { return r * kCw + c; }
 
+// Coordinates x, y of point i of an [L · 2] array (and (i, j) of match i).
+template <typename T>
+T X(const std::vector<T>& v, size_t i) {
+  return v[2 * i];
+}
+template <typename T>
+T Y(const std::vector<T>& v, size_t i) {
+  return v[2 * i + 1];
+}
+
 TEST(LoftrSupervision, IdentityPoseMatchesEveryCellToItself) {
   const DepthImage plane(kW, kH, static_cast<float>(kPlaneZ));
   const Eigen::Matrix4d I = Eigen::Matrix4d::Identity();
@@ -54,14 +64,15 @@ TEST(LoftrSupervision, IdentityPoseMatchesEveryCellToItself) {
   EXPECT_EQ(s.cells_h1, kCh);
   ASSERT_EQ(s.size(), static_cast<size_t>(kCw * kCh));  // cell 0 included (a fix)
   for (int i = 0; i < kCw * kCh; ++i) {
-    EXPECT_EQ(s.matches[2 * i], i);
-    EXPECT_EQ(s.matches[2 * i + 1], i);
+    EXPECT_EQ(X(s.matches, i), i);
+    EXPECT_EQ(Y(s.matches, i), i);
     EXPECT_EQ(s.status0[i], static_cast<uint8_t>(WarpStatus::kInGrid));
     // Corner anchors (c·8, r·8); the warp returns them up to LoFTR's z + 1e-4 (< 0.04 px).
-    EXPECT_EQ(s.grid0[2 * i], static_cast<float>(kStride * (i % kCw)));
-    EXPECT_EQ(s.grid0[2 * i + 1], static_cast<float>(kStride * (i / kCw)));
-    EXPECT_NEAR(s.warped0[2 * i], s.grid0[2 * i], 0.04);
-    EXPECT_NEAR(s.warped0[2 * i + 1], s.grid0[2 * i + 1], 0.04);
+    const int col = i % kCw, row = i / kCw;
+    EXPECT_EQ(X(s.grid0, i), static_cast<float>(kStride * col));
+    EXPECT_EQ(Y(s.grid0, i), static_cast<float>(kStride * row));
+    EXPECT_NEAR(X(s.warped0, i), X(s.grid0, i), 0.04);
+    EXPECT_NEAR(Y(s.warped0, i), Y(s.grid0, i), 0.04);
   }
   // compat: LoFTR ignores cell 0.
   const LoftrCoarseSupervision c =
@@ -83,11 +94,11 @@ TEST(LoftrSupervision, XTranslationShiftsCellsByTwo) {
         const int i = Cell(c, r);
         if (c + 2 < kCw) {
           EXPECT_EQ(s.target0[i], Cell(c + 2, r));
-          EXPECT_NEAR(s.warped0[2 * i], kStride * c + 16.0, 0.04);
+          EXPECT_NEAR(X(s.warped0, i), kStride * c + 16.0, 0.04);
           if (compat && i == 0) continue;  // LoFTR ignores cell 0
           ASSERT_LT(2 * m + 1, s.matches.size());
-          EXPECT_EQ(s.matches[2 * m], i);
-          EXPECT_EQ(s.matches[2 * m + 1], Cell(c + 2, r));
+          EXPECT_EQ(X(s.matches, m), i);
+          EXPECT_EQ(Y(s.matches, m), Cell(c + 2, r));
           ++m;
         } else {  // columns 78, 79 land right of the grid
           EXPECT_EQ(s.status0[i], static_cast<uint8_t>(WarpStatus::kOutOfGrid));
@@ -115,7 +126,7 @@ TEST(LoftrSupervision, BehindTheOtherCameraGivesNothing) {
   for (size_t i = 0; i < s.status0.size(); ++i) {
     EXPECT_EQ(s.status0[i], static_cast<uint8_t>(WarpStatus::kBehind));
     EXPECT_EQ(s.target0[i], -1);
-    EXPECT_TRUE(std::isnan(s.warped0[2 * i]));
+    EXPECT_TRUE(std::isnan(X(s.warped0, i)));
   }
   const LoftrCoarseSupervision c =
       ComputeLoftrSupervision(View(&plane), View(&plane), T, T, Compat(true));
@@ -125,8 +136,8 @@ TEST(LoftrSupervision, BehindTheOtherCameraGivesNothing) {
       const int i = Cell(col, r);
       EXPECT_EQ(c.status0[i], static_cast<uint8_t>(WarpStatus::kBehind));
       // y' = 2·239.5 − y; x' = x (both up to the 1e-4 term).
-      EXPECT_NEAR(c.warped0[2 * i], kStride * col, 0.04);
-      EXPECT_NEAR(c.warped0[2 * i + 1], 479.0 - kStride * r, 0.04);
+      EXPECT_NEAR(X(c.warped0, i), kStride * col, 0.04);
+      EXPECT_NEAR(Y(c.warped0, i), 479.0 - kStride * r, 0.04);
       if (c.target0[i] > 0) ++mirrored;
     }
   }
@@ -150,18 +161,18 @@ TEST(LoftrSupervision, CellsWithoutDepthGiveNothing) {
   for (int i : {zero, nan, inf, negative}) {
     EXPECT_EQ(s.status0[i], static_cast<uint8_t>(WarpStatus::kNoDepth)) << i;
     EXPECT_EQ(s.target0[i], -1);
-    EXPECT_TRUE(std::isnan(s.warped0[2 * i]));
+    EXPECT_TRUE(std::isnan(X(s.warped0, i)));
     EXPECT_EQ(s.target1[i], i);  // image 1 still warps there; the loop-back fails
   }
   for (size_t m = 0; m < s.size(); ++m) {
-    for (int i : {zero, nan, inf, negative}) EXPECT_NE(s.matches[2 * m], i);
+    for (int i : {zero, nan, inf, negative}) EXPECT_NE(X(s.matches, m), i);
   }
   // compat: a zero depth unprojects to camera 0's centre, which projects to (0, 0) → cell 0;
   // NaN and inf are non-finite → cell 0; a negative depth is used as a depth.
   const LoftrCoarseSupervision c =
       ComputeLoftrSupervision(View(&plane0), View(&plane1), I, I, Compat(true));
   EXPECT_EQ(c.target0[zero], 0);
-  EXPECT_EQ(c.warped0[2 * zero], 0.0f);
+  EXPECT_EQ(X(c.warped0, zero), 0.0f);
   EXPECT_EQ(c.target0[nan], 0);
   EXPECT_EQ(c.target0[inf], 0);
   EXPECT_EQ(c.target0[negative], negative);  // -z projects to the same pixel
@@ -178,8 +189,8 @@ TEST(LoftrSupervision, ImageScaleAndDepthMapBounds) {
   const Eigen::Matrix4d I = Eigen::Matrix4d::Identity();
   const LoftrCoarseSupervision s = ComputeLoftrSupervision(v, v, I, I, Compat(false));
   EXPECT_EQ(s.size(), static_cast<size_t>(kCw * kCh));
-  EXPECT_EQ(s.grid0[2 * Cell(3, 2)], 48.0f);
-  EXPECT_EQ(s.grid0[2 * Cell(3, 2) + 1], 32.0f);
+  EXPECT_EQ(X(s.grid0, Cell(3, 2)), 48.0f);
+  EXPECT_EQ(Y(s.grid0, Cell(3, 2)), 32.0f);
   // The depth map too small for the grid: outside it a point has no depth; compat throws.
   const DepthImage small(kW / 2, kH / 2, static_cast<float>(kPlaneZ));
   LoftrView w = View(&small);
