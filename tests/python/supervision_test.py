@@ -9,7 +9,8 @@ coarse supervision in torch (written here from the facts of LoFTR's `spvs_coarse
 - mode="occ2net": the vv/vo/ov matches of occgt.pair_ground_truth, from padded and from
   concatenated batches (occgt.torch.collate) and computed on the fly, with their fine targets.
 The reference runs in float64 (LoFTR's float32 depends on the BLAS's summation order; occgt
-computes in double), then rounds the warped points to float32 as LoFTR's tensors are."""
+computes in double), then rounds the warped points to float32 as LoFTR's tensors are; run in
+float32 (LoFTR's arithmetic) its cells may differ only next to a rounding boundary."""
 from __future__ import annotations
 
 import os
@@ -222,6 +223,32 @@ class SevenScenes(unittest.TestCase, Checks):
         self.assertGreater(total["no_depth"], 100)  # the no-depth fix is exercised
         self.assertGreater(total["out_of_grid"], 100)
         self.assertNotEqual(total["matches"], total["loftr"])
+
+    def test_loftr_float32(self) -> None:
+        """LoFTR's own float32 arithmetic: its target cells are occgt's (compat) except where
+        the warped point lies within 1e-3 cells of a rounding boundary, and its matches
+        differ only at those cells."""
+        cells = differ = 0
+        for k, frames in enumerate(self.frames):
+            batch = make_batch([frames])
+            ref32 = reference_supervision(batch, fixes=False, dtype=torch.float32)
+            got = loftr_supervision(batch, compat=True)
+            flipped = []
+            for side, key in ((0, "spv_w_pt0_i"), (1, "spv_w_pt1_i")):
+                one = occgt._occgt.loftr_coarse_supervision(
+                    *(batch[n][0].numpy() for n in ("depth0", "depth1", "K0", "K1", "T_0to1",
+                                                    "T_1to0")), compat=True)
+                target = torch.from_numpy(one[f"target{side}"]).long()[None]
+                diff = ref32[f"target{side}"] != target
+                at = got[key][diff] / 8.0
+                near = ((at - at.floor() - 0.5).abs() < 1e-3).any(-1)
+                self.assertTrue(bool(near.all()), f"{self.pairs[k]}: side {side}: {at[~near]}")
+                flipped.append(diff[0])
+                cells += diff.numel()
+                differ += int(diff.sum())
+            for b, i, j in set(ids(got)) ^ set(ids(ref32)):
+                self.assertTrue(bool(flipped[0][i] or flipped[1][j]), f"{self.pairs[k]}")
+        self.assertLessEqual(differ, cells * 1e-3)
 
     def test_batched_equals_per_pair(self) -> None:
         batch = make_batch(self.frames[:4])
