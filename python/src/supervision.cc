@@ -97,11 +97,16 @@ py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle
       T_1to0.is_none() ? Eigen::Matrix4d(gt::Rigid3d(cam1_from_cam0).inverse().matrix())
                        : RelativePoseFromArray(T_1to0, "T_1to0");
   gt::truth::LoftrCoarseSupervision s;
-  {
+  try {
     py::gil_scoped_release no_gil;
-    s = Named("depth", [&] {
-      return gt::truth::ComputeLoftrSupervision(v0, v1, cam1_from_cam0, cam0_from_cam1, options);
-    });
+    s = gt::truth::ComputeLoftrSupervision(v0, v1, cam1_from_cam0, cam0_from_cam1, options);
+  } catch (const gt::InputError& e) {  // "view0: ..." (e.g. compat, a grid point off the map)
+    std::string problem = e.what();
+    problem.erase(0, e.where().size() + 2);
+    ThrowValue(e.where() == "view0"   ? "depth0"
+               : e.where() == "view1" ? "depth1"
+                                      : e.where(),
+               problem);
   }
   const py::ssize_t l0 = static_cast<py::ssize_t>(s.target0.size());
   const py::ssize_t l1 = static_cast<py::ssize_t>(s.target1.size());

@@ -329,6 +329,22 @@ class SevenScenes(unittest.TestCase, Checks):
             ({}, {"mask0": torch.ones(1, 60, 80)}, "mask0"),
             ({}, {"depth1": torch.zeros(2, 480, 640)}, "depth1"),
         ]
+        # The binding itself (one pair, NumPy).
+        one = [batch[k][0].numpy() for k in ("depth0", "depth1", "K0", "K1", "T_0to1")]
+        binding_cases = [
+            (dict(scale0=(0.0, 1.0)), "scale0"),
+            (dict(image_size1=(4, 640)), "image_size1"),
+            (dict(coarse_stride=2000), "coarse_stride"),
+            (dict(compat=True, image_size0=(960, 1280)), "depth0"),  # grid off the depth map
+        ]
+        for kwargs, name in binding_cases:
+            with self.subTest(binding=name):
+                with self.assertRaises(ValueError) as e:
+                    occgt._occgt.loftr_coarse_supervision(*one, **kwargs)
+                self.assertTrue(str(e.exception).startswith(name + ":"), str(e.exception))
+        with self.assertRaises(ValueError) as e:
+            occgt._occgt.loftr_coarse_supervision(one[0].astype(np.int32), *one[1:])
+        self.assertTrue(str(e.exception).startswith("depth0: expected a depth map"))
         for kwargs, change, name in cases:
             with self.subTest(name=name):
                 b = dict(batch)
