@@ -26,6 +26,7 @@ import common  # noqa: E402
 
 import occgt  # noqa: E402
 from occgt.torch import loftr_supervision  # noqa: E402
+from occgt.torch.supervision import loftr_fine_target  # noqa: E402
 from occgt.torch.collate import Collate  # noqa: E402
 
 torch.set_num_threads(1)
@@ -289,6 +290,13 @@ class SevenScenes(unittest.TestCase, Checks):
         b, i, j = out["spv_b_ids"], out["spv_i_ids"], out["spv_j_ids"]
         want = (out["spv_w_pt0_i"][b, i] - out["spv_pt1_i"][b, j]) / 4.0 / 2
         self.assertTrue(torch.allclose(out["expec_f_gt"], want))
+        self.assertTrue(torch.equal(
+            loftr_fine_target(out, b, i, j, scale1=batch["scale1"]), out["expec_f_gt"]))
+        # At any ids (a coarse matcher's): NaN at cells without depth.
+        no_depth = torch.nonzero(out["spv_status0"][0] == 1)[:1, 0]
+        f = loftr_fine_target(out, torch.zeros(1, dtype=torch.long), no_depth,
+                              torch.zeros(1, dtype=torch.long), scale1=batch["scale1"])
+        self.assertTrue(bool(torch.isnan(f).all()) and no_depth.numel() == 1)
         self.assertLessEqual(float(out["expec_f_gt"].abs().max()), 1.0 + 1e-6)
 
     def test_options_and_bad_input(self) -> None:

@@ -8,7 +8,7 @@ docs/PYTHON.md, "Supervision".
 """
 from __future__ import annotations
 
-from typing import Any, Dict, List, Literal, Mapping, Tuple
+from typing import Any, Dict, List, Literal, Mapping, Optional, Tuple
 
 import numpy as np
 import torch
@@ -122,7 +122,7 @@ def loftr_supervision(
     warped into image 1, its pixels; NaN without depth or behind camera 1), ``spv_pt1_i``
     [N, L1, 2] (image 1's grid), ``expec_f_gt`` [M, 2] = (w_pt0_i[b, i] − pt1_i[b, j]) /
     (fine_stride · scale1[b]) / (fine_window // 2) at these matches (LoFTR's ``spvs_fine``
-    computes it at the coarse matcher's ids: index spv_w_pt0_i and spv_pt1_i there), and
+    computes it at the coarse matcher's ids: loftr_fine_target gives it there), and
     occgt's ``spv_w_pt1_i``, ``spv_pt0_i`` and ``spv_status0``/``spv_status1`` uint8
     [N, L] (WARP_STATUS_NAMES: in_grid, no_depth, behind, out_of_grid).
 
@@ -202,9 +202,9 @@ def _loftr(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_window:
     conf = _conf_matrix(n, l0, l1, b_ids, i_ids, j_ids, dense, unique=True)
     if compat and b_ids.numel() == 0:  # LoFTR's dummy match; conf_matrix_gt stays zero
         b_ids = i_ids = j_ids = torch.zeros(1, dtype=torch.int64)
-    radius = fine_window // 2
-    fine_scale = fine_stride * torch.from_numpy(scale1)[b_ids]  # [M, 2]
-    expec_f_gt = (w_pt0_i[b_ids, i_ids] - pt1_i[b_ids, j_ids]) / fine_scale / radius
+    expec_f_gt = loftr_fine_target({"spv_w_pt0_i": w_pt0_i, "spv_pt1_i": pt1_i}, b_ids, i_ids,
+                                   j_ids, fine_stride=fine_stride, fine_window=fine_window,
+                                   scale1=torch.from_numpy(scale1))
     return {
         "conf_matrix_gt": conf,
         "spv_b_ids": b_ids,
@@ -218,6 +218,20 @@ def _loftr(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_window:
         "spv_status0": stack("status0"),
         "spv_status1": stack("status1"),
     }
+
+
+def loftr_fine_target(spv: Mapping[str, torch.Tensor], b_ids: torch.Tensor, i_ids: torch.Tensor,
+                      j_ids: torch.Tensor, *, fine_stride: int = 2, fine_window: int = 5,
+                      scale1: Optional[torch.Tensor] = None) -> torch.Tensor:
+    """LoFTR's ``spvs_fine`` at any coarse ids (the coarse matcher's ``b_ids``, ``i_ids``,
+    ``j_ids``): (spv_w_pt0_i[b, i] − spv_pt1_i[b, j]) / (fine_stride · scale1[b]) /
+    (fine_window // 2), float32 [M, 2]. ``spv``: the output of loftr_supervision (mode
+    "loftr"); ``scale1``: the batch's [N, 2] (LoFTR's data['scale1']) or None. Rows at cells
+    without depth or behind the camera are NaN, which LoFTR's fine loss drops (its
+    ``norm(expec_f_gt, inf) < correct_thr`` is false for NaN)."""
+    w_pt0_i, pt1_i = spv["spv_w_pt0_i"], spv["spv_pt1_i"]
+    scale = float(fine_stride) if scale1 is None else fine_stride * scale1.to(w_pt0_i)[b_ids]
+    return (w_pt0_i[b_ids, i_ids] - pt1_i[b_ids, j_ids]) / scale / (fine_window // 2)
 
 
 def _batch_matches(batch: Mapping[str, Any], n: int) -> Tuple[torch.Tensor, ...]:
@@ -304,4 +318,4 @@ def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_windo
 
 
 __all__ = ["WARP_STATUS_NAMES", "IN_GRID", "NO_DEPTH", "BEHIND", "OUT_OF_GRID",
-           "loftr_supervision"]
+           "loftr_fine_target", "loftr_supervision"]
