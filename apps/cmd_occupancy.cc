@@ -1,5 +1,6 @@
-// occgt occupancy --root R --format F --scene S --frames ID0,ID1 [--resolution WxH] --out DIR
-//   [--voxel-m 0.05] [--max-range-m 10] [--near-m 0.1] [--far-m 10] [--bins 64]
+// occgt occupancy [--recipe R.yaml] --root R --format F --scene S --frames ID0,ID1
+//   [--resolution WxH] --out DIR
+//   [--voxel-m 0.05] [--max-range-m FAR] [--near-m 0.1] [--far-m 10] [--bins 64]
 //   [--spacing linear|log|inverse] [--traversal exact|center] [--scope pair|window:N|scene:S]
 //   [--mode octomap|two_point] [--dense] [--save-octree map.bt]
 // Occupancy target of one pair (GROUND_TRUTH.md §5, docs/OCCUPANCY.md): writes the folder of
@@ -10,6 +11,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/pair_recipe.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/io/reader.h"
@@ -22,58 +24,64 @@ namespace {
 namespace occ = gt::occupancy;
 
 struct OccupancyArgs {
-  std::string root, format, scene, frames, out;
-  std::string resolution = "640x480";
-  std::optional<double> min_depth_m, max_depth_m;
-  double voxel_m = 0.05, max_range_m = 10.0, near_m = 0.1, far_m = 10.0;
-  int bins = 64;
-  std::string spacing = "linear", traversal = "exact", scope = "pair", mode = "octomap";
+  PairDatasetArgs data;
+  // Unset: the recipe's value (--recipe), else the defaults of a recipe without the key.
+  std::optional<double> voxel_m, max_range_m, near_m, far_m;
+  std::optional<int> bins;
+  std::optional<std::string> spacing, traversal, scope, mode;
   bool dense = false, downsample = false, no_downsample = false, remove_outliers = false;
   std::string save_octree;
 };
 
 void RunOccupancy(const OccupancyArgs& args) {
   // Options first: bad flags fail before any file is read.
-  gt::truth::PairTruthOptions o;
+  PairSetup setup = StartPairSetup(args.data);
+  gt::truth::PairTruthOptions& o = setup.options;
   o.labels_and_matches = false;
+  o.occupancy = true;
   occ::FusionOptions& fo = o.fusion;
-  fo.voxel_size_m = args.voxel_m;
-  fo.max_range_m = args.max_range_m;
+  if (args.voxel_m) fo.voxel_size_m = *args.voxel_m;
+  if (args.far_m) o.bins.far_m = *args.far_m;
+  // The ray range is the last bin edge (as in a recipe's far_m) unless set apart.
+  fo.max_range_m = args.max_range_m.value_or(o.bins.far_m);
   if (args.downsample && args.no_downsample)
     throw gt::InputError("--downsample", "conflicts with --no-downsample");
   fo.downsample = args.downsample;  // off by default, as in the library and `build`
   fo.remove_outliers = args.remove_outliers;
-  occ::ParseFusionScope(args.scope, &fo);
+  if (args.scope) occ::ParseFusionScope(*args.scope, &fo);
   std::string error;
-  if (!fo.Check(&error)) {  // the defaults pass: a failure comes from a flag
+  if (!fo.Check(&error)) {
     ThrowOptionsError(error, "fusion options",
-                      {{"voxel_size_m", "--voxel-m", true},
-                       {"max_range_m", "--max-range-m", true},
-                       {"window", "--scope", true},
-                       {"scene", "--scope", true}});
+                      {{"voxel_size_m", "--voxel-m", args.voxel_m.has_value()},
+                       {"max_range_m", "--max-range-m", args.max_range_m.has_value()},
+                       {"window", "--scope", args.scope.has_value()},
+                       {"scene", "--scope", args.scope.has_value()}});
   }
-  o.bins.num_bins = args.bins;
-  o.bins.near_m = args.near_m;
-  o.bins.far_m = args.far_m;
-  o.bins.spacing = occ::ParseBinSpacing(args.spacing);
-  o.bins.traversal = occ::ParseTraversal(args.traversal);
+  if (args.bins) o.bins.num_bins = *args.bins;
+  if (args.near_m) o.bins.near_m = *args.near_m;
+  if (args.spacing) o.bins.spacing = occ::ParseBinSpacing(*args.spacing);
+  if (args.traversal) o.bins.traversal = occ::ParseTraversal(*args.traversal);
   if (!o.bins.Check(&error)) {
     ThrowOptionsError(error, "bin options",
-                      {{"num_bins", "--bins", true}, {"near_m", "--near-m", true},
-                       {"far_m", "--far-m", true}});
+                      {{"num_bins", "--bins", args.bins.has_value()},
+                       {"near_m", "--near-m", args.near_m.has_value()},
+                       {"far_m", "--far-m", args.far_m.has_value() || args.near_m.has_value()}});
   }
-  o.mode = occ::ParseOccupancyMode(args.mode);
+  if (args.mode) o.mode = occ::ParseOccupancyMode(*args.mode);
   if (o.mode == occ::OccupancyMode::kTwoPoint && !args.save_octree.empty())
     throw gt::InputError("--save-octree", "needs --mode octomap");
-  gt::truth::PairSource source{
-      args.format, args.scene, "",
-      "",          "",         gt::truth::ParseResolution(args.resolution, "--resolution")};
-  std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(args.frames);
+  const PairDatasetArgs& d = args.data;
+  gt::truth::PairSource source{setup.format, d.scene, "", "", "", setup.resolution};
+  std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 
-  const gt::Scene scene = gt::io::MakeReader(args.format)->ReadScene(args.root, args.scene);
+  const gt::Scene scene = gt::io::MakeReader(setup.format)->ReadScene(setup.root, d.scene);
   source.scene = scene.name;
-  o.labels.min_depth_m = args.min_depth_m.value_or(scene.min_depth_m);
-  o.labels.max_depth_m = args.max_depth_m.value_or(scene.max_depth_m);
+  o.labels = LabelsFor(setup, scene, std::nullopt, d);  // the validity range of the fusion
+  if (!o.labels.Check(&error)) {
+    ThrowOptionsError(error, "label options",
+                      {{"min_depth_m", "--min-depth-m", d.min_depth_m.has_value()},
+                       {"max_depth_m", "--max-depth-m", d.max_depth_m.has_value()}});
+  }
   const size_t i0 = gt::truth::FindFrame(scene, source.id0);
   const size_t i1 = gt::truth::FindFrame(scene, source.id1);
   const gt::truth::WorkingFrame w0 =
@@ -89,7 +97,7 @@ void RunOccupancy(const OccupancyArgs& args) {
   if (o.mode == occ::OccupancyMode::kOctomap) scope = gt::truth::FuseScope(scene, i0, i1, o, load);
   const gt::truth::PairTruth truth =
       gt::truth::ComputePairTruth(w0, w1, o, scope ? &scope->map : nullptr);
-  gt::truth::WriteOccupancyFolder(args.out, source, o, *truth.occupancy, scope ? &*scope : nullptr,
+  gt::truth::WriteOccupancyFolder(d.out, source, o, *truth.occupancy, scope ? &*scope : nullptr,
                                   args.dense);
   if (scope && !args.save_octree.empty()) scope->map.SaveBinary(args.save_octree);
 
@@ -98,7 +106,7 @@ void RunOccupancy(const OccupancyArgs& args) {
   std::printf("occupancy %s %s,%s (%s, %s): cam0 occupied %.3f free %.3f unknown %.3f -> %s\n",
               scene.name.c_str(), source.id0.c_str(), source.id1.c_str(),
               occ::OccupancyModeName(o.mode).c_str(), occ::FusionScopeName(fo).c_str(),
-              c.occupied / total, c.free / total, c.unknown / total, args.out.c_str());
+              c.occupied / total, c.free / total, c.unknown / total, d.out.c_str());
   if (scope && !scope->skipped.empty())
     std::printf("skipped %zu frame(s) of the scope (see occupancy.json)\n", scope->skipped.size());
 }
@@ -108,19 +116,24 @@ void RunOccupancy(const OccupancyArgs& args) {
 void AddOccupancyCommand(CLI::App& app) {
   auto args = std::make_shared<OccupancyArgs>();
   auto* cmd = app.add_subcommand("occupancy", "64-bin occupancy target of one pair of frames");
-  cmd->add_option("--root", args->root, "dataset root")->required();
-  cmd->add_option("--format", args->format, "dataset format (scannet, tartanair, ...)")->required();
-  cmd->add_option("--scene", args->scene, "scene name (see occgt scan)")->required();
-  cmd->add_option("--frames", args->frames, "two frame ids: ID0,ID1")->required();
-  cmd->add_option("--out", args->out, "output folder")->required();
-  cmd->add_option("--resolution", args->resolution, "working resolution WxH (default 640x480)");
-  cmd->add_option("--min-depth-m", args->min_depth_m, "minimum valid depth (dataset default)");
-  cmd->add_option("--max-depth-m", args->max_depth_m, "maximum valid depth (dataset default)");
+  PairDatasetArgs& d = args->data;
+  cmd->add_option("--recipe", d.recipe,
+                  "build recipe: its resolution, depth range and occupancy options (flags "
+                  "override); also its dataset root and format unless given");
+  cmd->add_option("--root", d.root, "dataset root (default: the recipe's)");
+  cmd->add_option("--format", d.format, "dataset format (scannet, tartanair, ...)");
+  cmd->add_option("--scene", d.scene, "scene name (see occgt scan)")->required();
+  cmd->add_option("--frames", d.frames, "two frame ids: ID0,ID1")->required();
+  cmd->add_option("--out", d.out, "output folder")->required();
+  cmd->add_option("--resolution", d.resolution, "working resolution WxH (default 640x480)");
+  cmd->add_option("--min-depth-m", d.min_depth_m, "minimum valid depth (dataset default)");
+  cmd->add_option("--max-depth-m", d.max_depth_m, "maximum valid depth (dataset default)");
   cmd->add_option("--voxel-m", args->voxel_m, "OctoMap resolution in metres (default 0.05)");
   cmd->add_option("--max-range-m", args->max_range_m,
-                  "ray truncation in metres, <= 0 unlimited (default 10)");
+                  "ray truncation in metres, <= 0 unlimited (default: the last bin edge)");
   cmd->add_option("--near-m", args->near_m, "first bin edge, planar depth (default 0.1)");
-  cmd->add_option("--far-m", args->far_m, "last bin edge, planar depth (default 10)");
+  cmd->add_option("--far-m", args->far_m,
+                  "last bin edge, planar depth, and the ray range (default 10)");
   cmd->add_option("--bins", args->bins, "number of depth bins, 1..64 (default 64)");
   cmd->add_option("--spacing", args->spacing, "linear|log|inverse (default linear)");
   cmd->add_option("--traversal", args->traversal, "exact|center (default exact)");

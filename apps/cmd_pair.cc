@@ -1,4 +1,5 @@
-// occgt pair --root R --format F --scene S --frames ID0,ID1 [--preset P] [overrides] --out DIR
+// occgt pair [--recipe R.yaml] --root R --format F --scene S --frames ID0,ID1 [--preset P]
+//   [overrides] --out DIR
 // Labels one pair of frames (GROUND_TRUTH.md §2–4) at the working resolution and writes
 // the folder of libgt/truth/pair_files.h (label maps, matches, cells, meta.json). The work is
 // truth::ComputePairTruth; this file parses flags and prints one line.
@@ -7,6 +8,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/pair_recipe.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/io/reader.h"
@@ -17,47 +19,52 @@ namespace occgt {
 namespace {
 
 struct PairArgs {
-  std::string root, format, scene, frames, out;
-  std::string preset = "default";
-  std::string resolution = "640x480";
-  std::optional<double> abs_tol_m, rel_tol, min_depth_m, max_depth_m;
-  std::string relative_to, bounds, target_lookup, missing_target, anchor = "center";
-  int stride = 8;
+  PairDatasetArgs data;
+  // Unset: the recipe's value (--recipe), else the defaults of a recipe without the key.
+  std::optional<std::string> preset;
+  std::optional<double> abs_tol_m, rel_tol;
+  std::string relative_to, bounds, target_lookup, missing_target;
+  std::optional<int> stride;
+  std::optional<std::string> anchor;
   bool no_mutual = false;
   int score_stride = 1;
 };
 
 void RunPair(const PairArgs& args) {
   // Options first: bad flags fail before any file is read.
-  gt::truth::PairTruthOptions o;
+  const PairDatasetArgs& d = args.data;
+  PairSetup setup = StartPairSetup(d);
+  gt::truth::PairTruthOptions& o = setup.options;
+  o.labels_and_matches = true;
   o.occupancy = false;
+  if (args.preset) gt::LabelPreset(*args.preset);  // a bad name fails now
+  if (args.stride) o.patches.stride = *args.stride;
+  if (args.anchor) o.patches.anchor = gt::ParseAnchor(*args.anchor);
+  if (args.no_mutual) o.patches.mutual = false;
+  std::string error;
+  if (!o.patches.Check(&error)) {
+    ThrowOptionsError(error, "patch options", {{"stride", "--stride", args.stride.has_value()}});
+  }
+  if (args.score_stride < 1) throw gt::InputError("--score-stride", "expected >= 1");
+  gt::truth::PairSource source{setup.format, d.scene, "", "", "default", setup.resolution};
+  if (setup.recipe) source.preset = setup.recipe->labels.preset;
+  if (args.preset) source.preset = *args.preset;
+  std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
+
+  const gt::Scene scene = gt::io::MakeReader(setup.format)->ReadScene(setup.root, d.scene);
+  source.scene = scene.name;
   gt::LabelOptions& lo = o.labels;
-  lo = gt::LabelPreset(args.preset);
+  lo = LabelsFor(setup, scene, args.preset, d);
   if (args.abs_tol_m) lo.abs_tol_m = *args.abs_tol_m;
   if (args.rel_tol) lo.rel_tol = *args.rel_tol;
   if (!args.relative_to.empty()) lo.relative_to = gt::ParseRelativeTo(args.relative_to);
   if (!args.bounds.empty()) lo.bounds = gt::ParseBounds(args.bounds);
   if (!args.target_lookup.empty()) lo.target_lookup = gt::ParseTargetLookup(args.target_lookup);
   if (!args.missing_target.empty()) lo.missing_target = gt::ParseMissingTarget(args.missing_target);
-  o.patches.stride = args.stride;
-  o.patches.anchor = gt::ParseAnchor(args.anchor);
-  o.patches.mutual = !args.no_mutual;
-  std::string error;
-  if (!o.patches.Check(&error)) throw gt::InputError("--stride", error);
-  if (args.score_stride < 1) throw gt::InputError("--score-stride", "expected >= 1");
-  gt::truth::PairSource source{
-      args.format, args.scene,  "",
-      "",          args.preset, gt::truth::ParseResolution(args.resolution, "--resolution")};
-  std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(args.frames);
-
-  const gt::Scene scene = gt::io::MakeReader(args.format)->ReadScene(args.root, args.scene);
-  source.scene = scene.name;
-  lo.min_depth_m = args.min_depth_m.value_or(scene.min_depth_m);  // dataset range unless set
-  lo.max_depth_m = args.max_depth_m.value_or(scene.max_depth_m);
   if (!lo.Check(&error)) {
     ThrowOptionsError(error, "label options",
-                      {{"min_depth_m", "--min-depth-m", args.min_depth_m.has_value()},
-                       {"max_depth_m", "--max-depth-m", args.max_depth_m.has_value()},
+                      {{"min_depth_m", "--min-depth-m", d.min_depth_m.has_value()},
+                       {"max_depth_m", "--max-depth-m", d.max_depth_m.has_value()},
                        {"abs_tol_m", "--abs-tol-m", args.abs_tol_m.has_value()},
                        {"rel_tol", "--rel-tol", args.rel_tol.has_value()}});
   }
@@ -66,7 +73,7 @@ void RunPair(const PairArgs& args) {
   const gt::truth::WorkingFrame w0 = gt::truth::LoadWorkingFrame(f0, source.resolution);
   const gt::truth::WorkingFrame w1 = gt::truth::LoadWorkingFrame(f1, source.resolution);
   const gt::truth::PairTruth truth = gt::truth::ComputePairTruth(w0, w1, o);
-  gt::truth::WritePairFolder(args.out, source, w0, w1, o, truth, args.score_stride);
+  gt::truth::WritePairFolder(d.out, source, w0, w1, o, truth, args.score_stride);
 
   const gt::PairLabels& p = truth.labels;
   const gt::DirectionMetrics m01 =
@@ -79,7 +86,7 @@ void RunPair(const PairArgs& args) {
       "(vv %lld, vo %lld, ov %lld) -> %s\n",
       scene.name.c_str(), source.id0.c_str(), source.id1.c_str(), m01.overlap, m10.overlap,
       m01.occlusion_ratio, m10.occlusion_ratio, p.patches.size(), static_cast<long long>(c.vv),
-      static_cast<long long>(c.vo), static_cast<long long>(c.ov), args.out.c_str());
+      static_cast<long long>(c.vo), static_cast<long long>(c.ov), d.out.c_str());
 }
 
 }  // namespace
@@ -87,22 +94,26 @@ void RunPair(const PairArgs& args) {
 void AddPairCommand(CLI::App& app) {
   auto args = std::make_shared<PairArgs>();
   auto* cmd = app.add_subcommand("pair", "label one pair of frames and write its ground truth");
-  cmd->add_option("--root", args->root, "dataset root")->required();
-  cmd->add_option("--format", args->format, "dataset format (scannet, tartanair, ...)")->required();
-  cmd->add_option("--scene", args->scene, "scene name (see occgt scan)")->required();
-  cmd->add_option("--frames", args->frames, "two frame ids: ID0,ID1")->required();
-  cmd->add_option("--out", args->out, "output folder")->required();
+  PairDatasetArgs& d = args->data;
+  cmd->add_option("--recipe", d.recipe,
+                  "build recipe: its resolution, labels and patches (flags override); also "
+                  "its dataset root and format unless given");
+  cmd->add_option("--root", d.root, "dataset root (default: the recipe's)");
+  cmd->add_option("--format", d.format, "dataset format (scannet, tartanair, ...)");
+  cmd->add_option("--scene", d.scene, "scene name (see occgt scan)")->required();
+  cmd->add_option("--frames", d.frames, "two frame ids: ID0,ID1")->required();
+  cmd->add_option("--out", d.out, "output folder")->required();
   cmd->add_option("--preset", args->preset,
                   "label preset: default, occ2net, occ2net-compat, loftr, superglue");
-  cmd->add_option("--resolution", args->resolution, "working resolution WxH (default 640x480)");
+  cmd->add_option("--resolution", d.resolution, "working resolution WxH (default 640x480)");
   cmd->add_option("--abs-tol-m", args->abs_tol_m, "absolute depth tolerance (m)");
   cmd->add_option("--rel-tol", args->rel_tol, "relative depth tolerance (fraction)");
   cmd->add_option("--relative-to", args->relative_to, "projected|observed");
   cmd->add_option("--bounds", args->bounds, "pixel-area|strict");
   cmd->add_option("--target-lookup", args->target_lookup, "nearest|truncate");
   cmd->add_option("--missing-target", args->missing_target, "unknown|as-zero-depth");
-  cmd->add_option("--min-depth-m", args->min_depth_m, "minimum valid depth (dataset default)");
-  cmd->add_option("--max-depth-m", args->max_depth_m, "maximum valid depth (dataset default)");
+  cmd->add_option("--min-depth-m", d.min_depth_m, "minimum valid depth (dataset default)");
+  cmd->add_option("--max-depth-m", d.max_depth_m, "maximum valid depth (dataset default)");
   cmd->add_option("--stride", args->stride, "patch cell size in pixels (default 8)");
   cmd->add_option("--anchor", args->anchor, "center|corner (default center)");
   cmd->add_flag("--no-mutual", args->no_mutual, "keep vv matches without the loop-back check");

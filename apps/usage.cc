@@ -58,9 +58,9 @@ void ThrowOptionsError(const std::string& error, const std::string& what,
                        std::initializer_list<FieldFlag> fields) {
   for (const FieldFlag& f : fields) {
     const std::string field = f.field;
-    const bool leads = error.rfind(field, 0) == 0 &&
-                       (error.size() == field.size() || error[field.size()] == ' ' ||
-                        error[field.size()] == ':');
+    const bool leads =
+        error.rfind(field, 0) == 0 &&
+        (error.size() == field.size() || error[field.size()] == ' ' || error[field.size()] == ':');
     if (leads && f.given) throw gt::InputError(f.flag, error);
   }
   throw gt::InputError(what, error);
