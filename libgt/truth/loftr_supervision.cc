@@ -46,7 +46,9 @@ Spacing SpacingOf(const LoftrView& v, int stride) {
 }
 
 void CheckView(const LoftrView& v, int stride, const std::string& name) {
-  if (v.depth == nullptr || v.depth->empty()) throw InputError(name, "no depth map");
+  if (v.depth_m == nullptr || v.depth_width < 1 || v.depth_height < 1) {
+    throw InputError(name, "no depth map");
+  }
   if (v.image_width < stride || v.image_height < stride) {
     std::ostringstream m;
     m << "image " << v.image_width << "x" << v.image_height
@@ -75,7 +77,6 @@ void WarpGrid(const LoftrView& a, const LoftrView& b, const Eigen::Matrix4d& b_f
   const Eigen::Matrix3d R = b_from_a.topLeftCorner<3, 3>();
   const Eigen::Vector3d t = b_from_a.topRightCorner<3, 1>();
   const Eigen::Matrix3d& Kb = b.K;
-  const DepthImage& depth = *a.depth;
   const size_t n = static_cast<size_t>(wa) * ha;
   grid_a->resize(2 * n);
   warped_a->resize(2 * n);
@@ -94,14 +95,17 @@ void WarpGrid(const LoftrView& a, const LoftrView& b, const Eigen::Matrix4d& b_f
       // rounding mode; nearbyint is the same but saves and restores the FP environment).
       const double u = std::rint(static_cast<double>(gx));
       const double v = std::rint(static_cast<double>(gy));
-      const bool inside = u >= 0 && u < depth.width && v >= 0 && v < depth.height;
+      const bool inside = u >= 0 && u < a.depth_width && v >= 0 && v < a.depth_height;
       if (!inside && compat) {
         std::ostringstream m;
         m << "grid point (" << gx << ", " << gy << ") of cell " << i << " lies outside the "
-          << depth.width << "x" << depth.height << " depth map (compat: LoFTR indexes it)";
+          << a.depth_width << "x" << a.depth_height << " depth map (compat: LoFTR indexes it)";
         throw InputError(name_a, m.str());
       }
-      const float d = inside ? depth.at(static_cast<int>(u), static_cast<int>(v)) : 0.0f;
+      const float d = inside
+                          ? a.depth_m[static_cast<size_t>(v) * static_cast<size_t>(a.depth_width) +
+                                      static_cast<size_t>(u)]
+                          : 0.0f;
       const bool has_depth = inside && std::isfinite(d) && d > 0.0f;
       const Eigen::Vector3d p =
           Ka_inv * Eigen::Vector3d(static_cast<double>(gx) * d, static_cast<double>(gy) * d, d);

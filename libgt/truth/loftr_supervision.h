@@ -53,12 +53,19 @@ struct LoftrSupervisionOptions {
   bool Check(std::string* error) const;  // 1 <= coarse_stride <= 1024
 };
 
-// One image of the pair.
+// One image of the pair. The depth map is not copied: it must outlive the call.
 struct LoftrView {
-  const DepthImage* depth = nullptr;                // [H, W] planar metres, in the pixels of K
+  const float* depth_m = nullptr;         // [depth_height, depth_width] row-major, planar metres
+  int depth_width = 0, depth_height = 0;  // in the pixels of K
   Eigen::Matrix3d K = Eigen::Matrix3d::Identity();  // intrinsics of the depth map (invertible)
   int image_width = 0, image_height = 0;            // the image the grid covers (>= coarse_stride)
   double scale_x = 1.0, scale_y = 1.0;  // depth-map pixels per image pixel (> 0, finite)
+
+  void SetDepth(const DepthImage& depth) {
+    depth_m = depth.values_m.data();
+    depth_width = depth.width;
+    depth_height = depth.height;
+  }
 };
 
 struct LoftrCoarseSupervision {

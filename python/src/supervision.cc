@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <array>
 #include <optional>
 #include <string>
@@ -14,6 +15,7 @@
 #include "libgt/core/error.h"
 #include "libgt/core/pose.h"
 #include "libgt/truth/loftr_supervision.h"
+#include "libgt/truth/working_frame.h"
 #include "python/src/convert.h"
 
 namespace occgt_py {
@@ -47,6 +49,30 @@ Eigen::Matrix4d RelativePoseFromArray(py::handle obj, const std::string& argumen
   return m;
 }
 
+// A depth map [H, W] float32 or float64 (planar metres; DepthFromArray's checks and
+// messages) as a C-contiguous float32 array: the input itself when it is one (no copy), else
+// a converted copy. Kept alive by the caller while the C++ reads it.
+py::array_t<float> DepthArray(py::handle obj, const std::string& argument) {
+  py::array a = AsArray(obj, argument);
+  const char kind = a.dtype().kind();
+  if (kind != 'f' || (a.itemsize() != 4 && a.itemsize() != 8)) {
+    ThrowValue(argument,
+               "expected a depth map of dtype float32 or float64 (planar metres), got dtype " +
+                   DtypeText(a));
+  }
+  if (a.ndim() != 2) {
+    ThrowValue(argument, "expected a depth map of shape (H, W), got shape " + ShapeText(a));
+  }
+  gt::truth::Resolution size;
+  size.width = static_cast<int>(std::min<py::ssize_t>(a.shape(1), gt::truth::kMaxResolution + 1));
+  size.height = static_cast<int>(std::min<py::ssize_t>(a.shape(0), gt::truth::kMaxResolution + 1));
+  std::string error;
+  if (!size.Check(&error)) ThrowValue(argument, error + " (shape " + ShapeText(a) + ")");
+  auto f = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(a);
+  if (!f) throw py::error_already_set();
+  return f;
+}
+
 void CheckScale(const std::array<double, 2>& s, const std::string& argument) {
   for (double v : s) {
     if (!(std::isfinite(v) && v > 0)) {
@@ -68,20 +94,22 @@ py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle
   options.compat = compat;
   std::string error;
   if (!options.Check(&error)) ThrowValue("coarse_stride", error);
-  const auto d0 = DepthFromArray(depth0, "depth0");
-  const auto d1 = DepthFromArray(depth1, "depth1");
+  const py::array_t<float> d0 = DepthArray(depth0, "depth0");
+  const py::array_t<float> d1 = DepthArray(depth1, "depth1");
   CheckScale(scale0, "scale0");
   CheckScale(scale1, "scale1");
-  const auto view = [&](const std::shared_ptr<const gt::DepthImage>& d, py::handle K,
+  const auto view = [&](const py::array_t<float>& d, py::handle K,
                         const std::array<double, 2>& scale,
                         const std::optional<std::array<int, 2>>& size, const std::string& index) {
     gt::truth::LoftrView v;
-    v.depth = d.get();
-    v.K = CameraFromArray(K, d->width, d->height, "K" + index).K();
+    v.depth_m = d.data();
+    v.depth_height = static_cast<int>(d.shape(0));
+    v.depth_width = static_cast<int>(d.shape(1));
+    v.K = CameraFromArray(K, v.depth_width, v.depth_height, "K" + index).K();
     v.scale_x = scale[0];
     v.scale_y = scale[1];
-    v.image_height = size ? (*size)[0] : d->height;
-    v.image_width = size ? (*size)[1] : d->width;
+    v.image_height = size ? (*size)[0] : v.depth_height;
+    v.image_width = size ? (*size)[1] : v.depth_width;
     if (v.image_height < coarse_stride || v.image_width < coarse_stride) {
       ThrowValue("image_size" + index, "expected (height, width) of at least one coarse cell (" +
                                            std::to_string(coarse_stride) + " pixels), got (" +

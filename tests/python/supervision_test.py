@@ -350,6 +350,16 @@ class SevenScenes(unittest.TestCase, Checks):
                 with self.assertRaises(ValueError) as e:
                     occgt._occgt.loftr_coarse_supervision(*one, **kwargs)
                 self.assertTrue(str(e.exception).startswith(name + ":"), str(e.exception))
+        # Depth layouts (read in place when float32 C-contiguous, else converted): same result.
+        ref_one = occgt._occgt.loftr_coarse_supervision(*one)
+        padded = np.zeros((480, 1280), np.float32)
+        padded[:, ::2] = one[0]
+        for name, d in (("float64", one[0].astype(np.float64)), ("fortran", np.asfortranarray(
+                one[0])), ("strided", padded[:, ::2]), ("big-endian", one[0].astype(">f4"))):
+            with self.subTest(layout=name):
+                r = occgt._occgt.loftr_coarse_supervision(d, *one[1:])
+                for key in ("warped0", "warped1", "target0", "target1", "matches"):
+                    self.assertTrue(np.array_equal(r[key], ref_one[key], equal_nan=True), key)
         with self.assertRaises(ValueError) as e:
             occgt._occgt.loftr_coarse_supervision(one[0].astype(np.int32), *one[1:])
         self.assertTrue(str(e.exception).startswith("depth0: expected a depth map"))

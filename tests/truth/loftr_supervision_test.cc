@@ -24,7 +24,7 @@ Eigen::Matrix3d TestK() {
 
 LoftrView View(const DepthImage* depth) {
   LoftrView v;
-  v.depth = depth;
+  if (depth != nullptr) v.SetDepth(*depth);
   v.K = TestK();
   v.image_width = kW;
   v.image_height = kH;
