@@ -318,7 +318,9 @@ void PublishIndices(const Recipe& recipe, const io::DatasetReader& reader,
     }
     rows.push_back(row);
     if (!intrinsics.count(p->scene)) {
-      const Eigen::Matrix3d K = truth::WorkingCamera(f0, {recipe.width, recipe.height}).K();
+      // At the consumer's resolution (LoFTR resizes to 640x480), not the working one.
+      const Eigen::Matrix3d K =
+          truth::WorkingCamera(f0, {shards::kLoftrWidth, shards::kLoftrHeight}).K();
       std::array<double, 9> k9;
       for (int r = 0; r < 3; ++r) {
         for (int c = 0; c < 3; ++c) k9[r * 3 + c] = K(r, c);

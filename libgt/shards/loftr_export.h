@@ -6,8 +6,10 @@
 //                                                           frame0, frame1)
 //                                    "score" float32 [N]   overlap of the pair
 //   {split}_list.txt                 one npz file name per line ("scene0707_00.npz")
-//   intrinsics.npz                   scene -> float64 [3, 3], K at the 640x480 working
-//                                    resolution (row-major)
+//   intrinsics.npz                   scene -> float64 [3, 3], K at 640x480 (row-major):
+//                                    the resolution LoFTR's ScanNet loader resizes images
+//                                    to (and uses this K unchanged), whatever the
+//                                    recipe's working resolution (kLoftrWidth/Height)
 // LoFTR keeps pairs with score > min_overlap_score (strict) and recomputes relative poses
 // from the dataset's pose files, so only names and scores go in.
 // Test (test-1500 style), under OUT:
@@ -42,7 +44,13 @@ struct LoftrPair {
   std::array<double, 12> cam1_from_cam0{};  // T_0to1, row-major 3x4 (test export)
 };
 
-// K (row-major 3x3) per scene name, at the 640x480 working resolution.
+// The image size of LoFTR's ScanNet loader (read_scannet_gray resizes every image to
+// 640x480 and pairs it with intrinsics.npz's K as stored): intrinsics.npz holds K at this
+// size, not at the working resolution of the shards.
+inline constexpr int kLoftrWidth = 640;
+inline constexpr int kLoftrHeight = 480;
+
+// K (row-major 3x3) per scene name, at kLoftrWidth x kLoftrHeight.
 using SceneIntrinsics = std::map<std::string, std::array<double, 9>>;
 
 // (XXXX, YY) for "sceneXXXX_YY", nullopt otherwise.
