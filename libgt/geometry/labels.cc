@@ -231,10 +231,27 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRo
   LabelRowBody<false>(kn, cols, dep, n, v, nullptr, nullptr, counts);
 }
 
-// labels[i] = codes[i] for i < n.
+// labels[i] = codes[i] for i < n, and counts[k] += the number of codes k (0 .. 5; every
+// code is one of them).
 __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void StoreLabels(
-    const int32_t* __restrict codes, int n, uint8_t* __restrict labels) {
-  for (int i = 0; i < n; ++i) labels[i] = static_cast<uint8_t>(codes[i]);
+    const int32_t* __restrict codes, int n, uint8_t* __restrict labels,
+    int64_t* __restrict counts) {
+  int32_t c0 = 0, c1 = 0, c2 = 0, c3 = 0, c4 = 0;
+  for (int i = 0; i < n; ++i) {
+    const int32_t code = codes[i];
+    labels[i] = static_cast<uint8_t>(code);
+    c0 += code == 0;
+    c1 += code == 1;
+    c2 += code == 2;
+    c3 += code == 3;
+    c4 += code == 4;
+  }
+  counts[0] += c0;
+  counts[1] += c1;
+  counts[2] += c2;
+  counts[3] += c3;
+  counts[4] += c4;
+  counts[5] += n - (c0 + c1 + c2 + c3 + c4);
 }
 
 void CheckInputs(const DepthImage& depth_a, const Camera& cam_a, const DepthImage& depth_b,
@@ -373,21 +390,20 @@ DirectionLabels LabelDirection(const DepthImage& depth_a, const Camera& cam_a,
   out.width = cam_a.width;
   out.height = cam_a.height;
   const size_t w = static_cast<size_t>(out.width);
-  // Rows are labelled into L1-resident scratch and appended: the maps are written once
-  // (resize would first zero 2.8 MB at 640x480, then the kernel would overwrite it).
-  out.labels.reserve(w * out.height);
-  out.warped_xy.reserve(w * out.height * 2);
+  // The kernel writes the warp map in place (its allocator leaves the floats uninitialised:
+  // no 2.4 MB zeroing at 640x480 before the kernel overwrites it) and the int32 codes of a
+  // row into L1-resident scratch, which StoreLabels narrows into the label map and counts.
+  out.labels.resize(w * out.height);
+  out.warped_xy.resize(w * out.height * 2);
+  std::array<int64_t, kNumPixelLabels> counts{};
   const Columns cols(kn, out.width, 1);
   std::vector<int32_t> codes(w);
-  std::vector<uint8_t> row_labels(w);
-  std::vector<float> row_xy(2 * w);
   for (int v = 0; v < out.height; ++v) {
     LabelRowMaps(kn, cols, depth_a.values_m.data() + v * w, out.width, v, codes.data(),
-                 row_xy.data());
-    StoreLabels(codes.data(), out.width, row_labels.data());
-    out.labels.insert(out.labels.end(), row_labels.begin(), row_labels.end());
-    out.warped_xy.insert(out.warped_xy.end(), row_xy.begin(), row_xy.end());
+                 out.warped_xy.data() + 2 * w * v);
+    StoreLabels(codes.data(), out.width, out.labels.data() + w * v, counts.data());
   }
+  out.counts = counts;
   return out;
 }
 
@@ -466,6 +482,12 @@ DirectionMetrics MetricsFromLabels(const DirectionLabels& labels, int score_stri
     throw InputError("labels", "label map size does not match width x height");
   }
   DirectionMetrics m;
+  if (score_stride == 1 && labels.counts) {  // LabelDirection counted them
+    m.counts = *labels.counts;
+    m.sampled = static_cast<int64_t>(labels.labels.size());
+    FinishMetrics(&m);
+    return m;
+  }
   const int n = (labels.width + score_stride - 1) / score_stride;
   for (int v = 0; v < labels.height; v += score_stride) {
     const uint8_t* row = labels.labels.data() + static_cast<size_t>(v) * labels.width;

@@ -31,10 +31,12 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "libgt/core/camera.h"
+#include "libgt/core/default_init_allocator.h"
 #include "libgt/core/depth.h"
 #include "libgt/core/pose.h"
 
@@ -122,7 +124,11 @@ struct DirectionLabels {
   // the continuous projection of the pixel, computed in float32 (see "Arithmetic"). NaN for
   // kNoDepth and for points that fail the cheirality test; finite (possibly outside B) for every
   // other label.
-  std::vector<float> warped_xy;
+  // (Its allocator default-initialises: resize() leaves new floats unset.)
+  std::vector<float, DefaultInitAllocator<float>> warped_xy;
+  // Number of pixels of each PixelLabel code in `labels`, when LabelDirection made them
+  // (MetricsFromLabels at stride 1 uses them instead of counting again); nullopt otherwise.
+  std::optional<std::array<int64_t, kNumPixelLabels>> counts;
 
   PixelLabel at(int u, int v) const {
     return static_cast<PixelLabel>(labels[static_cast<size_t>(v) * width + u]);

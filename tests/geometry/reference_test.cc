@@ -213,6 +213,11 @@ TEST(Reference, ScoreDirectionEqualsMetricsFromLabels) {
     const RandomScene s = MakeScene(&rng, w, h);
     const LabelOptions o = RandomOptions(&rng, trial);
     const DirectionLabels l = LabelDirection(s.depth_a, s.cam_a, s.depth_b, s.cam_b, s.b_from_a, o);
+    // The counts LabelDirection keeps are the label map's histogram.
+    ASSERT_TRUE(l.counts.has_value());
+    DirectionLabels uncounted = l;
+    uncounted.counts.reset();
+    EXPECT_EQ(*l.counts, MetricsFromLabels(uncounted, 1).counts) << "trial " << trial;
     for (int stride : {1, 2, 3, 8, 10}) {
       const DirectionMetrics a = MetricsFromLabels(l, stride);
       const DirectionMetrics b =
