@@ -1,6 +1,6 @@
 // Subcommands of the occgt binary. Each Add*Command registers its CLI11 subcommand with
 // a callback; callbacks throw gt::InputError for bad input, which main() turns into one
-// line on stderr and exit code 1.
+// line on stderr and exit code 1, or 2 when it names a flag (a usage error, apps/usage.h).
 #pragma once
 
 #include <CLI/CLI.hpp>
