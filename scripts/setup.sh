@@ -27,7 +27,7 @@ packages=(
   pybind11-dev python3-dev
 )
 if [[ $want_tests == 1 ]]; then
-  packages+=(python3 python3-numpy python3-jsonschema python3-yaml python3-pil python3-opencv chromium python3-torch
+  packages+=(python3 python3-numpy python3-jsonschema python3-yaml python3-pil python3-opencv mypy chromium python3-torch
     python3-venv python3-pip python3-setuptools python3-wheel)
 fi
 if [[ -n "${OCCGT_EXTRA_PACKAGES:-}" ]]; then

@@ -35,6 +35,7 @@ void KeepFreedMemory() {
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
 #endif
 }
+
 }  // namespace occgt_py
 
 PYBIND11_MODULE(_occgt, m) {

@@ -177,8 +177,8 @@ class PairIndexDataset:
                  npz_root: Optional[str] = None, **options: Any) -> None:
         if occupancy not in (None, "words", "dense"):
             raise ValueError(f"occupancy: expected None, 'words' or 'dense', got {occupancy!r}")
-        self.pairs: List[PairRef] = (list(pairs) if isinstance(pairs, (list, tuple))
-                                     else read_pair_index(pairs, scene_names, npz_root))
+        self.pairs: List[PairRef] = (read_pair_index(pairs, scene_names, npz_root)
+                                     if isinstance(pairs, (str, os.PathLike)) else list(pairs))
         self.root, self.format = root, format
         self.width, self.height = int(width), int(height)
         self.preset, self.images, self.occupancy = preset, bool(images), occupancy
@@ -298,13 +298,14 @@ class PairIndexDataset:
         id0, id1 = self.frame_ids(index)
         depth0, K0, world_from_cam0 = scene.load(id0, self.width, self.height)
         depth1, K1, world_from_cam1 = scene.load(id1, self.width, self.height)
-        options = {"min_depth_m": scene.min_depth_m, "max_depth_m": scene.max_depth_m}
+        options: Dict[str, Any] = {"min_depth_m": scene.min_depth_m,
+                                   "max_depth_m": scene.max_depth_m}
         options.update(self.options)
         if self.occupancy is not None and self.scope != "pair":
             options["scope_map"] = self._fused(scene, id0, id1, options)
-        truth = occgt.pair_ground_truth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1,
-                                        self.preset, occupancy=self.occupancy is not None,
-                                        **options)
+        truth: Dict[str, Any] = dict(occgt.pair_ground_truth(
+            depth0, depth1, K0, K1, world_from_cam0, world_from_cam1, self.preset,
+            occupancy=self.occupancy is not None, **options))
         sample: Dict[str, Any] = {}
         if self.images:
             for k, frame_id in (("image0", id0), ("image1", id1)):

@@ -8,7 +8,7 @@ docs/PYTHON.md, "Supervision".
 """
 from __future__ import annotations
 
-from typing import Any, Dict, List, Literal, Mapping, Optional, Tuple
+from typing import Any, Dict, List, Literal, Mapping, Optional, Tuple, Union
 
 import numpy as np
 import torch
@@ -157,7 +157,8 @@ def loftr_supervision(
         raise ValueError("batch: padded images (LoFTR's MegaDepth 'mask0'/'mask1') are not "
                          "supported")
     _require(batch, ["depth0", "depth1", "K0", "K1", "T_0to1"], mode)
-    device = batch["depth0"].device if isinstance(batch["depth0"], torch.Tensor) else "cpu"
+    device: Union[torch.device, str] = (batch["depth0"].device
+                                        if isinstance(batch["depth0"], torch.Tensor) else "cpu")
     if mode == "loftr":
         if label_options:
             raise ValueError(f"{sorted(label_options)[0]}: not an option of mode 'loftr'")
@@ -189,8 +190,9 @@ def _loftr(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_window:
     for b in range(n):
         per_pair.append(_occgt.loftr_coarse_supervision(
             depth0[b], depth1[b], K0[b], K1[b], T01[b], None if T10 is None else T10[b],
-            coarse_stride=stride, scale0=tuple(float(v) for v in scale0[b]),
-            scale1=tuple(float(v) for v in scale1[b]), image_size0=size0, image_size1=size1,
+            coarse_stride=stride, scale0=(float(scale0[b][0]), float(scale0[b][1])),
+            scale1=(float(scale1[b][0]), float(scale1[b][1])), image_size0=size0,
+            image_size1=size1,
             compat=compat))
     stack = lambda key: torch.from_numpy(np.stack([p[key] for p in per_pair]))  # noqa: E731
     w_pt0_i, pt1_i = stack("warped0"), stack("grid1")
