@@ -79,9 +79,19 @@ std::shared_ptr<const gt::DepthImage> DepthFromArray(py::handle obj, const std::
   size.height = static_cast<int>(std::min<py::ssize_t>(a.shape(0), gt::truth::kMaxResolution + 1));
   std::string error;
   if (!size.Check(&error)) ThrowValue(argument, error + " (shape " + ShapeText(a) + ")");
-  auto depth = std::make_shared<gt::DepthImage>(size.width, size.height);
-  // One copy (and the float64 -> float32 rounding, as a C cast) straight into the image:
-  // numpy.copyto into a view of its buffer, whatever the strides of the input.
+  auto depth = std::make_shared<gt::DepthImage>();
+  depth->width = size.width;
+  depth->height = size.height;
+  const auto native_float32 = py::array::c_style | py::array::forcecast;
+  if (py::isinstance<py::array_t<float, native_float32>>(a)) {
+    // float32, C order, native byte order: one copy of the buffer (no zeroing first).
+    const float* p = static_cast<const float*>(a.data());
+    depth->values_m.assign(p, p + static_cast<size_t>(size.width) * size.height);
+    return depth;
+  }
+  depth->values_m.resize(static_cast<size_t>(size.width) * size.height);
+  // Any other layout: one copy (and the float64 -> float32 rounding, as a C cast) straight
+  // into the image: numpy.copyto into a view of its buffer, whatever the strides of the input.
   py::capsule no_owner(depth.get(), [](void*) {});
   py::array_t<float> view({a.shape(0), a.shape(1)}, depth->values_m.data(), no_owner);
   py::module_::import("numpy").attr("copyto")(view, a, "casting"_a = "same_kind");
