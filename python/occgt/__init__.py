@@ -138,7 +138,7 @@ def pair_ground_truth(
     mutual: bool = True,
     occupancy: bool = False,
     voxel_m: float = 0.05,
-    max_range_m: float = 10.0,
+    max_range_m: Optional[float] = None,
     near_m: float = 0.1,
     far_m: float = 10.0,
     bins: int = 64,
@@ -182,7 +182,8 @@ def pair_ground_truth(
         occupancy: also compute the 64-bin occupancy volumes of both cameras (the pair's two
             depth maps fused into one OctoMap-equivalent voxel map, docs/GROUND_TRUTH.md §5).
         voxel_m: voxel size of the fused map (metres).
-        max_range_m: ray truncation of the fusion (metres; <= 0 unlimited).
+        max_range_m: ray truncation of the fusion (metres; <= 0 unlimited); None = far_m,
+            as a recipe's occupancy and ``occgt occupancy`` have it.
         near_m, far_m: first and last bin edge (planar depth, metres).
         bins: number of depth bins D, 1..64 (one uint64 word per ray).
         spacing: "linear" | "log" | "inverse": the bin edges.
@@ -268,9 +269,11 @@ def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = 640, heigh
     options.setdefault("min_depth_m", scene.min_depth_m)
     options.setdefault("max_depth_m", scene.max_depth_m)
     if scope != "pair" and options.get("occupancy") and "scope_map" not in options:
+        given = options.get("max_range_m")  # None: far_m, pair_ground_truth's rule
+        max_range_m = float(options.get("far_m", 10.0) if given is None else given)
         options["scope_map"] = scene.fuse(
             id0, id1, width, height, scope=scope, voxel_m=options.get("voxel_m", 0.05),
-            max_range_m=options.get("max_range_m", 10.0), min_depth_m=options["min_depth_m"],
+            max_range_m=max_range_m, min_depth_m=options["min_depth_m"],
             max_depth_m=options["max_depth_m"])
     return pair_ground_truth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1, preset,
                              **options)

@@ -33,7 +33,7 @@ def pair_ground_truth(
     mutual: bool = True,
     occupancy: bool = False,
     voxel_m: float = 0.05,
-    max_range_m: float = 10.0,
+    max_range_m: Optional[float] = None,
     near_m: float = 0.1,
     far_m: float = 10.0,
     bins: int = 64,

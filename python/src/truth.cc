@@ -36,7 +36,9 @@ struct PairArguments {
   int stride;
   std::string anchor;
   bool mutual, occupancy;
-  double voxel_m, max_range_m, near_m, far_m;
+  double voxel_m;
+  std::optional<double> max_range_m;  // none: far_m (as a recipe and `occgt occupancy`)
+  double near_m, far_m;
   int bins;
   std::string spacing, traversal, occupancy_mode;
   const PyScopeMap* scope_map = nullptr;  // Scene.fuse's map, or none (fuse the pair here)
@@ -61,7 +63,7 @@ gt::truth::PairTruthOptions MakeOptions(const PairArguments& a) {
   o.patches.mutual = a.mutual;
   o.occupancy = a.occupancy;
   o.fusion.voxel_size_m = a.voxel_m;
-  o.fusion.max_range_m = a.max_range_m;
+  o.fusion.max_range_m = a.max_range_m.value_or(a.far_m);
   o.bins.num_bins = a.bins;
   o.bins.near_m = a.near_m;
   o.bins.far_m = a.far_m;
@@ -197,7 +199,7 @@ void BindTruth(py::module_& m) {
          std::optional<std::string> relative_to, std::optional<std::string> bounds,
          std::optional<std::string> target_lookup, std::optional<std::string> missing_target,
          int stride, std::string anchor, bool mutual, bool occupancy, double voxel_m,
-         double max_range_m, double near_m, double far_m, int bins, std::string spacing,
+         std::optional<double> max_range_m, double near_m, double far_m, int bins, std::string spacing,
          std::string traversal, std::string occupancy_mode, const PyScopeMap* scope_map) {
         const PairArguments args{std::move(preset),
                                  abs_tol_m,
@@ -228,7 +230,7 @@ void BindTruth(py::module_& m) {
       "min_depth_m"_a = py::none(), "max_depth_m"_a = py::none(), "relative_to"_a = py::none(),
       "bounds"_a = py::none(), "target_lookup"_a = py::none(), "missing_target"_a = py::none(),
       "stride"_a = 8, "anchor"_a = "center", "mutual"_a = true, "occupancy"_a = false,
-      "voxel_m"_a = 0.05, "max_range_m"_a = 10.0, "near_m"_a = 0.1, "far_m"_a = 10.0, "bins"_a = 64,
+      "voxel_m"_a = 0.05, "max_range_m"_a = py::none(), "near_m"_a = 0.1, "far_m"_a = 10.0, "bins"_a = 64,
       "spacing"_a = "linear", "traversal"_a = "exact", "occupancy_mode"_a = "octomap",
       "scope_map"_a = py::none(),
       "The ground truth of one pair (truth::ComputePairTruth); see occgt.pair_ground_truth.");

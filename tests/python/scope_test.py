@@ -47,6 +47,22 @@ class Scopes(unittest.TestCase):
         # A wider scope knows more of the volume than the pair alone.
         self.assertFalse(np.array_equal(words["pair"], words["window:2"]))
 
+    def test_far_m_is_the_ray_range(self) -> None:
+        """max_range_m=None is far_m, as `occgt occupancy --far-m` and a recipe have it."""
+        out = common.scratch("scope_far_m")
+        common.occgt("occupancy", "--root", self.root, "--format", "sevenscenes", "--scene",
+                     "rgbd-frames", "--frames", ",".join(PAIR), "--far-m", "2.5", "--out", out,
+                     "--resolution", "160x120")
+        got = occgt.pair_from_scene(self.scene, *PAIR, width=160, height=120, occupancy=True,
+                                    far_m=2.5)
+        common.assert_same_as_folder(self, got, out, common.OCCUPANCY_ARRAYS, "far_m 2.5")
+        ten = occgt.pair_from_scene(self.scene, *PAIR, width=160, height=120, occupancy=True,
+                                    far_m=2.5, max_range_m=10.0)
+        self.assertFalse(np.array_equal(ten["known0"], got["known0"]))
+        window = occgt.pair_from_scene(self.scene, *PAIR, width=160, height=120, occupancy=True,
+                                       far_m=2.5, scope="window:1")
+        self.assertEqual(window["bin_edges_m"][-1], 2.5)
+
     def test_shared_map_and_errors(self) -> None:
         fused = self.scene.fuse(*PAIR, 160, 120, scope="scene:20", voxel_m=0.1)
         d0, K0, T0 = self.scene.load(PAIR[0], 160, 120)

@@ -281,9 +281,10 @@ class PairIndexDataset:
         """The scope's map of the pair; a scene scope's map is kept for the scene's next pairs."""
         if self.scope.startswith("scene:") and self._scene_map and self._scene_map[0] == scene.name:
             return self._scene_map[1]
+        given = options.get("max_range_m")  # None: far_m, pair_ground_truth's rule
+        max_range_m = float(options.get("far_m", 10.0) if given is None else given)
         fused = scene.fuse(id0, id1, self.width, self.height, scope=self.scope,
-                           voxel_m=options.get("voxel_m", 0.05),
-                           max_range_m=options.get("max_range_m", 10.0),
+                           voxel_m=options.get("voxel_m", 0.05), max_range_m=max_range_m,
                            min_depth_m=options["min_depth_m"], max_depth_m=options["max_depth_m"])
         if self.scope.startswith("scene:"):
             self._scene_map = (scene.name, fused)
