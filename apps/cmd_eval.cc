@@ -6,6 +6,7 @@
 #include <tbb/global_control.h>
 
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -74,7 +75,18 @@ void Run(const Args& args) {
   }
   options.aggregate = gt::ParseAggregate(args.aggregate, "--aggregate");
   std::string error;
-  if (!options.Check(&error)) throw gt::InputError("--" + error.substr(0, error.find(':')), error);
+  if (!options.Check(&error)) {
+    // The option's field name -> the flag that set it.
+    static const std::map<std::string, std::string> kFlags = {
+        {"ransac_px", "--ransac-px"},         {"confidence", "--ransac-conf"},
+        {"auc_thresholds_deg", "--auc"},      {"epipolar_threshold", "--epipolar-threshold"},
+        {"px", "--px"},                       {"occlusion_bins", "--occlusion-bins"},
+        {"overlap_bins", "--overlap-bins"},   {"curve_step", "--curve-step"},
+        {"failure_error_deg", "--failure-error"}, {"occlusion_definitions", "--occlusion"}};
+    const std::string field = error.substr(0, error.find(':'));
+    const auto it = kFlags.find(field);
+    throw gt::InputError(it == kFlags.end() ? "occgt eval" : it->second, error);
+  }
   if (args.threads < 0) throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
   std::unique_ptr<tbb::global_control> limit;
   if (args.threads > 0) {

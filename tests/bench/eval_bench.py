@@ -3,12 +3,14 @@
 <= 30 s on 2 cores).
 
     tests/bench/eval_bench.py [--build build] [--scratch /tmp/occgt-eval-bench]
-                              [--pairs 1500] [--matches 2000] [--reps 3]
+                              [--pairs 1500] [--matches 2000] [--reps 3] [--noise-px 0.5]
 
 1. A synthetic split of --pairs pairs (occgt synth rooms at 640x480 through a demo-like
    recipe, written once into the scratch folder and reused).
 2. Predictions per pair: --matches matches, 80 % inliers (visible pixels of image 0 warped
-   with the shards' depth, plus 0.5 px Gaussian noise) and 20 % random outliers.
+   with the shards' depth, plus --noise-px Gaussian noise in image 1) and 20 % random
+   outliers. RANSAC's iterations, hence the time, grow fast as the noise nears the 0.5 px
+   threshold (fewer points pass it): the figure depends on the predictions.
 3. `occgt eval --threads 1` and `--threads 2`, --reps times each in alternation; medians of
    wall time. Baseline in the same run: tests/eval/reference.py's LoFTR-style Python loop
    (cv2, one process) on the same predictions, pose only, once; the ratios are printed.
@@ -55,7 +57,7 @@ shards: {{samples_per_shard: 100}}
 """
 
 
-def make_predictions(split, n_matches, out):
+def make_predictions(split, n_matches, noise_px, out):
     rng = np.random.default_rng(0)
     arrays = {}
     metas = {}
@@ -71,7 +73,7 @@ def make_predictions(split, n_matches, out):
         p = np.stack([(u - K0[0, 2]) / K0[0, 0] * d, (v - K0[1, 2]) / K0[1, 1] * d, d], 1)
         q = p @ T[:3, :3].T + T[:3, 3]
         x1 = np.stack([K1[0, 0] * q[:, 0] / q[:, 2] + K1[0, 2], K1[1, 1] * q[:, 1] / q[:, 2] + K1[1, 2]], 1)
-        x1 = np.clip(x1 + rng.normal(0, 0.5, x1.shape), 0, [W - 1, H - 1])
+        x1 = np.clip(x1 + rng.normal(0, noise_px, x1.shape), 0, [W - 1, H - 1])
         k0 = np.stack([u, v], 1).astype(np.float64)
         out0 = rng.uniform([0, 0], [W - 1, H - 1], (n_matches - n_in, 2))
         out1 = rng.uniform([0, 0], [W - 1, H - 1], (n_matches - n_in, 2))
@@ -89,6 +91,7 @@ def main():
     ap.add_argument("--pairs", type=int, default=1500)
     ap.add_argument("--matches", type=int, default=2000)
     ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--noise-px", type=float, default=0.5)
     args = ap.parse_args()
     binary = os.path.join(args.build, "apps", "occgt")
     os.makedirs(args.scratch, exist_ok=True)
@@ -99,9 +102,10 @@ def main():
             f.write(RECIPE.format(scenes=(args.pairs + 24) // 25))
         subprocess.run([binary, "build", recipe, "--out", split], check=True,
                        stdout=subprocess.DEVNULL)
-    preds = os.path.join(args.scratch, f"pred_{args.matches}.npz")
-    arrays, metas = make_predictions(split, args.matches, preds)
-    print(f"split: {len(metas)} pairs, {args.matches} matches each, 80 % inliers")
+    preds = os.path.join(args.scratch, f"pred_{args.matches}_{args.noise_px}.npz")
+    arrays, metas = make_predictions(split, args.matches, args.noise_px, preds)
+    print(f"split: {len(metas)} pairs, {args.matches} matches each, 80 % inliers with "
+          f"{args.noise_px} px noise")
     times = {"1": [], "2": []}
     for _ in range(args.reps):
         for t in ("1", "2"):
