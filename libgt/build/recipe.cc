@@ -531,6 +531,8 @@ json Recipe::ToJson() const {
         {"frustum", selection.pruning.frustum}}},
       {"score_stride", selection.score_stride},
       {"overlap", {selection.overlap_lo, selection.overlap_hi}},
+      {"visible_overlap", {selection.visible_overlap_lo, selection.visible_overlap_hi}},
+      {"visible_aggregate", AggregateName(selection.visible_aggregate)},
       {"occlusion", {selection.occlusion_lo, selection.occlusion_hi}},
       {"occlusion_metric", OcclusionMetricName(selection.occlusion_metric)},
       {"aggregate", AggregateName(selection.aggregate)},
@@ -638,6 +640,14 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     if (s.contains("overlap")) {
       o.overlap_lo = s["overlap"][0].get<double>();
       o.overlap_hi = s["overlap"][1].get<double>();
+    }
+    if (s.contains("visible_overlap")) {
+      o.visible_overlap_lo = s["visible_overlap"][0].get<double>();
+      o.visible_overlap_hi = s["visible_overlap"][1].get<double>();
+    }
+    if (s.contains("visible_aggregate")) {
+      o.visible_aggregate = ParseAggregate(s["visible_aggregate"].get<std::string>(),
+                                           file + ": selection.visible_aggregate");
     }
     if (s.contains("occlusion")) {
       o.occlusion_lo = s["occlusion"][0].get<double>();

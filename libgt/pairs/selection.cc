@@ -290,6 +290,10 @@ double PairOcclusion(const ScoredPair& p, Aggregate aggregate, OcclusionMetric m
   return Combine(OcclusionOf(p.m01, metric), OcclusionOf(p.m10, metric), aggregate);
 }
 
+double PairVisibleOverlap(const ScoredPair& p, Aggregate aggregate) {
+  return Combine(p.m01.consistent_overlap, p.m10.consistent_overlap, aggregate);
+}
+
 uint64_t SceneSeed(uint64_t recipe_seed, const std::string& scene_name) {
   uint64_t h = 1469598103934665603ull;  // FNV-1a 64
   for (unsigned char ch : scene_name) {
@@ -327,11 +331,16 @@ std::vector<size_t> FilterAndSample(const std::vector<ScoredPair>& scored,
                                     const SelectionOptions& options, uint64_t scene_seed,
                                     DropCounts* drops) {
   std::vector<size_t> passed;
-  int64_t by_overlap = 0, by_occlusion = 0;
+  int64_t by_overlap = 0, by_visible = 0, by_occlusion = 0;
   for (size_t k = 0; k < scored.size(); ++k) {
     const double ov = PairOverlap(scored[k], options.aggregate);
     if (!(ov >= options.overlap_lo && ov <= options.overlap_hi)) {
       ++by_overlap;
+      continue;
+    }
+    const double vis = PairVisibleOverlap(scored[k], options.visible_aggregate);
+    if (!(vis >= options.visible_overlap_lo && vis <= options.visible_overlap_hi)) {
+      ++by_visible;
       continue;
     }
     const double oc = PairOcclusion(scored[k], options.aggregate, options.occlusion_metric);
@@ -342,6 +351,7 @@ std::vector<size_t> FilterAndSample(const std::vector<ScoredPair>& scored,
     passed.push_back(k);
   }
   if (by_overlap) (*drops)["filter.overlap"] += by_overlap;
+  if (by_visible) (*drops)["filter.visible_overlap"] += by_visible;
   if (by_occlusion) (*drops)["filter.occlusion"] += by_occlusion;
 
   std::mt19937_64 rng(scene_seed);
@@ -409,6 +419,9 @@ bool SelectionOptions::Check(std::string* error) const {
   if (score_stride < 1) return *error = "selection.score_stride: expected an integer >= 1", false;
   if (!range_ok(overlap_lo, overlap_hi)) {
     return *error = "selection.overlap: expected [lo, hi] with 0 <= lo <= hi <= 1", false;
+  }
+  if (!range_ok(visible_overlap_lo, visible_overlap_hi)) {
+    return *error = "selection.visible_overlap: expected [lo, hi] with 0 <= lo <= hi <= 1", false;
   }
   if (!range_ok(occlusion_lo, occlusion_hi)) {
     return *error = "selection.occlusion: expected [lo, hi] with 0 <= lo <= hi <= 1", false;

@@ -58,6 +58,12 @@ struct SelectionOptions {
   double occlusion_lo = 0.0, occlusion_hi = 1.0;
   OcclusionMetric occlusion_metric = OcclusionMetric::kImage;
   Aggregate aggregate = Aggregate::kMean;  // how the two directions are combined
+  // Visible overlap (consistent_overlap = VISIBLE / sampled, the SuperGlue-style score) in
+  // [lo, hi], its two directions combined with visible_aggregate: `overlap` counts occluded
+  // pixels too, so an occlusion-heavy selection needs this to keep out pairs that only see
+  // each other through walls. Default min: the weaker direction must see enough.
+  double visible_overlap_lo = 0.0, visible_overlap_hi = 1.0;
+  Aggregate visible_aggregate = Aggregate::kMin;
   int quota_per_scene = 0;                 // max pairs per scene after filters; 0 = all
   int balance_bins = 0;                    // sample evenly across overlap bins; 0 = off
   ImportPairsOptions import_pairs;
@@ -161,13 +167,15 @@ std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>
 // The two directions combined (geometry/aggregate.h).
 double PairOverlap(const ScoredPair& p, Aggregate aggregate);
 double PairOcclusion(const ScoredPair& p, Aggregate aggregate, OcclusionMetric metric);
+double PairVisibleOverlap(const ScoredPair& p, Aggregate aggregate);
 
 // Seed of a scene: FNV-1a 64 of the name mixed with the recipe seed (SplitMix64).
 uint64_t SceneSeed(uint64_t recipe_seed, const std::string& scene_name);
 // Uniform integer in [0, n) from raw engine outputs (rejection sampling; portable).
 uint64_t UniformBelow(uint64_t n, std::mt19937_64* rng);
 
-// Filters (overlap range "filter.overlap", occlusion range "filter.occlusion"), then
+// Filters (overlap range "filter.overlap", visible overlap range "filter.visible_overlap",
+// occlusion range "filter.occlusion", in this order), then
 // optional balancing over `balance_bins` equal bins of the overlap range
 // ("sample.balance"), then the per-scene quota ("sample.quota"). Returns indices into
 // `scored` in selection order: increasing (i0, i1). Inclusive ranges.

@@ -66,6 +66,8 @@ selection:
   pruning: {max_distance_m: 3.5, max_view_angle_deg: 60, frustum: false}
   score_stride: 4
   overlap: [0.4, 0.8]
+  visible_overlap: [0.15, 0.9]
+  visible_aggregate: max
   occlusion: [0.3, 1]
   occlusion_metric: visible
   aggregate: min
@@ -96,6 +98,9 @@ loftr_export: {kind: test}
   EXPECT_FALSE(r.selection.pruning.frustum);
   EXPECT_DOUBLE_EQ(r.selection.overlap_lo, 0.4);
   EXPECT_DOUBLE_EQ(r.selection.occlusion_lo, 0.3);
+  EXPECT_DOUBLE_EQ(r.selection.visible_overlap_lo, 0.15);
+  EXPECT_DOUBLE_EQ(r.selection.visible_overlap_hi, 0.9);
+  EXPECT_EQ(r.selection.visible_aggregate, Aggregate::kMax);
   EXPECT_EQ(r.selection.aggregate, Aggregate::kMin);
   EXPECT_EQ(r.selection.occlusion_metric, OcclusionMetric::kVisible);
   EXPECT_EQ(r.selection.quota_per_scene, 50);
@@ -130,6 +135,13 @@ TEST(Recipe, WrongTypeNamesFieldAndExpectation) {
 TEST(Recipe, SemanticChecksNameTheField) {
   EXPECT_EQ(ErrorOf(std::string(kMinimal) + "selection: {overlap: [0.8, 0.4]}\n"),
             "recipes/x.yaml: selection.overlap: expected [lo, hi] with 0 <= lo <= hi <= 1");
+  EXPECT_EQ(ErrorOf(std::string(kMinimal) + "selection: {visible_overlap: [0.5, 0.2]}\n"),
+            "recipes/x.yaml: selection.visible_overlap: expected [lo, hi] with 0 <= lo <= hi "
+            "<= 1");
+  EXPECT_EQ(ErrorOf(std::string(kMinimal) + "selection: {visible_aggregate: median}\n")
+                .find("recipes/x.yaml: selection.visible_aggregate:"),
+            0u);
+  EXPECT_EQ(ParseRecipe(kMinimal, "f.yaml", "/x").selection.visible_aggregate, Aggregate::kMin);
   EXPECT_EQ(ErrorOf(std::string(kMinimal) + "patches: {stride: 7}\n")
                 .find("recipes/x.yaml: patches.stride:"),
             0u);

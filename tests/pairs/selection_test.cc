@@ -230,6 +230,39 @@ TEST(Filters, AggregationMinMeanMax) {
   EXPECT_DOUBLE_EQ(PairOcclusion(v, Aggregate::kMax, OcclusionMetric::kImage), 0.3);
 }
 
+TEST(Filters, VisibleOverlapKeepsPairsThatSeeTheSameSurfaces) {
+  // Two pairs with the same overlap and occlusion: one sees its partner (visible 0.3 / 0.25),
+  // one only through walls (0.3 one way, 0.02 the other).
+  std::vector<ScoredPair> s = {Fake(0, 1, 0.6, 0.6, 0.3, 0.3), Fake(1, 2, 0.6, 0.6, 0.3, 0.3)};
+  s[0].m01.consistent_overlap = 0.30;
+  s[0].m10.consistent_overlap = 0.25;
+  s[1].m01.consistent_overlap = 0.30;
+  s[1].m10.consistent_overlap = 0.02;
+  EXPECT_DOUBLE_EQ(PairVisibleOverlap(s[1], Aggregate::kMin), 0.02);
+  EXPECT_DOUBLE_EQ(PairVisibleOverlap(s[1], Aggregate::kMean), 0.16);
+  SelectionOptions o;
+  o.overlap_lo = 0.4;
+  o.occlusion_lo = 0.2;
+  DropCounts none;
+  EXPECT_EQ(FilterAndSample(s, o, 1, &none).size(), 2u);  // the default [0, 1] keeps both
+  EXPECT_TRUE(none.empty());
+  o.visible_overlap_lo = 0.1;  // weaker direction (min, the default) must see 10 %
+  DropCounts d;
+  EXPECT_EQ(FilterAndSample(s, o, 1, &d), std::vector<size_t>{0});
+  EXPECT_EQ(d, (DropCounts{{"filter.visible_overlap", 1}}));
+  o.visible_aggregate = Aggregate::kMean;  // mean 0.16 passes
+  EXPECT_EQ(FilterAndSample(s, o, 1, &d).size(), 2u);
+  o.visible_aggregate = Aggregate::kMin;
+  o.visible_overlap_hi = 0.2;  // upper bound: 0.25 is too visible
+  DropCounts d2;
+  EXPECT_TRUE(FilterAndSample(s, o, 1, &d2).empty());
+  EXPECT_EQ(d2["filter.visible_overlap"], 2);
+  std::string error;
+  o.visible_overlap_lo = 0.5;
+  EXPECT_FALSE(o.Check(&error));
+  EXPECT_EQ(error, "selection.visible_overlap: expected [lo, hi] with 0 <= lo <= hi <= 1");
+}
+
 std::vector<ScoredPair> RandomScored(size_t n, uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0, 1);
