@@ -196,6 +196,9 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
     p.overlap10 = NeedNumber(m10, "overlap", where + ": metrics.10");
     p.occlusion01 = NeedNumber(m01, occ_key, where + ": metrics.01");
     p.occlusion10 = NeedNumber(m10, occ_key, where + ": metrics.10");
+    p.visible01 = NeedNumber(m01, "consistent_overlap", where + ": metrics.01");
+    p.visible10 = NeedNumber(m10, "consistent_overlap", where + ": metrics.10");
+    p.visible_min = std::min(p.visible01, p.visible10);
     p.overlap = Combine(p.overlap01, p.overlap10, options.aggregate);
     p.occlusion = Combine(p.occlusion01, p.occlusion10, options.aggregate);
     split.pairs.push_back(std::move(p));
@@ -426,16 +429,19 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
 
   // Summary tables.
   h << "<h2>Summary</h2>\n<div class=\"tables\">\n";
-  std::vector<double> ov, oc;
+  std::vector<double> ov, oc, vis;
   for (const auto& p : split.pairs) {
     ov.push_back(p.overlap);
     oc.push_back(p.occlusion);
+    vis.push_back(p.visible_min);
   }
-  const Stats so = Describe(ov), sc = Describe(oc);
+  const Stats so = Describe(ov), sc = Describe(oc), sv = Describe(vis);
   h << "<table><tr><th>selected pairs</th><th>min</th><th>median</th><th>mean</th>"
        "<th>max</th></tr>\n";
   for (const auto& [label, s] :
-       {std::pair<const char*, Stats>{"overlap", so}, {"occlusion ratio", sc}}) {
+       {std::pair<const char*, Stats>{"overlap", so},
+        {"visible overlap (weaker direction)", sv},
+        {"occlusion ratio", sc}}) {
     h << "<tr><td>" << label << "</td><td class=\"n\">" << Num(s.min) << "</td><td class=\"n\">"
       << Num(s.median) << "</td><td class=\"n\">" << Num(s.mean) << "</td><td class=\"n\">"
       << Num(s.max) << "</td></tr>\n";

@@ -38,6 +38,9 @@ struct SplitPair {
   double overlap01 = 0, overlap10 = 0;      // DirectionMetrics::overlap
   double occlusion01 = 0, occlusion10 = 0;  // occlusion_ratio or occlusion_ratio_visible
   double overlap = 0, occlusion = 0;        // combined with the aggregate
+  // DirectionMetrics::consistent_overlap (VISIBLE / sampled) of each direction, and of the
+  // weaker direction (min: the default of selection.visible_aggregate).
+  double visible01 = 0, visible10 = 0, visible_min = 0;
 };
 
 struct SplitData {

@@ -116,6 +116,20 @@ def main():
     check("http://" not in text and "https://" not in text, "report.html refers to the network")
     check("@media print" in text, "report.html has no print stylesheet")
     check(text.count("data:image/jpeg;base64,") >= 3 * 2, "gallery images missing")
+    # The visible overlap of the weaker direction (selection.visible_overlap's default
+    # aggregate), from pairs.jsonl: its min, median, max.
+    row = re.search(r"<tr><td>visible overlap \(weaker direction\)</td>" +
+                    r"<td class=\"n\">([^<]*)</td>" * 4, text)
+    check(row is not None, "report has no visible overlap row")
+    if row:
+        with open(os.path.join(build, "pairs.jsonl")) as f:
+            weaker = sorted(min(p["metrics"]["01"]["consistent_overlap"],
+                                p["metrics"]["10"]["consistent_overlap"])
+                            for p in map(json.loads, f))
+        lo, med, mean, hi = (float(v) for v in row.groups())
+        check(abs(lo - weaker[0]) < 1e-3 and abs(hi - weaker[-1]) < 1e-3,
+              f"visible overlap range {lo}..{hi}, expected {weaker[0]}..{weaker[-1]}")
+        check(abs(mean - sum(weaker) / len(weaker)) < 1e-3, f"visible overlap mean {mean}")
     with open(os.path.join(build, "summary.json")) as f:
         summary = json.load(f)
     for reason, n in summary.get("drops", {}).items():
