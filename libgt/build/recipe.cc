@@ -736,8 +736,9 @@ Recipe LoadRecipe(const std::string& path, const RecipeOverrides& overrides) {
 
 LabelOptions RecipeLabelOptions(const Recipe& recipe, const Scene& scene) {
   LabelOptions o = LabelPreset(recipe.labels.preset);
-  o.min_depth_m = recipe.dataset.min_depth_m.value_or(scene.min_depth_m);
-  o.max_depth_m = recipe.dataset.max_depth_m.value_or(scene.max_depth_m);
+  ApplyDatasetDepthRange(scene.min_depth_m, scene.max_depth_m, &o);
+  if (recipe.dataset.min_depth_m) o.min_depth_m = *recipe.dataset.min_depth_m;
+  if (recipe.dataset.max_depth_m) o.max_depth_m = *recipe.dataset.max_depth_m;
   if (recipe.labels.abs_tol_m) o.abs_tol_m = *recipe.labels.abs_tol_m;
   if (recipe.labels.rel_tol) o.rel_tol = *recipe.labels.rel_tol;
   if (recipe.labels.min_depth_m) o.min_depth_m = *recipe.labels.min_depth_m;

@@ -344,6 +344,12 @@ bool LabelOptions::Check(std::string* error) const {
   return false;
 }
 
+void ApplyDatasetDepthRange(double min_depth_m, double max_depth_m, LabelOptions* options) {
+  if (!options->dataset_depth_range) return;
+  options->min_depth_m = min_depth_m;
+  options->max_depth_m = max_depth_m;
+}
+
 std::vector<std::string> PresetNames() {
   return {"default", "occ2net", "occ2net-compat", "loftr", "superglue"};
 }
@@ -360,6 +366,8 @@ LabelOptions LabelPreset(const std::string& name) {
       o.missing_target = MissingTarget::kAsZeroDepth;
       o.cheirality = false;
       o.projection_eps_m = 1e-4;
+      o.max_depth_m = std::numeric_limits<float>::max();  // finite float depths: all valid
+      o.dataset_depth_range = false;
     }
     return o;
   }

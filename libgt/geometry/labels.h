@@ -98,17 +98,27 @@ struct LabelOptions {
   TargetLookup target_lookup = TargetLookup::kNearest;
   MissingTarget missing_target = MissingTarget::kUnknown;
   bool cheirality = true;         // test z > min_depth_m before dividing (off: compat only)
+  // The dataset's valid depth range (Scene::min/max_depth_m) replaces min/max_depth_m
+  // (ApplyDatasetDepthRange). false: occ2net-compat, which, like the released code, compares
+  // every finite depth > 0 (TartanAir's sky too); an explicit range still applies.
+  bool dataset_depth_range = true;
   double projection_eps_m = 0.0;  // added to z before the division (compat: 1e-4)
 
   // min <= max, tolerances finite and >= 0, eps finite and >= 0.
   bool Check(std::string* error) const;
 };
 
+// *options's depth range becomes [min_depth_m, max_depth_m] (a dataset's) unless its
+// dataset_depth_range is false.
+void ApplyDatasetDepthRange(double min_depth_m, double max_depth_m, LabelOptions* options);
+
 // Presets of GROUND_TRUTH.md §2 (options other than those in the table keep their
-// defaults: min/max depth come from the dataset):
+// defaults: min/max depth come from the dataset, except for occ2net-compat, whose range is
+// every finite depth > 0):
 //   default         τ = max(0.1 m, 0.05·z), pixel area, nearest, missing → UNKNOWN
 //   occ2net         τ = 0.1 m, strict, truncate, missing → UNKNOWN
-//   occ2net-compat  as occ2net, missing compared as 0, no cheirality, z + 1e-4
+//   occ2net-compat  as occ2net, missing compared as 0, no cheirality, z + 1e-4, every
+//                   finite depth > 0 valid (max_depth_m = FLT_MAX; no dataset range)
 //   loftr           τ = 0.2·d_B (observed), strict, truncate, missing → UNKNOWN
 //   superglue       τ = 0.1·z (projected), pixel area, nearest, missing → UNKNOWN
 // Throws InputError("--preset", "expected one of ...") for another name.

@@ -382,8 +382,7 @@ PairData ComputePairFromScene(const std::string& root, const std::string& format
   const gt::truth::Resolution resolution{options.width, options.height};
   gt::truth::PairTruthOptions o;
   o.labels = gt::LabelPreset(options.preset);
-  o.labels.min_depth_m = scene.min_depth_m;
-  o.labels.max_depth_m = scene.max_depth_m;
+  gt::ApplyDatasetDepthRange(scene.min_depth_m, scene.max_depth_m, &o.labels);
   o.patches = options.patches;
   o.occupancy = options.occupancy;
   o.fusion.voxel_size_m = options.voxel_size_m;

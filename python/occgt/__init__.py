@@ -255,7 +255,8 @@ def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = 640, heigh
                     preset: str = "default", scope: str = "pair",
                     **options: Any) -> PairGroundTruth:
     """pair_ground_truth of frames id0, id1 of a scene at width x height, with the scene's
-    depth range unless ``min_depth_m``/``max_depth_m`` are given: the arrays and metrics that
+    depth range unless ``min_depth_m``/``max_depth_m`` are given (occ2net-compat: every finite
+    depth > 0, as its release compares them): the arrays and metrics that
     ``occgt pair --root R --format F --scene S --frames id0,id1 --resolution WxH`` writes (and,
     with ``occupancy=True``, ``occgt occupancy ... --scope SCOPE``).
 
@@ -266,15 +267,16 @@ def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = 640, heigh
     """
     depth0, K0, world_from_cam0 = scene.load(id0, width, height)
     depth1, K1, world_from_cam1 = scene.load(id1, width, height)
-    options.setdefault("min_depth_m", scene.min_depth_m)
-    options.setdefault("max_depth_m", scene.max_depth_m)
+    if _occgt.preset_uses_dataset_depth_range(preset):  # not occ2net-compat
+        options.setdefault("min_depth_m", scene.min_depth_m)
+        options.setdefault("max_depth_m", scene.max_depth_m)
     if scope != "pair" and options.get("occupancy") and "scope_map" not in options:
         given = options.get("max_range_m")  # None: far_m, pair_ground_truth's rule
         max_range_m = float(options.get("far_m", 10.0) if given is None else given)
         options["scope_map"] = scene.fuse(
             id0, id1, width, height, scope=scope, voxel_m=options.get("voxel_m", 0.05),
-            max_range_m=max_range_m, min_depth_m=options["min_depth_m"],
-            max_depth_m=options["max_depth_m"])
+            max_range_m=max_range_m, min_depth_m=options.get("min_depth_m"),
+            max_depth_m=options.get("max_depth_m"))
     return pair_ground_truth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1, preset,
                              **options)
 

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <regex>
 #include <set>
 
@@ -110,6 +111,22 @@ loftr_export: {kind: test}
   EXPECT_TRUE(r.sample.depth);
   EXPECT_EQ(r.shards.samples_per_shard, 10);
   EXPECT_EQ(r.loftr_export, LoftrExportKind::kTest);
+}
+
+TEST(Recipe, LabelOptionsTakeTheDatasetRangeExceptForCompat) {
+  Scene scene;
+  scene.min_depth_m = 0.05;
+  scene.max_depth_m = 100.0;
+  Recipe r = ParseRecipe(kMinimal, "f.yaml", "/x");
+  LabelOptions o = RecipeLabelOptions(r, scene);
+  EXPECT_EQ(o.min_depth_m, 0.05);
+  EXPECT_EQ(o.max_depth_m, 100.0);
+  r.labels.preset = "occ2net-compat";  // every finite depth > 0, as the release
+  o = RecipeLabelOptions(r, scene);
+  EXPECT_EQ(o.min_depth_m, 0.0);
+  EXPECT_EQ(o.max_depth_m, std::numeric_limits<float>::max());
+  r.dataset.max_depth_m = 80.0;  // asked for explicitly: applies to compat too
+  EXPECT_EQ(RecipeLabelOptions(r, scene).max_depth_m, 80.0);
 }
 
 TEST(Recipe, UnknownKeyNamesFileAndField) {

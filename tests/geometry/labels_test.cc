@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "libgt/core/error.h"
 #include "tests/geometry/reference.h"
@@ -230,6 +231,36 @@ TEST(MissingTarget, UnknownByDefaultOccludedInCompat) {
   const auto ln =
       LabelDirection(near_a, cam, depth_b, cam, Rigid3d::Identity(), LabelPreset("occ2net-compat"));
   EXPECT_EQ(ln.at(15, 15), PixelLabel::kVisible);
+}
+
+TEST(MissingTarget, CompatComparesTheSkyLikeTheRelease) {
+  // TartanAir's sky is ~1e4 m, past any dataset maximum: occ2net-compat (like the released
+  // code) compares every finite depth > 0, so a sky pixel seen by both is VISIBLE there and
+  // NO_DEPTH with another preset; the dataset's range does not apply to compat.
+  const Camera cam = MakeCamera(16, 12, 20.0);
+  const DepthImage sky(16, 12, 9000.0f);
+  LabelOptions compat = LabelPreset("occ2net-compat");
+  EXPECT_FALSE(compat.dataset_depth_range);
+  EXPECT_EQ(compat.max_depth_m, std::numeric_limits<float>::max());
+  ApplyDatasetDepthRange(0.05, 100.0, &compat);  // TartanAir's reader range: not applied
+  EXPECT_EQ(compat.max_depth_m, std::numeric_limits<float>::max());
+  EXPECT_EQ(LabelDirection(sky, cam, sky, cam, Rigid3d::Identity(), compat).at(8, 6),
+            PixelLabel::kVisible);
+  LabelOptions occ2net = LabelPreset("occ2net");
+  EXPECT_TRUE(occ2net.dataset_depth_range);
+  ApplyDatasetDepthRange(0.05, 100.0, &occ2net);
+  EXPECT_EQ(occ2net.max_depth_m, 100.0);
+  EXPECT_EQ(LabelDirection(sky, cam, sky, cam, Rigid3d::Identity(), occ2net).at(8, 6),
+            PixelLabel::kNoDepth);
+  // Still invalid for compat: 0, inf and NaN.
+  DepthImage odd(16, 12, 9000.0f);
+  odd.at(1, 1) = 0.0f;
+  odd.at(2, 2) = std::numeric_limits<float>::infinity();
+  odd.at(3, 3) = std::numeric_limits<float>::quiet_NaN();
+  const DirectionLabels l = LabelDirection(odd, cam, sky, cam, Rigid3d::Identity(), compat);
+  EXPECT_EQ(l.at(1, 1), PixelLabel::kNoDepth);
+  EXPECT_EQ(l.at(2, 2), PixelLabel::kNoDepth);
+  EXPECT_EQ(l.at(3, 3), PixelLabel::kNoDepth);
 }
 
 // Identity pose, A sees a plane at z = 4, B reports depth d_b everywhere.

@@ -285,7 +285,8 @@ class PairIndexDataset:
         max_range_m = float(options.get("far_m", 10.0) if given is None else given)
         fused = scene.fuse(id0, id1, self.width, self.height, scope=self.scope,
                            voxel_m=options.get("voxel_m", 0.05), max_range_m=max_range_m,
-                           min_depth_m=options["min_depth_m"], max_depth_m=options["max_depth_m"])
+                           min_depth_m=options.get("min_depth_m"),
+                           max_depth_m=options.get("max_depth_m"))
         if self.scope.startswith("scene:"):
             self._scene_map = (scene.name, fused)
         return fused
@@ -299,8 +300,9 @@ class PairIndexDataset:
         id0, id1 = self.frame_ids(index)
         depth0, K0, world_from_cam0 = scene.load(id0, self.width, self.height)
         depth1, K1, world_from_cam1 = scene.load(id1, self.width, self.height)
-        options: Dict[str, Any] = {"min_depth_m": scene.min_depth_m,
-                                   "max_depth_m": scene.max_depth_m}
+        options: Dict[str, Any] = {}
+        if occgt._occgt.preset_uses_dataset_depth_range(self.preset):  # not occ2net-compat
+            options = {"min_depth_m": scene.min_depth_m, "max_depth_m": scene.max_depth_m}
         options.update(self.options)
         if self.occupancy is not None and self.scope != "pair":
             options["scope_map"] = self._fused(scene, id0, id1, options)
