@@ -2,7 +2,8 @@
 //                   [--stage select|write|all] [--root PATH] [--depth-cache-mb MB]
 // Turns a dataset and a YAML recipe into a filtered pair index and WebDataset shards
 // (docs/USER_GUIDE.md, docs/RECIPES.md, docs/CLI.md). The job is libgt/build/build.h;
-// this file parses flags, prints progress on stderr and the summary on stdout. Without
+// this file parses flags, prints progress on stderr and a short human summary on stdout
+// (--json: the summary JSON, the content of DIR/summary.json, instead). Without
 // --task/--tasks, a Slurm array task takes its place from SLURM_ARRAY_TASK_{ID,MIN,MAX,COUNT}
 // (docs/SCALE.md).
 #include <tbb/global_control.h>
@@ -32,6 +33,7 @@ struct BuildArgs {
   std::string root;
   int threads = 0;
   std::string stage = "all";
+  bool json = false;  // print the summary JSON instead of the human summary
   bool task_given = false;  // --task or --tasks on the command line (then Slurm's env is ignored)
   gt::build::BuildOptions build;
 };
@@ -105,6 +107,79 @@ void PrintProgress(const gt::build::Progress& p) {
   std::fflush(stderr);
 }
 
+// "38.2 MB" (decimal units).
+std::string HumanBytes(double bytes) {
+  const char* units[] = {"B", "kB", "MB", "GB", "TB", "PB"};
+  int u = 0;
+  while (bytes >= 1000 && u < 5) bytes /= 1000, ++u;
+  char text[32];
+  std::snprintf(text, sizeof(text), u == 0 ? "%.0f %s" : "%.1f %s", bytes, units[u]);
+  return text;
+}
+
+// A few lines for a person: what was selected and written, what was dropped and why, where
+// it went and what to run next. Every figure is a field of the summary JSON (--json).
+std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
+  using nlohmann::json;
+  const auto num = [&](const char* key) { return s.value(key, json(0)).get<int64_t>(); };
+  std::string text;
+  char line[512];
+  const std::string name = s.value("recipe", "") + " / " + s.value("split", "");
+  const double seconds = s.contains("timings") ? s["timings"].value("total_s", 0.0) : 0.0;
+  if (s.value("dry_run", false)) {
+    std::snprintf(line, sizeof(line),
+                  "%s: dry run: %lld pairs in %lld scenes would be written as %lld shards, about "
+                  "%s; nothing written (%.1f s)\n",
+                  name.c_str(), static_cast<long long>(num("samples")),
+                  static_cast<long long>(num("scenes")),
+                  static_cast<long long>(num("shards_planned")),
+                  HumanBytes(static_cast<double>(num("estimated_bytes"))).c_str(), seconds);
+    text += line;
+  } else if (s.value("stage", "all") == "select") {
+    std::snprintf(line, sizeof(line),
+                  "%s: selected %lld pairs in %lld scenes (%lld scenes this run); nothing "
+                  "written yet: run --stage write (%.1f s)\n",
+                  name.c_str(), static_cast<long long>(num("samples")),
+                  static_cast<long long>(num("scenes")),
+                  static_cast<long long>(num("scenes_selected_this_run")), seconds);
+    text += line;
+  } else {
+    const int64_t written = num("samples_written_this_run");
+    std::snprintf(line, sizeof(line), "%s: %lld pairs in %lld scenes, %lld shards", name.c_str(),
+                  static_cast<long long>(num("samples")), static_cast<long long>(num("scenes")),
+                  static_cast<long long>(num("shards_planned")));
+    text += line;
+    if (written == 0) {
+      text += "; nothing to write: every shard of this task was complete already";
+    } else {
+      std::snprintf(line, sizeof(line), "; wrote %lld pairs, %lld shards, %s", 
+                    static_cast<long long>(written),
+                    static_cast<long long>(num("shards_written_this_run")),
+                    HumanBytes(static_cast<double>(num("bytes_written"))).c_str());
+      text += line;
+    }
+    std::snprintf(line, sizeof(line), " (%.1f s)\n", seconds);
+    text += line;
+  }
+  if (s.contains("drops") && s["drops"].is_object() && !s["drops"].empty()) {
+    text += "  dropped:";
+    bool first = true;
+    for (const auto& [reason, n] : s["drops"].items()) {
+      text += (first ? " " : ", ") + reason + " " + n.dump();
+      first = false;
+    }
+    text += "\n";
+  }
+  if (!s.value("complete", false) && !s.value("dry_run", false) &&
+      s.value("stage", "all") != "select") {
+    text += "  this task's part is done; the split is published once every task has run\n";
+  } else if (s.value("complete", false)) {
+    text += "  out: " + out_dir + " (index.json, pairs.jsonl, summary.json); see it with: occgt "
+            "inspect split " + out_dir + "\n";
+  }
+  return text;
+}
+
 void Run(const BuildArgs& args_in) {
   BuildArgs args = args_in;
   args.build.stage = gt::build::ParseStage(args.stage, "--stage");
@@ -132,7 +207,11 @@ void Run(const BuildArgs& args_in) {
                  args.build.tasks, std::getenv("SLURM_ARRAY_TASK_ID"));
   }
   const nlohmann::json summary = gt::build::RunBuild(recipe, args.build, PrintProgress);
-  std::cout << summary.dump(2) << std::endl;
+  if (args.json) {
+    std::cout << summary.dump(2) << std::endl;
+  } else {
+    std::cout << HumanSummary(summary, args.build.out_dir) << std::flush;
+  }
 }
 
 }  // namespace
@@ -146,6 +225,9 @@ void AddBuildCommand(CLI::App& app) {
   cmd->add_flag("--dry-run", args->build.dry_run,
                 "Select in memory, print the plan and statistics, write nothing");
   cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)");
+  cmd->add_flag("--json", args->json,
+                "Print the summary as JSON (the content of DIR/summary.json) instead of a short "
+                "human summary");
   auto* task = cmd->add_option(
       "--task", args->build.task,
       "This task's index (0-based) when split in --tasks (default: from SLURM_ARRAY_TASK_ID)");

@@ -207,7 +207,7 @@ def base_build(case, occgt, cache):
     if not os.path.exists(src):
         os.makedirs(src)
         base_generic(src, occgt, cache)
-        occgt("build", os.path.join(src, "recipe.yaml"), "--out", os.path.join(src, "out"))
+        occgt("build", "--json", os.path.join(src, "recipe.yaml"), "--out", os.path.join(src, "out"))
     shutil.copytree(src, case, dirs_exist_ok=True, symlinks=True)
 
 

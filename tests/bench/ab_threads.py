@@ -28,7 +28,7 @@ SOURCE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file_
 def run(binary, recipe, threads, out, one_core=False):
     shutil.rmtree(out, ignore_errors=True)
     t0 = time.perf_counter()
-    p = subprocess.Popen([binary, "build", recipe, "--out", out, "--threads", str(threads)],
+    p = subprocess.Popen([binary, "build", "--json", recipe, "--out", out, "--threads", str(threads)],
                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                          preexec_fn=one_cpu(one_core))
     _, status, ru = os.wait4(p.pid, 0)

@@ -99,7 +99,7 @@ def pair_of_one_core_runs(recipe, outs, seed_data=None):
     t0 = time.perf_counter()
     for out, cpu in zip(outs, cpus):
         procs.append(subprocess.Popen(
-            [OCCGT, "build", recipe, "--out", out, "--threads", "1"],
+            [OCCGT, "build", "--json", recipe, "--out", out, "--threads", "1"],
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             preexec_fn=(lambda c=cpu: os.sched_setaffinity(0, {c}))))
     cpu_s = []
@@ -121,7 +121,7 @@ def build(recipe, out, threads, extra=(), seed_data=None, one_core=False):
     if seed_data:
         os.makedirs(out)
         shutil.copytree(seed_data, os.path.join(out, "data"))
-    text, wall, cpu, rss = timed([OCCGT, "build", recipe, "--out", out, "--threads", str(threads),
+    text, wall, cpu, rss = timed([OCCGT, "build", "--json", recipe, "--out", out, "--threads", str(threads),
                                   *extra], one_core=one_core)
     s = json.loads(text)
     return {"wall_s": wall, "cpu_s": cpu, "rss_mb": rss, "select_s": s["timings"]["select_s"],
@@ -139,7 +139,7 @@ def build_two_tasks(recipe, out, seed_data=None):
         shutil.copytree(seed_data, os.path.join(out, "data"))
     t0 = time.perf_counter()
     for stage in ("select", "write"):
-        procs = [subprocess.Popen([OCCGT, "build", recipe, "--out", out, "--threads", "1",
+        procs = [subprocess.Popen([OCCGT, "build", "--json", recipe, "--out", out, "--threads", "1",
                                    "--tasks", "2", "--task", str(k), "--stage", stage],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
                  for k in (0, 1)]
@@ -178,7 +178,7 @@ def speedup(results):
                ("demo", os.path.join(SOURCE, "recipes", "demo.yaml"))]
     demo_data = os.path.join(ARGS.scratch, "demo-data")
     if not os.path.exists(os.path.join(demo_data, "data", ".complete")):
-        timed([OCCGT, "build", recipes[2][1], "--out", demo_data, "--dry-run"])
+        timed([OCCGT, "build", "--json", recipes[2][1], "--out", demo_data, "--dry-run"])
     print("\n## speed-up on 2 cores: --threads 1 on one CPU, --threads 1 and --threads 2 on both "
           "(fresh output folder each run)")
     speedup_table(results, recipes, demo_data)

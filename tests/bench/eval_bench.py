@@ -100,7 +100,7 @@ def main():
         recipe = os.path.join(args.scratch, "recipe.yaml")
         with open(recipe, "w") as f:
             f.write(RECIPE.format(scenes=(args.pairs + 24) // 25))
-        subprocess.run([binary, "build", recipe, "--out", split], check=True,
+        subprocess.run([binary, "build", "--json", recipe, "--out", split], check=True,
                        stdout=subprocess.DEVNULL)
     preds = os.path.join(args.scratch, f"pred_{args.matches}_{args.noise_px}.npz")
     arrays, metas = make_predictions(split, args.matches, args.noise_px, preds)

@@ -39,7 +39,7 @@ def check_schema(doc):
 def main():
     work = common.scratch("eval_cli")
     split = os.path.join(work, "demo")
-    common.occgt("build", os.path.join(common.SOURCE, "recipes", "demo.yaml"), "--out", split)
+    common.occgt("build", "--json", os.path.join(common.SOURCE, "recipes", "demo.yaml"), "--out", split)
     samples = list(predictions.iter_samples(split))
     assert len(samples) >= 20, len(samples)
     truth, types, metas = {}, {}, {}

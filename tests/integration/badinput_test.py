@@ -253,7 +253,7 @@ def check_escape(cache, base, fmt, folder, hostile):
     os.makedirs(real_out)
     os.symlink(real_out, os.path.join(root, "out"))
     before = set(os.listdir(root))
-    r, _ = run(["build", os.path.join(root, "recipe.yaml"), "--out", os.path.join(root, "out")])
+    r, _ = run(["build", "--json", os.path.join(root, "recipe.yaml"), "--out", os.path.join(root, "out")])
     if r.returncode != 0:
         fail(tag, f"build over a hostile scene name failed: {r.stderr}")
         return

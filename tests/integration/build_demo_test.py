@@ -183,7 +183,7 @@ def main():
     recipe = os.path.join(common.SOURCE, "recipes", "demo.yaml")
     root = common.scratch("build_demo")
     out = os.path.join(root, "a")
-    r = common.occgt("build", recipe, "--out", out)
+    r = common.occgt("build", "--json", recipe, "--out", out)
     summary_stdout = json.loads(r.stdout)
     validate(summary_stdout, "summary.schema.json")
     assert "[write]" in r.stderr and "[select]" in r.stderr
@@ -210,7 +210,7 @@ def main():
     with open(train_recipe, "w") as f:
         yaml.safe_dump(doc, f)
     out_t = os.path.join(root, "train")
-    common.occgt("build", train_recipe, "--out", out_t)
+    common.occgt("build", "--json", train_recipe, "--out", out_t)
     with open(os.path.join(out_t, "pairs.jsonl")) as f:
         tlines = [json.loads(line) for line in f]
     with open(os.path.join(out_t, "loftr", "scenes.txt")) as f:
@@ -231,14 +231,14 @@ def main():
 
     # Determinism: a second run in another folder gives byte-identical outputs.
     out_b = os.path.join(root, "b")
-    common.occgt("build", recipe, "--out", out_b, "--threads", "1")
+    common.occgt("build", "--json", recipe, "--out", out_b, "--threads", "1")
     for pattern in ("*.tar", "index.json", "pairs.jsonl", "selection/*", "loftr/*"):
         a, b = file_bytes(out, pattern), file_bytes(out_b, pattern)
         assert a and a == b, pattern
 
     # Re-run: nothing rewritten; a deleted shard is rebuilt, nothing else rewritten.
     before = tree_state(out)
-    r = common.occgt("build", recipe, "--out", out)
+    r = common.occgt("build", "--json", recipe, "--out", out)
     s2 = json.loads(r.stdout)
     assert s2["shards_written_this_run"] == 0 and s2["scenes_reused"] == 2
     assert tree_state(out) == before, "a re-run with nothing to do rewrote files"
@@ -246,7 +246,7 @@ def main():
     victim_bytes = open(victim, "rb").read()
     os.remove(victim)
     before = tree_state(out)
-    r = common.occgt("build", recipe, "--out", out)
+    r = common.occgt("build", "--json", recipe, "--out", out)
     assert json.loads(r.stdout)["shards_written_this_run"] == 1
     after = tree_state(out)
     assert open(victim, "rb").read() == victim_bytes
@@ -258,24 +258,24 @@ def main():
     out_c = os.path.join(root, "c")
     for stage in ("select", "write"):
         for task in ("1", "0"):
-            common.occgt("build", recipe, "--out", out_c, "--tasks", "2", "--task", task, "--stage", stage)
+            common.occgt("build", "--json", recipe, "--out", out_c, "--tasks", "2", "--task", task, "--stage", stage)
     for pattern in ("*.tar", "index.json", "pairs.jsonl", "selection/*"):
         assert file_bytes(out, pattern) == file_bytes(out_c, pattern), pattern
 
     # Write before every selection exists: refused.
     out_d = os.path.join(root, "d")
-    common.occgt("build", recipe, "--out", out_d, "--tasks", "2", "--task", "0", "--stage", "select")
-    r = common.occgt("build", recipe, "--out", out_d, "--stage", "write", check=False)
+    common.occgt("build", "--json", recipe, "--out", out_d, "--tasks", "2", "--task", "0", "--stage", "select")
+    r = common.occgt("build", "--json", recipe, "--out", out_d, "--stage", "write", check=False)
     assert r.returncode == 1 and "not complete" in r.stderr, r.stderr
 
     # Dry run: plan and statistics, no shards, nothing written except the synthetic data.
     out_e = os.path.join(root, "e")
-    common.occgt("build", recipe, "--out", out_e)  # dataset + outputs
+    common.occgt("build", "--json", recipe, "--out", out_e)  # dataset + outputs
     shutil.rmtree(os.path.join(out_e, "selection"))
     for p in glob.glob(os.path.join(out_e, "*.tar")) + glob.glob(os.path.join(out_e, "*.json*")):
         os.remove(p)
     shutil.rmtree(os.path.join(out_e, "parts"))
-    r = common.occgt("build", recipe, "--out", out_e, "--dry-run")
+    r = common.occgt("build", "--json", recipe, "--out", out_e, "--dry-run")
     s = json.loads(r.stdout)
     assert s["dry_run"] and s["samples"] == 24 and s["shards_planned"] == 3
     assert not glob.glob(os.path.join(out_e, "*.tar")) and not os.path.exists(os.path.join(out_e, "selection"))
@@ -296,7 +296,7 @@ def main():
         with open(path, "w") as f:
             f.write(text)
         out_bad = os.path.join(bad_dir, "out-" + name)
-        r = common.occgt("build", path, "--out", out_bad, check=False)
+        r = common.occgt("build", "--json", path, "--out", out_bad, check=False)
         assert r.returncode == 1, (name, r.returncode)
         lines_err = r.stderr.strip().splitlines()
         assert len(lines_err) == 1 and lines_err[0].startswith(f"occgt: error: {path}: {expected}"), r.stderr

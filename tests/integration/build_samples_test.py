@@ -17,7 +17,7 @@ def run(recipe_name, data_rel, split, expected_pairs, min_consistent):
     env = dict(os.environ, OCCGT_SHARED_DATA=common.SHARED)
     out = common.scratch("build_" + split)
     recipe = os.path.join(common.SOURCE, "recipes", recipe_name)
-    r = common.occgt("build", recipe, "--out", out, env=env)
+    r = common.occgt("build", "--json", recipe, "--out", out, env=env)
     summary = json.loads(r.stdout)
     assert summary["complete"] and summary["samples"] == expected_pairs, summary
     keys, metas, lines, _ = read_split(out, split, 640, 480)

@@ -27,14 +27,14 @@ def main():
     recipe = os.path.join(common.SOURCE, "recipes", "demo.yaml")
     root = common.scratch("build_slurm_env")
     ref = os.path.join(root, "ref")
-    common.occgt("build", recipe, "--out", ref, env=slurm_env())
+    common.occgt("build", "--json", recipe, "--out", ref, env=slurm_env())
 
     # Two array tasks (0-1), select then write, layout from the environment only.
     out = os.path.join(root, "env")
     for stage in ("select", "write"):
         for task in (1, 0):
             env = slurm_env(id=task, min=0, max=1, count=2)
-            r = common.occgt("build", recipe, "--out", out, "--stage", stage, env=env)
+            r = common.occgt("build", "--json", recipe, "--out", out, "--stage", stage, env=env)
             s = json.loads(r.stdout)
             assert (s["task"], s["tasks"]) == (task, 2), s
             assert f"[build] task {task} of 2 (from SLURM_ARRAY_TASK_ID {task})" in r.stderr, r.stderr
@@ -47,7 +47,7 @@ def main():
     # synthetic dataset they generate, the shard plan and the indices: DIR/.lock).
     out4 = os.path.join(root, "concurrent")
     for stage in ("select", "write"):
-        procs = [subprocess.Popen([common.BINARY, "build", recipe, "--out", out4, "--stage", stage],
+        procs = [subprocess.Popen([common.BINARY, "build", "--json", recipe, "--out", out4, "--stage", stage],
                                   env=slurm_env(id=k, min=0, max=3, count=4),
                                   stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
                  for k in range(4)]
@@ -60,17 +60,17 @@ def main():
     # An array 1-2 (no MIN: 0 assumed only when unset) gives tasks 0 and 1; COUNT from MAX.
     out1 = os.path.join(root, "from1")
     for array_id in (1, 2):
-        r = common.occgt("build", recipe, "--out", out1, "--stage", "select", "--dry-run",
+        r = common.occgt("build", "--json", recipe, "--out", out1, "--stage", "select", "--dry-run",
                          env=slurm_env(id=array_id, min=1, max=2))
         s = json.loads(r.stdout)
         assert (s["task"], s["tasks"]) == (array_id - 1, 2), s
 
     # Flags win, also over a malformed variable.
     for env in (slurm_env(id=1, min=0, max=1, count=2), slurm_env(id="x", count="y")):
-        r = common.occgt("build", recipe, "--out", out, "--tasks", "1", env=env)
+        r = common.occgt("build", "--json", recipe, "--out", out, "--tasks", "1", env=env)
         s = json.loads(r.stdout)
         assert (s["task"], s["tasks"]) == (0, 1) and "[build] task" not in r.stderr, (s, r.stderr)
-        r = common.occgt("build", recipe, "--out", out, "--task", "0", env=env)
+        r = common.occgt("build", "--json", recipe, "--out", out, "--task", "0", env=env)
         assert (json.loads(r.stdout)["tasks"]) == 1
 
     # Bad values: one line naming the variable, exit 1, nothing created.
@@ -87,7 +87,7 @@ def main():
     ]
     for values, expected in cases:
         bad = os.path.join(root, "bad")
-        r = common.occgt("build", recipe, "--out", bad, env=slurm_env(**values), check=False)
+        r = common.occgt("build", "--json", recipe, "--out", bad, env=slurm_env(**values), check=False)
         lines = r.stderr.strip().splitlines()
         assert r.returncode == 1, (values, r.returncode, r.stderr)
         assert len(lines) == 1 and lines[0].startswith("occgt: error: " + expected), (values, r.stderr)

@@ -70,7 +70,7 @@ def main():
     # 1. The shipped recipe, select stage: the 1500 pairs.
     recipe = os.path.join(common.SOURCE, "recipes", "scannet-test-1500.yaml")
     out = os.path.join(root, "select")
-    r = common.occgt("build", recipe, "--out", out, "--root", data, "--stage", "select", env=env)
+    r = common.occgt("build", "--json", recipe, "--out", out, "--root", data, "--stage", "select", env=env)
     summary = json.loads(r.stdout)
     assert summary["counts"]["selected"] == 1500 and summary["scenes"] == 100, summary
     assert summary["drops"] == {}, summary["drops"]
@@ -94,7 +94,7 @@ def main():
     with open(small, "w") as f:
         yaml.safe_dump(doc, f)
     out = os.path.join(root, "full")
-    common.occgt("build", small, "--out", out, "--root", data, env=env)
+    common.occgt("build", "--json", small, "--out", out, "--root", data, env=env)
     t = np.load(os.path.join(out, "loftr", "test.npz"))
     assert np.array_equal(t["name"].astype(np.int64), np.array(expected)), "names differ"
     for row, (s, sub, f0, f1) in zip(t["rel_pose"], expected):

@@ -39,7 +39,7 @@ def make_recipe(root):
 
 
 def build(recipe, out, *flags, env=None):
-    r = common.occgt("build", recipe, "--out", out, *flags, env=env)
+    r = common.occgt("build", "--json", recipe, "--out", out, *flags, env=env)
     return json.loads(r.stdout)
 
 
@@ -47,7 +47,7 @@ def kill_when(recipe, out, pattern, what):
     """Starts a build, SIGKILLs it as soon as a file matching pattern exists under out;
     returns the seconds it ran. Fails when the build finished first."""
     t0 = time.time()
-    p = subprocess.Popen([common.BINARY, "build", recipe, "--out", out, "--threads", "2"],
+    p = subprocess.Popen([common.BINARY, "build", "--json", recipe, "--out", out, "--threads", "2"],
                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         while not glob.glob(os.path.join(out, pattern)):

@@ -17,7 +17,7 @@ def check(recipe, threads):
         common.shared("sevenscenes" if recipe.startswith("seven") else "tartanair")
     env = dict(os.environ, OCCGT_SHARED_DATA=common.SHARED)
     out = common.scratch(f"golden_{recipe}_t{threads}")
-    common.occgt("build", os.path.join(common.SOURCE, "recipes", recipe + ".yaml"), "--out", out,
+    common.occgt("build", "--json", os.path.join(common.SOURCE, "recipes", recipe + ".yaml"), "--out", out,
                  "--threads", threads, env=env)
     got = npy_digests.digests(out)
     with open(os.path.join(common.SOURCE, "tests", "golden", recipe + ".txt")) as f:

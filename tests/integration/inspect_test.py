@@ -101,7 +101,7 @@ def chromium_check(html, tmp):
 def main():
     tmp = common.scratch("inspect")
     build = os.path.join(tmp, "demo")
-    common.occgt("build", os.path.join(common.SOURCE, "recipes", "demo.yaml"), "--out", build)
+    common.occgt("build", "--json", os.path.join(common.SOURCE, "recipes", "demo.yaml"), "--out", build)
 
     # --- split report on a real build.
     report = os.path.join(tmp, "report")

@@ -45,7 +45,7 @@ def to_640x480(k, width, height):
 def main():
     tmp = common.scratch("loftr_intrinsics")
     demo = os.path.join(tmp, "demo")
-    common.occgt("build", os.path.join(common.SOURCE, "recipes", "demo.yaml"), "--out", demo)
+    common.occgt("build", "--json", os.path.join(common.SOURCE, "recipes", "demo.yaml"), "--out", demo)
     intr = np.load(os.path.join(demo, "loftr", "intrinsics.npz"))
     samples = sample_jsons(demo)
     if sorted(intr.files) != sorted(samples):
@@ -70,7 +70,7 @@ def main():
     with open(recipe, "w") as f:
         f.write(text + "loftr_export: {kind: train}\n")
     build = os.path.join(tmp, "tartanair")
-    common.occgt("build", recipe, "--out", build)
+    common.occgt("build", "--json", recipe, "--out", build)
     intr = np.load(os.path.join(build, "loftr", "intrinsics.npz"))
     samples = sample_jsons(build)
     if len(intr.files) != 1 or len(samples) != 1:

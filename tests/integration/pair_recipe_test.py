@@ -144,13 +144,13 @@ def main():
     # The shipped TartanAir sample: far_m 20 is the last bin edge and the ray range.
     tartan = os.path.join(common.SOURCE, "recipes", "tartanair-sample.yaml")
     build = os.path.join(tmp, "tartanair")
-    common.occgt("build", tartan, "--out", build)
+    common.occgt("build", "--json", tartan, "--out", build)
     line = check_pairs("tartanair", tartan, build)
 
     # The shipped demo (synthetic: the data generated into DIR/data, read as generic).
     demo = os.path.join(common.SOURCE, "recipes", "demo.yaml")
     build_demo = os.path.join(tmp, "demo")
-    common.occgt("build", demo, "--out", build_demo)
+    common.occgt("build", "--json", demo, "--out", build_demo)
     check_pairs("demo", demo, build_demo, extra=("--root", os.path.join(build_demo, "data")))
     r = common.occgt("pair", "--recipe", demo, "--scene", "synth_000", "--frames", "000000,000001",
                      "--out", os.path.join(tmp, "no_root"), check=False)
@@ -165,7 +165,7 @@ def main():
     with open(recipe, "w") as f:
         f.write(SYNTH_RECIPE.format(root=data))
     build_synth = os.path.join(tmp, "synth_build")
-    common.occgt("build", recipe, "--out", build_synth)
+    common.occgt("build", "--json", recipe, "--out", build_synth)
     check_pairs("synthetic", recipe, build_synth)
     meta = occupancy_json("--recipe", recipe, "--scene", "synth_000", "--frames", "000002,000004")
     if meta["fusion"]["scope"] != "window:1" or meta["fusion"]["fused_frames"] != [

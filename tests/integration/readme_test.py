@@ -44,7 +44,13 @@ def main():
     r = common.occgt("build", *args)
 
     summary = json.load(open(os.path.join(out, "summary.json")))
-    assert summary == json.loads(r.stdout), "stdout summary differs from summary.json"
+    # The human summary on stdout (--json prints summary.json instead): its figures.
+    first = r.stdout.splitlines()[0]
+    assert f"{summary['samples']} pairs in {summary['scenes']} scenes" in first, r.stdout
+    assert f"wrote {summary['samples_written_this_run']} pairs" in first, r.stdout
+    for reason, n in summary["drops"].items():
+        assert f"{reason} {n}" in r.stdout, (reason, r.stdout)
+    assert "occgt inspect split " + out in r.stdout, r.stdout
     index = json.load(open(os.path.join(out, "index.json")))
     assert index["__kind__"] == "wids-shard-index-v1"
     shards = index["shardlist"]

@@ -136,7 +136,7 @@ def main():
         bad_ids = re.fullmatch(r"select=(\d+) write=(\d+) merge=(\d+)\n", r.stdout).groups()
         jobs += list(bad_ids)
         for name, (recipe, _, _) in outs.items():
-            common.occgt("build", recipe, "--out", os.path.join(root, name, "ref"), env=env)
+            common.occgt("build", "--json", recipe, "--out", os.path.join(root, name, "ref"), env=env)
 
         deadline = time.time() + TIMEOUT_S
         while True:

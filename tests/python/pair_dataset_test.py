@@ -39,7 +39,7 @@ def built_split(recipe: str) -> str:
     """recipes/<recipe>.yaml built once into scratch (shared by the tests of this file)."""
     if recipe not in _SPLITS:
         out = common.scratch("pair_dataset_" + recipe)
-        common.occgt("build", os.path.join(common.SOURCE, "recipes", recipe + ".yaml"), "--out",
+        common.occgt("build", "--json", os.path.join(common.SOURCE, "recipes", recipe + ".yaml"), "--out",
                      out)
         _SPLITS[recipe] = out
     return _SPLITS[recipe]
@@ -132,7 +132,7 @@ class FromSplit(unittest.TestCase):
                 f.write(text.replace("  scope: pair\n", scope).replace("quota_per_scene: 12",
                                                                          "quota_per_scene: 3"))
             split = os.path.join(out, "split")
-            common.occgt("build", recipe, "--out", split)
+            common.occgt("build", "--json", recipe, "--out", split)
             ds = PairIndexDataset.from_split(split)
             self.assertEqual(ds.scope, {"window": "window:1", "scene": "scene:3"}[name])
             samples = list(shard_samples(split))

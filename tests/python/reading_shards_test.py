@@ -32,7 +32,7 @@ def blocks(path: str) -> List[Tuple[str, str]]:
 class ReadingShards(unittest.TestCase):
     def test_every_block_runs_as_written(self) -> None:
         work = common.scratch("reading_shards")
-        common.occgt("build", os.path.join(common.SOURCE, "recipes", "demo.yaml"), "--out",
+        common.occgt("build", "--json", os.path.join(common.SOURCE, "recipes", "demo.yaml"), "--out",
                      os.path.join(work, "out", "demo"))
         found = blocks(PAGE)
         languages = [lang for lang, _ in found]

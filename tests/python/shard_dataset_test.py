@@ -78,7 +78,7 @@ def build(name: str, **fields: str) -> str:
     with open(recipe, "w") as f:
         f.write(RECIPE.format(split=name.replace("_", "-"), **fields))
     out = os.path.join(folder, "split")
-    common.occgt("build", recipe, "--out", out)
+    common.occgt("build", "--json", recipe, "--out", out)
     return out
 
 
