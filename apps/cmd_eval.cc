@@ -78,16 +78,22 @@ void Run(const Args& args) {
   if (!options.Check(&error)) {
     // The option's field name -> the flag that set it.
     static const std::map<std::string, std::string> kFlags = {
-        {"ransac_px", "--ransac-px"},         {"confidence", "--ransac-conf"},
-        {"auc_thresholds_deg", "--auc"},      {"epipolar_threshold", "--epipolar-threshold"},
-        {"px", "--px"},                       {"occlusion_bins", "--occlusion-bins"},
-        {"overlap_bins", "--overlap-bins"},   {"curve_step", "--curve-step"},
-        {"failure_error_deg", "--failure-error"}, {"occlusion_definitions", "--occlusion"}};
+        {"ransac_px", "--ransac-px"},
+        {"confidence", "--ransac-conf"},
+        {"auc_thresholds_deg", "--auc"},
+        {"epipolar_threshold", "--epipolar-threshold"},
+        {"px", "--px"},
+        {"occlusion_bins", "--occlusion-bins"},
+        {"overlap_bins", "--overlap-bins"},
+        {"curve_step", "--curve-step"},
+        {"failure_error_deg", "--failure-error"},
+        {"occlusion_definitions", "--occlusion"}};
     const std::string field = error.substr(0, error.find(':'));
     const auto it = kFlags.find(field);
     throw gt::InputError(it == kFlags.end() ? "occgt eval" : it->second, error);
   }
-  if (args.threads < 0) throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
+  if (args.threads < 0)
+    throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
   std::unique_ptr<tbb::global_control> limit;
   if (args.threads > 0) {
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
@@ -115,11 +121,11 @@ void Run(const Args& args) {
       name = base;
     }
     if (name.empty() || !names.insert(name).second) {
-      throw gt::InputError("--predictions", "set name '" + name +
-                                                "' is empty or repeats (use NAME=PATH)");
+      throw gt::InputError("--predictions",
+                           "set name '" + name + "' is empty or repeats (use NAME=PATH)");
     }
-    sets.push_back(gt::eval::ReadPredictions(name, path, keys, split.width, split.height,
-                                             &problems));
+    sets.push_back(
+        gt::eval::ReadPredictions(name, path, keys, split.width, split.height, &problems));
     gt::eval::FilterByConfidence(args.min_confidence, &sets.back(), &problems);
   }
   if (!problems.empty()) {

@@ -5,9 +5,9 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <atomic>
-#include <functional>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/core/version.hpp>
@@ -297,9 +297,8 @@ std::string ProcessSample(const std::string& tar, const SampleData& s, const Spl
     r.predicted = true;
     r.matches = p.size();
     if (r.matches > 0) {
-      const std::vector<double> d =
-          SymmetricEpipolarDistances(p.kpts0, p.kpts1, geometry->K0, geometry->K1, geometry->R,
-                                     geometry->t);
+      const std::vector<double> d = SymmetricEpipolarDistances(
+          p.kpts0, p.kpts1, geometry->K0, geometry->K1, geometry->R, geometry->t);
       int64_t under = 0;
       for (const double x : d) under += x < options.epipolar_threshold ? 1 : 0;
       r.epipolar_precision = static_cast<double>(under) / static_cast<double>(d.size());
@@ -307,10 +306,9 @@ std::string ProcessSample(const std::string& tar, const SampleData& s, const Spl
     if (missing.empty()) {
       r.quality = ScoreMatches(truth, p.kpts0, p.kpts1, options.quality);
       if (r.matches > 0) {
-        r.occluded_share =
-            static_cast<double>(r.quality.types[kClassVO].predicted +
-                                r.quality.types[kClassOV].predicted) /
-            static_cast<double>(r.matches);
+        r.occluded_share = static_cast<double>(r.quality.types[kClassVO].predicted +
+                                               r.quality.types[kClassOV].predicted) /
+                           static_cast<double>(r.matches);
       }
     } else {
       r.quality = PairQuality();
@@ -366,8 +364,8 @@ EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& s
         const size_t i = it->second;
         if (seen[i]++ != 0) throw InputError(tar, "sample " + current.key + " repeats");
         result.pairs[i].key = current.key;
-        missing_reason[i] = ProcessSample(tar, current, split, sets, options, &result.pairs[i],
-                                          &geometry[i]);
+        missing_reason[i] =
+            ProcessSample(tar, current, split, sets, options, &result.pairs[i], &geometry[i]);
         current = SampleData();
       };
       shards::ForEachTarMember(tar, [&](const shards::TarMemberInfo& m, std::string_view data) {
@@ -384,8 +382,7 @@ EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& s
         if (field == "json") {
           current.json_text.assign(data);
         } else {
-          current.arrays[field] =
-              io::ParseNpy(data, tar + ":" + m.path);
+          current.arrays[field] = io::ParseNpy(data, tar + ":" + m.path);
         }
       });
       flush();
@@ -446,8 +443,8 @@ double Median(std::vector<double> v) {
 }
 
 const char* const kTypeNames[] = {"vv", "vo", "ov"};
-const char* const kLabelNames[] = {"NO_DEPTH",     "OUT_OF_VIEW", "VISIBLE",
-                                   "OCCLUDED",     "INCONSISTENT", "UNKNOWN"};
+const char* const kLabelNames[] = {"NO_DEPTH", "OUT_OF_VIEW",  "VISIBLE",
+                                   "OCCLUDED", "INCONSISTENT", "UNKNOWN"};
 
 // Statistics of one set over a subset of pairs.
 json Stats(const EvalResult& r, size_t set, const std::vector<size_t>& pairs) {
@@ -507,8 +504,7 @@ json Stats(const EvalResult& r, size_t set, const std::vector<size_t>& pairs) {
     types[kTypeNames[t]] = {
         {"predicted", c.predicted},
         {"correct", c.correct},
-        {"precision_percent",
-         c.predicted ? json(100.0 * c.correct / c.predicted) : json(nullptr)},
+        {"precision_percent", c.predicted ? json(100.0 * c.correct / c.predicted) : json(nullptr)},
         {"truth", c.truth},
         {"recalled", c.recalled},
         {"recall_percent", c.truth ? json(100.0 * c.recalled / c.truth) : json(nullptr)}};
@@ -523,10 +519,11 @@ json Stats(const EvalResult& r, size_t set, const std::vector<size_t>& pairs) {
   }
   all = scored + unscored;
   types["unscored"] = {{"count", unscored}, {"by_label0", by_label}};
-  types["all"] = {{"scored", scored},
-                  {"correct", correct},
-                  {"precision_scored_percent", scored ? json(100.0 * correct / scored) : json(nullptr)},
-                  {"precision_all_percent", all ? json(100.0 * correct / all) : json(nullptr)}};
+  types["all"] = {
+      {"scored", scored},
+      {"correct", correct},
+      {"precision_scored_percent", scored ? json(100.0 * correct / scored) : json(nullptr)},
+      {"precision_all_percent", all ? json(100.0 * correct / all) : json(nullptr)}};
   out["types"] = types;
   return out;
 }
@@ -608,15 +605,17 @@ std::string EvalJson(const EvalResult& r) {
   json estimators = json::array();
   for (const PoseEstimatorOptions& e : o.estimators) {
     estimators.push_back({{"name", EstimatorName(e)},
-                          {"method", "cv::findEssentialMat(RANSAC) on K-normalised points, "
-                                     "cv::recoverPose per 3x3 block, most inliers"},
+                          {"method",
+                           "cv::findEssentialMat(RANSAC) on K-normalised points, "
+                           "cv::recoverPose per 3x3 block, most inliers"},
                           {"opencv_version", CV_VERSION},
                           {"ransac_px", e.ransac_px},
                           {"confidence", e.confidence},
                           {"min_matches", e.min_matches}});
   }
   json defs = json::array();
-  for (const OcclusionDefinition d : o.occlusion_definitions) defs.push_back(OcclusionDefinitionName(d));
+  for (const OcclusionDefinition d : o.occlusion_definitions)
+    defs.push_back(OcclusionDefinitionName(d));
   doc["options"] = {{"estimators", estimators},
                     {"auc_thresholds_deg", o.auc_thresholds_deg},
                     {"epipolar_threshold", o.epipolar_threshold},

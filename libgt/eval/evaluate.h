@@ -41,16 +41,16 @@ const char* OcclusionDefinitionName(OcclusionDefinition d);
 
 struct EvalOptions {
   std::vector<PoseEstimatorOptions> estimators{PoseEstimatorOptions{}};  // >= 1
-  std::vector<double> auc_thresholds_deg{5, 10, 20};  // increasing, > 0
+  std::vector<double> auc_thresholds_deg{5, 10, 20};                     // increasing, > 0
   double epipolar_threshold = 5e-4;  // symmetric epipolar distance (LoFTR ScanNet; 1e-4 MegaDepth)
   QualityOptions quality;            // px for per-type precision/recall
   std::vector<OcclusionDefinition> occlusion_definitions{OcclusionDefinition::kImage,
                                                          OcclusionDefinition::kVisible};
   std::vector<double> occlusion_bins{0, 0.05, 0.1, 0.15, 0.2, 0.3, 1.0};  // edges, increasing
-  std::vector<double> overlap_bins{0, 0.2, 0.4, 0.6, 0.8, 1.0};  // visible overlap edges
+  std::vector<double> overlap_bins{0, 0.2, 0.4, 0.6, 0.8, 1.0};           // visible overlap edges
   Aggregate aggregate = Aggregate::kMean;  // both directions of a metric -> the pair's value
-  double curve_step = 0.05;         // cumulative curve sampled at step, 2*step, ... (ratio)
-  double failure_error_deg = 180;   // a failed pair's error inside means (medians use +inf)
+  double curve_step = 0.05;                // cumulative curve sampled at step, 2*step, ... (ratio)
+  double failure_error_deg = 180;          // a failed pair's error inside means (medians use +inf)
   bool Check(std::string* error) const;
 };
 
@@ -67,8 +67,8 @@ SplitIndex LoadSplitIndex(const std::string& dir);
 struct SetPairResult {
   bool predicted = false;  // false: missing from the set (a failure)
   int64_t matches = 0;
-  std::vector<PoseError> pose;  // one per estimator
-  std::vector<int> inliers;     // one per estimator (0 without pose)
+  std::vector<PoseError> pose;    // one per estimator
+  std::vector<int> inliers;       // one per estimator (0 without pose)
   double epipolar_precision = 0;  // share of matches under the threshold (0 without matches)
   PairQuality quality;
   double occluded_share = 0;  // (vo + ov) / matches: Occ²Net's test-time statistic
@@ -76,9 +76,9 @@ struct SetPairResult {
 
 struct PairInfo {
   std::string key, scene;
-  std::vector<double> occlusion;  // one per EvalOptions::occlusion_definitions
-  double visible_overlap = 0;     // consistent_overlap, aggregated
-  double overlap = 0;             // overlap, aggregated
+  std::vector<double> occlusion;    // one per EvalOptions::occlusion_definitions
+  double visible_overlap = 0;       // consistent_overlap, aggregated
+  double overlap = 0;               // overlap, aggregated
   std::vector<SetPairResult> sets;  // one per prediction set
 };
 

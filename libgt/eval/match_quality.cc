@@ -69,8 +69,8 @@ PairQuality ScoreMatches(const PairTruthView& truth, const std::vector<float>& k
     const bool from1 = l1 == kOccluded;
     if (from0) {
       const double d = truth.depth0[static_cast<size_t>(v0) * w + u0];
-      if (Warp(x0, y0, d, truth.K0, truth.cam1_from_cam0_R, truth.cam1_from_cam0_t, truth.K1,
-               &tx, &ty)) {
+      if (Warp(x0, y0, d, truth.K0, truth.cam1_from_cam0_R, truth.cam1_from_cam0_t, truth.K1, &tx,
+               &ty)) {
         err01 = (x1 - tx) * (x1 - tx) + (y1 - ty) * (y1 - ty);
       }
       if (u0 / s < cols && v0 / s < rows) cell0 = (v0 / s) * cols + u0 / s;
@@ -100,7 +100,8 @@ PairQuality ScoreMatches(const PairTruthView& truth, const std::vector<float>& k
     if (err2 <= px2) ++q.types[cls].correct;
     // Recall: every hypothesis the match satisfies credits its source cell, whatever class
     // the match was given (a match near an occlusion edge can satisfy both).
-    if (from0 && err01 <= px2 && cell0 >= 0) hit_cells[l0 == kVisible ? kClassVV : kClassVO].insert(cell0);
+    if (from0 && err01 <= px2 && cell0 >= 0)
+      hit_cells[l0 == kVisible ? kClassVV : kClassVO].insert(cell0);
     if (from1 && err10 <= px2 && cell1 >= 0) hit_cells[kClassOV].insert(cell1);
   }
   for (int64_t m = 0; m < truth.num_matches; ++m) {

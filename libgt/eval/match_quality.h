@@ -63,7 +63,7 @@ struct TypeCounts {
 };
 
 struct PairQuality {
-  std::array<TypeCounts, 3> types;            // vv, vo, ov
+  std::array<TypeCounts, 3> types;             // vv, vo, ov
   std::array<int64_t, 6> unscored_by_label{};  // unscored matches by l0's code
   int64_t unscored = 0;
 };

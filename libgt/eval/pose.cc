@@ -39,9 +39,7 @@ cv::Mat Normalise(const std::vector<float>& kpts, const Eigen::Matrix3d& K) {
   return out;
 }
 
-double AngleDeg(double cosine) {
-  return std::acos(std::clamp(cosine, -1.0, 1.0)) * 180.0 / M_PI;
-}
+double AngleDeg(double cosine) { return std::acos(std::clamp(cosine, -1.0, 1.0)) * 180.0 / M_PI; }
 
 }  // namespace
 
@@ -53,8 +51,7 @@ std::optional<PoseEstimate> EstimateRelativePose(const std::vector<float>& kpts0
   GT_ASSERT(kpts0.size() == kpts1.size() && kpts0.size() % 2 == 0);
   const int n = static_cast<int>(kpts0.size() / 2);
   if (n < options.min_matches) return std::nullopt;
-  const double threshold =
-      options.ransac_px / ((K0(0, 0) + K1(1, 1) + K0(0, 0) + K1(1, 1)) / 4.0);
+  const double threshold = options.ransac_px / ((K0(0, 0) + K1(1, 1) + K0(0, 0) + K1(1, 1)) / 4.0);
   const cv::Mat p0 = Normalise(kpts0, K0);
   const cv::Mat p1 = Normalise(kpts1, K1);
   const cv::Mat identity = cv::Mat::eye(3, 3, CV_64F);
@@ -131,8 +128,7 @@ std::vector<double> PoseAuc(const std::vector<double>& errors,
 
 std::vector<double> SymmetricEpipolarDistances(const std::vector<float>& kpts0,
                                                const std::vector<float>& kpts1,
-                                               const Eigen::Matrix3d& K0,
-                                               const Eigen::Matrix3d& K1,
+                                               const Eigen::Matrix3d& K0, const Eigen::Matrix3d& K1,
                                                const Eigen::Matrix3d& R_gt,
                                                const Eigen::Vector3d& t_gt) {
   GT_ASSERT(kpts0.size() == kpts1.size() && kpts0.size() % 2 == 0);
@@ -149,8 +145,9 @@ std::vector<double> SymmetricEpipolarDistances(const std::vector<float>& kpts0,
     const Eigen::Vector3d Ex0 = E * x0;
     const Eigen::Vector3d Etx1 = E.transpose() * x1;
     const double x1Ex0 = x1.dot(Ex0);
-    d[i] = x1Ex0 * x1Ex0 *
-           (1.0 / (Ex0(0) * Ex0(0) + Ex0(1) * Ex0(1)) + 1.0 / (Etx1(0) * Etx1(0) + Etx1(1) * Etx1(1)));
+    d[i] =
+        x1Ex0 * x1Ex0 *
+        (1.0 / (Ex0(0) * Ex0(0) + Ex0(1) * Ex0(1)) + 1.0 / (Etx1(0) * Etx1(0) + Etx1(1) * Etx1(1)));
   }
   return d;
 }

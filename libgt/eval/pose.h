@@ -25,9 +25,9 @@ namespace gt::eval {
 
 // The essential-matrix estimator and its settings; recorded with every result.
 struct PoseEstimatorOptions {
-  double ransac_px = 0.5;      // RANSAC inlier threshold in pixels (LoFTR 0.5, SuperGlue 1)
-  double confidence = 0.99999; // RANSAC confidence, in (0, 1)
-  int min_matches = 5;         // fewer matches -> no pose (error +inf); >= 5
+  double ransac_px = 0.5;       // RANSAC inlier threshold in pixels (LoFTR 0.5, SuperGlue 1)
+  double confidence = 0.99999;  // RANSAC confidence, in (0, 1)
+  int min_matches = 5;          // fewer matches -> no pose (error +inf); >= 5
   bool Check(std::string* error) const;
 };
 
@@ -70,8 +70,7 @@ std::vector<double> PoseAuc(const std::vector<double>& errors,
 // 1 / ((E^T x1)_0^2 + (E^T x1)_1^2)). Returns [N].
 std::vector<double> SymmetricEpipolarDistances(const std::vector<float>& kpts0,
                                                const std::vector<float>& kpts1,
-                                               const Eigen::Matrix3d& K0,
-                                               const Eigen::Matrix3d& K1,
+                                               const Eigen::Matrix3d& K0, const Eigen::Matrix3d& K1,
                                                const Eigen::Matrix3d& R_gt,
                                                const Eigen::Vector3d& t_gt);
 

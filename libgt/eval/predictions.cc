@@ -246,7 +246,8 @@ PredictionSet ReadPredictions(const std::string& name, const std::string& path,
     }
     by_key[member.substr(0, slash)][member.substr(slash + 1)] = &array;
   }
-  for (const auto& [key, members] : by_key) keep(path + ":" + key, path + ":" + key + "/", key, members, top);
+  for (const auto& [key, members] : by_key)
+    keep(path + ":" + key, path + ":" + key + "/", key, members, top);
   return set;
 }
 

@@ -36,8 +36,8 @@ struct PairPrediction {
 };
 
 struct PredictionSet {
-  std::string name;  // label in outputs (unique among the sets of one evaluation)
-  std::string path;  // the .npz or folder it was read from
+  std::string name;    // label in outputs (unique among the sets of one evaluation)
+  std::string path;    // the .npz or folder it was read from
   std::string layout;  // "npz" (one file) or "folder" (one .npz per pair)
   std::map<std::string, PairPrediction> pairs;  // by sample key
 };

@@ -1,6 +1,8 @@
 // libgt/eval: the AUC, pose-error, epipolar-distance and per-type scoring functions on
 // cases whose answers are known in closed form (GROUND_TRUTH.md §7; docs/EVAL.md). The
 // whole protocol is also checked against a cv2 reference in tests/eval/cli_test.py.
+#include "libgt/eval/pose.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -8,7 +10,6 @@
 #include <random>
 
 #include "libgt/eval/match_quality.h"
-#include "libgt/eval/pose.h"
 
 namespace gt::eval {
 namespace {
@@ -45,8 +46,8 @@ TEST(RelativePoseError, KnownAngles) {
   EXPECT_NEAR(RelativePoseError(R_gt, t_gt, R_gt, {0, 0, 2}).translation_deg, 90, 1e-9);
   EXPECT_NEAR(RelativePoseError(R_gt, t_gt, R_gt, Rot(30, {0, 0, 1}) * t_gt).translation_deg, 30,
               1e-9);
-  EXPECT_NEAR(RelativePoseError(R_gt, t_gt, R_gt, Rot(150, {0, 0, 1}) * t_gt).translation_deg,
-              30, 1e-9);
+  EXPECT_NEAR(RelativePoseError(R_gt, t_gt, R_gt, Rot(150, {0, 0, 1}) * t_gt).translation_deg, 30,
+              1e-9);
   // A pure rotation in the ground truth: only the rotation is scored.
   EXPECT_EQ(RelativePoseError(R_gt, Eigen::Vector3d::Zero(), R_gt, t_gt).translation_deg, 0);
   EXPECT_TRUE(std::isinf(NoPoseError().max_deg));
@@ -70,8 +71,8 @@ Scene MakeScene(int n, uint32_t seed) {
     const Eigen::Vector3d p0(u(rng), u(rng), z(rng));
     const Eigen::Vector3d p1 = s.R * p0 + s.t;
     const Eigen::Vector3d x0 = s.K * p0 / p0.z(), x1 = s.K * p1 / p1.z();
-    if (p1.z() <= 0.5 || x0.x() < 0 || x0.x() > 639 || x0.y() < 0 || x0.y() > 479 ||
-        x1.x() < 0 || x1.x() > 639 || x1.y() < 0 || x1.y() > 479) {
+    if (p1.z() <= 0.5 || x0.x() < 0 || x0.x() > 639 || x0.y() < 0 || x0.y() > 479 || x1.x() < 0 ||
+        x1.x() > 639 || x1.y() < 0 || x1.y() > 479) {
       continue;
     }
     s.kpts0.insert(s.kpts0.end(), {static_cast<float>(x0.x()), static_cast<float>(x0.y())});
@@ -112,9 +113,8 @@ TEST(SymmetricEpipolarDistances, ZeroOnExactMatchesKnownOffEpipolar) {
   // fx = fy = f has distance (dy/f)^2 * 2 (same line length in both images).
   Eigen::Matrix3d K;
   K << 400, 0, 320, 0, 400, 240, 0, 0, 1;
-  const std::vector<double> d = SymmetricEpipolarDistances({100, 200}, {150, 204}, K, K,
-                                                           Eigen::Matrix3d::Identity(),
-                                                           Eigen::Vector3d(1, 0, 0));
+  const std::vector<double> d = SymmetricEpipolarDistances(
+      {100, 200}, {150, 204}, K, K, Eigen::Matrix3d::Identity(), Eigen::Vector3d(1, 0, 0));
   EXPECT_NEAR(d[0], 2 * std::pow(4.0 / 400.0, 2), 1e-12);
 }
 
