@@ -11,6 +11,7 @@
 
 #include <cctype>
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -105,6 +106,18 @@ void PrintProgress(const gt::build::Progress& p) {
                  static_cast<long long>(p.done), static_cast<long long>(p.total), unit, rate, eta);
   }
   std::fflush(stderr);
+}
+
+// SIGINT/SIGTERM during a build: one line saying how to go on, then the default action (the
+// exit status stays "killed by the signal": 130 for Ctrl-C in a shell). Finished shards and
+// selections are complete files (temporary name, then rename), so a re-run resumes.
+extern "C" void OnInterrupt(int signal_number) {
+  static const char kMessage[] =
+      "\noccgt: interrupted; re-run the same command to resume (finished shards are kept)\n";
+  ssize_t ignored = ::write(STDERR_FILENO, kMessage, sizeof(kMessage) - 1);
+  (void)ignored;
+  std::signal(signal_number, SIG_DFL);
+  std::raise(signal_number);
 }
 
 // "38.2 MB" (decimal units).
@@ -206,6 +219,8 @@ void Run(const BuildArgs& args_in) {
     std::fprintf(stderr, "[build] task %d of %d (from SLURM_ARRAY_TASK_ID %s)\n", args.build.task,
                  args.build.tasks, std::getenv("SLURM_ARRAY_TASK_ID"));
   }
+  std::signal(SIGINT, OnInterrupt);
+  std::signal(SIGTERM, OnInterrupt);
   const nlohmann::json summary = gt::build::RunBuild(recipe, args.build, PrintProgress);
   if (args.json) {
     std::cout << summary.dump(2) << std::endl;

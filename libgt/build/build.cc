@@ -214,6 +214,22 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
                   {"dry_run", options.dry_run},
                   {"timings", json::object()}};
   ClaimOutputFolder(recipe_in, options);
+  // One process per task and folder: a second `occgt build` of the same task into the same
+  // --out (a re-run started while the first still runs) would rename the first's temporary
+  // files. Tasks of one array job hold different locks and run together.
+  std::unique_ptr<io::FileLock> task_lock;
+  if (!options.dry_run) {
+    const std::string lock_path = options.out_dir + "/.tasks.lock";  // byte K: task K
+    task_lock = io::FileLock::TryAcquire(lock_path, options.task);
+    if (!task_lock) {
+      throw InputError(options.out_dir,
+                       "another occgt build of task " + std::to_string(options.task) + " of " +
+                           std::to_string(options.tasks) +
+                           " is writing this folder now (it holds byte " +
+                           std::to_string(options.task) + " of " + lock_path +
+                           "); wait for it to finish, or build into another --out");
+    }
+  }
   const Recipe recipe = ResolveDataset(recipe_in, options);
   const std::unique_ptr<io::DatasetReader> reader = io::MakeReader(recipe.dataset.format);
   const std::vector<std::string> scenes = ResolveScenes(recipe, *reader, nullptr);

@@ -5,9 +5,28 @@
 // released when the object is destroyed (or the process ends).
 #pragma once
 
+#include <cstdint>
+#include <memory>
 #include <string>
 
 namespace gt::io {
+
+// An exclusive advisory lock (POSIX record lock, fcntl F_SETLK) on byte `slot` of one file,
+// taken without waiting: TryAcquire returns null when another process holds that byte. One
+// file serves many independent locks (one per build task). The file is created when missing
+// and never removed; the lock is released when the object is destroyed or the process ends.
+class FileLock {
+ public:
+  // Throws InputError naming the file when it cannot be created or opened.
+  static std::unique_ptr<FileLock> TryAcquire(const std::string& path, int64_t slot);
+  ~FileLock();
+  FileLock(const FileLock&) = delete;
+  FileLock& operator=(const FileLock&) = delete;
+
+ private:
+  explicit FileLock(int fd) : fd_(fd) {}
+  int fd_ = -1;
+};
 
 class FolderLock {
  public:
