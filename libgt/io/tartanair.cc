@@ -29,6 +29,19 @@ bool IsTrajectory(const std::string& folder) {
   return FileExists((fs::path(folder) / "pose_left.txt").string());
 }
 
+// A folder holding depth_left/ or image_left/ is meant as a trajectory: without
+// pose_left.txt it is an error, never silently skipped.
+void RequirePoseFileIfTrajectoryLike(const std::string& folder) {
+  std::error_code ec;
+  if (IsTrajectory(folder)) return;
+  if (fs::is_directory(fs::path(folder) / "depth_left", ec) ||
+      fs::is_directory(fs::path(folder) / "image_left", ec)) {
+    throw InputError((fs::path(folder) / "pose_left.txt").string(),
+                     "missing (the folder holds depth_left/ or image_left/: a TartanAir "
+                     "trajectory needs pose_left.txt)");
+  }
+}
+
 // body_from_cam: columns are the camera axes expressed in the body (NED) frame.
 Eigen::Matrix3d BodyFromCamRotation() {
   Eigen::Matrix3d m;
@@ -40,24 +53,46 @@ Eigen::Matrix3d BodyFromCamRotation() {
 
 }  // namespace
 
+// Which shape a root is (docs/DATASETS.md "TartanAir v1"): a trajectory when it holds
+// pose_left.txt; else a folder of trajectories when subfolders hold pose_left.txt
+// (root/P000); else a dataset root when ENV/{Easy,Hard}/Pxxx below it do. A root holding
+// both of the last two shapes is an error.
 std::vector<std::string> TartanAirReader::ListScenes(const std::string& root) const {
   RequireRoot(root);
   if (IsTrajectory(root)) return {FolderName(root)};
-  std::vector<std::string> out;
-  for (const auto& env : ListSubfolders(root)) {
+  RequirePoseFileIfTrajectoryLike(root);
+  std::vector<std::string> trajectories;      // root/Pxxx
+  std::vector<std::string> env_trajectories;  // root/ENV/{Easy,Hard}/Pxxx
+  for (const auto& sub : ListSubfolders(root)) {
+    const fs::path sub_dir = fs::path(root) / sub;
+    RequirePoseFileIfTrajectoryLike(sub_dir.string());
+    if (IsTrajectory(sub_dir.string())) {
+      trajectories.push_back(sub);
+      continue;
+    }
     for (const char* level : {"Easy", "Hard"}) {
-      const fs::path level_dir = fs::path(root) / env / level;
+      const fs::path level_dir = sub_dir / level;
       for (const auto& traj : ListSubfolders(level_dir.string())) {
+        RequirePoseFileIfTrajectoryLike((level_dir / traj).string());
         if (IsTrajectory((level_dir / traj).string())) {
-          out.push_back(env + "/" + level + "/" + traj);
+          env_trajectories.push_back(sub + "/" + level + "/" + traj);
         }
       }
     }
   }
+  if (!trajectories.empty() && !env_trajectories.empty()) {
+    throw InputError(root, "mixes two TartanAir layouts (trajectory " + trajectories.front() +
+                               "/pose_left.txt and " + env_trajectories.front() +
+                               "/pose_left.txt); expected one: ROOT/Pxxx/pose_left.txt or "
+                               "ROOT/ENV/{Easy,Hard}/Pxxx/pose_left.txt");
+  }
+  std::vector<std::string> out = trajectories.empty() ? env_trajectories : trajectories;
   std::sort(out.begin(), out.end());
   if (out.empty()) {
     throw InputError(root,
-                     "no TartanAir trajectory found (expected pose_left.txt or ENV/Easy/Pxxx)");
+                     "no TartanAir trajectory found; expected ROOT/pose_left.txt (one "
+                     "trajectory), ROOT/Pxxx/pose_left.txt (a folder of trajectories) or "
+                     "ROOT/ENV/{Easy,Hard}/Pxxx/pose_left.txt (the dataset root)");
   }
   return out;
 }

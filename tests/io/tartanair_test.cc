@@ -1,6 +1,7 @@
 // TartanAir reader on the real sample (tartanair/hospital_sample): NED -> OpenCV pose
 // conversion checked by depth reprojection, the raw NED pose as a negative control, the
-// pose file parsed independently, and bad layouts (short pose file, AppleDouble files).
+// pose file parsed independently, bad layouts (short pose file, AppleDouble files), and the
+// three root shapes (one trajectory, a folder of trajectories, the ENV/{Easy,Hard} root).
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -180,6 +181,124 @@ TEST(TartanAir, AppleDoubleFilesIgnoredAndEnvLayoutListed) {
     FAIL();
   } catch (const InputError& e) {
     EXPECT_EQ(e.where(), root + "/office/Easy/P999");
+  }
+}
+
+// root/P000 = sample frames 0-3, root/P001 = sample frames 10-13 renumbered 0-3 (symlinks
+// to the real files, pose lines copied), so P001's frame 0 must carry the sample's frame 10.
+std::string MakeFolderOfTrajectories(const std::string& sample) {
+  const std::string root = test::ScratchDir("ta_folder_of_trajectories");
+  std::ifstream in(sample + "/pose_left.txt");
+  std::vector<std::string> pose_lines;
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty()) pose_lines.push_back(line);
+  }
+  EXPECT_EQ(pose_lines.size(), 24u);
+  for (const auto& [traj, first] : {std::pair<std::string, int>{"P000", 0}, {"P001", 10}}) {
+    const fs::path dir = fs::path(root) / traj;
+    fs::create_directories(dir / "depth_left");
+    fs::create_directories(dir / "image_left");
+    std::string poses;
+    for (int i = 0; i < 4; ++i) {
+      char src[32], dst[32];
+      std::snprintf(src, sizeof(src), "%06d", first + i);
+      std::snprintf(dst, sizeof(dst), "%06d", i);
+      fs::create_symlink(fs::path(sample) / "depth_left" / (std::string(src) + "_left_depth.npy"),
+                         dir / "depth_left" / (std::string(dst) + "_left_depth.npy"));
+      fs::create_symlink(fs::path(sample) / "image_left" / (std::string(src) + "_left.png"),
+                         dir / "image_left" / (std::string(dst) + "_left.png"));
+      poses += pose_lines.at(static_cast<size_t>(first + i)) + "\n";
+    }
+    WriteFileAtomic((dir / "pose_left.txt").string(), poses);
+  }
+  fs::create_directories(fs::path(root) / "notes");  // not a trajectory: no depth/image folder
+  return root;
+}
+
+TEST(TartanAir, FolderOfTrajectoriesListsAndReadsEachByFolderName) {
+  const std::string sample = test::SharedData("tartanair/hospital_sample");
+  ASSERT_FALSE(sample.empty());
+  const std::string root = MakeFolderOfTrajectories(sample);
+  const auto reader = MakeReader("tartanair");
+  ASSERT_EQ(reader->ListScenes(root), (std::vector<std::string>{"P000", "P001"}));
+  const Scene full = reader->ReadScene(sample, "");
+  const Scene p1 = reader->ReadScene(root, "P001");
+  EXPECT_EQ(p1.name, "P001");
+  EXPECT_EQ(p1.path, root + "/P001");
+  ASSERT_EQ(p1.frames.size(), 4u);
+  for (int i = 0; i < 4; ++i) {
+    const Frame& f = p1.frames[static_cast<size_t>(i)];
+    const Frame& ref = full.frames[static_cast<size_t>(10 + i)];
+    EXPECT_TRUE(f.usable) << f.unusable_reason;
+    EXPECT_EQ(f.number, i);
+    EXPECT_NEAR((f.world_from_cam.matrix() - ref.world_from_cam.matrix()).norm(), 0.0, 1e-12);
+    EXPECT_TRUE(FileExists(f.color_path)) << f.color_path;
+  }
+  const DepthImage d = ReadDepth(p1.frames[0].depth, 640, 480);
+  const DepthImage d_ref = ReadDepth(full.frames[10].depth, 640, 480);
+  EXPECT_EQ(d.values_m, d_ref.values_m);
+  const Scene p0 = reader->ReadScene(root, "P000");
+  ASSERT_EQ(p0.frames.size(), 4u);
+  EXPECT_NEAR(
+      (p0.frames[3].world_from_cam.matrix() - full.frames[3].world_from_cam.matrix()).norm(), 0.0,
+      1e-12);
+  try {
+    reader->ReadScene(root, "P002");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), root + "/P002");
+  }
+}
+
+TEST(TartanAir, TrajectoryFolderWithoutPoseFileIsFatal) {
+  const std::string root = test::ScratchDir("ta_no_pose");
+  const std::vector<float> depth(16, 1.0f);
+  for (const char* traj : {"P000", "P001"}) {
+    WriteFileAtomic(root + "/" + traj + "/depth_left/000000_left_depth.npy",
+                    EncodeNpy("<f4", {4, 4}, depth.data(), depth.size() * 4));
+  }
+  WriteFileAtomic(root + "/P000/pose_left.txt", "0 0 0 0 0 0 1\n");
+  try {
+    MakeReader("tartanair")->ListScenes(root);
+    FAIL() << "P001 has depth_left/ but no pose_left.txt";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), root + "/P001/pose_left.txt") << e.what();
+  }
+}
+
+TEST(TartanAir, MixedLayoutsAndNoTrajectoryAreFatalAndListTheShapes) {
+  const std::string root = test::ScratchDir("ta_mixed");
+  const std::vector<float> depth(16, 1.0f);
+  for (const char* traj : {"P000", "office/Easy/P001"}) {
+    const std::string dir = root + "/" + traj;
+    WriteFileAtomic(dir + "/depth_left/000000_left_depth.npy",
+                    EncodeNpy("<f4", {4, 4}, depth.data(), depth.size() * 4));
+    WriteFileAtomic(dir + "/pose_left.txt", "0 0 0 0 0 0 1\n");
+  }
+  const auto reader = MakeReader("tartanair");
+  try {
+    reader->ListScenes(root);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), root);
+    const std::string what = e.what();
+    EXPECT_NE(what.find("mixes"), std::string::npos) << what;
+    EXPECT_NE(what.find("P000/pose_left.txt"), std::string::npos) << what;
+    EXPECT_NE(what.find("office/Easy/P001/pose_left.txt"), std::string::npos) << what;
+  }
+  const std::string empty = test::ScratchDir("ta_no_trajectory");
+  fs::create_directories(empty + "/notes");
+  try {
+    reader->ListScenes(empty);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), empty);
+    const std::string what = e.what();
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    for (const char* shape :
+         {"ROOT/pose_left.txt", "ROOT/Pxxx/pose_left.txt", "ROOT/ENV/{Easy,Hard}/Pxxx"}) {
+      EXPECT_NE(what.find(shape), std::string::npos) << shape << " in " << what;
+    }
   }
 }
 
