@@ -64,7 +64,7 @@ Eigen::MatrixXd RealMatrix(py::handle obj, int rows, int cols, const std::string
 
 }  // namespace
 
-std::shared_ptr<const gt::DepthImage> DepthFromArray(py::handle obj, const std::string& argument) {
+py::array CheckedDepthArray(py::handle obj, const std::string& argument) {
   py::array a = AsArray(obj, argument);
   if (!IsFloat32Or64(a)) {
     ThrowValue(argument,
@@ -79,17 +79,23 @@ std::shared_ptr<const gt::DepthImage> DepthFromArray(py::handle obj, const std::
   size.height = static_cast<int>(std::min<py::ssize_t>(a.shape(0), gt::truth::kMaxResolution + 1));
   std::string error;
   if (!size.Check(&error)) ThrowValue(argument, error + " (shape " + ShapeText(a) + ")");
+  return a;
+}
+
+std::shared_ptr<const gt::DepthImage> DepthFromArray(py::handle obj, const std::string& argument) {
+  const py::array a = CheckedDepthArray(obj, argument);
   auto depth = std::make_shared<gt::DepthImage>();
-  depth->width = size.width;
-  depth->height = size.height;
+  depth->width = static_cast<int>(a.shape(1));
+  depth->height = static_cast<int>(a.shape(0));
+  const size_t n = static_cast<size_t>(depth->width) * depth->height;
   const auto native_float32 = py::array::c_style | py::array::forcecast;
   if (py::isinstance<py::array_t<float, native_float32>>(a)) {
     // float32, C order, native byte order: one copy of the buffer (no zeroing first).
     const float* p = static_cast<const float*>(a.data());
-    depth->values_m.assign(p, p + static_cast<size_t>(size.width) * size.height);
+    depth->values_m.assign(p, p + n);
     return depth;
   }
-  depth->values_m.resize(static_cast<size_t>(size.width) * size.height);
+  depth->values_m.resize(n);
   // Any other layout: one copy (and the float64 -> float32 rounding, as a C cast) straight
   // into the image: numpy.copyto into a view of its buffer, whatever the strides of the input.
   py::capsule no_owner(depth.get(), [](void*) {});

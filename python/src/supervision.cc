@@ -53,21 +53,7 @@ Eigen::Matrix4d RelativePoseFromArray(py::handle obj, const std::string& argumen
 // messages) as a C-contiguous float32 array: the input itself when it is one (no copy), else
 // a converted copy. Kept alive by the caller while the C++ reads it.
 py::array_t<float> DepthArray(py::handle obj, const std::string& argument) {
-  py::array a = AsArray(obj, argument);
-  const char kind = a.dtype().kind();
-  if (kind != 'f' || (a.itemsize() != 4 && a.itemsize() != 8)) {
-    ThrowValue(argument,
-               "expected a depth map of dtype float32 or float64 (planar metres), got dtype " +
-                   DtypeText(a));
-  }
-  if (a.ndim() != 2) {
-    ThrowValue(argument, "expected a depth map of shape (H, W), got shape " + ShapeText(a));
-  }
-  gt::truth::Resolution size;
-  size.width = static_cast<int>(std::min<py::ssize_t>(a.shape(1), gt::truth::kMaxResolution + 1));
-  size.height = static_cast<int>(std::min<py::ssize_t>(a.shape(0), gt::truth::kMaxResolution + 1));
-  std::string error;
-  if (!size.Check(&error)) ThrowValue(argument, error + " (shape " + ShapeText(a) + ")");
+  const py::array a = CheckedDepthArray(obj, argument);
   auto f = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(a);
   if (!f) throw py::error_already_set();
   return f;
