@@ -6,17 +6,27 @@
 #   scripts/setup.sh            runtime + build dependencies, then build
 #   scripts/setup.sh --test     also the test dependencies (python3-numpy, jsonschema, ...)
 #   scripts/setup.sh --no-build only install packages
+#   scripts/setup.sh --target T build only target T (scripts/occgt: --target occgt)
+#   scripts/setup.sh --install  then `cmake --install` into $OCCGT_PREFIX (default ~/.local),
+#                               which puts bin/occgt on PATH when PREFIX/bin is on it
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 want_tests=0
 do_build=1
-for arg in "$@"; do
-  case "$arg" in
+do_install=0
+targets=()
+while (($#)); do
+  case "$1" in
     --test) want_tests=1 ;;
     --no-build) do_build=0 ;;
-    *) echo "setup.sh: unknown argument '$arg' (expected --test or --no-build)" >&2; exit 2 ;;
+    --install) do_install=1 ;;
+    --target)
+      [[ $# -ge 2 ]] || { echo "setup.sh: --target needs a target name (e.g. occgt)" >&2; exit 2; }
+      targets+=(--target "$2"); shift ;;
+    *) echo "setup.sh: unknown argument '$1' (expected --test, --no-build, --target T or --install)" >&2; exit 2 ;;
   esac
+  shift
 done
 
 packages=(
@@ -60,5 +70,13 @@ if [[ $do_build == 1 ]]; then
     cmake -S "$here" -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release \
       -DCMAKE_CXX_COMPILER_LAUNCHER=ccache >&2
   fi
-  cmake --build "$build_dir" -j "$(nproc)" >&2
+  cmake --build "$build_dir" -j "$(nproc)" ${targets[@]+"${targets[@]}"} >&2
+  if [[ $do_install == 1 ]]; then
+    prefix="${OCCGT_PREFIX:-$HOME/.local}"
+    cmake --install "$build_dir" --prefix "$prefix" >&2
+    case ":$PATH:" in
+      *":$prefix/bin:"*) echo "setup.sh: installed $prefix/bin/occgt" >&2 ;;
+      *) echo "setup.sh: installed $prefix/bin/occgt; add $prefix/bin to PATH to run occgt" >&2 ;;
+    esac
+  fi
 fi
