@@ -706,6 +706,7 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   if (j.contains("loftr_export")) {
     const std::string kind = j["loftr_export"]["kind"].get<std::string>();
     r.loftr_export = kind == "test" ? LoftrExportKind::kTest : LoftrExportKind::kTrain;
+    Get(j["loftr_export"], "tree", &r.loftr_tree, file);
   }
   std::string error;
   if (!r.Check(&error)) throw InputError(file, error);

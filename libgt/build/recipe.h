@@ -115,6 +115,7 @@ struct Recipe {
   SampleRecipe sample;
   ShardOptions shards;
   LoftrExportKind loftr_export = LoftrExportKind::kNone;
+  bool loftr_tree = false;  // loftr_export.tree: also DIR/loftr/data/, ScanNet's exported layout
 
   // Cross-field checks after the schema (ranges lo <= hi, stride divides the resolution,
   // near < far ...). On failure *error is "<field>: expected ...".

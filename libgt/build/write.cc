@@ -10,16 +10,20 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
+#include <set>
 #include <thread>
 #include <utility>
 
 #include "libgt/build/image_cache.h"
 #include "libgt/build/select.h"
 #include "libgt/core/error.h"
+#include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/folder_lock.h"
 #include "libgt/pairs/selection.h"
 #include "libgt/shards/loftr_export.h"
+#include "libgt/shards/loftr_tree.h"
 #include "libgt/shards/split.h"
 #include "libgt/truth/working_frame.h"
 
@@ -335,6 +339,30 @@ void PublishIndices(const Recipe& recipe, const io::DatasetReader& reader,
   } else {
     shards::ExportLoftrTrain(options.out_dir + "/loftr", rows, intrinsics, export_options);
   }
+  if (!recipe.loftr_tree) return;
+  // The frames the index names, in ScanNet's exported layout (DIR/loftr/data/).
+  std::set<std::string> names;
+  for (const auto& [name, scene] : scenes) names.insert(name);
+  const auto folders = shards::LoftrSceneFolders(names);
+  std::vector<shards::LoftrTreeScene> tree;
+  for (const auto& [name, scene] : scenes) {
+    shards::LoftrTreeScene t;
+    t.scene = &scene;
+    t.folder = folders.at(name);
+    for (const shards::LoftrPair& row : rows) {
+      if (row.scene != name) continue;
+      t.numbers.push_back(row.frame0);
+      t.numbers.push_back(row.frame1);
+    }
+    tree.push_back(std::move(t));
+  }
+  const shards::LoftrTreeStats stats =
+      shards::ExportLoftrTree(options.out_dir + "/loftr/data", tree, shards::LoftrTreeOptions{});
+  const nlohmann::json doc = {{"frames", stats.frames},
+                              {"linked", stats.linked},
+                              {"converted", stats.converted},
+                              {"depth_zeroed_px", stats.depth_zeroed_px}};
+  io::WriteFileAtomic(options.out_dir + "/loftr/tree.json", doc.dump(2) + "\n");
 }
 
 }  // namespace gt::build

@@ -10,6 +10,7 @@
 #include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/npy.h"
+#include "libgt/shards/loftr_tree.h"
 #include "libgt/shards/sample.h"
 
 namespace gt::shards {
@@ -54,6 +55,11 @@ void WriteIntrinsics(const std::string& out_dir, const std::set<std::string>& sc
     if (it == intrinsics.end()) throw InputError("loftr export", "no intrinsics for scene " + s);
     const std::vector<double> k(it->second.begin(), it->second.end());
     members[s] = io::EncodeNpy<double>({3, 3}, k);
+  }
+  // Also under the folder name LoFTR's ScanNetDataset looks K up by ("scene%04d_%02d" of
+  // the name row), for scenes whose own name is not a ScanNet one.
+  for (const auto& [scene, folder] : LoftrSceneFolders(scenes)) {
+    if (folder != scene) members[folder] = members.at(scene);
   }
   io::WriteNpz((fs::path(out_dir) / "intrinsics.npz").string(), members);
 }

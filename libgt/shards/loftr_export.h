@@ -9,7 +9,10 @@
 //   intrinsics.npz                   scene -> float64 [3, 3], K at 640x480 (row-major):
 //                                    the resolution LoFTR's ScanNet loader resizes images
 //                                    to (and uses this K unchanged), whatever the
-//                                    recipe's working resolution (kLoftrWidth/Height)
+//                                    recipe's working resolution (kLoftrWidth/Height);
+//                                    a non-ScanNet scene's K is also stored under
+//                                    "scene%04d_00" (LoftrSceneFolders, loftr_tree.h), the
+//                                    key LoFTR forms from the name row
 // LoFTR keeps pairs with score > min_overlap_score (strict) and recomputes relative poses
 // from the dataset's pose files, so only names and scores go in.
 // Test (test-1500 style), under OUT:
