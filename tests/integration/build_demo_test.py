@@ -176,7 +176,8 @@ def tree_state(out):
 
 
 def file_bytes(out, pattern):
-    return {os.path.basename(p): open(p, "rb").read() for p in sorted(glob.glob(os.path.join(out, pattern)))}
+    return {os.path.basename(p): open(p, "rb").read() for p in sorted(glob.glob(os.path.join(out, pattern)))
+            if os.path.isfile(p)}
 
 
 def main():
