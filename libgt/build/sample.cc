@@ -66,8 +66,8 @@ const char* VolumeEncodingName(VolumeEncoding encoding) {
 }
 
 std::string EncodeFrameImage(const Frame& frame, const SampleOptions& options) {
-  const io::ColorImage c = io::ReadColorResized(
-      frame.color_path, frame.color_camera, options.resolution.width, options.resolution.height);
+  const io::ColorImage c =
+      io::ReadFrameColorResized(frame, options.resolution.width, options.resolution.height);
   return EncodeImage(c, options.image, frame.color_path);
 }
 

@@ -16,6 +16,16 @@ enum class DepthFormat {
   kNpyFloat32,  // .npy float32 metres, shape (H, W)
   kPng16,       // 16-bit PNG (or PGM), metres = value * scale_m_per_unit; 0 invalid
   kExr,         // OpenEXR, one channel (matched by suffix), metres
+  // A payload inside a container file (ScanNet .sens, libgt/io/sens.h): bytes `range` of
+  // `path`, width x height uint16 (little-endian), metres = value * scale_m_per_unit; 0 invalid.
+  kSensZlib,  // zlib stream of the uint16 values
+  kSensRaw,   // the uint16 values as they are
+};
+
+// Bytes [offset, offset + size) of a file: a payload inside a container (.sens).
+struct ByteRange {
+  uint64_t offset = 0;
+  uint64_t size = 0;  // 0: not a range (the whole file)
 };
 
 struct DepthSource {
@@ -24,6 +34,9 @@ struct DepthSource {
   double scale_m_per_unit = 1.0;  // png16: 0.001 for millimetres, 1/5000 for TUM
   std::string exr_channel;        // exr: channel name or suffix ("Z", "Depth.Z"); "" = auto
   int invalid_value = -1;         // png16: a raw value that means "no depth" (7-Scenes: 65535)
+  ByteRange range;                // sens*: the payload inside `path`
+  int width = 0;                  // sens*: size of the map (the container's header)
+  int height = 0;
 };
 
 struct Frame {
@@ -37,6 +50,10 @@ struct Frame {
   std::string color_path;       // may be empty when the dataset has no colour
   Camera color_camera;          // K at the colour image's resolution (0x0 when unknown)
   double timestamp_s = 0.0;     // TUM only
+  // .sens: the colour payload inside color_path (size 0: color_path is the image file), JPEG
+  // or PNG bytes, or with color_raw_rgb, color_camera.width x height x 3 bytes R, G, B.
+  ByteRange color_range;
+  bool color_raw_rgb = false;
 };
 
 struct Scene {

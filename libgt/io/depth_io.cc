@@ -6,6 +6,7 @@
 #include <ImfHeader.h>
 #include <ImfIO.h>
 #include <ImfInputFile.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -305,9 +306,68 @@ DepthImage DecodeExrDepth(std::string_view bytes, const DepthSource& src, int ex
   }
 }
 
+// A .sens depth payload: width x height little-endian uint16, zlib-compressed or raw; the
+// stream must inflate to exactly that many bytes.
+DepthImage DecodeSensDepth(std::string_view bytes, const DepthSource& src) {
+  if (!(src.scale_m_per_unit > 0) || !std::isfinite(src.scale_m_per_unit)) {
+    throw InputError(src.path, "depth scale must be a positive number of metres per unit");
+  }
+  if (!PlausibleSize(src.width, src.height)) {
+    throw InputError(src.path, "depth payload: implausible size " + std::to_string(src.width) +
+                                   "x" + std::to_string(src.height));
+  }
+  const size_t n = static_cast<size_t>(src.width) * static_cast<size_t>(src.height);
+  std::vector<uint16_t> raw(n);
+  const std::string where =
+      src.path + " (depth payload at byte " + std::to_string(src.range.offset) + ")";
+  if (src.format == DepthFormat::kSensRaw) {
+    if (bytes.size() != n * 2) {
+      throw InputError(where, "expected " + std::to_string(n * 2) + " bytes of raw uint16, got " +
+                                  std::to_string(bytes.size()));
+    }
+    std::memcpy(raw.data(), bytes.data(), n * 2);
+  } else {
+    z_stream z{};
+    if (inflateInit(&z) != Z_OK) throw InputError(where, "zlib: cannot initialise");
+    z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data()));
+    z.avail_in = static_cast<uInt>(std::min<size_t>(bytes.size(), UINT32_MAX));
+    z.next_out = reinterpret_cast<Bytef*>(raw.data());
+    z.avail_out = static_cast<uInt>(n * 2);
+    const int rc = inflate(&z, Z_FINISH);
+    const size_t produced = n * 2 - z.avail_out;
+    inflateEnd(&z);
+    if (rc != Z_STREAM_END || produced != n * 2) {
+      throw InputError(where, rc == Z_STREAM_END || rc == Z_BUF_ERROR
+                                  ? "zlib depth: expected " + std::to_string(n * 2) + " bytes (" +
+                                        std::to_string(src.width) + "x" +
+                                        std::to_string(src.height) + " uint16) after inflating"
+                                  : "zlib depth: corrupt or cut stream");
+    }
+  }
+  DepthImage d(src.width, src.height);
+  // As the 16-bit PNG path: the same metres for the same raw value, whichever container.
+  for (size_t i = 0; i < n; ++i) {
+    d.values_m[i] = raw[i] == 0 ? 0.0f : Sanitize(raw[i] * src.scale_m_per_unit);
+  }
+  return d;
+}
+
 }  // namespace
 
+void PrefetchDepth(const DepthSource& source) {
+  if (source.format == DepthFormat::kSensZlib || source.format == DepthFormat::kSensRaw) {
+    PrefetchFileRange(source.path, source.range.offset, source.range.size);
+  } else {
+    PrefetchFile(source.path);
+  }
+}
+
 DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected_height) {
+  if (source.format == DepthFormat::kSensZlib || source.format == DepthFormat::kSensRaw) {
+    return DecodeDepth(
+        ReadFileRange(source.path, source.range.offset, source.range.size, "depth payload"), source,
+        expected_width, expected_height);
+  }
   return DecodeDepth(ReadFileBytes(source.path), source, expected_width, expected_height);
 }
 
@@ -323,6 +383,14 @@ DepthImage DecodeDepth(std::string_view bytes, const DepthSource& source, int ex
       break;
     case DepthFormat::kExr:
       d = DecodeExrDepth(bytes, source, expected_width, expected_height);
+      break;
+    case DepthFormat::kSensZlib:
+    case DepthFormat::kSensRaw:
+      if (expected_width > 0 && expected_height > 0) {
+        CheckDeclaredSize(source.path, source.width, source.height, expected_width,
+                          expected_height);
+      }
+      d = DecodeSensDepth(bytes, source);
       break;
   }
   if (expected_width > 0 && expected_height > 0 &&

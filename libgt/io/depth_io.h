@@ -16,6 +16,9 @@ namespace gt::io {
 // Depth maps are at most 65536 pixels a side and 2^27 pixels in all (checked from the
 // header, before any pixel buffer is allocated).
 DepthImage ReadDepth(const DepthSource& source, int expected_width = 0, int expected_height = 0);
+// Asks the kernel to read a frame's depth file (or its payload inside a container) ahead
+// (io::PrefetchFile / PrefetchFileRange); a hint only.
+void PrefetchDepth(const DepthSource& source);
 // The same from the file's bytes already in memory (source.path names it in messages):
 // ReadDepth is ReadFileBytes + DecodeDepth. PNG/PGM go through libgt/io/codec.h (only 16-bit
 // grey is depth: an 8-bit or colour file is refused), EXR through

@@ -25,11 +25,7 @@ ColorImage FromRgbMat(const cv::Mat& rgb) {
   return out;
 }
 
-}  // namespace
-
-ColorImage ReadColor(const std::string& path) {
-  if (!FileExists(path)) throw InputError(path, "cannot open file (missing or unreadable)");
-  const std::string bytes = ReadFileBytes(path);
+ColorImage DecodeColor(std::string_view bytes, const std::string& path) {
   cv::Mat m = DecodeImageBytes(bytes, ChannelOrder::kRgb, path);
   if (m.depth() == CV_16U) {
     m.convertTo(m, CV_8U, 1.0 / 257.0);
@@ -51,6 +47,74 @@ ColorImage ReadColor(const std::string& path) {
       throw InputError(path, "expected 1, 3 or 4 channels, got " + std::to_string(m.channels()));
   }
   return FromRgbMat(rgb);
+}
+
+std::string SizeMismatch(int width, int height, const Camera& camera) {
+  std::ostringstream s;
+  s << "colour image is " << width << "x" << height << ", expected " << camera.width << "x"
+    << camera.height;
+  return s.str();
+}
+
+}  // namespace
+
+ColorImage ReadColor(const std::string& path) {
+  if (!FileExists(path)) throw InputError(path, "cannot open file (missing or unreadable)");
+  return DecodeColor(ReadFileBytes(path), path);
+}
+
+ColorImage ReadFrameColor(const Frame& frame) {
+  if (frame.color_range.size == 0) return ReadColor(frame.color_path);
+  const std::string where = frame.color_path + " (colour payload at byte " +
+                            std::to_string(frame.color_range.offset) + ")";
+  const Camera& camera = frame.color_camera;
+  if (frame.color_raw_rgb) {
+    const uint64_t expected = uint64_t(camera.width) * uint64_t(camera.height) * 3;
+    if (camera.width <= 0 || camera.height <= 0 || frame.color_range.size != expected) {
+      throw InputError(where, "raw RGB colour: expected " + std::to_string(expected) + " bytes (" +
+                                  std::to_string(camera.width) + "x" +
+                                  std::to_string(camera.height) + "x3), got " +
+                                  std::to_string(frame.color_range.size));
+    }
+  }
+  const std::string bytes = ReadFileRange(frame.color_path, frame.color_range.offset,
+                                          frame.color_range.size, "colour payload");
+  if (frame.color_raw_rgb) {
+    ColorImage out;
+    out.width = camera.width;
+    out.height = camera.height;
+    out.rgb.assign(bytes.begin(), bytes.end());
+    return out;
+  }
+  if (camera.width > 0) {  // header size first: no decode of a wrong payload
+    const ImageSize header = DecodeImageSize(bytes, where);
+    if (header.width != camera.width || header.height != camera.height) {
+      throw InputError(where, SizeMismatch(header.width, header.height, camera));
+    }
+  }
+  return DecodeColor(bytes, where);
+}
+
+ColorImage ReadFrameColorResized(const Frame& frame, int new_width, int new_height,
+                                 Camera* resized_camera) {
+  if (frame.color_range.size == 0) {
+    return ReadColorResized(frame.color_path, frame.color_camera, new_width, new_height,
+                            resized_camera);
+  }
+  ColorImage image = ReadFrameColor(frame);
+  const Camera& camera = frame.color_camera;
+  if (camera.width > 0 && (image.width != camera.width || image.height != camera.height)) {
+    throw InputError(frame.color_path, SizeMismatch(image.width, image.height, camera));
+  }
+  if (resized_camera) {
+    Camera c = camera;
+    if (c.width == 0) {
+      c.width = image.width;
+      c.height = image.height;
+    }
+    *resized_camera = c.Resized(new_width, new_height);
+  }
+  return ResizeColorBilinear(image, new_width, new_height);
 }
 
 ColorImage ResizeColorBilinear(const ColorImage& image, int new_width, int new_height) {

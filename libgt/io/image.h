@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "libgt/core/camera.h"
+#include "libgt/core/frame.h"
 
 namespace gt::io {
 
@@ -38,5 +39,13 @@ ColorImage ResizeColorBilinear(const ColorImage& image, int new_width, int new_h
 // (optional) receives camera.Resized(new_width, new_height).
 ColorImage ReadColorResized(const std::string& path, const Camera& camera, int new_width,
                             int new_height, Camera* resized_camera = nullptr);
+
+// A frame's colour: the file frame.color_path, or its payload frame.color_range inside a
+// container (.sens: JPEG/PNG bytes, or raw RGB888 at color_camera's size with
+// color_raw_rgb). InputError naming the file (and the payload's offset) on any problem.
+ColorImage ReadFrameColor(const Frame& frame);
+// ReadColorResized for a frame's colour (its camera is frame.color_camera).
+ColorImage ReadFrameColorResized(const Frame& frame, int new_width, int new_height,
+                                 Camera* resized_camera = nullptr);
 
 }  // namespace gt::io

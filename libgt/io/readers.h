@@ -21,6 +21,7 @@ class ScanNetReader : public DatasetReader {
 
  private:
   Scene ReadCppExport(const std::string& folder, const std::string& scene_name) const;
+  Scene ReadSens(const std::string& folder, const std::string& scene_name) const;
   ReaderOptions options_;
 };
 

@@ -5,7 +5,10 @@
 //     .pose.txt, and _info.txt ("key = value" lines: m_depthWidth, m_depthHeight,
 //     m_depthShift, m_calibrationDepthIntrinsic as 16 (4x4) or 12 (3x4) numbers, row-major;
 //     the colour keys are optional).
-// A folder with pose/ is read as the Python layout, else one with _info.txt as the C++ one.
+//   raw: <scene>/<scene>.sens, read in place (libgt/io/sens.h): frame i is the exporters'
+//     frame i; depth and colour are byte ranges of the .sens (DepthFormat::kSensZlib).
+// A folder with pose/ is read as the Python layout, else one with _info.txt as the C++ one,
+// else one holding <folder name>.sens as the raw file.
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -14,6 +17,7 @@
 #include "libgt/io/depth_io.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/readers.h"
+#include "libgt/io/sens.h"
 #include "libgt/io/text_parsing.h"
 
 namespace gt::io {
@@ -35,8 +39,18 @@ bool IsCppExport(const std::string& folder) {
          !ListNumberedFiles(folder, "frame-", ".pose.txt").empty();
 }
 
+// <folder>/<folder name>.sens (ScanNet's scans/sceneXXXX_XX/sceneXXXX_XX.sens).
+std::string SensPath(const std::string& folder) {
+  return (fs::path(folder) / (FolderName(folder) + ".sens")).string();
+}
+
+bool IsSensScene(const std::string& folder) {
+  std::error_code ec;
+  return fs::is_regular_file(SensPath(folder), ec);
+}
+
 bool IsScanNetScene(const std::string& folder) {
-  return IsPythonExport(folder) || IsCppExport(folder);
+  return IsPythonExport(folder) || IsCppExport(folder) || IsSensScene(folder);
 }
 
 // Pose of frame f from a 4x4 camera-to-world text file; a non-finite or non-rigid pose
@@ -144,7 +158,9 @@ std::vector<std::string> ScanNetReader::ListScenes(const std::string& root) cons
     if (IsScanNetScene((fs::path(root) / name).string())) out.push_back(name);
   }
   if (out.empty()) {
-    throw InputError(root, "no ScanNet scene found (expected a folder with pose/ or _info.txt)");
+    throw InputError(root,
+                     "no ScanNet scene found (expected a folder with pose/, _info.txt or "
+                     "<folder name>.sens)");
   }
   return out;
 }
@@ -152,6 +168,7 @@ std::vector<std::string> ScanNetReader::ListScenes(const std::string& root) cons
 Scene ScanNetReader::ReadScene(const std::string& root, const std::string& scene_name) const {
   const std::string folder = ResolveSceneFolder(root, scene_name, IsScanNetScene(root));
   if (!IsPythonExport(folder) && IsCppExport(folder)) return ReadCppExport(folder, scene_name);
+  if (!IsPythonExport(folder) && IsSensScene(folder)) return ReadSens(folder, scene_name);
   const std::string pose_dir = (fs::path(folder) / "pose").string();
   std::error_code ec;
   if (!fs::is_directory(pose_dir, ec)) throw InputError(pose_dir, "pose folder not found");
@@ -247,6 +264,47 @@ Scene ScanNetReader::ReadCppExport(const std::string& folder, const std::string&
     if (options_.check_depth_files && !FileExists(f.depth.path)) {
       MarkUnusable(&f, kReasonDepthMissing);
     }
+    scene.frames.push_back(std::move(f));
+  }
+  return scene;
+}
+
+Scene ScanNetReader::ReadSens(const std::string& folder, const std::string& scene_name) const {
+  Scene scene = NewFolderScene(folder, scene_name, Format(), 0.1, 10.0);
+  const std::string path = SensPath(folder);
+  const SensIndex sens = ReadSensIndex(path);
+  const Camera depth_camera = Camera::FromK(
+      CheckedIntrinsics(sens.depth_intrinsic.topLeftCorner<3, 3>(), path + " depth intrinsic"),
+      sens.depth_width, sens.depth_height);
+  const Camera color_camera = Camera::FromK(
+      CheckedIntrinsics(sens.color_intrinsic.topLeftCorner<3, 3>(), path + " colour intrinsic"),
+      sens.color_width, sens.color_height);
+  scene.frames.reserve(sens.frames.size());
+  for (size_t i = 0; i < sens.frames.size(); ++i) {
+    const SensFrameEntry& e = sens.frames[i];
+    Frame f;
+    f.id = std::to_string(i);
+    f.number = static_cast<int64_t>(i);
+    f.depth.path = path;
+    f.depth.format = sens.depth_compression == SensDepthCompression::kZlib ? DepthFormat::kSensZlib
+                                                                           : DepthFormat::kSensRaw;
+    f.depth.scale_m_per_unit = 1.0 / sens.depth_shift;
+    f.depth.range = e.depth;
+    f.depth.width = sens.depth_width;
+    f.depth.height = sens.depth_height;
+    f.depth_camera = depth_camera;
+    if (e.color.size > 0) {
+      f.color_path = path;
+      f.color_range = e.color;
+      f.color_raw_rgb = sens.color_compression == SensColorCompression::kRaw;
+      f.color_camera = color_camera;
+    }
+    if (const auto problem = PoseProblem(e.world_from_cam)) {
+      MarkUnusable(&f, PoseReason(*problem));
+    } else {
+      f.world_from_cam = RigidFromMatrix(e.world_from_cam);
+    }
+    if (e.depth.size == 0) MarkUnusable(&f, kReasonDepthMissing);
     scene.frames.push_back(std::move(f));
   }
   return scene;

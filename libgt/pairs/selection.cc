@@ -9,6 +9,7 @@
 #include <random>
 
 #include "libgt/core/error.h"
+#include "libgt/io/depth_io.h"
 #include "libgt/io/file_read.h"
 #include "libgt/truth/working_frame.h"
 
@@ -103,12 +104,12 @@ ScanResult ScanFrames(const Scene& scene, const FrameScanOptions& options, Depth
   const size_t n = scene.frames.size();
   std::vector<int> status(n, 0);  // 0 kept, 1 stride, 2 unusable, 3 read error, 4 low depth
   std::vector<double> medians(n, 0.0);
-  // The depth files are read ahead (io::PrefetchFile) kScanPrefetch scanned frames in
+  // The depth files are read ahead (io::PrefetchDepth) kScanPrefetch scanned frames in
   // advance, so that a file missing from the page cache is read from disk while the
   // threads work on the frames before it, instead of stalling one of them.
   const size_t stride = static_cast<size_t>(options.frame_stride);
   auto prefetch = [&](size_t i) {
-    if (i < n && scene.frames[i].usable) io::PrefetchFile(scene.frames[i].depth.path);
+    if (i < n && scene.frames[i].usable) io::PrefetchDepth(scene.frames[i].depth);
   };
   for (size_t k = 0; k < kScanPrefetch; ++k) prefetch(k * stride);
   tbb::parallel_for(size_t{0}, n, [&](size_t i) {

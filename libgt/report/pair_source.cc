@@ -348,7 +348,12 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
     for (int k = 0; k < 2; ++k) {
       const std::string id = meta["frames"][k].get<std::string>();
       for (const auto& f : scene.frames) {
-        if (f.id == id) (k == 0 ? p0 : p1) = f.color_path;
+        if (f.id != id || f.color_path.empty()) continue;
+        if (f.color_range.size > 0) {  // a payload inside a container (.sens)
+          (k == 0 ? img0 : img1) = BgrFromColor(gt::io::ReadFrameColor(f));
+        } else {
+          (k == 0 ? p0 : p1) = f.color_path;
+        }
       }
     }
   }
@@ -400,8 +405,8 @@ PairData ComputePairFromScene(const std::string& root, const std::string& format
   p.stride = options.patches.stride;
   p.anchor = options.patches.anchor;
   cv::Mat img0, img1;
-  if (!f0.color_path.empty()) img0 = BgrFromColor(gt::io::ReadColor(f0.color_path));
-  if (!f1.color_path.empty()) img1 = BgrFromColor(gt::io::ReadColor(f1.color_path));
+  if (!f0.color_path.empty()) img0 = BgrFromColor(gt::io::ReadFrameColor(f0));
+  if (!f1.color_path.empty()) img1 = BgrFromColor(gt::io::ReadFrameColor(f1));
   p.has_images = !img0.empty() && !img1.empty();
   p.image0 = PrepareImage(img0, p.width, p.height);
   p.image1 = PrepareImage(img1, p.width, p.height);

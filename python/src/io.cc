@@ -69,7 +69,7 @@ class PyScene {
         throw gt::InputError("frame_id", "frame " + frame.id + " of scene " + scene_->name +
                                              " has no colour image");
       }
-      image = gt::io::ReadColorResized(frame.color_path, frame.color_camera, width, height);
+      image = gt::io::ReadFrameColorResized(frame, width, height);
     }
     const int h = image.height, w = image.width;
     return ToArray(std::move(image.rgb), {h, w, 3});

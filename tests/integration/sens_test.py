@@ -1,0 +1,115 @@
+"""ScanNet raw .sens read in place (libgt/io/sens.h): the same frames written as a .sens and
+in the exporter's layout (tests/support/write_sens.py) give the same scan (poses, K, usable
+frames and reasons) and bit-identical `occgt pair` outputs, for a synthetic scene (JPEG colour,
+a lost-tracking frame) and the real 7-Scenes sample frames (PNG colour); damaged files are one
+line naming the file and the field."""
+import json
+import os
+import struct
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+import common  # noqa: E402
+
+sys.path.insert(0, os.path.join(common.SOURCE, "tests", "support"))
+import write_sens  # noqa: E402
+
+out = common.scratch("sens")
+write_sens.main(["", "synthetic", out])
+write_sens.main(["", "sevenscenes", common.shared("sevenscenes"), out])
+sens_root, export_root = os.path.join(out, "sens"), os.path.join(out, "export")
+
+
+def scan(root, *extra):
+    return json.loads(common.occgt("scan", root, "--format", "scannet", "--json", *extra).stdout)
+
+
+# scan: the same scenes, frame counts, usable counts, reasons and cameras; depth readable.
+a, b = scan(sens_root, "--check-depth"), scan(export_root, "--check-depth")
+assert [s["name"] for s in a["scenes"]] == ["seven", "synth"], a["scenes"]
+for sa, sb in zip(a["scenes"], b["scenes"]):
+    for key in sa:
+        if key != "path":
+            assert sa[key] == sb[key], (sa["name"], key, sa[key], sb[key])
+synth = a["scenes"][1]
+assert synth["frames"] == 5 and synth["usable"] == 4, synth
+text = common.occgt("scan", sens_root, "--format", "scannet").stdout
+assert "unusable 1: pose: non-finite pose entries (lost tracking)" in text, text
+
+# pair: every output file bit for bit (labels, matches, meta.json with its K and poses).
+for scene, frames, res in [("seven", "0,10", "320x240"), ("seven", "5,40", "640x480"),
+                           ("synth", "0,3", "80x60")]:
+    outs = []
+    for root in [sens_root, export_root]:
+        d = os.path.join(out, "pair", os.path.basename(root), scene + frames.replace(",", "_"))
+        common.occgt("pair", "--root", root, "--format", "scannet", "--scene", scene, "--frames",
+                     frames, "--out", d, "--resolution", res)
+        outs.append(d)
+    names = sorted(os.listdir(outs[0]))
+    assert names == sorted(os.listdir(outs[1])) and "label01.npy" in names, names
+    for n in names:
+        with open(os.path.join(outs[0], n), "rb") as f0, open(os.path.join(outs[1], n), "rb") as f1:
+            assert f0.read() == f1.read(), (scene, frames, n)
+    assert (np.load(os.path.join(outs[0], "label01.npy")) == 2).any()  # some VISIBLE pixels
+
+# A lost-tracking frame is refused as the exported layout refuses it.
+r = common.occgt("pair", "--root", sens_root, "--format", "scannet", "--scene", "synth",
+                 "--frames", "0,2", "--out", os.path.join(out, "pair_lost"), check=False)
+assert r.returncode != 0 and "lost tracking" in r.stderr, r.stderr
+
+# Damaged files: one line naming the .sens and the field, no crash, no huge allocation.
+with open(os.path.join(sens_root, "synth", "synth.sens"), "rb") as f:
+    good = f.read()
+header_len = len(write_sens.header_bytes(np.eye(3), np.eye(3), (1, 1), (1, 1), 0))
+# colorCompression, depthCompression, 4 uint32 sizes, depthShift, numFrames end the header.
+fields = header_len - (4 + 4 + 16 + 4 + 8)
+frame0 = header_len
+color_bytes0 = struct.unpack_from("<Q", good, frame0 + 64 + 16)[0]
+
+
+def patched(offset, fmt, value):
+    b = bytearray(good)
+    struct.pack_into(fmt, b, offset, value)
+    return bytes(b)
+
+
+cases = [
+    ("cut in the header", good[:50], "colour intrinsic: file ends at byte 50"),
+    ("cut in a payload", good[: frame0 + 96 + color_bytes0 // 2], "frame 0: colorBytes"),
+    ("frame count too large", patched(header_len - 8, "<Q", 10**9), "numFrames: 1000000000"),
+    ("byte count past the end", patched(frame0 + 64 + 24, "<Q", 2**60),
+     "run past the end of the file"),
+    ("absurd width", patched(fields + 8, "<I", 10**7), "colorWidth: 10000000"),
+    ("absurd size", good[:fields + 16] + struct.pack("<II", 60000, 60000) + good[fields + 24:],
+     "depth 60000x60000: implausible size"),
+    ("OCCI depth", patched(fields + 4, "<i", 2), "depthCompression: 2 (OCCI, proprietary)"),
+    ("unknown colour", patched(fields, "<i", -1), "colorCompression: -1 is not supported"),
+    ("version", patched(0, "<I", 3), "version: 3, expected 4"),
+]
+for what, data, expected in cases:
+    scene = os.path.join(out, "bad", "s")
+    os.makedirs(scene, exist_ok=True)
+    path = os.path.join(scene, "s.sens")
+    with open(path, "wb") as f:
+        f.write(data)
+    r = common.occgt("scan", scene, "--format", "scannet", check=False)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 1 and len(lines) == 1, (what, r.returncode, r.stderr)
+    assert path in lines[0] and expected in lines[0], (what, lines[0])
+    os.remove(path)
+
+# A corrupt zlib payload is found when the depth is read: one line from pair.
+b = bytearray(good)
+depth0 = frame0 + 96 + color_bytes0
+b[depth0 + 10: depth0 + 30] = b"\xff" * 20
+scene = os.path.join(out, "bad", "z")
+os.makedirs(scene, exist_ok=True)
+with open(os.path.join(scene, "z.sens"), "wb") as f:
+    f.write(bytes(b))
+r = common.occgt("pair", "--root", scene, "--format", "scannet", "--scene", "z", "--frames", "0,1",
+                 "--out", os.path.join(out, "pair_z"), check=False)
+lines = r.stderr.strip().splitlines()
+assert r.returncode == 1 and len(lines) == 1 and "z.sens (depth payload at byte" in lines[0], r.stderr
+print("sens: ok")
