@@ -21,6 +21,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "libgt/core/human.h"
 #include "libgt/build/build.h"
 #include "libgt/build/recipe.h"
 #include "libgt/core/error.h"
@@ -120,15 +121,7 @@ extern "C" void OnInterrupt(int signal_number) {
   std::raise(signal_number);
 }
 
-// "38.2 MB" (decimal units).
-std::string HumanBytes(double bytes) {
-  const char* units[] = {"B", "kB", "MB", "GB", "TB", "PB"};
-  int u = 0;
-  while (bytes >= 1000 && u < 5) bytes /= 1000, ++u;
-  char text[32];
-  std::snprintf(text, sizeof(text), u == 0 ? "%.0f %s" : "%.1f %s", bytes, units[u]);
-  return text;
-}
+using gt::HumanBytes;
 
 // A few lines for a person: what was selected and written, what was dropped and why, where
 // it went and what to run next. Every figure is a field of the summary JSON (--json).

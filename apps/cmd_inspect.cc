@@ -30,7 +30,7 @@ struct InspectPairArgs {
 };
 
 struct InspectSplitArgs {
-  std::string dir, out, aggregate = "mean", occlusion_metric = "image";
+  std::string dir, out, aggregate = "mean", occlusion_metric = "image", gallery_order = "random";
   int gallery = 6;
   uint64_t seed = 0;
   int bins = 20;
@@ -90,6 +90,7 @@ void RunInspectSplit(const InspectSplitArgs& a) {
   o.occlusion_metric = gt::ParseOcclusionMetric(a.occlusion_metric, "--occlusion-metric");
   o.gallery_pairs = a.gallery;
   o.seed = a.seed;
+  o.gallery_order = gt::report::ParseGalleryOrder(a.gallery_order, "--gallery-order");
   o.histogram_bins = a.bins;
   std::string error;
   if (!o.Check(&error)) {  // the defaults pass: a failure comes from a flag
@@ -155,6 +156,10 @@ void AddInspectCommand(CLI::App& app) {
   split->add_option("--gallery", sa->gallery, "pairs shown with their pictures")
       ->capture_default_str();
   split->add_option("--seed", sa->seed, "seed of the gallery choice")->capture_default_str();
+  split
+      ->add_option("--gallery-order", sa->gallery_order,
+                   "random (seeded) or most-occluded (largest occlusion ratio first)")
+      ->capture_default_str();
   split->add_option("--bins", sa->bins, "histogram bins over [0, 1]")->capture_default_str();
   split->callback([sa] { RunInspectSplit(*sa); });
 }

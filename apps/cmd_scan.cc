@@ -48,6 +48,20 @@ nlohmann::ordered_json SceneJson(const gt::io::SceneSummary& s) {
             {"cy", s.depth_camera.cy}};
   j["uniform_depth_camera"] = s.uniform_depth_camera;
   j["depth_range_m"] = {s.min_depth_m, s.max_depth_m};
+  if (s.usable_with_color > 0) {
+    j["color"] = {{"usable_with_color", s.usable_with_color},
+                  {"size", {s.color_camera.width, s.color_camera.height}},
+                  {"K",
+                   {{"fx", s.color_camera.fx},
+                    {"fy", s.color_camera.fy},
+                    {"cx", s.color_camera.cx},
+                    {"cy", s.color_camera.cy}}},
+                  {"uniform_color_camera", s.uniform_color_camera}};
+  } else {
+    j["color"] = {{"usable_with_color", 0}, {"size", nullptr}, {"K", nullptr},
+                  {"uniform_color_camera", true}};
+  }
+  j["warnings"] = s.warnings;
   if (s.depth_checked) {
     j["depth_check"] = {{"files_read", s.depth_files_read},
                         {"files_bad", s.depth_files_bad},
@@ -71,6 +85,15 @@ void PrintSceneText(const gt::io::SceneSummary& s) {
   for (const auto& [reason, count] : s.unusable_reasons) {
     out << "  unusable " << count << ": " << reason << "\n";
   }
+  const gt::Camera& cc = s.color_camera;
+  out << "  colour " << s.usable_with_color << " of " << s.usable << " usable frames";
+  if (s.usable_with_color > 0) {
+    out << ", " << cc.width << "x" << cc.height << ", K fx=" << cc.fx << " fy=" << cc.fy
+        << " cx=" << cc.cx << " cy=" << cc.cy
+        << (s.uniform_color_camera ? "" : " (first frame; varies)");
+  }
+  out << "\n";
+  for (const auto& w : s.warnings) out << "  warning: " << w << "\n";
   if (s.depth_checked) {
     out << "  depth check: " << s.depth_files_read << " read, " << s.depth_files_bad
         << " bad, mean valid fraction " << s.mean_valid_fraction << "\n";
@@ -96,11 +119,12 @@ void RunScan(const ScanArgs& args) {
     const gt::Scene scene = reader->ReadScene(args.root, name);
     summaries.push_back(gt::io::SummarizeScene(scene, args.scan));
   }
-  size_t frames = 0, usable = 0;
+  size_t frames = 0, usable = 0, with_color = 0;
   std::map<std::string, size_t> reasons;
   for (const auto& s : summaries) {
     frames += s.frames;
     usable += s.usable;
+    with_color += s.usable_with_color;
     for (const auto& [reason, count] : s.unusable_reasons) reasons[reason] += count;
   }
   if (args.json) {
@@ -116,13 +140,15 @@ void RunScan(const ScanArgs& args) {
                    {"frames", frames},
                    {"usable", usable},
                    {"unusable", frames - usable},
+                   {"usable_with_color", with_color},
                    {"unusable_reasons", ReasonsJson(reasons)}};
     std::cout << j.dump(2) << "\n";
     return;
   }
   for (const auto& s : summaries) PrintSceneText(s);
   std::cout << "total: " << summaries.size() << " scene(s), " << frames << " frames, " << usable
-            << " usable, " << frames - usable << " unusable\n";
+            << " usable (" << with_color << " with colour), " << frames - usable
+            << " unusable\n";
 }
 
 }  // namespace

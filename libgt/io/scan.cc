@@ -21,6 +21,15 @@ bool SameCamera(const Camera& a, const Camera& b) {
 }
 }  // namespace
 
+std::vector<std::string> DatasetCaveats(const std::string& format) {
+  if (format == "sevenscenes") {
+    return {"7-Scenes depth and colour come from different, unregistered cameras (no "
+            "extrinsics are published): labels follow the depth camera, and colour pixels are "
+            "only approximately aligned with them"};
+  }
+  return {};
+}
+
 SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
   std::string error;
   if (!options.Check(&error)) throw InputError("scan options", error);
@@ -31,6 +40,8 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
   s.min_depth_m = scene.min_depth_m;
   s.max_depth_m = scene.max_depth_m;
   if (!scene.frames.empty()) s.depth_camera = scene.frames.front().depth_camera;
+  s.warnings = DatasetCaveats(scene.format);
+  bool have_color_camera = false;
   s.depth_checked = options.check_depth;
   double fraction_sum = 0.0;
   for (const Frame& f : scene.frames) {
@@ -54,8 +65,26 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
       }
     }
     ++s.usable;
+    if (!f.color_path.empty()) {
+      ++s.usable_with_color;
+      if (!have_color_camera) {
+        s.color_camera = f.color_camera;
+        have_color_camera = true;
+      } else if (!SameCamera(f.color_camera, s.color_camera)) {
+        s.uniform_color_camera = false;
+      }
+    }
   }
   if (s.depth_files_read > 0) s.mean_valid_fraction = fraction_sum / s.depth_files_read;
+  if (s.usable > 0 && s.usable_with_color == 0) {
+    s.warnings.emplace_back("no usable frame has a colour image: a build that stores images "
+                            "stops (set sample.image: none)");
+  } else if (s.usable_with_color < s.usable) {
+    s.warnings.emplace_back(std::to_string(s.usable - s.usable_with_color) + " of " +
+                            std::to_string(s.usable) +
+                            " usable frames have no colour image: a build that stores images "
+                            "skips them (drop scan.no_color)");
+  }
   return s;
 }
 

@@ -34,6 +34,13 @@ struct SceneSummary {
   bool uniform_depth_camera = true;                // every frame has the same size and K
   double min_depth_m = 0.0;
   double max_depth_m = 0.0;
+  // Colour coverage: usable frames with a colour file, and the colour camera of the first
+  // of them (0x0 when none has colour).
+  size_t usable_with_color = 0;
+  Camera color_camera;
+  bool uniform_color_camera = true;
+  // Known caveats of the dataset (DatasetCaveats) and of this scene (no colour at all).
+  std::vector<std::string> warnings;
   // check_depth only:
   bool depth_checked = false;
   size_t depth_files_read = 0;       // successfully read
@@ -43,6 +50,10 @@ struct SceneSummary {
 
   size_t unusable() const { return frames - usable; }
 };
+
+// Known caveats of a dataset format that a user must see before trusting its outputs, one
+// sentence each (shown by `occgt scan` and in the split report); empty when none.
+std::vector<std::string> DatasetCaveats(const std::string& format);
 
 // Summarises `scene`; with check_depth, reads the depth of every usable frame.
 SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options);

@@ -12,9 +12,11 @@
 #include <sstream>
 
 #include "libgt/core/error.h"
+#include "libgt/core/human.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/file_read.h"
+#include "libgt/io/scan.h"
 
 namespace gt::report {
 namespace {
@@ -212,7 +214,51 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
     }
     if (!split.summary.is_object()) throw InputError(summary_path, "expected a JSON object");
   }
+  const std::string recipe_path = (fs::path(dir) / "recipe.json").string();
+  if (gt::io::FileExists(recipe_path)) {
+    try {
+      split.recipe = json::parse(gt::io::ReadFileBytes(recipe_path));
+    } catch (const json::exception&) {
+      throw InputError(recipe_path, "expected a JSON object (the resolved recipe)");
+    }
+    if (!split.recipe.is_object()) {
+      throw InputError(recipe_path, "expected a JSON object (the resolved recipe)");
+    }
+  }
   return split;
+}
+
+std::vector<std::string> SplitWarnings(const SplitData& split) {
+  std::vector<std::string> w;
+  if (split.pairs.empty()) w.emplace_back("The split has no pairs (see the drops below).");
+  if (split.recipe.is_object()) {
+    const json sample = split.recipe.value("sample", json::object());
+    if (sample.is_object() && sample.value("image", "") == "none") {
+      w.emplace_back(
+          "No images are stored in this split (sample.image: none): a trainer must read the "
+          "dataset's own colour files.");
+    }
+    const json dataset = split.recipe.value("dataset", json::object());
+    if (dataset.is_object() && dataset.contains("format") && dataset["format"].is_string()) {
+      for (auto& c : gt::io::DatasetCaveats(dataset["format"].get<std::string>())) {
+        w.push_back(c + ".");
+      }
+    }
+  }
+  if (split.summary.is_object()) {
+    const json drops = split.summary.value("drops", json::object());
+    if (drops.is_object()) {
+      for (const char* reason : {"scan.no_color", "import.no_color"}) {
+        if (drops.contains(reason) && drops[reason].is_number() && drops[reason].get<double>() > 0) {
+          w.push_back(JsonScalar(drops[reason]) + (std::string(reason) == "scan.no_color"
+                                                        ? " frames were skipped"
+                                                        : " imported pairs were skipped") +
+                      " for lack of a colour image (" + reason + ").");
+        }
+      }
+    }
+  }
+  return w;
 }
 
 std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReportOptions& options,
@@ -345,19 +391,37 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
   return plots;
 }
 
+GalleryOrder ParseGalleryOrder(const std::string& text, const std::string& field) {
+  if (text == "random") return GalleryOrder::kRandom;
+  if (text == "most-occluded") return GalleryOrder::kMostOccluded;
+  throw InputError(field, "expected one of random, most-occluded; got '" + text + "'");
+}
+
+const char* GalleryOrderName(GalleryOrder order) {
+  return order == GalleryOrder::kRandom ? "random" : "most-occluded";
+}
+
 std::vector<size_t> PickGalleryPairs(const SplitData& split, const SplitReportOptions& options) {
+  // Sort keys: (hash, index) for a seeded random choice; (-occlusion as ordered bits, index)
+  // for the most occluded first.
   std::vector<std::pair<uint64_t, size_t>> keyed;
   const uint64_t seed_hash = SplitMix64(options.seed);
   for (size_t i = 0; i < split.pairs.size(); ++i) {
     const SplitPair& p = split.pairs[i];
     if (p.shard.empty() || p.key.empty()) continue;
-    keyed.emplace_back(SplitMix64(seed_hash ^ Fnv1a64(p.key)), i);
+    if (options.gallery_order == GalleryOrder::kRandom) {
+      keyed.emplace_back(SplitMix64(seed_hash ^ Fnv1a64(p.key)), i);
+    } else {
+      // Occlusion ratios are in [0, 1]: larger ratio -> smaller key.
+      const double occ = std::clamp(std::isfinite(p.occlusion) ? p.occlusion : 0.0, 0.0, 1.0);
+      keyed.emplace_back(static_cast<uint64_t>((1.0 - occ) * 9.0e15), i);
+    }
   }
   const size_t take = std::min(keyed.size(), static_cast<size_t>(options.gallery_pairs));
   std::partial_sort(keyed.begin(), keyed.begin() + static_cast<std::ptrdiff_t>(take), keyed.end());
   std::vector<size_t> out;
   for (size_t k = 0; k < take; ++k) out.push_back(keyed[k].second);
-  std::sort(out.begin(), out.end());
+  if (options.gallery_order == GalleryOrder::kRandom) std::sort(out.begin(), out.end());
   return out;
 }
 
@@ -414,6 +478,10 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
     << "img{max-width:100%;height:auto;border:1px solid #ddd}\n"
     << "figure{margin:0 0 16px 0}figcaption{font-size:0.88em;color:#555}\n"
     << ".pair{margin-bottom:28px;page-break-inside:avoid}.muted{color:#777}\n"
+    << ".warn{border:2px solid #c77700;background:#fff4e0;padding:6px 14px;margin:12px 0}"
+       ".warn ul{margin:4px 0}\n"
+    << "pre.recipe{background:#f7f7f7;border:1px solid #ddd;padding:8px;font-size:0.85em;"
+       "overflow-x:auto}\n"
     << ".tables{display:flex;flex-wrap:wrap;gap:32px;align-items:flex-start}\n"
     << "@media print{body{max-width:none;padding:0;font-size:10pt}"
        ".plots figure{flex:none;width:100%;max-width:100%}img{max-width:100%;"
@@ -426,6 +494,12 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
     << (options.occlusion_metric == OcclusionMetric::kImage ? "OCCLUDED / (W&middot;H)"
                                                             : "OCCLUDED / (VISIBLE + OCCLUDED)")
     << "</p>\n";
+  const std::vector<std::string> warnings = SplitWarnings(split);
+  if (!warnings.empty()) {
+    h << "<div class=\"warn\" role=\"alert\"><strong>Warnings</strong><ul>\n";
+    for (const auto& w : warnings) h << "<li>" << HtmlEscape(w) << "</li>\n";
+    h << "</ul></div>\n";
+  }
 
   // Summary tables.
   h << "<h2>Summary</h2>\n<div class=\"tables\">\n";
@@ -449,10 +523,18 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
   h << "</table>\n";
   if (split.summary.is_object()) {
     h << "<table><tr><th>summary.json</th><th>value</th></tr>\n";
+    // Byte counts also in decimal units: "79.2 MB (79234567)".
+    auto shown = [](const std::string& key, const json& v) {
+      std::string value = JsonScalar(v);
+      if (v.is_number() && key.find("bytes") != std::string::npos) {
+        value = gt::HumanBytes(v.get<double>()) + " (" + value + ")";
+      }
+      return value;
+    };
     for (auto it = split.summary.begin(); it != split.summary.end(); ++it) {
       if (it.value().is_primitive()) {
         h << "<tr><td>" << HtmlEscape(it.key()) << "</td><td class=\"n\">"
-          << HtmlEscape(JsonScalar(it.value())) << "</td></tr>\n";
+          << HtmlEscape(shown(it.key(), it.value())) << "</td></tr>\n";
       }
     }
     for (const char* group : {"counts", "timings"}) {
@@ -460,7 +542,7 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
       for (auto it = split.summary[group].begin(); it != split.summary[group].end(); ++it) {
         if (!it.value().is_primitive()) continue;
         h << "<tr><td>" << group << "." << HtmlEscape(it.key()) << "</td><td class=\"n\">"
-          << HtmlEscape(JsonScalar(it.value())) << "</td></tr>\n";
+          << HtmlEscape(shown(it.key(), it.value())) << "</td></tr>\n";
       }
     }
     h << "</table>\n";
@@ -487,8 +569,13 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
   }
   h << "</div>\n";
 
-  h << "<h2>Gallery</h2>\n<p class=\"muted\">" << gallery.size() << " pairs picked with seed "
-    << options.seed
+  h << "<h2>Gallery</h2>\n<p class=\"muted\">" << gallery.size() << " pairs: ";
+  if (options.gallery_order == GalleryOrder::kRandom) {
+    h << "picked with seed " << options.seed;
+  } else {
+    h << "the most occluded (largest occlusion ratio first)";
+  }
+  h
     << ". Matches: vv green, vo yellow, ov red. Labels: NO_DEPTH near black, OUT_OF_VIEW blue, "
        "VISIBLE green, OCCLUDED red, INCONSISTENT magenta, UNKNOWN orange.</p>\n";
   for (const auto& g : gallery) {
@@ -499,6 +586,12 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
     }
     h << "</div>\n";
   }
+  if (split.recipe.is_object()) {
+    h << "<h2>Recipe</h2>\n<p class=\"muted\">recipe.json: the resolved recipe this split was "
+         "built with (every default filled in).</p>\n<pre class=\"recipe\">"
+      << HtmlEscape(split.recipe.dump(2)) << "</pre>\n";
+  }
+
   // Records how many images decoded (the page needs no script to be read).
   h << "<script>window.addEventListener('load',function(){var a=document.images,k=0;"
        "for(var i=0;i<a.length;i++){if(a[i].complete&&a[i].naturalWidth>0)k++;}"

@@ -47,14 +47,27 @@ struct SplitData {
   std::string dir;
   std::vector<SplitPair> pairs;  // pairs.jsonl order
   nlohmann::json summary;        // summary.json, null when absent
+  nlohmann::json recipe;         // recipe.json (the resolved recipe), null when absent
 };
+
+// What a reader of the report must know before trusting the split, one sentence each: no
+// pairs, no images stored, frames skipped for lack of colour, and the dataset's caveats
+// (gt::io::DatasetCaveats of recipe.json's dataset.format). Empty when none applies.
+std::vector<std::string> SplitWarnings(const SplitData& split);
+
+// Which pairs the gallery shows: a seeded random choice, or the most occluded ones (largest
+// pair occlusion ratio first, ties by pairs.jsonl order).
+enum class GalleryOrder { kRandom, kMostOccluded };
+GalleryOrder ParseGalleryOrder(const std::string& text, const std::string& field);
+const char* GalleryOrderName(GalleryOrder order);
 
 struct SplitReportOptions {
   Aggregate aggregate = Aggregate::kMean;
   OcclusionMetric occlusion_metric = OcclusionMetric::kImage;
   int histogram_bins = 20;          // bins over [0, 1], 1..200
   int gallery_pairs = 6;            // pairs rendered in the gallery, 0..100
-  uint64_t seed = 0;                // gallery choice
+  uint64_t seed = 0;                // gallery choice (kRandom)
+  GalleryOrder gallery_order = GalleryOrder::kRandom;
   double gallery_scale = 0.5;       // gallery pictures resized by this (0, 1]
   std::string gnuplot = "gnuplot";  // executable (PATH lookup)
   int plot_width_px = 800, plot_height_px = 480;
@@ -77,7 +90,8 @@ struct NamedImage {
 std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReportOptions& options,
                                        const std::string& scratch_dir);
 
-// Indices into split.pairs of the gallery (increasing), at most options.gallery_pairs.
+// Indices into split.pairs of the gallery, at most options.gallery_pairs: increasing for
+// kRandom, most occluded first for kMostOccluded.
 std::vector<size_t> PickGalleryPairs(const SplitData& split, const SplitReportOptions& options);
 
 struct GalleryItem {

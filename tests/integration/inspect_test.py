@@ -35,6 +35,10 @@ ALPHA = 0.55
 failures = []
 
 
+def html_escape(t):
+    return t.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
+
+
 def check(cond, msg):
     if not cond:
         failures.append(msg)
@@ -134,12 +138,54 @@ def main():
         summary = json.load(f)
     for reason, n in summary.get("drops", {}).items():
         check(f"<td>{reason}</td><td class=\"n\">{n}</td>" in text, f"drop {reason} not in report")
+    # Byte counts in decimal units beside the raw number; the resolved recipe shown.
+    check(re.search(r"<td>bytes_written</td><td class=\"n\">[0-9.]+ [kMG]?B \(%d\)</td>"
+                    % summary["bytes_written"], text) is not None,
+          "bytes_written not shown in human units")
+    check("<h2>Recipe</h2>" in text and html_escape(json.dumps(json.load(open(os.path.join(build, "recipe.json"))),
+                                                              indent=2)) in text,
+          "report does not show recipe.json")
+    # The demo (synthetic, images stored) needs no warning box.
+    check('class="warn"' not in text, "demo report shows a warning box")
     chromium_check(html, tmp)
     # Deterministic: a second run writes identical files.
     report2 = os.path.join(tmp, "report2")
     common.occgt("inspect", "split", build, "--out", report2, "--gallery", "3")
     check(open(html, "rb").read() == open(os.path.join(report2, "report.html"), "rb").read(),
           "report.html differs between two runs")
+
+    # --- the gallery's most occluded pairs: the largest mean occlusion ratio first.
+    report3 = os.path.join(tmp, "report3")
+    common.occgt("inspect", "split", build, "--out", report3, "--gallery", "3",
+                 "--gallery-order", "most-occluded")
+    text3 = open(os.path.join(report3, "report.html"), encoding="utf-8").read()
+    with open(os.path.join(build, "pairs.jsonl")) as f:
+        lines = [json.loads(l) for l in f]
+    occ = [((p["metrics"]["01"]["occlusion_ratio"] + p["metrics"]["10"]["occlusion_ratio"]) / 2, i, p["key"])
+           for i, p in enumerate(lines)]
+    want = [k for _, _, k in sorted(occ, key=lambda t: (-t[0], t[1]))[:3]]
+    got = re.findall(r"<h3>(\S+)  \(overlap", text3)
+    check(got == want, f"most-occluded gallery {got}, expected {want}")
+    r = common.occgt("inspect", "split", build, "--gallery-order", "worst", check=False)
+    check(r.returncode == 2 and r.stderr.startswith("occgt: error: --gallery-order"), r.stderr)
+
+    # --- a split with a caveat and no images: the warning box says both.
+    plain = os.path.join(tmp, "plain")
+    os.makedirs(plain)
+    for name in ("pairs.jsonl", "summary.json"):
+        shutil.copyfile(os.path.join(build, name), os.path.join(plain, name))
+    rec = json.load(open(os.path.join(build, "recipe.json")))
+    rec["dataset"]["format"] = "sevenscenes"
+    rec["sample"]["image"] = "none"
+    json.dump(rec, open(os.path.join(plain, "recipe.json"), "w"))
+    common.occgt("inspect", "split", plain, "--gallery", "0")
+    text4 = open(os.path.join(plain, "inspect", "report.html"), encoding="utf-8").read()
+    box = re.search(r'<div class="warn" role="alert">(.*?)</div>', text4, re.S)
+    check(box is not None, "no warning box for a 7-Scenes split without images")
+    if box:
+        items = re.findall(r"<li>(.*?)</li>", box.group(1))
+        check(len(items) == 2 and "No images are stored" in items[0] and "unregistered" in items[1],
+              f"warning items {items}")
 
     # --- pair from a shard: sizes, label blend, match colours.
     with open(os.path.join(build, "pairs.jsonl")) as f:

@@ -32,8 +32,11 @@ def scan(root, fmt, *extra):
 # TartanAir: 24 usable frames, K 320/320/320/240 at 640x480; every depth file read.
 doc = scan(common.shared("tartanair/hospital_sample"), "tartanair", "--check-depth")
 assert doc["totals"] == {"scenes": 1, "frames": 24, "usable": 24, "unusable": 0,
-                         "unusable_reasons": {}}, doc["totals"]
+                         "usable_with_color": 24, "unusable_reasons": {}}, doc["totals"]
 s = doc["scenes"][0]
+assert s["color"] == {"usable_with_color": 24, "size": [640, 480],
+                      "K": {"fx": 320, "fy": 320, "cx": 320, "cy": 240}, "uniform_color_camera": True}
+assert s["warnings"] == [], s["warnings"]
 assert s["depth_size"] == [640, 480] and s["K"] == {"fx": 320, "fy": 320, "cx": 320, "cy": 240}
 assert s["depth_check"]["files_read"] == 24 and s["depth_check"]["files_bad"] == 0
 assert 0.5 < s["depth_check"]["mean_valid_fraction"] <= 1.0
@@ -44,15 +47,46 @@ for root in ("sevenscenes/rgbd-frames", "sevenscenes"):
     assert doc["totals"]["usable"] == 50 and doc["totals"]["frames"] == 50, doc["totals"]
     assert doc["scenes"][0]["name"] == "rgbd-frames"
     assert doc["scenes"][0]["K"] == {"fx": 585, "fy": 585, "cx": 320, "cy": 240}
+    assert doc["scenes"][0]["color"]["usable_with_color"] == 50
+    # The dataset caveat: depth and colour are not registered.
+    assert len(doc["scenes"][0]["warnings"]) == 1, doc["scenes"][0]["warnings"]
+    assert "unregistered" in doc["scenes"][0]["warnings"][0]
 doc = scan(common.shared("sevenscenes/rgbd-frames"), "sevenscenes", "--check-depth")
 assert doc["scenes"][0]["depth_check"]["files_read"] == 50
 
 # ScanNet sample: 4 frames, none usable (no depth folder), K from intrinsic_depth.txt.
 doc = scan(common.shared("scannet_posed_color/scene_sample"), "scannet")
-assert doc["totals"] == {"scenes": 1, "frames": 4, "usable": 0, "unusable": 4,
+assert doc["totals"] == {"scenes": 1, "frames": 4, "usable": 0, "unusable": 4, "usable_with_color": 0,
                          "unusable_reasons": {"depth: missing file": 4}}, doc["totals"]
 k = doc["scenes"][0]["K"]
 assert abs(k["fx"] - 577.590698) < 1e-9 and abs(k["cy"] - 242.683609) < 1e-9
+
+# Colour coverage: a 7-Scenes copy where every other frame lacks its colour file (both
+# colour extensions the releases use are accepted: half the rest are .color.jpg).
+import shutil  # noqa: E402
+src = common.shared("sevenscenes/rgbd-frames")
+part = os.path.join(common.scratch("scan_colour"), "seq-01")
+os.makedirs(part)
+kept = 0
+for name in sorted(os.listdir(src)):
+    if ".color." in name:
+        n = int(name.split("-")[1].split(".")[0])
+        if n % 2:
+            continue
+        if n % 4 == 0:
+            name_out = name.replace(".color.png", ".color.jpg")
+            shutil.copyfile(os.path.join(src, name), os.path.join(part, name_out))
+            kept += 1
+            continue
+        kept += 1
+    os.symlink(os.path.join(src, name), os.path.join(part, name))
+doc = scan(part, "sevenscenes")
+s = doc["scenes"][0]
+assert s["usable"] == 50 and s["color"]["usable_with_color"] == kept == 25, (s["color"], kept)
+assert doc["totals"]["usable_with_color"] == 25
+assert any(w.startswith("25 of 50 usable frames have no colour image") for w in s["warnings"]), s["warnings"]
+text = common.occgt("scan", part, "--format", "sevenscenes").stdout
+assert "colour 25 of 50 usable frames" in text and "(25 with colour)" in text, text
 
 # --scene selects one scene by name.
 doc = scan(common.shared("scannet_posed_color"), "scannet", "--scene", "scene_sample")
@@ -105,5 +139,20 @@ assert s["usable"] == 1 and s["unusable_reasons"] == {
 assert s["depth_check"]["files_read"] == 1 and s["depth_check"]["files_bad"] == 1
 assert "b.npy: depth is 32x24, expected 64x48" in s["depth_check"]["errors"][0]
 assert s["depth_check"]["mean_valid_fraction"] == 1.0
+assert s["color"] == {"usable_with_color": 0, "size": None, "K": None, "uniform_color_camera": True}
+assert any(w.startswith("no usable frame has a colour image") for w in s["warnings"]), s["warnings"]
+
+# docs/CLI.md's scan example runs as written (from the repository root) and prints what it shows.
+import re  # noqa: E402
+import subprocess  # noqa: E402
+cli = open(os.path.join(common.SOURCE, "docs", "CLI.md"), encoding="utf-8").read()
+m = re.search(r"Example \(the real TartanAir sample\):\n\n((?:    .*\n)+)", cli)
+assert m, "docs/CLI.md: scan example not found"
+lines = [ln[4:] for ln in m.group(1).splitlines()]
+assert lines[0].startswith("$ occgt scan "), lines[0]
+argv = lines[0][2:].split()[1:]
+r = subprocess.run([common.BINARY, *argv], cwd=common.SOURCE, capture_output=True, text=True)
+assert r.returncode == 0, r.stderr
+assert r.stdout.splitlines() == lines[1:], (r.stdout, lines[1:])
 
 print("scan integration: OK")
