@@ -39,7 +39,7 @@ text = common.occgt("scan", sens_root, "--format", "scannet").stdout
 assert "unusable 1: pose: non-finite pose entries (lost tracking)" in text, text
 
 # pair: every output file bit for bit (labels, matches, meta.json with its K and poses).
-for scene, frames, res in [("seven", "0,10", "320x240"), ("seven", "5,40", "640x480"),
+for scene, frames, res in [("seven", "0,10", "320x240"), ("seven", "5,40", "160x120"),
                            ("synth", "0,3", "80x60")]:
     outs = []
     for root in [sens_root, export_root]:
@@ -53,6 +53,46 @@ for scene, frames, res in [("seven", "0,10", "320x240"), ("seven", "5,40", "640x
         with open(os.path.join(outs[0], n), "rb") as f0, open(os.path.join(outs[1], n), "rb") as f1:
             assert f0.read() == f1.read(), (scene, frames, n)
     assert (np.load(os.path.join(outs[0], "label01.npy")) == 2).any()  # some VISIBLE pixels
+
+# build: the shards (colour PNG from the .sens JPEG/PNG payloads, depth, labels) and the
+# index are byte-identical; only recipe.json (its root) and summary.json (timings) differ.
+builds = []
+for root in [sens_root, export_root]:
+    recipe = os.path.join(out, os.path.basename(root) + ".yaml")
+    with open(recipe, "w") as f:
+        f.write(f"""name: sens-eq
+split: sens-eq
+seed: 0
+resolution: [320, 240]
+dataset: {{format: scannet, root: {root}, scenes: [seven], frame_stride: 2,
+          min_valid_depth_fraction: 0.3}}
+labels: {{preset: default}}
+patches: {{stride: 8, anchor: center, mutual: true}}
+selection:
+  max_frame_gap: 6
+  pruning: {{max_distance_m: 2.0, max_view_angle_deg: 60, frustum: true}}
+  score_stride: 8
+  overlap: [0.4, 0.9]
+  occlusion: [0.0, 1.0]
+  aggregate: mean
+  quota_per_scene: 4
+occupancy: {{enabled: false}}
+sample: {{image: png, depth: true, labels: true, occupancy: false}}
+shards: {{samples_per_shard: 4}}
+""")
+    d = os.path.join(out, "build_" + os.path.basename(root))
+    common.occgt("build", recipe, "--out", d)
+    builds.append(d)
+files = sorted(os.path.relpath(os.path.join(dp, n), builds[0])
+               for dp, _, names in os.walk(builds[0]) for n in names)
+assert any(f.endswith(".tar") for f in files), files
+for rel in files:
+    if rel in ("recipe.json", "summary.json"):
+        continue
+    with open(os.path.join(builds[0], rel), "rb") as f0, open(os.path.join(builds[1], rel), "rb") as f1:
+        assert f0.read() == f1.read(), rel
+with open(os.path.join(builds[0], "summary.json")) as f:
+    assert json.load(f)["samples"] == 4
 
 # A lost-tracking frame is refused as the exported layout refuses it.
 r = common.occgt("pair", "--root", sens_root, "--format", "scannet", "--scene", "synth",
