@@ -261,6 +261,23 @@ std::vector<std::string> SplitWarnings(const SplitData& split) {
   return w;
 }
 
+std::pair<double, double> HistogramRange(const std::vector<double>& values) {
+  constexpr double kStep = 0.05;
+  double lo = 1.0, hi = 0.0;
+  for (double v : values) {
+    if (!std::isfinite(v)) continue;
+    lo = std::min(lo, std::clamp(v, 0.0, 1.0));
+    hi = std::max(hi, std::clamp(v, 0.0, 1.0));
+  }
+  if (lo > hi) return {0.0, 1.0};
+  // Multiples of the step, computed on integers so that 0.35 stays 0.35.
+  int a = static_cast<int>(std::floor(lo / kStep + 1e-9));
+  int b = static_cast<int>(std::ceil(hi / kStep - 1e-9));
+  if (b <= a) b = a + 1;
+  if (b > 20) a -= b - 20, b = 20;
+  return {a * kStep, b * kStep};
+}
+
 std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReportOptions& options,
                                        const std::string& scratch_dir) {
   std::string error;
@@ -271,20 +288,35 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
   };
   const size_t n = split.pairs.size();
   const int bins = options.histogram_bins;
-  auto histogram = [&](auto value) {
+  // Histograms over the range of the data (HistogramRange), `bins` bins.
+  auto histogram = [&](const std::vector<double>& values, std::pair<double, double> range) {
     std::vector<int64_t> counts(bins, 0);
-    for (const auto& p : split.pairs) {
-      const double v = std::clamp(value(p), 0.0, 1.0);
-      ++counts[std::min(bins - 1, static_cast<int>(std::floor(v * bins)))];
+    const double width = range.second - range.first;
+    for (double raw : values) {
+      const double v = std::clamp(std::isfinite(raw) ? raw : 0.0, range.first, range.second);
+      ++counts[std::min(bins - 1, static_cast<int>(std::floor((v - range.first) / width * bins)))];
     }
     std::string text;
     for (int b = 0; b < bins; ++b) {
-      text += Num((b + 0.5) / bins, 8) + " " + std::to_string(counts[b]) + "\n";
+      text += Num(range.first + (b + 0.5) * width / bins, 8) + " " + std::to_string(counts[b]) +
+              "\n";
     }
     return text;
   };
-  write("overlap_hist.dat", histogram([](const SplitPair& p) { return p.overlap; }));
-  write("occlusion_hist.dat", histogram([](const SplitPair& p) { return p.occlusion; }));
+  std::vector<double> overlaps, occlusions;
+  for (const auto& p : split.pairs) {
+    overlaps.push_back(p.overlap);
+    occlusions.push_back(p.occlusion);
+  }
+  const auto overlap_range = HistogramRange(overlaps), occlusion_range = HistogramRange(occlusions);
+  write("overlap_hist.dat", histogram(overlaps, overlap_range));
+  write("occlusion_hist.dat", histogram(occlusions, occlusion_range));
+  auto range_text = [](std::pair<double, double> r) {
+    return "[" + Num(r.first, 2) + ":" + Num(r.second, 2) + "]";
+  };
+  auto range_title = [](std::pair<double, double> r) {
+    return "[" + Num(r.first, 2) + ", " + Num(r.second, 2) + "]";
+  };
 
   std::vector<double> occ;
   for (const auto& p : split.pairs) occ.push_back(p.occlusion);
@@ -329,16 +361,22 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
      << " font \"DejaVu Sans,11\" noenhanced\n"
      << "set encoding utf8\nset grid ytics lc rgb '#dddddd'\nset border 3\n"
      << "set xtics nomirror\nset ytics nomirror\nset style fill solid 0.85 border -1\n"
-     << "set boxwidth " << Num(0.9 / bins, 8) << "\n";
+     << "set boxwidth " << Num(0.9 * (overlap_range.second - overlap_range.first) / bins, 8)
+     << "\n";
   gp << "set output 'overlap_hist.png'\nset title "
-     << GnuplotString("Overlap (" + agg + " of both directions), " + count)
-     << "\nset xlabel 'overlap'\nset ylabel 'pairs'\nset xrange [0:1]\nset yrange [0:*]\n"
+     << GnuplotString("Overlap (" + agg + " of both directions), " + count + ", " +
+                      std::to_string(bins) + " bins over " + range_title(overlap_range))
+     << "\nset xlabel 'overlap'\nset ylabel 'pairs'\nset xrange " << range_text(overlap_range)
+     << "\nset yrange [0:*]\n"
      << "plot 'overlap_hist.dat' using 1:2 with boxes lc rgb '#3b7dd8' notitle\n";
   gp << "set output 'occlusion_hist.png'\nset title "
-     << GnuplotString("Occlusion ratio (" + agg + " of both directions), " + count)
-     << "\nset xlabel " << GnuplotString(occ_name)
+     << GnuplotString("Occlusion ratio (" + agg + " of both directions), " + count + ", " +
+                      std::to_string(bins) + " bins over " + range_title(occlusion_range))
+     << "\nset xlabel " << GnuplotString(occ_name) << "\nset xrange "
+     << range_text(occlusion_range) << "\nset boxwidth "
+     << Num(0.9 * (occlusion_range.second - occlusion_range.first) / bins, 8)
      << "\nplot 'occlusion_hist.dat' using 1:2 with boxes lc rgb '#d8503b' notitle\n";
-  gp << "set output 'occlusion_cumulative.png'\nset title "
+  gp << "set output 'occlusion_cumulative.png'\nset xrange [0:1]\nset title "
      << GnuplotString("Pairs with occlusion ratio <= x, " + count) << "\nset xlabel "
      << GnuplotString(occ_name) << "\nset ylabel 'cumulative number of pairs'\n"
      << "set yrange [0:" << std::max<size_t>(n, 1) << "]\n"

@@ -26,6 +26,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "libgt/geometry/aggregate.h"
@@ -84,6 +85,10 @@ struct NamedImage {
   std::string mime;   // "image/png" | "image/jpeg"
   std::string bytes;  // encoded image
 };
+
+// The x range of a histogram that fits the data: [min, max] of the finite values widened
+// to multiples of 0.05 inside [0, 1], at least 0.05 wide; [0, 1] when there is no value.
+std::pair<double, double> HistogramRange(const std::vector<double>& values);
 
 // Runs gnuplot once; returns the plots in the order listed above. Throws
 // InputError("gnuplot", ...) when gnuplot is missing or fails (its first error line).

@@ -1,0 +1,105 @@
+// The split report's choices that the pictures do not show directly: the histogram range
+// fitted to the data, the gallery's order and the warning sentences.
+#include "libgt/report/split_report.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace gt::report {
+namespace {
+
+TEST(HistogramRange, WidensToMultiplesOfTheStepAroundTheData) {
+  EXPECT_EQ(HistogramRange({}), std::make_pair(0.0, 1.0));
+  EXPECT_EQ(HistogramRange({NAN, INFINITY}), std::make_pair(0.0, 1.0));
+  auto [lo, hi] = HistogramRange({0.012, 0.2046, 0.031});
+  EXPECT_DOUBLE_EQ(lo, 0.0);
+  EXPECT_DOUBLE_EQ(hi, 0.25);
+  std::tie(lo, hi) = HistogramRange({0.41, 0.88});
+  EXPECT_DOUBLE_EQ(lo, 0.40);
+  EXPECT_DOUBLE_EQ(hi, 0.90);
+  // Exactly on a multiple: kept, not widened by a step.
+  std::tie(lo, hi) = HistogramRange({0.35, 0.6});
+  EXPECT_DOUBLE_EQ(lo, 0.35);
+  EXPECT_DOUBLE_EQ(hi, 0.60);
+  // One value (or equal values): one step wide, inside [0, 1].
+  std::tie(lo, hi) = HistogramRange({1.0, 1.0});
+  EXPECT_DOUBLE_EQ(lo, 0.95);
+  EXPECT_DOUBLE_EQ(hi, 1.0);
+  std::tie(lo, hi) = HistogramRange({0.0});
+  EXPECT_DOUBLE_EQ(lo, 0.0);
+  EXPECT_DOUBLE_EQ(hi, 0.05);
+  // Out-of-range values are clamped to [0, 1].
+  EXPECT_EQ(HistogramRange({-0.5, 1.5}), std::make_pair(0.0, 1.0));
+}
+
+TEST(HistogramRange, AlwaysHoldsEveryValue) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int t = 0; t < 2000; ++t) {
+    std::vector<double> v(1 + t % 5);
+    for (double& x : v) x = u(rng) * u(rng);
+    const auto [lo, hi] = HistogramRange(v);
+    ASSERT_GE(lo, 0.0);
+    ASSERT_LE(hi, 1.0);
+    ASSERT_GE(hi - lo, 0.05 - 1e-12);
+    for (double x : v) {
+      ASSERT_GE(x, lo);
+      ASSERT_LE(x, hi);
+    }
+    // Tight: the range is not a step wider than the data on either side.
+    const auto [mn, mx] = std::minmax_element(v.begin(), v.end());
+    if (hi - lo > 0.05 + 1e-12) {
+      ASSERT_LT(*mn - lo, 0.05);
+      ASSERT_LT(hi - *mx, 0.05);
+    }
+  }
+}
+
+SplitPair Pair(const std::string& key, double occlusion) {
+  SplitPair p;
+  p.scene = "s";
+  p.key = key;
+  p.shard = "x.tar";
+  p.occlusion = occlusion;
+  return p;
+}
+
+TEST(PickGalleryPairs, MostOccludedFirstTiesInFileOrder) {
+  SplitData split;
+  split.pairs = {Pair("a", 0.1), Pair("b", 0.5), Pair("c", 0.3), Pair("d", 0.5), Pair("e", 0.0)};
+  SplitReportOptions o;
+  o.gallery_order = GalleryOrder::kMostOccluded;
+  o.gallery_pairs = 3;
+  EXPECT_EQ(PickGalleryPairs(split, o), (std::vector<size_t>{1, 3, 2}));
+  o.gallery_pairs = 10;
+  EXPECT_EQ(PickGalleryPairs(split, o), (std::vector<size_t>{1, 3, 2, 0, 4}));
+  // Random: a subset in file order, the same for the same seed.
+  o.gallery_order = GalleryOrder::kRandom;
+  o.gallery_pairs = 3;
+  const auto a = PickGalleryPairs(split, o);
+  EXPECT_EQ(a.size(), 3u);
+  EXPECT_TRUE(std::is_sorted(a.begin(), a.end()));
+  EXPECT_EQ(a, PickGalleryPairs(split, o));
+  EXPECT_EQ(ParseGalleryOrder("most-occluded", "--gallery-order"), GalleryOrder::kMostOccluded);
+  EXPECT_THROW(ParseGalleryOrder("worst", "--gallery-order"), std::exception);
+}
+
+TEST(SplitWarnings, SaysWhatMustBeKnown) {
+  SplitData split;
+  EXPECT_EQ(SplitWarnings(split).size(), 1u);  // no pairs
+  split.pairs = {Pair("a", 0.1)};
+  EXPECT_TRUE(SplitWarnings(split).empty());
+  split.recipe = {{"dataset", {{"format", "tartanair"}}}, {"sample", {{"image", "png"}}}};
+  EXPECT_TRUE(SplitWarnings(split).empty());
+  split.recipe["dataset"]["format"] = "sevenscenes";
+  split.summary = {{"drops", {{"scan.no_color", 4}, {"filter.overlap", 9}}}};
+  const auto w = SplitWarnings(split);
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_NE(w[0].find("unregistered"), std::string::npos);
+  EXPECT_EQ(w[1].rfind("4 frames were skipped", 0), 0u) << w[1];
+}
+
+}  // namespace
+}  // namespace gt::report
