@@ -26,7 +26,7 @@ struct PairArgs {
   std::string relative_to, bounds, target_lookup, missing_target;
   std::optional<int> stride;
   std::optional<std::string> anchor;
-  bool no_mutual = false;
+  bool mutual = false, no_mutual = false;  // neither: the recipe's patches.mutual
   int score_stride = 1;
 };
 
@@ -40,6 +40,7 @@ void RunPair(const PairArgs& args) {
   if (args.preset) gt::LabelPreset(*args.preset);  // a bad name fails now
   if (args.stride) o.patches.stride = *args.stride;
   if (args.anchor) o.patches.anchor = gt::ParseAnchor(*args.anchor);
+  if (args.mutual) o.patches.mutual = true;
   if (args.no_mutual) o.patches.mutual = false;
   std::string error;
   if (!o.patches.Check(&error)) {
@@ -116,7 +117,13 @@ void AddPairCommand(CLI::App& app) {
   cmd->add_option("--max-depth-m", d.max_depth_m, "maximum valid depth (dataset default)");
   cmd->add_option("--stride", args->stride, "patch cell size in pixels (default 8)");
   cmd->add_option("--anchor", args->anchor, "center|corner (default center)");
-  cmd->add_flag("--no-mutual", args->no_mutual, "keep vv matches without the loop-back check");
+  auto* mutual = cmd->add_flag("--mutual", args->mutual,
+                               "vv matches need the loop-back check (the default); overrides "
+                               "the recipe's patches.mutual");
+  cmd->add_flag("--no-mutual", args->no_mutual,
+                "keep vv matches without the loop-back check; overrides the recipe's "
+                "patches.mutual")
+      ->excludes(mutual);
   cmd->add_option("--score-stride", args->score_stride,
                   "metrics on every N-th pixel in x and y (default 1)");
   cmd->callback([args] { RunPair(*args); });

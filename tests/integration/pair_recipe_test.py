@@ -172,6 +172,24 @@ def main():
             "000001", "000002", "000003", "000004", "000005"]:
         fail(f"the recipe's window scope not used: {meta['fusion']}")
 
+    # --mutual / --no-mutual override the recipe's patches.mutual (false here) both ways.
+    with open(os.path.join(build_synth, "pairs.jsonl")) as f:
+        first = json.loads(f.readline())
+
+    def pair_meta(*flags):
+        out = common.scratch("pair_recipe/mutual")
+        common.occgt("pair", "--recipe", recipe, "--scene", first["scene"], "--frames",
+                     f"{first['frame0']},{first['frame1']}", *flags, "--out", out)
+        meta = json.load(open(os.path.join(out, "meta.json")))
+        return meta, meta["matches"]["vv"]
+    (m_recipe, n_recipe), (m_on, n_on), (m_off, n_off) = (
+        pair_meta(), pair_meta("--mutual"), pair_meta("--no-mutual"))
+    got = [m["patch_options"]["mutual"] for m in (m_recipe, m_on, m_off)]
+    if got != [False, True, False]:
+        fail(f"patches.mutual with recipe / --mutual / --no-mutual: {got}")
+    if not (n_on < n_recipe == n_off):
+        fail(f"match counts recipe {n_recipe}, --mutual {n_on}, --no-mutual {n_off}")
+
     # Flags override single fields of the recipe; the ray range follows --far-m.
     frames = f"{line['frame0']},{line['frame1']}"
     meta = occupancy_json("--recipe", tartan, "--scene", line["scene"], "--frames", frames,
