@@ -70,6 +70,13 @@ std::vector<std::string> TartanAirReader::ListScenes(const std::string& root) co
       trajectories.push_back(sub);
       continue;
     }
+    if (sub == "Easy" || sub == "Hard") {  // root is one environment: ENV/{Easy,Hard}/Pxxx
+      for (const auto& traj : ListSubfolders(sub_dir.string())) {
+        RequirePoseFileIfTrajectoryLike((sub_dir / traj).string());
+        if (IsTrajectory((sub_dir / traj).string())) trajectories.push_back(sub + "/" + traj);
+      }
+      continue;
+    }
     for (const char* level : {"Easy", "Hard"}) {
       const fs::path level_dir = sub_dir / level;
       for (const auto& traj : ListSubfolders(level_dir.string())) {
@@ -91,7 +98,8 @@ std::vector<std::string> TartanAirReader::ListScenes(const std::string& root) co
   if (out.empty()) {
     throw InputError(root,
                      "no TartanAir trajectory found; expected ROOT/pose_left.txt (one "
-                     "trajectory), ROOT/Pxxx/pose_left.txt (a folder of trajectories) or "
+                     "trajectory), ROOT/Pxxx/pose_left.txt (a folder of trajectories), "
+                     "ROOT/{Easy,Hard}/Pxxx/pose_left.txt (one environment) or "
                      "ROOT/ENV/{Easy,Hard}/Pxxx/pose_left.txt (the dataset root)");
   }
   return out;
