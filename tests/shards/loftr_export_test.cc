@@ -69,7 +69,11 @@ TEST(LoftrExport, TrainLayoutForScanNetAndOtherScenes) {
             (std::vector<std::string>{"abandonedfactory_Hard_P001.npz", "hospital_Easy_P036.npz",
                                       "scene0002_01.npz"}));
   const auto intr = io::ReadNpz(dir + "/intrinsics.npz");
-  ASSERT_EQ(intr.size(), 3u);
+  // The three scenes, and the two non-ScanNet ones again under the folder names LoFTR
+  // forms from their name rows (scene%04d_00 of their line in scenes.txt).
+  ASSERT_EQ(intr.size(), 5u);
+  EXPECT_EQ(intr.at("scene0000_00").data, intr.at("abandonedfactory/Hard/P001").data);
+  EXPECT_EQ(intr.at("scene0001_00").data, intr.at("hospital/Easy/P036").data);
   const io::NpyArray& kk = intr.at("scene0002_01");
   EXPECT_EQ(kk.descr, "<f8");
   EXPECT_EQ(kk.shape, (std::vector<int64_t>{3, 3}));
