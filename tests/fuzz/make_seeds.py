@@ -183,6 +183,21 @@ def main():
         put("depth_exr", f"small_{tag}.exr", Exr(chans, 4, 3))
     put("depth_exr", "one_pixel.exr", Exr(["Z"], 1, 1))
 
+    # --- ScanNet .sens: small files written by tests/support/write_sens.py (zlib and raw
+    # depth, JPEG and raw colour, a lost-tracking frame).
+    sys.path.insert(0, os.path.join(src, "tests", "support"))
+    import write_sens
+    frames, Kc, Kd, cs, ds = write_sens.synthetic_frames((16, 12), (8, 6))
+    for cc, dc, tag in [(write_sens.COLOR_JPEG, write_sens.DEPTH_ZLIB, "jpeg_zlib"),
+                        (write_sens.COLOR_RAW, write_sens.DEPTH_RAW, "raw_raw")]:
+        fr = frames[:3] if cc != write_sens.COLOR_RAW else [
+            (p, bytes(cs[0] * cs[1] * 3), d) for p, _, d in frames[:3]]
+        path = os.path.join(out, "sens_tmp", tag + ".sens")
+        write_sens.write_sens(path, fr, Kc, Kd, cs, ds, cc, dc)
+        with open(path, "rb") as f:
+            put("sens", tag + ".sens", f.read())
+    shutil.rmtree(os.path.join(out, "sens_tmp"))
+
     for target, n in sorted(counts.items()):
         print(f"make_seeds.py: {target}: {n} seeds")
 
