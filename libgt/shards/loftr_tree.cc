@@ -130,7 +130,9 @@ FrameOutput ExportFrame(const Frame& f, const std::string& folder,
   }
   // Colour.
   const std::string color_dst = folder + "/color/" + n + ".jpg";
-  if (IsJpegPath(f.color_path)) {
+  // A JPEG file is linked; a payload inside a container (.sens) or another format is
+  // decoded and written as JPEG.
+  if (f.color_range.size == 0 && IsJpegPath(f.color_path)) {
     out.links.emplace_back(f.color_path, color_dst);
     ++out.linked;
     if (f.color_camera.width > 0) {
@@ -140,7 +142,7 @@ FrameOutput ExportFrame(const Frame& f, const std::string& folder,
       out.color_camera = f.depth_camera.Resized(size.width, size.height);
     }
   } else {
-    const io::ColorImage rgb = io::ReadColor(f.color_path);
+    const io::ColorImage rgb = io::ReadFrameColor(f);
     const cv::Mat m(rgb.height, rgb.width, CV_8UC3, const_cast<uint8_t*>(rgb.rgb.data()));
     out.files.push_back({color_dst, io::EncodeJpegBytes(m, io::ChannelOrder::kRgb,
                                                         options.jpeg_quality, f.color_path)});

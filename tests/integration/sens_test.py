@@ -79,6 +79,7 @@ selection:
 occupancy: {{enabled: false}}
 sample: {{image: png, depth: true, labels: true, occupancy: false}}
 shards: {{samples_per_shard: 4}}
+loftr_export: {{kind: train, tree: true}}
 """)
     d = os.path.join(out, "build_" + os.path.basename(root))
     common.occgt("build", recipe, "--out", d)
@@ -86,8 +87,24 @@ shards: {{samples_per_shard: 4}}
 files = sorted(os.path.relpath(os.path.join(dp, n), builds[0])
                for dp, _, names in os.walk(builds[0]) for n in names)
 assert any(f.endswith(".tar") for f in files), files
+import cv2  # noqa: E402
 for rel in files:
     if rel in ("recipe.json", "summary.json"):
+        continue
+    if rel == os.path.join("loftr", "tree.json"):
+        t0, t1 = (json.load(open(os.path.join(b, rel))) for b in builds)
+        assert t0["linked"] == 0 and t0["converted"] == t1["converted"] + t1["linked"] > 0, (t0, t1)
+        continue
+    if rel.startswith(os.path.join("loftr", "data") + os.sep) and rel.endswith((".jpg", ".png")):
+        # The LoFTR tree links the exported layout's files but decodes the .sens payloads
+        # and encodes them again: equal depth values, colour within JPEG re-encoding.
+        a = cv2.imread(os.path.join(builds[0], rel), cv2.IMREAD_UNCHANGED)
+        b = cv2.imread(os.path.join(builds[1], rel), cv2.IMREAD_UNCHANGED)
+        assert a is not None and b is not None and a.shape == b.shape and a.dtype == b.dtype, rel
+        if rel.endswith(".png"):
+            assert (a == b).all(), rel
+        else:
+            assert np.abs(a.astype(int) - b.astype(int)).mean() < 3.0, rel
         continue
     with open(os.path.join(builds[0], rel), "rb") as f0, open(os.path.join(builds[1], rel), "rb") as f1:
         assert f0.read() == f1.read(), rel
