@@ -56,6 +56,24 @@ std::string SizeMismatch(int width, int height, const Camera& camera) {
   return s.str();
 }
 
+// The decoded image checked against the frame's colour camera (when known), the camera
+// resized with it, and the image resized bilinearly.
+ColorImage CheckedResize(const ColorImage& image, const std::string& where, const Camera& camera,
+                         int new_width, int new_height, Camera* resized_camera) {
+  if (camera.width > 0 && (image.width != camera.width || image.height != camera.height)) {
+    throw InputError(where, SizeMismatch(image.width, image.height, camera));
+  }
+  if (resized_camera) {
+    Camera c = camera;
+    if (c.width == 0) {
+      c.width = image.width;
+      c.height = image.height;
+    }
+    *resized_camera = c.Resized(new_width, new_height);
+  }
+  return ResizeColorBilinear(image, new_width, new_height);
+}
+
 }  // namespace
 
 ColorImage ReadColor(const std::string& path) {
@@ -101,20 +119,8 @@ ColorImage ReadFrameColorResized(const Frame& frame, int new_width, int new_heig
     return ReadColorResized(frame.color_path, frame.color_camera, new_width, new_height,
                             resized_camera);
   }
-  ColorImage image = ReadFrameColor(frame);
-  const Camera& camera = frame.color_camera;
-  if (camera.width > 0 && (image.width != camera.width || image.height != camera.height)) {
-    throw InputError(frame.color_path, SizeMismatch(image.width, image.height, camera));
-  }
-  if (resized_camera) {
-    Camera c = camera;
-    if (c.width == 0) {
-      c.width = image.width;
-      c.height = image.height;
-    }
-    *resized_camera = c.Resized(new_width, new_height);
-  }
-  return ResizeColorBilinear(image, new_width, new_height);
+  return CheckedResize(ReadFrameColor(frame), frame.color_path, frame.color_camera, new_width,
+                       new_height, resized_camera);
 }
 
 ColorImage ResizeColorBilinear(const ColorImage& image, int new_width, int new_height) {
@@ -133,28 +139,10 @@ ColorImage ReadColorResized(const std::string& path, const Camera& camera, int n
   if (camera.width > 0 && FileExists(path)) {  // header size first: no decode of a wrong file
     const ImageSize header = ReadImageSize(path);
     if (header.width != camera.width || header.height != camera.height) {
-      std::ostringstream s;
-      s << "colour image is " << header.width << "x" << header.height << ", expected "
-        << camera.width << "x" << camera.height;
-      throw InputError(path, s.str());
+      throw InputError(path, SizeMismatch(header.width, header.height, camera));
     }
   }
-  ColorImage image = ReadColor(path);
-  if (camera.width > 0 && (image.width != camera.width || image.height != camera.height)) {
-    std::ostringstream s;
-    s << "colour image is " << image.width << "x" << image.height << ", expected " << camera.width
-      << "x" << camera.height;
-    throw InputError(path, s.str());
-  }
-  if (resized_camera) {
-    Camera c = camera;
-    if (c.width == 0) {
-      c.width = image.width;
-      c.height = image.height;
-    }
-    *resized_camera = c.Resized(new_width, new_height);
-  }
-  return ResizeColorBilinear(image, new_width, new_height);
+  return CheckedResize(ReadColor(path), path, camera, new_width, new_height, resized_camera);
 }
 
 }  // namespace gt::io

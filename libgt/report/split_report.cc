@@ -205,26 +205,21 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
     p.occlusion = Combine(p.occlusion01, p.occlusion10, options.aggregate);
     split.pairs.push_back(std::move(p));
   }
-  const std::string summary_path = (fs::path(dir) / "summary.json").string();
-  if (gt::io::FileExists(summary_path)) {
+  // Optional JSON objects beside pairs.jsonl: null when absent, an error when malformed.
+  auto optional_object = [&](const char* name, const std::string& expected) {
+    const std::string path = (fs::path(dir) / name).string();
+    if (!gt::io::FileExists(path)) return json();
+    json j;
     try {
-      split.summary = json::parse(gt::io::ReadFileBytes(summary_path));
+      j = json::parse(gt::io::ReadFileBytes(path));
     } catch (const json::exception&) {
-      throw InputError(summary_path, "expected a JSON object");
+      throw InputError(path, expected);
     }
-    if (!split.summary.is_object()) throw InputError(summary_path, "expected a JSON object");
-  }
-  const std::string recipe_path = (fs::path(dir) / "recipe.json").string();
-  if (gt::io::FileExists(recipe_path)) {
-    try {
-      split.recipe = json::parse(gt::io::ReadFileBytes(recipe_path));
-    } catch (const json::exception&) {
-      throw InputError(recipe_path, "expected a JSON object (the resolved recipe)");
-    }
-    if (!split.recipe.is_object()) {
-      throw InputError(recipe_path, "expected a JSON object (the resolved recipe)");
-    }
-  }
+    if (!j.is_object()) throw InputError(path, expected);
+    return j;
+  };
+  split.summary = optional_object("summary.json", "expected a JSON object");
+  split.recipe = optional_object("recipe.json", "expected a JSON object (the resolved recipe)");
   return split;
 }
 
