@@ -708,6 +708,8 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     r.loftr_export = kind == "test" ? LoftrExportKind::kTest : LoftrExportKind::kTrain;
     Get(j["loftr_export"], "tree", &r.loftr_tree, file);
   }
+  Get(j, "gluefactory_export", &r.gluefactory_export, file);
+  Get(j, "dust3r_export", &r.dust3r_export, file);
   std::string error;
   if (!r.Check(&error)) throw InputError(file, error);
   return r;

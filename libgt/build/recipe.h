@@ -116,6 +116,8 @@ struct Recipe {
   ShardOptions shards;
   LoftrExportKind loftr_export = LoftrExportKind::kNone;
   bool loftr_tree = false;  // loftr_export.tree: also DIR/loftr/data/, ScanNet's exported layout
+  bool gluefactory_export = false;  // DIR/gluefactory/: glue-factory's posed-image layout
+  bool dust3r_export = false;       // DIR/dust3r/: DUSt3R's preprocessed ScanNet++ layout
 
   // Cross-field checks after the schema (ranges lo <= hi, stride divides the resolution,
   // near < far ...). On failure *error is "<field>: expected ...".

@@ -24,6 +24,7 @@
 #include "libgt/pairs/selection.h"
 #include "libgt/shards/loftr_export.h"
 #include "libgt/shards/loftr_tree.h"
+#include "libgt/shards/posed_export.h"
 #include "libgt/shards/split.h"
 #include "libgt/truth/working_frame.h"
 
@@ -294,21 +295,62 @@ WriteResult WriteShards(const Recipe& recipe, const io::DatasetReader& reader,
   return result;
 }
 
+namespace {
+
+// DIR/gluefactory/ and DIR/dust3r/ (libgt/shards/posed_export.h): the pairs with their
+// selection score and both overlaps, the frames at the working resolution.
+void PublishPosedExports(const Recipe& recipe, const BuildOptions& options,
+                         const std::vector<const SelectedPair*>& all,
+                         const std::map<std::string, Scene>& scenes) {
+  std::vector<shards::PosedPair> pairs;
+  for (const SelectedPair* p : all) {
+    shards::PosedPair row;
+    row.scene = p->scene;
+    row.frame0 = p->number0;
+    row.frame1 = p->number1;
+    row.score = Combine(p->score01.overlap, p->score10.overlap, recipe.selection.aggregate);
+    row.overlap01 = p->score01.overlap;
+    row.overlap10 = p->score10.overlap;
+    pairs.push_back(row);
+  }
+  std::map<std::string, const Scene*> scene_ptrs;
+  for (const auto& [name, scene] : scenes) scene_ptrs[name] = &scene;
+  shards::PosedExportOptions posed;
+  posed.width = recipe.width;
+  posed.height = recipe.height;
+  if (recipe.gluefactory_export) {
+    shards::ExportGlueFactory(options.out_dir + "/gluefactory", scene_ptrs, pairs, posed);
+  }
+  if (recipe.dust3r_export) {
+    shards::ExportDust3r(options.out_dir + "/dust3r", scene_ptrs, pairs, posed);
+  }
+}
+
+}  // namespace
+
 void PublishIndices(const Recipe& recipe, const io::DatasetReader& reader,
                     const BuildOptions& options, const std::vector<const SelectedPair*>& all) {
   shards::MergeOptions merge;
   merge.split = recipe.split;
   shards::MergeSplit(options.out_dir, merge);
+  if (recipe.loftr_export == LoftrExportKind::kNone && !recipe.gluefactory_export &&
+      !recipe.dust3r_export) {
+    return;
+  }
+  std::map<std::string, Scene> scenes;
+  for (const SelectedPair* p : all) {
+    if (!scenes.count(p->scene)) {
+      scenes.emplace(p->scene, reader.ReadScene(recipe.dataset.root, p->scene));
+    }
+  }
+  if (recipe.gluefactory_export || recipe.dust3r_export) {
+    PublishPosedExports(recipe, options, all, scenes);
+  }
   if (recipe.loftr_export == LoftrExportKind::kNone) return;
   std::vector<shards::LoftrPair> rows;
   shards::SceneIntrinsics intrinsics;
-  std::map<std::string, Scene> scenes;
   for (const SelectedPair* p : all) {
-    auto it = scenes.find(p->scene);
-    if (it == scenes.end()) {
-      it = scenes.emplace(p->scene, reader.ReadScene(recipe.dataset.root, p->scene)).first;
-    }
-    const Scene& scene = it->second;
+    const Scene& scene = scenes.at(p->scene);
     const Frame& f0 = scene.frames.at(truth::FindFrame(scene, p->frame0, "selection"));
     const Frame& f1 = scene.frames.at(truth::FindFrame(scene, p->frame1, "selection"));
     shards::LoftrPair row;

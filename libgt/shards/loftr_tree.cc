@@ -3,18 +3,16 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <atomic>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <opencv2/core/mat.hpp>
 
-#include "libgt/core/depth.h"
 #include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/depth_io.h"
 #include "libgt/io/image.h"
+#include "libgt/shards/frame_files.h"
 #include "libgt/shards/loftr_export.h"
 
 namespace gt::shards {
@@ -27,11 +25,6 @@ std::string Lower(std::string s) {
   return s;
 }
 
-bool IsJpegPath(const std::string& path) {
-  const std::string ext = Lower(fs::path(path).extension().string());
-  return ext == ".jpg" || ext == ".jpeg";
-}
-
 // Already ScanNet's depth: 16-bit PNG in millimetres, no marker but 0, at 640x480.
 bool DepthIsScanNetForm(const Frame& f) {
   return f.depth.format == DepthFormat::kPng16 && f.depth.scale_m_per_unit == 0.001 &&
@@ -40,48 +33,10 @@ bool DepthIsScanNetForm(const Frame& f) {
          f.depth_camera.width == kLoftrWidth && f.depth_camera.height == kLoftrHeight;
 }
 
-// 4x4, one space between numbers, LF after each row (np.loadtxt(path, delimiter=' ')).
-std::string Matrix4Text(const Eigen::Matrix4d& m) {
-  std::string text;
-  char buf[32];
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) {
-      std::snprintf(buf, sizeof(buf), "%.17g", m(r, c));
-      if (c) text += ' ';
-      text += buf;
-    }
-    text += '\n';
-  }
-  return text;
-}
-
 std::string IntrinsicText(const Camera& camera) {
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
   m.topLeftCorner<3, 3>() = camera.K();
   return Matrix4Text(m);
-}
-
-// Publishes a link to `src` at `dst` (hard link, else an absolute symlink), through a
-// temporary and a rename. Nothing to do when dst already is that file.
-void LinkAtomic(const std::string& src, const std::string& dst) {
-  std::error_code ec;
-  if (fs::exists(dst, ec) && fs::equivalent(src, dst, ec)) return;
-  fs::create_directories(fs::path(dst).parent_path(), ec);
-  const std::string tmp = dst + ".tmp";
-  fs::remove(tmp, ec);
-  ec.clear();
-  fs::create_hard_link(src, tmp, ec);
-  if (ec) {
-    ec.clear();
-    fs::create_symlink(fs::absolute(src), tmp, ec);
-  }
-  if (ec) throw InputError(dst, "cannot link to " + src + ": " + ec.message());
-  fs::rename(tmp, dst, ec);
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    throw InputError(dst, "cannot rename the link into place: " + ec.message());
-  }
 }
 
 // One frame's outputs: files to write (converted) and links to make.
@@ -91,34 +46,6 @@ struct FrameOutput {
   Camera color_camera;                                     // K of the colour file as written
   size_t linked = 0, converted = 0, zeroed = 0;
 };
-
-std::string ConvertedDepthPng(const Frame& f, const LoftrTreeOptions& options, size_t* zeroed) {
-  DepthImage depth = io::ReadDepth(f.depth, f.depth_camera.width, f.depth_camera.height);
-  if (depth.width != kLoftrWidth || depth.height != kLoftrHeight) {
-    depth = ResizeDepthNearest(depth, kLoftrWidth, kLoftrHeight);
-  }
-  cv::Mat mm(depth.height, depth.width, CV_16UC1);
-  size_t n_zeroed = 0;
-  for (int v = 0; v < depth.height; ++v) {
-    auto* row = mm.ptr<uint16_t>(v);
-    for (int u = 0; u < depth.width; ++u) {
-      const float d = depth.at(u, v);
-      if (!std::isfinite(d) || d <= 0.0f) {
-        row[u] = 0;
-        continue;
-      }
-      const double value = std::round(static_cast<double>(d) * 1000.0);
-      if (value > 65535.0) {
-        row[u] = 0;
-        ++n_zeroed;
-      } else {
-        row[u] = static_cast<uint16_t>(value);
-      }
-    }
-  }
-  *zeroed = n_zeroed;
-  return io::EncodePngBytes(mm, io::ChannelOrder::kRgb, options.png_level, f.depth.path);
-}
 
 FrameOutput ExportFrame(const Frame& f, const std::string& folder,
                         const LoftrTreeOptions& options) {
@@ -157,23 +84,13 @@ FrameOutput ExportFrame(const Frame& f, const std::string& folder,
     out.links.emplace_back(f.depth.path, depth_dst);
     ++out.linked;
   } else {
-    out.files.push_back({depth_dst, ConvertedDepthPng(f, options, &out.zeroed)});
+    out.files.push_back({depth_dst, DepthPngBytes(f, kLoftrWidth, kLoftrHeight, 1000.0,
+                                                  options.png_level, &out.zeroed)});
     ++out.converted;
   }
   // Pose.
   out.files.push_back({folder + "/pose/" + n + ".txt", Matrix4Text(f.world_from_cam.matrix())});
   return out;
-}
-
-// Removes the entries of `dir` whose names are not in `keep` (left-overs of an earlier export).
-void RemoveOthers(const fs::path& dir, const std::set<std::string>& keep) {
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) return;
-  std::vector<fs::path> stale;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    if (!keep.count(e.path().filename().string())) stale.push_back(e.path());
-  }
-  for (const fs::path& p : stale) fs::remove_all(p, ec);
 }
 
 const Frame& FrameByNumber(const Scene& scene, int64_t number) {
@@ -267,10 +184,10 @@ LoftrTreeStats ExportLoftrTree(const std::string& tree_dir,
       png.insert(n + ".png");
       txt.insert(n + ".txt");
     }
-    RemoveOthers(fs::path(folder) / "color", jpg);
-    RemoveOthers(fs::path(folder) / "depth", png);
-    RemoveOthers(fs::path(folder) / "pose", txt);
-    RemoveOthers(fs::path(folder) / "intrinsic", {"intrinsic_depth.txt", "intrinsic_color.txt"});
+    RemoveOthers(folder + "/color", jpg);
+    RemoveOthers(folder + "/depth", png);
+    RemoveOthers(folder + "/pose", txt);
+    RemoveOthers(folder + "/intrinsic", {"intrinsic_depth.txt", "intrinsic_color.txt"});
     RemoveOthers(folder, {"color", "depth", "pose", "intrinsic"});
   }
   RemoveOthers(tree_dir, folders);

@@ -49,6 +49,8 @@ TEST(Recipe, MinimalGetsDefaultsAndResolvesRootAgainstRecipeFolder) {
   EXPECT_EQ(r.labels.preset, "default");
   EXPECT_EQ(r.patches.stride, 8);
   EXPECT_EQ(r.shards.samples_per_shard, 100);
+  EXPECT_FALSE(r.gluefactory_export);
+  EXPECT_FALSE(r.dust3r_export);
   EXPECT_EQ(r.Digest().size(), 32u);
 }
 
@@ -79,6 +81,8 @@ occupancy: {enabled: false, voxel_m: 0.1, bins: 32, near_m: 0.5, far_m: 20, spac
 sample: {image: jpg, depth: true, labels: false, occupancy: false}
 shards: {samples_per_shard: 10, target_mb: 0}
 loftr_export: {kind: test}
+gluefactory_export: true
+dust3r_export: true
 )";
   Recipe r = ParseRecipe(yaml, "f.yaml", "/x");
   EXPECT_EQ(r.split, "val");
@@ -111,6 +115,8 @@ loftr_export: {kind: test}
   EXPECT_TRUE(r.sample.depth);
   EXPECT_EQ(r.shards.samples_per_shard, 10);
   EXPECT_EQ(r.loftr_export, LoftrExportKind::kTest);
+  EXPECT_TRUE(r.gluefactory_export);
+  EXPECT_TRUE(r.dust3r_export);
 }
 
 TEST(Recipe, LabelOptionsTakeTheDatasetRangeExceptForCompat) {
@@ -147,6 +153,9 @@ TEST(Recipe, WrongTypeNamesFieldAndExpectation) {
             "recipes/x.yaml: seed: expected an integer >= 0");
   EXPECT_EQ(ErrorOf(std::string(kMinimal) + "sample: {depth: yes}\n"),
             "recipes/x.yaml: sample.depth: expected true or false");
+  EXPECT_EQ(ErrorOf(std::string(kMinimal) + "dust3r_export: 1\n"),
+            "recipes/x.yaml: dust3r_export: expected true or false (true: DIR/dust3r/, the pairs "
+            "and their frames in DUSt3R's preprocessed ScanNet++ layout)");
 }
 
 TEST(Recipe, SemanticChecksNameTheField) {

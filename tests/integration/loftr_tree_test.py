@@ -25,6 +25,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import common  # noqa: E402
+import posed_readers  # noqa: E402
 
 
 def fail(msg):
@@ -215,7 +216,9 @@ def main():
         build(recipe, out, env)
         stats = check_build(recipe, out, kind)
         print(f"{recipe}: {stats}")
-    print("loftr tree: ok")
+        # The same build's glue-factory and DUSt3R exports (tests/integration/posed_readers.py).
+        posed_readers.check_build(recipe, out, occgt_samples(out))
+    print("loftr tree, gluefactory, dust3r: ok")
 
 
 if __name__ == "__main__":
