@@ -110,6 +110,15 @@ def main():
     # the shards: the fixture's K scaled by 8 with the pixel-centre rule.
     s = 640 / W
     assert np.allclose(k, [[s * FX, 0, s * W / 2 - 0.5], [0, s * FX, s * H / 2 - 0.5], [0, 0, 1]])
+    # The shipped recipe writes the LoFTR tree too (loftr_export.tree): exactly the frames
+    # test.npz names, one folder per scene.
+    tree = json.load(open(os.path.join(out, "loftr", "tree.json")))
+    validate(tree, "loftr_tree.schema.json")
+    assert tree["frames"] == sum(len(f) for f in scenes.values()), tree
+    assert sorted(os.listdir(os.path.join(out, "loftr", "data"))) == sorted(scenes)
+    for sub in ("color", "depth", "pose"):
+        got = os.listdir(os.path.join(out, "loftr", "data", "scene0707_00", sub))
+        assert len(got) == len(scenes["scene0707_00"]), (sub, got)
     # Every sample is there, with depth for Occ2Net's test step.
     with open(os.path.join(out, "index.json")) as f:
         index = json.load(f)
