@@ -707,6 +707,9 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     const std::string kind = j["loftr_export"]["kind"].get<std::string>();
     r.loftr_export = kind == "test" ? LoftrExportKind::kTest : LoftrExportKind::kTrain;
     Get(j["loftr_export"], "tree", &r.loftr_tree, file);
+    if (j["loftr_export"].value("score", "overlap") == "covisible") {
+      r.loftr_score = LoftrScore::kCovisible;
+    }
   }
   Get(j, "gluefactory_export", &r.gluefactory_export, file);
   Get(j, "dust3r_export", &r.dust3r_export, file);

@@ -34,6 +34,11 @@ namespace gt::build {
 // loftr_export.kind: the LoFTR-family index written beside the shards (DIR/loftr/).
 enum class LoftrExportKind { kNone, kTrain, kTest };  // "" | "train" | "test"
 const char* LoftrExportKindName(LoftrExportKind kind);
+// loftr_export.score: what the train index's `score` holds (docs/EXPORTS.md).
+enum class LoftrScore {
+  kOverlap,    // "overlap": Combine of the two directions' overlap (the selection score)
+  kCovisible,  // "covisible": Combine of the two consistent_overlap (VISIBLE / sampled)
+};
 
 // dataset.synthetic: the procedural sample generated into <out>/data when missing.
 struct SyntheticDatasetOptions {
@@ -116,6 +121,7 @@ struct Recipe {
   ShardOptions shards;
   LoftrExportKind loftr_export = LoftrExportKind::kNone;
   bool loftr_tree = false;  // loftr_export.tree: also DIR/loftr/data/, ScanNet's exported layout
+  LoftrScore loftr_score = LoftrScore::kOverlap;  // loftr_export.score
   bool gluefactory_export = false;  // DIR/gluefactory/: glue-factory's posed-image layout
   bool dust3r_export = false;       // DIR/dust3r/: DUSt3R's preprocessed ScanNet++ layout
 

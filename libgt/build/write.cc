@@ -357,7 +357,10 @@ void PublishIndices(const Recipe& recipe, const io::DatasetReader& reader,
     row.scene = p->scene;
     row.frame0 = p->number0;
     row.frame1 = p->number1;
-    row.score = Combine(p->score01.overlap, p->score10.overlap, recipe.selection.aggregate);
+    row.score = recipe.loftr_score == LoftrScore::kCovisible
+                    ? Combine(p->score01.consistent_overlap, p->score10.consistent_overlap,
+                              recipe.selection.aggregate)
+                    : Combine(p->score01.overlap, p->score10.overlap, recipe.selection.aggregate);
     const Rigid3d t = RelativePose(f0.world_from_cam, f1.world_from_cam);
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 4; ++c) row.cam1_from_cam0[r * 4 + c] = t.matrix()(r, c);

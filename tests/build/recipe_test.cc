@@ -49,6 +49,7 @@ TEST(Recipe, MinimalGetsDefaultsAndResolvesRootAgainstRecipeFolder) {
   EXPECT_EQ(r.labels.preset, "default");
   EXPECT_EQ(r.patches.stride, 8);
   EXPECT_EQ(r.shards.samples_per_shard, 100);
+  EXPECT_EQ(r.loftr_score, LoftrScore::kOverlap);
   EXPECT_FALSE(r.gluefactory_export);
   EXPECT_FALSE(r.dust3r_export);
   EXPECT_EQ(r.Digest().size(), 32u);
@@ -80,7 +81,7 @@ occupancy: {enabled: false, voxel_m: 0.1, bins: 32, near_m: 0.5, far_m: 20, spac
             traversal: center, scope: scene, mode: two_point, encoding: both}
 sample: {image: jpg, depth: true, labels: false, occupancy: false}
 shards: {samples_per_shard: 10, target_mb: 0}
-loftr_export: {kind: test}
+loftr_export: {kind: test, score: covisible}
 gluefactory_export: true
 dust3r_export: true
 )";
@@ -115,6 +116,7 @@ dust3r_export: true
   EXPECT_TRUE(r.sample.depth);
   EXPECT_EQ(r.shards.samples_per_shard, 10);
   EXPECT_EQ(r.loftr_export, LoftrExportKind::kTest);
+  EXPECT_EQ(r.loftr_score, LoftrScore::kCovisible);
   EXPECT_TRUE(r.gluefactory_export);
   EXPECT_TRUE(r.dust3r_export);
 }

@@ -218,6 +218,34 @@ def main():
         print(f"{recipe}: {stats}")
         # The same build's glue-factory and DUSt3R exports (tests/integration/posed_readers.py).
         posed_readers.check_build(recipe, out, occgt_samples(out))
+    # loftr_export.score: covisible (LoFTR's covisibility definition), by re-running the
+    # 7-Scenes build with that recipe: export keys are not part of the options digest, so the
+    # selection and shards are reused, and without summary.json (a complete build's re-run
+    # leaves its published outputs alone) the index and exports are published again.
+    out = os.path.join(tmp, "sevenscenes-sample")
+    text = open(os.path.join(common.SOURCE, "recipes", "sevenscenes-sample.yaml")).read()
+    assert "loftr_export: {kind: train, tree: true}\n" in text
+    covisible = os.path.join(tmp, "sevenscenes-covisible.yaml")
+    with open(covisible, "w") as f:
+        f.write(text.replace("loftr_export: {kind: train, tree: true}",
+                             "loftr_export: {kind: train, tree: true, score: covisible}"))
+    os.remove(os.path.join(out, "summary.json"))
+    common.occgt("build", "--json", covisible, "--out", out, env=env)
+    samples = occgt_samples(out)
+    split = json.load(open(os.path.join(out, "recipe.json")))["split"]
+    n = 0
+    for npz in open(os.path.join(out, "loftr", f"{split}_list.txt")).read().split():
+        with np.load(os.path.join(out, "loftr", "scene_data", split, npz)) as data:
+            names = open(os.path.join(out, "loftr", "scenes.txt")).read().split("\n")
+            for name, score in zip(data["name"], data["score"]):
+                m = samples[(names[name[0]], int(name[2]), int(name[3]))][0]["score_metrics"]
+                want = np.mean([m[d]["consistent_overlap"] for d in ("01", "10")])
+                if abs(float(score) - want) > 1e-6 or abs(want - np.mean(
+                        [m[d]["overlap"] for d in ("01", "10")])) < 1e-3:
+                    fail(f"covisible score {score} vs mean consistent_overlap {want}")
+                n += 1
+    if n != len(samples):
+        fail(f"covisible: {n} scores, pairs.jsonl has {len(samples)}")
     print("loftr tree, gluefactory, dust3r: ok")
 
 
