@@ -25,7 +25,11 @@ DUSt3R / MASt3R, the ScanNetpp dataset class (dust3r/datasets/scannetpp.py):
   depth/<images[v]>.png read with IMREAD_UNCHANGED, / 1000 (metres), non-finite -> 0;
 - camera_pose = trajectories[v] is camera-to-world; camera_intrinsics = intrinsics[v] is
   used with pixel centres at integer coordinates (depthmap_to_camera_coordinates in
-  dust3r/utils/geometry.py meshes u = arange(W) against cu).
+  dust3r/utils/geometry.py meshes u = arange(W) against cu);
+- its base class (dust3r/datasets/base/base_stereo_view_dataset.py) asserts a finite pose
+  and depth map, and its crop around the principal point asserts that (cx, cy), rounded,
+  lies more than W/5 and H/5 from every border; the image and depth map are cropped with
+  one box, so they have one size.
 """
 import json
 import os
@@ -126,6 +130,13 @@ class Dust3rScanNetppReader:
             fail(f"{scene_dir} {basename}: image or uint16 depth png unreadable")
         depth = raw.astype(np.float32) / 1000
         depth[~np.isfinite(depth)] = 0
+        pose, K = self.trajectories[v], self.intrinsics[v]
+        H, W = raw.shape
+        cx, cy = K[:2, 2].round().astype(int)
+        if img.shape[:2] != raw.shape or not np.isfinite(pose).all() or \
+                min(cx, W - cx) <= W / 5 or min(cy, H - cy) <= H / 5:
+            fail(f"{scene_dir} {basename}: DUSt3R's view checks fail (size {img.shape} vs "
+                 f"{raw.shape}, pose {pose.tolist()}, principal point {cx}, {cy})")
         return {"img": cv2.cvtColor(img, cv2.COLOR_BGR2RGB), "raw": raw, "depthmap": depth,
                 "camera_pose": self.trajectories[v], "camera_intrinsics": self.intrinsics[v],
                 "scene": str(self.scenes[self.sceneids[v]]), "basename": basename}
