@@ -236,6 +236,14 @@ def main():
     for pattern in ("*.tar", "index.json", "pairs.jsonl", "selection/*", "loftr/*"):
         a, b = file_bytes(out, pattern), file_bytes(out_b, pattern)
         assert a and a == b, pattern
+    # The glue-factory and DUSt3R exports too, every file by its relative path.
+    for export in ("gluefactory", "dust3r"):
+        trees = []
+        for o in (out, out_b):
+            top = os.path.join(o, export)
+            trees.append({os.path.relpath(os.path.join(d, n), top): open(os.path.join(d, n), "rb").read()
+                          for d, _, names in os.walk(top) for n in names})
+        assert trees[0] and trees[0] == trees[1], export
 
     # Re-run: nothing rewritten; a deleted shard is rebuilt, nothing else rewritten.
     before = tree_state(out)
