@@ -20,6 +20,7 @@ enum class DepthFormat {
   // `path`, width x height uint16 (little-endian), metres = value * scale_m_per_unit; 0 invalid.
   kSensZlib,  // zlib stream of the uint16 values
   kSensRaw,   // the uint16 values as they are
+  kHdf5,      // HDF5 file, 2-D float dataset "depth" (MegaDepth v1), metres; 0 invalid
 };
 
 // Bytes [offset, offset + size) of a file: a payload inside a container (.sens).

@@ -22,6 +22,7 @@
 #include "libgt/core/error.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/file_read.h"
+#include "libgt/io/hdf5_depth.h"
 #include "libgt/io/npy.h"
 
 namespace gt::io {
@@ -368,6 +369,11 @@ DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected
         ReadFileRange(source.path, source.range.offset, source.range.size, "depth payload"), source,
         expected_width, expected_height);
   }
+  if (source.format == DepthFormat::kHdf5) {
+    DepthImage d = ReadHdf5Depth(source.path, expected_width, expected_height);
+    for (float& v : d.values_m) v = Sanitize(v);
+    return d;
+  }
   return DecodeDepth(ReadFileBytes(source.path), source, expected_width, expected_height);
 }
 
@@ -391,6 +397,10 @@ DepthImage DecodeDepth(std::string_view bytes, const DepthSource& source, int ex
                           expected_height);
       }
       d = DecodeSensDepth(bytes, source);
+      break;
+    case DepthFormat::kHdf5:
+      d = DecodeHdf5Depth(bytes, source.path, expected_width, expected_height);
+      for (float& v : d.values_m) v = Sanitize(v);
       break;
   }
   if (expected_width > 0 && expected_height > 0 &&
