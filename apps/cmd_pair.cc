@@ -105,7 +105,7 @@ void AddPairCommand(CLI::App& app) {
   cmd->add_option("--frames", d.frames, "two frame ids: ID0,ID1")->required();
   cmd->add_option("--out", d.out, "output folder")->required();
   cmd->add_option("--preset", args->preset,
-                  "label preset: default, occ2net, occ2net-compat, loftr, superglue");
+                  "label preset: default, occ2net, occ2net-compat, loftr, superglue, megadepth");
   cmd->add_option("--resolution", d.resolution, "working resolution WxH (default 640x480)");
   cmd->add_option("--abs-tol-m", args->abs_tol_m, "absolute depth tolerance (m)");
   cmd->add_option("--rel-tol", args->rel_tol, "relative depth tolerance (fraction)");

@@ -158,7 +158,7 @@ void AddScanCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("scan", "List the scenes and frames of a dataset root");
   cmd->add_option("root", args->root, "Dataset root, scene folder or manifest")->required();
   cmd->add_option("--format", args->format,
-                  "Dataset layout: scannet, tartanair, sevenscenes, tum, generic")
+                  "Dataset layout: scannet, tartanair, sevenscenes, tum, megadepth, generic")
       ->required();
   cmd->add_option("--scene", args->scene, "Only this scene (a name listed by scan)");
   cmd->add_flag("--json", args->json, "Print one JSON document (schemas/scan.schema.json)");

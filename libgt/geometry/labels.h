@@ -121,6 +121,8 @@ void ApplyDatasetDepthRange(double min_depth_m, double max_depth_m, LabelOptions
 //                   finite depth > 0 valid (max_depth_m = FLT_MAX; no dataset range)
 //   loftr           τ = 0.2·d_B (observed), strict, truncate, missing → UNKNOWN
 //   superglue       τ = 0.1·z (projected), pixel area, nearest, missing → UNKNOWN
+//   megadepth       τ = 0.15·z (projected), pixel area, nearest, missing → UNKNOWN (MVS
+//                   depth, arbitrary scale: no absolute term)
 // Throws InputError("--preset", "expected one of ...") for another name.
 LabelOptions LabelPreset(const std::string& name);
 std::vector<std::string> PresetNames();

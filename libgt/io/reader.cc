@@ -17,7 +17,7 @@ bool ReaderOptions::Check(std::string* error) const {
 }
 
 std::vector<std::string> KnownFormats() {
-  return {"scannet", "tartanair", "sevenscenes", "tum", "generic"};
+  return {"scannet", "tartanair", "sevenscenes", "tum", "megadepth", "generic"};
 }
 
 std::unique_ptr<DatasetReader> MakeReader(const std::string& format, const ReaderOptions& options) {
@@ -27,6 +27,7 @@ std::unique_ptr<DatasetReader> MakeReader(const std::string& format, const Reade
   if (format == "tartanair") return std::make_unique<TartanAirReader>(options);
   if (format == "sevenscenes") return std::make_unique<SevenScenesReader>(options);
   if (format == "tum") return std::make_unique<TumReader>(options);
+  if (format == "megadepth") return std::make_unique<MegaDepthReader>(options);
   if (format == "generic") return std::make_unique<GenericReader>(options);
   std::string known;
   for (const auto& f : KnownFormats()) known += (known.empty() ? "" : ", ") + f;

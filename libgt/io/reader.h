@@ -31,7 +31,7 @@ class DatasetReader {
   virtual Scene ReadScene(const std::string& root, const std::string& scene_name) const = 0;
 };
 
-// Formats: "scannet", "tartanair", "sevenscenes", "tum", "generic".
+// Formats: "scannet", "tartanair", "sevenscenes", "tum", "megadepth", "generic".
 std::vector<std::string> KnownFormats();
 // Throws InputError("--format", ...) for an unknown format.
 std::unique_ptr<DatasetReader> MakeReader(const std::string& format,

@@ -61,6 +61,19 @@ class TumReader : public DatasetReader {
   ReaderOptions options_;
 };
 
+// MegaDepth v1: dense0/depths/*.h5 with a COLMAP sparse model of the undistorted images
+// (megadepth.cc).
+class MegaDepthReader : public DatasetReader {
+ public:
+  explicit MegaDepthReader(const ReaderOptions& options) : options_(options) {}
+  std::string Format() const override { return "megadepth"; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  ReaderOptions options_;
+};
+
 // occgt's own JSON manifest, schemas/manifest.schema.json (generic.cc).
 class GenericReader : public DatasetReader {
  public:

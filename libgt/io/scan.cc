@@ -27,6 +27,12 @@ std::vector<std::string> DatasetCaveats(const std::string& format) {
             "extrinsics are published): labels follow the depth camera, and colour pixels are "
             "only approximately aligned with them"};
   }
+  if (format == "megadepth") {
+    return {"MegaDepth depth is multi-view stereo with holes and errors, and its scale is "
+            "arbitrary per scene: expect a share of INCONSISTENT and UNKNOWN labels (see the "
+            "report), use relative tolerances (preset megadepth), and images of other aspect "
+            "ratios are stretched to the working resolution"};
+  }
   return {};
 }
 

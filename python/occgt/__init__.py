@@ -164,7 +164,8 @@ def pair_ground_truth(
             OpenCV camera axes, metres: finite, last row [0, 0, 0, 1], rotation orthonormal to
             |R^T R - I| <= 1e-3 with det R > 0. Used as given (not re-orthonormalised).
         preset: label preset (PRESETS): "default", "occ2net", "occ2net-compat", "loftr",
-            "superglue" (docs/GROUND_TRUTH.md §2); the options below override its fields.
+            "superglue", "megadepth" (docs/GROUND_TRUTH.md §2); the options below override its
+            fields.
         abs_tol_m: absolute depth tolerance (metres); None = the preset's.
         rel_tol: relative depth tolerance (fraction of z or of B's depth); None = the preset's.
         min_depth_m: minimum valid depth (metres), also the cheirality threshold; None = the
@@ -240,7 +241,8 @@ def open_dataset(root: Union[str, "os.PathLike[str]"], format: str) -> Dataset:
 
     Args:
         root: the dataset folder (or a scene folder / generic manifest folder).
-        format: one of FORMATS: "scannet", "tartanair", "sevenscenes", "tum", "generic".
+        format: one of FORMATS: "scannet", "tartanair", "sevenscenes", "tum", "megadepth",
+            "generic".
 
     Returns:
         A Dataset: ``.scenes()`` lists the scene names, ``.scene(name)`` reads one scene

@@ -284,6 +284,11 @@ TEST(Presets, TolerancesDiffer) {
   // d_b = 3.0: diff = 1.0; loftr τ = 0.6 → occluded; superglue τ = 0.4.
   EXPECT_EQ(LabelAgainst(3.0f, LabelPreset("loftr")), PixelLabel::kOccluded);
   EXPECT_EQ(LabelAgainst(3.0f, LabelPreset("superglue")), PixelLabel::kOccluded);
+  // d_b = 3.5: diff = 0.5; megadepth τ = 0.15 · 4 = 0.6 → visible, superglue's 0.4 → occluded.
+  EXPECT_EQ(LabelAgainst(3.5f, LabelPreset("megadepth")), PixelLabel::kVisible);
+  EXPECT_EQ(LabelAgainst(3.5f, LabelPreset("superglue")), PixelLabel::kOccluded);
+  EXPECT_EQ(LabelAgainst(3.3f, LabelPreset("megadepth")), PixelLabel::kOccluded);  // 0.7 > 0.6
+  EXPECT_EQ(LabelAgainst(4.65f, LabelPreset("megadepth")), PixelLabel::kInconsistent);
   // d_b = 5.5: diff = -1.5, B sees past the point.
   for (const auto& p : PresetNames()) {
     EXPECT_EQ(LabelAgainst(5.5f, LabelPreset(p)), PixelLabel::kInconsistent) << p;
@@ -346,7 +351,7 @@ TEST(Presets, BoundsAtTheImageEdge) {
 }
 
 TEST(Presets, NamesAndErrors) {
-  EXPECT_EQ(PresetNames().size(), 5u);
+  EXPECT_EQ(PresetNames().size(), 6u);
   for (const auto& p : PresetNames()) {
     std::string error;
     EXPECT_TRUE(LabelPreset(p).Check(&error)) << p << ": " << error;

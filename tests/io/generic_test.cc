@@ -230,8 +230,8 @@ TEST(Generic, NonRigidPoseIsUnusable) {
 }
 
 TEST(Readers, UnknownFormatAndKnownFormats) {
-  EXPECT_EQ(KnownFormats(),
-            (std::vector<std::string>{"scannet", "tartanair", "sevenscenes", "tum", "generic"}));
+  EXPECT_EQ(KnownFormats(), (std::vector<std::string>{"scannet", "tartanair", "sevenscenes", "tum",
+                                                      "megadepth", "generic"}));
   for (const auto& f : KnownFormats()) EXPECT_EQ(MakeReader(f)->Format(), f);
   try {
     MakeReader("colmap");

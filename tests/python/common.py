@@ -23,7 +23,7 @@ SCRATCH: str = os.environ.get("OCCGT_SCRATCH", "/tmp/occgt-python-scratch")
 PAIR_ARRAYS: List[str] = ["label01", "label10", "matches", "match_type", "match_xy", "cells0",
                           "cells1"]
 OCCUPANCY_ARRAYS: List[str] = ["occ0", "known0", "occ1", "known1"]
-PRESETS: List[str] = ["default", "occ2net", "occ2net-compat", "loftr", "superglue"]
+PRESETS: List[str] = ["default", "occ2net", "occ2net-compat", "loftr", "superglue", "megadepth"]
 
 
 def shared(rel: str) -> str:

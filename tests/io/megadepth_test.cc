@@ -1,0 +1,206 @@
+// MegaDepth v1 (`--format megadepth`, docs/DATASETS.md "MegaDepth"): a tiny download
+// written here in its layout, phoenix/S6/zl548/MegaDepth_v1/<scene>/dense0/depths/*.h5
+// with COLMAP text models in both places the reader looks (dense0/sparse/ and D2-Net's
+// Undistorted_SfM/<scene>/sparse-txt/). Closed-form answers: a plane at depth 10 seen from
+// two cameras 2 apart (fx = 100), so 20 columns leave the view; an image at 1.25 times the size
+// with its own K gives the same working camera; ordinal (< 100 KiB), missing depth and a bad
+// quaternion are unusable with their reasons; scan and pair run on it through the CLI.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "libgt/core/error.h"
+#include "libgt/io/depth_io.h"
+#include "libgt/io/hdf5_depth.h"
+#include "libgt/io/reader.h"
+#include "tests/support/test_support.h"
+
+namespace gt::io {
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+void WriteText(const fs::path& p, const std::string& text) {
+  fs::create_directories(p.parent_path());
+  std::ofstream(p.string()) << text;
+}
+
+void WritePlane(const fs::path& p, int w, int h, bool first_row_invalid) {
+  fs::create_directories(p.parent_path());
+  DepthImage d(w, h, 10.0f);
+  if (first_row_invalid) {
+    for (int u = 0; u < w; ++u) d.at(u, 0) = 0.0f;
+  }
+  WriteHdf5Depth(p.string(), d);
+}
+
+void WriteJpeg(const fs::path& p, int w, int h) {
+  fs::create_directories(p.parent_path());
+  ASSERT_TRUE(cv::imwrite(p.string(), cv::Mat(h, w, CV_8UC3, cv::Scalar(40, 80, 120))));
+}
+
+// The download folder (holding phoenix/ and Undistorted_SfM/), written once per process.
+std::string Download() {
+  static const std::string base = [] {
+    const fs::path root = test::ScratchDir("megadepth");
+    const fs::path v1 = root / "phoenix/S6/zl548/MegaDepth_v1";
+    // Scene 0001: model in dense0/sparse (text), images in dense0/imgs.
+    const fs::path s1 = v1 / "0001" / "dense0";
+    WriteText(s1 / "sparse/cameras.txt",
+              "# Camera list with one line of data per camera:\n"
+              "1 PINHOLE 192 144 100 100 96.5 72.5\n"
+              "2 SIMPLE_PINHOLE 240 180 125 120.625 90.625\n");
+    WriteText(s1 / "sparse/images.txt",
+              "# Image list with two lines of data per image:\n"
+              "2 1 0 0 0 -2 0 0 1 b.jpg\n"
+              "\n"
+              "1 1 0 0 0 0 0 0 1 a.jpg\n"
+              "10.5 20.5 -1\n"
+              "3 1 0 0 0 0 0 0 2 c.jpg\n"
+              "\n"
+              "4 1 0 0 0 0 0 0 1 d.jpg\n"
+              "\n"
+              "5 1 0 0 0 0 0 0 1 e.jpg\n"
+              "\n"
+              "6 2 0 0 0 0 0 0 1 f.jpg\n"
+              "\n");
+    WritePlane(s1 / "depths/a.h5", 192, 144, true);
+    WritePlane(s1 / "depths/b.h5", 192, 144, false);
+    WritePlane(s1 / "depths/c.h5", 240, 180, false);
+    WritePlane(s1 / "depths/d.h5", 32, 32, false);  // 4 KiB: an ordinal / mask map
+    WritePlane(s1 / "depths/f.h5", 192, 144, false);
+    WriteJpeg(s1 / "imgs/a.jpg", 192, 144);
+    WriteJpeg(s1 / "imgs/b.jpg", 192, 144);
+    // Scene 0002: D2-Net's undistortion beside phoenix/.
+    const fs::path und = root / "Undistorted_SfM/0002";
+    WriteText(und / "sparse-txt/cameras.txt", "1 PINHOLE 192 144 100 100 96.5 72.5\n");
+    WriteText(und / "sparse-txt/images.txt",
+              "1 1 0 0 0 0 0 0 1 x.jpg\n\n2 1 0 0 0 0 0 -1 1 y.jpg\n\n");
+    WritePlane(v1 / "0002/dense0/depths/x.h5", 192, 144, false);
+    WritePlane(v1 / "0002/dense0/depths/y.h5", 192, 144, false);
+    WriteJpeg(und / "images/x.jpg", 192, 144);
+    // Scene 0003: depth without any model (not listed).
+    WritePlane(v1 / "0003/dense0/depths/z.h5", 192, 144, false);
+    return root.string();
+  }();
+  return base;
+}
+
+TEST(MegaDepth, ListsScenesWithAModelFromEveryRootShape) {
+  const auto reader = MakeReader("megadepth");
+  const std::vector<std::string> both{"0001", "0002"};
+  EXPECT_EQ(reader->ListScenes(Download()), both);
+  const std::string v1 = Download() + "/phoenix/S6/zl548/MegaDepth_v1";
+  EXPECT_EQ(reader->ListScenes(v1), both);
+  EXPECT_EQ(reader->ListScenes(v1 + "/0002"), std::vector<std::string>{"0002"});
+  try {
+    reader->ListScenes(v1 + "/0003");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no COLMAP sparse model of the scene"), std::string::npos);
+  }
+}
+
+TEST(MegaDepth, FramesPosesKAndReasons) {
+  const Scene s = MakeReader("megadepth")->ReadScene(Download(), "0001");
+  EXPECT_EQ(s.format, "megadepth");
+  ASSERT_EQ(s.frames.size(), 6u);
+  const char* ids[] = {"a", "b", "c", "d", "e", "f"};
+  for (size_t i = 0; i < 6; ++i) EXPECT_EQ(s.frames[i].id, ids[i]);
+  const Frame& a = s.frames[0];
+  const Frame& b = s.frames[1];
+  const Frame& c = s.frames[2];
+  EXPECT_TRUE(a.usable && b.usable && c.usable);
+  EXPECT_EQ(a.depth_camera.width, 192);
+  EXPECT_DOUBLE_EQ(a.depth_camera.fx, 100);
+  EXPECT_DOUBLE_EQ(a.depth_camera.cx, 96);  // COLMAP 96.5 - 0.5
+  EXPECT_DOUBLE_EQ(a.depth_camera.cy, 72);
+  EXPECT_EQ(c.depth_camera.width, 240);
+  EXPECT_EQ(c.depth_camera.height, 180);
+  EXPECT_DOUBLE_EQ(c.depth_camera.fy, 125);
+  EXPECT_DOUBLE_EQ(c.depth_camera.cx, 120.125);
+  // cam_from_world t = (-2, 0, 0): the camera sits at x = 2.
+  EXPECT_TRUE(b.world_from_cam.translation().isApprox(Eigen::Vector3d(2, 0, 0)));
+  EXPECT_EQ(a.color_path, Download() + "/phoenix/S6/zl548/MegaDepth_v1/0001/dense0/imgs/a.jpg");
+  EXPECT_EQ(a.color_camera.fx, 100);
+  EXPECT_TRUE(c.color_path.empty());
+  EXPECT_EQ(s.frames[3].unusable_reason,
+            "depth: under 100 KiB (an ordinal or mask map, not metric depth)");
+  EXPECT_EQ(s.frames[4].unusable_reason, "depth: missing file");
+  EXPECT_EQ(s.frames[5].unusable_reason, "pose: quaternion norm is 2, expected 1");
+  const DepthImage d = ReadDepth(a.depth, 192, 144);
+  EXPECT_EQ(d.at(5, 0), 0.0f);
+  EXPECT_EQ(d.at(5, 1), 10.0f);
+
+  const Scene s2 = MakeReader("megadepth")->ReadScene(Download(), "0002");
+  ASSERT_EQ(s2.frames.size(), 2u);
+  EXPECT_EQ(s2.frames[0].color_path, Download() + "/Undistorted_SfM/0002/images/x.jpg");
+  EXPECT_TRUE(s2.frames[1].color_path.empty());
+  EXPECT_TRUE(s2.frames[1].world_from_cam.translation().isApprox(Eigen::Vector3d(0, 0, 1)));
+}
+
+json Meta(const std::string& frames, const std::string& extra) {
+  const std::string out =
+      test::ScratchDir("megadepth_pair_" + frames.substr(0, 1) + frames.substr(2, 1));
+  const auto r =
+      test::RunOccgt("pair --root '" + Download() + "' --format megadepth --scene 0001 --frames " +
+                     frames + " --score-stride 1 --out '" + out + "' " + extra);
+  EXPECT_EQ(r.exit_code, 0) << r.stderr_text;
+  std::ifstream in(out + "/meta.json");
+  return json::parse(in);
+}
+
+TEST(MegaDepth, PairLabelsOfAPlaneFromTwoPoses) {
+  const json m = Meta("a,b", "--resolution 192x144");
+  const json& ab = m["metrics01"]["counts"];
+  EXPECT_EQ(ab["NO_DEPTH"], 192);          // a's first row
+  EXPECT_EQ(ab["OUT_OF_VIEW"], 20 * 143);  // u_b = u_a - 20 < -0.5
+  EXPECT_EQ(ab["VISIBLE"], 172 * 143);
+  const json& ba = m["metrics10"]["counts"];
+  EXPECT_EQ(ba["OUT_OF_VIEW"], 20 * 144);  // u_a = u_b + 20 >= 191.5
+  EXPECT_EQ(ba["UNKNOWN"], 172);           // lands on a's invalid first row
+  EXPECT_EQ(ba["VISIBLE"], 172 * 143);
+  EXPECT_EQ(ab["INCONSISTENT"], 0);
+}
+
+// c is 240x180 with its own K (a's scaled by 1.25): at the working resolution (default 640x480) it
+// is the same camera as a, so c -> a is the identity; only a's invalid rows give UNKNOWN.
+TEST(MegaDepth, ImagesOfDifferentSizesMeetAtTheWorkingResolution) {
+  const json m = Meta("c,a", "");
+  EXPECT_EQ(m["resolution"], json::array({640, 480}));
+  const json& ca = m["metrics01"]["counts"];
+  const json& ac = m["metrics10"]["counts"];
+  const int a_no_depth = ac["NO_DEPTH"];
+  EXPECT_GT(a_no_depth, 0);
+  EXPECT_EQ(a_no_depth % 640, 0);
+  EXPECT_EQ(ca["UNKNOWN"], a_no_depth);
+  EXPECT_EQ(ca["VISIBLE"], 640 * 480 - a_no_depth);
+  EXPECT_EQ(ac["VISIBLE"], 640 * 480 - a_no_depth);
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(m["K0"][r][k].get<double>(), m["K1"][r][k].get<double>(), 1e-9);
+    }
+  }
+}
+
+TEST(MegaDepth, ScanListsUsableCountsAndReasons) {
+  const auto r = test::RunOccgt("scan '" + Download() + "' --format megadepth --json");
+  ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
+  const json j = json::parse(r.stdout_text);
+  ASSERT_EQ(j["scenes"].size(), 2u);
+  const json& s = j["scenes"][0];
+  EXPECT_EQ(s["name"], "0001");
+  EXPECT_EQ(s["frames"], 6);
+  EXPECT_EQ(s["usable"], 3);
+  EXPECT_EQ(s["unusable_reasons"].size(), 3u);
+  EXPECT_EQ(s["uniform_depth_camera"], false);
+  ASSERT_GE(s["warnings"].size(), 1u);
+  EXPECT_EQ(s["warnings"][0].get<std::string>().rfind("MegaDepth depth is multi-view stereo", 0),
+            0u);
+}
+
+}  // namespace
+}  // namespace gt::io
