@@ -202,5 +202,37 @@ TEST(MegaDepth, ScanListsUsableCountsAndReasons) {
             0u);
 }
 
+// occgt build on the download: scene 0002's two views (y is 1 closer along the optical
+// axis, but its depth file says 10 too: a 10 % depth error) are one pair. With the
+// megadepth preset (τ = 0.15 z = 1.35 >= 1) they are VISIBLE where x projects into y:
+// u_y = 96 + (u - 96) 10/9 in the pixel area for u in 10..181, v in 7..136.
+TEST(MegaDepth, BuildsASplit) {
+  const std::string dir = test::ScratchDir("megadepth_build");
+  const std::string recipe = dir + "/recipe.yaml";
+  WriteText(recipe,
+            "name: megadepth-tiny\nsplit: megadepth-tiny\nresolution: [192, 144]\n"
+            "dataset: {format: megadepth, root: '" +
+                Download() +
+                "', scenes: ['0002']}\n"
+                "labels: {preset: megadepth}\n"
+                "selection: {overlap: [0.1, 1.0], occlusion: [0.0, 1.0], score_stride: 4}\n"
+                "occupancy: {enabled: false}\n"
+                "sample: {image: none, depth: true, labels: true, occupancy: false}\n");
+  const auto r = test::RunOccgt("build '" + recipe + "' --out '" + dir + "/out' --threads 1");
+  ASSERT_EQ(r.exit_code, 0) << r.stderr_text << r.stdout_text;
+  std::ifstream in(dir + "/out/pairs.jsonl");
+  std::string line;
+  int pairs = 0;
+  json first;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    if (pairs++ == 0) first = json::parse(line);
+  }
+  ASSERT_EQ(pairs, 1);
+  EXPECT_EQ(first["metrics"]["01"]["counts"]["VISIBLE"], 172 * 130);
+  EXPECT_EQ(first["metrics"]["01"]["counts"]["INCONSISTENT"], 0);
+  EXPECT_EQ(first["metrics"]["10"]["counts"]["VISIBLE"], 192 * 144);
+}
+
 }  // namespace
 }  // namespace gt::io
