@@ -198,6 +198,22 @@ def main():
             put("sens", tag + ".sens", f.read())
     shutil.rmtree(os.path.join(out, "sens_tmp"))
 
+    # --- COLMAP sparse models (colmap_fuzz: the first byte picks the parser, 0 cameras.bin,
+    # 1 images.bin, 2 cameras.txt, 3 images.txt), a tiny model in both forms.
+    cams_bin = struct.pack("<Q", 2)
+    cams_bin += struct.pack("<iiQQ", 1, 1, 64, 48) + struct.pack("<4d", 50, 52, 32, 24)
+    cams_bin += struct.pack("<iiQQ", 2, 2, 40, 30) + struct.pack("<4d", 30, 20, 15, 0.01)
+    imgs_bin = struct.pack("<Q", 2)
+    imgs_bin += struct.pack("<i7di", 1, 1, 0, 0, 0, 0, 0, 0, 1) + b"a.jpg\0" + struct.pack("<Q", 0)
+    imgs_bin += (struct.pack("<i7di", 2, 0.5 ** 0.5, 0, 0, 0.5 ** 0.5, 1, 2, 3, 2) + b"b.jpg\0" +
+                 struct.pack("<Q", 1) + struct.pack("<ddq", 10.5, 20.5, -1))
+    put("colmap", "cameras_bin", b"\x00" + cams_bin)
+    put("colmap", "images_bin", b"\x01" + imgs_bin)
+    put("colmap", "cameras_txt", b"\x02# cameras\n1 PINHOLE 64 48 50 52 32 24\n"
+        b"2 SIMPLE_PINHOLE 40 30 30 20 15\n")
+    put("colmap", "images_txt", b"\x03# images\n1 1 0 0 0 0 0 0 1 a.jpg\n\n"
+        b"2 0.7071 0 0 0.7071 1 2 3 2 b.jpg\n10.5 20.5 -1\n")
+
     for target, n in sorted(counts.items()):
         print(f"make_seeds.py: {target}: {n} seeds")
 

@@ -1,0 +1,40 @@
+// COLMAP sparse-model bytes -> gt::io::ParseColmap{Cameras,Images}{Binary,Text}: the first
+// byte picks the parser (0 cameras.bin, 1 images.bin, 2 cameras.txt, 3 images.txt), the
+// rest is the file. Counts and sizes are checked against the bytes left before allocating;
+// every camera then goes through ColmapPinholeCamera and every image through the pose
+// conversion (a value or one InputError, never a crash).
+#include <cstdint>
+#include <string>
+
+#include "libgt/core/error.h"
+#include "libgt/io/colmap.h"
+#include "tests/fuzz/fuzz_support.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  if (size == 0) return 0;
+  const int kind = data[0] % 4;
+  const std::string name = kind == 0   ? "cameras.bin"
+                           : kind == 1 ? "images.bin"
+                           : kind == 2 ? "cameras.txt"
+                                       : "images.txt";
+  const std::string_view bytes = gt::fuzz::Bytes(data + 1, size - 1);
+  gt::fuzz::ExpectValueOrInputError(name, [&] {
+    if (kind == 0 || kind == 2) {
+      const auto cameras = kind == 0 ? gt::io::ParseColmapCamerasBinary(bytes, name)
+                                     : gt::io::ParseColmapCamerasText(bytes, name);
+      for (const auto& [id, c] : cameras) {
+        try {
+          (void)gt::io::ColmapPinholeCamera(c, name);
+        } catch (const gt::InputError&) {
+        }
+      }
+    } else {
+      const auto images = kind == 1 ? gt::io::ParseColmapImagesBinary(bytes, name)
+                                    : gt::io::ParseColmapImagesText(bytes, name);
+      for (const auto& im : images) {
+        if (!gt::io::ColmapPoseProblem(im)) (void)gt::io::ColmapWorldFromCam(im);
+      }
+    }
+  });
+  return 0;
+}
