@@ -71,7 +71,7 @@ void RunOccupancy(const OccupancyArgs& args) {
   if (o.mode == occ::OccupancyMode::kTwoPoint && !args.save_octree.empty())
     throw gt::InputError("--save-octree", "needs --mode octomap");
   const PairDatasetArgs& d = args.data;
-  gt::truth::PairSource source{setup.format, d.scene, "", "", "", setup.resolution};
+  gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, "", setup.resolution};
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 
   const gt::Scene scene = gt::io::MakeReader(setup.format)->ReadScene(setup.root, d.scene);
@@ -84,6 +84,8 @@ void RunOccupancy(const OccupancyArgs& args) {
   }
   const size_t i0 = gt::truth::FindFrame(scene, source.id0);
   const size_t i1 = gt::truth::FindFrame(scene, source.id1);
+  source.number0 = scene.frames[i0].number;
+  source.number1 = scene.frames[i1].number;
   const gt::truth::WorkingFrame w0 =
       gt::truth::LoadWorkingFrame(scene.frames[i0], source.resolution);
   const gt::truth::WorkingFrame w1 =

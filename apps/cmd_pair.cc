@@ -47,7 +47,7 @@ void RunPair(const PairArgs& args) {
     ThrowOptionsError(error, "patch options", {{"stride", "--stride", args.stride.has_value()}});
   }
   if (args.score_stride < 1) throw gt::InputError("--score-stride", "expected >= 1");
-  gt::truth::PairSource source{setup.format, d.scene, "", "", "default", setup.resolution};
+  gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, "default", setup.resolution};
   if (setup.recipe) source.preset = setup.recipe->labels.preset;
   if (args.preset) source.preset = *args.preset;
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
@@ -71,6 +71,8 @@ void RunPair(const PairArgs& args) {
   }
   const gt::Frame& f0 = scene.frames[gt::truth::FindFrame(scene, source.id0)];
   const gt::Frame& f1 = scene.frames[gt::truth::FindFrame(scene, source.id1)];
+  source.number0 = f0.number;
+  source.number1 = f1.number;
   const gt::truth::WorkingFrame w0 = gt::truth::LoadWorkingFrame(f0, source.resolution);
   const gt::truth::WorkingFrame w1 = gt::truth::LoadWorkingFrame(f1, source.resolution);
   const gt::truth::PairTruth truth = gt::truth::ComputePairTruth(w0, w1, o);
@@ -82,12 +84,16 @@ void RunPair(const PairArgs& args) {
   const gt::DirectionMetrics m10 =
       args.score_stride == 1 ? p.m10 : gt::MetricsFromLabels(p.l10, args.score_stride);
   const gt::MatchTypeCounts c = gt::CountMatchTypes(p.patches);
+  const std::string grid = args.score_stride == 1
+                               ? ""
+                               : " (score grid, every " + std::to_string(args.score_stride) + ")";
   std::printf(
-      "pair %s %s,%s: overlap %.3f / %.3f, occlusion %.3f / %.3f, matches %zu "
+      "pair %s %s,%s: overlap %.3f / %.3f, occlusion %.3f / %.3f%s, matches %zu "
       "(vv %lld, vo %lld, ov %lld) -> %s\n",
       scene.name.c_str(), source.id0.c_str(), source.id1.c_str(), m01.overlap, m10.overlap,
-      m01.occlusion_ratio, m10.occlusion_ratio, p.patches.size(), static_cast<long long>(c.vv),
-      static_cast<long long>(c.vo), static_cast<long long>(c.ov), d.out.c_str());
+      m01.occlusion_ratio, m10.occlusion_ratio, grid.c_str(), p.patches.size(),
+      static_cast<long long>(c.vv), static_cast<long long>(c.vo), static_cast<long long>(c.ov),
+      d.out.c_str());
 }
 
 }  // namespace

@@ -143,7 +143,9 @@ void AddSelectionStatistics(const Recipe& recipe,
     occlusions.push_back(Combine(OcclusionOf(p->score01, s.occlusion_metric),
                                  OcclusionOf(p->score10, s.occlusion_metric), s.aggregate));
   }
-  auto stats = [](std::vector<double> v) {
+  // Of the pairs' score_metrics: the grid of every score_stride-th pixel the selection
+  // scored on (the same numbers as pairs.jsonl's score_metrics and the report's).
+  auto stats = [&s](std::vector<double> v) {
     if (v.empty()) return json(nullptr);
     std::sort(v.begin(), v.end());
     double sum = 0;
@@ -151,7 +153,8 @@ void AddSelectionStatistics(const Recipe& recipe,
     return json{{"min", v.front()},
                 {"median", v[v.size() / 2]},
                 {"mean", sum / v.size()},
-                {"max", v.back()}};
+                {"max", v.back()},
+                {"score_stride", s.score_stride}};
   };
   (*summary)["selected_overlap"] = stats(overlaps);
   (*summary)["selected_occlusion"] = stats(occlusions);

@@ -757,6 +757,7 @@ LabelOptions RecipeLabelOptions(const Recipe& recipe, const Scene& scene) {
 SampleOptions RecipeSampleOptions(const Recipe& recipe) {
   SampleOptions s;
   s.resolution = {recipe.width, recipe.height};
+  s.score_stride = recipe.selection.score_stride;
   truth::PairTruthOptions& t = s.truth;
   t.patches = recipe.patches;
   t.occupancy = recipe.occupancy.enabled && recipe.sample.occupancy;

@@ -169,7 +169,7 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
         {"mode", occupancy::OccupancyModeName(options.truth.mode)},
         {"encoding", VolumeEncodingName(options.encoding)},
         {"voxel_m", options.truth.fusion.voxel_size_m},
-        {"grid", {occ.cam0.height, occ.cam0.width}},
+        {"grid", {occ.cam0.width, occ.cam0.height}},
         {"counts0", {{"occupied", c0.occupied}, {"free", c0.free}, {"unknown", c0.unknown}}},
         {"counts1", {{"occupied", c1.occupied}, {"free", c1.free}, {"unknown", c1.unknown}}}};
   }
@@ -194,7 +194,6 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
   using truth::MetricsJson;
   const json metrics = {{"01", MetricsJson(labels.m01)}, {"10", MetricsJson(labels.m10)}};
   const json score_metrics = {{"01", MetricsJson(pair.score01)}, {"10", MetricsJson(pair.score10)}};
-  const LabelOptions& lo = options.truth.labels;
   json meta = {{"key", key},
                {"scene", scene.name},
                {"frame0", {{"id", f0.id}, {"number", f0.number}}},
@@ -208,17 +207,9 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
                {"metrics", metrics},
                {"score_metrics", score_metrics},
                {"matches", {{"total", M}, {"vv", types.vv}, {"vo", types.vo}, {"ov", types.ov}}},
-               {"patch_stride", options.truth.patches.stride},
-               {"anchor", AnchorName(options.truth.patches.anchor)},
-               {"label_preset_options",
-                {{"abs_tol_m", lo.abs_tol_m},
-                 {"rel_tol", lo.rel_tol},
-                 {"min_depth_m", lo.min_depth_m},
-                 {"max_depth_m", lo.max_depth_m},
-                 {"relative_to", RelativeToName(lo.relative_to)},
-                 {"bounds", BoundsName(lo.bounds)},
-                 {"target_lookup", TargetLookupName(lo.target_lookup)},
-                 {"missing_target", MissingTargetName(lo.missing_target)}}},
+               {"score_stride", options.score_stride},
+               {"label_options", truth::LabelOptionsJson(options.truth.labels)},
+               {"patch_options", truth::PatchOptionsJson(options.truth.patches)},
                {"occupancy", occupancy_json},
                {"image", image_json},
                {"options_digest", options.digest},
@@ -226,16 +217,16 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
                {"split", options.split}};
   sample.fields[0].bytes = meta.dump(1) + "\n";
 
-  out.pair_line = json{{"scene", scene.name},
-                       {"frame0", f0.id},
-                       {"frame1", f1.id},
-                       {"number0", f0.number},
-                       {"number1", f1.number},
-                       {"metrics", metrics},
-                       {"score_metrics", score_metrics},
-                       {"matches", M},
-                       {"T_0to1", MatrixJson(cam1_from_cam0.matrix())}}
-                      .dump();
+  out.pair_line =
+      json{{"scene", scene.name},
+           {"frame0", {{"id", f0.id}, {"number", f0.number}}},
+           {"frame1", {{"id", f1.id}, {"number", f1.number}}},
+           {"metrics", metrics},
+           {"score_stride", options.score_stride},
+           {"score_metrics", score_metrics},
+           {"matches", {{"total", M}, {"vv", types.vv}, {"vo", types.vo}, {"ov", types.ov}}},
+           {"T_0to1", MatrixJson(cam1_from_cam0.matrix())}}
+          .dump();
   return out;
 }
 

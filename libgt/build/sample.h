@@ -50,6 +50,7 @@ struct SampleOptions {
   ImageFormat image = ImageFormat::kPng;
   bool depth = false;      // depth0/1.npy
   bool label_maps = true;  // label01/10.npy, cells0/1.npy
+  int score_stride = 1;    // the grid of the selection's score_metrics (recorded)
   std::string digest;      // Recipe::Digest()
   std::string recipe_name, split;
 };

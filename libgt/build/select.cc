@@ -103,12 +103,11 @@ std::vector<std::string> ResolveScenes(const Recipe& r, const io::DatasetReader&
 
 namespace {
 
-json PairJson(const SelectedPair& p) {
+json PairJson(const SelectedPair& p, int score_stride) {
   return {{"scene", p.scene},
-          {"frame0", p.frame0},
-          {"frame1", p.frame1},
-          {"number0", p.number0},
-          {"number1", p.number1},
+          {"frame0", {{"id", p.frame0}, {"number", p.number0}}},
+          {"frame1", {{"id", p.frame1}, {"number", p.number1}}},
+          {"score_stride", score_stride},
           {"score_metrics",
            {{"01", truth::MetricsJson(p.score01)}, {"10", truth::MetricsJson(p.score10)}}}};
 }
@@ -116,10 +115,10 @@ json PairJson(const SelectedPair& p) {
 SelectedPair PairFromJson(const json& j) {
   SelectedPair p;
   p.scene = j.at("scene").get<std::string>();
-  p.frame0 = j.at("frame0").get<std::string>();
-  p.frame1 = j.at("frame1").get<std::string>();
-  p.number0 = j.at("number0").get<int64_t>();
-  p.number1 = j.at("number1").get<int64_t>();
+  p.frame0 = j.at("frame0").at("id").get<std::string>();
+  p.frame1 = j.at("frame1").at("id").get<std::string>();
+  p.number0 = j.at("frame0").at("number").get<int64_t>();
+  p.number1 = j.at("frame1").at("number").get<int64_t>();
   p.score01 = truth::MetricsFromJson(j.at("score_metrics").at("01"));
   p.score10 = truth::MetricsFromJson(j.at("score_metrics").at("10"));
   return p;
@@ -225,6 +224,7 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
                {"scored", static_cast<int64_t>(scored.size())},
                {"selected", static_cast<int64_t>(out.pairs.size())},
                {"drops", drops},
+               {"score_stride", r.selection.score_stride},
                {"options_digest", r.Digest()}};
   return out;
 }
@@ -244,7 +244,8 @@ std::string SelectionDir(const std::string& out_dir) { return out_dir + "/select
 
 int64_t WriteSelection(const std::string& o, const SceneSelection& s) {
   std::string lines;
-  for (const auto& p : s.pairs) lines += PairJson(p).dump() + "\n";
+  const int score_stride = s.stats.at("score_stride").get<int>();
+  for (const auto& p : s.pairs) lines += PairJson(p, score_stride).dump() + "\n";
   const std::string stats = s.stats.dump(2) + "\n";
   // Written at once; the stats, the scene's completion marker, are published second.
   io::WriteFilesAtomic(

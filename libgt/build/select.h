@@ -2,7 +2,8 @@
 // candidates (or imported pairs) → pruning → scoring → filters → seeded sampling
 // (libgt/pairs/selection.h), recorded under the output folder DIR:
 //   DIR/selection/<scene>.jsonl   selected pairs in selection order, one JSON object each
-//                                 {scene, frame0, frame1, number0, number1, score_metrics}
+//                                 {scene, frame0, frame1 ({id, number}), score_stride,
+//                                 score_metrics}
 //   DIR/selection/<scene>.json    per-scene counts and drops; written last, it is the
 //                                 scene's completion marker (a re-run skips the scene)
 // (<scene> is SceneFileName(scene name); two scenes with the same file name are an error.)

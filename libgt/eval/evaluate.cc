@@ -257,7 +257,11 @@ std::string ProcessSample(const std::string& tar, const SampleData& s, const Spl
   truth.K1 = geometry->K1;
   truth.cam1_from_cam0_R = geometry->R;
   truth.cam1_from_cam0_t = geometry->t;
-  truth.patch_stride = j.value("patch_stride", 8);
+  try {
+    truth.patch_stride = j.at("patch_options").at("stride").get<int>();
+  } catch (const json::exception&) {
+    throw InputError(where, "expected \"patch_options\": {\"stride\": ...}");
+  }
   const std::vector<int64_t> image_shape{split.height, split.width};
   const char* const kImageFields[] = {"label01.npy", "label10.npy", "depth0.npy", "depth1.npy"};
   for (const char* f : kImageFields) {

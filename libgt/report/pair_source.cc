@@ -335,18 +335,23 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
     } catch (const nlohmann::json::exception&) {
       throw InputError(meta_path, "expected JSON");
     }
+    auto frame_id = [&meta](const char* key) -> const nlohmann::json* {
+      if (!meta.contains(key) || !meta[key].is_object() || !meta[key].contains("id") ||
+          !meta[key]["id"].is_string()) {
+        return nullptr;
+      }
+      return &meta[key]["id"];
+    };
     if (!meta.contains("format") || !meta["format"].is_string() || !meta.contains("scene") ||
-        !meta["scene"].is_string() || !meta.contains("frames") || !meta["frames"].is_array() ||
-        meta["frames"].size() != 2 || !meta["frames"][0].is_string() ||
-        !meta["frames"][1].is_string()) {
+        !meta["scene"].is_string() || !frame_id("frame0") || !frame_id("frame1")) {
       throw InputError(meta_path,
-                       "expected \"format\", \"scene\" and \"frames\": [id0, id1] "
-                       "to find the colour images under --root");
+                       "expected \"format\", \"scene\", \"frame0\" and \"frame1\" "
+                       "({\"id\": ..., \"number\": ...}) to find the colour images under --root");
     }
     const auto reader = gt::io::MakeReader(meta["format"].get<std::string>());
     const gt::Scene scene = reader->ReadScene(dataset_root, meta["scene"].get<std::string>());
     for (int k = 0; k < 2; ++k) {
-      const std::string id = meta["frames"][k].get<std::string>();
+      const std::string id = frame_id(k == 0 ? "frame0" : "frame1")->get<std::string>();
       for (const auto& f : scene.frames) {
         if (f.id != id || f.color_path.empty()) continue;
         if (f.color_range.size > 0) {  // a payload inside a container (.sens)

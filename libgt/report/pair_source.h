@@ -61,7 +61,7 @@ PairData LoadPairFromShard(const std::string& tar_path, const std::string& key);
 
 // An `occgt pair` output folder. Colour: image0_path/image1_path when given, else
 // image*.png in the folder, else meta.json's "color_path" entries, else, when dataset_root
-// is given, the colour files of meta.json's "format", "scene" and "frames" [id0, id1] read
+// is given, the colour files of meta.json's "format", "scene" and "frame0"/"frame1" ids read
 // with that dataset's reader; grey placeholders otherwise.
 PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path = "",
                          const std::string& image1_path = "", const std::string& dataset_root = "");

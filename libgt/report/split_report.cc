@@ -54,6 +54,15 @@ std::string NeedString(const json& j, const char* key, const std::string& where)
   return j.at(key).get<std::string>();
 }
 
+// A frame record {"id": "...", "number": n}: its id.
+std::string NeedFrameId(const json& j, const char* key, const std::string& where) {
+  if (!j.contains(key) || !j.at(key).is_object()) {
+    throw InputError(where, std::string("expected a frame record \"") + key +
+                                "\": {\"id\": ..., \"number\": ...}");
+  }
+  return NeedString(j.at(key), "id", where + ": " + key);
+}
+
 std::string ShellQuote(const std::string& s) {
   std::string out = "'";
   for (char c : s) {
@@ -185,8 +194,8 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
     if (!j.is_object()) throw InputError(where, "expected one JSON object per line");
     SplitPair p;
     p.scene = NeedString(j, "scene", where);
-    p.frame0 = NeedString(j, "frame0", where);
-    p.frame1 = NeedString(j, "frame1", where);
+    p.frame0 = NeedFrameId(j, "frame0", where);
+    p.frame1 = NeedFrameId(j, "frame1", where);
     p.shard = j.value("shard", "");
     p.key = j.value("key", "");
     if (!j.contains("metrics") || !j["metrics"].is_object()) {
@@ -203,6 +212,24 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
     p.visible_min = std::min(p.visible01, p.visible10);
     p.overlap = Combine(p.overlap01, p.overlap10, options.aggregate);
     p.occlusion = Combine(p.occlusion01, p.occlusion10, options.aggregate);
+    // The same on the selection's score grid (summary.json's selected_* statistics).
+    if (!j.contains("score_metrics") || !j["score_metrics"].is_object()) {
+      throw InputError(where, "expected \"score_metrics\": {\"01\": {...}, \"10\": {...}}");
+    }
+    const json& sm = j["score_metrics"];
+    const json s01 = sm.value("01", json()), s10 = sm.value("10", json());
+    p.score_overlap =
+        Combine(NeedNumber(s01, "overlap", where + ": score_metrics.01"),
+                NeedNumber(s10, "overlap", where + ": score_metrics.10"), options.aggregate);
+    p.score_occlusion =
+        Combine(NeedNumber(s01, occ_key, where + ": score_metrics.01"),
+                NeedNumber(s10, occ_key, where + ": score_metrics.10"), options.aggregate);
+    const double stride = NeedNumber(j, "score_stride", where);
+    if (split.score_stride == 0) split.score_stride = static_cast<int>(stride);
+    if (stride != split.score_stride) {
+      throw InputError(where, "score_stride " + Num(stride) + " differs from the first line's " +
+                                  std::to_string(split.score_stride));
+    }
     split.pairs.push_back(std::move(p));
   }
   // Optional JSON objects beside pairs.jsonl: null when absent, an error when malformed.
@@ -244,10 +271,11 @@ std::vector<std::string> SplitWarnings(const SplitData& split) {
     const json drops = split.summary.value("drops", json::object());
     if (drops.is_object()) {
       for (const char* reason : {"scan.no_color", "import.no_color"}) {
-        if (drops.contains(reason) && drops[reason].is_number() && drops[reason].get<double>() > 0) {
-          w.push_back(JsonScalar(drops[reason]) + (std::string(reason) == "scan.no_color"
-                                                        ? " frames were skipped"
-                                                        : " imported pairs were skipped") +
+        if (drops.contains(reason) && drops[reason].is_number() &&
+            drops[reason].get<double>() > 0) {
+          w.push_back(JsonScalar(drops[reason]) +
+                      (std::string(reason) == "scan.no_color" ? " frames were skipped"
+                                                              : " imported pairs were skipped") +
                       " for lack of a colour image (" + reason + ").");
         }
       }
@@ -293,8 +321,8 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
     }
     std::string text;
     for (int b = 0; b < bins; ++b) {
-      text += Num(range.first + (b + 0.5) * width / bins, 8) + " " + std::to_string(counts[b]) +
-              "\n";
+      text +=
+          Num(range.first + (b + 0.5) * width / bins, 8) + " " + std::to_string(counts[b]) + "\n";
     }
     return text;
   };
@@ -367,9 +395,8 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
   gp << "set output 'occlusion_hist.png'\nset title "
      << GnuplotString("Occlusion ratio (" + agg + " of both directions), " + count + ", " +
                       std::to_string(bins) + " bins over " + range_title(occlusion_range))
-     << "\nset xlabel " << GnuplotString(occ_name) << "\nset xrange "
-     << range_text(occlusion_range) << "\nset boxwidth "
-     << Num(0.9 * (occlusion_range.second - occlusion_range.first) / bins, 8)
+     << "\nset xlabel " << GnuplotString(occ_name) << "\nset xrange " << range_text(occlusion_range)
+     << "\nset boxwidth " << Num(0.9 * (occlusion_range.second - occlusion_range.first) / bins, 8)
      << "\nplot 'occlusion_hist.dat' using 1:2 with boxes lc rgb '#d8503b' notitle\n";
   gp << "set output 'occlusion_cumulative.png'\nset xrange [0:1]\nset title "
      << GnuplotString("Pairs with occlusion ratio <= x, " + count) << "\nset xlabel "
@@ -542,13 +569,23 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
     oc.push_back(p.occlusion);
     vis.push_back(p.visible_min);
   }
+  std::vector<double> score_ov, score_oc;
+  for (const auto& p : split.pairs) {
+    score_ov.push_back(p.score_overlap);
+    score_oc.push_back(p.score_occlusion);
+  }
   const Stats so = Describe(ov), sc = Describe(oc), sv = Describe(vis);
-  h << "<table><tr><th>selected pairs</th><th>min</th><th>median</th><th>mean</th>"
-       "<th>max</th></tr>\n";
-  for (const auto& [label, s] :
-       {std::pair<const char*, Stats>{"overlap", so},
-        {"visible overlap (weaker direction)", sv},
-        {"occlusion ratio", sc}}) {
+  const Stats sso = Describe(score_ov), ssc = Describe(score_oc);
+  const std::string grid =
+      " (score grid, score_stride " + std::to_string(split.score_stride) + "; as summary.json)";
+  const std::string overlap_score = "overlap" + grid, occlusion_score = "occlusion ratio" + grid;
+  h << "<table><tr><th>selected pairs (every pixel unless said)</th><th>min</th><th>median</th>"
+       "<th>mean</th><th>max</th></tr>\n";
+  for (const auto& [label, s] : {std::pair<const char*, Stats>{"overlap", so},
+                                 {"visible overlap (weaker direction)", sv},
+                                 {"occlusion ratio", sc},
+                                 {overlap_score.c_str(), sso},
+                                 {occlusion_score.c_str(), ssc}}) {
     h << "<tr><td>" << label << "</td><td class=\"n\">" << Num(s.min) << "</td><td class=\"n\">"
       << Num(s.median) << "</td><td class=\"n\">" << Num(s.mean) << "</td><td class=\"n\">"
       << Num(s.max) << "</td></tr>\n";
@@ -608,8 +645,7 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
   } else {
     h << "the most occluded (largest occlusion ratio first)";
   }
-  h
-    << ". Matches: vv green, vo yellow, ov red. Labels: NO_DEPTH near black, OUT_OF_VIEW blue, "
+  h << ". Matches: vv green, vo yellow, ov red. Labels: NO_DEPTH near black, OUT_OF_VIEW blue, "
        "VISIBLE green, OCCLUDED red, INCONSISTENT magenta, UNKNOWN orange.</p>\n";
   for (const auto& g : gallery) {
     h << "<div class=\"pair\"><h3>" << HtmlEscape(g.caption) << "</h3>\n";

@@ -2,8 +2,9 @@
 // with gnuplot and a self-contained HTML page.
 //
 // Input (SHARDS.md, libgt/shards/split.h): DIR/pairs.jsonl, one JSON object per pair with
-// "scene", "frame0", "frame1", "metrics": {"01": {...}, "10": {...}} (DirectionMetrics:
-// "overlap", "occlusion_ratio", "occlusion_ratio_visible", ...), "shard" (file name
+// "scene", "frame0"/"frame1" ({id, number}), "metrics": {"01": {...}, "10": {...}}
+// (DirectionMetrics on every pixel: "overlap", "occlusion_ratio", "occlusion_ratio_visible",
+// ...), "score_stride" and "score_metrics" (the same on the selection's grid), "shard" (file name
 // relative to DIR) and "key"; DIR/summary.json (counts per stage, "drops" by reason,
 // "pairs_per_scene", ...), optional.
 // Pair values: overlap and occlusion ratio of both directions, combined with
@@ -39,6 +40,8 @@ struct SplitPair {
   double overlap01 = 0, overlap10 = 0;      // DirectionMetrics::overlap
   double occlusion01 = 0, occlusion10 = 0;  // occlusion_ratio or occlusion_ratio_visible
   double overlap = 0, occlusion = 0;        // combined with the aggregate
+  // The same from score_metrics (the selection's grid, every score_stride-th pixel).
+  double score_overlap = 0, score_occlusion = 0;
   // DirectionMetrics::consistent_overlap (VISIBLE / sampled) of each direction, and of the
   // weaker direction (min: the default of selection.visible_aggregate).
   double visible01 = 0, visible10 = 0, visible_min = 0;
@@ -47,6 +50,7 @@ struct SplitPair {
 struct SplitData {
   std::string dir;
   std::vector<SplitPair> pairs;  // pairs.jsonl order
+  int score_stride = 0;          // of every line's score_metrics (0: no pairs)
   nlohmann::json summary;        // summary.json, null when absent
   nlohmann::json recipe;         // recipe.json (the resolved recipe), null when absent
 };
@@ -65,9 +69,9 @@ const char* GalleryOrderName(GalleryOrder order);
 struct SplitReportOptions {
   Aggregate aggregate = Aggregate::kMean;
   OcclusionMetric occlusion_metric = OcclusionMetric::kImage;
-  int histogram_bins = 20;          // bins over [0, 1], 1..200
-  int gallery_pairs = 6;            // pairs rendered in the gallery, 0..100
-  uint64_t seed = 0;                // gallery choice (kRandom)
+  int histogram_bins = 20;  // bins over [0, 1], 1..200
+  int gallery_pairs = 6;    // pairs rendered in the gallery, 0..100
+  uint64_t seed = 0;        // gallery choice (kRandom)
   GalleryOrder gallery_order = GalleryOrder::kRandom;
   double gallery_scale = 0.5;       // gallery pictures resized by this (0, 1]
   std::string gnuplot = "gnuplot";  // executable (PATH lookup)

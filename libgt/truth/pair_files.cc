@@ -28,7 +28,8 @@ ordered_json SourceJson(const char* tool, const PairSource& s) {
   j["occgt_version"] = kVersion;
   j["format"] = s.format;
   j["scene"] = s.scene;
-  j["frames"] = {s.id0, s.id1};
+  j["frame0"] = {{"id", s.id0}, {"number", s.number0}};
+  j["frame1"] = {{"id", s.id1}, {"number", s.number1}};
   j["resolution"] = {s.resolution.width, s.resolution.height};
   return j;
 }
@@ -67,6 +68,23 @@ nlohmann::json MatrixJson(const Eigen::MatrixXd& m) {
   return rows;
 }
 
+nlohmann::ordered_json LabelOptionsJson(const LabelOptions& lo) {
+  return {{"min_depth_m", lo.min_depth_m},
+          {"max_depth_m", lo.max_depth_m},
+          {"abs_tol_m", lo.abs_tol_m},
+          {"rel_tol", lo.rel_tol},
+          {"relative_to", RelativeToName(lo.relative_to)},
+          {"bounds", BoundsName(lo.bounds)},
+          {"target_lookup", TargetLookupName(lo.target_lookup)},
+          {"missing_target", MissingTargetName(lo.missing_target)},
+          {"cheirality", lo.cheirality},
+          {"projection_eps_m", lo.projection_eps_m}};
+}
+
+nlohmann::ordered_json PatchOptionsJson(const PatchOptions& po) {
+  return {{"stride", po.stride}, {"anchor", AnchorName(po.anchor)}, {"mutual", po.mutual}};
+}
+
 void WritePairFolder(const std::string& dir, const PairSource& source, const WorkingFrame& frame0,
                      const WorkingFrame& frame1, const PairTruthOptions& options,
                      const PairTruth& truth, int score_stride) {
@@ -84,34 +102,24 @@ void WritePairFolder(const std::string& dir, const PairSource& source, const Wor
 
   const DirectionMetrics m01 = score_stride == 1 ? p.m01 : MetricsFromLabels(p.l01, score_stride);
   const DirectionMetrics m10 = score_stride == 1 ? p.m10 : MetricsFromLabels(p.l10, score_stride);
-  const LabelOptions& lo = options.labels;
   ordered_json j = SourceJson("occgt pair", source);
   j["K0"] = KJson(frame0.camera);
   j["K1"] = KJson(frame1.camera);
   j["world_from_cam0"] = PoseJson(frame0.world_from_cam);
   j["world_from_cam1"] = PoseJson(frame1.world_from_cam);
-  j["cam1_from_cam0"] = PoseJson(p.cam1_from_cam0);
+  j["T_0to1"] = PoseJson(p.cam1_from_cam0);  // cam1_from_cam0
   j["preset"] = source.preset;
-  j["label_options"] = {{"min_depth_m", lo.min_depth_m},
-                        {"max_depth_m", lo.max_depth_m},
-                        {"abs_tol_m", lo.abs_tol_m},
-                        {"rel_tol", lo.rel_tol},
-                        {"relative_to", RelativeToName(lo.relative_to)},
-                        {"bounds", BoundsName(lo.bounds)},
-                        {"target_lookup", TargetLookupName(lo.target_lookup)},
-                        {"missing_target", MissingTargetName(lo.missing_target)},
-                        {"cheirality", lo.cheirality},
-                        {"projection_eps_m", lo.projection_eps_m}};
-  j["patch_options"] = {{"stride", options.patches.stride},
-                        {"anchor", AnchorName(options.patches.anchor)},
-                        {"mutual", options.patches.mutual}};
-  j["score_stride"] = score_stride;
+  j["label_options"] = LabelOptionsJson(options.labels);
+  j["patch_options"] = PatchOptionsJson(options.patches);
   j["label_codes"] = ordered_json::object();
   for (int k = 0; k < kNumPixelLabels; ++k) {
     j["label_codes"][PixelLabelName(static_cast<PixelLabel>(k))] = k;
   }
-  j["metrics01"] = MetricsJson<ordered_json>(m01);
-  j["metrics10"] = MetricsJson<ordered_json>(m10);
+  j["metrics"] = {{"01", MetricsJson<ordered_json>(p.m01)},
+                  {"10", MetricsJson<ordered_json>(p.m10)}};
+  j["score_stride"] = score_stride;
+  j["score_metrics"] = {{"01", MetricsJson<ordered_json>(m01)},
+                        {"10", MetricsJson<ordered_json>(m10)}};
   const MatchTypeCounts c = CountMatchTypes(pm);
   j["matches"] = {{"total", m}, {"vv", c.vv}, {"vo", c.vo}, {"ov", c.ov}};
   io::WriteFileAtomic(dir + "/meta.json", j.dump(2) + "\n");

@@ -43,17 +43,24 @@ DirectionMetrics MetricsFromJson(const nlohmann::json& j);
 // Rows of a matrix as nested arrays.
 nlohmann::json MatrixJson(const Eigen::MatrixXd& m);
 
+// The label and patch options as every output records them ("label_options",
+// "patch_options": {stride, anchor, mutual}).
+nlohmann::ordered_json LabelOptionsJson(const LabelOptions& lo);
+nlohmann::ordered_json PatchOptionsJson(const PatchOptions& po);
+
 // Where a pair came from, for the records.
 struct PairSource {
-  std::string format;     // dataset format
-  std::string scene;      // scene name
-  std::string id0, id1;   // frame ids
-  std::string preset;     // label preset name the options started from
-  Resolution resolution;  // working resolution
+  std::string format;                // dataset format
+  std::string scene;                 // scene name
+  std::string id0, id1;              // frame ids
+  int64_t number0 = 0, number1 = 0;  // the frames' numbers (Frame::number)
+  std::string preset;                // label preset name the options started from
+  Resolution resolution;             // working resolution
 };
 
-// Writes the `occgt pair` folder. score_stride: the metrics of meta.json on every n-th
-// pixel (1 = the labels' own metrics).
+// Writes the `occgt pair` folder. meta.json's "metrics" are the labels' own (every pixel of
+// the working resolution); its "score_metrics" count every score_stride-th pixel of each
+// row and column (the grid pair selection scores on; 1 = the same as "metrics").
 void WritePairFolder(const std::string& dir, const PairSource& source, const WorkingFrame& frame0,
                      const WorkingFrame& frame1, const PairTruthOptions& options,
                      const PairTruth& truth, int score_stride);

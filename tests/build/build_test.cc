@@ -214,7 +214,7 @@ TEST(Pipeline, ErrorsMidPipelinePropagateAndWriteNoLaterShard) {
   ASSERT_GT(lines.size(), bad);
   const std::string original = io::ReadFileBytes(files[0]);
   nlohmann::json j = nlohmann::json::parse(lines[bad]);
-  j["frame0"] = "no-such-frame";
+  j["frame0"]["id"] = "no-such-frame";
   lines[bad] = j.dump();
   std::string text;
   for (const auto& l : lines) text += l + "\n";

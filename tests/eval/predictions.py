@@ -36,9 +36,9 @@ def truth_matches(sample: Dict[str, object]) -> Tuple[np.ndarray, np.ndarray, np
     """The sample's coarse ground-truth matches as keypoints: (kpts0, kpts1, type); vv/vo
     from the anchor of cell0 to match_xy, ov from match_xy to the anchor of cell1."""
     meta = sample["json"]
-    s = meta["patch_stride"]
+    s = meta["patch_options"]["stride"]
     cols = meta["resolution"][0] // s
-    off = s // 2 if meta["anchor"] == "center" else 0
+    off = s // 2 if meta["patch_options"]["anchor"] == "center" else 0
     matches = sample["matches.npy"]
     typ = sample["match_type.npy"]
     xy = sample["match_xy.npy"].astype(np.float32)

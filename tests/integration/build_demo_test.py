@@ -116,7 +116,7 @@ def check_sample(key, fields, width, height, stride=8):
         assert d.dtype == np.float32 and d.shape == (height, width)
     # Pixels without depth are NO_DEPTH and nothing else is.
     d0 = npy(fields["depth0.npy"])
-    opts = meta["label_preset_options"]
+    opts = meta["label_options"]
     invalid = ~((d0 > 0) & (d0 >= opts["min_depth_m"]) & (d0 <= opts["max_depth_m"]) & np.isfinite(d0))
     assert np.array_equal(invalid, l01 == 0)
     # T_0to1 = inv(world_from_cam1) @ world_from_cam0.
@@ -199,7 +199,7 @@ def main():
     assert t["name"].shape == (24, 4) and t["rel_pose"].shape == (24, 12)
     for row, p in zip(t["rel_pose"], lines):
         assert np.allclose(row.reshape(3, 4), np.array(p["T_0to1"])[:3], atol=1e-5)
-    assert [int(x) for x in t["name"][:, 2]] == [p["number0"] for p in lines]
+    assert [int(x) for x in t["name"][:, 2]] == [p["frame0"]["number"] for p in lines]
 
     # LoFTR train export (ScanNet style) of the same recipe: names and overlap scores.
     import yaml
@@ -224,7 +224,7 @@ def main():
             rows.append((scene_names[int(name[0])], int(name[2]), int(name[3]), float(score)))
     assert len(rows) == len(tlines) == 24
     for (scene, f0, f1, score), p in zip(rows, tlines):
-        assert (scene, f0, f1) == (p["scene"], p["number0"], p["number1"])
+        assert (scene, f0, f1) == (p["scene"], p["frame0"]["number"], p["frame1"]["number"])
         sm = p["score_metrics"]
         assert abs(score - (sm["01"]["overlap"] + sm["10"]["overlap"]) / 2) < 1e-6
     intr = np.load(os.path.join(out_t, "loftr", "intrinsics.npz"))

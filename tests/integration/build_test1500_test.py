@@ -79,7 +79,7 @@ def main():
         with open(os.path.join(out, "selection", scene + ".jsonl")) as f:
             for line in f:
                 p = json.loads(line)
-                got.append((int(scene[5:9]), int(scene[10:12]), p["number0"], p["number1"]))
+                got.append((int(scene[5:9]), int(scene[10:12]), p["frame0"]["number"], p["frame1"]["number"]))
     assert got == expected
 
     # 2. The same recipe at 80x60 without images/occupancy: a full build and the export.

@@ -97,7 +97,7 @@ def occgt_samples(build):
         meta = json.load(tf.extractfile(line["key"] + ".json"))
         d = [np.load(io.BytesIO(tf.extractfile(line["key"] + f".depth{k}.npy").read()))
              for k in "01"]
-        out[(line["scene"], line["number0"], line["number1"])] = (line, meta, d[0], d[1])
+        out[(line["scene"], line["frame0"]["number"], line["frame1"]["number"])] = (line, meta, d[0], d[1])
     return out
 
 

@@ -82,7 +82,7 @@ def check_pairs(name, recipe, build, extra=()):
         fail(f"{name}: the build selected no pairs")
     for line in [lines[0], lines[-1]] if len(lines) > 1 else lines:
         members = shard_members(os.path.join(build, line["shard"]), line["key"])
-        frames = f"{line['frame0']},{line['frame1']}"
+        frames = f"{line['frame0']['id']},{line['frame1']['id']}"
         tag = f"{name} {line['key']}"
         pair_dir = common.scratch(f"pair_recipe/{name}_pair")
         common.occgt("pair", "--recipe", recipe, "--scene", line["scene"], "--frames", frames,
@@ -179,7 +179,7 @@ def main():
     def pair_meta(*flags):
         out = common.scratch("pair_recipe/mutual")
         common.occgt("pair", "--recipe", recipe, "--scene", first["scene"], "--frames",
-                     f"{first['frame0']},{first['frame1']}", *flags, "--out", out)
+                     f"{first['frame0']['id']},{first['frame1']['id']}", *flags, "--out", out)
         meta = json.load(open(os.path.join(out, "meta.json")))
         return meta, meta["matches"]["vv"]
     (m_recipe, n_recipe), (m_on, n_on), (m_off, n_off) = (
@@ -191,7 +191,7 @@ def main():
         fail(f"match counts recipe {n_recipe}, --mutual {n_on}, --no-mutual {n_off}")
 
     # Flags override single fields of the recipe; the ray range follows --far-m.
-    frames = f"{line['frame0']},{line['frame1']}"
+    frames = f"{line['frame0']['id']},{line['frame1']['id']}"
     meta = occupancy_json("--recipe", tartan, "--scene", line["scene"], "--frames", frames,
                           "--far-m", "12", "--bins", "16")
     if (meta["bins"]["far_m"], meta["fusion"]["max_range_m"]) != (12, 12):

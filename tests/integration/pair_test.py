@@ -39,12 +39,12 @@ def check(out, stride=8):
     assert m > 0 and np.all(np.isfinite(a["match_xy"]))
     # Counts in meta.json agree with the label arrays.
     names = ["NO_DEPTH", "OUT_OF_VIEW", "VISIBLE", "OCCLUDED", "INCONSISTENT", "UNKNOWN"]
-    for lab, key in [("label01", "metrics01"), ("label10", "metrics10")]:
+    for lab, key in [("label01", "01"), ("label10", "10")]:
         counts = np.bincount(a[lab].ravel(), minlength=6)
         for k, n in enumerate(names):
-            assert counts[k] == meta[key]["counts"][n], (lab, n, counts[k])
-        assert meta[key]["sampled"] == w * h
-        assert abs(meta[key]["occlusion_ratio"] - counts[OCC] / (w * h)) < 1e-12
+            assert counts[k] == meta["metrics"][key]["counts"][n], (lab, n, counts[k])
+        assert meta["metrics"][key]["sampled"] == w * h
+        assert abs(meta["metrics"][key]["occlusion_ratio"] - counts[OCC] / (w * h)) < 1e-12
     # Matches agree with the cell maps and the type counts.
     cells0, cells1 = a["cells0"].ravel(), a["cells1"].ravel()
     t = a["match_type"]
@@ -73,7 +73,7 @@ def main():
     common.occgt("pair", "--root", root7, "--format", "sevenscenes", "--scene", "rgbd-frames",
                  "--frames", "000150,000190", "--out", out)
     a, meta = check(out)
-    assert 0.2 < meta["metrics01"]["overlap"] <= 1
+    assert 0.2 < meta["metrics"]["01"]["overlap"] <= 1
     assert meta["label_options"]["min_depth_m"] == 0.1  # the dataset's range
 
     # The compat preset reproduces the release: missing target depth counts as occluded.
@@ -81,8 +81,8 @@ def main():
     common.occgt("pair", "--root", root7, "--format", "sevenscenes", "--scene", "rgbd-frames",
                  "--frames", "000150,000190", "--preset", "occ2net-compat", "--out", out_c)
     ac, mc = check(out_c)
-    assert mc["metrics01"]["counts"]["UNKNOWN"] == 0
-    assert mc["metrics01"]["counts"]["OCCLUDED"] > meta["metrics01"]["counts"]["OCCLUDED"]
+    assert mc["metrics"]["01"]["counts"]["UNKNOWN"] == 0
+    assert mc["metrics"]["01"]["counts"]["OCCLUDED"] > meta["metrics"]["01"]["counts"]["OCCLUDED"]
 
     # Determinism: same inputs, byte-identical outputs.
     out_again = common.scratch("pair_7s_again")

@@ -102,11 +102,11 @@ def main():
     common.occgt("build", "--json", recipe, "--out", ref)
     with open(os.path.join(ref, "pairs.jsonl")) as f:
         ref_pairs = [json.loads(line) for line in f]
-    by_frames = {(p["frame0"], p["frame1"]): strip(p) for p in ref_pairs}
-    common_pairs = [p for p in env_pairs if (p["frame0"], p["frame1"]) in by_frames]
+    by_frames = {(p["frame0"]["id"], p["frame1"]["id"]): strip(p) for p in ref_pairs}
+    common_pairs = [p for p in env_pairs if (p["frame0"]["id"], p["frame1"]["id"]) in by_frames]
     assert common_pairs, (env_pairs, ref_pairs)
     for p in common_pairs:
-        assert strip(p) == by_frames[(p["frame0"], p["frame1"])], p["key"]
+        assert strip(p) == by_frames[(p["frame0"]["id"], p["frame1"]["id"])], p["key"]
     print(f"tartanair_folder: scan lists {names} and {env_names}; scenes [P000] built {len(pairs)} pairs")
 
 

@@ -155,11 +155,11 @@ json Meta(const std::string& frames, const std::string& extra) {
 
 TEST(MegaDepth, PairLabelsOfAPlaneFromTwoPoses) {
   const json m = Meta("a,b", "--resolution 192x144");
-  const json& ab = m["metrics01"]["counts"];
+  const json& ab = m["metrics"]["01"]["counts"];
   EXPECT_EQ(ab["NO_DEPTH"], 192);          // a's first row
   EXPECT_EQ(ab["OUT_OF_VIEW"], 20 * 143);  // u_b = u_a - 20 < -0.5
   EXPECT_EQ(ab["VISIBLE"], 172 * 143);
-  const json& ba = m["metrics10"]["counts"];
+  const json& ba = m["metrics"]["10"]["counts"];
   EXPECT_EQ(ba["OUT_OF_VIEW"], 20 * 144);  // u_a = u_b + 20 >= 191.5
   EXPECT_EQ(ba["UNKNOWN"], 172);           // lands on a's invalid first row
   EXPECT_EQ(ba["VISIBLE"], 172 * 143);
@@ -171,8 +171,8 @@ TEST(MegaDepth, PairLabelsOfAPlaneFromTwoPoses) {
 TEST(MegaDepth, ImagesOfDifferentSizesMeetAtTheWorkingResolution) {
   const json m = Meta("c,a", "");
   EXPECT_EQ(m["resolution"], json::array({640, 480}));
-  const json& ca = m["metrics01"]["counts"];
-  const json& ac = m["metrics10"]["counts"];
+  const json& ca = m["metrics"]["01"]["counts"];
+  const json& ac = m["metrics"]["10"]["counts"];
   const int a_no_depth = ac["NO_DEPTH"];
   EXPECT_GT(a_no_depth, 0);
   EXPECT_EQ(a_no_depth % 640, 0);

@@ -99,9 +99,9 @@ def assert_same_as_pair_folder(test: Any, result: Mapping[str, Any], folder: str
     metrics of meta.json and its cam1_from_cam0. Returns meta.json."""
     assert_same_as_folder(test, result, folder, PAIR_ARRAYS, where)
     meta = read_json(os.path.join(folder, "meta.json"))
-    test.assertEqual(result["metrics01"], meta["metrics01"], where)
-    test.assertEqual(result["metrics10"], meta["metrics10"], where)
-    test.assertEqual(result["T_0to1"].tolist(), meta["cam1_from_cam0"], where)
+    test.assertEqual(result["metrics01"], meta["metrics"]["01"], where)
+    test.assertEqual(result["metrics10"], meta["metrics"]["10"], where)
+    test.assertEqual(result["T_0to1"].tolist(), meta["T_0to1"], where)
     return meta
 
 

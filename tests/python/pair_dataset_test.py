@@ -156,7 +156,7 @@ class Indices(unittest.TestCase):
         self.assertEqual(read_pair_index(split), from_pairs)
         lines = [json.loads(line) for line in open(os.path.join(split, "pairs.jsonl"))]
         self.assertEqual([(r.scene, r.frame0, r.frame1) for r in from_pairs],
-                         [(p["scene"], p["frame0"], p["frame1"]) for p in lines])
+                         [(p["scene"], p["frame0"]["id"], p["frame1"]["id"]) for p in lines])
         # selection/ holds the same pairs (scene by scene).
         os.rename(os.path.join(split, "pairs.jsonl"), os.path.join(split, "pairs.jsonl.away"))
         try:
@@ -223,7 +223,8 @@ class Indices(unittest.TestCase):
         cases.append((p, "score: expected shape [2]"))
         p = os.path.join(out, "bad.jsonl")
         with open(p, "w") as f:
-            f.write('{"scene": "s", "frame0": "1", "frame1": "2"}\n{"scene": "s"}\n')
+            f.write('{"scene": "s", "frame0": {"id": "1", "number": 1}, '
+                    '"frame1": {"id": "2", "number": 2}}\n{"scene": "s"}\n')
         cases.append((p, "bad.jsonl:2: expected a pair line"))
         p = os.path.join(out, "garbage.npz")
         with open(p, "wb") as f:

@@ -95,11 +95,12 @@ def _read_jsonl(path: str) -> List[PairRef]:
                 continue
             try:
                 p = json.loads(line)
-                refs.append(PairRef(p["scene"], p["frame0"], p["frame1"], p.get("number0"),
-                                    p.get("number1")))
+                f0, f1 = p["frame0"], p["frame1"]  # frame records {id, number}
+                refs.append(PairRef(p["scene"], f0["id"], f1["id"], int(f0["number"]),
+                                    int(f1["number"])))
             except (ValueError, KeyError, TypeError) as e:
                 raise ValueError(f"{path}:{number}: expected a pair line with scene, frame0, "
-                                 f"frame1 ({e})") from None
+                                 f"frame1 as {{id, number}} ({e})") from None
     return refs
 
 
