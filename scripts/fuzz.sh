@@ -52,6 +52,7 @@ fi
 build="${OCCGT_FUZZ_BUILD_DIR:-$here/build-fuzz}"
 if [[ ! -f "$build/CMakeCache.txt" ]]; then
   cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
     -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_CXX_COMPILER_LAUNCHER=ccache \
     -DOCCGT_SANITIZE=address,undefined -DOCCGT_BUILD_FUZZ=ON -DOCCGT_BUILD_BENCH=OFF -DOCCGT_BUILD_PYTHON=OFF >&2
 fi
