@@ -14,6 +14,8 @@
 # already holds a build of that version it only prints the folder.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# ccache paths relative to the checkout, as in setup.sh (the source tree is under DEST).
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$here}" CCACHE_NOHASHDIR="${CCACHE_NOHASHDIR:-1}"
 dest="${1:-$here/build-tsan/tbb-tsan}"
 mkdir -p "$dest"
 dest="$(cd "$dest" && pwd)"
@@ -75,7 +77,7 @@ srcdir="$(find "$dest/src" -mindepth 1 -maxdepth 1 -type d -name "$src_pkg-*" | 
 echo "build-tbb-tsan.sh: building $srcdir with -DTBB_SANITIZE=thread" >&2
 rm -rf "$dest/build" "$prefix"
 cmake -S "$srcdir" -B "$dest/build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_COMPILER=g++ -DCMAKE_INSTALL_PREFIX="$prefix" \
+  -DCMAKE_CXX_COMPILER=g++ -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_INSTALL_PREFIX="$prefix" \
   -DCMAKE_INSTALL_LIBDIR=lib -DTBB_SANITIZE=thread -DTBB_TEST=OFF -DTBB_EXAMPLES=OFF \
   -DTBB_STRICT=OFF -DTBBMALLOC_BUILD=OFF -DTBB_DISABLE_HWLOC_AUTOMATIC_SEARCH=ON \
   -DBUILD_SHARED_LIBS=ON >&2

@@ -17,6 +17,8 @@
 # executions, coverage (cov: edges, ft: features) and the corpus size.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# ccache paths relative to the checkout, as in setup.sh.
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$here}" CCACHE_NOHASHDIR="${CCACHE_NOHASHDIR:-1}"
 
 runs=20000
 seconds=0

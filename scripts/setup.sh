@@ -11,6 +11,9 @@
 #                               which puts bin/occgt on PATH when PREFIX/bin is on it
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# ccache keyed on paths relative to the checkout (and not on the build folder), so a
+# second clone of the same sources (CI's fresh clone, a worktree) reuses the cache.
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$here}" CCACHE_NOHASHDIR="${CCACHE_NOHASHDIR:-1}"
 
 want_tests=0
 do_build=1
