@@ -19,6 +19,8 @@ const char* WarpStatusName(WarpStatus s) {
       return "behind";
     case WarpStatus::kOutOfGrid:
       return "out_of_grid";
+    case WarpStatus::kPadded:
+      return "padded";
   }
   return "?";
 }
@@ -86,11 +88,18 @@ void WarpGrid(const LoftrView& a, const LoftrView& b, const Eigen::Matrix4d& b_f
   for (int r = 0; r < ha; ++r) {
     for (int c = 0; c < wa; ++c) {
       const size_t i = static_cast<size_t>(r) * wa + c;
-      const float gx = sa.x * static_cast<float>(c);
-      const float gy = sa.y * static_cast<float>(r);
+      const bool padded = a.cell_mask != nullptr && a.cell_mask[i] == 0;
+      // compat: LoFTR moves the grid point of a padded cell to (0, 0) and warps it.
+      const float gx = padded && compat ? 0.0f : sa.x * static_cast<float>(c);
+      const float gy = padded && compat ? 0.0f : sa.y * static_cast<float>(r);
       (*grid_a)[2 * i] = gx;
       (*grid_a)[2 * i + 1] = gy;
       (*target_a)[i] = none;
+      if (padded && !compat) {
+        (*warped_a)[2 * i] = (*warped_a)[2 * i + 1] = kNaN;
+        (*status_a)[i] = static_cast<uint8_t>(WarpStatus::kPadded);
+        continue;
+      }
       // The depth at the nearest pixel (torch's round: half to even, rint in the default
       // rounding mode; nearbyint is the same but saves and restores the FP environment).
       const double u = std::rint(static_cast<double>(gx));
@@ -126,8 +135,12 @@ void WarpGrid(const LoftrView& a, const LoftrView& b, const Eigen::Matrix4d& b_f
       // floating point first, so that non-finite or huge values are out of the grid.
       const float cx = std::rint(x / sb.x);
       const float cy = std::rint(y / sb.y);
-      const bool in_grid =
+      bool in_grid =
           cx >= 0 && cx < static_cast<float>(wb) && cy >= 0 && cy < static_cast<float>(hb);
+      if (in_grid && !compat && b.cell_mask != nullptr &&
+          b.cell_mask[static_cast<size_t>(cy) * wb + static_cast<size_t>(cx)] == 0) {
+        in_grid = false;  // on the other image's padding
+      }
       if (status == WarpStatus::kInGrid && !in_grid) status = WarpStatus::kOutOfGrid;
       (*status_a)[i] = static_cast<uint8_t>(status);
       if (in_grid && (compat || status == WarpStatus::kInGrid)) {

@@ -23,6 +23,13 @@
 // target is cell 0, cell 0 of image 0 never matches, and a grid point whose rounded pixel
 // lies outside its depth map is an InputError (LoFTR's indexing fails there).
 //
+// Padded images (LoFTR's MegaDepth batches: image and depth zero-padded to a square, with
+// data['mask0'/'mask1'] at the coarse grid, 0 on padding): a view's `cell_mask`. Default: a
+// padded cell has no target and its warp is NaN (status kPadded; its grid point stays its
+// corner), and a target that lands on a padded cell of the other grid is out of the grid.
+// compat: LoFTR's mask_pts_at_padded_regions — the grid point of a padded cell is (0, 0)
+// and is warped like any other, and the other grid's padding is ordinary cells.
+//
 // Numerics in double from the float32/float64 inputs; LoFTR computes in float32, so its
 // warped points differ from these by ~1e-4 px and a target may differ where x/σ lies within
 // ~1e-5 of a rounding boundary.
@@ -42,9 +49,11 @@ enum class WarpStatus : uint8_t {
   kInGrid = 0,     // its warp lands in the other grid: target = that cell
   kNoDepth = 1,    // depth invalid (or its pixel outside the depth map)
   kBehind = 2,     // q.z <= 0: behind (or at) the other camera
-  kOutOfGrid = 3,  // the rounded target cell lies outside the other grid
+  kOutOfGrid = 3,  // the rounded target cell lies outside the other grid (or on its padding)
+  kPadded = 4,     // the cell lies in the padding of its own image (cell_mask 0)
 };
-const char* WarpStatusName(WarpStatus s);  // "in_grid", "no_depth", "behind", "out_of_grid"
+// "in_grid", "no_depth", "behind", "out_of_grid", "padded"
+const char* WarpStatusName(WarpStatus s);
 
 struct LoftrSupervisionOptions {
   int coarse_stride = 8;  // s: coarse cell size in image pixels (LoFTR RESOLUTION[0])
@@ -60,6 +69,9 @@ struct LoftrView {
   Eigen::Matrix3d K = Eigen::Matrix3d::Identity();  // intrinsics of the depth map (invertible)
   int image_width = 0, image_height = 0;            // the image the grid covers (>= coarse_stride)
   double scale_x = 1.0, scale_y = 1.0;  // depth-map pixels per image pixel (> 0, finite)
+  // Optional [floor(H/s) · floor(W/s)] row-major over the coarse cells: 0 = padding, else
+  // image (LoFTR's coarse data['mask<k>']); null = no padding. Not copied.
+  const uint8_t* cell_mask = nullptr;
 
   void SetDepth(const DepthImage& depth) {
     depth_m = depth.values_m.data();

@@ -60,14 +60,18 @@ def loftr_coarse_supervision(
     image_size0: Optional[Tuple[int, int]] = None,
     image_size1: Optional[Tuple[int, int]] = None,
     compat: bool = False,
+    mask0: Optional[npt.ArrayLike] = None,
+    mask1: Optional[npt.ArrayLike] = None,
 ) -> Any:
     """LoFTR's coarse supervision of one pair (libgt/truth/loftr_supervision.h): a dict with
     cells_shape0/1 (h_c, w_c), grid0/1 float32 [L, 2] (corner grid points, depth-map
-    pixels), warped0/1 float32 [L, 2] (into the other image; NaN without depth or behind),
-    target0/1 int32 [L] (target cell, -1 none; compat 0), status0/1 uint8 [L]
+    pixels), warped0/1 float32 [L, 2] (into the other image; NaN without depth, behind or
+    padded), target0/1 int32 [L] (target cell, -1 none; compat 0), status0/1 uint8 [L]
     (WARP_STATUS_NAMES) and matches int32 [M, 2] (i, j). image_size: (height, width) of the
     image the grid covers (default the depth map's); scale: (sx, sy) depth-map pixels per
-    image pixel. Batched torch form: occgt.torch.loftr_supervision."""
+    image pixel; mask: bool/int [h_c, w_c] over the coarse cells, 0 on the padding of a
+    padded image (LoFTR's MegaDepth mask0/mask1). Batched torch form:
+    occgt.torch.loftr_supervision."""
     ...
 
 class Frame:

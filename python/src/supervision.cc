@@ -70,11 +70,39 @@ void CheckScale(const std::array<double, 2>& s, const std::string& argument) {
   }
 }
 
+// A coarse-grid mask [cells_h, cells_w] (bool or integer; 0 = padding) as C-contiguous uint8.
+py::array_t<uint8_t> CellMaskArray(py::handle obj, int cells_h, int cells_w,
+                                   const std::string& argument) {
+  py::array a = AsArray(obj, argument);
+  const char kind = a.dtype().kind();
+  if (kind != 'b' && kind != 'i' && kind != 'u') {
+    ThrowValue(argument,
+               "expected a bool or integer array [cells_h, cells_w] (0 = padding), got "
+               "dtype " +
+                   DtypeText(a));
+  }
+  if (a.ndim() != 2 || a.shape(0) != cells_h || a.shape(1) != cells_w) {
+    ThrowValue(argument,
+               "expected shape (" + std::to_string(cells_h) + ", " + std::to_string(cells_w) +
+                   ") (the coarse grid of the image: floor(H/s), floor(W/s)), got " + ShapeText(a));
+  }
+  py::array_t<uint8_t> out({static_cast<py::ssize_t>(cells_h), static_cast<py::ssize_t>(cells_w)});
+  auto dst = out.mutable_unchecked<2>();
+  const py::array ints = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(a);
+  if (!ints) throw py::error_already_set();
+  const auto src = py::array_t<int64_t>(ints).unchecked<2>();
+  for (py::ssize_t r = 0; r < cells_h; ++r) {
+    for (py::ssize_t c = 0; c < cells_w; ++c) dst(r, c) = src(r, c) != 0 ? 1 : 0;
+  }
+  return out;
+}
+
 py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle K0, py::handle K1,
                                 py::handle T_0to1, py::handle T_1to0, int coarse_stride,
                                 std::array<double, 2> scale0, std::array<double, 2> scale1,
                                 std::optional<std::array<int, 2>> image_size0,
-                                std::optional<std::array<int, 2>> image_size1, bool compat) {
+                                std::optional<std::array<int, 2>> image_size1, bool compat,
+                                py::handle mask0, py::handle mask1) {
   gt::truth::LoftrSupervisionOptions options;
   options.coarse_stride = coarse_stride;
   options.compat = compat;
@@ -104,8 +132,19 @@ py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle
     }
     return v;
   };
-  const gt::truth::LoftrView v0 = view(d0, K0, scale0, image_size0, "0");
-  const gt::truth::LoftrView v1 = view(d1, K1, scale1, image_size1, "1");
+  gt::truth::LoftrView v0 = view(d0, K0, scale0, image_size0, "0");
+  gt::truth::LoftrView v1 = view(d1, K1, scale1, image_size1, "1");
+  py::array_t<uint8_t> m0, m1;  // alive while the C++ reads them
+  if (!mask0.is_none()) {
+    m0 = CellMaskArray(mask0, v0.image_height / coarse_stride, v0.image_width / coarse_stride,
+                       "mask0");
+    v0.cell_mask = m0.data();
+  }
+  if (!mask1.is_none()) {
+    m1 = CellMaskArray(mask1, v1.image_height / coarse_stride, v1.image_width / coarse_stride,
+                       "mask1");
+    v1.cell_mask = m1.data();
+  }
   const Eigen::Matrix4d cam1_from_cam0 = RelativePoseFromArray(T_0to1, "T_0to1");
   const Eigen::Matrix4d cam0_from_cam1 =
       T_1to0.is_none() ? Eigen::Matrix4d(gt::Rigid3d(cam1_from_cam0).inverse().matrix())
@@ -143,11 +182,13 @@ py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle
 }  // namespace
 
 void BindSupervision(py::module_& m) {
-  m.attr("WARP_STATUS_NAMES") = py::make_tuple("in_grid", "no_depth", "behind", "out_of_grid");
+  m.attr("WARP_STATUS_NAMES") =
+      py::make_tuple("in_grid", "no_depth", "behind", "out_of_grid", "padded");
   m.def("loftr_coarse_supervision", &LoftrCoarseSupervision, "depth0"_a, "depth1"_a, "K0"_a, "K1"_a,
         "T_0to1"_a, "T_1to0"_a = py::none(), py::kw_only(), "coarse_stride"_a = 8,
         "scale0"_a = std::array<double, 2>{1.0, 1.0}, "scale1"_a = std::array<double, 2>{1.0, 1.0},
         "image_size0"_a = py::none(), "image_size1"_a = py::none(), "compat"_a = false,
+        "mask0"_a = py::none(), "mask1"_a = py::none(),
         "LoFTR's coarse supervision of one pair (truth::ComputeLoftrSupervision); see "
         "occgt.torch.loftr_supervision and docs/PYTHON.md, \"Supervision\".");
 }

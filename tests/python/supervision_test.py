@@ -84,6 +84,15 @@ def reference_supervision(batch: Dict[str, torch.Tensor], fixes: bool, stride: i
     s0 = stride * batch.get("scale0", ones).to(torch.float32)
     s1 = stride * batch.get("scale1", ones).to(torch.float32)
     pt0, pt1 = _grid(n, h0, w0, s0), _grid(n, h1, w1, s1)
+    # Padded images (LoFTR's MegaDepth mask0/mask1 at the coarse grid, 0 on padding).
+    pad0 = pad1 = None
+    if "mask0" in batch:
+        pad0 = ~batch["mask0"].bool().reshape(n, h0 * w0)
+        pad1 = ~batch["mask1"].bool().reshape(n, h1 * w1)
+        if not fixes:  # LoFTR: padded grid points become (0, 0) and are warped as any other
+            pt0, pt1 = pt0.clone(), pt1.clone()
+            pt0[pad0] = 0.0
+            pt1[pad1] = 0.0
     w_pt0, z0, d0 = _warp(pt0, depth0, batch["T_0to1"], batch["K0"], batch["K1"], dtype)
     w_pt1, z1, d1 = _warp(pt1, depth1, batch["T_1to0"], batch["K1"], batch["K0"], dtype)
     idx1, in1 = _nearest(w_pt0, s1, h1, w1)
@@ -95,6 +104,13 @@ def reference_supervision(batch: Dict[str, torch.Tensor], fixes: bool, stride: i
         s[z <= 0] = 2
         s[~(torch.isfinite(d) & (d > 0))] = 1
         status.append(s)
+    if fixes and pad0 is not None:
+        # occgt: a target on the other image's padding is out of the grid; a padded cell
+        # has no target (status 4).
+        for s, idx, pad_own, pad_other in ((status[0], idx1, pad0, pad1),
+                                           (status[1], idx0, pad1, pad0)):
+            s[(s == 0) & torch.gather(pad_other, 1, idx)] = 3
+            s[pad_own] = 4
     if fixes:
         idx1 = torch.where(status[0] == 0, idx1, torch.full_like(idx1, -1))
         idx0 = torch.where(status[1] == 0, idx0, torch.full_like(idx0, -1))
@@ -175,13 +191,15 @@ class Checks:
         fixed_ref = reference_supervision(batch, fixes=True)
         fixed = loftr_supervision(batch)
         self.assertEqual(ids(fixed), ids(fixed_ref), f"{where}: default ids")
-        self.assertTrue(torch.equal(fixed["spv_status0"], ref["status"][0]), where)
+        self.assertTrue(torch.equal(fixed["spv_status0"], fixed_ref["status"][0]), where)
+        self.assertTrue(torch.equal(fixed["spv_status1"], fixed_ref["status"][1]), where)
         ok0 = fixed["spv_status0"] == 0
         ok1 = fixed["spv_status1"] == 0
         for key, ok in (("spv_w_pt0_i", ok0), ("spv_w_pt1_i", ok1)):
             # Untouched cells: LoFTR's warped points, bit for bit with compat.
             self.assertTrue(torch.equal(fixed[key][ok], got[key][ok]), f"{where}: {key}")
-        nd_or_behind = (fixed["spv_status0"] == 1) | (fixed["spv_status0"] == 2)
+        nd_or_behind = ((fixed["spv_status0"] == 1) | (fixed["spv_status0"] == 2) |
+                        (fixed["spv_status0"] == 4))
         self.assertTrue(bool(torch.isnan(fixed["spv_w_pt0_i"][nd_or_behind]).all()), where)
         loftr_set, occgt_set = set(ids(ref)), set(ids(fixed))
         if ref["spv_b_ids"].numel() == 1 and not ref["conf_matrix_gt"].any():
@@ -201,7 +219,7 @@ class Checks:
         st = torch.cat([fixed["spv_status0"].flatten(), fixed["spv_status1"].flatten()])
         return {"matches": len(occgt_set), "loftr": len(loftr_set),
                 "no_depth": int((st == 1).sum()), "behind": int((st == 2).sum()),
-                "out_of_grid": int((st == 3).sum())}
+                "out_of_grid": int((st == 3).sum()), "padded": int((st == 4).sum())}
 
 
 class SevenScenes(unittest.TestCase, Checks):
@@ -299,6 +317,59 @@ class SevenScenes(unittest.TestCase, Checks):
         self.assertTrue(bool(torch.isnan(f).all()) and no_depth.numel() == 1)
         self.assertLessEqual(float(out["expec_f_gt"].abs().max()), 1.0 + 1e-6)
 
+    def test_padded_megadepth_batch(self) -> None:
+        """LoFTR's MegaDepth batches: images and depth zero-padded (here 640x480 to 640x640
+        and 704x480), mask0/mask1 [N, h_c, w_c] at the coarse grid. compat: LoFTR's
+        mask_pts_at_padded_regions (padded grid points warped from (0, 0)); default: no
+        match touches the padding."""
+        frames = self.frames[:2]
+        batch = make_batch(frames)
+        n = 2
+        depth0 = torch.zeros(n, 640, 640)
+        depth0[:, :480, :] = batch["depth0"]
+        depth1 = torch.zeros(n, 480, 704)
+        depth1[:, :, :640] = batch["depth1"]
+        batch["depth0"], batch["depth1"] = depth0, depth1
+        batch["image0"] = torch.zeros(n, 1, 640, 640)
+        batch["image1"] = torch.zeros(n, 1, 480, 704)
+        mask0 = torch.zeros(n, 80, 80, dtype=torch.bool)
+        mask0[:, :60, :] = True
+        mask1 = torch.zeros(n, 60, 88, dtype=torch.bool)
+        mask1[:, :, :80] = True
+        batch["mask0"], batch["mask1"] = mask0, mask1
+        c = self.check_batch(batch, "7-Scenes padded")
+        self.assertEqual(c["padded"], n * (20 * 80 + 60 * 8))
+        self.assertGreater(c["matches"], 1000)
+        compat = loftr_supervision(batch, compat=True)
+        fixed = loftr_supervision(batch)
+        pad0 = ~mask0.reshape(n, -1)
+        # compat: the padded cells' grid points are (0, 0) and their warps are cell 0's.
+        self.assertTrue(bool((compat["spv_pt0_i"][pad0] == 0).all()))
+        w = compat["spv_w_pt0_i"]
+        self.assertTrue(torch.equal(w[pad0], w[:, :1].expand(-1, 6400, -1)[pad0]))
+        # default: the padded cells keep their corners, warp to NaN, and no match uses them.
+        self.assertEqual(fixed["spv_pt0_i"][0, 60 * 80].tolist(), [0.0, 480.0])
+        self.assertTrue(bool(torch.isnan(fixed["spv_w_pt0_i"][pad0]).all()))
+        b, i, j = fixed["spv_b_ids"], fixed["spv_i_ids"], fixed["spv_j_ids"]
+        self.assertFalse(bool(pad0[b, i].any()))
+        self.assertFalse(bool((~mask1.reshape(n, -1))[b, j].any()))
+        # The same pairs unpadded: the same matches (the padding holds no depth and no cell
+        # of the image lands on it except through no-depth points).
+        plain = loftr_supervision(make_batch(frames))
+        unpadded = {(bb, ii // 80 * 80 + ii % 80, jj // 80 * 88 + jj % 80)
+                    for bb, ii, jj in ids(plain)}
+        self.assertEqual(set(ids(fixed)), unpadded)
+        for bad, key in (({"mask0": mask0[:, :10]}, "mask0"),
+                         ({"mask1": mask1.float()[:1]}, "mask1")):
+            with self.assertRaisesRegex(ValueError, key):
+                loftr_supervision({**batch, **bad})
+        only = dict(batch)
+        del only["mask1"]
+        with self.assertRaisesRegex(ValueError, "mask1"):
+            loftr_supervision(only)
+        with self.assertRaisesRegex(ValueError, "occ2net"):
+            loftr_supervision(batch, mode="occ2net")
+
     def test_options_and_bad_input(self) -> None:
         batch = make_batch(self.frames[:1])
         sparse = loftr_supervision(batch, dense_conf_matrix=False)
@@ -344,6 +415,8 @@ class SevenScenes(unittest.TestCase, Checks):
             (dict(image_size1=(4, 640)), "image_size1"),
             (dict(coarse_stride=2000), "coarse_stride"),
             (dict(compat=True, image_size0=(960, 1280)), "depth0"),  # grid off the depth map
+            (dict(mask0=np.ones((60, 79), bool)), "mask0"),  # not the 60x80 coarse grid
+            (dict(mask1=np.ones((60, 80), np.float32)), "mask1"),  # not bool/integer
         ]
         for kwargs, name in binding_cases:
             with self.subTest(binding=name):

@@ -113,6 +113,53 @@ TEST(LoftrSupervision, XTranslationShiftsCellsByTwo) {
   }
 }
 
+TEST(LoftrSupervision, PaddedCellsOfLoftrMegaDepthBatches) {
+  // The x-translation above with the last 10 columns of both grids marked as padding
+  // (LoFTR's mask0/mask1). Default: padded cells have no target (status kPadded, NaN warp)
+  // and a target on the other grid's padding is out of the grid, so image 0 matches only
+  // columns 0..67 (their targets 2..69 are real). compat: every padded grid point is
+  // (0, 0) and warps as cell 0 does.
+  const DepthImage plane(kW, kH, static_cast<float>(kPlaneZ));
+  constexpr int kRealCols = kCw - 10;
+  std::vector<uint8_t> mask(static_cast<size_t>(kCw) * kCh, 1);
+  for (int r = 0; r < kCh; ++r) {
+    for (int c = kRealCols; c < kCw; ++c) mask[Cell(c, r)] = 0;
+  }
+  LoftrView v = View(&plane);
+  v.cell_mask = mask.data();
+  const LoftrCoarseSupervision s =
+      ComputeLoftrSupervision(v, v, Translation(0.064), Translation(-0.064), Compat(false));
+  for (int r = 0; r < kCh; ++r) {
+    for (int c = 0; c < kCw; ++c) {
+      const int i = Cell(c, r);
+      if (c >= kRealCols) {
+        EXPECT_EQ(s.status0[i], static_cast<uint8_t>(WarpStatus::kPadded));
+        EXPECT_EQ(s.target0[i], -1);
+        EXPECT_TRUE(std::isnan(X(s.warped0, i)));
+        EXPECT_EQ(X(s.grid0, i), static_cast<float>(kStride * c));  // the corner stays
+      } else if (c + 2 >= kRealCols) {
+        EXPECT_EQ(s.status0[i], static_cast<uint8_t>(WarpStatus::kOutOfGrid));
+      } else {
+        EXPECT_EQ(s.target0[i], Cell(c + 2, r));
+      }
+    }
+  }
+  EXPECT_EQ(s.size(), static_cast<size_t>((kRealCols - 2) * kCh));
+  for (size_t m = 0; m < s.size(); ++m) {
+    EXPECT_EQ(mask[X(s.matches, m)], 1);
+    EXPECT_EQ(mask[Y(s.matches, m)], 1);
+  }
+  const LoftrCoarseSupervision compat =
+      ComputeLoftrSupervision(v, v, Translation(0.064), Translation(-0.064), Compat(true));
+  for (int r = 0; r < kCh; ++r) {
+    const int i = Cell(kCw - 1, r);
+    EXPECT_EQ(X(compat.grid0, i), 0.0f);
+    EXPECT_EQ(Y(compat.grid0, i), 0.0f);
+    EXPECT_EQ(X(compat.warped0, i), X(compat.warped0, 0));
+    EXPECT_EQ(compat.target0[i], compat.target0[0]);  // cell 2, as cell 0's
+  }
+}
+
 TEST(LoftrSupervision, BehindTheOtherCameraGivesNothing) {
   // Camera 1 turned by 180 degrees about y: the plane is behind it (q.z = -Z). LoFTR divides
   // by q.z + 1e-4 and mirrors the points into view (x kept, y flipped).

@@ -20,7 +20,7 @@ Mode = Literal["loftr", "occ2net"]
 
 #: Codes of spv_status0/spv_status1 (uint8): WARP_STATUS_NAMES[code] is the name.
 WARP_STATUS_NAMES: Tuple[str, ...] = tuple(_occgt.WARP_STATUS_NAMES)
-IN_GRID, NO_DEPTH, BEHIND, OUT_OF_GRID = 0, 1, 2, 3
+IN_GRID, NO_DEPTH, BEHIND, OUT_OF_GRID, PADDED = 0, 1, 2, 3, 4
 
 
 def _numpy(t: Any, name: str) -> np.ndarray:
@@ -106,16 +106,19 @@ def loftr_supervision(
     (occgt.torch) stacked on dim 0: ``depth0``, ``depth1`` [N, H, W] planar metres (0 =
     none), ``K0``, ``K1`` [N, 3, 3] at the depth maps' size, ``T_0to1`` (cam1_from_cam0)
     [N, 4, 4] and, when present, ``T_1to0``, ``image0``/``image1`` [N, 1, H, W] (their size
-    sets the grid), LoFTR's ``scale0``/``scale1`` [N, 2] (depth-map pixels per image pixel).
-    Work is on the CPU, one pair at a time without the GIL; the outputs are on the device
+    sets the grid), LoFTR's ``scale0``/``scale1`` [N, 2] (depth-map pixels per image pixel)
+    and ``mask0``/``mask1`` [N, h_c, w_c] (LoFTR's padded MegaDepth images: the coarse
+    grid's mask, 0 on the padding). Work is on the CPU, one pair at a time without the GIL; the outputs are on the device
     of ``depth0``.
 
     mode="loftr": LoFTR's ``spvs_coarse`` (corner grid points (c, r)·8·scale, both-way
     warps of the depth at the nearest pixel, division by z + 1e-4, the nearest cell, the
     mutual loop-back, no depth-consistency test), except three fixes: a grid point without
     depth, one behind the other camera and one whose cell is outside the other grid give no
-    match (LoFTR sends them to a corner or to cell 0), and cell 0 is an ordinary cell.
-    ``compat=True`` gives LoFTR exactly (also its dummy match (0, 0, 0) for a batch without
+    match (LoFTR sends them to a corner or to cell 0), and cell 0 is an ordinary cell; with
+    ``mask0``/``mask1``, a padded cell has no target (status ``padded``, warp NaN) and a
+    target on the other image's padding is out of the grid (LoFTR moves padded grid points
+    to (0, 0) and warps them). ``compat=True`` gives LoFTR exactly (also its dummy match (0, 0, 0) for a batch without
     any). Keys: ``conf_matrix_gt`` float32 [N, L0, L1] (1 at every match; a sparse COO
     tensor with ``dense_conf_matrix=False``), ``spv_b_ids``, ``spv_i_ids``, ``spv_j_ids``
     int64 [M] (by pair, then by i), ``spv_w_pt0_i`` float32 [N, L0, 2] (image 0's grid
@@ -124,7 +127,7 @@ def loftr_supervision(
     (fine_stride · scale1[b]) / (fine_window // 2) at these matches (LoFTR's ``spvs_fine``
     computes it at the coarse matcher's ids: loftr_fine_target gives it there), and
     occgt's ``spv_w_pt1_i``, ``spv_pt0_i`` and ``spv_status0``/``spv_status1`` uint8
-    [N, L] (WARP_STATUS_NAMES: in_grid, no_depth, behind, out_of_grid).
+    [N, L] (WARP_STATUS_NAMES: in_grid, no_depth, behind, out_of_grid, padded).
 
     mode="occ2net": occgt's vv, vo and ov patch matches (docs/GROUND_TRUTH.md §4): those of
     the batch (``matches``/``match_type``/``match_xy``, padded with ``match_mask`` or
@@ -141,8 +144,8 @@ def loftr_supervision(
     anchor label, LABEL_NAMES).
 
     Raises:
-        ValueError: a missing key or a tensor of the wrong shape, a bad option, LoFTR's padded
-            MegaDepth batches (``mask0``, not supported), or the C++ checks (naming them).
+        ValueError: a missing key or a tensor of the wrong shape, a bad option, ``mask0``
+            without ``mask1`` or in mode "occ2net", or the C++ checks (naming them).
     """
     if mode not in ("loftr", "occ2net"):
         raise ValueError(f"mode: expected 'loftr' or 'occ2net', got {mode!r}")
@@ -153,9 +156,12 @@ def loftr_supervision(
     if fine_window < 3:
         raise ValueError(f"fine_window: expected >= 3 (radius fine_window // 2 >= 1), got "
                          f"{fine_window}")
-    if "mask0" in batch or "mask1" in batch:
-        raise ValueError("batch: padded images (LoFTR's MegaDepth 'mask0'/'mask1') are not "
-                         "supported")
+    if ("mask0" in batch) != ("mask1" in batch):
+        raise ValueError("batch: 'mask0' and 'mask1' (LoFTR's padded MegaDepth images) come "
+                         "together, got only " + ("'mask0'" if "mask0" in batch else "'mask1'"))
+    if mode == "occ2net" and "mask0" in batch:
+        raise ValueError("batch: mode 'occ2net' takes unpadded pairs at the depth maps' size; "
+                         "'mask0'/'mask1' (padded images) are for mode 'loftr'")
     _require(batch, ["depth0", "depth1", "K0", "K1", "T_0to1"], mode)
     device: Union[torch.device, str] = (batch["depth0"].device
                                         if isinstance(batch["depth0"], torch.Tensor) else "cpu")
@@ -186,6 +192,14 @@ def _loftr(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_window:
     scale0, scale1 = _scales(batch, n)
     size0 = _image_size(batch, 0, depth0)
     size1 = _image_size(batch, 1, depth1)
+    masks: Tuple[Optional[np.ndarray], Optional[np.ndarray]] = (None, None)
+    if "mask0" in batch:
+        masks = (_batched(batch, "mask0", (size0[0] // stride, size0[1] // stride)),
+                 _batched(batch, "mask1", (size1[0] // stride, size1[1] // stride)))
+        for key, a in (("mask0", masks[0]), ("mask1", masks[1])):
+            if a.shape[0] != n:
+                raise ValueError(f"batch[{key!r}]: expected {n} pairs (as depth0), got "
+                                 f"{a.shape[0]}")
     per_pair = []
     for b in range(n):
         per_pair.append(_occgt.loftr_coarse_supervision(
@@ -193,7 +207,9 @@ def _loftr(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_window:
             coarse_stride=stride, scale0=(float(scale0[b][0]), float(scale0[b][1])),
             scale1=(float(scale1[b][0]), float(scale1[b][1])), image_size0=size0,
             image_size1=size1,
-            compat=compat))
+            compat=compat,
+            mask0=None if masks[0] is None else masks[0][b],
+            mask1=None if masks[1] is None else masks[1][b]))
     stack = lambda key: torch.from_numpy(np.stack([p[key] for p in per_pair]))  # noqa: E731
     w_pt0_i, pt1_i = stack("warped0"), stack("grid1")
     l0, l1 = w_pt0_i.shape[1], pt1_i.shape[1]
@@ -319,5 +335,5 @@ def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_windo
     return out
 
 
-__all__ = ["WARP_STATUS_NAMES", "IN_GRID", "NO_DEPTH", "BEHIND", "OUT_OF_GRID",
+__all__ = ["WARP_STATUS_NAMES", "IN_GRID", "NO_DEPTH", "BEHIND", "OUT_OF_GRID", "PADDED",
            "loftr_fine_target", "loftr_supervision"]
