@@ -124,8 +124,8 @@ void Run(const Args& args) {
       throw gt::InputError("--predictions",
                            "set name '" + name + "' is empty or repeats (use NAME=PATH)");
     }
-    sets.push_back(
-        gt::eval::ReadPredictions(name, path, keys, split.width, split.height, &problems));
+    sets.push_back(gt::eval::ReadPredictions(name, path, keys, split.width, split.height, &problems,
+                                             split.loftr_names));
     gt::eval::FilterByConfidence(args.min_confidence, &sets.back(), &problems);
   }
   if (!problems.empty()) {
@@ -163,7 +163,8 @@ void AddEvalCommand(CLI::App& app) {
   cmd->add_option("split_dir", args->split_dir, "Split folder (index.json, pairs.jsonl, shards)")
       ->required();
   cmd->add_option("--predictions", args->predictions,
-                  "[NAME=]PATH: a .npz keyed by sample key, or a folder of <key>.npz; repeat "
+                  "[NAME=]PATH: a .npz keyed by sample key (or LoFTR pair name), or a folder of "
+                  "<key>.npz; repeat "
                   "to compare sets")
       ->required()
       ->expected(1)

@@ -12,10 +12,12 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core/version.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "libgt/core/error.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
+#include "libgt/shards/loftr_tree.h"
 #include "libgt/shards/sample.h"
 #include "libgt/shards/tar_shard.h"
 
@@ -125,6 +127,9 @@ SplitIndex LoadSplitIndex(const std::string& dir) {
   std::istringstream lines(io::ReadFileBytes(pairs_path));
   std::string line;
   std::set<std::string> seen;
+  // (scene, number0, number1) of every key, for the LoFTR pair names.
+  std::vector<std::tuple<std::string, int64_t, int64_t>> frames;
+  std::set<std::string> scenes;
   for (int n = 1; std::getline(lines, line); ++n) {
     if (line.empty()) continue;
     json j;
@@ -141,6 +146,27 @@ SplitIndex LoadSplitIndex(const std::string& dir) {
       throw InputError(pairs_path + ":" + std::to_string(n), "key " + key + " repeats");
     }
     split.keys.push_back(key);
+    const json& f0 = j.contains("frame0") ? j["frame0"] : json();
+    const json& f1 = j.contains("frame1") ? j["frame1"] : json();
+    if (!j.contains("scene") || !j["scene"].is_string() || !f0.is_object() || !f1.is_object() ||
+        !f0.contains("number") || !f0["number"].is_number_integer() || !f1.contains("number") ||
+        !f1["number"].is_number_integer()) {
+      throw InputError(pairs_path + ":" + std::to_string(n),
+                       "expected 'scene' and 'frame0'/'frame1' with an integer 'number'");
+    }
+    frames.emplace_back(j["scene"].get<std::string>(), f0["number"].get<int64_t>(),
+                        f1["number"].get<int64_t>());
+    scenes.insert(std::get<0>(frames.back()));
+  }
+  std::map<std::string, std::string> folders;
+  try {
+    folders = shards::LoftrSceneFolders(scenes);
+  } catch (const InputError&) {
+    frames.clear();  // two scenes share a LoFTR folder: sample keys only
+  }
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const auto& [scene, n0, n1] = frames[i];
+    split.loftr_names[LoftrPairName(folders.at(scene), n0, n1)] = split.keys[i];
   }
   const std::string recipe_path = dir + "/recipe.json";
   json recipe;

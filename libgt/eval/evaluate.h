@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -60,6 +61,9 @@ struct SplitIndex {
   std::vector<std::string> shard_urls;  // index.json order
   std::vector<std::string> keys;        // pairs.jsonl order
   int width = 0, height = 0;            // recipe.json "resolution"
+  // LoFTR pair name (predictions.h LoftrPairName, with the scene's LoFTR folder,
+  // shards::LoftrSceneFolders) -> sample key, for every pair of pairs.jsonl.
+  std::map<std::string, std::string> loftr_names;
 };
 // Throws InputError naming the file and field.
 SplitIndex LoadSplitIndex(const std::string& dir);

@@ -170,9 +170,41 @@ bool ReadPair(const std::string& where, const Members& members, const int64_t de
 
 }  // namespace
 
+std::string LoftrPairName(const std::string& folder, int64_t number0, int64_t number1) {
+  return folder + "/color/" + std::to_string(number0) + ".jpg#" + folder + "/color/" +
+         std::to_string(number1) + ".jpg";
+}
+
+std::string NormalizeLoftrPairName(const std::string& name) {
+  const size_t hash = name.find('#');
+  if (hash == std::string::npos || name.find('#', hash + 1) != std::string::npos) return "";
+  std::string out;
+  for (const std::string& side : {name.substr(0, hash), name.substr(hash + 1)}) {
+    // The last three components: <folder>/color/<n>.<ext>.
+    std::vector<std::string> parts;
+    std::string part;
+    std::istringstream in(side);
+    while (std::getline(in, part, '/')) parts.push_back(part);
+    if (parts.size() < 3 || parts[parts.size() - 2] != "color") return "";
+    const std::string& file = parts.back();
+    const size_t dot = file.rfind('.');
+    const std::string stem = file.substr(0, dot);
+    if (stem.empty() || stem.size() > 18 ||
+        !std::all_of(stem.begin(), stem.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+      return "";
+    }
+    const std::string& folder = parts[parts.size() - 3];
+    if (folder.empty()) return "";
+    out +=
+        (out.empty() ? "" : "#") + folder + "/color/" + std::to_string(std::stoll(stem)) + ".jpg";
+  }
+  return out;
+}
+
 PredictionSet ReadPredictions(const std::string& name, const std::string& path,
                               const std::set<std::string>& split_keys, int width, int height,
-                              std::vector<std::string>* problems) {
+                              std::vector<std::string>* problems,
+                              const std::map<std::string, std::string>& loftr_names) {
   namespace fs = std::filesystem;
   PredictionSet set;
   set.name = name;
@@ -180,10 +212,25 @@ PredictionSet ReadPredictions(const std::string& name, const std::string& path,
   const int64_t working[2][2] = {{width, height}, {width, height}};
   // `label`: the file (folder layout) or "<file>:<key>" (one .npz); `where`: the prefix of
   // member names in problem lines.
-  auto keep = [&](const std::string& label, const std::string& where, const std::string& key,
+  // The name each sample key was given under (a sample key or a LoFTR pair name).
+  std::map<std::string, std::string> given_as;
+  auto keep = [&](const std::string& label, const std::string& where, const std::string& name,
                   const Members& members, const int64_t wh[2][2]) {
+    std::string key = name;
     if (split_keys.count(key) == 0) {
-      problems->push_back(label + ": pair " + key + " is not a sample of the split");
+      const std::string loftr = NormalizeLoftrPairName(name);
+      const auto it = loftr.empty() ? loftr_names.end() : loftr_names.find(loftr);
+      if (it == loftr_names.end()) {
+        problems->push_back(label + ": pair " + name +
+                            (loftr.empty() ? " is not a sample of the split"
+                                           : " (a LoFTR pair name) is not a pair of the split"));
+        return;
+      }
+      key = it->second;
+    }
+    if (const auto [it, inserted] = given_as.emplace(key, name); !inserted) {
+      problems->push_back(label + ": pair " + key + " is given twice, as " + it->second +
+                          " and as " + name);
       return;
     }
     PairPrediction pair;

@@ -1,6 +1,7 @@
 // A matcher's predictions on a split, read from NumPy files (docs/EVAL.md "Predictions").
 //
-// Two layouts, both keyed by occgt's sample key "<scene>/<frame0>_<frame1>":
+// Two layouts, both keyed by occgt's sample key "<scene>/<frame0>_<frame1>" (or, in the
+// one-.npz layout, by LoFTR's pair name: below):
 //  - one .npz for the whole split, members "<key>/kpts0", "<key>/kpts1", optional
 //    "<key>/confidence" and "<key>/resolution", and an optional top-level "resolution"
 //    (np.savez(path, **{key + "/kpts0": ..., ...}));
@@ -17,6 +18,12 @@
 // with a problem is left out of the set, and the caller stops when any line was written.
 // Pairs of the split without a prediction are not a problem here: the evaluation counts
 // them as failures (pose error +inf, no matches).
+// LoFTR pair names: the identifier LoFTR's test loop forms, '#'.join(pair_names), e.g.
+// "scene0707_00/color/15.jpg#scene0707_00/color/585.jpg" (each side <folder>/color/<n>.jpg,
+// <folder> the LoFTR scene folder of the split's scene, <n> Frame::number; any leading
+// path components, such as a data root, are ignored). A key that is not a sample key is
+// looked up in `loftr_names` (LoftrPairName of every pair of the split); the same pair
+// under two names is a problem.
 #pragma once
 
 #include <cstdint>
@@ -47,7 +54,16 @@ struct PredictionSet {
 // to `problems` (in a deterministic order: members sorted by name).
 PredictionSet ReadPredictions(const std::string& name, const std::string& path,
                               const std::set<std::string>& split_keys, int width, int height,
-                              std::vector<std::string>* problems);
+                              std::vector<std::string>* problems,
+                              const std::map<std::string, std::string>& loftr_names = {});
+
+// LoFTR's identifier of a pair: "<folder>/color/<n0>.jpg#<folder>/color/<n1>.jpg".
+std::string LoftrPairName(const std::string& folder, int64_t number0, int64_t number1);
+
+// A LoFTR pair name as LoftrPairName writes it: each '#'-side cut to its last three path
+// components ("<folder>/color/<n>.<ext>" with any image extension becomes ".jpg"); "" when
+// `name` is not of that form.
+std::string NormalizeLoftrPairName(const std::string& name);
 
 // Keeps the matches with confidence >= min_confidence (a pair without confidence is a
 // problem line when min_confidence > 0).

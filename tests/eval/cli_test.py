@@ -179,6 +179,27 @@ def main():
     assert [s["name"] for s in doc["sets"]] == ["gt", "gt_folder", "moved"]
     assert doc["sets"][0]["overall"] == doc["sets"][1]["overall"]
 
+    # 5b. Keyed by LoFTR pair names ('#'.join(pair_names) of LoFTR's test loop): the
+    #     scene's LoFTR folder (the name itself for ScanNet names, else scene%04d_00 of its
+    #     line in loftr/scenes.txt) and the frame numbers of pairs.jsonl; a data-root
+    #     prefix and another image extension are accepted. Same scores as by sample key.
+    with open(os.path.join(split, "loftr", "scenes.txt")) as f:
+        aliases = {name: f"scene{i:04d}_00" for i, name in enumerate(f.read().split())}
+    loftr_name = {}
+    with open(os.path.join(split, "pairs.jsonl")) as f:
+        for line in f:
+            p = json.loads(line)
+            folder = aliases.get(p["scene"], p["scene"])
+            n0, n1 = p["frame0"]["number"], p["frame1"]["number"]
+            loftr_name[p["key"]] = f"scans/{folder}/color/{n0}.jpg#{folder}/color/{n1}.png"
+    by_name = save("gt_loftr", {loftr_name[k]: v for k, v in truth.items()})
+    out = os.path.join(work, "gt_loftr.json")
+    run_eval(split, out, "--predictions", "gt=" + by_name, "--ransac-px", "0.5,1.0")
+    a, b = load(os.path.join(work, "gt.json")), load(out)
+    assert a["sets"][0]["overall"] == b["sets"][0]["overall"]
+    assert [p["sets"][0]["pose"][0] for p in a["pairs"]] == \
+        [p["sets"][0]["pose"][0] for p in b["pairs"]]
+
     # 6. Bad prediction files: one line, exit 1, nothing written.
     first = next(iter(truth))
     k0, k1 = truth[first]
@@ -192,6 +213,10 @@ def main():
         "extra": ({first: (k0, k1), "nowhere/000000_000001": (k0, k1)}, None,
                   r"pair nowhere/000000_000001 is not a sample of the split"),
         "outside": ({first: (k0 + W, k1)}, None, r"kpts0: point 0 .* is outside the"),
+        "loftr_unknown": ({"scene9999_00/color/1.jpg#scene9999_00/color/2.jpg": (k0, k1)}, None,
+                          r"\(a LoFTR pair name\) is not a pair of the split"),
+        "twice": ({first: (k0, k1), loftr_name[first]: (k0, k1)}, None,
+                  rf"pair {first} is given twice"),
         "dtype": ({first: (k0, k1)}, {first + "/confidence": np.ones(len(k0), np.int32)},
                   r"confidence: expected dtype float32"),
     }

@@ -1,7 +1,7 @@
 """docs/EVAL.md's examples run as written: the loop (build the demo, the SIFT baseline,
 occgt eval with two estimator settings; eval.json valid against its schema) and the
-Python block that writes predictions (read back by occgt eval, whose only complaint is
-that the made-up pair is not in the demo split)."""
+Python blocks that write predictions by sample key and by LoFTR pair name (read back by
+occgt eval, whose only complaint is that the made-up pair is not in the demo split)."""
 import json
 import os
 import re
@@ -50,7 +50,16 @@ def main():
     lines = r.stderr.splitlines()
     assert r.returncode == 1 and len(lines) == 1, r.stderr
     assert "pair scene0707_00/000015_000585 is not a sample of the split" in lines[0], lines
-    print("docs/EVAL.md: loop and predictions example ran")
+    code = block(text, "loftr", "python")
+    subprocess.run(["/usr/bin/python3", "-c", code], cwd=work, check=True)
+    r = common.occgt("eval", os.path.join(work, "out", "demo"), "--predictions",
+                     os.path.join(work, "loftr_predictions.npz"), "--out",
+                     os.path.join(work, "x.json"), check=False)
+    lines = r.stderr.splitlines()
+    assert r.returncode == 1 and len(lines) == 1, r.stderr
+    assert ("pair scene0707_00/color/15.jpg#scene0707_00/color/585.jpg (a LoFTR pair name) "
+            "is not a pair of the split") in lines[0], lines
+    print("docs/EVAL.md: loop, predictions and LoFTR-name examples ran")
 
 
 if __name__ == "__main__":
