@@ -47,7 +47,7 @@ struct Args {
   std::vector<std::string> predictions;
   std::string ransac_px = "0.5", occlusion = "image,visible", occlusion_bins, overlap_bins,
               auc = "5,10,20", aggregate = "mean";
-  double ransac_conf = 0.99999, min_confidence = 0;
+  double ransac_conf = 0.99999;
   gt::eval::EvalOptions options;
   int threads = 0;
 };
@@ -126,7 +126,7 @@ void Run(const Args& args) {
     }
     sets.push_back(gt::eval::ReadPredictions(name, path, keys, split.width, split.height, &problems,
                                              split.loftr_names));
-    gt::eval::FilterByConfidence(args.min_confidence, &sets.back(), &problems);
+    gt::eval::FilterByConfidence(options.min_confidence, &sets.back(), &problems);
   }
   if (!problems.empty()) {
     if (problems.size() == 1) throw gt::InputError("predictions", problems[0]);
@@ -187,7 +187,7 @@ void AddEvalCommand(CLI::App& app) {
                   "Cumulative curve step over the occlusion ratio (default 0.05)");
   cmd->add_option("--failure-error", args->options.failure_error_deg,
                   "Error (deg) of a failed pair inside means (default 180)");
-  cmd->add_option("--min-confidence", args->min_confidence,
+  cmd->add_option("--min-confidence", args->options.min_confidence,
                   "Drop matches with confidence below this (needs 'confidence')");
   cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)");
   cmd->callback([args] { Run(*args); });

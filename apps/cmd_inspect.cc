@@ -2,10 +2,11 @@
 //   occgt inspect pair (--shard X.tar --key K | --pair-dir D | --root R --format F --scene S
 //                      --frames A,B) --out DIR
 //   (--pair-dir: a folder of `occgt pair`, of `occgt occupancy`, or of both)
-//   occgt inspect split DIR [--out OUT]
+//   occgt inspect split DIR [--out OUT] [--eval eval.json ...]
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "apps/commands.h"
 #include "apps/usage.h"
@@ -34,6 +35,8 @@ struct InspectSplitArgs {
   int gallery = 6;
   uint64_t seed = 0;
   int bins = 20;
+  std::vector<std::string> eval;
+  int eval_gallery = 4;
 };
 
 void RunInspectPair(const InspectPairArgs& a) {
@@ -92,10 +95,14 @@ void RunInspectSplit(const InspectSplitArgs& a) {
   o.seed = a.seed;
   o.gallery_order = gt::report::ParseGalleryOrder(a.gallery_order, "--gallery-order");
   o.histogram_bins = a.bins;
+  o.eval_paths = a.eval;
+  o.eval_gallery_pairs = a.eval_gallery;
   std::string error;
   if (!o.Check(&error)) {  // the defaults pass: a failure comes from a flag
     ThrowOptionsError(error, "occgt inspect split",
-                      {{"histogram_bins", "--bins", true}, {"gallery_pairs", "--gallery", true}});
+                      {{"histogram_bins", "--bins", true},
+                       {"gallery_pairs", "--gallery", true},
+                       {"eval_gallery_pairs", "--eval-gallery", true}});
   }
   const std::string out = a.out.empty() ? a.dir + "/inspect" : a.out;
   const auto written = gt::report::WriteSplitReport(a.dir, out, o);
@@ -161,6 +168,11 @@ void AddInspectCommand(CLI::App& app) {
                    "random (seeded) or most-occluded (largest occlusion ratio first)")
       ->capture_default_str();
   split->add_option("--bins", sa->bins, "histogram bins over [0, 1]")->capture_default_str();
+  split->add_option("--eval", sa->eval,
+                    "eval.json of `occgt eval` on this split: adds the evaluation section "
+                    "(repeat to compare several files' prediction sets)");
+  split->add_option("--eval-gallery", sa->eval_gallery, "worst pairs shown per prediction set")
+      ->capture_default_str();
   split->callback([sa] { RunInspectSplit(*sa); });
 }
 

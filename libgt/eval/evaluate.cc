@@ -96,6 +96,10 @@ bool EvalOptions::Check(std::string* error) const {
     *error = "curve_step: expected a number in (0, 1]";
     return false;
   }
+  if (!(min_confidence >= 0) || !std::isfinite(min_confidence)) {
+    *error = "min_confidence: expected a finite number >= 0";
+    return false;
+  }
   if (!(failure_error_deg >= 0 && failure_error_deg <= 180)) {
     *error = "failure_error_deg: expected a number in [0, 180]";
     return false;
@@ -230,10 +234,52 @@ double DirectionOcclusion(const json& m, OcclusionDefinition d) {
   return 0;
 }
 
-const io::NpyArray* Find(const SampleData& s, const std::string& field) {
-  auto it = s.arrays.find(field);
-  return it == s.arrays.end() ? nullptr : &it->second;
+}  // namespace
+
+std::string SampleTruthArrays(const json& meta, const std::map<std::string, io::NpyArray>& arrays,
+                              int width, int height, const std::string& tar, const std::string& key,
+                              PairTruthView* truth) {
+  const std::string where = tar + ":" + key;
+  truth->width = width;
+  truth->height = height;
+  try {
+    truth->patch_stride = meta.at("patch_options").at("stride").get<int>();
+  } catch (const json::exception&) {
+    throw InputError(where + ".json", "expected \"patch_options\": {\"stride\": ...}");
+  }
+  auto find = [&](const char* field) -> const io::NpyArray* {
+    auto it = arrays.find(field);
+    return it == arrays.end() ? nullptr : &it->second;
+  };
+  const std::vector<int64_t> image_shape{height, width};
+  for (const char* f : {"label01.npy", "label10.npy", "depth0.npy", "depth1.npy"}) {
+    const io::NpyArray* a = find(f);
+    if (a == nullptr) {
+      const std::string key = where.substr(where.find(':') + 1);
+      return key + " has no " + f + " member (build with sample.labels and sample.depth)";
+    }
+    if (a->shape != image_shape) throw InputError(where + "." + f, "expected [H, W]");
+  }
+  const io::NpyArray* matches = find("matches.npy");
+  const io::NpyArray* types = find("match_type.npy");
+  if (matches == nullptr || types == nullptr) {
+    return key + " has no matches.npy / match_type.npy member";
+  }
+  truth->label01 = find("label01.npy")->As<uint8_t>(where + ".label01.npy");
+  truth->label10 = find("label10.npy")->As<uint8_t>(where + ".label10.npy");
+  truth->depth0 = find("depth0.npy")->As<float>(where + ".depth0.npy");
+  truth->depth1 = find("depth1.npy")->As<float>(where + ".depth1.npy");
+  if (matches->shape.size() != 2 || matches->shape[1] != 2 || types->shape.size() != 1 ||
+      types->shape[0] != matches->shape[0]) {
+    throw InputError(where + ".matches.npy", "expected [M, 2] with match_type [M]");
+  }
+  truth->matches = matches->As<int32_t>(where + ".matches.npy");
+  truth->match_type = types->As<uint8_t>(where + ".match_type.npy");
+  truth->num_matches = matches->shape[0];
+  return "";
 }
+
+namespace {
 
 // Scores one sample for every set; fills info and geometry. Returns "" when labels and
 // depth were usable, else why per-type scores are not available for it.
@@ -275,47 +321,13 @@ std::string ProcessSample(const std::string& tar, const SampleData& s, const Spl
     throw InputError(where, std::string("unexpected sample metadata: ") + e.what());
   }
   // Per-type ground truth, when the sample has it.
-  std::string missing;
   PairTruthView truth;
-  truth.width = split.width;
-  truth.height = split.height;
   truth.K0 = geometry->K0;
   truth.K1 = geometry->K1;
   truth.cam1_from_cam0_R = geometry->R;
   truth.cam1_from_cam0_t = geometry->t;
-  try {
-    truth.patch_stride = j.at("patch_options").at("stride").get<int>();
-  } catch (const json::exception&) {
-    throw InputError(where, "expected \"patch_options\": {\"stride\": ...}");
-  }
-  const std::vector<int64_t> image_shape{split.height, split.width};
-  const char* const kImageFields[] = {"label01.npy", "label10.npy", "depth0.npy", "depth1.npy"};
-  for (const char* f : kImageFields) {
-    const io::NpyArray* a = Find(s, f);
-    if (a == nullptr) {
-      missing = s.key + " has no " + f + " member (build with sample.labels and sample.depth)";
-      break;
-    }
-    if (a->shape != image_shape) throw InputError(tar + ":" + s.key + "." + f, "expected [H, W]");
-  }
-  const io::NpyArray* matches = Find(s, "matches.npy");
-  const io::NpyArray* types = Find(s, "match_type.npy");
-  if (missing.empty() && (matches == nullptr || types == nullptr)) {
-    missing = s.key + " has no matches.npy / match_type.npy member";
-  }
-  if (missing.empty()) {
-    truth.label01 = Find(s, "label01.npy")->As<uint8_t>(tar + ":" + s.key + ".label01.npy");
-    truth.label10 = Find(s, "label10.npy")->As<uint8_t>(tar + ":" + s.key + ".label10.npy");
-    truth.depth0 = Find(s, "depth0.npy")->As<float>(tar + ":" + s.key + ".depth0.npy");
-    truth.depth1 = Find(s, "depth1.npy")->As<float>(tar + ":" + s.key + ".depth1.npy");
-    if (matches->shape.size() != 2 || matches->shape[1] != 2 || types->shape.size() != 1 ||
-        types->shape[0] != matches->shape[0]) {
-      throw InputError(tar + ":" + s.key + ".matches.npy", "expected [M, 2] with match_type [M]");
-    }
-    truth.matches = matches->As<int32_t>(tar + ":" + s.key + ".matches.npy");
-    truth.match_type = types->As<uint8_t>(tar + ":" + s.key + ".match_type.npy");
-    truth.num_matches = matches->shape[0];
-  }
+  const std::string missing =
+      SampleTruthArrays(j, s.arrays, split.width, split.height, tar, s.key, &truth);
   info->sets.resize(sets.size());
   for (size_t k = 0; k < sets.size(); ++k) {
     SetPairResult& r = info->sets[k];
@@ -357,6 +369,41 @@ std::string ProcessSample(const std::string& tar, const SampleData& s, const Spl
 }
 
 }  // namespace
+
+PairQuality ScoreSampleMatches(const std::string& tar, const std::string& key, int width,
+                               int height, const PairPrediction& prediction,
+                               const QualityOptions& options, std::vector<MatchVerdict>* verdicts) {
+  const shards::Sample sample = shards::ReadShardSample(tar, key);
+  std::map<std::string, io::NpyArray> arrays;
+  json meta;
+  for (const shards::SampleField& f : sample.fields) {
+    if (f.name == "json") {
+      try {
+        meta = json::parse(f.bytes);
+      } catch (const json::exception&) {
+        throw InputError(tar + ":" + key + ".json", "not valid JSON");
+      }
+    } else if (IsWantedField(f.name)) {
+      arrays[f.name] = io::ParseNpy(f.bytes, tar + ":" + key + "." + f.name);
+    }
+  }
+  const std::string where = tar + ":" + key + ".json";
+  PairTruthView truth;
+  try {
+    truth.K0 = Mat3(meta.at("K0"), where + ":K0");
+    truth.K1 = Mat3(meta.at("K1"), where + ":K1");
+    const json& T = meta.at("T_0to1");
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) truth.cam1_from_cam0_R(r, c) = T.at(r).at(c).get<double>();
+      truth.cam1_from_cam0_t(r) = T.at(r).at(3).get<double>();
+    }
+  } catch (const json::exception& e) {
+    throw InputError(where, std::string("unexpected sample metadata: ") + e.what());
+  }
+  const std::string missing = SampleTruthArrays(meta, arrays, width, height, tar, key, &truth);
+  if (!missing.empty()) throw InputError(tar, missing);
+  return ScoreMatches(truth, prediction.kpts0, prediction.kpts1, options, verdicts);
+}
 
 EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& sets,
                     const EvalOptions& options) {
@@ -655,7 +702,8 @@ std::string EvalJson(const EvalResult& r) {
                     {"overlap_bins", o.overlap_bins},
                     {"aggregate", AggregateName(o.aggregate)},
                     {"curve_step", o.curve_step},
-                    {"failure_error_deg", o.failure_error_deg}};
+                    {"failure_error_deg", o.failure_error_deg},
+                    {"min_confidence", o.min_confidence}};
   doc["match_quality"] = r.has_quality
                              ? json({{"available", true}, {"reason", nullptr}})
                              : json({{"available", false}, {"reason", r.quality_missing_reason}});

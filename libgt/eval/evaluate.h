@@ -18,6 +18,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
@@ -27,6 +28,7 @@
 #include "libgt/eval/pose.h"
 #include "libgt/eval/predictions.h"
 #include "libgt/geometry/aggregate.h"
+#include "libgt/io/npy.h"
 
 namespace gt::eval {
 
@@ -52,6 +54,9 @@ struct EvalOptions {
   Aggregate aggregate = Aggregate::kMean;  // both directions of a metric -> the pair's value
   double curve_step = 0.05;                // cumulative curve sampled at step, 2*step, ... (ratio)
   double failure_error_deg = 180;          // a failed pair's error inside means (medians use +inf)
+  // Matches under this confidence were dropped before scoring (FilterByConfidence, by the
+  // caller); recorded in eval.json so that its readers (the report) drop the same.
+  double min_confidence = 0;
   bool Check(std::string* error) const;
 };
 
@@ -94,6 +99,23 @@ struct EvalResult {
   bool has_quality = false;     // labels and depth in every sample
   std::string quality_missing_reason;
 };
+
+// The ground truth of one sample for ScoreMatches: `meta` is its json (patch_options.stride),
+// `arrays` its label01/label10/depth0/depth1/matches/match_type members at width x height
+// (referenced, not copied; K and pose are left to the caller). Returns "" when usable, else
+// why not ("<key> has no <member> member ..."). Throws InputError("<tar>:<key>.<member>")
+// on a wrong shape or dtype.
+std::string SampleTruthArrays(const nlohmann::json& meta,
+                              const std::map<std::string, io::NpyArray>& arrays, int width,
+                              int height, const std::string& tar, const std::string& key,
+                              PairTruthView* truth);
+
+// One prediction scored on sample `key` of shard `tar` (split resolution width x height),
+// with a verdict per match (the report's gallery of worst pairs). Throws InputError when
+// the sample lacks the ground truth (labels, depth, matches) or is malformed.
+PairQuality ScoreSampleMatches(const std::string& tar, const std::string& key, int width,
+                               int height, const PairPrediction& prediction,
+                               const QualityOptions& options, std::vector<MatchVerdict>* verdicts);
 
 // Scores every prediction set on the split. Throws InputError on a broken shard or sample.
 EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& sets,

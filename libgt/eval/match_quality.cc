@@ -42,8 +42,10 @@ bool Warp(float px, float py, double depth, const Eigen::Matrix3d& Ka, const Eig
 }  // namespace
 
 PairQuality ScoreMatches(const PairTruthView& truth, const std::vector<float>& kpts0,
-                         const std::vector<float>& kpts1, const QualityOptions& options) {
+                         const std::vector<float>& kpts1, const QualityOptions& options,
+                         std::vector<MatchVerdict>* verdicts) {
   GT_ASSERT(kpts0.size() == kpts1.size() && kpts0.size() % 2 == 0);
+  if (verdicts != nullptr) verdicts->assign(kpts0.size() / 2, MatchVerdict());
   const int w = truth.width, h = truth.height, s = truth.patch_stride;
   const int cols = w / s, rows = h / s;
   const Eigen::Matrix3d R10 = truth.cam1_from_cam0_R.transpose();
@@ -98,6 +100,7 @@ PairQuality ScoreMatches(const PairTruthView& truth, const std::vector<float>& k
     }
     ++q.types[cls].predicted;
     if (err2 <= px2) ++q.types[cls].correct;
+    if (verdicts != nullptr) (*verdicts)[i] = {static_cast<uint8_t>(cls), err2 <= px2};
     // Recall: every hypothesis the match satisfies credits its source cell, whatever class
     // the match was given (a match near an occlusion edge can satisfy both).
     if (from0 && err01 <= px2 && cell0 >= 0)

@@ -68,8 +68,17 @@ struct PairQuality {
   int64_t unscored = 0;
 };
 
+// The verdict on one predicted match: its class and whether it lies within px of the
+// target of its class (always false for kClassUnscored).
+struct MatchVerdict {
+  uint8_t match_class = kClassUnscored;  // MatchClass
+  bool correct = false;
+};
+
 // kpts0, kpts1: [N, 2] pixels at the working resolution (inside the pixel area).
+// verdicts (optional): resized to N, one verdict per predicted match in input order.
 PairQuality ScoreMatches(const PairTruthView& truth, const std::vector<float>& kpts0,
-                         const std::vector<float>& kpts1, const QualityOptions& options);
+                         const std::vector<float>& kpts1, const QualityOptions& options,
+                         std::vector<MatchVerdict>* verdicts = nullptr);
 
 }  // namespace gt::eval

@@ -226,6 +226,73 @@ cv::Mat RenderMatches(const cv::Mat& image0, const cv::Mat& image1, const gt::Pa
   return StackVertical({canvas, LegendStrip(entries, canvas.cols, 3, shown)});
 }
 
+bool PredictionPictureOptions::Check(std::string* error) const {
+  if (max_lines <= 0) {
+    *error = "max_lines: expected > 0";
+    return false;
+  }
+  if (!(alpha >= 0.0 && alpha <= 1.0)) {
+    *error = "alpha: expected a number in [0, 1]";
+    return false;
+  }
+  return true;
+}
+
+cv::Mat RenderPredictedMatches(const cv::Mat& image0, const LabelMap& labels01,
+                               const cv::Mat& image1, const LabelMap& labels10,
+                               const std::vector<float>& kpts0, const std::vector<float>& kpts1,
+                               const std::vector<PredictionVerdict>& verdicts,
+                               const PredictionPictureOptions& options) {
+  std::string error;
+  if (!options.Check(&error)) throw InputError("prediction picture options", error);
+  const size_t n = verdicts.size();
+  if (kpts0.size() != 2 * n || kpts1.size() != 2 * n) {
+    throw InputError("predictions", "expected kpts0 [N, 2], kpts1 [N, 2] and N verdicts");
+  }
+  std::vector<uint8_t> groups(n);
+  std::array<int64_t, 3> counts{};
+  for (size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(kpts0[2 * k]) || !std::isfinite(kpts0[2 * k + 1]) ||
+        !std::isfinite(kpts1[2 * k]) || !std::isfinite(kpts1[2 * k + 1])) {
+      throw InputError("predictions", "match " + std::to_string(k) + ": expected finite x, y");
+    }
+    groups[k] = static_cast<uint8_t>(verdicts[k]);
+    if (groups[k] > 2) throw InputError("predictions", "expected verdicts 0, 1, 2");
+    ++counts[groups[k]];
+  }
+  const cv::Mat over0 = OverlayLabels(image0, labels01, options.alpha);
+  const cv::Mat over1 = OverlayLabels(image1, labels10, options.alpha);
+  const int x1 = over0.cols + kPanelGap;
+  cv::Mat canvas = SideBySide(over0, over1);
+  const std::vector<size_t> subset = SelectMatchSubset(groups, options.max_lines, options.seed);
+  auto to_point = [](double x, double y, int dx) {
+    return cv::Point(static_cast<int>(std::lround(x)) + dx, static_cast<int>(std::lround(y)));
+  };
+  const std::array<Rgb, 3> colors = {kPredictionCorrectColor, kPredictionWrongColor,
+                                     kPredictionUnscoredColor};
+  // Wrong matches last, drawn on top.
+  for (const uint8_t g : {uint8_t{2}, uint8_t{0}, uint8_t{1}}) {
+    for (size_t k : subset) {
+      if (groups[k] != g) continue;
+      const cv::Point p0 = to_point(kpts0[2 * k], kpts0[2 * k + 1], 0);
+      const cv::Point p1 = to_point(kpts1[2 * k], kpts1[2 * k + 1], x1);
+      const cv::Scalar color = colors[g].Scalar();
+      cv::line(canvas, p0, p1, color, 1, cv::LINE_8);
+      cv::circle(canvas, p0, 2, color, cv::FILLED, cv::LINE_8);
+      cv::circle(canvas, p1, 2, color, cv::FILLED, cv::LINE_8);
+    }
+  }
+  const std::vector<LegendEntry> entries = {
+      {kPredictionCorrectColor, "correct " + std::to_string(counts[0])},
+      {kPredictionWrongColor, "wrong " + std::to_string(counts[1])},
+      {kPredictionUnscoredColor, "unscored (no target) " + std::to_string(counts[2])},
+  };
+  std::string shown = "lines: " + std::to_string(subset.size()) + " of " + std::to_string(n) +
+                      " (equal share per verdict)";
+  if (!options.note.empty()) shown += "; " + options.note;
+  return StackVertical({canvas, LegendStrip(entries, canvas.cols, 3, shown)});
+}
+
 bool LabelPictureOptions::Check(std::string* error) const {
   if (!(alpha >= 0.0 && alpha <= 1.0)) {
     *error = "alpha: expected a number in [0, 1]";

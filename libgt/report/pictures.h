@@ -12,6 +12,13 @@
 //    image 0 to the anchor of cell j in image 1 (match_xy is always the exact warped
 //    anchor, libgt/geometry/patches.h). When there are more than max_lines matches a
 //    seeded subset is drawn (SelectMatchSubset).
+//  - RenderPredictedMatches: a matcher's predicted matches over the ground truth (the eval
+//    section of the split report): the label overlays of both directions (as RenderLabels,
+//    weight alpha) side by side, one line per drawn match from its keypoint in image 0 to
+//    its keypoint in image 1, coloured by its verdict (libgt/eval/match_quality.h):
+//    correct cyan, wrong magenta, unscored (no ground-truth target) white. When there are
+//    more than max_lines matches a seeded subset is drawn, an equal share per verdict
+//    (SelectMatchSubset over the verdicts).
 //  - RenderLabels: the pixel labels of both directions (label01 on image 0, label10 on
 //    image 1; codes NO_DEPTH 0 … UNKNOWN 5, GROUND_TRUTH.md §2) blended over the images
 //    with weight `alpha`, and a legend with each label's share of the image.
@@ -103,6 +110,29 @@ struct LabelMap {
   int height = 0;
   std::vector<uint8_t> codes;
 };
+
+// Predicted matches by verdict.
+inline constexpr Rgb kPredictionCorrectColor{0, 235, 255};     // cyan
+inline constexpr Rgb kPredictionWrongColor{255, 0, 220};       // magenta
+inline constexpr Rgb kPredictionUnscoredColor{255, 255, 255};  // white
+enum class PredictionVerdict : uint8_t { kCorrect = 0, kWrong = 1, kUnscored = 2 };
+
+struct PredictionPictureOptions {
+  int max_lines = 150;  // lines drawn at most (> 0)
+  uint64_t seed = 0;    // subset seed
+  double alpha = 0.35;  // label overlay weight, [0, 1]
+  std::string note;     // an extra line under the legend (e.g. per-class counts)
+  bool Check(std::string* error) const;
+};
+
+// image0/image1: BGR CV_8UC3 of the label maps' sizes; kpts0/kpts1: [N, 2] pixels (x, y);
+// verdicts: [N]. Throws InputError("predictions", ...) when the sizes disagree or a point
+// is not finite. Output: [max(h0, h1) + legend strip, w0 + kPanelGap + w1].
+cv::Mat RenderPredictedMatches(const cv::Mat& image0, const LabelMap& labels01,
+                               const cv::Mat& image1, const LabelMap& labels10,
+                               const std::vector<float>& kpts0, const std::vector<float>& kpts1,
+                               const std::vector<PredictionVerdict>& verdicts,
+                               const PredictionPictureOptions& options);
 
 struct LabelPictureOptions {
   double alpha = 0.55;  // weight of the label colour over the image, in [0, 1]

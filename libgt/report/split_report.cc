@@ -1,7 +1,5 @@
 #include "libgt/report/split_report.h"
 
-#include <sys/wait.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -17,6 +15,7 @@
 #include "libgt/io/codec.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/scan.h"
+#include "libgt/report/eval_report.h"
 
 namespace gt::report {
 namespace {
@@ -63,60 +62,6 @@ std::string NeedFrameId(const json& j, const char* key, const std::string& where
   return NeedString(j.at(key), "id", where + ": " + key);
 }
 
-std::string ShellQuote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) {
-    if (c == '\'') {
-      out += "'\\''";
-    } else {
-      out += c;
-    }
-  }
-  return out + "'";
-}
-
-// A string inside gnuplot double quotes (noenhanced text: only quotes and backslashes).
-std::string GnuplotString(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\'';
-    } else if (static_cast<unsigned char>(c) >= 32) {
-      out += c;
-    }
-  }
-  return "\"" + out + "\"";
-}
-
-std::string Num(double v, int digits = 4) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.*g", digits, v);
-  return buf;
-}
-
-std::string HtmlEscape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 std::string JsonScalar(const json& v) {
   if (v.is_string()) return v.get<std::string>();
   if (v.is_number_float()) return Num(v.get<double>(), 6);
@@ -139,11 +84,6 @@ Stats Describe(std::vector<double> v) {
   return s;
 }
 
-std::string ImgTag(const NamedImage& im, const std::string& alt) {
-  return "<img alt=\"" + HtmlEscape(alt) + "\" src=\"data:" + im.mime + ";base64," +
-         Base64(im.bytes) + "\">";
-}
-
 }  // namespace
 
 bool SplitReportOptions::Check(std::string* error) const {
@@ -157,6 +97,10 @@ bool SplitReportOptions::Check(std::string* error) const {
   }
   if (!(gallery_scale > 0 && gallery_scale <= 1)) {
     *error = "gallery_scale: expected (0, 1]";
+    return false;
+  }
+  if (eval_gallery_pairs < 0 || eval_gallery_pairs > 50) {
+    *error = "eval_gallery_pairs: expected 0..50";
     return false;
   }
   if (gnuplot.empty()) {
@@ -418,37 +362,9 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
      << "plot 'scenes.dat' using 1:2:xtic(3) with boxes lc rgb '#5a9e4b' notitle\n";
   write("plots.gp", gp.str());
 
-  const std::string err_path = (fs::path(scratch_dir) / "gnuplot.err").string();
-  const std::string cmd = "cd " + ShellQuote(scratch_dir) + " && " + ShellQuote(options.gnuplot) +
-                          " plots.gp > /dev/null 2> gnuplot.err";
-  const int rc = std::system(cmd.c_str());
-  if (rc != 0) {
-    std::string first;
-    if (gt::io::FileExists(err_path)) {
-      const auto lines = gt::io::ReadLines(err_path);
-      for (const auto& l : lines) {
-        if (!l.empty() && l.rfind("Warning", 0) != 0 && l.find('^') == std::string::npos &&
-            l.rfind(' ', 0) != 0) {
-          first = l;  // the last error line wins ("plots.gp" line N: ...)
-        }
-      }
-    }
-    if (WIFEXITED(rc) && WEXITSTATUS(rc) == 127) {
-      throw InputError(
-          "gnuplot", "'" + options.gnuplot + "' not found: install gnuplot-nox (scripts/setup.sh)");
-    }
-    throw InputError("gnuplot", "failed on " + (fs::path(scratch_dir) / "plots.gp").string() +
-                                    (first.empty() ? "" : ": " + first));
-  }
-  std::vector<NamedImage> plots;
-  for (const char* name : {"overlap_hist.png", "occlusion_hist.png", "occlusion_cumulative.png",
-                           "overlap_vs_occlusion.png", "pairs_per_scene.png"}) {
-    const std::string path = (fs::path(scratch_dir) / name).string();
-    if (!gt::io::FileExists(path))
-      throw InputError("gnuplot", std::string("did not write ") + name);
-    plots.push_back({name, "image/png", gt::io::ReadFileBytes(path)});
-  }
-  return plots;
+  return RunGnuplot(options.gnuplot, scratch_dir, "plots.gp",
+                    {"overlap_hist.png", "occlusion_hist.png", "occlusion_cumulative.png",
+                     "overlap_vs_occlusion.png", "pairs_per_scene.png"});
 }
 
 GalleryOrder ParseGalleryOrder(const std::string& text, const std::string& field) {
@@ -485,39 +401,10 @@ std::vector<size_t> PickGalleryPairs(const SplitData& split, const SplitReportOp
   return out;
 }
 
-std::string Base64(std::string_view bytes) {
-  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
-  size_t i = 0;
-  for (; i + 2 < bytes.size(); i += 3) {
-    const uint32_t v = (static_cast<uint8_t>(bytes[i]) << 16) |
-                       (static_cast<uint8_t>(bytes[i + 1]) << 8) |
-                       static_cast<uint8_t>(bytes[i + 2]);
-    out += kAlphabet[(v >> 18) & 63];
-    out += kAlphabet[(v >> 12) & 63];
-    out += kAlphabet[(v >> 6) & 63];
-    out += kAlphabet[v & 63];
-  }
-  if (i + 1 == bytes.size()) {
-    const uint32_t v = static_cast<uint8_t>(bytes[i]) << 16;
-    out += kAlphabet[(v >> 18) & 63];
-    out += kAlphabet[(v >> 12) & 63];
-    out += "==";
-  } else if (i + 2 == bytes.size()) {
-    const uint32_t v =
-        (static_cast<uint8_t>(bytes[i]) << 16) | (static_cast<uint8_t>(bytes[i + 1]) << 8);
-    out += kAlphabet[(v >> 18) & 63];
-    out += kAlphabet[(v >> 12) & 63];
-    out += kAlphabet[(v >> 6) & 63];
-    out += '=';
-  }
-  return out;
-}
-
 std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& options,
                              const std::vector<NamedImage>& plots,
-                             const std::vector<GalleryItem>& gallery) {
+                             const std::vector<GalleryItem>& gallery,
+                             const std::string& eval_section) {
   const std::string name = split.summary.is_object() && split.summary.contains("split") &&
                                    split.summary["split"].is_string()
                                ? split.summary["split"].get<std::string>()
@@ -638,6 +525,7 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
       << "</figcaption></figure>\n";
   }
   h << "</div>\n";
+  h << eval_section;
 
   h << "<h2>Gallery</h2>\n<p class=\"muted\">" << gallery.size() << " pairs: ";
   if (options.gallery_order == GalleryOrder::kRandom) {
@@ -672,17 +560,24 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
 std::vector<std::string> WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
                                           const SplitReportOptions& options) {
   const SplitData split = LoadSplit(split_dir, options);
+  EvalReportData eval;
+  if (!options.eval_paths.empty()) eval = LoadEvalReport(options.eval_paths, split);
   fs::create_directories(out_dir);
   const std::string scratch = (fs::path(out_dir) / ".plots.tmp").string();
   fs::remove_all(scratch);
-  std::vector<NamedImage> plots;
+  std::vector<NamedImage> plots, eval_plots;
   try {
     plots = MakeSplitPlots(split, options, scratch);
+    if (!eval.sets.empty()) eval_plots = MakeEvalPlots(eval, options, scratch);
   } catch (...) {
     fs::remove_all(scratch);
     throw;
   }
   fs::remove_all(scratch);
+  std::string eval_section;
+  if (!eval.sets.empty()) {
+    eval_section = RenderEvalSection(eval, eval_plots, MakeEvalGalleries(eval, split, options));
+  }
 
   std::vector<GalleryItem> gallery;
   for (size_t i : PickGalleryPairs(split, options)) {
@@ -714,13 +609,16 @@ std::vector<std::string> WriteSplitReport(const std::string& split_dir, const st
   }
 
   std::vector<std::string> written;
-  for (const auto& p : plots) {
-    const std::string path = (fs::path(out_dir) / p.name).string();
-    gt::io::WriteFileAtomic(path, p.bytes);
-    written.push_back(path);
+  for (const std::vector<NamedImage>* group : {&plots, &eval_plots}) {
+    for (const auto& p : *group) {
+      const std::string path = (fs::path(out_dir) / p.name).string();
+      gt::io::WriteFileAtomic(path, p.bytes);
+      written.push_back(path);
+    }
   }
   const std::string html_path = (fs::path(out_dir) / "report.html").string();
-  gt::io::WriteFileAtomic(html_path, RenderHtmlReport(split, options, plots, gallery));
+  gt::io::WriteFileAtomic(html_path,
+                          RenderHtmlReport(split, options, plots, gallery, eval_section));
   written.push_back(html_path);
   return written;
 }

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "libgt/geometry/aggregate.h"
+#include "libgt/report/page.h"
 #include "libgt/report/pair_source.h"
 
 namespace gt::report {
@@ -77,18 +78,16 @@ struct SplitReportOptions {
   std::string gnuplot = "gnuplot";  // executable (PATH lookup)
   int plot_width_px = 800, plot_height_px = 480;
   PairPictureOptions pictures;
+  // The evaluation section (eval_report.h): eval.json files of `occgt eval` on this split,
+  // and the worst pairs shown per prediction set (0..50).
+  std::vector<std::string> eval_paths;
+  int eval_gallery_pairs = 4;
   bool Check(std::string* error) const;
 };
 
 // Reads DIR/pairs.jsonl (required) and DIR/summary.json (optional). Throws InputError
 // naming "<file>:<line>" and the field on malformed content.
 SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options);
-
-struct NamedImage {
-  std::string name;   // file name ("overlap_hist.png") or caption
-  std::string mime;   // "image/png" | "image/jpeg"
-  std::string bytes;  // encoded image
-};
 
 // The x range of a histogram that fits the data: [min, max] of the finite values widened
 // to multiples of 0.05 inside [0, 1], at least 0.05 wide; [0, 1] when there is no value.
@@ -108,14 +107,15 @@ struct GalleryItem {
   std::vector<NamedImage> images;  // matches, labels, occupancy (when present)
 };
 
-// RFC 4648 base64 (with padding).
-std::string Base64(std::string_view bytes);
-// The HTML page (deterministic for the same inputs).
+// The HTML page (deterministic for the same inputs); eval_section (RenderEvalSection) is
+// placed after the plots when not empty.
 std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& options,
                              const std::vector<NamedImage>& plots,
-                             const std::vector<GalleryItem>& gallery);
+                             const std::vector<GalleryItem>& gallery,
+                             const std::string& eval_section = "");
 
-// Everything: plots as PNG files, report.html, into out_dir (atomic writes). Returns the
+// Everything: plots as PNG files (with options.eval_paths, the eval plots too), report.html,
+// into out_dir (atomic writes). The eval files are checked before any work. Returns the
 // paths written.
 std::vector<std::string> WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
                                           const SplitReportOptions& options);

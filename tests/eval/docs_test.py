@@ -1,5 +1,6 @@
 """docs/EVAL.md's examples run as written: the loop (build the demo, the SIFT baseline,
-occgt eval with two estimator settings; eval.json valid against its schema) and the
+occgt eval with two estimator settings; eval.json valid against its schema; the split
+report with its evaluation section) and the
 Python blocks that write predictions by sample key and by LoFTR pair name (read back by
 occgt eval, whose only complaint is that the made-up pair is not in the demo split)."""
 import json
@@ -34,6 +35,10 @@ def main():
         assert r.returncode == 0, (line, r.returncode, r.stderr)
         if argv[0] == common.BINARY and argv[1] == "eval":
             assert "AUC" in r.stdout and "sift" in r.stdout, r.stdout
+    with open(os.path.join(work, "out", "report", "report.html"), encoding="utf-8") as f:
+        page = f.read()
+    assert '<h2 id="eval">Evaluation</h2>' in page and 'data-set="sift"' in page
+    assert os.path.exists(os.path.join(work, "out", "report", "eval_cumulative.png"))
     import jsonschema
     with open(os.path.join(work, "out", "eval.json")) as f:
         doc = json.load(f)

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -118,19 +120,14 @@ TEST(SymmetricEpipolarDistances, ZeroOnExactMatchesKnownOffEpipolar) {
   EXPECT_NEAR(d[0], 2 * std::pow(4.0 / 400.0, 2), 1e-12);
 }
 
-TEST(ScoreMatches, FrontoParallelPlane) {
-  // Both cameras look at a plane z = 2 m; camera 1 moved by 0.2 m along x: a point moves by
-  // -f * 0.2 / 2 = -20 px in x. Right half of image 0: label VISIBLE; left: OCCLUDED.
-  const int w = 64, h = 48;
+// Both cameras look at the plane z = 2 m (depth 2 everywhere, 64 x 48, f = 200); camera 1
+// moved by 0.2 m along x: a point moves by -f * 0.2 / 2 = -20 px in x.
+PairTruthView PlaneTruth(const std::vector<uint8_t>& l01, const std::vector<uint8_t>& l10,
+                         const std::vector<float>& depth) {
   PairTruthView t;
-  t.width = w;
-  t.height = h;
+  t.width = 64;
+  t.height = 48;
   t.patch_stride = 8;
-  std::vector<uint8_t> l01(w * h), l10(w * h, 2);
-  for (int v = 0; v < h; ++v) {
-    for (int u = 0; u < w; ++u) l01[v * w + u] = u >= 32 ? 2 : 3;
-  }
-  std::vector<float> depth(w * h, 2.0f);
   t.label01 = l01.data();
   t.label10 = l10.data();
   t.depth0 = depth.data();
@@ -139,6 +136,19 @@ TEST(ScoreMatches, FrontoParallelPlane) {
   t.K1 = t.K0;
   t.cam1_from_cam0_R.setIdentity();
   t.cam1_from_cam0_t = Eigen::Vector3d(-0.2, 0, 0);
+  return t;
+}
+
+TEST(ScoreMatches, FrontoParallelPlane) {
+  // Both cameras look at a plane z = 2 m; camera 1 moved by 0.2 m along x: a point moves by
+  // -f * 0.2 / 2 = -20 px in x. Right half of image 0: label VISIBLE; left: OCCLUDED.
+  const int w = 64, h = 48;
+  std::vector<uint8_t> l01(w * h), l10(w * h, 2);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) l01[v * w + u] = u >= 32 ? 2 : 3;
+  }
+  const std::vector<float> depth(w * h, 2.0f);
+  PairTruthView t = PlaneTruth(l01, l10, depth);
   // Ground truth: one vv match from cell (5, 2) and one vo from cell (1, 2).
   const std::vector<int32_t> gt_matches{2 * 8 + 5, 2 * 8 + 3, 2 * 8 + 1, 0};
   const std::vector<uint8_t> gt_types{0, 1};
@@ -148,7 +158,16 @@ TEST(ScoreMatches, FrontoParallelPlane) {
   // vv exact; vv 5 px off (correct at 8, wrong at 4); vo exact; vo 30 px off.
   const std::vector<float> k0{44, 20, 50, 30, 12, 20, 10, 10};
   const std::vector<float> k1{24, 20, 30, 35, 0, 20, 20, 10};
-  PairQuality q = ScoreMatches(t, k0, k1, QualityOptions{});
+  std::vector<MatchVerdict> verdicts;
+  PairQuality q = ScoreMatches(t, k0, k1, QualityOptions{}, &verdicts);
+  // Match by match: the class of its source label and whether it is within 8 px.
+  ASSERT_EQ(verdicts.size(), 4u);
+  const uint8_t expected_class[] = {kClassVV, kClassVV, kClassVO, kClassVO};
+  const bool expected_correct[] = {true, true, true, false};
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(verdicts[i].match_class, expected_class[i]) << i;
+    EXPECT_EQ(verdicts[i].correct, expected_correct[i]) << i;
+  }
   EXPECT_EQ(q.types[kClassVV].predicted, 2);
   EXPECT_EQ(q.types[kClassVV].correct, 2);
   EXPECT_EQ(q.types[kClassVO].predicted, 2);
@@ -158,8 +177,10 @@ TEST(ScoreMatches, FrontoParallelPlane) {
   EXPECT_EQ(q.types[kClassVO].recalled, 1);  // (12, 20) is in cell (1, 2)
   QualityOptions tight;
   tight.px = 4;
-  q = ScoreMatches(t, k0, k1, tight);
+  q = ScoreMatches(t, k0, k1, tight, &verdicts);
   EXPECT_EQ(q.types[kClassVV].correct, 1);
+  EXPECT_TRUE(verdicts[0].correct);
+  EXPECT_FALSE(verdicts[1].correct);  // 5 px off
   EXPECT_EQ(q.types[kClassVV].recalled, 1);
   // Without the exact vo match its cell is not recalled.
   q = ScoreMatches(t, {10, 10}, {20, 10}, QualityOptions{});
@@ -167,9 +188,56 @@ TEST(ScoreMatches, FrontoParallelPlane) {
   EXPECT_EQ(q.types[kClassVO].recalled, 0);
   // A source pixel without depth: unscored, counted by its label.
   l01[20 * w + 44] = 0;
-  q = ScoreMatches(t, {44, 20}, {24, 20}, QualityOptions{});
+  q = ScoreMatches(t, {44, 20}, {24, 20}, QualityOptions{}, &verdicts);
   EXPECT_EQ(q.unscored, 1);
   EXPECT_EQ(q.unscored_by_label[0], 1);
+  ASSERT_EQ(verdicts.size(), 1u);
+  EXPECT_EQ(verdicts[0].match_class, kClassUnscored);
+  EXPECT_FALSE(verdicts[0].correct);
+}
+
+TEST(ScoreMatches, VerdictsAddUpToTheCounts) {
+  // Random matches over a plane with a random label map: the verdicts, counted by class
+  // and correctness, are the pair's counts.
+  const int w = 64, h = 48;
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> label(0, 5);
+  std::uniform_real_distribution<float> ux(-0.5f, w - 0.51f), uy(-0.5f, h - 0.51f);
+  std::vector<uint8_t> l01(w * h), l10(w * h);
+  for (auto& l : l01) l = static_cast<uint8_t>(label(rng));
+  for (auto& l : l10) l = static_cast<uint8_t>(label(rng));
+  const std::vector<float> depth(w * h, 2.0f);
+  const PairTruthView t = PlaneTruth(l01, l10, depth);
+  std::vector<float> k0, k1;
+  for (int i = 0; i < 3000; ++i) {
+    const float x = ux(rng), y = uy(rng);
+    k0.insert(k0.end(), {x, y});
+    // Half near the true target (20 px left), half anywhere.
+    if (i % 2 == 0) {
+      k1.insert(k1.end(), {std::clamp(x - 20.0f + (ux(rng) - 32) / 4, -0.5f, w - 0.51f), y});
+    } else {
+      k1.insert(k1.end(), {ux(rng), uy(rng)});
+    }
+  }
+  std::vector<MatchVerdict> verdicts;
+  const PairQuality q = ScoreMatches(t, k0, k1, QualityOptions{}, &verdicts);
+  ASSERT_EQ(verdicts.size(), 3000u);
+  std::array<int64_t, 4> predicted{}, correct{};
+  for (const MatchVerdict& v : verdicts) {
+    ++predicted[v.match_class];
+    correct[v.match_class] += v.correct ? 1 : 0;
+  }
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(predicted[c], q.types[c].predicted) << c;
+    EXPECT_EQ(correct[c], q.types[c].correct) << c;
+    EXPECT_GT(q.types[c].predicted, 0) << c;
+    EXPECT_GT(q.types[c].correct, 0) << c;
+  }
+  EXPECT_EQ(predicted[kClassUnscored], q.unscored);
+  EXPECT_EQ(correct[kClassUnscored], 0);
+  // The same counts without asking for verdicts.
+  const PairQuality again = ScoreMatches(t, k0, k1, QualityOptions{});
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(again.types[c].correct, q.types[c].correct);
 }
 
 }  // namespace

@@ -338,5 +338,48 @@ TEST(PrepareImage, ResizesConvertsAndFillsPlaceholder) {
   EXPECT_EQ(At(placeholder, 0, 0), cv::Vec3b(128, 128, 128));
 }
 
+TEST(RenderPredictedMatches, VerdictColoursAlongTheLinesOverTheLabels) {
+  const int w = 64, h = 48;
+  const cv::Mat img0 = Checker(w, h), img1 = Checker(w, h);
+  LabelMap l01{w, h, std::vector<uint8_t>(w * h, 2)}, l10{w, h, std::vector<uint8_t>(w * h, 3)};
+  // Correct: (4, 10) -> (20, 10); wrong: (4, 30) -> (50, 30); unscored: (4, 44) -> (10, 44).
+  const std::vector<float> k0{4, 10, 4, 30, 4, 44}, k1{20, 10, 50, 30, 10, 44};
+  const std::vector<PredictionVerdict> v{PredictionVerdict::kCorrect, PredictionVerdict::kWrong,
+                                         PredictionVerdict::kUnscored};
+  PredictionPictureOptions o;
+  o.alpha = 1.0;  // pure label colours under the lines
+  const cv::Mat pic = RenderPredictedMatches(img0, l01, img1, l10, k0, k1, v, o);
+  ASSERT_EQ(pic.cols, 2 * w + kPanelGap);
+  ASSERT_GT(pic.rows, h);  // legend strip below
+  const int x1 = w + kPanelGap;
+  for (int x = 4; x <= x1 + 20; ++x) EXPECT_EQ(At(pic, x, 10), kPredictionCorrectColor.Bgr()) << x;
+  for (int x = 4; x <= x1 + 50; ++x) EXPECT_EQ(At(pic, x, 30), kPredictionWrongColor.Bgr()) << x;
+  for (int x = 8; x <= x1 + 8; ++x) {
+    if (x >= w && x < x1) continue;  // the white gap
+    EXPECT_EQ(At(pic, x, 44), kPredictionUnscoredColor.Bgr()) << x;
+  }
+  // Away from the lines: the labels (VISIBLE in image 0, OCCLUDED in image 1).
+  EXPECT_EQ(At(pic, 40, 20), kLabelColors[2].Bgr());
+  EXPECT_EQ(At(pic, x1 + 40, 20), kLabelColors[3].Bgr());
+
+  // Many matches: at most max_lines drawn, deterministic; bad input is an InputError.
+  std::vector<float> m0, m1;
+  std::vector<PredictionVerdict> mv;
+  for (int i = 0; i < 500; ++i) {
+    m0.insert(m0.end(), {static_cast<float>(i % w), static_cast<float>(i % h)});
+    m1.insert(m1.end(), {static_cast<float>((i * 7) % w), static_cast<float>((i * 3) % h)});
+    mv.push_back(static_cast<PredictionVerdict>(i % 3));
+  }
+  o.max_lines = 20;
+  const cv::Mat a = RenderPredictedMatches(img0, l01, img1, l10, m0, m1, mv, o);
+  const cv::Mat b = RenderPredictedMatches(img0, l01, img1, l10, m0, m1, mv, o);
+  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
+  EXPECT_THROW(RenderPredictedMatches(img0, l01, img1, l10, {1, 2}, {}, {v[0]}, o), InputError);
+  EXPECT_THROW(RenderPredictedMatches(img0, l01, img1, l10, {NAN, 2}, {1, 2}, {v[0]}, o),
+               InputError);
+  o.max_lines = 0;
+  EXPECT_THROW(RenderPredictedMatches(img0, l01, img1, l10, k0, k1, v, o), InputError);
+}
+
 }  // namespace
 }  // namespace gt::report

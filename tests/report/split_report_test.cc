@@ -1,11 +1,14 @@
 // The split report's choices that the pictures do not show directly: the histogram range
-// fitted to the data, the gallery's order and the warning sentences.
+// fitted to the data, the gallery's order, the eval section's worst pairs and the warning
+// sentences.
 #include "libgt/report/split_report.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
+
+#include "libgt/report/eval_report.h"
 
 namespace gt::report {
 namespace {
@@ -99,6 +102,17 @@ TEST(SplitWarnings, SaysWhatMustBeKnown) {
   ASSERT_EQ(w.size(), 2u);
   EXPECT_NE(w[0].find("unregistered"), std::string::npos);
   EXPECT_EQ(w[1].rfind("4 frames were skipped", 0), 0u) << w[1];
+}
+
+TEST(PickWorstPairs, FailuresFirstThenLargestErrorThenLowestEpipolarPrecision) {
+  EvalSetView v;
+  const double inf = INFINITY;
+  v.error_deg = {3.0, inf, 10.0, 10.0, inf, 50.0};
+  v.epipolar = {0.9, 0.5, 0.8, 0.2, 0.1, 0.7};
+  v.predicted = {true, true, true, true, false, true};  // pair 4 has no prediction
+  EXPECT_EQ(PickWorstPairs(v, 10), (std::vector<size_t>{1, 5, 3, 2, 0}));
+  EXPECT_EQ(PickWorstPairs(v, 2), (std::vector<size_t>{1, 5}));
+  EXPECT_TRUE(PickWorstPairs(v, 0).empty());
 }
 
 }  // namespace

@@ -1,0 +1,499 @@
+#include "libgt/report/eval_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <opencv2/imgproc.hpp>
+#include <set>
+#include <sstream>
+
+#include "libgt/core/error.h"
+#include "libgt/eval/evaluate.h"
+#include "libgt/eval/predictions.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/codec.h"
+#include "libgt/io/file_read.h"
+#include "libgt/report/pair_source.h"
+
+namespace gt::report {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kMaxGalleryWidth = 1300;
+
+std::vector<double> Doubles(const json& j) {
+  std::vector<double> out;
+  for (const json& x : j) out.push_back(x.get<double>());
+  return out;
+}
+
+// "12.3" for a number, "-" for null.
+std::string Cell(const json& v, int decimals = 1) {
+  if (!v.is_number()) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v.get<double>());
+  return buf;
+}
+
+std::string BinLabel(double lo, double hi, bool last) {
+  return "[" + Num(lo, 3) + ", " + Num(hi, 3) + (last ? "]" : ")");
+}
+
+}  // namespace
+
+EvalReportData LoadEvalReport(const std::vector<std::string>& eval_paths, const SplitData& split) {
+  EvalReportData data;
+  std::vector<std::string> split_keys;
+  for (const SplitPair& p : split.pairs) split_keys.push_back(p.key);
+  std::map<std::string, int> name_count;
+  std::vector<EvalSetView> sets;
+  for (size_t f = 0; f < eval_paths.size(); ++f) {
+    const std::string& path = eval_paths[f];
+    if (!gt::io::FileExists(path)) throw InputError(path, "missing: expected an eval.json");
+    json doc;
+    try {
+      doc = json::parse(gt::io::ReadFileBytes(path));
+    } catch (const json::exception&) {
+      throw InputError(path, "not valid JSON: expected an eval.json of `occgt eval`");
+    }
+    std::string field = "kind";
+    try {
+      if (!doc.is_object() || doc.value("kind", "") != "occgt-eval" ||
+          doc.value("version", 0) != 1) {
+        throw InputError(path,
+                         "kind/version: expected an eval.json of `occgt eval` (\"kind\": "
+                         "\"occgt-eval\", \"version\": 1)");
+      }
+      field = "pairs";
+      const json& pairs = doc.at("pairs");
+      std::vector<std::string> keys;
+      for (const json& p : pairs) keys.push_back(p.at("key").get<std::string>());
+      if (keys != split_keys) {
+        throw InputError(path, "pairs: evaluated split '" + doc.at("split").value("dir", "") +
+                                   "' (" + std::to_string(keys.size()) + " pairs), not " +
+                                   split.dir + " (" + std::to_string(split_keys.size()) +
+                                   " pairs, pairs.jsonl order)");
+      }
+      field = "options";
+      const json& o = doc.at("options");
+      const std::vector<double> thresholds = Doubles(o.at("auc_thresholds_deg"));
+      const std::vector<double> occ_bins = Doubles(o.at("occlusion_bins"));
+      const std::vector<double> ov_bins = Doubles(o.at("overlap_bins"));
+      const std::string def = o.at("occlusion_definitions").at(0).get<std::string>();
+      if (f == 0) {
+        data.auc_thresholds_deg = thresholds;
+        data.occlusion_bins = occ_bins;
+        data.overlap_bins = ov_bins;
+        data.occlusion_definition = def;
+        for (const json& e : o.at("estimators")) {
+          data.estimator_names.push_back(e.at("name").get<std::string>());
+        }
+      } else if (thresholds != data.auc_thresholds_deg || occ_bins != data.occlusion_bins ||
+                 ov_bins != data.overlap_bins || def != data.occlusion_definition) {
+        throw InputError(path,
+                         "options: AUC thresholds, bins or first occlusion definition "
+                         "differ from " +
+                             eval_paths[0] +
+                             "'s; evaluate with the same options to compare the sets");
+      }
+      field = "sets";
+      const json& quality = doc.at("match_quality");
+      for (size_t k = 0; k < doc.at("sets").size(); ++k) {
+        EvalSetView v;
+        v.set = doc["sets"][k];
+        v.label = v.set.at("name").get<std::string>();
+        v.eval_path = path;
+        v.options = o;
+        v.has_quality = quality.at("available").get<bool>();
+        v.quality_reason =
+            quality.at("reason").is_string() ? quality["reason"].get<std::string>() : "";
+        // Every field the section reads, so that a malformed file fails here, named.
+        const size_t estimators = o.at("estimators").size();
+        const json& overall = v.set.at("overall");
+        auto pose_fields = [&](const json& stats) {
+          for (size_t e = 0; e < estimators; ++e) {
+            const json& pose = stats.at("pose").at(e);
+            if (pose.at("auc_percent").size() != thresholds.size()) {
+              throw json::other_error::create(501, "auc_percent: one per threshold", &pose);
+            }
+            (void)pose.at("failures").get<int64_t>();
+          }
+          (void)stats.at("pairs").get<int64_t>();
+        };
+        pose_fields(overall);
+        (void)overall.at("matches_mean");
+        (void)overall.at("epipolar_precision_percent");
+        (void)v.set.at("pairs_missing").get<int64_t>();
+        (void)v.set.at("path").get<std::string>();
+        const json& types = overall.at("types");
+        if (!types.is_null()) {
+          for (const char* t : {"vv", "vo", "ov"}) {
+            for (const char* f : {"predicted", "correct", "truth", "recalled"}) {
+              (void)types.at(t).at(f).get<int64_t>();
+            }
+            (void)types.at(t).at("precision_percent");
+            (void)types.at(t).at("recall_percent");
+          }
+          (void)types.at("unscored").at("count").get<int64_t>();
+          (void)types.at("all").at("precision_scored_percent");
+        }
+        for (const auto& [bins, edges] : {std::pair<const json*, const std::vector<double>*>{
+                                              &v.set.at("by_occlusion").at(def), &occ_bins},
+                                          {&v.set.at("by_visible_overlap"), &ov_bins}}) {
+          if (bins->size() + 1 != edges->size()) {
+            throw json::other_error::create(501, "one entry per bin", bins);
+          }
+          for (const json& bin : *bins) pose_fields(bin);
+        }
+        for (const json& pt : v.set.at("cumulative").at(def)) {
+          (void)pt.at("max_occlusion").get<double>();
+          (void)pt.at("mean_error_deg").at(0);
+          (void)pt.at("pairs").get<int64_t>();
+        }
+        for (const json& p : pairs) {
+          const json& s = p.at("sets").at(k);
+          const json& err = s.at("pose").at(0).at("error_deg");
+          (void)s.at("pose").at(0).at("rotation_deg");
+          (void)s.at("pose").at(0).at("translation_deg");
+          (void)s.at("pose").at(0).at("inliers").get<int64_t>();
+          (void)s.at("matches").get<int64_t>();
+          v.error_deg.push_back(err.is_number() ? err.get<double>() : kInf);
+          v.epipolar.push_back(s.at("epipolar_precision").get<double>());
+          v.predicted.push_back(s.at("predicted").get<bool>());
+          v.pair.push_back(s);
+        }
+        ++name_count[v.label];
+        sets.push_back(std::move(v));
+      }
+    } catch (const json::exception& e) {
+      throw InputError(path, field + ": not as schemas/eval.schema.json expects (" +
+                                 std::string(e.what()) + ")");
+    }
+  }
+  for (EvalSetView& v : sets) {
+    if (name_count[v.label] > 1) v.label = fs::path(v.eval_path).stem().string() + ":" + v.label;
+  }
+  std::set<std::string> labels;
+  for (const EvalSetView& v : sets) {
+    if (!labels.insert(v.label).second) {
+      throw InputError(v.eval_path, "sets: set '" + v.label + "' is given twice");
+    }
+  }
+  data.sets = std::move(sets);
+  return data;
+}
+
+std::vector<NamedImage> MakeEvalPlots(const EvalReportData& data, const SplitReportOptions& options,
+                                      const std::string& scratch_dir) {
+  fs::create_directories(scratch_dir);
+  auto write = [&](const std::string& name, const std::string& text) {
+    gt::io::WriteFileAtomic((fs::path(scratch_dir) / name).string(), text);
+  };
+  const size_t mid = data.auc_thresholds_deg.size() / 2;
+  const std::string auc_name = "AUC@" + Num(data.auc_thresholds_deg[mid]) + " deg (%)";
+  const std::string def = data.occlusion_definition;
+  // Data files: one per set and plot; "NaN" where a bin has no pairs (gnuplot skips it).
+  for (size_t k = 0; k < data.sets.size(); ++k) {
+    const json& s = data.sets[k].set;
+    std::string cum;
+    for (const json& pt : s.at("cumulative").at(def)) {
+      const json& mean = pt.at("mean_error_deg").at(0);
+      cum += Num(pt.at("max_occlusion").get<double>(), 8) + " " +
+             (mean.is_number() ? Num(mean.get<double>(), 8) : "NaN") + " " +
+             std::to_string(pt.at("pairs").get<int64_t>()) + "\n";
+    }
+    write("cum" + std::to_string(k) + ".dat", cum.empty() ? "NaN NaN NaN\n" : cum);
+    for (const auto& [file, bins] :
+         {std::pair<std::string, const json*>{"occ", &s.at("by_occlusion").at(def)},
+          {"ovl", &s.at("by_visible_overlap")}}) {
+      std::string text;
+      for (size_t b = 0; b < bins->size(); ++b) {
+        const json& bin = (*bins)[b];
+        const bool empty = bin.at("pairs").get<int64_t>() == 0;
+        text +=
+            std::to_string(b) + " " +
+            (empty ? "NaN" : Num(bin.at("pose").at(0).at("auc_percent").at(mid).get<double>(), 8)) +
+            "\n";
+      }
+      write(file + std::to_string(k) + ".dat", text);
+    }
+  }
+  // Bin labels with the number of pairs in the bin (the same for every set).
+  auto xtics = [](const std::vector<double>& edges, const json& bins) {
+    std::string t = "set xtics (";
+    for (size_t b = 0; b + 1 < edges.size(); ++b) {
+      if (b) t += ", ";
+      t += GnuplotString(BinLabel(edges[b], edges[b + 1], b + 2 == edges.size()) +
+                         " n=" + std::to_string(bins.at(b).at("pairs").get<int64_t>())) +
+           " " + std::to_string(b);
+    }
+    return t + ") rotate by 30 right\n";
+  };
+  auto plot_sets = [&](const std::string& prefix, const std::string& using_cols) {
+    std::string t = "plot ";
+    for (size_t k = 0; k < data.sets.size(); ++k) {
+      if (k) t += ", ";
+      t += "'" + prefix + std::to_string(k) + ".dat' using " + using_cols +
+           " with linespoints lw 2 pt 7 title " + GnuplotString(data.sets[k].label);
+    }
+    return t;
+  };
+  const std::string estimator =
+      data.estimator_names.empty() ? std::string() : data.estimator_names[0];
+  std::ostringstream gp;
+  gp << "set terminal pngcairo size " << options.plot_width_px << "," << options.plot_height_px
+     << " font \"DejaVu Sans,11\" noenhanced\n"
+     << "set encoding utf8\nset grid ytics lc rgb '#dddddd'\nset border 3\n"
+     << "set xtics nomirror\nset ytics nomirror\nset key below horizontal\n";
+  gp << "set output 'eval_cumulative.png'\nset title "
+     << GnuplotString("Mean pose error of the pairs with occlusion ratio <= x (" + def + ", " +
+                      estimator + ")")
+     << "\nset xlabel " << GnuplotString("occlusion ratio (" + def + ")")
+     << "\nset ylabel 'mean pose error (deg)'\nset y2label 'pairs'\nset y2tics\n"
+     << "set yrange [0:*]\nset y2range [0:*]\n"
+     << plot_sets("cum", "1:2") << ", 'cum0.dat' using 1:3 axes x1y2 with steps lc rgb '#999999' "
+     << "dt 2 title 'pairs (right axis)'\n"
+     << "unset y2label\nunset y2tics\n";
+  gp << "set output 'eval_auc_by_occlusion.png'\nset title "
+     << GnuplotString(auc_name + " per occlusion-ratio bin (" + def + ")") << "\nset xlabel "
+     << GnuplotString("occlusion ratio (" + def + ")") << "\nset ylabel " << GnuplotString(auc_name)
+     << "\nset yrange [0:100]\nset xrange [-0.5:" << Num(data.occlusion_bins.size() - 1.5, 8)
+     << "]\n"
+     << xtics(data.occlusion_bins, data.sets[0].set.at("by_occlusion").at(def))
+     << plot_sets("occ", "1:2") << "\n";
+  gp << "set output 'eval_auc_by_overlap.png'\nset title "
+     << GnuplotString(auc_name + " per visible-overlap bin")
+     << "\nset xlabel 'visible overlap (consistent_overlap)'\nset xrange [-0.5:"
+     << Num(data.overlap_bins.size() - 1.5, 8) << "]\n"
+     << xtics(data.overlap_bins, data.sets[0].set.at("by_visible_overlap"))
+     << plot_sets("ovl", "1:2") << "\n";
+  gt::io::WriteFileAtomic((fs::path(scratch_dir) / "eval.gp").string(), gp.str());
+  return RunGnuplot(
+      options.gnuplot, scratch_dir, "eval.gp",
+      {"eval_cumulative.png", "eval_auc_by_occlusion.png", "eval_auc_by_overlap.png"});
+}
+
+std::vector<size_t> PickWorstPairs(const EvalSetView& set, int count) {
+  std::vector<size_t> idx;
+  for (size_t i = 0; i < set.error_deg.size(); ++i) {
+    if (set.predicted[i]) idx.push_back(i);
+  }
+  std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) {
+    if (set.error_deg[a] != set.error_deg[b]) return set.error_deg[a] > set.error_deg[b];
+    return set.epipolar[a] < set.epipolar[b];
+  });
+  if (idx.size() > static_cast<size_t>(std::max(count, 0))) idx.resize(std::max(count, 0));
+  return idx;
+}
+
+namespace {
+
+// The set's predictions file: as written, else relative to the eval.json's folder.
+std::string ResolvePredictions(const EvalSetView& v) {
+  const std::string path = v.set.at("path").get<std::string>();
+  if (fs::exists(path)) return path;
+  const fs::path beside = fs::path(v.eval_path).parent_path() / path;
+  if (!fs::path(path).is_absolute() && fs::exists(beside)) return beside.string();
+  return "";
+}
+
+std::string Degrees(const json& v) { return v.is_number() ? Cell(v, 2) + "°" : "failed"; }
+
+}  // namespace
+
+std::vector<EvalGallery> MakeEvalGalleries(const EvalReportData& data, const SplitData& split,
+                                           const SplitReportOptions& options) {
+  std::vector<EvalGallery> out;
+  if (options.eval_gallery_pairs == 0) return out;
+  const gt::eval::SplitIndex index = gt::eval::LoadSplitIndex(split.dir);
+  const std::set<std::string> keys(index.keys.begin(), index.keys.end());
+  for (const EvalSetView& v : data.sets) {
+    EvalGallery g;
+    g.set_label = v.label;
+    int64_t missing = 0;
+    for (const bool p : v.predicted) missing += p ? 0 : 1;
+    if (missing > 0) {
+      g.warnings.push_back(std::to_string(missing) +
+                           " pair(s) without a prediction are not shown (each is a failure).");
+    }
+    if (!v.has_quality) {
+      g.warnings.push_back("No gallery: the split has no per-type ground truth (" +
+                           v.quality_reason + ").");
+      out.push_back(std::move(g));
+      continue;
+    }
+    const std::string path = ResolvePredictions(v);
+    if (path.empty()) {
+      g.warnings.push_back("No gallery: the predictions '" + v.set.at("path").get<std::string>() +
+                           "' were not found (as written, nor next to " + v.eval_path + ").");
+      out.push_back(std::move(g));
+      continue;
+    }
+    std::vector<std::string> problems;
+    gt::eval::PredictionSet set = gt::eval::ReadPredictions(
+        v.label, path, keys, index.width, index.height, &problems, index.loftr_names);
+    gt::eval::FilterByConfidence(v.options.value("min_confidence", 0.0), &set, &problems);
+    if (!problems.empty()) {
+      throw InputError(path, problems[0] + (problems.size() > 1
+                                                ? " (and " + std::to_string(problems.size() - 1) +
+                                                      " more problems)"
+                                                : ""));
+    }
+    gt::eval::QualityOptions quality;
+    quality.px = v.options.at("px").get<double>();
+    for (const size_t i : PickWorstPairs(v, options.eval_gallery_pairs)) {
+      const SplitPair& p = split.pairs[i];
+      const json& r = v.pair[i];
+      const json& pose = r.at("pose").at(0);
+      GalleryItem item;
+      item.caption = p.key + "  (pose error " + Degrees(pose.at("error_deg")) + ": R " +
+                     Degrees(pose.at("rotation_deg")) + ", t " +
+                     Degrees(pose.at("translation_deg")) + "; " +
+                     std::to_string(r.at("matches").get<int64_t>()) + " matches, " +
+                     std::to_string(pose.at("inliers").get<int64_t>()) + " inliers, epipolar " +
+                     Cell(json(100.0 * v.epipolar[i])) + "%; occlusion " + Num(p.occlusion, 3) +
+                     ", visible overlap " + Num(p.visible_min, 3) + ")";
+      const std::string px_text = Num(quality.px);
+      auto it = set.pairs.find(p.key);
+      if (it == set.pairs.end()) {
+        item.caption += " — no prediction of this pair in " + path;
+        g.items.push_back(std::move(item));
+        continue;
+      }
+      const std::string tar = (fs::path(split.dir) / p.shard).string();
+      std::vector<gt::eval::MatchVerdict> verdicts;
+      const gt::eval::PairQuality q = gt::eval::ScoreSampleMatches(
+          tar, p.key, index.width, index.height, it->second, quality, &verdicts);
+      item.caption += "; correct/predicted within " + px_text + " px:";
+      for (int t = 0; t < 3; ++t) {
+        item.caption += std::string(t ? "," : "") + " " +
+                        (t == 0   ? "vv "
+                         : t == 1 ? "vo "
+                                  : "ov ") +
+                        std::to_string(q.types[t].correct) + "/" +
+                        std::to_string(q.types[t].predicted);
+      }
+      item.caption += ", unscored " + std::to_string(q.unscored);
+      const PairData pair = LoadPairFromShard(tar, p.key);
+      std::vector<PredictionVerdict> drawn(verdicts.size());
+      for (size_t m = 0; m < verdicts.size(); ++m) {
+        drawn[m] =
+            verdicts[m].match_class == gt::eval::kClassUnscored
+                ? PredictionVerdict::kUnscored
+                : (verdicts[m].correct ? PredictionVerdict::kCorrect : PredictionVerdict::kWrong);
+      }
+      PredictionPictureOptions po;
+      po.seed = options.seed;
+      const cv::Mat picture =
+          RenderPredictedMatches(pair.image0, pair.labels01, pair.image1, pair.labels10,
+                                 it->second.kpts0, it->second.kpts1, drawn, po);
+      // At most kMaxGalleryWidth pixels wide, never enlarged (lines stay readable at 640x480).
+      const double scale = std::min(1.0, kMaxGalleryWidth / picture.cols);
+      cv::Mat small = picture;
+      if (scale < 1.0) cv::resize(picture, small, cv::Size(), scale, scale, cv::INTER_AREA);
+      item.images.push_back(
+          {"predicted matches over the labels", "image/jpeg",
+           gt::io::EncodeJpegBytes(small, gt::io::ChannelOrder::kBgr, 85, "eval gallery")});
+      g.items.push_back(std::move(item));
+    }
+    out.push_back(std::move(g));
+  }
+  return out;
+}
+
+std::string RenderEvalSection(const EvalReportData& data, const std::vector<NamedImage>& plots,
+                              const std::vector<EvalGallery>& galleries) {
+  std::ostringstream h;
+  std::set<std::string> files;
+  std::string file_list;
+  for (const EvalSetView& v : data.sets) {
+    if (files.insert(v.eval_path).second) {
+      file_list += (file_list.empty() ? "" : ", ") + HtmlEscape(v.eval_path);
+    }
+  }
+  h << "<h2 id=\"eval\">Evaluation</h2>\n<p class=\"muted\">" << data.sets.size()
+    << " prediction set(s) from " << file_list << " (`occgt eval`, docs/EVAL.md). Plots and "
+    << "gallery use the first estimator (" << HtmlEscape(data.estimator_names.at(0))
+    << ") and the occlusion ratio '" << HtmlEscape(data.occlusion_definition) << "'.</p>\n";
+  // Pose table.
+  h << "<table class=\"eval-pose\"><tr><th>set</th><th>estimator</th>";
+  for (const double t : data.auc_thresholds_deg) h << "<th>AUC@" << Num(t) << "° (%)</th>";
+  h << "<th>failures</th><th>missing pairs</th><th>matches / pair</th>"
+       "<th>epipolar precision (%)</th></tr>\n";
+  for (const EvalSetView& v : data.sets) {
+    const json& overall = v.set.at("overall");
+    const json& estimators = v.options.at("estimators");
+    for (size_t e = 0; e < estimators.size(); ++e) {
+      const json& pose = overall.at("pose").at(e);
+      h << "<tr data-set=\"" << HtmlEscape(v.label) << "\"><td>" << HtmlEscape(v.label)
+        << "</td><td>" << HtmlEscape(estimators[e].at("name").get<std::string>()) << "</td>";
+      for (const json& a : pose.at("auc_percent")) h << "<td class=\"n\">" << Cell(a, 2) << "</td>";
+      h << "<td class=\"n\">" << pose.at("failures").get<int64_t>() << "</td><td class=\"n\">"
+        << v.set.at("pairs_missing").get<int64_t>() << "</td><td class=\"n\">"
+        << Cell(overall.at("matches_mean")) << "</td><td class=\"n\">"
+        << Cell(overall.at("epipolar_precision_percent")) << "</td></tr>\n";
+    }
+  }
+  h << "</table>\n";
+  // Per-type table.
+  const std::string px = data.sets.empty() ? "" : Num(data.sets[0].options.at("px").get<double>());
+  h << "<h3>Per-type precision and recall (within " << px << " px of the ground truth)</h3>\n"
+    << "<table class=\"eval-types\"><tr><th>set</th>";
+  for (const char* t : {"vv", "vo", "ov"}) {
+    h << "<th>" << t << " precision (%)</th><th>" << t << " recall (%)</th>";
+  }
+  h << "<th>unscored</th><th>precision of scored (%)</th></tr>\n";
+  for (const EvalSetView& v : data.sets) {
+    const json& types = v.set.at("overall").at("types");
+    h << "<tr data-set=\"" << HtmlEscape(v.label) << "\"><td>" << HtmlEscape(v.label) << "</td>";
+    if (types.is_null()) {
+      h << "<td colspan=\"8\" class=\"muted\">not available: " << HtmlEscape(v.quality_reason)
+        << "</td></tr>\n";
+      continue;
+    }
+    for (const char* t : {"vv", "vo", "ov"}) {
+      const json& x = types.at(t);
+      h << "<td class=\"n\">" << Cell(x.at("precision_percent")) << " ("
+        << x.at("correct").get<int64_t>() << "/" << x.at("predicted").get<int64_t>()
+        << ")</td><td class=\"n\">" << Cell(x.at("recall_percent")) << " ("
+        << x.at("recalled").get<int64_t>() << "/" << x.at("truth").get<int64_t>() << ")</td>";
+    }
+    h << "<td class=\"n\">" << types.at("unscored").at("count").get<int64_t>()
+      << "</td><td class=\"n\">" << Cell(types.at("all").at("precision_scored_percent"))
+      << "</td></tr>\n";
+  }
+  h << "</table>\n<div class=\"plots\">\n";
+  for (const auto& p : plots) {
+    h << "<figure>" << ImgTag(p, p.name) << "<figcaption>" << HtmlEscape(p.name)
+      << "</figcaption></figure>\n";
+  }
+  h << "</div>\n";
+  for (const EvalGallery& g : galleries) {
+    h << "<h3 class=\"eval-gallery\" data-set=\"" << HtmlEscape(g.set_label) << "\">Worst pairs of "
+      << HtmlEscape(g.set_label) << "</h3>\n<p class=\"muted\">" << g.items.size()
+      << " pair(s), largest pose error first. Predicted matches over the labels: correct cyan, "
+         "wrong magenta, unscored (no ground-truth target) white; labels as in the gallery "
+         "below.</p>\n";
+    if (!g.warnings.empty()) {
+      h << "<div class=\"warn\" role=\"alert\"><ul>\n";
+      for (const auto& w : g.warnings) h << "<li>" << HtmlEscape(w) << "</li>\n";
+      h << "</ul></div>\n";
+    }
+    for (const GalleryItem& item : g.items) {
+      h << "<div class=\"pair eval-pair\"><h4>" << HtmlEscape(item.caption) << "</h4>\n";
+      for (const auto& im : item.images) {
+        h << "<figure>" << ImgTag(im, im.name) << "<figcaption>" << HtmlEscape(im.name)
+          << "</figcaption></figure>\n";
+      }
+      h << "</div>\n";
+    }
+  }
+  return h.str();
+}
+
+}  // namespace gt::report

@@ -1,0 +1,144 @@
+#include "libgt/report/page.h"
+
+#include <sys/wait.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include "libgt/core/error.h"
+#include "libgt/io/file_read.h"
+
+namespace gt::report {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string ShellQuote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) {
+    if (c == '\'') {
+      out += "'\\''";
+    } else {
+      out += c;
+    }
+  }
+  return out + "'";
+}
+
+}  // namespace
+
+// A string inside gnuplot double quotes (noenhanced text: only quotes and backslashes).
+std::string GnuplotString(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\'';
+    } else if (static_cast<unsigned char>(c) >= 32) {
+      out += c;
+    }
+  }
+  return "\"" + out + "\"";
+}
+
+std::string Num(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*g", digits, v);
+  return buf;
+}
+
+std::string HtmlEscape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::string ImgTag(const NamedImage& im, const std::string& alt) {
+  return "<img alt=\"" + HtmlEscape(alt) + "\" src=\"data:" + im.mime + ";base64," +
+         Base64(im.bytes) + "\">";
+}
+
+std::string Base64(std::string_view bytes) {
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  size_t i = 0;
+  for (; i + 2 < bytes.size(); i += 3) {
+    const uint32_t v = (static_cast<uint8_t>(bytes[i]) << 16) |
+                       (static_cast<uint8_t>(bytes[i + 1]) << 8) |
+                       static_cast<uint8_t>(bytes[i + 2]);
+    out += kAlphabet[(v >> 18) & 63];
+    out += kAlphabet[(v >> 12) & 63];
+    out += kAlphabet[(v >> 6) & 63];
+    out += kAlphabet[v & 63];
+  }
+  if (i + 1 == bytes.size()) {
+    const uint32_t v = static_cast<uint8_t>(bytes[i]) << 16;
+    out += kAlphabet[(v >> 18) & 63];
+    out += kAlphabet[(v >> 12) & 63];
+    out += "==";
+  } else if (i + 2 == bytes.size()) {
+    const uint32_t v =
+        (static_cast<uint8_t>(bytes[i]) << 16) | (static_cast<uint8_t>(bytes[i + 1]) << 8);
+    out += kAlphabet[(v >> 18) & 63];
+    out += kAlphabet[(v >> 12) & 63];
+    out += kAlphabet[(v >> 6) & 63];
+    out += '=';
+  }
+  return out;
+}
+
+std::vector<NamedImage> RunGnuplot(const std::string& gnuplot, const std::string& scratch_dir,
+                                   const std::string& script,
+                                   const std::vector<std::string>& outputs) {
+  const std::string err_path = (fs::path(scratch_dir) / "gnuplot.err").string();
+  const std::string cmd = "cd " + ShellQuote(scratch_dir) + " && " + ShellQuote(gnuplot) + " " +
+                          ShellQuote(script) + " > /dev/null 2> gnuplot.err";
+  const int rc = std::system(cmd.c_str());
+  if (rc != 0) {
+    std::string first;
+    if (gt::io::FileExists(err_path)) {
+      const auto lines = gt::io::ReadLines(err_path);
+      for (const auto& l : lines) {
+        if (!l.empty() && l.rfind("Warning", 0) != 0 && l.find('^') == std::string::npos &&
+            l.rfind(' ', 0) != 0) {
+          first = l;  // the last error line wins ("plots.gp" line N: ...)
+        }
+      }
+    }
+    if (WIFEXITED(rc) && WEXITSTATUS(rc) == 127) {
+      throw InputError("gnuplot",
+                       "'" + gnuplot + "' not found: install gnuplot-nox (scripts/setup.sh)");
+    }
+    throw InputError("gnuplot", "failed on " + (fs::path(scratch_dir) / script).string() +
+                                    (first.empty() ? "" : ": " + first));
+  }
+  std::vector<NamedImage> plots;
+  for (const std::string& name : outputs) {
+    const std::string path = (fs::path(scratch_dir) / name).string();
+    if (!gt::io::FileExists(path)) throw InputError("gnuplot", "did not write " + name);
+    plots.push_back({name, "image/png", gt::io::ReadFileBytes(path)});
+  }
+  return plots;
+}
+
+}  // namespace gt::report

@@ -1,0 +1,37 @@
+// Pieces shared by the HTML pages of libgt/report (the split report and its eval section):
+// embedded images, HTML and gnuplot text escaping, number formatting, one gnuplot run.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace gt::report {
+
+struct NamedImage {
+  std::string name;   // file name ("overlap_hist.png") or caption
+  std::string mime;   // "image/png" | "image/jpeg"
+  std::string bytes;  // encoded image
+};
+
+// RFC 4648 base64 (with padding).
+std::string Base64(std::string_view bytes);
+// &, <, >, " escaped.
+std::string HtmlEscape(const std::string& s);
+// printf "%.<digits>g".
+std::string Num(double v, int digits = 4);
+// A string inside gnuplot double quotes (noenhanced text: quotes and backslashes become ',
+// control characters are dropped).
+std::string GnuplotString(const std::string& s);
+// <img> with the image embedded as a data URI.
+std::string ImgTag(const NamedImage& image, const std::string& alt);
+
+// Runs `gnuplot script` inside scratch_dir (the script and its data files written there
+// by the caller) and reads back `outputs` (PNG files it wrote) in that order. Throws
+// InputError("gnuplot", ...) when gnuplot is missing or fails (its last error line) or an
+// output is missing.
+std::vector<NamedImage> RunGnuplot(const std::string& gnuplot, const std::string& scratch_dir,
+                                   const std::string& script,
+                                   const std::vector<std::string>& outputs);
+
+}  // namespace gt::report
