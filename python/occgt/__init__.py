@@ -53,6 +53,7 @@ __all__ = [
     "OV",
     "PairGroundTruth",
     "dense_volume",
+    "depth_at_image_size",
     "open_dataset",
     "pair_from_scene",
     "pair_ground_truth",
@@ -234,6 +235,31 @@ def dense_volume(occ: npt.ArrayLike, known: npt.ArrayLike, bins: int = 64) -> np
         [bin_edges_m[k], bin_edges_m[k + 1])), like ``occgt occupancy --dense``.
     """
     return _occgt.dense_volume(occ, known, bins)
+
+
+def depth_at_image_size(
+    depth: npt.ArrayLike, K: npt.ArrayLike, scale: Tuple[float, float], width: int, height: int
+) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float64]]:
+    """A depth map and its intrinsics at the size of a resized image (LoFTR's ``scale0``).
+
+    Args:
+        depth: depth map [H, W] float32/float64, planar metres (0 = none); it may be padded at
+            the bottom and right (MegaDepth's 2000 x 2000 maps).
+        K: intrinsics [3, 3] of the depth map's pixels.
+        scale: (sx, sy) depth-map pixels per image pixel (LoFTR's ``scale0``: original size /
+            resized size), finite and > 0.
+        width, height: the resized image's size in pixels (without its padding).
+
+    Returns:
+        (depth float32 [height, width], K float64 [3, 3]): the top-left round(width * sx) x
+        round(height * sy) pixels of depth resampled nearest to width x height, and K for it,
+        with the pixel-centre rules of docs/GROUND_TRUTH.md §1 (fx' = fx / sx,
+        cx' = (cx + 0.5) / sx - 0.5).
+
+    Raises:
+        ValueError: a bad argument, or an image that covers more than the depth map.
+    """
+    return _occgt.depth_at_image_size(depth, K, (float(scale[0]), float(scale[1])), width, height)
 
 
 def open_dataset(root: Union[str, "os.PathLike[str]"], format: str) -> Dataset:

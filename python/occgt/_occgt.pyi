@@ -74,6 +74,12 @@ def loftr_coarse_supervision(
     occgt.torch.loftr_supervision."""
     ...
 
+def depth_at_image_size(
+    depth: npt.ArrayLike, K: npt.ArrayLike, scale: Tuple[float, float], width: int, height: int
+) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float64]]:
+    """(depth, K) at the size of LoFTR's resized image; see occgt.depth_at_image_size."""
+    ...
+
 class Frame:
     """One frame of a scene as its reader lists it (metadata only)."""
 

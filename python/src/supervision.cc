@@ -8,10 +8,14 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 
+#include "libgt/core/camera.h"
+#include "libgt/core/depth.h"
 #include "libgt/core/error.h"
 #include "libgt/core/pose.h"
 #include "libgt/truth/loftr_supervision.h"
@@ -179,6 +183,42 @@ py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle
   return out;
 }
 
+// A depth map and its K at the size of LoFTR's resized image (scale = depth-map pixels per
+// image pixel): the image covers the top-left round(width * sx) x round(height * sy) pixels
+// of the depth map (MegaDepth's depth is padded at the bottom and right), which are resampled
+// to width x height with the pixel-centre rules of core/camera.h (ResizeDepthNearest,
+// Camera::Resized).
+py::tuple DepthAtImageSize(py::handle depth, py::handle K, std::array<double, 2> scale, int width,
+                           int height) {
+  CheckScale(scale, "scale");
+  if (width < 2 || height < 2) {
+    ThrowValue("width/height", "expected an image of at least 2 x 2 pixels, got " +
+                                   std::to_string(width) + " x " + std::to_string(height));
+  }
+  const std::shared_ptr<const gt::DepthImage> full = DepthFromArray(depth, "depth");
+  const long cover_w = std::lround(width * scale[0]), cover_h = std::lround(height * scale[1]);
+  if (cover_w < 1 || cover_h < 1 || cover_w > full->width || cover_h > full->height) {
+    ThrowValue("scale", "the image (" + std::to_string(width) + " x " + std::to_string(height) +
+                            ") at this scale covers " + std::to_string(cover_w) + " x " +
+                            std::to_string(cover_h) + " depth pixels; the depth map has " +
+                            std::to_string(full->width) + " x " + std::to_string(full->height));
+  }
+  const gt::Camera camera = CameraFromArray(K, static_cast<int>(cover_w),
+                                            static_cast<int>(cover_h), "K");
+  gt::DepthImage resized;
+  {
+    py::gil_scoped_release release;
+    gt::DepthImage crop(static_cast<int>(cover_w), static_cast<int>(cover_h));
+    for (int v = 0; v < crop.height; ++v) {
+      std::copy_n(full->values_m.data() + static_cast<size_t>(v) * full->width, crop.width,
+                  crop.values_m.data() + static_cast<size_t>(v) * crop.width);
+    }
+    resized = gt::ResizeDepthNearest(crop, width, height);
+  }
+  return py::make_tuple(ToArray(std::move(resized.values_m), {height, width}),
+                        MatrixToArray(camera.Resized(width, height).K()));
+}
+
 }  // namespace
 
 void BindSupervision(py::module_& m) {
@@ -191,6 +231,12 @@ void BindSupervision(py::module_& m) {
         "mask0"_a = py::none(), "mask1"_a = py::none(),
         "LoFTR's coarse supervision of one pair (truth::ComputeLoftrSupervision); see "
         "occgt.torch.loftr_supervision and docs/PYTHON.md, \"Supervision\".");
+  m.def("depth_at_image_size", &DepthAtImageSize, "depth"_a, "K"_a, "scale"_a, "width"_a,
+        "height"_a,
+        "(depth, K) at the size of LoFTR's resized image: the top-left round(width * sx) x "
+        "round(height * sy) pixels of depth (scale = depth-map pixels per image pixel) "
+        "resampled nearest to width x height, and K for it (pixel-centre rules, "
+        "docs/GROUND_TRUTH.md §1).");
 }
 
 }  // namespace occgt_py

@@ -26,7 +26,7 @@ import common  # noqa: E402
 
 import occgt  # noqa: E402
 from occgt.torch import loftr_supervision  # noqa: E402
-from occgt.torch.supervision import loftr_fine_target  # noqa: E402
+from occgt.torch.supervision import PADDED_CELL, loftr_fine_target  # noqa: E402
 from occgt.torch.collate import Collate  # noqa: E402
 
 torch.set_num_threads(1)
@@ -367,8 +367,90 @@ class SevenScenes(unittest.TestCase, Checks):
         del only["mask1"]
         with self.assertRaisesRegex(ValueError, "mask1"):
             loftr_supervision(only)
-        with self.assertRaisesRegex(ValueError, "occ2net"):
-            loftr_supervision(batch, mode="occ2net")
+
+    def test_occ2net_resized_and_padded(self) -> None:
+        """mode="occ2net" on LoFTR's resized (scale 2) and padded (MegaDepth-style) batches:
+        the matches of occgt.pair_ground_truth on the frames loaded at the image's size by
+        the dataset reader (Scene.load at 320x240, another path to the same resampling),
+        with the cells placed on the padded grids."""
+        pairs = self.pairs[:2]
+        small = scene_pairs(self.scene, pairs, 320, 240)
+        rs = [occgt.pair_ground_truth(d0, d1, K0, K1, P0, P1, "occ2net")
+              for d0, K0, P0, d1, K1, P1 in small]
+        n = 2
+        batch = make_batch(self.frames[:2])  # depth 640x480
+        batch["image0"] = torch.zeros(n, 1, 240, 320)
+        batch["image1"] = torch.zeros(n, 1, 240, 320)
+        batch["scale0"] = torch.full((n, 2), 2.0)
+        batch["scale1"] = torch.full((n, 2), 2.0)
+        out = loftr_supervision(batch, "occ2net", preset="occ2net")
+        want = [(b, i, j) for b, r in enumerate(rs) for i, j in r["matches"].tolist()]
+        self.assertEqual(ids(out), want)
+        self.assertGreater(len(want), 500)
+        types = np.concatenate([r["match_type"] for r in rs])
+        self.assertTrue(np.array_equal(out["spv_type"].numpy(), types))
+        self.assertGreater(int((types == occgt.VO).sum()), 5)
+        self.assertTrue(np.allclose(out["spv_xy"].numpy(),
+                                    np.concatenate([r["match_xy"] for r in rs]), atol=1e-3))
+        self.assertEqual(tuple(out["conf_matrix_gt"].shape), (n, 1200, 1200))
+        # Padded: image 0 to 320x320 (40x40 cells), image 1 to 352x240 (44x30), depth
+        # zero-padded at the bottom/right; same matches, cells renumbered on the wider grids.
+        padded = dict(batch)
+        d0 = torch.zeros(n, 700, 640)
+        d0[:, :480] = batch["depth0"]
+        d1 = torch.zeros(n, 480, 720)
+        d1[:, :, :640] = batch["depth1"]
+        padded["depth0"], padded["depth1"] = d0, d1
+        padded["image0"] = torch.zeros(n, 1, 320, 320)
+        padded["image1"] = torch.zeros(n, 1, 240, 352)
+        mask0 = torch.zeros(n, 40, 40, dtype=torch.bool)
+        mask0[:, :30] = True
+        mask1 = torch.zeros(n, 30, 44, dtype=torch.bool)
+        mask1[:, :, :40] = True
+        padded["mask0"], padded["mask1"] = mask0, mask1
+        got = loftr_supervision(padded, "occ2net", preset="occ2net")
+        self.assertEqual(ids(got), [(b, i, j // 40 * 44 + j % 40) for b, i, j in want])
+        self.assertTrue(torch.equal(got["spv_xy"], out["spv_xy"]))
+        self.assertTrue(torch.equal(got["expec_f_gt"], out["expec_f_gt"]))
+        self.assertEqual(tuple(got["conf_matrix_gt"].shape), (n, 1600, 1320))
+        cells1 = got["spv_cells1"].reshape(n, 30, 44)
+        self.assertTrue(bool((cells1[:, :, 40:] == PADDED_CELL).all()))
+        self.assertTrue(torch.equal(cells1[:, :, :40].reshape(n, -1), out["spv_cells1"]))
+        self.assertTrue(bool((got["spv_cells0"].reshape(n, 40, 40)[:, 30:] == PADDED_CELL).all()))
+        # Bad input, each naming what is wrong.
+        holes = mask1.clone()
+        holes[:, 3, 5] = False
+        for change, text in (({"mask1": holes}, "mask1"),
+                             ({"image1": None}, "image1"),
+                             ({"scale1": torch.full((n, 2), 3.0)}, "scale"),
+                             ({"matches": torch.zeros(n, 1, 2)}, "matches")):
+            with self.subTest(text=text):
+                b = dict(padded)
+                for k, v in change.items():
+                    if v is None:
+                        del b[k]
+                    else:
+                        b[k] = v
+                with self.assertRaisesRegex(ValueError, text):
+                    loftr_supervision(b, "occ2net")
+
+    def test_depth_at_image_size(self) -> None:
+        """occgt.depth_at_image_size on a 4x4 map at scale 2: pixel u' takes source pixel
+        floor((u' + 0.5) * 2) = 1, 3; fx' = fx / 2, cx' = (cx + 0.5) / 2 - 0.5."""
+        depth = np.arange(1, 17, dtype=np.float32).reshape(4, 4)
+        K = np.array([[100.0, 0, 1.5], [0, 80.0, 1.5], [0, 0, 1]])
+        d, k = occgt.depth_at_image_size(depth, K, (2.0, 2.0), 2, 2)
+        self.assertEqual(d.tolist(), [[6.0, 8.0], [14.0, 16.0]])
+        self.assertTrue(np.allclose(k, [[50.0, 0, 0.5], [0, 40.0, 0.5], [0, 0, 1]]))
+        # A padded map: only the covered top-left part is read.
+        padded = np.zeros((6, 9), np.float32)
+        padded[:4, :4] = depth
+        d2, k2 = occgt.depth_at_image_size(padded, K, (2.0, 2.0), 2, 2)
+        self.assertTrue(np.array_equal(d2, d) and np.array_equal(k2, k))
+        for args, text in ((((2.0, 2.0), 3, 2), "scale"), (((0.0, 2.0), 2, 2), "scale"),
+                           (((2.0, 2.0), 1, 2), "width")):
+            with self.assertRaisesRegex(ValueError, text):
+                occgt.depth_at_image_size(depth, K, *args)
 
     def test_options_and_bad_input(self) -> None:
         batch = make_batch(self.frames[:1])

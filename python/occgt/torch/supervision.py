@@ -21,6 +21,8 @@ Mode = Literal["loftr", "occ2net"]
 #: Codes of spv_status0/spv_status1 (uint8): WARP_STATUS_NAMES[code] is the name.
 WARP_STATUS_NAMES: Tuple[str, ...] = tuple(_occgt.WARP_STATUS_NAMES)
 IN_GRID, NO_DEPTH, BEHIND, OUT_OF_GRID, PADDED = 0, 1, 2, 3, 4
+# spv_cells0/1 of mode "occ2net" on a padded image's cells (LABEL_NAMES has codes 0..5).
+PADDED_CELL = 255
 
 
 def _numpy(t: Any, name: str) -> np.ndarray:
@@ -141,11 +143,18 @@ def loftr_supervision(
     must be those the matches were computed with), ``spv_vv_ids``, ``spv_vo_ids``,
     ``spv_ov_ids`` int64 (rows of each type), ``conf_matrix_gt`` (1 at every match of any
     type) and, when computed here, ``spv_cells0``/``spv_cells1`` uint8 [N, L] (each cell's
-    anchor label, LABEL_NAMES).
+    anchor label, LABEL_NAMES; PADDED_CELL = 255 on padding). LoFTR's resized and padded
+    images (``scale0``/``scale1``, ``mask0``/``mask1``, MegaDepth): the ground truth is
+    computed at each image's unpadded size (``image0``/``image1`` give the size, the mask's
+    top-left block of ones the unpadded part) from the depth map's top-left
+    round(w·sx) × round(h·sy) pixels resampled to it with K (occgt.depth_at_image_size,
+    pixel-centre rules), and its cells are placed on the padded grid; matches stored in the
+    batch are refused there (they are at the depth maps' size).
 
     Raises:
         ValueError: a missing key or a tensor of the wrong shape, a bad option, ``mask0``
-            without ``mask1`` or in mode "occ2net", or the C++ checks (naming them).
+            without ``mask1``, a mask that is not a top-left block, or the C++ checks
+            (naming them).
     """
     if mode not in ("loftr", "occ2net"):
         raise ValueError(f"mode: expected 'loftr' or 'occ2net', got {mode!r}")
@@ -159,9 +168,6 @@ def loftr_supervision(
     if ("mask0" in batch) != ("mask1" in batch):
         raise ValueError("batch: 'mask0' and 'mask1' (LoFTR's padded MegaDepth images) come "
                          "together, got only " + ("'mask0'" if "mask0" in batch else "'mask1'"))
-    if mode == "occ2net" and "mask0" in batch:
-        raise ValueError("batch: mode 'occ2net' takes unpadded pairs at the depth maps' size; "
-                         "'mask0'/'mask1' (padded images) are for mode 'loftr'")
     _require(batch, ["depth0", "depth1", "K0", "K1", "T_0to1"], mode)
     device: Union[torch.device, str] = (batch["depth0"].device
                                         if isinstance(batch["depth0"], torch.Tensor) else "cpu")
@@ -275,19 +281,42 @@ def _batch_matches(batch: Mapping[str, Any], n: int) -> Tuple[torch.Tensor, ...]
                      "(concatenated) with it (occgt.torch.collate)")
 
 
+def _valid_cells(mask: np.ndarray, key: str) -> Tuple[int, int]:
+    """(rows, cols) of the unpadded top-left block of a LoFTR coarse mask [h_c, w_c]."""
+    m = mask != 0
+    rows, cols = int(m.any(1).sum()), int(m.any(0).sum())
+    if rows == 0 or int(m.sum()) != rows * cols or not m[:rows, :cols].all():
+        raise ValueError(f"batch[{key!r}]: expected the image's cells as a top-left block of "
+                         f"ones (LoFTR pads at the bottom and right), got {int(m.sum())} ones "
+                         f"over {rows} rows and {cols} columns")
+    return rows, cols
+
+
 def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_window: int,
              dense: bool, preset: str, anchor: str,
              label_options: Dict[str, Any]) -> Dict[str, torch.Tensor]:
     if anchor not in ("center", "corner"):
         raise ValueError(f"anchor: expected 'center' or 'corner', got {anchor!r}")
-    if "scale0" in batch:
-        raise ValueError("batch: mode 'occ2net' works at the depth maps' resolution; "
-                         "'scale0'/'scale1' (resized images) are not supported")
     depth0 = _batched(batch, "depth0", (-1, -1))
     depth1 = _batched(batch, "depth1", (-1, -1))
     n = depth0.shape[0]
-    w0, w1 = depth0.shape[2] // stride, depth1.shape[2] // stride
-    l0, l1 = (depth0.shape[1] // stride) * w0, (depth1.shape[1] // stride) * w1
+    # Resized (scale0/1) or padded (mask0/1) images: the ground truth is computed at the
+    # image's unpadded size (depth and K resampled to it) and its cells placed on the
+    # padded grid of the image.
+    resized = "scale0" in batch or "mask0" in batch
+    if resized and "matches" in batch:
+        raise ValueError("batch: 'matches' with 'scale0'/'mask0': stored matches are at the "
+                         "depth maps' size; drop them to compute matches at the images' size")
+    if resized:
+        size0, size1 = _image_size(batch, 0, depth0), _image_size(batch, 1, depth1)
+        if "image0" not in batch or "image1" not in batch:
+            raise ValueError("batch: 'scale0'/'mask0' need 'image0' and 'image1' (their size "
+                             "sets the grid)")
+    else:
+        size0, size1 = (depth0.shape[1], depth0.shape[2]), (depth1.shape[1], depth1.shape[2])
+    grid0, grid1 = (size0[0] // stride, size0[1] // stride), (size1[0] // stride, size1[1] // stride)
+    w0, w1 = grid0[1], grid1[1]
+    l0, l1 = grid0[0] * w0, grid1[0] * w1
     out: Dict[str, torch.Tensor] = {}
     if "matches" in batch:
         b_ids, matches, types, xy = _batch_matches(batch, n)
@@ -295,17 +324,51 @@ def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_windo
         K0 = _batched(batch, "K0", (3, 3))
         K1 = _batched(batch, "K1", (3, 3))
         T01 = _batched(batch, "T_0to1", (4, 4)).astype(np.float64)
+        scale0, scale1 = _scales(batch, n)
+        masks = None
+        if "mask0" in batch:
+            masks = (_batched(batch, "mask0", grid0), _batched(batch, "mask1", grid1))
         eye = np.eye(4)
-        results = [pair_ground_truth(depth0[b], depth1[b], K0[b], K1[b], eye,
-                                     np.linalg.inv(T01[b]), preset, stride=stride,
-                                     anchor=anchor, **label_options) for b in range(n)]
+        results, valid_w = [], []
+        for b in range(n):
+            d0, k0, d1, k1 = depth0[b], K0[b], depth1[b], K1[b]
+            if resized:
+                # The unpadded block of each image, in pixels (whole cells with a mask).
+                hw = []
+                for k, (size, grid) in enumerate(((size0, grid0), (size1, grid1))):
+                    if masks is None:
+                        hw.append(size)
+                    else:
+                        rows, cols = _valid_cells(masks[k][b], f"mask{k}")
+                        hw.append((rows * stride, cols * stride))
+                s0 = (float(scale0[b][0]), float(scale0[b][1]))
+                s1 = (float(scale1[b][0]), float(scale1[b][1]))
+                d0, k0 = _occgt.depth_at_image_size(d0, k0, s0, hw[0][1], hw[0][0])
+                d1, k1 = _occgt.depth_at_image_size(d1, k1, s1, hw[1][1], hw[1][0])
+            valid_w.append((d0.shape[1] // stride, d1.shape[1] // stride))
+            results.append(pair_ground_truth(d0, d1, k0, k1, eye, np.linalg.inv(T01[b]), preset,
+                                             stride=stride, anchor=anchor, **label_options))
         b_ids = torch.cat([torch.full((r["matches"].shape[0],), b, dtype=torch.int64)
                            for b, r in enumerate(results)])
-        matches = torch.from_numpy(np.concatenate([r["matches"] for r in results]))
+        # Cell c of the unpadded grid (vw columns) is cell (c // vw) * w + c % vw of the
+        # image's grid (w columns); the same cell when nothing is padded.
+        placed = []
+        for r, (vw0, vw1) in zip(results, valid_w):
+            m = r["matches"].astype(np.int64)
+            placed.append(np.stack([(m[:, 0] // vw0) * w0 + m[:, 0] % vw0,
+                                    (m[:, 1] // vw1) * w1 + m[:, 1] % vw1], 1))
+        matches = torch.from_numpy(np.concatenate(placed).reshape(-1, 2))
         types = torch.from_numpy(np.concatenate([r["match_type"] for r in results]))
         xy = torch.from_numpy(np.concatenate([r["match_xy"] for r in results]))
-        out["spv_cells0"] = torch.from_numpy(np.stack([r["cells0"].reshape(-1) for r in results]))
-        out["spv_cells1"] = torch.from_numpy(np.stack([r["cells1"].reshape(-1) for r in results]))
+
+        def cells(per_pair: List[np.ndarray], grid: Tuple[int, int]) -> torch.Tensor:
+            full = np.full((n,) + grid, PADDED_CELL, np.uint8)
+            for b, c in enumerate(per_pair):
+                full[b, :c.shape[0], :c.shape[1]] = c
+            return torch.from_numpy(full.reshape(n, -1))
+
+        out["spv_cells0"] = cells([r["cells0"] for r in results], grid0)
+        out["spv_cells1"] = cells([r["cells1"] for r in results], grid1)
     b_ids = b_ids.to(torch.int64)
     i_ids = matches[:, 0].to(torch.int64).contiguous()
     j_ids = matches[:, 1].to(torch.int64).contiguous()
@@ -335,5 +398,5 @@ def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_windo
     return out
 
 
-__all__ = ["WARP_STATUS_NAMES", "IN_GRID", "NO_DEPTH", "BEHIND", "OUT_OF_GRID", "PADDED",
+__all__ = ["WARP_STATUS_NAMES", "IN_GRID", "NO_DEPTH", "BEHIND", "OUT_OF_GRID", "PADDED", "PADDED_CELL",
            "loftr_fine_target", "loftr_supervision"]
