@@ -517,6 +517,43 @@ bool NetpbmSize(std::string_view head, int* width, int* height) {
   }
 }
 
+bool DecodeJpegRgbInto(std::string_view bytes, const std::string& what, std::vector<uint8_t>* rgb,
+                       int* width, int* height) {
+  if (bytes.size() < 3 || static_cast<unsigned char>(bytes[0]) != 0xFF ||
+      static_cast<unsigned char>(bytes[1]) != 0xD8 ||
+      static_cast<unsigned char>(bytes[2]) != 0xFF) {
+    return false;
+  }
+  if (std::string e = JpegDamage(bytes); !e.empty()) throw InputError(what, e);
+  JpegDecodeState s;
+  JpegInitState(&s);
+  struct Guard {
+    jpeg_decompress_struct* cinfo;
+    ~Guard() { jpeg_destroy_decompress(cinfo); }
+  } guard{&s.cinfo};
+  const int started = JpegStart(&s, reinterpret_cast<const unsigned char*>(bytes.data()),
+                                bytes.size(), /*bgr=*/false);
+  if (started == 1) throw InputError(what, std::string("cannot decode JPEG: ") + s.errors.message);
+  if (started == 2) {
+    throw InputError(what, "CMYK JPEG is not supported (convert it to RGB first)");
+  }
+  if (started == 3) CheckSize(s.cinfo.image_width, s.cinfo.image_height, what, "JPEG header");
+  if (s.cinfo.output_components != 3) return false;
+  const size_t w = s.cinfo.output_width, h = s.cinfo.output_height;
+  rgb->resize(w * h * 3);
+  std::vector<unsigned char*> rows(h);
+  for (size_t v = 0; v < h; ++v) rows[v] = rgb->data() + v * w * 3;
+  if (!JpegReadRows(&s, rows.data())) {
+    throw InputError(what, std::string("cannot decode JPEG: ") + s.errors.message);
+  }
+  if (s.errors.warning[0] != '\0') {
+    throw InputError(what, std::string("corrupt JPEG data: ") + s.errors.warning);
+  }
+  *width = static_cast<int>(w);
+  *height = static_cast<int>(h);
+  return true;
+}
+
 cv::Mat DecodeImageBytes(std::string_view bytes, ChannelOrder order, const std::string& what) {
   static const char kPngSig[] = "\x89PNG\r\n\x1a\n";
   if (std::string e = PngDamage(bytes); !e.empty()) throw InputError(what, e);

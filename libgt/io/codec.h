@@ -24,6 +24,7 @@
 #include <opencv2/core/mat.hpp>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace gt::io {
 
@@ -42,6 +43,12 @@ std::string JpegDamage(std::string_view bytes);
 // Decodes PNG, JPEG or Netpbm bytes, told apart by their signature; anything else is an
 // InputError ("unsupported image format ..."). PngDamage and JpegDamage are checked first.
 cv::Mat DecodeImageBytes(std::string_view bytes, ChannelOrder order, const std::string& what);
+
+// A 3-component JPEG decoded straight into `rgb` ([height, width, 3], R G B; no cv::Mat in
+// between), with every check of DecodeImageBytes. Returns false, `rgb` untouched, when the
+// bytes are not a JPEG or not of 3 components (the caller decodes them the general way).
+bool DecodeJpegRgbInto(std::string_view bytes, const std::string& what, std::vector<uint8_t>* rgb,
+                       int* width, int* height);
 
 // Width and height from the first two tokens of a Netpbm header (P1..P6; comments and
 // whitespace as DecodeImageBytes reads them), without reading further; false when `head`

@@ -26,6 +26,8 @@ ColorImage FromRgbMat(const cv::Mat& rgb) {
 }
 
 ColorImage DecodeColor(std::string_view bytes, const std::string& path) {
+  ColorImage direct;  // JPEG colour (ScanNet's .sens and exports): no intermediate cv::Mat
+  if (DecodeJpegRgbInto(bytes, path, &direct.rgb, &direct.width, &direct.height)) return direct;
   cv::Mat m = DecodeImageBytes(bytes, ChannelOrder::kRgb, path);
   if (m.depth() == CV_16U) {
     m.convertTo(m, CV_8U, 1.0 / 257.0);
