@@ -238,6 +238,28 @@ bool JpegReadRows(JpegDecodeState* s, unsigned char** rows) {
   return true;
 }
 
+// JpegStart with its outcomes as InputErrors.
+void StartJpegOrThrow(JpegDecodeState* s, std::string_view bytes, bool bgr,
+                      const std::string& what) {
+  const int started =
+      JpegStart(s, reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), bgr);
+  if (started == 1) throw InputError(what, std::string("cannot decode JPEG: ") + s->errors.message);
+  if (started == 2) {
+    throw InputError(what, "CMYK JPEG is not supported (convert it to RGB first)");
+  }
+  if (started == 3) CheckSize(s->cinfo.image_width, s->cinfo.image_height, what, "JPEG header");
+}
+
+// JpegReadRows with its failure and a refused warning as InputErrors.
+void ReadJpegRowsOrThrow(JpegDecodeState* s, unsigned char** rows, const std::string& what) {
+  if (!JpegReadRows(s, rows)) {
+    throw InputError(what, std::string("cannot decode JPEG: ") + s->errors.message);
+  }
+  if (s->errors.warning[0] != '\0') {
+    throw InputError(what, std::string("corrupt JPEG data: ") + s->errors.warning);
+  }
+}
+
 cv::Mat DecodeJpeg(std::string_view bytes, ChannelOrder order, const std::string& what) {
   JpegDecodeState s;
   JpegInitState(&s);
@@ -245,13 +267,7 @@ cv::Mat DecodeJpeg(std::string_view bytes, ChannelOrder order, const std::string
     jpeg_decompress_struct* cinfo;
     ~Guard() { jpeg_destroy_decompress(cinfo); }
   } guard{&s.cinfo};
-  const int started = JpegStart(&s, reinterpret_cast<const unsigned char*>(bytes.data()),
-                                bytes.size(), order == ChannelOrder::kBgr);
-  if (started == 1) throw InputError(what, std::string("cannot decode JPEG: ") + s.errors.message);
-  if (started == 2) {
-    throw InputError(what, "CMYK JPEG is not supported (convert it to RGB first)");
-  }
-  if (started == 3) CheckSize(s.cinfo.image_width, s.cinfo.image_height, what, "JPEG header");
+  StartJpegOrThrow(&s, bytes, order == ChannelOrder::kBgr, what);
   const int channels = s.cinfo.output_components;
   if (channels != 1 && channels != 3) {
     throw InputError(what, "cannot decode JPEG: " + std::to_string(channels) + " components");
@@ -260,12 +276,7 @@ cv::Mat DecodeJpeg(std::string_view bytes, ChannelOrder order, const std::string
                 CV_MAKETYPE(CV_8U, channels));
   std::vector<unsigned char*> rows(s.cinfo.output_height);
   for (size_t v = 0; v < rows.size(); ++v) rows[v] = image.ptr<unsigned char>(static_cast<int>(v));
-  if (!JpegReadRows(&s, rows.data())) {
-    throw InputError(what, std::string("cannot decode JPEG: ") + s.errors.message);
-  }
-  if (s.errors.warning[0] != '\0') {
-    throw InputError(what, std::string("corrupt JPEG data: ") + s.errors.warning);
-  }
+  ReadJpegRowsOrThrow(&s, rows.data(), what);
   return image;
 }
 
@@ -531,24 +542,13 @@ bool DecodeJpegRgbInto(std::string_view bytes, const std::string& what, std::vec
     jpeg_decompress_struct* cinfo;
     ~Guard() { jpeg_destroy_decompress(cinfo); }
   } guard{&s.cinfo};
-  const int started = JpegStart(&s, reinterpret_cast<const unsigned char*>(bytes.data()),
-                                bytes.size(), /*bgr=*/false);
-  if (started == 1) throw InputError(what, std::string("cannot decode JPEG: ") + s.errors.message);
-  if (started == 2) {
-    throw InputError(what, "CMYK JPEG is not supported (convert it to RGB first)");
-  }
-  if (started == 3) CheckSize(s.cinfo.image_width, s.cinfo.image_height, what, "JPEG header");
+  StartJpegOrThrow(&s, bytes, /*bgr=*/false, what);
   if (s.cinfo.output_components != 3) return false;
   const size_t w = s.cinfo.output_width, h = s.cinfo.output_height;
   rgb->resize(w * h * 3);
   std::vector<unsigned char*> rows(h);
   for (size_t v = 0; v < h; ++v) rows[v] = rgb->data() + v * w * 3;
-  if (!JpegReadRows(&s, rows.data())) {
-    throw InputError(what, std::string("cannot decode JPEG: ") + s.errors.message);
-  }
-  if (s.errors.warning[0] != '\0') {
-    throw InputError(what, std::string("corrupt JPEG data: ") + s.errors.warning);
-  }
+  ReadJpegRowsOrThrow(&s, rows.data(), what);
   *width = static_cast<int>(w);
   *height = static_cast<int>(h);
   return true;
