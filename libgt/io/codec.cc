@@ -238,6 +238,12 @@ bool JpegReadRows(JpegDecodeState* s, unsigned char** rows) {
   return true;
 }
 
+// Destroys a decompressor (created or only zeroed) when the decode leaves its scope.
+struct JpegDestroyOnExit {
+  jpeg_decompress_struct* cinfo;
+  ~JpegDestroyOnExit() { jpeg_destroy_decompress(cinfo); }
+};
+
 // JpegStart with its outcomes as InputErrors.
 void StartJpegOrThrow(JpegDecodeState* s, std::string_view bytes, bool bgr,
                       const std::string& what) {
@@ -263,10 +269,7 @@ void ReadJpegRowsOrThrow(JpegDecodeState* s, unsigned char** rows, const std::st
 cv::Mat DecodeJpeg(std::string_view bytes, ChannelOrder order, const std::string& what) {
   JpegDecodeState s;
   JpegInitState(&s);
-  struct Guard {
-    jpeg_decompress_struct* cinfo;
-    ~Guard() { jpeg_destroy_decompress(cinfo); }
-  } guard{&s.cinfo};
+  const JpegDestroyOnExit guard{&s.cinfo};
   StartJpegOrThrow(&s, bytes, order == ChannelOrder::kBgr, what);
   const int channels = s.cinfo.output_components;
   if (channels != 1 && channels != 3) {
@@ -538,10 +541,7 @@ bool DecodeJpegRgbInto(std::string_view bytes, const std::string& what, std::vec
   if (std::string e = JpegDamage(bytes); !e.empty()) throw InputError(what, e);
   JpegDecodeState s;
   JpegInitState(&s);
-  struct Guard {
-    jpeg_decompress_struct* cinfo;
-    ~Guard() { jpeg_destroy_decompress(cinfo); }
-  } guard{&s.cinfo};
+  const JpegDestroyOnExit guard{&s.cinfo};
   StartJpegOrThrow(&s, bytes, /*bgr=*/false, what);
   if (s.cinfo.output_components != 3) return false;
   const size_t w = s.cinfo.output_width, h = s.cinfo.output_height;
