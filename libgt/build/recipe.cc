@@ -307,6 +307,8 @@ const char* LoftrExportKindName(LoftrExportKind kind) {
       return "train";
     case LoftrExportKind::kTest:
       return "test";
+    case LoftrExportKind::kMegaDepth:
+      return "megadepth";
     case LoftrExportKind::kNone:
       break;
   }
@@ -481,6 +483,13 @@ bool Recipe::Check(std::string* error) const {
     return *error = "resolution: expected even W and H when occupancy.enabled (H/2 x W/2 rays)",
            false;
   }
+  if (loftr_export == LoftrExportKind::kMegaDepth &&
+      (dataset.format != "megadepth" || loftr_tree)) {
+    return *error =
+               "loftr_export.kind: megadepth (LoFTR's MegaDepth index) expects dataset.format "
+               "megadepth and no tree",
+           false;
+  }
   if (loftr_export == LoftrExportKind::kTest && !sample.depth) {
     return *error =
                "sample.depth: expected true for loftr_export.kind test (Occ2Net's test step reads "
@@ -591,7 +600,9 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   if (d.contains("root"))
     r.dataset.root = ResolvePath(d["root"].get<std::string>(), file + ": dataset.root", base_dir);
   Get(d, "scenes", &r.dataset.scenes, file);
-  if (d.contains("split_file")) {
+  // An empty value (e.g. an unset ${VAR:-}) means no split file: every scene.
+  if (d.contains("split_file") &&
+      !ExpandEnv(d["split_file"].get<std::string>(), file + ": dataset.split_file").empty()) {
     r.dataset.split_file =
         ResolvePath(d["split_file"].get<std::string>(), file + ": dataset.split_file", base_dir);
   }
@@ -705,7 +716,9 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   }
   if (j.contains("loftr_export")) {
     const std::string kind = j["loftr_export"]["kind"].get<std::string>();
-    r.loftr_export = kind == "test" ? LoftrExportKind::kTest : LoftrExportKind::kTrain;
+    r.loftr_export = kind == "test"        ? LoftrExportKind::kTest
+                     : kind == "megadepth" ? LoftrExportKind::kMegaDepth
+                                           : LoftrExportKind::kTrain;
     Get(j["loftr_export"], "tree", &r.loftr_tree, file);
     if (j["loftr_export"].value("score", "overlap") == "covisible") {
       r.loftr_score = LoftrScore::kCovisible;

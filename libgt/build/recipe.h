@@ -32,7 +32,7 @@
 namespace gt::build {
 
 // loftr_export.kind: the LoFTR-family index written beside the shards (DIR/loftr/).
-enum class LoftrExportKind { kNone, kTrain, kTest };  // "" | "train" | "test"
+enum class LoftrExportKind { kNone, kTrain, kTest, kMegaDepth };  // "" | "train" | "test" | "megadepth"
 const char* LoftrExportKindName(LoftrExportKind kind);
 // loftr_export.score: what the train index's `score` holds (docs/EXPORTS.md).
 enum class LoftrScore {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <filesystem>
 #include <future>
 #include <map>
 #include <memory>
@@ -24,6 +25,7 @@
 #include "libgt/pairs/selection.h"
 #include "libgt/shards/loftr_export.h"
 #include "libgt/shards/loftr_tree.h"
+#include "libgt/shards/megadepth_export.h"
 #include "libgt/shards/posed_export.h"
 #include "libgt/shards/split.h"
 #include "libgt/truth/working_frame.h"
@@ -326,6 +328,70 @@ void PublishPosedExports(const Recipe& recipe, const BuildOptions& options,
   }
 }
 
+// The pair's score in a LoFTR index (recipe loftr_export.score).
+double LoftrScoreOf(const Recipe& recipe, const SelectedPair& p) {
+  return recipe.loftr_score == LoftrScore::kCovisible
+             ? Combine(p.score01.consistent_overlap, p.score10.consistent_overlap,
+                       recipe.selection.aggregate)
+             : Combine(p.score01.overlap, p.score10.overlap, recipe.selection.aggregate);
+}
+
+// LoFTR's root_dir for a MegaDepth file: the folder holding phoenix/ when the path has
+// one (the download folder, where LoFTR's indices point), else the recipe's dataset root.
+std::string MegaDepthRootDir(const std::string& path, const std::string& dataset_root) {
+  const size_t at = path.rfind("/phoenix/S6/zl548/MegaDepth_v1/");
+  if (at != std::string::npos) return path.substr(0, at);
+  return dataset_root;
+}
+
+std::string RelativeTo(const std::string& path, const std::string& root) {
+  return std::filesystem::path(path).lexically_relative(root).generic_string();
+}
+
+// DIR/loftr/scene_info/<scene>.npz and {split}_list.txt (shards/megadepth_export.h): every
+// frame of each scene with a selected pair, the pairs by frame index.
+void PublishMegaDepthIndex(const Recipe& recipe, const BuildOptions& options,
+                           const std::vector<const SelectedPair*>& all,
+                           const std::map<std::string, Scene>& scenes) {
+  std::map<std::string, shards::MegaDepthIndexScene> index;
+  for (const auto& [name, scene] : scenes) {
+    shards::MegaDepthIndexScene& out = index[name];
+    out.scene = name;
+    for (const Frame& f : scene.frames) {
+      const std::string root = MegaDepthRootDir(f.depth.path, recipe.dataset.root);
+      shards::MegaDepthIndexFrame x;
+      x.image_path = RelativeTo(f.color_path, root);
+      if (f.usable) {
+        x.depth_path = RelativeTo(f.depth.path, root);
+        // COLMAP's convention: the top-left pixel's centre at (0.5, 0.5) (core/camera.h has
+        // it at (0, 0)).
+        const Camera& c = f.depth_camera;
+        x.K = std::array<double, 9>{c.fx, 0, c.cx + 0.5, 0, c.fy, c.cy + 0.5, 0, 0, 1};
+        const Eigen::Matrix4d T = f.world_from_cam.inverse().matrix();
+        std::array<double, 16> t16;
+        for (int r = 0; r < 4; ++r) {
+          for (int c4 = 0; c4 < 4; ++c4) t16[r * 4 + c4] = T(r, c4);
+        }
+        x.cam_from_world = t16;
+      }
+      out.frames.push_back(std::move(x));
+    }
+  }
+  for (const SelectedPair* p : all) {
+    const Scene& scene = scenes.at(p->scene);
+    shards::MegaDepthIndexPair pair;
+    pair.i = static_cast<int64_t>(truth::FindFrame(scene, p->frame0, "selection"));
+    pair.j = static_cast<int64_t>(truth::FindFrame(scene, p->frame1, "selection"));
+    pair.score = LoftrScoreOf(recipe, *p);
+    index.at(p->scene).pairs.push_back(pair);
+  }
+  std::vector<shards::MegaDepthIndexScene> list;
+  for (auto& [name, s] : index) list.push_back(std::move(s));
+  shards::LoftrExportOptions export_options;
+  export_options.split = recipe.split;
+  shards::ExportLoftrMegaDepth(options.out_dir + "/loftr", std::move(list), export_options);
+}
+
 }  // namespace
 
 void PublishIndices(const Recipe& recipe, const io::DatasetReader& reader,
@@ -347,6 +413,10 @@ void PublishIndices(const Recipe& recipe, const io::DatasetReader& reader,
     PublishPosedExports(recipe, options, all, scenes);
   }
   if (recipe.loftr_export == LoftrExportKind::kNone) return;
+  if (recipe.loftr_export == LoftrExportKind::kMegaDepth) {
+    PublishMegaDepthIndex(recipe, options, all, scenes);
+    return;
+  }
   std::vector<shards::LoftrPair> rows;
   shards::SceneIntrinsics intrinsics;
   for (const SelectedPair* p : all) {
@@ -357,10 +427,7 @@ void PublishIndices(const Recipe& recipe, const io::DatasetReader& reader,
     row.scene = p->scene;
     row.frame0 = p->number0;
     row.frame1 = p->number1;
-    row.score = recipe.loftr_score == LoftrScore::kCovisible
-                    ? Combine(p->score01.consistent_overlap, p->score10.consistent_overlap,
-                              recipe.selection.aggregate)
-                    : Combine(p->score01.overlap, p->score10.overlap, recipe.selection.aggregate);
+    row.score = LoftrScoreOf(recipe, *p);
     const Rigid3d t = RelativePose(f0.world_from_cam, f1.world_from_cam);
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 4; ++c) row.cam1_from_cam0[r * 4 + c] = t.matrix()(r, c);

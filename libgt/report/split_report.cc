@@ -154,6 +154,16 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
     p.visible01 = NeedNumber(m01, "consistent_overlap", where + ": metrics.01");
     p.visible10 = NeedNumber(m10, "consistent_overlap", where + ": metrics.10");
     p.visible_min = std::min(p.visible01, p.visible10);
+    const double valid = NeedNumber(m01, "valid", where + ": metrics.01") +
+                         NeedNumber(m10, "valid", where + ": metrics.10");
+    auto share = [&](const char* label) {
+      const json c01 = m01.value("counts", json()), c10 = m10.value("counts", json());
+      const double n = NeedNumber(c01, label, where + ": metrics.01.counts") +
+                       NeedNumber(c10, label, where + ": metrics.10.counts");
+      return valid > 0 ? n / valid : 0.0;
+    };
+    p.inconsistent_share = share("INCONSISTENT");
+    p.unknown_share = share("UNKNOWN");
     p.overlap = Combine(p.overlap01, p.overlap10, options.aggregate);
     p.occlusion = Combine(p.occlusion01, p.occlusion10, options.aggregate);
     // The same on the selection's score grid (summary.json's selected_* statistics).
@@ -461,7 +471,13 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
     score_ov.push_back(p.score_overlap);
     score_oc.push_back(p.score_occlusion);
   }
+  std::vector<double> inconsistent, unknown;
+  for (const auto& p : split.pairs) {
+    inconsistent.push_back(p.inconsistent_share);
+    unknown.push_back(p.unknown_share);
+  }
   const Stats so = Describe(ov), sc = Describe(oc), sv = Describe(vis);
+  const Stats si = Describe(inconsistent), su = Describe(unknown);
   const Stats sso = Describe(score_ov), ssc = Describe(score_oc);
   const std::string grid =
       " (score grid, score_stride " + std::to_string(split.score_stride) + "; as summary.json)";
@@ -472,7 +488,9 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
                                  {"visible overlap (weaker direction)", sv},
                                  {"occlusion ratio", sc},
                                  {overlap_score.c_str(), sso},
-                                 {occlusion_score.c_str(), ssc}}) {
+                                 {occlusion_score.c_str(), ssc},
+                                 {"INCONSISTENT share of valid-depth pixels (both directions)", si},
+                                 {"UNKNOWN share of valid-depth pixels (both directions)", su}}) {
     h << "<tr><td>" << label << "</td><td class=\"n\">" << Num(s.min) << "</td><td class=\"n\">"
       << Num(s.median) << "</td><td class=\"n\">" << Num(s.mean) << "</td><td class=\"n\">"
       << Num(s.max) << "</td></tr>\n";

@@ -46,6 +46,9 @@ struct SplitPair {
   // DirectionMetrics::consistent_overlap (VISIBLE / sampled) of each direction, and of the
   // weaker direction (min: the default of selection.visible_aggregate).
   double visible01 = 0, visible10 = 0, visible_min = 0;
+  // INCONSISTENT and UNKNOWN pixels of both directions over their valid-depth pixels (the
+  // depth errors of MVS data such as MegaDepth; 0 when no pixel has depth).
+  double inconsistent_share = 0, unknown_share = 0;
 };
 
 struct SplitData {

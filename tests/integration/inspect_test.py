@@ -134,6 +134,32 @@ def main():
         check(abs(lo - weaker[0]) < 1e-3 and abs(hi - weaker[-1]) < 1e-3,
               f"visible overlap range {lo}..{hi}, expected {weaker[0]}..{weaker[-1]}")
         check(abs(mean - sum(weaker) / len(weaker)) < 1e-3, f"visible overlap mean {mean}")
+    # INCONSISTENT / UNKNOWN shares of valid-depth pixels (MegaDepth's caveat points here):
+    # a copy of pairs.jsonl where one pair has known counts.
+    shares = os.path.join(tmp, "shares")
+    os.makedirs(shares, exist_ok=True)
+    with open(os.path.join(build, "pairs.jsonl")) as f:
+        lines = [json.loads(x) for x in f]
+    m = lines[0]["metrics"]
+    m["01"]["counts"]["INCONSISTENT"] = m["01"]["valid"] // 4
+    m["10"]["counts"]["INCONSISTENT"] = 0
+    m["01"]["counts"]["UNKNOWN"] = m["10"]["counts"]["UNKNOWN"] = 0
+    for p in lines[1:]:
+        for d in ("01", "10"):
+            p["metrics"][d]["counts"]["INCONSISTENT"] = p["metrics"][d]["counts"]["UNKNOWN"] = 0
+    want = (m["01"]["valid"] // 4) / (m["01"]["valid"] + m["10"]["valid"])
+    with open(os.path.join(shares, "pairs.jsonl"), "w") as f:
+        f.writelines(json.dumps(p) + "\n" for p in lines)
+    common.occgt("inspect", "split", shares, "--out", os.path.join(shares, "r"), "--gallery", "0")
+    t = open(os.path.join(shares, "r", "report.html"), encoding="utf-8").read()
+    for label, hi in (("INCONSISTENT", want), ("UNKNOWN", 0.0)):
+        row = re.search(r"<tr><td>%s share of valid-depth pixels \(both directions\)</td>" % label
+                        + r"<td class=\"n\">([^<]*)</td>" * 4, t)
+        check(row is not None, f"report has no {label} share row")
+        if row:
+            lo, med, mean, top = (float(v) for v in row.groups())
+            check(lo == 0 and abs(top - hi) < 1e-3 and abs(mean - hi / len(lines)) < 1e-3,
+                  f"{label} share {row.groups()}, expected max {hi}")
     with open(os.path.join(build, "summary.json")) as f:
         summary = json.load(f)
     for reason, n in summary.get("drops", {}).items():

@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -232,6 +233,109 @@ TEST(MegaDepth, BuildsASplit) {
   EXPECT_EQ(first["metrics"]["01"]["counts"]["VISIBLE"], 172 * 130);
   EXPECT_EQ(first["metrics"]["01"]["counts"]["INCONSISTENT"], 0);
   EXPECT_EQ(first["metrics"]["10"]["counts"]["VISIBLE"], 192 * 144);
+}
+
+// loftr_export.kind megadepth: LoFTR's MegaDepth index of the split (shards/megadepth_export.h),
+// read by tests/io/megadepth_index_check.py as LoFTR's loader reads it and compared with what
+// the reader says of every frame (paths relative to the download folder, K in COLMAP's
+// convention, cam_from_world, the selected pairs by frame index with their overlap).
+TEST(MegaDepth, WritesLoftrsMegaDepthIndex) {
+  const std::string dir = test::ScratchDir("megadepth_index");
+  const std::string recipe = dir + "/recipe.yaml";
+  WriteText(recipe,
+            "name: megadepth-index\nsplit: train\nresolution: [192, 144]\n"
+            "dataset: {format: megadepth, root: '" +
+                Download() +
+                "/phoenix/S6/zl548/MegaDepth_v1', scenes: ['0001', '0002']}\n"
+                "labels: {preset: megadepth}\n"
+                "selection: {overlap: [0.05, 1.0], occlusion: [0.0, 1.0], score_stride: 4}\n"
+                "occupancy: {enabled: false}\n"
+                "sample: {image: none, depth: true, labels: true, occupancy: false}\n"
+                "loftr_export: {kind: megadepth}\n");
+  const auto r = test::RunOccgt("build '" + recipe + "' --out '" + dir + "/out' --threads 1");
+  ASSERT_EQ(r.exit_code, 0) << r.stderr_text << r.stdout_text;
+  // Expectations from the reader and pairs.jsonl.
+  const auto reader = MakeReader("megadepth");
+  const std::string root = Download();
+  json expected;
+  std::map<std::string, Scene> scenes;
+  for (const std::string name : {"0001", "0002"}) {
+    scenes[name] = reader->ReadScene(root + "/phoenix/S6/zl548/MegaDepth_v1", name);
+    json s = {{"image_paths", json::array()},
+              {"depth_paths", json::array()},
+              {"intrinsics", json::array()},
+              {"poses", json::array()},
+              {"pairs", json::array()}};
+    for (const Frame& f : scenes[name].frames) {
+      s["image_paths"].push_back(fs::path(f.color_path).lexically_relative(root).string());
+      if (!f.usable) {
+        for (const char* k : {"depth_paths", "intrinsics", "poses"}) s[k].push_back(nullptr);
+        continue;
+      }
+      s["depth_paths"].push_back(fs::path(f.depth.path).lexically_relative(root).string());
+      const Camera& c = f.depth_camera;
+      s["intrinsics"].push_back(
+          {{c.fx, 0.0, c.cx + 0.5}, {0.0, c.fy, c.cy + 0.5}, {0.0, 0.0, 1.0}});
+      const Eigen::Matrix4d T = f.world_from_cam.inverse().matrix();
+      json rows = json::array();
+      for (int i = 0; i < 4; ++i) rows.push_back({T(i, 0), T(i, 1), T(i, 2), T(i, 3)});
+      s["poses"].push_back(rows);
+    }
+    expected[name] = s;
+  }
+  std::ifstream in(dir + "/out/pairs.jsonl");
+  int pairs = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty()) continue;
+    const json p = json::parse(line);
+    const Scene& scene = scenes.at(p["scene"]);
+    auto index = [&](const json& frame) {
+      for (size_t k = 0; k < scene.frames.size(); ++k) {
+        if (scene.frames[k].id == frame["id"]) return static_cast<int64_t>(k);
+      }
+      return int64_t{-1};
+    };
+    // The selection's score (its grid, score_stride), as the LoFTR ScanNet index.
+    const double overlap = 0.5 * (p["score_metrics"]["01"]["overlap"].get<double>() +
+                                  p["score_metrics"]["10"]["overlap"].get<double>());
+    expected[p["scene"].get<std::string>()]["pairs"].push_back(
+        {{index(p["frame0"]), index(p["frame1"])}, overlap});
+    ++pairs;
+  }
+  ASSERT_GE(pairs, 2);
+  EXPECT_EQ(expected["0001"]["depth_paths"][3], nullptr);  // d.h5: an ordinal map
+  std::ofstream(dir + "/expected.json") << expected.dump();
+  const auto check = test::RunShell("/usr/bin/python3 '" + std::string(OCCGT_SOURCE_DIR) +
+                                    "/tests/io/megadepth_index_check.py' '" + dir +
+                                    "/out/loftr' '" + root + "' '" + dir + "/expected.json'");
+  EXPECT_EQ(check.exit_code, 0) << check.stdout_text << check.stderr_text;
+  EXPECT_EQ(check.stdout_text, "ok 2\n");
+  // The same build twice writes the same bytes.
+  const auto again = test::RunOccgt("build '" + recipe + "' --out '" + dir + "/out2' --threads 2");
+  ASSERT_EQ(again.exit_code, 0) << again.stderr_text;
+  for (const char* f : {"scene_info/0001.npz", "scene_info/0002.npz", "train_list.txt"}) {
+    std::ifstream a(dir + "/out/loftr/" + f, std::ios::binary),
+        b(dir + "/out2/loftr/" + f, std::ios::binary);
+    const std::string sa((std::istreambuf_iterator<char>(a)), {}),
+        sb((std::istreambuf_iterator<char>(b)), {});
+    EXPECT_TRUE(!sa.empty() && sa == sb) << f;
+  }
+  // The shipped recipe runs on the download (MEGADEPTH_ROOT; an unset
+  // MEGADEPTH_TRAIN_SPLIT means every scene) and writes the index beside its shards.
+  const auto shipped =
+      test::RunShell("env -u MEGADEPTH_TRAIN_SPLIT MEGADEPTH_ROOT='" + root + "' '" +
+                     test::OccgtBinary() + "' build '" + std::string(OCCGT_SOURCE_DIR) +
+                     "/recipes/megadepth-train.yaml' --out '" + dir + "/shipped'");
+  ASSERT_EQ(shipped.exit_code, 0) << shipped.stderr_text << shipped.stdout_text;
+  EXPECT_TRUE(fs::exists(dir + "/shipped/loftr/train_list.txt"));
+  EXPECT_NE(shipped.stdout_text.find("in 2 scenes"), std::string::npos) << shipped.stdout_text;
+  // Another dataset format is refused.
+  WriteText(dir + "/bad.yaml",
+            "name: x\nsplit: x\ndataset: {format: synthetic}\n"
+            "loftr_export: {kind: megadepth}\n");
+  const auto bad = test::RunOccgt("build '" + dir + "/bad.yaml' --out '" + dir + "/bad'");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.stderr_text.find("loftr_export.kind"), std::string::npos) << bad.stderr_text;
 }
 
 }  // namespace
