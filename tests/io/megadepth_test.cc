@@ -90,6 +90,17 @@ std::string Download() {
   return base;
 }
 
+// A recipe over the download's scenes at 192x144 (megadepth preset, no occupancy, no
+// images), with `extra` lines appended.
+std::string TinyRecipe(const std::string& split, const std::string& root, const std::string& scenes,
+                       double min_overlap, const std::string& extra) {
+  return "name: " + split + "\nsplit: " + split + "\nresolution: [192, 144]\n" +
+         "dataset: {format: megadepth, root: '" + root + "', scenes: " + scenes + "}\n" +
+         "labels: {preset: megadepth}\nselection: {overlap: [" + std::to_string(min_overlap) +
+         ", 1.0], occlusion: [0.0, 1.0], score_stride: 4}\noccupancy: {enabled: false}\n" +
+         "sample: {image: none, depth: true, labels: true, occupancy: false}\n" + extra;
+}
+
 TEST(MegaDepth, ListsScenesWithAModelFromEveryRootShape) {
   const auto reader = MakeReader("megadepth");
   const std::vector<std::string> both{"0001", "0002"};
@@ -210,15 +221,7 @@ TEST(MegaDepth, ScanListsUsableCountsAndReasons) {
 TEST(MegaDepth, BuildsASplit) {
   const std::string dir = test::ScratchDir("megadepth_build");
   const std::string recipe = dir + "/recipe.yaml";
-  WriteText(recipe,
-            "name: megadepth-tiny\nsplit: megadepth-tiny\nresolution: [192, 144]\n"
-            "dataset: {format: megadepth, root: '" +
-                Download() +
-                "', scenes: ['0002']}\n"
-                "labels: {preset: megadepth}\n"
-                "selection: {overlap: [0.1, 1.0], occlusion: [0.0, 1.0], score_stride: 4}\n"
-                "occupancy: {enabled: false}\n"
-                "sample: {image: none, depth: true, labels: true, occupancy: false}\n");
+  WriteText(recipe, TinyRecipe("megadepth-tiny", Download(), "['0002']", 0.1, ""));
   const auto r = test::RunOccgt("build '" + recipe + "' --out '" + dir + "/out' --threads 1");
   ASSERT_EQ(r.exit_code, 0) << r.stderr_text << r.stdout_text;
   std::ifstream in(dir + "/out/pairs.jsonl");
@@ -242,16 +245,8 @@ TEST(MegaDepth, BuildsASplit) {
 TEST(MegaDepth, WritesLoftrsMegaDepthIndex) {
   const std::string dir = test::ScratchDir("megadepth_index");
   const std::string recipe = dir + "/recipe.yaml";
-  WriteText(recipe,
-            "name: megadepth-index\nsplit: train\nresolution: [192, 144]\n"
-            "dataset: {format: megadepth, root: '" +
-                Download() +
-                "/phoenix/S6/zl548/MegaDepth_v1', scenes: ['0001', '0002']}\n"
-                "labels: {preset: megadepth}\n"
-                "selection: {overlap: [0.05, 1.0], occlusion: [0.0, 1.0], score_stride: 4}\n"
-                "occupancy: {enabled: false}\n"
-                "sample: {image: none, depth: true, labels: true, occupancy: false}\n"
-                "loftr_export: {kind: megadepth}\n");
+  WriteText(recipe, TinyRecipe("train", Download() + "/phoenix/S6/zl548/MegaDepth_v1",
+                               "['0001', '0002']", 0.05, "loftr_export: {kind: megadepth}\n"));
   const auto r = test::RunOccgt("build '" + recipe + "' --out '" + dir + "/out' --threads 1");
   ASSERT_EQ(r.exit_code, 0) << r.stderr_text << r.stdout_text;
   // Expectations from the reader and pairs.jsonl.
