@@ -74,7 +74,8 @@ std::map<std::string, SceneSelection> SelectStage(
     const BuildOptions& options, const ProgressFn& progress, json* summary, bool* complete) {
   std::unique_ptr<ImportList> imports;
   if (!recipe.selection.import_pairs.path.empty()) {
-    imports = std::make_unique<ImportList>(ReadImportList(recipe.selection.import_pairs.path));
+    imports = std::make_unique<ImportList>(
+        ReadImportList(recipe.selection.import_pairs.path, recipe.selection.import_pairs.format));
   }
   const auto t_select = Clock::now();
   std::map<std::string, SceneSelection> selections;

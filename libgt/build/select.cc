@@ -3,12 +3,16 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <optional>
 #include <set>
 
 #include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
+#include "libgt/io/pickle.h"
 #include "libgt/truth/pair_files.h"
 #include "libgt/truth/working_frame.h"
 
@@ -41,7 +45,79 @@ std::vector<int64_t> IntegerValues(const io::NpyArray& a, const std::string& wha
 
 }  // namespace
 
-ImportList ReadImportList(const std::string& path) {
+namespace {
+
+ImportList ReadLoftrMegaDepthList(const std::string& list_path) {
+  ImportList list;
+  const std::string dir = std::filesystem::path(list_path).parent_path().string();
+  int files = 0;
+  for (std::string name : io::ReadLines(list_path)) {
+    while (!name.empty() && std::isspace(static_cast<unsigned char>(name.back()))) name.pop_back();
+    if (name.empty() || name[0] == '#') continue;
+    name = name.substr(0, name.find_first_of(" \t"));
+    const bool has_ext = name.size() > 4 && name.compare(name.size() - 4, 4, ".npz") == 0;
+    const std::string file = (dir.empty() ? "" : dir + "/") + name + (has_ext ? "" : ".npz");
+    if (!io::FileExists(file)) {
+      throw InputError(list_path, "names " + name + ", but " + file + " is missing");
+    }
+    const io::PyValue info = io::ReadPickle(io::ReadFileBytes(file), file);
+    auto field = [&](const char* key) -> const io::PyValue& {
+      if (info.kind == io::PyValue::Kind::kDict) {
+        for (size_t k = 0; k < info.keys.size(); ++k) {
+          if (info.keys[k] == key && info.items[k].kind == io::PyValue::Kind::kList) {
+            return info.items[k];
+          }
+        }
+      }
+      throw InputError(file, std::string("expected a dict with a list or array \"") + key +
+                                 "\" (LoFTR's MegaDepth scene_info)");
+    };
+    const io::PyValue& images = field("image_paths");
+    const io::PyValue& infos = field("pair_infos");
+    auto image = [&](const io::PyValue& index, size_t row) -> const std::string& {
+      if (index.kind != io::PyValue::Kind::kInt || index.int_value < 0 ||
+          index.int_value >= static_cast<int64_t>(images.items.size()) ||
+          images.items[index.int_value].kind != io::PyValue::Kind::kStr) {
+        throw InputError(file + ":pair_infos[" + std::to_string(row) + "]",
+                         "expected image indices into image_paths (0.." +
+                             std::to_string(images.items.size()) + ") naming an image");
+      }
+      return images.items[index.int_value].str;
+    };
+    for (size_t row = 0; row < infos.items.size(); ++row) {
+      const io::PyValue& p = infos.items[row];
+      const io::PyValue* ij = p.items.empty() ? nullptr : &p.items[0];
+      if ((p.kind != io::PyValue::Kind::kTuple && p.kind != io::PyValue::Kind::kList) ||
+          ij == nullptr || ij->items.size() != 2) {
+        throw InputError(file + ":pair_infos[" + std::to_string(row) + "]",
+                         "expected ((i, j), score, ...)");
+      }
+      const std::string& a = image(ij->items[0], row);
+      const std::string& b = image(ij->items[1], row);
+      std::string scene;
+      for (const char* marker : {"Undistorted_SfM/", "MegaDepth_v1/"}) {
+        const size_t at = a.find(marker);
+        if (at != std::string::npos && scene.empty()) {
+          const size_t begin = at + std::strlen(marker);
+          scene = a.substr(begin, a.find('/', begin) - begin);
+        }
+      }
+      if (scene.empty()) scene = name.substr(0, name.find('_'));
+      ImportedPair pair;
+      pair.id0 = std::filesystem::path(a).stem().string();
+      pair.id1 = std::filesystem::path(b).stem().string();
+      list[scene].push_back(pair);
+    }
+    ++files;
+  }
+  if (files == 0) throw InputError(list_path, "expected at least one scene_info name");
+  return list;
+}
+
+}  // namespace
+
+ImportList ReadImportList(const std::string& path, const std::string& format) {
+  if (format == "loftr-megadepth") return ReadLoftrMegaDepthList(path);
   const auto members = io::ReadNpz(path);
   auto it = members.find("name");
   if (it == members.end())
@@ -56,7 +132,10 @@ ImportList ReadImportList(const std::string& path) {
     char scene[64];
     std::snprintf(scene, sizeof(scene), "scene%04lld_%02lld", static_cast<long long>(v[r * 4]),
                   static_cast<long long>(v[r * 4 + 1]));
-    list[scene].emplace_back(v[r * 4 + 2], v[r * 4 + 3]);
+    ImportedPair pair;
+    pair.number0 = v[r * 4 + 2];
+    pair.number1 = v[r * 4 + 3];
+    list[scene].push_back(pair);
   }
   return list;
 }
@@ -155,19 +234,32 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
   }
   if (imports) {
     std::map<int64_t, size_t> by_number;
-    for (size_t i = 0; i < scene.frames.size(); ++i) by_number[scene.frames[i].number] = i;
+    std::map<std::string, size_t> by_id;
+    for (size_t i = 0; i < scene.frames.size(); ++i) {
+      by_number[scene.frames[i].number] = i;
+      by_id[scene.frames[i].id] = i;
+    }
     auto it = imports->find(scene_name);
     if (it != imports->end()) {
-      for (const auto& [n0, n1] : it->second) {
-        auto a = by_number.find(n0), b = by_number.find(n1);
-        if (a == by_number.end() || b == by_number.end()) {
+      for (const ImportedPair& p : it->second) {
+        // A pair by id (LoFTR's MegaDepth) or by number (LoFTR's test.npz), as its frame index.
+        auto index = [&](int64_t number, const std::string& id) -> std::optional<size_t> {
+          if (!id.empty()) {
+            auto f = by_id.find(id);
+            return f == by_id.end() ? std::nullopt : std::optional<size_t>(f->second);
+          }
+          auto f = by_number.find(number);
+          return f == by_number.end() ? std::nullopt : std::optional<size_t>(f->second);
+        };
+        const std::optional<size_t> a = index(p.number0, p.id0), b = index(p.number1, p.id1);
+        if (!a || !b) {
           ++drops["import.missing_frame"];
-        } else if (!scene.frames[a->second].usable || !scene.frames[b->second].usable) {
+        } else if (!scene.frames[*a].usable || !scene.frames[*b].usable) {
           ++drops["import.unusable_frame"];
-        } else if (need_color && (!has_color(a->second) || !has_color(b->second))) {
+        } else if (need_color && (!has_color(*a) || !has_color(*b))) {
           ++drops["import.no_color"];
         } else {
-          candidates.push_back({a->second, b->second});
+          candidates.push_back({*a, *b});
         }
       }
     }

@@ -24,10 +24,21 @@
 
 namespace gt::build {
 
-// Imported pairs (LoFTR test.npz `name` [N, 4]): scene → (frame number 0, frame number 1)
-// in file order.
-using ImportList = std::map<std::string, std::vector<std::pair<int64_t, int64_t>>>;
-ImportList ReadImportList(const std::string& path);
+// Imported pairs, scene → pairs in file order: by frame number (format "loftr-npz", LoFTR's
+// test.npz `name` [N, 4]) or by frame id (format "loftr-megadepth": LoFTR's MegaDepth
+// scene_info files named by a list file, below).
+struct ImportedPair {
+  int64_t number0 = 0, number1 = 0;  // Frame::number, when the ids are empty
+  std::string id0, id1;              // Frame::id
+};
+using ImportList = std::map<std::string, std::vector<ImportedPair>>;
+// "loftr-megadepth": `path` is a list file (LoFTR's megadepth_test_1500.txt), one name a
+// line, each naming <name>.npz beside it, a pickled dict (io/pickle.h ReadPickle) with
+// "image_paths" and "pair_infos" [((i, j), score, ...)]; a pair is (stem of image_paths[i],
+// stem of image_paths[j]) in the scene named by the folder after "Undistorted_SfM/" (or
+// "MegaDepth_v1/") in the image path, else the name before its first '_'. Throws InputError
+// naming the file and field.
+ImportList ReadImportList(const std::string& path, const std::string& format = "loftr-npz");
 
 // The recipe's scenes (dataset.scenes, the split file, the imported scenes or every scene
 // under the root), sorted, each checked to exist; throws InputError naming the recipe.

@@ -1,5 +1,6 @@
-// Python values written as a pickle (protocol 2): the index files of LoFTR's MegaDepth
-// loader are pickled dicts read with np.load(path, allow_pickle=True) (docs/EXPORTS.md).
+// Python values written as a pickle (protocol 2), and read back from pickles of plain values
+// and NumPy arrays: the index files of LoFTR's MegaDepth loader are pickled dicts read with
+// np.load(path, allow_pickle=True) (docs/EXPORTS.md).
 //
 // Only plain Python values are written (None, bool, int, float, str, list, tuple, dict with
 // str keys), with these opcodes of the protocol (Python's Lib/pickletools.py documents them):
@@ -12,6 +13,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -39,5 +41,16 @@ struct PyValue {
 
 // The pickle of `value`, protocol 2, ending with STOP.
 std::string PickleBytes(const PyValue& value);
+
+// Reads a pickle (protocols 0-5 as Python 3 writes them: memo, frames, short and long
+// forms) of plain values and NumPy data, without running anything: the only globals
+// accepted are NumPy's array reconstruction (numpy.core.multiarray._reconstruct or
+// numpy._core.multiarray._reconstruct with numpy.ndarray), numpy.dtype and
+// numpy.core.multiarray.scalar (any other global is an InputError naming it). A NumPy
+// array becomes nested lists by its shape (C or Fortran order, numeric, bool, unicode or
+// object dtype); a NumPy scalar its Python value; bytes a kStr of the raw bytes; dict keys
+// must be str. Every malformed input (truncation, unknown opcode, stack underflow, sizes
+// beyond the bytes) is an InputError(what, ...) checked before allocating.
+PyValue ReadPickle(std::string_view bytes, const std::string& what);
 
 }  // namespace gt::io

@@ -429,8 +429,9 @@ bool SelectionOptions::Check(std::string* error) const {
   }
   if (quota_per_scene < 0) return *error = "selection.quota_per_scene: expected >= 0", false;
   if (balance_bins < 0) return *error = "selection.balance_bins: expected >= 0", false;
-  if (!import_pairs.path.empty() && import_pairs.format != "loftr-npz") {
-    return *error = "selection.import_pairs.format: expected loftr-npz", false;
+  if (!import_pairs.path.empty() && import_pairs.format != "loftr-npz" &&
+      import_pairs.format != "loftr-megadepth") {
+    return *error = "selection.import_pairs.format: expected loftr-npz or loftr-megadepth", false;
   }
   return true;
 }

@@ -45,8 +45,8 @@ struct PruningOptions {
 
 // A pair list imported instead of candidates (recipe key selection.import_pairs).
 struct ImportPairsOptions {
-  std::string format = "loftr-npz";
-  std::string path;  // absolute after loading; "" = no import
+  std::string format = "loftr-npz";  // or "loftr-megadepth" (build/select.h ReadImportList)
+  std::string path;                  // absolute after loading; "" = no import
 };
 
 // Recipe key selection (docs/RECIPES.md).
@@ -64,8 +64,8 @@ struct SelectionOptions {
   // each other through walls. Default min: the weaker direction must see enough.
   double visible_overlap_lo = 0.0, visible_overlap_hi = 1.0;
   Aggregate visible_aggregate = Aggregate::kMin;
-  int quota_per_scene = 0;                 // max pairs per scene after filters; 0 = all
-  int balance_bins = 0;                    // sample evenly across overlap bins; 0 = off
+  int quota_per_scene = 0;  // max pairs per scene after filters; 0 = all
+  int balance_bins = 0;     // sample evenly across overlap bins; 0 = off
   ImportPairsOptions import_pairs;
 
   bool Check(std::string* error) const;

@@ -214,6 +214,19 @@ def main():
     put("colmap", "images_txt", b"\x03# images\n1 1 0 0 0 0 0 0 1 a.jpg\n\n"
         b"2 0.7071 0 0 0.7071 1 2 3 2 b.jpg\n10.5 20.5 -1\n")
 
+    # --- Pickles (pickle_fuzz): a LoFTR-style MegaDepth scene_info dict with NumPy object
+    # arrays, numeric arrays and scalars, at protocols 2, 4 and 5, and the writer's own form.
+    import pickle
+    info = {"image_paths": np.array(["Undistorted_SfM/0015/images/a.jpg", None], dtype=object),
+            "depth_paths": np.array(["d/a.h5", None], dtype=object),
+            "intrinsics": np.array([np.eye(3), None], dtype=object),
+            "poses": np.array([np.eye(4), None], dtype=object),
+            "pair_infos": np.array([((0, 1), np.float64(0.3), np.zeros((1, 2)))], dtype=object),
+            "u": np.array(["ab"]), "f": np.asfortranarray(np.ones((2, 2), ">f4"))}
+    for proto in (2, 4, 5):
+        put("pickle", f"scene_info_p{proto}", pickle.dumps(info, protocol=proto))
+    put("pickle", "plain_list", pickle.dumps({"k": [(1, 2.5, "x"), [None, True]]}, protocol=2))
+
     for target, n in sorted(counts.items()):
         print(f"make_seeds.py: {target}: {n} seeds")
 

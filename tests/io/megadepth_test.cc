@@ -333,5 +333,77 @@ TEST(MegaDepth, WritesLoftrsMegaDepthIndex) {
   EXPECT_NE(bad.stderr_text.find("loftr_export.kind"), std::string::npos) << bad.stderr_text;
 }
 
+// recipes/megadepth-1500.yaml on the download: LoFTR's MegaDepth scene_info files (pickled
+// dicts of NumPy arrays, written here by Python as LoFTR's are) named by a list file are
+// imported as pairs by image name; a pair naming an image the model does not have is
+// counted (import.missing_frame), and a listed file that is missing is one error line.
+TEST(MegaDepth, ImportsLoftrsMegaDepthPairs) {
+  const std::string dir = test::ScratchDir("megadepth_1500");
+  const std::string script = R"PY(
+import pickle, sys
+import numpy as np
+out = sys.argv[1]
+info = {"image_paths": np.array(["Undistorted_SfM/0002/images/x.jpg",
+                                 "Undistorted_SfM/0002/images/y.jpg",
+                                 "Undistorted_SfM/0002/images/nope.jpg"], dtype=object),
+        "depth_paths": np.array(["phoenix/S6/zl548/MegaDepth_v1/0002/dense0/depths/x.h5",
+                                 "phoenix/S6/zl548/MegaDepth_v1/0002/dense0/depths/y.h5",
+                                 None], dtype=object),
+        "intrinsics": np.array([np.eye(3), np.eye(3), None], dtype=object),
+        "poses": np.array([np.eye(4), np.eye(4), None], dtype=object),
+        "pair_infos": np.array([((0, 1), np.float64(0.4), np.zeros((3, 2))),
+                                ((1, 2), np.float64(0.2), np.zeros((0, 2)))], dtype=object)}
+with open(out + "/0002_0.1_0.3.npz", "wb") as f:
+    pickle.dump(info, f)
+with open(out + "/megadepth_test_1500.txt", "w") as f:
+    f.write("0002_0.1_0.3\n")
+with open(out + "/bad_list.txt", "w") as f:
+    f.write("0002_0.1_0.3\n0002_gone\n")
+)PY";
+  std::ofstream(dir + "/make.py") << script;
+  const auto made = test::RunShell("/usr/bin/python3 '" + dir + "/make.py' '" + dir + "'");
+  ASSERT_EQ(made.exit_code, 0) << made.stderr_text;
+  const std::string root = Download();
+  auto build = [&](const std::string& list, const std::string& out) {
+    return test::RunShell("MEGADEPTH_ROOT='" + root + "' MEGADEPTH_1500_LIST='" + list + "' '" +
+                          test::OccgtBinary() + "' build '" + std::string(OCCGT_SOURCE_DIR) +
+                          "/recipes/megadepth-1500.yaml' --out '" + out + "' --threads 1");
+  };
+  const auto r = build(dir + "/megadepth_test_1500.txt", dir + "/out");
+  ASSERT_EQ(r.exit_code, 0) << r.stderr_text << r.stdout_text;
+  std::ifstream in(dir + "/out/pairs.jsonl");
+  std::vector<json> lines;
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty()) lines.push_back(json::parse(line));
+  }
+  // x (with colour) and y (no colour image in the fixture): the recipe stores images, so
+  // the pair is counted as import.no_color; nope.jpg is not in the model.
+  const json summary = json::parse(std::ifstream(dir + "/out/summary.json"));
+  EXPECT_EQ(summary["drops"].value("import.missing_frame", 0), 1) << summary.dump();
+  EXPECT_EQ(lines.size() + summary["drops"].value("import.no_color", 0), 1u) << summary.dump();
+  // Without images (sample.image none through a copy of the recipe) the pair is built.
+  std::ifstream shipped(std::string(OCCGT_SOURCE_DIR) + "/recipes/megadepth-1500.yaml");
+  std::string text((std::istreambuf_iterator<char>(shipped)), {});
+  text.replace(text.find("image: jpg"), 10, "image: none");
+  WriteText(dir + "/noimg.yaml", text);
+  const auto r2 = test::RunShell("MEGADEPTH_ROOT='" + root + "' MEGADEPTH_1500_LIST='" + dir +
+                                 "/megadepth_test_1500.txt' '" + test::OccgtBinary() + "' build '" +
+                                 dir + "/noimg.yaml' --out '" + dir + "/out2' --threads 1");
+  ASSERT_EQ(r2.exit_code, 0) << r2.stderr_text << r2.stdout_text;
+  std::ifstream in2(dir + "/out2/pairs.jsonl");
+  std::string first;
+  std::getline(in2, first);
+  const json p = json::parse(first);
+  EXPECT_EQ(p["scene"], "0002");
+  EXPECT_EQ(p["frame0"]["id"], "x");
+  EXPECT_EQ(p["frame1"]["id"], "y");
+  EXPECT_TRUE(fs::exists(dir + "/out2/loftr/scene_info/0002.npz"));
+  EXPECT_TRUE(fs::exists(dir + "/out2/loftr/test_list.txt"));
+  // A listed file that is missing: one line naming the list and the file.
+  const auto bad = build(dir + "/bad_list.txt", dir + "/out3");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.stderr_text.find("0002_gone.npz is missing"), std::string::npos) << bad.stderr_text;
+}
+
 }  // namespace
 }  // namespace gt::io
