@@ -1,6 +1,7 @@
 #include "libgt/report/canvas.h"
 
 #include <algorithm>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 
 namespace gt::report {
@@ -36,35 +37,42 @@ cv::Mat StackVertical(const std::vector<cv::Mat>& images) {
   return out;
 }
 
-cv::Mat TitleAbove(const cv::Mat& image, const std::string& title) {
-  cv::Mat strip(22, image.cols, CV_8UC3, kWhite);
-  PutText(strip, title, 4, 16);
+namespace {
+int Scaled(int px, double text_scale) { return static_cast<int>(std::lround(px * text_scale)); }
+}  // namespace
+
+cv::Mat TitleAbove(const cv::Mat& image, const std::string& title, double text_scale) {
+  cv::Mat strip(Scaled(22, text_scale), image.cols, CV_8UC3, kWhite);
+  PutText(strip, title, Scaled(4, text_scale), Scaled(16, text_scale), 0.45 * text_scale);
   return StackVertical({strip, image});
 }
 
 cv::Mat LegendStrip(const std::vector<LegendEntry>& entries, int width, int per_row,
-                    const std::string& note) {
-  const int row_h = 22;
+                    const std::string& note, double text_scale) {
+  const double font = 0.45 * text_scale;
+  const int row_h = Scaled(22, text_scale), box = Scaled(14, text_scale);
   // Fewer entries a row when the widest text would not fit its cell.
   int widest = 0;
   for (const auto& e : entries) {
     int baseline = 0;
     widest = std::max(widest,
-                      cv::getTextSize(e.text, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &baseline).width);
+                      cv::getTextSize(e.text, cv::FONT_HERSHEY_SIMPLEX, font, 1, &baseline).width);
   }
-  per_row = std::max(1, std::min(per_row, width / (widest + 34)));
+  per_row = std::max(1, std::min(per_row, width / (widest + Scaled(34, text_scale))));
   const int rows =
       static_cast<int>((entries.size() + per_row - 1) / per_row) + (note.empty() ? 0 : 1);
-  cv::Mat strip(rows * row_h + 6, width, CV_8UC3, kWhite);
+  cv::Mat strip(rows * row_h + Scaled(6, text_scale), width, CV_8UC3, kWhite);
   const int cell_w = std::max(1, width / per_row);
+  const int pad = Scaled(4, text_scale);
   for (size_t e = 0; e < entries.size(); ++e) {
-    const int x = static_cast<int>(e % per_row) * cell_w + 4;
-    const int y = static_cast<int>(e / per_row) * row_h + 4;
-    cv::rectangle(strip, cv::Rect(x, y + 2, 14, 14), entries[e].color.Scalar(), cv::FILLED);
-    cv::rectangle(strip, cv::Rect(x, y + 2, 14, 14), cv::Scalar(0, 0, 0), 1);
-    PutText(strip, entries[e].text, x + 20, y + 14);
+    const int x = static_cast<int>(e % per_row) * cell_w + pad;
+    const int y = static_cast<int>(e / per_row) * row_h + pad;
+    const cv::Rect swatch(x, y + Scaled(2, text_scale), box, box);
+    cv::rectangle(strip, swatch, entries[e].color.Scalar(), cv::FILLED);
+    cv::rectangle(strip, swatch, cv::Scalar(0, 0, 0), 1);
+    PutText(strip, entries[e].text, x + box + Scaled(6, text_scale), y + box, font);
   }
-  if (!note.empty()) PutText(strip, note, 4, (rows - 1) * row_h + 18);
+  if (!note.empty()) PutText(strip, note, pad, (rows - 1) * row_h + Scaled(18, text_scale), font);
   return strip;
 }
 

@@ -22,11 +22,12 @@ void PutText(cv::Mat& image, const std::string& text, int x, int y, double scale
 cv::Mat SideBySide(const cv::Mat& a, const cv::Mat& b, int gap = kPanelGap);
 // Images one above the other, left-aligned, narrower ones padded white on the right.
 cv::Mat StackVertical(const std::vector<cv::Mat>& images);
-// A 22-pixel white strip with `title` above the image.
-cv::Mat TitleAbove(const cv::Mat& image, const std::string& title);
+// A 22-pixel white strip with `title` above the image. text_scale enlarges the text and
+// the strip (pictures that are shown downscaled stay readable: 1 / the display scale).
+cv::Mat TitleAbove(const cv::Mat& image, const std::string& title, double text_scale = 1.0);
 // A white strip `width` wide: colour swatches with their text, `per_row` entries a row,
-// and an optional note on a last line.
+// and an optional note on a last line; text_scale as above.
 cv::Mat LegendStrip(const std::vector<LegendEntry>& entries, int width, int per_row,
-                    const std::string& note);
+                    const std::string& note, double text_scale = 1.0);
 
 }  // namespace gt::report

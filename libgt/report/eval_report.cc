@@ -389,11 +389,14 @@ std::vector<EvalGallery> MakeEvalGalleries(const EvalReportData& data, const Spl
       }
       PredictionPictureOptions po;
       po.seed = options.seed;
+      // At most kMaxGalleryWidth pixels wide, never enlarged (lines stay readable at 640x480);
+      // the legend drawn larger by the downscale.
+      const double scale =
+          std::min(1.0, kMaxGalleryWidth / (pair.image0.cols + kPanelGap + pair.image1.cols));
+      po.text_scale = std::min(4.0, 1.0 / scale);
       const cv::Mat picture =
           RenderPredictedMatches(pair.image0, pair.labels01, pair.image1, pair.labels10,
                                  it->second.kpts0, it->second.kpts1, drawn, po);
-      // At most kMaxGalleryWidth pixels wide, never enlarged (lines stay readable at 640x480).
-      const double scale = std::min(1.0, kMaxGalleryWidth / picture.cols);
       cv::Mat small = picture;
       if (scale < 1.0) cv::resize(picture, small, cv::Size(), scale, scale, cv::INTER_AREA);
       item.images.push_back(

@@ -140,6 +140,10 @@ std::vector<size_t> SelectMatchSubset(const std::vector<uint8_t>& match_type, in
 }
 
 bool MatchPictureOptions::Check(std::string* error) const {
+  if (!(text_scale >= 0.5 && text_scale <= 4.0)) {
+    *error = "text_scale: expected a number in [0.5, 4]";
+    return false;
+  }
   if (max_lines <= 0) {
     *error = "max_lines: expected > 0";
     return false;
@@ -223,10 +227,14 @@ cv::Mat RenderMatches(const cv::Mat& image0, const cv::Mat& image1, const gt::Pa
       {kMatchColorOv, "ov (occluded-visible) " + std::to_string(counts[2])},
   };
   std::string shown = "lines: " + std::to_string(subset.size()) + " of " + std::to_string(n);
-  return StackVertical({canvas, LegendStrip(entries, canvas.cols, 3, shown)});
+  return StackVertical({canvas, LegendStrip(entries, canvas.cols, 3, shown, options.text_scale)});
 }
 
 bool PredictionPictureOptions::Check(std::string* error) const {
+  if (!(text_scale >= 0.5 && text_scale <= 4.0)) {
+    *error = "text_scale: expected a number in [0.5, 4]";
+    return false;
+  }
   if (max_lines <= 0) {
     *error = "max_lines: expected > 0";
     return false;
@@ -290,10 +298,14 @@ cv::Mat RenderPredictedMatches(const cv::Mat& image0, const LabelMap& labels01,
   std::string shown = "lines: " + std::to_string(subset.size()) + " of " + std::to_string(n) +
                       " (equal share per verdict)";
   if (!options.note.empty()) shown += "; " + options.note;
-  return StackVertical({canvas, LegendStrip(entries, canvas.cols, 3, shown)});
+  return StackVertical({canvas, LegendStrip(entries, canvas.cols, 3, shown, options.text_scale)});
 }
 
 bool LabelPictureOptions::Check(std::string* error) const {
+  if (!(text_scale >= 0.5 && text_scale <= 4.0)) {
+    *error = "text_scale: expected a number in [0.5, 4]";
+    return false;
+  }
   if (!(alpha >= 0.0 && alpha <= 1.0)) {
     *error = "alpha: expected a number in [0, 1]";
     return false;
@@ -334,8 +346,8 @@ cv::Mat RenderLabels(const cv::Mat& image0, const LabelMap& labels01, const cv::
   if (!options.Check(&error)) throw InputError("label picture options", error);
   const cv::Mat over0 = OverlayLabels(image0, labels01, options.alpha);
   const cv::Mat over1 = OverlayLabels(image1, labels10, options.alpha);
-  cv::Mat panels = SideBySide(TitleAbove(over0, "labels 0->1 (on image 0)"),
-                              TitleAbove(over1, "labels 1->0 (on image 1)"));
+  cv::Mat panels = SideBySide(TitleAbove(over0, "image 0: labels 0->1", options.text_scale),
+                              TitleAbove(over1, "image 1: labels 1->0", options.text_scale));
   if (!options.legend) return panels;
   std::array<double, 6> share01{}, share10{};
   for (uint8_t c : labels01.codes) share01[c] += 1.0;
@@ -348,11 +360,15 @@ cv::Mat RenderLabels(const cv::Mat& image0, const LabelMap& labels01, const cv::
                   100.0 * share10[c] / std::max<size_t>(labels10.codes.size(), 1));
     entries.push_back({kLabelColors[c], buf});
   }
-  return StackVertical(
-      {panels, LegendStrip(entries, panels.cols, 3, "share of pixels: 0->1 / 1->0")});
+  return StackVertical({panels, LegendStrip(entries, panels.cols, 3, "share of pixels: 0->1 / 1->0",
+                                            options.text_scale)});
 }
 
 bool OccupancyPictureOptions::Check(std::string* error) const {
+  if (!(text_scale >= 0.5 && text_scale <= 4.0)) {
+    *error = "text_scale: expected a number in [0.5, 4]";
+    return false;
+  }
   if (scale < 1 || scale > 16) {
     *error = "scale: expected 1..16";
     return false;
@@ -424,7 +440,7 @@ cv::Mat RenderFirstOccupied(const gt::occupancy::FrustumVolume& volume,
       {kNoOccupiedSeenColor, "no occupied bin (free seen)"},
       {kNothingKnownColor, "nothing known"},
   };
-  return StackVertical({row, LegendStrip(entries, row.cols, 1, "")});
+  return StackVertical({row, LegendStrip(entries, row.cols, 1, "", options.text_scale)});
 }
 
 cv::Mat RenderOccupancySlice(const gt::occupancy::FrustumVolume& volume,
@@ -451,22 +467,25 @@ cv::Mat RenderOccupancySlice(const gt::occupancy::FrustumVolume& volume,
   PutText(axis, Metres(volume.edges_m[volume.edges_m.size() / 2]), 2, slice.rows / 2 + 4);
   PutText(axis, Metres(volume.edges_m.back()), 2, slice.rows - 4);
   cv::Mat body = SideBySide(axis, slice, 0);
-  body = TitleAbove(body, "row v=" + std::to_string(row) + ": depth (down) x column u");
+  body = TitleAbove(body, "row v=" + std::to_string(row) + ": depth (down) x column u",
+                    options.text_scale);
   std::vector<LegendEntry> entries = {
       {kOccupiedColor, "occupied"}, {kFreeColor, "free"}, {kUnknownColor, "unknown"}};
-  return StackVertical({body, LegendStrip(entries, body.cols, 3, "")});
+  return StackVertical({body, LegendStrip(entries, body.cols, 3, "", options.text_scale)});
 }
 
 cv::Mat RenderOccupancy(const gt::occupancy::FrustumVolume& cam0,
                         const gt::occupancy::FrustumVolume* cam1,
                         const OccupancyPictureOptions& options) {
-  cv::Mat top = TitleAbove(RenderFirstOccupied(cam0, options), "camera 0: first occupied bin");
-  cv::Mat bottom = TitleAbove(RenderOccupancySlice(cam0, options), "camera 0: slice");
+  cv::Mat top = TitleAbove(RenderFirstOccupied(cam0, options), "camera 0: first occupied bin",
+                           options.text_scale);
+  cv::Mat bottom =
+      TitleAbove(RenderOccupancySlice(cam0, options), "camera 0: slice", options.text_scale);
   if (cam1 != nullptr) {
-    top = SideBySide(
-        top, TitleAbove(RenderFirstOccupied(*cam1, options), "camera 1: first occupied bin"));
-    bottom =
-        SideBySide(bottom, TitleAbove(RenderOccupancySlice(*cam1, options), "camera 1: slice"));
+    top = SideBySide(top, TitleAbove(RenderFirstOccupied(*cam1, options),
+                                     "camera 1: first occupied bin", options.text_scale));
+    bottom = SideBySide(bottom, TitleAbove(RenderOccupancySlice(*cam1, options), "camera 1: slice",
+                                           options.text_scale));
   }
   return StackVertical({top, bottom});
 }

@@ -95,6 +95,7 @@ struct MatchPictureOptions {
   gt::Anchor anchor = gt::Anchor::kCenter;  // anchor rule of the matches
   int thickness = 1;                        // line thickness (pixels, 1..8); 8-connected lines
   bool legend = true;                       // a strip below with the counts per type
+  double text_scale = 1.0;  // titles and legends enlarged by this (0.5..4): 1 / display scale
   bool Check(std::string* error) const;
 };
 
@@ -118,10 +119,11 @@ inline constexpr Rgb kPredictionUnscoredColor{255, 255, 255};  // white
 enum class PredictionVerdict : uint8_t { kCorrect = 0, kWrong = 1, kUnscored = 2 };
 
 struct PredictionPictureOptions {
-  int max_lines = 150;  // lines drawn at most (> 0)
-  uint64_t seed = 0;    // subset seed
-  double alpha = 0.35;  // label overlay weight, [0, 1]
-  std::string note;     // an extra line under the legend (e.g. per-class counts)
+  int max_lines = 150;      // lines drawn at most (> 0)
+  uint64_t seed = 0;        // subset seed
+  double alpha = 0.35;      // label overlay weight, [0, 1]
+  std::string note;         // an extra line under the legend (e.g. per-class counts)
+  double text_scale = 1.0;  // titles and legends enlarged by this (0.5..4): 1 / display scale
   bool Check(std::string* error) const;
 };
 
@@ -135,8 +137,9 @@ cv::Mat RenderPredictedMatches(const cv::Mat& image0, const LabelMap& labels01,
                                const PredictionPictureOptions& options);
 
 struct LabelPictureOptions {
-  double alpha = 0.55;  // weight of the label colour over the image, in [0, 1]
-  bool legend = true;   // a strip below with colour, name and share per direction
+  double alpha = 0.55;      // weight of the label colour over the image, in [0, 1]
+  bool legend = true;       // a strip below with colour, name and share per direction
+  double text_scale = 1.0;  // titles and legends enlarged by this (0.5..4): 1 / display scale
   bool Check(std::string* error) const;
 };
 
@@ -150,9 +153,10 @@ cv::Mat RenderLabels(const cv::Mat& image0, const LabelMap& labels01, const cv::
                      const LabelMap& labels10, const LabelPictureOptions& options);
 
 struct OccupancyPictureOptions {
-  int scale = 2;         // pixels per ray in the first-occupied image (2: working size)
-  int slice_row = -1;    // row v of the half grid to slice; -1 = the middle row H/2 / 2
-  int slice_bin_px = 4;  // picture rows per depth bin in the slice
+  int scale = 2;            // pixels per ray in the first-occupied image (2: working size)
+  int slice_row = -1;       // row v of the half grid to slice; -1 = the middle row H/2 / 2
+  int slice_bin_px = 4;     // picture rows per depth bin in the slice
+  double text_scale = 1.0;  // titles and legends enlarged by this (0.5..4): 1 / display scale
   bool Check(std::string* error) const;
 };
 

@@ -607,7 +607,13 @@ std::vector<std::string> WriteSplitReport(const std::string& split_dir, const st
     item.caption = caption;
     try {
       const PairData pair = LoadPairFromShard((fs::path(split_dir) / p.shard).string(), p.key);
-      const PairPictures pics = RenderPair(pair, options.pictures);
+      // Titles and legends drawn larger by the downscale that follows, so that they read
+      // at the size they are shown.
+      PairPictureOptions pictures = options.pictures;
+      const double text_scale = std::min(4.0, 1.0 / options.gallery_scale);
+      pictures.matches.text_scale = pictures.labels.text_scale = pictures.occupancy.text_scale =
+          text_scale;
+      const PairPictures pics = RenderPair(pair, pictures);
       for (const auto& [mat, label] :
            {std::pair<const cv::Mat*, const char*>{&pics.matches, "matches"},
             {&pics.labels, "labels"},

@@ -381,5 +381,25 @@ TEST(RenderPredictedMatches, VerdictColoursAlongTheLinesOverTheLabels) {
   EXPECT_THROW(RenderPredictedMatches(img0, l01, img1, l10, k0, k1, v, o), InputError);
 }
 
+TEST(Legends, TextScaleEnlargesTitlesAndLegendsForDownscaledPictures) {
+  // The split report draws its gallery pictures with text_scale = 1 / gallery_scale: after
+  // the downscale the legend has the size of an unscaled one (rows of 22 px, 0.45 font).
+  const int w = 64, h = 48;
+  const cv::Mat img0 = Checker(w, h), img1 = Checker(w, h);
+  const LabelMap labels{w, h, std::vector<uint8_t>(w * h, 2)};
+  LabelPictureOptions o;
+  const cv::Mat one = RenderLabels(img0, labels, img1, labels, o);
+  o.text_scale = 2.0;
+  const cv::Mat two = RenderLabels(img0, labels, img1, labels, o);
+  EXPECT_EQ(one.cols, two.cols);
+  // Title strip 22 -> 44 px; legend 6 rows (one per entry at this width, and the note)
+  // of 22 -> 44 px plus 6 -> 12 px of margin.
+  const int legend_rows = (one.rows - h - 22 - 6) / 22;
+  EXPECT_EQ(one.rows, h + 22 + legend_rows * 22 + 6);
+  EXPECT_EQ(two.rows - h, 2 * (one.rows - h));
+  o.text_scale = 5.0;
+  EXPECT_THROW(RenderLabels(img0, labels, img1, labels, o), InputError);
+}
+
 }  // namespace
 }  // namespace gt::report
