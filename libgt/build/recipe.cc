@@ -564,7 +564,8 @@ json Recipe::ToJson() const {
   j["sample"] = {{"image", ImageFormatName(sample.image)},
                  {"depth", sample.depth},
                  {"labels", sample.labels},
-                 {"occupancy", sample.occupancy}};
+                 {"occupancy", sample.occupancy},
+                 {"compression", SampleCompressionName(sample.compression)}};
   j["shards"] = {{"samples_per_shard", shards.samples_per_shard}, {"target_mb", shards.target_mb}};
   j["loftr_export"] = LoftrExportKindName(loftr_export);
   return j;
@@ -709,6 +710,10 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     Get(s, "depth", &r.sample.depth, file);
     Get(s, "labels", &r.sample.labels, file);
     Get(s, "occupancy", &r.sample.occupancy, file);
+    if (s.contains("compression")) {
+      r.sample.compression = ParseSampleCompression(s["compression"].get<std::string>(),
+                                                    file + ": sample.compression");
+    }
   }
   if (j.contains("shards")) {
     Get(j["shards"], "samples_per_shard", &r.shards.samples_per_shard, file);
@@ -791,6 +796,7 @@ SampleOptions RecipeSampleOptions(const Recipe& recipe) {
   s.image = recipe.sample.image;
   s.depth = recipe.sample.depth;
   s.label_maps = recipe.sample.labels;
+  s.compression = recipe.sample.compression;
   s.digest = recipe.Digest();
   s.recipe_name = recipe.name;
   s.split = recipe.split;

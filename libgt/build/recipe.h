@@ -32,7 +32,12 @@
 namespace gt::build {
 
 // loftr_export.kind: the LoFTR-family index written beside the shards (DIR/loftr/).
-enum class LoftrExportKind { kNone, kTrain, kTest, kMegaDepth };  // "" | "train" | "test" | "megadepth"
+enum class LoftrExportKind {
+  kNone,
+  kTrain,
+  kTest,
+  kMegaDepth
+};  // "" | "train" | "test" | "megadepth"
 const char* LoftrExportKindName(LoftrExportKind kind);
 // loftr_export.score: what the train index's `score` holds (docs/EXPORTS.md).
 enum class LoftrScore {
@@ -96,6 +101,7 @@ struct SampleRecipe {
   bool depth = false;                     // depth0/1.npy (float32 metres)
   bool labels = true;                     // label01/10.npy and cells0/1.npy
   bool occupancy = true;  // occ/known (or dense) volumes (also needs occupancy.enabled)
+  SampleCompression compression = SampleCompression::kNone;  // none | deflate (.npy.gz)
 };
 
 struct ShardOptions {

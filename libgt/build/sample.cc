@@ -8,6 +8,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/io/codec.h"
+#include "libgt/io/gzip.h"
 #include "libgt/io/image.h"
 #include "libgt/io/npy.h"
 #include "libgt/truth/pair_files.h"
@@ -32,6 +33,16 @@ ImageFormat ParseImageFormat(const std::string& text, const std::string& field) 
   if (text == "jpg") return ImageFormat::kJpg;
   if (text == "none") return ImageFormat::kNone;
   throw InputError(field, "expected png, jpg or none; got '" + text + "'");
+}
+
+SampleCompression ParseSampleCompression(const std::string& text, const std::string& field) {
+  if (text == "none") return SampleCompression::kNone;
+  if (text == "deflate") return SampleCompression::kDeflate;
+  throw InputError(field, "expected none or deflate; got '" + text + "'");
+}
+
+const char* SampleCompressionName(SampleCompression compression) {
+  return compression == SampleCompression::kDeflate ? "deflate" : "none";
 }
 
 const char* ImageFormatName(ImageFormat format) {
@@ -126,7 +137,12 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
   sample.key = key;
   const int64_t W = options.resolution.width, H = options.resolution.height;
   auto add = [&](const std::string& name, std::string bytes) {
-    sample.fields.push_back({name, std::move(bytes)});
+    const bool array = name.size() > 4 && name.compare(name.size() - 4, 4, ".npy") == 0;
+    if (array && options.compression == SampleCompression::kDeflate) {
+      sample.fields.push_back({name + ".gz", io::GzipBytes(bytes, 1)});
+    } else {
+      sample.fields.push_back({name, std::move(bytes)});
+    }
   };
 
   // Metadata first (the json member), filled below; its slot is reserved now.

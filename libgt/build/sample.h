@@ -37,6 +37,12 @@ enum class ImageFormat { kNone, kPng, kJpg };  // "none" | "png" | "jpg"
 ImageFormat ParseImageFormat(const std::string& text, const std::string& field);
 const char* ImageFormatName(ImageFormat format);
 
+// How array members are stored (recipe sample.compression, SHARDS.md "Compression"):
+// "<field>.npy" as is, or "<field>.npy.gz", its gzip at zlib level 1 (io/gzip.h).
+enum class SampleCompression { kNone, kDeflate };  // "none" | "deflate"
+SampleCompression ParseSampleCompression(const std::string& text, const std::string& field);
+const char* SampleCompressionName(SampleCompression compression);
+
 // How the occupancy volumes are stored: occ/known words, the dense uint8 volume, or both.
 enum class VolumeEncoding { kPacked, kDense, kBoth };  // "packed" | "dense" | "both"
 VolumeEncoding ParseVolumeEncoding(const std::string& text, const std::string& field);
@@ -50,8 +56,9 @@ struct SampleOptions {
   ImageFormat image = ImageFormat::kPng;
   bool depth = false;      // depth0/1.npy
   bool label_maps = true;  // label01/10.npy, cells0/1.npy
-  int score_stride = 1;    // the grid of the selection's score_metrics (recorded)
-  std::string digest;      // Recipe::Digest()
+  SampleCompression compression = SampleCompression::kNone;
+  int score_stride = 1;  // the grid of the selection's score_metrics (recorded)
+  std::string digest;    // Recipe::Digest()
   std::string recipe_name, split;
 };
 

@@ -455,11 +455,15 @@ EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& s
         }
         if (key != current.key) flush();
         current.key = key;
-        if (!IsWantedField(field)) return;
+        std::string plain = field;  // "<field>.gz": compressed (sample.compression)
+        if (plain.size() > 3 && plain.compare(plain.size() - 3, 3, ".gz") == 0)
+          plain.resize(plain.size() - 3);
+        if (!IsWantedField(plain)) return;
+        const std::string bytes = shards::DecodeMember(&field, data, tar + ":" + m.path);
         if (field == "json") {
-          current.json_text.assign(data);
+          current.json_text = bytes;
         } else {
-          current.arrays[field] = io::ParseNpy(data, tar + ":" + m.path);
+          current.arrays[field] = io::ParseNpy(bytes, tar + ":" + m.path);
         }
       });
       flush();

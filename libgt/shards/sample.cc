@@ -3,6 +3,7 @@
 #include <set>
 
 #include "libgt/core/error.h"
+#include "libgt/io/gzip.h"
 
 namespace gt::shards {
 namespace {
@@ -146,6 +147,14 @@ bool SplitMemberPath(std::string_view member_path, std::string* key, std::string
   *key = std::string(member_path.substr(0, dot));
   *field = std::string(member_path.substr(dot + 1));
   return true;
+}
+
+std::string DecodeMember(std::string* field, std::string_view bytes, const std::string& where) {
+  if (field->size() > 3 && field->compare(field->size() - 3, 3, ".gz") == 0) {
+    field->resize(field->size() - 3);
+    return io::GunzipBytes(bytes, where);
+  }
+  return std::string(bytes);
 }
 
 }  // namespace gt::shards

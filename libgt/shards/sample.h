@@ -58,4 +58,9 @@ std::string MakeSampleKey(std::string_view scene, std::string_view frame0_id,
 // basename, field = the rest after that dot. Returns false when the basename has no dot.
 bool SplitMemberPath(std::string_view member_path, std::string* key, std::string* field);
 
+// A compressed member (recipe sample.compression, io/gzip.h): "<field>.gz" holds the gzip
+// of "<field>". When `field` ends with ".gz", strips it and returns the gunzipped bytes;
+// otherwise returns `bytes` unchanged. Throws InputError(where, ...) on bad gzip data.
+std::string DecodeMember(std::string* field, std::string_view bytes, const std::string& where);
+
 }  // namespace gt::shards

@@ -166,11 +166,19 @@ std::vector<std::string> CheckTarContents(const std::string& tar_path,
       keys.push_back(key);
       fields_of_key.clear();
     }
-    if (!fields_of_key.insert(field).second) problems.push_back(name + ": duplicate member");
-    const std::string ext = field.substr(field.rfind('.') + 1);
+    std::string plain_field = field;
+    std::string plain;  // a compressed member's bytes (DecodeMember)
+    try {
+      plain = DecodeMember(&plain_field, data, tar_path + ":" + name);
+    } catch (const InputError& e) {
+      problems.push_back(name + ": " + e.what());
+      return;
+    }
+    if (!fields_of_key.insert(plain_field).second) problems.push_back(name + ": duplicate member");
+    const std::string ext = plain_field.substr(plain_field.rfind('.') + 1);
     if (ext == "npy") {
       try {
-        io::ParseNpy(data, tar_path + ":" + name);
+        io::ParseNpy(plain, tar_path + ":" + name);
       } catch (const InputError& e) {
         problems.push_back(name + ": bad .npy: " + e.what());
       }

@@ -296,7 +296,8 @@ std::vector<Sample> ReadShardSamples(const std::string& tar_path) {
       throw InputError(tar_path + ": " + info.path, "member name has no '.<field>' suffix");
     }
     if (samples.empty() || samples.back().key != key) samples.push_back(Sample{key, {}});
-    samples.back().fields.push_back(SampleField{field, std::string(data)});
+    std::string bytes = DecodeMember(&field, data, tar_path + ": " + info.path);
+    samples.back().fields.push_back(SampleField{field, std::move(bytes)});
   });
   return samples;
 }
@@ -306,7 +307,8 @@ Sample ReadShardSample(const std::string& tar_path, const std::string& key) {
   ForEachTarMember(tar_path, [&](const TarMemberInfo& info, std::string_view data) {
     std::string k, field;
     if (SplitMemberPath(info.path, &k, &field) && k == key) {
-      out.fields.push_back(SampleField{field, std::string(data)});
+      std::string bytes = DecodeMember(&field, data, tar_path + ": " + info.path);
+      out.fields.push_back(SampleField{field, std::move(bytes)});
     }
   });
   if (out.fields.empty()) throw InputError(tar_path, "no sample " + key);

@@ -4,7 +4,8 @@ The split folder's ``index.json`` lists the shards (docs/READING_SHARDS.md). At 
 every shard's tar headers are read once (one pass, seeking past the data) to find the byte
 range of every member of every sample; nothing else is kept. A sample's members are
 consecutive in its tar, so ``ds[i]`` reads them with one ``os.preadv`` into one buffer, parses
-the ``.npy`` members in place (``np.frombuffer``, no copy), the ``json`` member with ``json`` and
+the ``.npy`` members in place (``np.frombuffer``, no copy; a compressed ``.npy.gz`` member of
+``sample.compression: deflate`` is gunzipped first), the ``json`` member with ``json`` and
 the images with OpenCV (``python3-opencv``), and yields the sample contract of
 ``occgt.torch`` (see its docstring). Files are opened lazily in each process, so a
 ``DataLoader`` with worker processes never shares a file handle across ``fork``.
@@ -16,6 +17,7 @@ import json
 import math
 import os
 import re
+import zlib
 from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
@@ -114,6 +116,11 @@ def _index_shard(path: str, shard: int, expected_size: int,
         return count
     finally:
         os.close(fd)
+
+
+def _has(members: Dict[str, Tuple[int, int]], field: str) -> bool:
+    """Whether the sample holds `field`, as is or compressed ("<field>.gz")."""
+    return field in members or field + ".gz" in members
 
 
 def _npy(buf: bytearray, offset: int, size: int, where: str) -> np.ndarray:
@@ -246,15 +253,15 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             need += ["label01.npy", "label10.npy", "cells0.npy", "cells1.npy"]
         if self.depth:
             need += ["depth0.npy", "depth1.npy"]
-        missing = [m for m in need if m not in members]
+        missing = [m for m in need if not _has(members, m)]
         if missing:
             return missing[:1]
         for c in "01":
             words = [f"occ{c}.npy", f"known{c}.npy"]
             if self.occupancy == "words" or (self.occupancy == "dense" and
-                                             f"occ{c}_dense.npy" not in members):
+                                             not _has(members, f"occ{c}_dense.npy")):
                 for m in words:
-                    if m not in members:
+                    if not _has(members, m):
                         return [m] if self.occupancy == "words" else [f"occ{c}_dense.npy", m]
             if (self.images or self.color) and not (f"image{c}.png" in members or
                                                     f"image{c}.jpg" in members):
@@ -340,8 +347,16 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         where = f"{self._paths[self._samples[j].shard]}: {self._keys[j]}"
 
         def npy(field: str) -> np.ndarray:
-            offset, size = members[field]
-            return _npy(buf, offset, size, f"{where}.{field}")
+            if field in members:
+                offset, size = members[field]
+                return _npy(buf, offset, size, f"{where}.{field}")
+            # A compressed member (recipe sample.compression: deflate): "<field>.gz".
+            offset, size = members[field + ".gz"]
+            try:
+                raw = bytearray(zlib.decompress(bytes(buf[offset:offset + size]), 31))
+            except zlib.error as e:
+                raise ValueError(f"{where}.{field}.gz: bad gzip data ({e})") from None
+            return _npy(raw, 0, len(raw), f"{where}.{field}.gz")
 
         offset, size = members["json"]
         try:

@@ -1,0 +1,79 @@
+// io/gzip.h: round trips at every size class, the same bytes for the same input, Python's
+// gzip module reading what is written (a standard tool), and each bad input (not gzip,
+// truncated, corrupt, trailing bytes, inflating past the limit) as one InputError.
+#include "libgt/io/gzip.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <random>
+
+#include "libgt/core/error.h"
+#include "tests/support/test_support.h"
+
+namespace gt::io {
+namespace {
+
+std::string Random(size_t n, uint32_t seed, int alphabet) {
+  std::mt19937 rng(seed);
+  std::string s(n, '\0');
+  for (char& c : s) c = static_cast<char>(rng() % alphabet);
+  return s;
+}
+
+TEST(Gzip, RoundTripsAndIsDeterministic) {
+  for (size_t n : {size_t{0}, size_t{1}, size_t{1000}, size_t{300000}}) {
+    for (int alphabet : {2, 256}) {
+      const std::string data = Random(n, static_cast<uint32_t>(n + alphabet), alphabet);
+      for (int level : {1, 6, 9}) {
+        const std::string gz = GzipBytes(data, level);
+        EXPECT_EQ(GunzipBytes(gz, "x"), data) << n << " " << level;
+        EXPECT_EQ(GzipBytes(data, level), gz);
+        // The header: 1f 8b, deflate, no flags, mtime 0.
+        ASSERT_GE(gz.size(), 18u);
+        EXPECT_EQ(gz.substr(0, 8), std::string("\x1f\x8b\x08\x00\x00\x00\x00\x00", 8));
+      }
+    }
+  }
+  EXPECT_LT(GzipBytes(std::string(100000, 'a'), 1).size(), 1000u);
+}
+
+TEST(Gzip, PythonReadsIt) {
+  const std::string dir = test::ScratchDir("gzip");
+  const std::string data = Random(5000, 3, 7);
+  std::ofstream(dir + "/a.gz", std::ios::binary) << GzipBytes(data, 1);
+  std::ofstream(dir + "/a.raw", std::ios::binary) << data;
+  const auto r = test::RunShell(
+      "/usr/bin/python3 -c \"import gzip,sys; "
+      "assert gzip.open(sys.argv[1]).read() == open(sys.argv[2], 'rb')"
+      ".read(); print('ok')\" '" +
+      dir + "/a.gz' '" + dir + "/a.raw'");
+  EXPECT_EQ(r.exit_code, 0) << r.stderr_text;
+  EXPECT_EQ(r.stdout_text, "ok\n");
+}
+
+TEST(Gzip, BadInputIsOneInputError) {
+  const std::string gz = GzipBytes(Random(20000, 9, 256), 6);
+  auto message = [](const std::string& bytes, size_t limit) {
+    try {
+      (void)GunzipBytes(bytes, "m.npy.gz", limit);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("plain bytes, not gzip at all", 1 << 20).find("not gzip"), std::string::npos);
+  EXPECT_NE(message(gz.substr(0, gz.size() / 2), 1 << 20).find("truncated"), std::string::npos);
+  EXPECT_NE(message(gz + "xx", 1 << 20).find("trailing"), std::string::npos);
+  std::string corrupt = gz;
+  corrupt[gz.size() / 2] ^= 0x55;
+  EXPECT_NE(message(corrupt, 1 << 20).find("bad gzip data"), std::string::npos);
+  EXPECT_NE(message(GzipBytes(std::string(1 << 20, 'z'), 9), 1000).find("more than 1000 bytes"),
+            std::string::npos);
+  for (size_t n = 0; n < gz.size(); n += 97) {
+    EXPECT_THROW((void)GunzipBytes(gz.substr(0, n), "cut"), InputError) << n;
+  }
+}
+
+}  // namespace
+}  // namespace gt::io
