@@ -101,7 +101,7 @@ struct SampleRecipe {
   bool depth = false;                     // depth0/1.npy (float32 metres)
   bool labels = true;                     // label01/10.npy and cells0/1.npy
   bool occupancy = true;  // occ/known (or dense) volumes (also needs occupancy.enabled)
-  SampleCompression compression = SampleCompression::kNone;  // none | deflate (.npy.gz)
+  SampleCompression compression = SampleCompression::kDeflate;  // deflate (.npy.gz) | none
 };
 
 struct ShardOptions {

@@ -37,8 +37,9 @@ enum class ImageFormat { kNone, kPng, kJpg };  // "none" | "png" | "jpg"
 ImageFormat ParseImageFormat(const std::string& text, const std::string& field);
 const char* ImageFormatName(ImageFormat format);
 
-// How array members are stored (recipe sample.compression, SHARDS.md "Compression"):
-// "<field>.npy" as is, or "<field>.npy.gz", its gzip at zlib level 1 (io/gzip.h).
+// How array members are stored (recipe sample.compression; docs/RECIPES.md "Sample
+// compression"): "<field>.npy.gz", the gzip at zlib level 1 of "<field>.npy" (io/gzip.h;
+// the default), or "<field>.npy" as is.
 enum class SampleCompression { kNone, kDeflate };  // "none" | "deflate"
 SampleCompression ParseSampleCompression(const std::string& text, const std::string& field);
 const char* SampleCompressionName(SampleCompression compression);
@@ -56,7 +57,7 @@ struct SampleOptions {
   ImageFormat image = ImageFormat::kPng;
   bool depth = false;      // depth0/1.npy
   bool label_maps = true;  // label01/10.npy, cells0/1.npy
-  SampleCompression compression = SampleCompression::kNone;
+  SampleCompression compression = SampleCompression::kDeflate;
   int score_stride = 1;  // the grid of the selection's score_metrics (recorded)
   std::string digest;    // Recipe::Digest()
   std::string recipe_name, split;

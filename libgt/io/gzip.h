@@ -1,6 +1,7 @@
 // gzip (RFC 1952) members of a shard: `<field>.gz` holds the gzip of `<field>`'s bytes
-// (recipe sample.compression: deflate; SHARDS.md "Compression"). Standard tools read them:
-// Python's gzip module, `gunzip`, WebDataset's decoders (which strip a ".gz" suffix).
+// (recipe sample.compression: deflate, the default; docs/RECIPES.md "Sample compression").
+// Standard tools read them: Python's gzip module, `gunzip`, WebDataset's decoders (which
+// strip a ".gz" suffix).
 #pragma once
 
 #include <cstddef>

@@ -6,7 +6,8 @@ section "Reading shards from Python").
         [--build build] [--split DIR] [--reps 7] [--scratch /tmp/occgt-shard-dataset-bench]
 
 Without --split, builds a 640x480 synthetic split (recipes/demo.yaml at 640x480: labels,
-cells, matches, packed occupancy words, PNG images, float32 depth; 48 samples) into the
+cells, matches, packed occupancy words, PNG images, float32 depth; 48 samples; plain .npy
+members, sample.compression: none: tests/bench/compression_bench.py compares deflate) into the
 scratch folder with BUILD/apps/occgt (reused when present). The process is confined to one
 CPU (sched_setaffinity) with torch and OpenCV on one thread, and every shard is read once
 before timing (page cache). Each repetition times, in a rotating order:
@@ -42,7 +43,9 @@ def bench_recipe(path: str) -> None:
     text = text.replace("width: 320, height: 240", "width: 640, height: 480")
     text = text.replace("quota_per_scene: 12", "quota_per_scene: 24")
     text = text.replace("frames: 16", "frames: 30")
-    assert "[640, 480]" in text and "quota_per_scene: 24" in text, "demo.yaml changed"
+    text = text.replace("occupancy: true}", "occupancy: true, compression: none}")
+    assert "[640, 480]" in text and "quota_per_scene: 24" in text and "none}" in text, \
+        "demo.yaml changed"
     with open(path, "w") as f:
         f.write(text)
 

@@ -1,4 +1,5 @@
 """Predictions with known answers made from a built split's shards (for the eval tests)."""
+import gzip
 import io
 import json
 import os
@@ -24,6 +25,8 @@ def iter_samples(split_dir: str) -> Iterator[Dict[str, object]]:
                     sample = {}
                 sample["__key__"] = key
                 data = tar.extractfile(m).read()
+                if field.endswith(".gz"):  # sample.compression: deflate (the default)
+                    field, data = field[:-3], gzip.decompress(data)
                 if field == "json":
                     sample["json"] = json.loads(data)
                 elif field.endswith(".npy"):

@@ -5,6 +5,7 @@ LoFTR test.npz read with numpy. Then: two runs give byte-identical shards, a del
 is rebuilt by a re-run and nothing else is rewritten, a 2-task split gives the same files,
 --dry-run writes nothing, and bad recipes fail before any work with one line."""
 import glob
+import gzip
 import io
 import json
 import os
@@ -47,7 +48,10 @@ def read_shard(path):
                 order.append(key)
                 samples[key] = {}
             assert order[-1] == key, f"members of {key} not contiguous"
-            samples[key][field] = tf.extractfile(m).read()
+            data = tf.extractfile(m).read()
+            if field.endswith(".npy.gz"):  # sample.compression: deflate (the default)
+                field, data = field[:-3], gzip.decompress(data)
+            samples[key][field] = data
     return samples
 
 

@@ -11,6 +11,7 @@
 - `inspect pair --root ... --frames` on the real TartanAir sample and `inspect split` on a
   folder written by this test (an empty split, a malformed line).
 """
+import gzip
 import io
 import json
 import os
@@ -65,7 +66,10 @@ def read_sample(tar_path, key):
             base = m.name.rsplit("/", 1)
             k = m.name[: len(m.name) - len(base[-1])] + base[-1].split(".", 1)[0]
             if k == key:
-                fields[base[-1].split(".", 1)[1]] = tf.extractfile(m).read()
+                field, data = base[-1].split(".", 1)[1], tf.extractfile(m).read()
+                if field.endswith(".gz"):  # sample.compression: deflate (the default)
+                    field, data = field[:-3], gzip.decompress(data)
+                fields[field] = data
     return fields
 
 

@@ -13,6 +13,7 @@ src/utils/dataset.py), written here from those facts:
   loader inverts it (world-to-camera) and T_0to1 = pose1 @ inv(pose0);
 - K = intrinsics.npz[folder], used with the 640x480 images and the depth as stored.
 """
+import gzip
 import io
 import json
 import os
@@ -95,8 +96,8 @@ def occgt_samples(build):
     for line in lines:
         tf = tars.setdefault(line["shard"], tarfile.open(os.path.join(build, line["shard"])))
         meta = json.load(tf.extractfile(line["key"] + ".json"))
-        d = [np.load(io.BytesIO(tf.extractfile(line["key"] + f".depth{k}.npy").read()))
-             for k in "01"]
+        d = [np.load(io.BytesIO(gzip.decompress(tf.extractfile(line["key"] + f".depth{k}.npy.gz")
+                                                .read()))) for k in "01"]  # deflate: the default
         out[(line["scene"], line["frame0"]["number"], line["frame1"]["number"])] = (line, meta, d[0], d[1])
     return out
 

@@ -7,6 +7,7 @@ single-pair tools with --recipe on pairs of each build and compares the .npy byt
 shard's members. Then: flags override the recipe, and without a recipe --far-m is also the
 ray range (as a recipe's far_m).
 """
+import gzip
 import json
 import os
 import re
@@ -65,7 +66,10 @@ def shard_members(tar_path, key):
     with tarfile.open(tar_path) as tf:
         for m in tf.getmembers():
             if m.name.startswith(key + "."):
-                out[m.name[len(key) + 1:]] = tf.extractfile(m).read()
+                field, data = m.name[len(key) + 1:], tf.extractfile(m).read()
+                if field.endswith(".gz"):  # sample.compression: deflate (the default)
+                    field, data = field[:-3], gzip.decompress(data)
+                out[field] = data
     return out
 
 

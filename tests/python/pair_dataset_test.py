@@ -13,6 +13,7 @@ a pair index and the dataset on disk.
 """
 from __future__ import annotations
 
+import gzip
 import io
 import json
 import os
@@ -61,7 +62,10 @@ def shard_samples(split: str) -> Iterator[Dict[str, bytes]]:
                 sample["__key__"] = key.encode()
                 data = tar.extractfile(member)
                 assert data is not None
-                sample[field] = data.read()
+                raw = data.read()
+                if field.endswith(".gz"):  # sample.compression: deflate (the default)
+                    field, raw = field[:-3], gzip.decompress(raw)
+                sample[field] = raw
         if sample:
             yield sample
 

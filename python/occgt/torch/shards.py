@@ -352,8 +352,11 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                 return _npy(buf, offset, size, f"{where}.{field}")
             # A compressed member (recipe sample.compression: deflate): "<field>.gz".
             offset, size = members[field + ".gz"]
+            gz = memoryview(buf)[offset:offset + size]
+            # The gzip trailer's ISIZE (the plain size mod 2^32) sizes the output buffer once.
+            isize = int.from_bytes(gz[-4:], "little") if size >= 18 else 0
             try:
-                raw = bytearray(zlib.decompress(bytes(buf[offset:offset + size]), 31))
+                raw = bytearray(zlib.decompress(gz, 31, max(isize, 1024)))
             except zlib.error as e:
                 raise ValueError(f"{where}.{field}.gz: bad gzip data ({e})") from None
             return _npy(raw, 0, len(raw), f"{where}.{field}.gz")
