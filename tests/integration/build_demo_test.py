@@ -49,7 +49,11 @@ def read_shard(path):
                 samples[key] = {}
             assert order[-1] == key, f"members of {key} not contiguous"
             data = tf.extractfile(m).read()
-            if field.endswith(".npy.gz"):  # sample.compression: deflate (the default)
+            # demo.yaml leaves sample.compression at its default, deflate: every array is a
+            # .npy.gz member, a gzip with no name and mtime 0 (the same bytes on every run).
+            assert not field.endswith(".npy"), f"{m.name}: plain .npy under the default"
+            if field.endswith(".npy.gz"):
+                assert data[:2] == b"\x1f\x8b" and data[3] == 0 and data[4:8] == bytes(4), m.name
                 field, data = field[:-3], gzip.decompress(data)
             samples[key][field] = data
     return samples

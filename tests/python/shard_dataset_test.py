@@ -207,10 +207,17 @@ class ShardDatasetTest(unittest.TestCase):
         C++ readers (inspect split's gallery) accept it, and it is much smaller."""
         z = build("sd_deflate", compression="deflate", encoding="packed", image="png",
                   depth="true")
-        names = set()
-        for shard in sorted(f for f in os.listdir(z) if f.endswith(".tar")):
-            with tarfile.open(os.path.join(z, shard)) as tf:
-                names.update(m.name.split(".", 1)[1] for m in tf if m.isfile())
+        def member_fields(split: str) -> set:
+            names = set()
+            for shard in sorted(f for f in os.listdir(split) if f.endswith(".tar")):
+                with tarfile.open(os.path.join(split, shard)) as tf:
+                    names.update(m.name.split(".", 1)[1] for m in tf if m.isfile())
+            return names
+
+        plain_names = member_fields(self.full)  # compression: none in its recipe
+        self.assertIn("label01.npy", plain_names)
+        self.assertNotIn("label01.npy.gz", plain_names)
+        names = member_fields(z)
         self.assertIn("label01.npy.gz", names)
         self.assertIn("occ0.npy.gz", names)
         self.assertNotIn("label01.npy", names)
