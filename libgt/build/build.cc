@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -191,18 +192,24 @@ bool BuildOptions::Check(std::string* error) const {
 }
 
 int64_t EstimatedSampleBytes(const Recipe& r) {
-  const int64_t px = static_cast<int64_t>(r.width) * r.height;
-  int64_t bytes = 4096 + 64 * 1024;  // json + matches
-  if (r.sample.labels) bytes += 2 * px + 2 * px / (r.patches.stride * r.patches.stride);
+  const bool deflate = r.sample.compression == SampleCompression::kDeflate;
+  const double sparse = deflate ? 0.06 : 1.0;  // labels, cells, occupancy: long runs
+  const double px = static_cast<double>(r.width) * r.height;
+  double bytes = 4096 + 64 * 1024 * (deflate ? 0.9 : 1.0);  // json + matches
+  if (r.sample.labels) {
+    bytes += sparse * (2 * px + 2 * px / (r.patches.stride * r.patches.stride));
+  }
   if (r.occupancy.enabled && r.sample.occupancy) {
-    const int64_t rays = px / 4;
-    if (r.occupancy.encoding != VolumeEncoding::kDense) bytes += 2 * 2 * 8 * rays;
-    if (r.occupancy.encoding != VolumeEncoding::kPacked) bytes += 2 * r.occupancy.bins * rays;
+    const double rays = px / 4;
+    if (r.occupancy.encoding != VolumeEncoding::kDense) bytes += sparse * 2 * 2 * 8 * rays;
+    if (r.occupancy.encoding != VolumeEncoding::kPacked) {
+      bytes += sparse * 2 * r.occupancy.bins * rays;
+    }
   }
   if (r.sample.image == ImageFormat::kPng) bytes += 2 * 2 * px;
   if (r.sample.image == ImageFormat::kJpg) bytes += 2 * px * 3 / 10;
-  if (r.sample.depth) bytes += 2 * 4 * px;
-  return bytes;
+  if (r.sample.depth) bytes += (deflate ? 0.4 : 1.0) * 2 * 4 * px;
+  return static_cast<int64_t>(std::ceil(bytes));
 }
 
 json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const ProgressFn& progress) {
