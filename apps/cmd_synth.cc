@@ -2,6 +2,7 @@
 // writes the synthetic dataset of libgt/synth/dataset.h (docs/SYNTH.md).
 #include <chrono>
 #include <cstdio>
+#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <regex>
@@ -49,7 +50,8 @@ void RunSynth(SynthArgs& args) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cout << "synth: " << summary.scene_names.size() << " scenes, " << summary.frames
             << " frames (" << args.options.width << "x" << args.options.height << ", seed "
-            << args.options.seed << ") written to " << args.out << " in " << seconds << " s\n"
+            << args.options.seed << ") written to " << args.out << " in " << std::fixed
+            << std::setprecision(2) << seconds << " s\n"
             << "  read it with --format generic " << args.out << "\n";
 }
 

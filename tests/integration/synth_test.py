@@ -102,7 +102,33 @@ def main():
     bad = common.occgt("synth", "--out", out, "--resolution", "160", check=False)
     assert bad.returncode == 2 and bad.stderr.startswith("occgt: error: --resolution: "), bad.stderr
     assert bad.stderr.count("\n") == 1, bad.stderr
+    cli_example()
     print("ok")
+
+
+def cli_example():
+    """docs/CLI.md's synth example, run as written in an empty folder: every line it shows,
+    the time of the first line excepted."""
+    import re
+    import subprocess
+    cli = open(os.path.join(common.SOURCE, "docs", "CLI.md"), encoding="utf-8").read()
+    m = re.search(r"^## synth\n.*?^Example [^\n]*\n[^\n]*\n\n((?:    [^\n]*\n)+)", cli, re.S | re.M)
+    assert m, "docs/CLI.md: synth example not found"
+    lines = [ln[4:] for ln in m.group(1).splitlines()]
+    cwd = common.scratch("synth_cli_example")
+    commands = [i for i, ln in enumerate(lines) if ln.startswith("$ occgt ")]
+    assert len(commands) == 2, lines
+    for k, i in enumerate(commands):
+        end = commands[k + 1] if k + 1 < len(commands) else len(lines)
+        argv = lines[i][2:].split()[1:]
+        r = subprocess.run([common.BINARY, *argv], cwd=cwd, capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        got, want = r.stdout.splitlines(), lines[i + 1:end]
+        if k == 0:
+            time = re.compile(r" in [0-9]+\.[0-9]{2} s$")
+            assert time.search(got[0]) and time.search(want[0]), (got[0], want[0])
+            got[0], want[0] = time.sub("", got[0]), time.sub("", want[0])
+        assert got == want, (got, want)
 
 
 if __name__ == "__main__":
