@@ -208,7 +208,7 @@ int64_t EstimatedSampleBytes(const Recipe& r) {
   }
   if (r.sample.image == ImageFormat::kPng) bytes += 2 * 2 * px;
   if (r.sample.image == ImageFormat::kJpg) bytes += 2 * px * 3 / 10;
-  if (r.sample.depth) bytes += (deflate ? 0.4 : 1.0) * 2 * 4 * px;
+  if (r.sample.depth) bytes += (deflate ? 0.2 : 1.0) * 2 * 4 * px;
   return static_cast<int64_t>(std::ceil(bytes));
 }
 

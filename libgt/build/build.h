@@ -61,7 +61,7 @@ nlohmann::json RunBuild(const Recipe& recipe, const BuildOptions& options,
 // maps, occupancy, images (PNG ~ 2 bytes/pixel, JPG ~ 0.3), depth, ~64 kB of matches. With
 // sample.compression: deflate the arrays count at the gzip ratios of the real samples
 // (docs/PERFORMANCE.md "Sample compression"), rounded up: labels, cells and occupancy 0.06,
-// depth 0.4, matches 0.9.
+// depth 0.2, matches 0.9.
 int64_t EstimatedSampleBytes(const Recipe& recipe);
 
 }  // namespace gt::build

@@ -38,7 +38,7 @@ ImageFormat ParseImageFormat(const std::string& text, const std::string& field);
 const char* ImageFormatName(ImageFormat format);
 
 // How array members are stored (recipe sample.compression; docs/RECIPES.md "Sample
-// compression"): "<field>.npy.gz", the gzip at zlib level 1 of "<field>.npy" (io/gzip.h;
+// compression"): "<field>.npy.gz", the gzip (libdeflate level 1) of "<field>.npy" (io/gzip.h;
 // the default), or "<field>.npy" as is.
 enum class SampleCompression { kNone, kDeflate };  // "none" | "deflate"
 SampleCompression ParseSampleCompression(const std::string& text, const std::string& field);

@@ -5,18 +5,32 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <string_view>
 
 namespace gt::io {
 
-// gzip of `data` at zlib `level` (1..9): no file name, modification time 0, so the same
-// bytes and level give the same output.
+// gzip of `data` by libdeflate at `level` (1..12): no file name, modification time 0, so
+// the same bytes, level and libdeflate version give the same output (libdeflate is
+// deterministic for a version; another version may change the gzip bytes, never the plain
+// ones, which is what tests/golden records).
 std::string GzipBytes(std::string_view data, int level);
 
 // The bytes of a gzip stream (one member). Throws InputError(what, ...) when it is not
 // gzip, is truncated or corrupt, has trailing data, or inflates to more than max_bytes.
+// Inflates with libdeflate (whole buffer, sized by the trailer) and falls back to zlib's
+// streaming inflate for the error message.
 std::string GunzipBytes(std::string_view gz, const std::string& what,
                         size_t max_bytes = size_t{1} << 31);
+
+// The same into `out`, which must hold exactly the plain size (`size` bytes, e.g. the
+// trailer's GzipTrailerSize): throws InputError(what, ...) when the data is bad or does not
+// inflate to exactly `size` bytes.
+void GunzipInto(std::string_view gz, char* out, size_t size, const std::string& what);
+
+// The plain size a gzip member's trailer records (ISIZE, the size mod 2^32; 0 when shorter
+// than 4 bytes). Only a hint: the data may lie.
+uint32_t GzipTrailerSize(std::string_view gz);
 
 }  // namespace gt::io

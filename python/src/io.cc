@@ -12,11 +12,13 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
 #include "libgt/core/error.h"
 #include "libgt/core/frame.h"
+#include "libgt/io/gzip.h"
 #include "libgt/io/image.h"
 #include "libgt/io/reader.h"
 #include "libgt/occupancy/fusion.h"
@@ -144,6 +146,28 @@ class PyDataset {
 
 void BindIo(py::module_& m) {
   m.attr("FORMATS") = py::tuple(py::cast(gt::io::KnownFormats()));
+
+  // A compressed shard member (sample.compression: deflate) inflated into a buffer the
+  // caller sized from the gzip trailer (occgt.torch.ShardDataset): io::GunzipInto, with
+  // libdeflate, without the GIL.
+  m.def(
+      "gunzip_into",
+      [](py::buffer gz, py::buffer out, const std::string& what) {
+        const py::buffer_info in = gz.request();
+        const py::buffer_info dst = out.request(true);
+        if (in.ndim != 1 || in.itemsize != 1 || dst.ndim != 1 || dst.itemsize != 1 ||
+            in.strides[0] != 1 || dst.strides[0] != 1) {
+          throw gt::InputError(what, "gunzip_into: expected contiguous byte buffers");
+        }
+        const std::string_view bytes(static_cast<const char*>(in.ptr),
+                                     static_cast<size_t>(in.size));
+        py::gil_scoped_release release;
+        gt::io::GunzipInto(bytes, static_cast<char*>(dst.ptr), static_cast<size_t>(dst.size),
+                           what);
+      },
+      "gz"_a, "out"_a, "what"_a,
+      "Inflate the gzip member `gz` into `out`, which must have exactly its plain size "
+      "(ValueError naming `what` otherwise, or on bad data)");
 
   py::class_<gt::Frame>(m, "Frame",
                         "One frame of a scene as its reader lists it (metadata only; "

@@ -75,5 +75,52 @@ TEST(Gzip, BadInputIsOneInputError) {
   }
 }
 
+// The trailer records the plain size; GunzipBytes sizes its buffer from it (libdeflate) and
+// falls back to zlib when it lies. Every lie is an error, never a wrong result or a huge
+// allocation, and a multi-member file (what `cat a.gz b.gz` makes) is refused as trailing.
+TEST(Gzip, TrailerSizeIsOnlyAHint) {
+  const std::string data = Random(50000, 4, 5);
+  const std::string gz = GzipBytes(data, 1);
+  EXPECT_EQ(GzipTrailerSize(gz), data.size());
+  EXPECT_EQ(GzipTrailerSize("ab"), 0u);
+  auto with_isize = [&](uint32_t isize) {
+    std::string out = gz;
+    for (size_t k = 0; k < 4; ++k) out[out.size() - 4 + k] = static_cast<char>(isize >> (8 * k));
+    return out;
+  };
+  for (uint32_t lie :
+       {uint32_t{0}, uint32_t{1}, uint32_t{49999}, uint32_t{50001}, uint32_t{0xffffffffu}}) {
+    EXPECT_THROW((void)GunzipBytes(with_isize(lie), "lie"), InputError) << lie;
+  }
+  EXPECT_THROW((void)GunzipBytes(gz + gz, "two members"), InputError);
+}
+
+TEST(Gzip, GunzipIntoNeedsTheExactSize) {
+  for (size_t n : {size_t{0}, size_t{7}, size_t{100000}}) {
+    const std::string data = Random(n, static_cast<uint32_t>(n), 3);
+    const std::string gz = GzipBytes(data, 1);
+    std::string out(n, 'x');
+    GunzipInto(gz, out.data(), out.size(), "into");
+    EXPECT_EQ(out, data) << n;
+    std::string small(n + 1, 'x');
+    EXPECT_THROW(GunzipInto(gz, small.data(), small.size(), "into"), InputError) << n;
+    if (n > 0) EXPECT_THROW(GunzipInto(gz, out.data(), n - 1, "into"), InputError) << n;
+  }
+  std::string out(10, 'x');
+  EXPECT_THROW(GunzipInto("not gzip at all, no", out.data(), out.size(), "into"), InputError);
+}
+
+// GunzipBytes and GunzipInto give the same bytes across sizes around the 64 KiB window.
+TEST(Gzip, BytesAndIntoAgree) {
+  for (size_t n : {size_t{1}, size_t{4096}, size_t{65535}, size_t{65537}, size_t{400000}}) {
+    const std::string data = Random(n, static_cast<uint32_t>(7 * n), 11);
+    const std::string gz = GzipBytes(data, 1);
+    EXPECT_EQ(GunzipBytes(gz, "bytes"), data) << n;
+    std::string out(n, '\0');
+    GunzipInto(gz, out.data(), n, "into");
+    EXPECT_EQ(out, data) << n;
+  }
+}
+
 }  // namespace
 }  // namespace gt::io

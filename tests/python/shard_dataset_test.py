@@ -267,8 +267,22 @@ class ShardDatasetTest(unittest.TestCase):
         with open(shard, "r+b") as f:  # the first member's gzip bytes, same size
             f.seek(at)
             f.write(b"not gzip at all!")
-        with self.assertRaisesRegex(ValueError, "bad gzip data"):
+        with self.assertRaisesRegex(ValueError, r"label01\.npy\.gz: not gzip data"):
             ShardDataset(bad)[0]
+        # A corrupt body and a trailer that lies about the size: one clear error each.
+        member = next(m for m in tarfile.open(os.path.join(z, os.path.basename(shard)))
+                      if m.name.endswith("label01.npy.gz"))
+        for offset, patch, message in [(member.size // 2, b"\xff\x00\xff\x00", "bad gzip data"),
+                                       (member.size - 4, b"\xff\xff\xff\x7f", "bad gzip data"),
+                                       (member.size - 4, b"\x01\x00\x00\x00",
+                                        "inflates to more than 1 bytes|bad gzip data")]:
+            shutil.copyfile(os.path.join(z, os.path.basename(shard)), shard)
+            with open(shard, "r+b") as f:
+                f.seek(at + offset)
+                f.write(patch)
+            with self.subTest(offset=offset), \
+                    self.assertRaisesRegex(ValueError, r"label01\.npy\.gz: .*(" + message + ")"):
+                ShardDataset(bad)[0]
 
     def test_color_and_options(self) -> None:
         ds = ShardDataset(self.full, color=True, depth=False, occupancy="none")
