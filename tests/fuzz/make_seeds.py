@@ -227,6 +227,21 @@ def main():
         put("pickle", f"scene_info_p{proto}", pickle.dumps(info, protocol=proto))
     put("pickle", "plain_list", pickle.dumps({"k": [(1, 2.5, "x"), [None, True]]}, protocol=2))
 
+    # --- gzip members (gzip_fuzz): Python's gzip with a file name and mtime, zlib's raw
+    # gzip wrapper, an empty member, an .npy as a shard holds it, two members in a row.
+    import gzip as gz
+    npy_bytes = io.BytesIO()
+    np.save(npy_bytes, np.arange(300, dtype=np.float32).reshape(15, 20))
+    put("gzip", "npy", gz.compress(npy_bytes.getvalue(), 1, mtime=0))
+    with io.BytesIO() as b:
+        with gz.GzipFile("label01.npy", "wb", 6, b, mtime=12345) as f:
+            f.write(bytes(range(256)) * 8)
+        put("gzip", "named", b.getvalue())
+    z = zlib.compressobj(9, zlib.DEFLATED, 31)
+    put("gzip", "zlib_wrapper", z.compress(b"abc" * 1000) + z.flush())
+    put("gzip", "empty", gz.compress(b"", mtime=0))
+    put("gzip", "two_members", gz.compress(b"x", mtime=0) + gz.compress(b"y", mtime=0))
+
     for target, n in sorted(counts.items()):
         print(f"make_seeds.py: {target}: {n} seeds")
 
