@@ -5,10 +5,10 @@ every shard's tar headers are read once (one pass, seeking past the data) to fin
 range of every member of every sample; nothing else is kept. A sample's members are
 consecutive in its tar, so ``ds[i]`` reads them with one ``os.preadv`` into one buffer, parses
 the ``.npy`` members in place (``np.frombuffer``, no copy; a compressed ``.npy.gz`` member of
-``sample.compression: deflate`` is gunzipped first), the ``json`` member with ``json`` and
-the images with OpenCV (``python3-opencv``), and yields the sample contract of
-``occgt.torch`` (see its docstring). Files are opened lazily in each process, so a
-``DataLoader`` with worker processes never shares a file handle across ``fork``.
+``sample.compression: deflate``, the default, is inflated first by libdeflate in C++), the
+``json`` member with ``json`` and the images with OpenCV (``python3-opencv``), and yields the
+sample contract of ``occgt.torch`` (see its docstring). Files are opened lazily in each
+process, so a ``DataLoader`` with worker processes never shares a file handle across ``fork``.
 """
 from __future__ import annotations
 
