@@ -244,7 +244,8 @@ def main():
                 if name.endswith(".tar") or name in ("index.json", "pairs.jsonl"):
                     with open(os.path.join(one, name), "rb") as a, \
                             open(os.path.join(x, name), "rb") as b:
-                        assert a.read() == b.read(), f"{name}: 8 tasks by hand differ from one build"
+                        same = a.read() == b.read()
+                    assert same, f"{name}: 8 tasks by hand differ from one build"
     print("docs examples: every example line accounted for; INSPECT, SCALE and USER_GUIDE ran")
 
 
