@@ -455,10 +455,8 @@ EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& s
         }
         if (key != current.key) flush();
         current.key = key;
-        std::string plain = field;  // "<field>.gz": compressed (sample.compression)
-        if (plain.size() > 3 && plain.compare(plain.size() - 3, 3, ".gz") == 0)
-          plain.resize(plain.size() - 3);
-        if (!IsWantedField(plain)) return;
+        // A compressed member is inflated only when its field is wanted.
+        if (!IsWantedField(std::string(shards::PlainFieldName(field)))) return;
         const std::string bytes = shards::DecodeMember(&field, data, tar + ":" + m.path);
         if (field == "json") {
           current.json_text = bytes;

@@ -103,6 +103,11 @@ bool InflateExactly(std::string_view gz, char* out, size_t size) {
          in_used == gz.size() && out_size == size;
 }
 
+// DEFLATE expands at most ~1032:1: a larger trailer size is a lie.
+bool PlausiblePlainSize(std::string_view gz, uint32_t isize) {
+  return isize <= gz.size() * 1032 + 64;
+}
+
 void CheckGzipSignature(std::string_view gz, const std::string& what) {
   if (gz.size() < 18 || static_cast<unsigned char>(gz[0]) != 0x1f ||
       static_cast<unsigned char>(gz[1]) != 0x8b) {
@@ -115,11 +120,10 @@ void CheckGzipSignature(std::string_view gz, const std::string& what) {
 std::string GunzipBytes(std::string_view gz, const std::string& what, size_t max_bytes) {
   CheckGzipSignature(gz, what);
   // Fast path: libdeflate into a buffer of the trailer's size, when that size is possible
-  // (DEFLATE expands at most ~1032:1) and within max_bytes, so that a lying trailer never
-  // makes a large allocation. A failure goes to zlib's streaming inflate, which gives the
-  // result or the precise error.
+  // and within max_bytes, so that a lying trailer never makes a large allocation. A failure
+  // goes to zlib's streaming inflate, which gives the result or the precise error.
   const uint32_t isize = GzipTrailerSize(gz);
-  if (isize <= max_bytes && isize <= gz.size() * 1032 + 64) {
+  if (isize <= max_bytes && PlausiblePlainSize(gz, isize)) {
     std::string out(isize, '\0');
     if (InflateExactly(gz, out.data(), out.size())) return out;
   }
@@ -135,6 +139,16 @@ void GunzipInto(std::string_view gz, char* out, size_t size, const std::string& 
                                " bytes, expected " + std::to_string(size));
   }
   std::memcpy(out, plain.data(), size);
+}
+
+size_t GzipPlainSize(std::string_view gz, const std::string& what) {
+  CheckGzipSignature(gz, what);
+  const uint32_t isize = GzipTrailerSize(gz);
+  if (!PlausiblePlainSize(gz, isize)) {
+    throw InputError(what, "bad gzip data: its trailer claims " + std::to_string(isize) +
+                               " bytes from " + std::to_string(gz.size()) + " compressed");
+  }
+  return isize;
 }
 
 uint32_t GzipTrailerSize(std::string_view gz) {

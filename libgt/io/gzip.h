@@ -33,4 +33,9 @@ void GunzipInto(std::string_view gz, char* out, size_t size, const std::string& 
 // than 4 bytes). Only a hint: the data may lie.
 uint32_t GzipTrailerSize(std::string_view gz);
 
+// The trailer's size, for a caller that allocates the output before GunzipInto: throws
+// InputError(what, ...) when `gz` is not gzip or the size is one DEFLATE cannot reach from
+// these bytes (over ~1032:1), so that a lying trailer never makes a large allocation.
+size_t GzipPlainSize(std::string_view gz, const std::string& what);
+
 }  // namespace gt::io

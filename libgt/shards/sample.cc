@@ -149,12 +149,16 @@ bool SplitMemberPath(std::string_view member_path, std::string* key, std::string
   return true;
 }
 
+std::string_view PlainFieldName(std::string_view field) {
+  if (field.size() > 3 && field.substr(field.size() - 3) == ".gz") field.remove_suffix(3);
+  return field;
+}
+
 std::string DecodeMember(std::string* field, std::string_view bytes, const std::string& where) {
-  if (field->size() > 3 && field->compare(field->size() - 3, 3, ".gz") == 0) {
-    field->resize(field->size() - 3);
-    return io::GunzipBytes(bytes, where);
-  }
-  return std::string(bytes);
+  const size_t plain = PlainFieldName(*field).size();
+  if (plain == field->size()) return std::string(bytes);
+  field->resize(plain);
+  return io::GunzipBytes(bytes, where);
 }
 
 }  // namespace gt::shards

@@ -63,4 +63,8 @@ bool SplitMemberPath(std::string_view member_path, std::string* key, std::string
 // otherwise returns `bytes` unchanged. Throws InputError(where, ...) on bad gzip data.
 std::string DecodeMember(std::string* field, std::string_view bytes, const std::string& where);
 
+// The field a member holds once decoded: `field` without a ".gz" suffix (DecodeMember's
+// rule), for readers that choose members by field before inflating them.
+std::string_view PlainFieldName(std::string_view field);
+
 }  // namespace gt::shards

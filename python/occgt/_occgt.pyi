@@ -43,7 +43,7 @@ def pair_ground_truth(
     scope_map: Optional[ScopeMap] = None,
 ) -> Any: ...  # occgt.PairGroundTruth
 def preset_uses_dataset_depth_range(preset: str) -> bool: ...
-def gunzip_into(gz: Any, out: Any, what: str) -> None: ...  # bytes-like in, writable bytes out
+def gunzip(gz: Any, what: str) -> bytearray: ...  # bytes-like gzip member in
 def dense_volume(occ: npt.ArrayLike, known: npt.ArrayLike, bins: int = 64) -> npt.NDArray[np.uint8]: ...
 
 WARP_STATUS_NAMES: Tuple[str, ...]  # index = uint8 code of status0/status1

@@ -147,27 +147,32 @@ class PyDataset {
 void BindIo(py::module_& m) {
   m.attr("FORMATS") = py::tuple(py::cast(gt::io::KnownFormats()));
 
-  // A compressed shard member (sample.compression: deflate) inflated into a buffer the
-  // caller sized from the gzip trailer (occgt.torch.ShardDataset): io::GunzipInto, with
-  // libdeflate, without the GIL.
+  // A compressed shard member (sample.compression: deflate) inflated into a new bytearray
+  // (occgt.torch.ShardDataset parses it in place): sized by io::GzipPlainSize, filled by
+  // io::GunzipInto (libdeflate) without the GIL.
   m.def(
-      "gunzip_into",
-      [](py::buffer gz, py::buffer out, const std::string& what) {
+      "gunzip",
+      [](py::buffer gz, const std::string& what) {
         const py::buffer_info in = gz.request();
-        const py::buffer_info dst = out.request(true);
-        if (in.ndim != 1 || in.itemsize != 1 || dst.ndim != 1 || dst.itemsize != 1 ||
-            in.strides[0] != 1 || dst.strides[0] != 1) {
-          throw gt::InputError(what, "gunzip_into: expected contiguous byte buffers");
+        if (in.ndim != 1 || in.itemsize != 1 || in.strides[0] != 1) {
+          throw gt::InputError(what, "gunzip: expected a contiguous byte buffer");
         }
         const std::string_view bytes(static_cast<const char*>(in.ptr),
                                      static_cast<size_t>(in.size));
-        py::gil_scoped_release release;
-        gt::io::GunzipInto(bytes, static_cast<char*>(dst.ptr), static_cast<size_t>(dst.size),
-                           what);
+        const size_t size = gt::io::GzipPlainSize(bytes, what);
+        auto out = py::reinterpret_steal<py::bytearray>(
+            PyByteArray_FromStringAndSize(nullptr, static_cast<Py_ssize_t>(size)));
+        if (!out) throw py::error_already_set();
+        char* dst = PyByteArray_AsString(out.ptr());
+        {
+          py::gil_scoped_release release;
+          gt::io::GunzipInto(bytes, dst, size, what);
+        }
+        return out;
       },
-      "gz"_a, "out"_a, "what"_a,
-      "Inflate the gzip member `gz` into `out`, which must have exactly its plain size "
-      "(ValueError naming `what` otherwise, or on bad data)");
+      "gz"_a, "what"_a,
+      "The plain bytes of the gzip member `gz` as a bytearray (ValueError naming `what` on "
+      "bad data)");
 
   py::class_<gt::Frame>(m, "Frame",
                         "One frame of a scene as its reader lists it (metadata only; "

@@ -122,5 +122,23 @@ TEST(Gzip, BytesAndIntoAgree) {
   }
 }
 
+// GzipPlainSize, for callers that allocate before GunzipInto (the Python binding): the
+// trailer's size when DEFLATE can reach it from these bytes, one InputError otherwise.
+TEST(Gzip, PlainSizeRefusesImpossibleTrailers) {
+  const std::string data = Random(20000, 5, 4);
+  std::string gz = GzipBytes(data, 1);
+  EXPECT_EQ(GzipPlainSize(gz, "m"), data.size());
+  EXPECT_THROW((void)GzipPlainSize("not gzip data at all", "m"), InputError);
+  for (size_t k = 0; k < 4; ++k) gz[gz.size() - 4 + k] = static_cast<char>(0xff);
+  try {
+    (void)GzipPlainSize(gz, "m.npy.gz");
+    ADD_FAILURE() << "a 4 GiB trailer on " << gz.size() << " bytes was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("m.npy.gz"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("trailer claims 4294967295"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace gt::io

@@ -21,6 +21,7 @@
 #include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
+#include "libgt/io/gzip.h"
 #include "libgt/io/md5.h"
 #include "libgt/io/npy.h"
 #include "libgt/shards/sample.h"
@@ -527,6 +528,24 @@ TEST(TarShard, MemberSizeBeyondTheArchiveFailsBeforeAllocating) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(huge), std::string::npos) << e.what();
   }
+}
+
+// The one ".gz" rule of compressed members: PlainFieldName picks the field, DecodeMember
+// strips the same suffix and inflates; other fields pass through unchanged.
+TEST(TarShard, CompressedMemberNamesDecodeByOneRule) {
+  EXPECT_EQ(PlainFieldName("label01.npy.gz"), "label01.npy");
+  EXPECT_EQ(PlainFieldName("label01.npy"), "label01.npy");
+  EXPECT_EQ(PlainFieldName("json"), "json");
+  EXPECT_EQ(PlainFieldName(".gz"), ".gz");  // nothing left to name
+  const std::string npy = io::EncodeNpy<uint8_t>({2, 3}, std::vector<uint8_t>{1, 2, 3, 4, 5, 6});
+  std::string field = "cells0.npy.gz";
+  EXPECT_EQ(DecodeMember(&field, io::GzipBytes(npy, 1), "m"), npy);
+  EXPECT_EQ(field, std::string(PlainFieldName("cells0.npy.gz")));
+  field = "cells0.npy";
+  EXPECT_EQ(DecodeMember(&field, npy, "m"), npy);
+  EXPECT_EQ(field, "cells0.npy");
+  field = "cells0.npy.gz";
+  EXPECT_THROW((void)DecodeMember(&field, npy, "m"), InputError);  // not gzip
 }
 
 }  // namespace
