@@ -1,9 +1,11 @@
 #include "libgt/eval/pose.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/core/hal/hal.hpp>
 
 #include "libgt/core/error.h"
 
@@ -28,20 +30,109 @@ bool PoseEstimatorOptions::Check(std::string* error) const {
 namespace {
 
 // [N, 2] pixels -> N normalised points (x - cx) / fx, (y - cy) / fy, in double as LoFTR
-// (NumPy float64 after subtracting K's entries).
-cv::Mat Normalise(const std::vector<float>& kpts, const Eigen::Matrix3d& K) {
-  const int n = static_cast<int>(kpts.size() / 2);
-  cv::Mat out(n, 2, CV_64F);
-  for (int i = 0; i < n; ++i) {
-    out.at<double>(i, 0) = (static_cast<double>(kpts[2 * i]) - K(0, 2)) / K(0, 0);
-    out.at<double>(i, 1) = (static_cast<double>(kpts[2 * i + 1]) - K(1, 2)) / K(1, 1);
+// (NumPy float64 after subtracting K's entries); row-major [N, 2].
+std::vector<double> Normalise(const std::vector<float>& kpts, const Eigen::Matrix3d& K) {
+  std::vector<double> out(kpts.size());
+  for (size_t i = 0; i + 1 < kpts.size(); i += 2) {
+    out[i] = (static_cast<double>(kpts[i]) - K(0, 2)) / K(0, 0);
+    out[i + 1] = (static_cast<double>(kpts[i + 1]) - K(1, 2)) / K(1, 1);
   }
   return out;
 }
 
 double AngleDeg(double cosine) { return std::acos(std::clamp(cosine, -1.0, 1.0)) * 180.0 / M_PI; }
 
+// OpenCV's triangulation of one point for P0 = [I|0] and P = [R|t] (cvTriangulatePoints):
+// the rows x0 P0_2 - P0_0, y0 P0_2 - P0_1, x1 P_2 - P_0, y1 P_2 - P_1, and the right
+// singular vector of the smallest singular value, by the routine cv::SVD::compute runs
+// (hal::SVD64f on the transposed matrix), hence the same bits.
+std::array<double, 4> TriangulateLikeOpenCV(double x0, double y0, double x1, double y1,
+                                            const double P[3][4]) {
+  static constexpr double P0[3][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}};
+  alignas(16) double At[16], W[4], Vt[16];  // At[k * 4 + row] = A(row, k)
+  for (int k = 0; k < 4; ++k) {
+    At[k * 4 + 0] = x0 * P0[2][k] - P0[0][k];
+    At[k * 4 + 1] = y0 * P0[2][k] - P0[1][k];
+    At[k * 4 + 2] = x1 * P[2][k] - P[0][k];
+    At[k * 4 + 3] = y1 * P[2][k] - P[1][k];
+  }
+  // The last argument: OpenCV 4.6 reads it as the number of left singular vectors to
+  // normalise into At afterwards (the header calls it flags); 0 skips that step, which
+  // does not touch Vt. Anything above 4 would write past At.
+  cv::hal::SVD64f(At, 4 * sizeof(double), W, nullptr, 4 * sizeof(double), Vt, 4 * sizeof(double), 4,
+                  4, 0);
+  return {Vt[12], Vt[13], Vt[14], Vt[15]};
+}
+
 }  // namespace
+
+RecoveredPose RecoverPose(const Eigen::Matrix3d& E, const std::vector<double>& p0,
+                          const std::vector<double>& p1, double distance_thresh,
+                          std::vector<uint8_t>* mask) {
+  GT_ASSERT(p0.size() == p1.size() && p0.size() % 2 == 0);
+  const size_t n = p0.size() / 2;
+  const bool all = mask->empty();
+  GT_ASSERT(all || mask->size() == n);
+  cv::Mat E_cv(3, 3, CV_64F), R1, R2, t;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) E_cv.at<double>(r, c) = E(r, c);
+  }
+  cv::decomposeEssentialMat(E_cv, R1, R2, t);
+  double P[2][3][4];  // [R1|t], [R2|t]
+  for (int k = 0; k < 2; ++k) {
+    const cv::Mat& R = k == 0 ? R1 : R2;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) P[k][r][c] = R.at<double>(r, c);
+      P[k][r][3] = t.at<double>(r, 0);
+    }
+  }
+  // Bit c of in_front[i]: point i counts for candidate c = (R1, t), (R2, t), (R1, -t), (R2, -t).
+  std::vector<uint8_t> in_front(n, 0);
+  std::array<int, 4> good{0, 0, 0, 0};
+  for (size_t i = 0; i < n; ++i) {
+    if (!all && (*mask)[i] == 0) continue;
+    for (int k = 0; k < 2; ++k) {
+      const std::array<double, 4> q =
+          TriangulateLikeOpenCV(p0[2 * i], p0[2 * i + 1], p1[2 * i], p1[2 * i + 1], P[k]);
+      // As recoverPose: Z W > 0; then Q / W, its depth in camera 0 and, by P, in camera 1,
+      // both below distance_thresh and the latter > 0. For [R|-t] every one of these
+      // numbers is negated (see the header).
+      const double zw = q[2] * q[3];
+      const double x = q[0] / q[3], y = q[1] / q[3], z = q[2] / q[3];
+      const double z1 =
+          P[k][2][0] * x + P[k][2][1] * y + P[k][2][2] * z + P[k][2][3] * (q[3] / q[3]);
+      if (zw > 0 && z < distance_thresh && z1 > 0 && z1 < distance_thresh) {
+        in_front[i] |= static_cast<uint8_t>(1u << k);
+        ++good[k];
+      }
+      if (-zw > 0 && -z < distance_thresh && -z1 > 0 && -z1 < distance_thresh) {
+        in_front[i] |= static_cast<uint8_t>(1u << (k + 2));
+        ++good[k + 2];
+      }
+    }
+  }
+  int best = 3;  // OpenCV's order: the first candidate with a count >= all others
+  for (int c = 0; c < 4; ++c) {
+    if (good[c] >= *std::max_element(good.begin(), good.end())) {
+      best = c;
+      break;
+    }
+  }
+  if (all) mask->assign(n, 0);
+  for (size_t i = 0; i < n; ++i) {
+    const bool in = (in_front[i] >> best) & 1u;
+    (*mask)[i] = in ? (all ? 255 : (*mask)[i]) : 0;
+  }
+  RecoveredPose out;
+  const cv::Mat& R = best % 2 == 0 ? R1 : R2;
+  const double sign = best < 2 ? 1.0 : -1.0;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out.cam1_from_cam0_R(r, c) = R.at<double>(r, c);
+    out.cam1_from_cam0_t(r) = sign * t.at<double>(r, 0);
+  }
+  out.inliers = good[best];
+  return out;
+}
 
 std::optional<PoseEstimate> EstimateRelativePose(const std::vector<float>& kpts0,
                                                  const std::vector<float>& kpts1,
@@ -52,29 +143,28 @@ std::optional<PoseEstimate> EstimateRelativePose(const std::vector<float>& kpts0
   const int n = static_cast<int>(kpts0.size() / 2);
   if (n < options.min_matches) return std::nullopt;
   const double threshold = options.ransac_px / ((K0(0, 0) + K1(1, 1) + K0(0, 0) + K1(1, 1)) / 4.0);
-  const cv::Mat p0 = Normalise(kpts0, K0);
-  const cv::Mat p1 = Normalise(kpts1, K1);
+  std::vector<double> p0 = Normalise(kpts0, K0);
+  std::vector<double> p1 = Normalise(kpts1, K1);
   const cv::Mat identity = cv::Mat::eye(3, 3, CV_64F);
-  cv::Mat mask;
+  cv::Mat mask_cv;
   const cv::Mat E =
-      cv::findEssentialMat(p0, p1, identity, cv::RANSAC, options.confidence, threshold, mask);
+      cv::findEssentialMat(cv::Mat(n, 2, CV_64F, p0.data()), cv::Mat(n, 2, CV_64F, p1.data()),
+                           identity, cv::RANSAC, options.confidence, threshold, mask_cv);
   if (E.empty() || E.cols != 3 || E.rows % 3 != 0) return std::nullopt;
+  GT_ASSERT(mask_cv.isContinuous() && mask_cv.total() == static_cast<size_t>(n));
+  // The same mask for every block: recoverPose narrows it in place (LoFTR's loop).
+  std::vector<uint8_t> mask(mask_cv.data, mask_cv.data + n);
   std::optional<PoseEstimate> best;
   int best_inliers = 0;
   for (int k = 0; k < E.rows / 3; ++k) {
-    const cv::Mat block = E.rowRange(3 * k, 3 * k + 3).clone();
-    cv::Mat R, t;
-    // The same mask object for every block: recoverPose narrows it in place (LoFTR's loop).
-    const int inliers = cv::recoverPose(block, p0, p1, identity, R, t, 1e9, mask);
-    if (inliers > best_inliers) {
-      best_inliers = inliers;
-      PoseEstimate estimate;
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) estimate.cam1_from_cam0_R(r, c) = R.at<double>(r, c);
-        estimate.cam1_from_cam0_t(r) = t.at<double>(r, 0);
-      }
-      estimate.inliers = inliers;
-      best = estimate;
+    Eigen::Matrix3d block;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) block(r, c) = E.at<double>(3 * k + r, c);
+    }
+    const RecoveredPose pose = RecoverPose(block, p0, p1, 1e9, &mask);
+    if (pose.inliers > best_inliers) {
+      best_inliers = pose.inliers;
+      best = PoseEstimate{pose.cam1_from_cam0_R, pose.cam1_from_cam0_t, pose.inliers};
     }
   }
   return best;

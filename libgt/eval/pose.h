@@ -8,7 +8,8 @@
 // cv::recoverPose(E_k, ..., I, distanceThresh 1e9, mask) on each 3x3 block E_k of E, the
 // same mask passed on from block to block (OpenCV updates it in place, as LoFTR's Python
 // loop does), the block with most inliers wins; fewer than `min_matches` matches, no E, or
-// no block with an inlier -> no pose (pose error +inf).
+// no block with an inlier -> no pose (pose error +inf). recoverPose is RecoverPose below:
+// the same numbers, computed only where they count.
 // Errors (degrees): rotation arccos(clip((tr(R^T R_gt) - 1) / 2, -1, 1)); translation the
 // angle between t and t_gt folded to min(e, 180 - e) (t is known up to sign and scale);
 // pose error = max of the two. AUC at threshold T: errors sorted with 0 prepended, recall
@@ -16,6 +17,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <string>
@@ -44,6 +46,28 @@ std::optional<PoseEstimate> EstimateRelativePose(const std::vector<float>& kpts0
                                                  const Eigen::Matrix3d& K0,
                                                  const Eigen::Matrix3d& K1,
                                                  const PoseEstimatorOptions& options);
+
+// cv::recoverPose(E, p0, p1, I, R, t, distance_thresh, mask) of OpenCV 4.6 on normalised
+// points p0, p1 (row-major [N, 2]), with the same result: E split by
+// cv::decomposeEssentialMat into R1, R2, t; each point triangulated by OpenCV's DLT (the
+// smallest right singular vector of the 4x4 system, by the same SVD routine, hence the
+// same bits) for [R1|t] and [R2|t]; a point counts for a candidate when it lies in front
+// of both cameras closer than distance_thresh; the candidate with most points wins, ties
+// to the first of (R1, t), (R2, t), (R1, -t), (R2, -t). It differs in cost only:
+//  - points whose mask entry is 0 are not triangulated (OpenCV ANDs them out after);
+//  - [R|-t] is not triangulated again: its system is [R|t]'s with the last column
+//    negated, whose solution is (X, -W) for [R|t]'s (X, W), so its depths are the
+//    negatives of [R|t]'s, exactly.
+// `mask` (N entries, or empty for all points) is narrowed in place to the winner's points,
+// as OpenCV does. Checked against cv::recoverPose in tests/eval/pose_test.cc.
+struct RecoveredPose {
+  Eigen::Matrix3d cam1_from_cam0_R;
+  Eigen::Vector3d cam1_from_cam0_t;
+  int inliers = 0;
+};
+RecoveredPose RecoverPose(const Eigen::Matrix3d& E, const std::vector<double>& p0,
+                          const std::vector<double>& p1, double distance_thresh,
+                          std::vector<uint8_t>* mask);
 
 struct PoseError {
   double rotation_deg = 0;     // +inf when no pose

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <opencv2/calib3d.hpp>
 #include <random>
 
 #include "libgt/eval/match_quality.h"
@@ -104,6 +105,135 @@ TEST(EstimateRelativePose, ExactMatchesGiveTheTruePose) {
   bad = PoseEstimatorOptions{};
   bad.confidence = 1;
   EXPECT_FALSE(bad.Check(&error));
+}
+
+// RecoverPose is cv::recoverPose(E, p0, p1, I, R, t, 1e9, mask) computed differently; the
+// slow reference here is OpenCV itself. Every case runs LoFTR's loop on both sides: each
+// block of findEssentialMat's E in turn, the mask narrowed from block to block; counts,
+// narrowed masks, R and t must be equal, bit for bit.
+struct Correspondences {
+  std::vector<double> p0, p1;  // normalised, row-major [N, 2]
+};
+
+// Points at depths [z_min, z_max] seen by cameras `baseline` apart; a fraction `outliers`
+// of random pairs; Gaussian noise (normalised units) on the second image's points.
+Correspondences MakeCorrespondences(std::mt19937* rng, int n, double baseline, double z_min,
+                                    double z_max, double noise, double outliers,
+                                    const Eigen::Matrix3d& R, const Eigen::Vector3d& t_dir) {
+  std::uniform_real_distribution<double> u(-0.6, 0.6), z(z_min, z_max), unit(0, 1);
+  std::normal_distribution<double> g(0, noise);
+  Correspondences c;
+  while (static_cast<int>(c.p0.size() / 2) < n) {
+    if (unit(*rng) < outliers) {
+      c.p0.insert(c.p0.end(), {u(*rng), u(*rng)});
+      c.p1.insert(c.p1.end(), {u(*rng), u(*rng)});
+      continue;
+    }
+    const double depth = z(*rng);
+    const Eigen::Vector3d p(u(*rng) * depth, u(*rng) * depth, depth);
+    const Eigen::Vector3d q = R * p + baseline * t_dir.normalized();
+    if (q.z() <= 1e-3) continue;
+    c.p0.insert(c.p0.end(), {p.x() / p.z(), p.y() / p.z()});
+    c.p1.insert(c.p1.end(), {q.x() / q.z() + g(*rng), q.y() / q.z() + g(*rng)});
+  }
+  return c;
+}
+
+// Runs both on every block of E with the mask carried along; returns the number of
+// triangulated points compared.
+int64_t ExpectSameAsOpenCV(const Correspondences& c, const cv::Mat& E, const cv::Mat& mask_in,
+                           const std::string& what) {
+  const int n = static_cast<int>(c.p0.size() / 2);
+  cv::Mat p0(n, 2, CV_64F, const_cast<double*>(c.p0.data()));
+  cv::Mat p1(n, 2, CV_64F, const_cast<double*>(c.p1.data()));
+  cv::Mat mask_cv = mask_in.clone();
+  std::vector<uint8_t> mask(mask_cv.data, mask_cv.data + mask_cv.total());
+  int64_t compared = 0;
+  for (int k = 0; k < E.rows / 3; ++k) {
+    SCOPED_TRACE(what + ", block " + std::to_string(k));
+    cv::Mat R_cv, t_cv;
+    const int expected = cv::recoverPose(E.rowRange(3 * k, 3 * k + 3).clone(), p0, p1,
+                                         cv::Mat::eye(3, 3, CV_64F), R_cv, t_cv, 1e9, mask_cv);
+    Eigen::Matrix3d block;
+    for (int r = 0; r < 3; ++r) {
+      for (int col = 0; col < 3; ++col) block(r, col) = E.at<double>(3 * k + r, col);
+    }
+    const RecoveredPose got = RecoverPose(block, c.p0, c.p1, 1e9, &mask);
+    EXPECT_EQ(got.inliers, expected);
+    if (mask.size() != mask_cv.total()) {
+      ADD_FAILURE() << "mask size " << mask.size() << ", OpenCV's " << mask_cv.total();
+      return compared;
+    }
+    EXPECT_TRUE(std::equal(mask.begin(), mask.end(), mask_cv.data));
+    for (int r = 0; r < 3; ++r) {
+      for (int col = 0; col < 3; ++col)
+        EXPECT_EQ(got.cam1_from_cam0_R(r, col), R_cv.at<double>(r, col));
+      EXPECT_EQ(got.cam1_from_cam0_t(r), t_cv.at<double>(r, 0));
+    }
+    compared += n;
+  }
+  return compared;
+}
+
+TEST(RecoverPose, SameAsOpenCVOnRansacOutput) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> angle(0, 30), axis(-1, 1), unit(0, 1);
+  int64_t compared = 0;
+  int multi_block = 0;
+  for (int scene = 0; scene < 40; ++scene) {
+    // Baselines from 1 mm (many points near infinity, depths of either sign) to 1 m;
+    // noise up to ~2 px at f = 500; up to half outliers.
+    const double baseline = std::pow(10.0, -3 + 3 * unit(rng));
+    const Eigen::Matrix3d R = Rot(angle(rng), {axis(rng), axis(rng), axis(rng)});
+    const Eigen::Vector3d t_dir(axis(rng), axis(rng), axis(rng));
+    // Every fifth scene has 5 points: OpenCV then returns every five-point solution, the
+    // case of several blocks.
+    const int points = scene % 5 == 4 ? 5 : 300 + scene * 15;
+    const Correspondences c = MakeCorrespondences(&rng, points, baseline, 0.5, 20, 4e-3 * unit(rng),
+                                                  0.5 * unit(rng), R, t_dir);
+    const int n = static_cast<int>(c.p0.size() / 2);
+    cv::Mat mask;
+    const cv::Mat E =
+        cv::findEssentialMat(cv::Mat(n, 2, CV_64F, const_cast<double*>(c.p0.data())),
+                             cv::Mat(n, 2, CV_64F, const_cast<double*>(c.p1.data())),
+                             cv::Mat::eye(3, 3, CV_64F), cv::RANSAC, 0.999, 1e-3, mask);
+    if (E.empty()) continue;
+    multi_block += E.rows > 3;
+    compared += ExpectSameAsOpenCV(c, E, mask, "scene " + std::to_string(scene));
+    // No mask: every point, and the mask comes back 0/255 as OpenCV's.
+    compared += ExpectSameAsOpenCV(c, E.rowRange(0, 3), cv::Mat(),
+                                   "scene " + std::to_string(scene) + " without mask");
+  }
+  EXPECT_GT(compared, 20000);
+  EXPECT_GT(multi_block, 0) << "no case exercised a second block";
+}
+
+TEST(RecoverPose, SameAsOpenCVOnWrongEssentialMatrices) {
+  // A random E: the four candidates share the points far more evenly than for a good E,
+  // and ties are likely on few points.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> angle(0, 180), axis(-1, 1);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Correspondences c = MakeCorrespondences(&rng, trial % 2 == 0 ? 6 : 300, 0.2, 1, 5, 1e-3,
+                                                  0.2, Rot(5, {0, 1, 0}), {1, 0, 0});
+    const Eigen::Matrix3d R = Rot(angle(rng), {axis(rng), axis(rng), axis(rng)});
+    const Eigen::Vector3d t(axis(rng), axis(rng), axis(rng));
+    Eigen::Matrix3d tx;
+    tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+    const Eigen::Matrix3d E = tx * R;
+    cv::Mat E_cv(3, 3, CV_64F);
+    for (int r = 0; r < 3; ++r) {
+      for (int col = 0; col < 3; ++col) E_cv.at<double>(r, col) = E(r, col);
+    }
+    cv::Mat mask(static_cast<int>(c.p0.size() / 2), 1, CV_8U);
+    for (int i = 0; i < mask.rows; ++i) mask.at<uint8_t>(i) = (i * 7 + trial) % 3 != 0;
+    ExpectSameAsOpenCV(c, E_cv, mask, "trial " + std::to_string(trial));
+  }
+  // An all-zero mask: every count 0, OpenCV returns (R1, t).
+  const Correspondences c =
+      MakeCorrespondences(&rng, 20, 0.2, 1, 5, 0, 0, Rot(5, {0, 1, 0}), {1, 0, 0});
+  ExpectSameAsOpenCV(c, (cv::Mat_<double>(3, 3) << 0, -1, 0, 1, 0, 0, 0, 0, 0),
+                     cv::Mat::zeros(20, 1, CV_8U), "empty mask");
 }
 
 TEST(SymmetricEpipolarDistances, ZeroOnExactMatchesKnownOffEpipolar) {
