@@ -1,7 +1,7 @@
 // occgt build RECIPE --out DIR [--dry-run] [--threads N] [--task K --tasks N]
 //                   [--stage select|write|all] [--root PATH] [--depth-cache-mb MB]
 // Turns a dataset and a YAML recipe into a filtered pair index and WebDataset shards
-// (docs/USER_GUIDE.md, docs/RECIPES.md, docs/CLI.md). The job is libgt/build/build.h;
+// (docs/USER_GUIDE.md, docs/RECIPES.md, docs/CLI.md). The job is libgt/pipeline/build.h;
 // this file parses flags, prints progress on stderr and a short human summary on stdout
 // (--json: the summary JSON, the content of DIR/summary.json, instead). Without
 // --task/--tasks, a Slurm array task takes its place from SLURM_ARRAY_TASK_{ID,MIN,MAX,COUNT}
@@ -21,10 +21,10 @@
 #include <string>
 
 #include "apps/commands.h"
-#include "libgt/core/human.h"
-#include "libgt/build/build.h"
-#include "libgt/build/recipe.h"
 #include "libgt/core/error.h"
+#include "libgt/core/human.h"
+#include "libgt/pipeline/build.h"
+#include "libgt/pipeline/recipe.h"
 #include "libgt/shards/split.h"
 
 namespace occgt {
@@ -35,9 +35,9 @@ struct BuildArgs {
   std::string root;
   int threads = 0;
   std::string stage = "all";
-  bool json = false;  // print the summary JSON instead of the human summary
+  bool json = false;        // print the summary JSON instead of the human summary
   bool task_given = false;  // --task or --tasks on the command line (then Slurm's env is ignored)
-  gt::build::BuildOptions build;
+  gt::pipeline::BuildOptions build;
 };
 
 // The value of environment variable `name` as an integer >= 0, nullopt when unset or empty;
@@ -58,7 +58,7 @@ std::optional<int> EnvIndex(const char* name) {
 // Task layout of a Slurm array task: task = SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN,
 // tasks = SLURM_ARRAY_TASK_COUNT. The array must be contiguous with step 1 (0-7, or 1-8),
 // so that the tasks cover 0..tasks-1 exactly once. False when not in an array job.
-bool TaskFromSlurm(gt::build::BuildOptions* build) {
+bool TaskFromSlurm(gt::pipeline::BuildOptions* build) {
   const std::optional<int> id = EnvIndex("SLURM_ARRAY_TASK_ID");
   if (!id) return false;
   const int min = EnvIndex("SLURM_ARRAY_TASK_MIN").value_or(0);
@@ -92,12 +92,12 @@ bool TaskFromSlurm(gt::build::BuildOptions* build) {
   return true;
 }
 
-void PrintProgress(const gt::build::Progress& p) {
+void PrintProgress(const gt::pipeline::Progress& p) {
   static const bool tty = ::isatty(STDERR_FILENO);
   const double rate = p.elapsed_s > 0 ? p.done / p.elapsed_s : 0.0;
   const double eta = rate > 0 ? (p.total - p.done) / rate : 0.0;
-  const char* unit = p.stage == gt::build::Stage::kSelect ? "scenes" : "pairs";
-  const char* stage = gt::build::StageName(p.stage);
+  const char* unit = p.stage == gt::pipeline::Stage::kSelect ? "scenes" : "pairs";
+  const char* stage = gt::pipeline::StageName(p.stage);
   if (tty) {
     std::fprintf(stderr, "\r[%s] %lld/%lld %s  %.2f/s  ETA %.0fs   ", stage,
                  static_cast<long long>(p.done), static_cast<long long>(p.total), unit, rate, eta);
@@ -158,7 +158,7 @@ std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
     if (written == 0) {
       text += "; nothing to write: every shard of this task was complete already";
     } else {
-      std::snprintf(line, sizeof(line), "; wrote %lld pairs, %lld shards, %s", 
+      std::snprintf(line, sizeof(line), "; wrote %lld pairs, %lld shards, %s",
                     static_cast<long long>(written),
                     static_cast<long long>(num("shards_written_this_run")),
                     HumanBytes(static_cast<double>(num("bytes_written"))).c_str());
@@ -180,19 +180,21 @@ std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
       s.value("stage", "all") != "select") {
     text += "  this task's part is done; the split is published once every task has run\n";
   } else if (s.value("complete", false)) {
-    text += "  out: " + out_dir + " (index.json, pairs.jsonl, summary.json); see it with: occgt "
-            "inspect split " + out_dir + "\n";
+    text += "  out: " + out_dir +
+            " (index.json, pairs.jsonl, summary.json); see it with: occgt "
+            "inspect split " +
+            out_dir + "\n";
   }
   return text;
 }
 
 void Run(const BuildArgs& args_in) {
   BuildArgs args = args_in;
-  args.build.stage = gt::build::ParseStage(args.stage, "--stage");
+  args.build.stage = gt::pipeline::ParseStage(args.stage, "--stage");
   const bool from_slurm = !args.task_given && TaskFromSlurm(&args.build);
-  gt::build::RecipeOverrides overrides;
+  gt::pipeline::RecipeOverrides overrides;
   overrides.root = args.root;
-  const gt::build::Recipe recipe = gt::build::LoadRecipe(args.recipe, overrides);
+  const gt::pipeline::Recipe recipe = gt::pipeline::LoadRecipe(args.recipe, overrides);
   if (args.threads < 0)
     throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
   std::unique_ptr<tbb::global_control> limit;
@@ -214,7 +216,7 @@ void Run(const BuildArgs& args_in) {
   }
   std::signal(SIGINT, OnInterrupt);
   std::signal(SIGTERM, OnInterrupt);
-  const nlohmann::json summary = gt::build::RunBuild(recipe, args.build, PrintProgress);
+  const nlohmann::json summary = gt::pipeline::RunBuild(recipe, args.build, PrintProgress);
   if (args.json) {
     std::cout << summary.dump(2) << std::endl;
   } else {

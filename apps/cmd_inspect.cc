@@ -5,6 +5,7 @@
 //   occgt inspect split DIR [--out OUT] [--eval eval.json ...]
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,8 +22,8 @@ namespace {
 struct InspectPairArgs {
   std::string shard, key, pair_dir, root, format, scene, frames, out;
   std::string image0, image1;
-  std::string preset = "default";
-  std::string resolution = "640x480";
+  std::optional<std::string> preset;      // default: truth::LabelSettings's
+  std::optional<std::string> resolution;  // WxH; default: truth::Resolution's
   bool no_occupancy = false;
   int max_lines = 200;
   uint64_t seed = 0;
@@ -62,13 +63,14 @@ void RunInspectPair(const InspectPairArgs& a) {
       throw gt::InputError("--root/--format/--scene/--frames", "expected all four");
     }
     const auto [id0, id1] = gt::truth::ParseFramePair(a.frames);
-    gt::report::ComputePairOptions o;
-    o.preset = a.preset;
-    const gt::truth::Resolution r = gt::truth::ParseResolution(a.resolution, "--resolution");
-    o.width = r.width;
-    o.height = r.height;
-    o.occupancy = !a.no_occupancy;
-    pair = gt::report::ComputePairFromScene(a.root, a.format, a.scene, id0, id1, o);
+    gt::truth::PairSettings settings;
+    if (a.preset) settings.labels.preset = *a.preset;
+    settings.occupancy.enabled = !a.no_occupancy;
+    const gt::truth::Resolution r = a.resolution
+                                        ? gt::truth::ParseResolution(*a.resolution, "--resolution")
+                                        : gt::truth::Resolution();
+    pair = gt::report::ComputePairFromScene(a.root, gt::ParseDatasetFormat(a.format, "--format"),
+                                            a.scene, id0, id1, settings, r);
   }
   gt::report::PairPictureOptions po;
   po.matches.max_lines = a.max_lines;
@@ -132,9 +134,9 @@ void AddInspectCommand(CLI::App& app) {
   pair->add_option("--format", pa->format, "dataset format: scannet, tartanair, ...");
   pair->add_option("--scene", pa->scene, "scene name");
   pair->add_option("--frames", pa->frames, "two frame ids: A,B");
-  pair->add_option("--preset", pa->preset, "label preset (with --root)")->capture_default_str();
-  pair->add_option("--resolution", pa->resolution, "working resolution WxH (with --root)")
-      ->capture_default_str();
+  pair->add_option("--preset", pa->preset, "label preset (with --root; default: default)");
+  pair->add_option("--resolution", pa->resolution,
+                   "working resolution WxH (with --root; default 640x480)");
   pair->add_flag("--no-occupancy", pa->no_occupancy, "skip the occupancy fusion (with --root)");
   pair->add_option("--max-lines", pa->max_lines, "match lines drawn at most")
       ->capture_default_str();

@@ -14,8 +14,9 @@
 #include "apps/pair_recipe.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
-#include "libgt/io/reader.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/truth/pair_files.h"
+#include "libgt/truth/pair_settings.h"
 #include "libgt/truth/pair_truth.h"
 
 namespace occgt {
@@ -34,54 +35,58 @@ struct OccupancyArgs {
 };
 
 void RunOccupancy(const OccupancyArgs& args) {
-  // Options first: bad flags fail before any file is read.
+  // Settings first: bad flags fail before any file is read.
   PairSetup setup = StartPairSetup(args.data);
-  gt::truth::PairTruthOptions& o = setup.options;
-  o.labels_and_matches = false;
-  o.occupancy = true;
-  occ::FusionOptions& fo = o.fusion;
-  if (args.voxel_m) fo.voxel_size_m = *args.voxel_m;
-  if (args.far_m) o.bins.far_m = *args.far_m;
-  // The ray range is the last bin edge (as in a recipe's far_m) unless set apart.
-  fo.max_range_m = args.max_range_m.value_or(o.bins.far_m);
+  gt::truth::OccupancySettings& os = setup.settings.occupancy;
+  os.enabled = true;
+  if (args.voxel_m) os.voxel_m = *args.voxel_m;
+  if (args.max_range_m) os.max_range_m = *args.max_range_m;
+  if (args.bins) os.bins = *args.bins;
+  if (args.near_m) os.near_m = *args.near_m;
+  if (args.far_m) os.far_m = *args.far_m;
+  if (args.spacing) os.spacing = occ::ParseBinSpacing(*args.spacing);
+  if (args.traversal) os.traversal = occ::ParseTraversal(*args.traversal);
+  if (args.mode) os.mode = occ::ParseOccupancyMode(*args.mode);
   if (args.downsample && args.no_downsample)
     throw gt::InputError("--downsample", "conflicts with --no-downsample");
-  fo.downsample = args.downsample;  // off by default, as in the library and `build`
-  fo.remove_outliers = args.remove_outliers;
-  if (args.scope) occ::ParseFusionScope(*args.scope, &fo);
+  os.downsample = args.downsample;  // off by default, as in the library and `build`
+  os.remove_outliers = args.remove_outliers;
+  if (args.scope) {
+    occ::FusionOptions scope;
+    occ::ParseFusionScope(*args.scope, &scope);
+    os.scope = scope.scope;
+    os.window = scope.window;
+    os.scene_stride = scope.scene_stride;
+  }
+  gt::truth::PairTruthOptions o = gt::truth::ResolvePairTruthOptions(setup.settings);
+  o.labels_and_matches = false;
   std::string error;
-  if (!fo.Check(&error)) {
-    ThrowOptionsError(error, "fusion options",
-                      {{"voxel_size_m", "--voxel-m", args.voxel_m.has_value()},
-                       {"max_range_m", "--max-range-m", args.max_range_m.has_value()},
-                       {"window", "--scope", args.scope.has_value()},
-                       {"scene", "--scope", args.scope.has_value()}});
-  }
-  if (args.bins) o.bins.num_bins = *args.bins;
-  if (args.near_m) o.bins.near_m = *args.near_m;
-  if (args.spacing) o.bins.spacing = occ::ParseBinSpacing(*args.spacing);
-  if (args.traversal) o.bins.traversal = occ::ParseTraversal(*args.traversal);
-  if (!o.bins.Check(&error)) {
-    ThrowOptionsError(error, "bin options",
-                      {{"num_bins", "--bins", args.bins.has_value()},
-                       {"near_m", "--near-m", args.near_m.has_value()},
-                       {"far_m", "--far-m", args.far_m.has_value() || args.near_m.has_value()}});
-  }
-  if (args.mode) o.mode = occ::ParseOccupancyMode(*args.mode);
+  const std::initializer_list<FieldFlag> occupancy_flags = {
+      {"voxel_size_m", "--voxel-m", args.voxel_m.has_value()},
+      {"max_range_m", "--max-range-m", args.max_range_m.has_value()},
+      {"window", "--scope", args.scope.has_value()},
+      {"scene", "--scope", args.scope.has_value()},
+      {"num_bins", "--bins", args.bins.has_value()},
+      {"near_m", "--near-m", args.near_m.has_value()},
+      {"far_m", "--far-m", args.far_m.has_value() || args.near_m.has_value()}};
+  if (!o.Check(&error)) ThrowOptionsError(error, "occupancy options", occupancy_flags);
   if (o.mode == occ::OccupancyMode::kTwoPoint && !args.save_octree.empty())
     throw gt::InputError("--save-octree", "needs --mode octomap");
   const PairDatasetArgs& d = args.data;
   gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, "", setup.resolution};
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 
-  const gt::Scene scene = gt::io::MakeReader(setup.format)->ReadScene(setup.root, d.scene);
+  const gt::Scene scene = gt::datasets::MakeReader(setup.format)->ReadScene(setup.root, d.scene);
   source.scene = scene.name;
-  o.labels = LabelsFor(setup, scene, std::nullopt, d);  // the validity range of the fusion
-  if (!o.labels.Check(&error)) {
-    ThrowOptionsError(error, "label options",
+  // The scene's depth range: the validity range of the fusion.
+  o = gt::truth::ResolvePairTruthOptions(setup.settings, DepthRangeFor(setup, scene));
+  o.labels_and_matches = false;
+  if (!o.Check(&error)) {
+    ThrowOptionsError(error, "occupancy options",
                       {{"min_depth_m", "--min-depth-m", d.min_depth_m.has_value()},
                        {"max_depth_m", "--max-depth-m", d.max_depth_m.has_value()}});
   }
+  const occ::FusionOptions& fo = o.fusion;
   const size_t i0 = gt::truth::FindFrame(scene, source.id0);
   const size_t i1 = gt::truth::FindFrame(scene, source.id1);
   source.number0 = scene.frames[i0].number;

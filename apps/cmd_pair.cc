@@ -11,8 +11,9 @@
 #include "apps/pair_recipe.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
-#include "libgt/io/reader.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/truth/pair_files.h"
+#include "libgt/truth/pair_settings.h"
 #include "libgt/truth/pair_truth.h"
 
 namespace occgt {
@@ -31,39 +32,40 @@ struct PairArgs {
 };
 
 void RunPair(const PairArgs& args) {
-  // Options first: bad flags fail before any file is read.
+  // Settings first: bad flags fail before any file is read.
   const PairDatasetArgs& d = args.data;
   PairSetup setup = StartPairSetup(d);
-  gt::truth::PairTruthOptions& o = setup.options;
-  o.labels_and_matches = true;
-  o.occupancy = false;
-  if (args.preset) gt::LabelPreset(*args.preset);  // a bad name fails now
-  if (args.stride) o.patches.stride = *args.stride;
-  if (args.anchor) o.patches.anchor = gt::ParseAnchor(*args.anchor);
-  if (args.mutual) o.patches.mutual = true;
-  if (args.no_mutual) o.patches.mutual = false;
+  gt::truth::PairSettings& st = setup.settings;
+  st.occupancy.enabled = false;
+  gt::truth::LabelSettings& ls = st.labels;
+  if (args.preset) {
+    gt::LabelPreset(*args.preset);  // a bad name fails now
+    ls.preset = *args.preset;
+  }
+  if (args.abs_tol_m) ls.abs_tol_m = *args.abs_tol_m;
+  if (args.rel_tol) ls.rel_tol = *args.rel_tol;
+  if (!args.relative_to.empty()) ls.relative_to = gt::ParseRelativeTo(args.relative_to);
+  if (!args.bounds.empty()) ls.bounds = gt::ParseBounds(args.bounds);
+  if (!args.target_lookup.empty()) ls.target_lookup = gt::ParseTargetLookup(args.target_lookup);
+  if (!args.missing_target.empty()) ls.missing_target = gt::ParseMissingTarget(args.missing_target);
+  if (args.stride) st.patches.stride = *args.stride;
+  if (args.anchor) st.patches.anchor = gt::ParseAnchor(*args.anchor);
+  if (args.mutual) st.patches.mutual = true;
+  if (args.no_mutual) st.patches.mutual = false;
   std::string error;
-  if (!o.patches.Check(&error)) {
+  if (!st.patches.Check(&error)) {
     ThrowOptionsError(error, "patch options", {{"stride", "--stride", args.stride.has_value()}});
   }
   if (args.score_stride < 1) throw gt::InputError("--score-stride", "expected >= 1");
-  gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, "default", setup.resolution};
-  if (setup.recipe) source.preset = setup.recipe->labels.preset;
-  if (args.preset) source.preset = *args.preset;
+  gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, ls.preset, setup.resolution};
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 
-  const gt::Scene scene = gt::io::MakeReader(setup.format)->ReadScene(setup.root, d.scene);
+  const gt::Scene scene = gt::datasets::MakeReader(setup.format)->ReadScene(setup.root, d.scene);
   source.scene = scene.name;
-  gt::LabelOptions& lo = o.labels;
-  lo = LabelsFor(setup, scene, args.preset, d);
-  if (args.abs_tol_m) lo.abs_tol_m = *args.abs_tol_m;
-  if (args.rel_tol) lo.rel_tol = *args.rel_tol;
-  if (!args.relative_to.empty()) lo.relative_to = gt::ParseRelativeTo(args.relative_to);
-  if (!args.bounds.empty()) lo.bounds = gt::ParseBounds(args.bounds);
-  if (!args.target_lookup.empty()) lo.target_lookup = gt::ParseTargetLookup(args.target_lookup);
-  if (!args.missing_target.empty()) lo.missing_target = gt::ParseMissingTarget(args.missing_target);
-  if (!lo.Check(&error)) {
-    ThrowOptionsError(error, "label options",
+  const gt::truth::PairTruthOptions o =
+      gt::truth::ResolvePairTruthOptions(st, DepthRangeFor(setup, scene));
+  if (!o.Check(&error)) {
+    ThrowOptionsError(error, "pair options",
                       {{"min_depth_m", "--min-depth-m", d.min_depth_m.has_value()},
                        {"max_depth_m", "--max-depth-m", d.max_depth_m.has_value()},
                        {"abs_tol_m", "--abs-tol-m", args.abs_tol_m.has_value()},

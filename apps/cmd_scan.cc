@@ -12,8 +12,8 @@
 
 #include "apps/commands.h"
 #include "libgt/core/error.h"
-#include "libgt/io/reader.h"
-#include "libgt/io/scan.h"
+#include "libgt/datasets/reader.h"
+#include "libgt/datasets/scan.h"
 
 namespace occgt {
 namespace {
@@ -23,8 +23,8 @@ struct ScanArgs {
   std::string format;
   std::string scene;
   bool json = false;
-  gt::io::ReaderOptions reader;
-  gt::io::ScanOptions scan;
+  gt::datasets::ReaderOptions reader;
+  gt::datasets::ScanOptions scan;
 };
 
 nlohmann::ordered_json ReasonsJson(const std::map<std::string, size_t>& reasons) {
@@ -33,7 +33,7 @@ nlohmann::ordered_json ReasonsJson(const std::map<std::string, size_t>& reasons)
   return j;
 }
 
-nlohmann::ordered_json SceneJson(const gt::io::SceneSummary& s) {
+nlohmann::ordered_json SceneJson(const gt::datasets::SceneSummary& s) {
   nlohmann::ordered_json j;
   j["name"] = s.name;
   j["path"] = s.path;
@@ -58,7 +58,9 @@ nlohmann::ordered_json SceneJson(const gt::io::SceneSummary& s) {
                     {"cy", s.color_camera.cy}}},
                   {"uniform_color_camera", s.uniform_color_camera}};
   } else {
-    j["color"] = {{"usable_with_color", 0}, {"size", nullptr}, {"K", nullptr},
+    j["color"] = {{"usable_with_color", 0},
+                  {"size", nullptr},
+                  {"K", nullptr},
                   {"uniform_color_camera", true}};
   }
   j["warnings"] = s.warnings;
@@ -73,7 +75,7 @@ nlohmann::ordered_json SceneJson(const gt::io::SceneSummary& s) {
   return j;
 }
 
-void PrintSceneText(const gt::io::SceneSummary& s) {
+void PrintSceneText(const gt::datasets::SceneSummary& s) {
   std::ostringstream out;
   const gt::Camera& c = s.depth_camera;
   out << "scene " << s.name << "  (" << s.path << ")\n"
@@ -107,17 +109,18 @@ void RunScan(const ScanArgs& args) {
     throw gt::InputError("--tum-max-dt", "expected a finite number of seconds >= 0, got " +
                                              std::to_string(args.reader.tum_max_dt_s));
   }
-  const auto reader = gt::io::MakeReader(args.format, args.reader);
+  const gt::DatasetFormat format = gt::ParseDatasetFormat(args.format, "--format");
+  const auto reader = gt::datasets::MakeReader(format, args.reader);
   std::vector<std::string> names;
   if (!args.scene.empty()) {
     names.push_back(args.scene);
   } else {
     names = reader->ListScenes(args.root);
   }
-  std::vector<gt::io::SceneSummary> summaries;
+  std::vector<gt::datasets::SceneSummary> summaries;
   for (const auto& name : names) {
     const gt::Scene scene = reader->ReadScene(args.root, name);
-    summaries.push_back(gt::io::SummarizeScene(scene, args.scan));
+    summaries.push_back(gt::datasets::SummarizeScene(scene, args.scan));
   }
   size_t frames = 0, usable = 0, with_color = 0;
   std::map<std::string, size_t> reasons;
@@ -147,8 +150,7 @@ void RunScan(const ScanArgs& args) {
   }
   for (const auto& s : summaries) PrintSceneText(s);
   std::cout << "total: " << summaries.size() << " scene(s), " << frames << " frames, " << usable
-            << " usable (" << with_color << " with colour), " << frames - usable
-            << " unusable\n";
+            << " usable (" << with_color << " with colour), " << frames - usable << " unusable\n";
 }
 
 }  // namespace

@@ -1,19 +1,18 @@
-// `occgt pair` and `occgt occupancy` with `--recipe R.yaml`: the options of one pair of a
-// build, so that the single-pair tools reproduce a built shard's arrays byte for byte
-// (docs/CLI.md). The recipe is read by the build's own loader (build::LoadRecipe) and
-// mapped by the build's own functions (build::RecipeSampleOptions for the resolution,
-// patches, fusion and bins; build::RecipeLabelOptions for the labels of a scene); flags
-// given on the command line then override single fields. Without a recipe the tools start
-// from the same defaults as a recipe without those keys.
+// `occgt pair` and `occgt occupancy`: the settings of one pair, from a recipe (`--recipe
+// R.yaml`, so that the single-pair tools reproduce a built shard's arrays byte for byte;
+// docs/CLI.md) or the defaults, then the flags. The recipe is read by the build's loader
+// (pipeline::LoadRecipe) and its settings taken as the build takes them
+// (pipeline::RecipePairSettings, RecipeDepthRange); the options are resolved by
+// truth::ResolvePairTruthOptions, as everywhere.
 #pragma once
 
 #include <optional>
 #include <string>
 
-#include "libgt/build/recipe.h"
 #include "libgt/core/frame.h"
-#include "libgt/geometry/labels.h"
-#include "libgt/truth/pair_truth.h"
+#include "libgt/pipeline/recipe.h"
+#include "libgt/truth/pair_settings.h"
+#include "libgt/truth/working_frame.h"
 
 namespace occgt {
 
@@ -26,20 +25,18 @@ struct PairDatasetArgs {
 };
 
 struct PairSetup {
-  std::optional<gt::build::Recipe> recipe;
-  std::string root, format;             // resolved as above
-  gt::truth::Resolution resolution;     // working resolution
-  gt::truth::PairTruthOptions options;  // the recipe's (labels filled by LabelsFor)
+  std::optional<gt::pipeline::Recipe> recipe;
+  std::string root;  // resolved as above
+  gt::DatasetFormat format = gt::DatasetFormat::kGeneric;
+  gt::truth::Resolution resolution;  // working resolution
+  gt::truth::PairSettings settings;  // the recipe's (or the defaults), then the depth flags
 };
 
-// Loads the recipe (when given) and resolves root, format and resolution; throws InputError
-// naming the recipe file or the flag.
+// Loads the recipe (when given) and resolves root, format, resolution and settings; throws
+// InputError naming the recipe file or the flag.
 PairSetup StartPairSetup(const PairDatasetArgs& args);
 
-// Label options for `scene` (build::RecipeLabelOptions: the preset, `preset` when given,
-// else the recipe's, else `default`; the depth range of the recipe's dataset/labels, else
-// the scene's; the recipe's tolerances), then the --min/max-depth-m flags (unchecked).
-gt::LabelOptions LabelsFor(const PairSetup& setup, const gt::Scene& scene,
-                           const std::optional<std::string>& preset, const PairDatasetArgs& args);
+// The depth range of `scene` under the setup (the recipe's dataset.min/max_depth_m apply).
+gt::truth::DatasetDepthRange DepthRangeFor(const PairSetup& setup, const gt::Scene& scene);
 
 }  // namespace occgt

@@ -56,12 +56,17 @@ std::vector<std::string> FlagNames(const CLI::App* sub) {
 
 void ThrowOptionsError(const std::string& error, const std::string& what,
                        std::initializer_list<FieldFlag> fields) {
+  // PairTruthOptions::Check names the section first ("labels: max_depth_m ...").
+  std::string body = error;
+  for (const std::string section : {"labels: ", "patches: ", "occupancy: "}) {
+    if (body.rfind(section, 0) == 0) body = body.substr(section.size());
+  }
   for (const FieldFlag& f : fields) {
     const std::string field = f.field;
     const bool leads =
-        error.rfind(field, 0) == 0 &&
-        (error.size() == field.size() || error[field.size()] == ' ' || error[field.size()] == ':');
-    if (leads && f.given) throw gt::InputError(f.flag, error);
+        body.rfind(field, 0) == 0 &&
+        (body.size() == field.size() || body[field.size()] == ' ' || body[field.size()] == ':');
+    if (leads && f.given) throw gt::InputError(f.flag, body);
   }
   throw gt::InputError(what, error);
 }

@@ -23,6 +23,12 @@ struct DepthImage {
   bool empty() const { return values_m.empty(); }
 };
 
+// The validity range every consumer of depth starts from when no dataset gives one (a
+// reader's Scene range, LabelOptions, FusionInput and the frame scan take these): no lower
+// limit, and an upper one far beyond any sensor (TartanAir's sky, ~1e4 m, stays invalid).
+inline constexpr double kDefaultMinDepthM = 0.0;
+inline constexpr double kDefaultMaxDepthM = 1000.0;
+
 inline bool IsValidDepth(float d, double min_depth_m, double max_depth_m) {
   return std::isfinite(d) && d > 0.0f && d >= min_depth_m && d <= max_depth_m;
 }

@@ -5,18 +5,37 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "libgt/core/camera.h"
+#include "libgt/core/depth.h"
 #include "libgt/core/pose.h"
 
 namespace gt {
+
+// The dataset layouts occgt reads (libgt/datasets, docs/DATASETS.md). Parsed from its name
+// once, where it enters (a flag, a recipe, meta.json), and named back only where written.
+enum class DatasetFormat {
+  kScanNet,      // "scannet"
+  kTartanAir,    // "tartanair"
+  kSevenScenes,  // "sevenscenes"
+  kTum,          // "tum"
+  kMegaDepth,    // "megadepth"
+  kGeneric,      // "generic": occgt's own JSON manifest
+};
+inline constexpr DatasetFormat kAllDatasetFormats[] = {
+    DatasetFormat::kScanNet, DatasetFormat::kTartanAir, DatasetFormat::kSevenScenes,
+    DatasetFormat::kTum,     DatasetFormat::kMegaDepth, DatasetFormat::kGeneric};
+const char* DatasetFormatName(DatasetFormat format);
+// Throws InputError(field, "unknown format '<name>', expected one of: ...").
+DatasetFormat ParseDatasetFormat(std::string_view name, const std::string& field = "--format");
 
 enum class DepthFormat {
   kNpyFloat32,  // .npy float32 metres, shape (H, W)
   kPng16,       // 16-bit PNG (or PGM), metres = value * scale_m_per_unit; 0 invalid
   kExr,         // OpenEXR, one channel (matched by suffix), metres
-  // A payload inside a container file (ScanNet .sens, libgt/io/sens.h): bytes `range` of
+  // A payload inside a container file (ScanNet .sens, libgt/datasets/sens.h): bytes `range` of
   // `path`, width x height uint16 (little-endian), metres = value * scale_m_per_unit; 0 invalid.
   kSensZlib,  // zlib stream of the uint16 values
   kSensRaw,   // the uint16 values as they are
@@ -58,11 +77,11 @@ struct Frame {
 };
 
 struct Scene {
-  std::string name;    // e.g. "scene0707_00", "hospital/Easy/P036", "seq-01"
-  std::string format;  // reader format name
-  std::string path;    // folder (or manifest) the scene was read from
-  double min_depth_m = 0.0;    // dataset default validity range (recipes may override)
-  double max_depth_m = 1000.0;
+  std::string name;  // e.g. "scene0707_00", "hospital/Easy/P036", "seq-01"
+  DatasetFormat format = DatasetFormat::kGeneric;  // the reader's format
+  std::string path;                                // folder (or manifest) the scene was read from
+  double min_depth_m = kDefaultMinDepthM;  // the reader's validity range (recipes may override)
+  double max_depth_m = kDefaultMaxDepthM;
   std::vector<Frame> frames;  // sorted by number
 
   size_t NumUsable() const {

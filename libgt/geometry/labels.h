@@ -88,9 +88,9 @@ MissingTarget ParseMissingTarget(const std::string& name,
                                  const std::string& field = "--missing-target");
 
 struct LabelOptions {
-  double min_depth_m = 0.0;     // depths below are invalid (core/depth.h IsValidDepth); also
+  double min_depth_m = kDefaultMinDepthM;  // depths below are invalid (core/depth.h IsValidDepth); also
                                 // the cheirality threshold: z <= min_depth_m is OUT_OF_VIEW
-  double max_depth_m = 1000.0;  // depths above are invalid (TartanAir sky is ~1e4 m)
+  double max_depth_m = kDefaultMaxDepthM;  // depths above are invalid (core/depth.h)
   double abs_tol_m = 0.1;       // absolute depth tolerance (metres)
   double rel_tol = 0.05;        // relative tolerance (fraction of z or d_B)
   RelativeTo relative_to = RelativeTo::kProjected;

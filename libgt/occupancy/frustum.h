@@ -38,7 +38,7 @@ enum class Traversal { kExact, kCenter };           // "exact" | "center"
 struct BinOptions {
   int num_bins = 64;    // D, 1..64 (one uint64 word per ray); the paper uses 64
   double near_m = 0.1;  // first edge (metres), > 0: indoor RGB-D sensors start ~0.1-0.5 m
-  double far_m = 10.0;  // last edge (metres), > near_m: ScanNet / 7-Scenes depth < 10 m
+  double far_m = kDefaultFarM;  // last edge (metres), > near_m (fusion.h)
   BinSpacing spacing = BinSpacing::kLinear;
   Traversal traversal = Traversal::kExact;
 

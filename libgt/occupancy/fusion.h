@@ -51,10 +51,14 @@ enum class FusionEngine {
   kOctomap,  // OctoMap's OcTree::insertPointCloud (reference for tests and benchmarks)
 };
 
+// The far end of the occupancy target: the last bin edge (frustum.h BinOptions::far_m) and,
+// unless set apart, the fusion's ray range. 10 m covers indoor depth sensors (ScanNet and
+// 7-Scenes read < 10 m).
+inline constexpr double kDefaultFarM = 10.0;
+
 struct FusionOptions {
   double voxel_size_m = 0.05;  // OctoMap resolution (metres), > 0
-  double max_range_m = 10.0;   // ray truncation (metres); <= 0 means unlimited. 10 m covers
-                               // indoor depth sensors (ScanNet/7-Scenes read < 10 m).
+  double max_range_m = kDefaultFarM;  // ray truncation (metres); <= 0 means unlimited
   bool downsample = false;     // one centroid per voxel (pcl::VoxelGrid, overflow-guarded);
                                // off: with `discretize` every voxel gets one ray anyway
   bool discretize = true;      // OctoMap's discretized insertion (one ray per end voxel, to its
@@ -64,8 +68,8 @@ struct FusionOptions {
   int outlier_k = 20;            // neighbours for the mean distance, >= 1
   double outlier_stddev = 2.0;   // reject mean distance > mean + stddev * sigma, > 0
   FusionScope scope = FusionScope::kPair;
-  int window = 0;        // kWindow: neighbours on each side, >= 1
-  int scene_stride = 0;  // kScene: frame stride, >= 1
+  int window = 2;         // kWindow: usable neighbours on each side of the pair, >= 1
+  int scene_stride = 10;  // kScene: fuse every n-th frame (one map per scene), >= 1
 
   bool Check(std::string* error) const;
 };
@@ -87,8 +91,8 @@ struct FusionInput {
   const DepthImage* depth = nullptr;
   Camera camera;  // K at the depth map's resolution
   Rigid3d world_from_cam = Rigid3d::Identity();
-  double min_depth_m = 0.0;  // validity range (depth.h IsValidDepth)
-  double max_depth_m = 1000.0;
+  double min_depth_m = kDefaultMinDepthM;  // validity range (depth.h IsValidDepth)
+  double max_depth_m = kDefaultMaxDepthM;
 };
 
 // What happened to the points during fusion (summed over frames).

@@ -45,7 +45,7 @@ struct PruningOptions {
 
 // A pair list imported instead of candidates (recipe key selection.import_pairs).
 struct ImportPairsOptions {
-  std::string format = "loftr-npz";  // or "loftr-megadepth" (build/select.h ReadImportList)
+  std::string format = "loftr-npz";  // or "loftr-megadepth" (pipeline/select.h ReadImportList)
   std::string path;                  // absolute after loading; "" = no import
 };
 
@@ -107,8 +107,8 @@ class DepthCache {
 struct FrameScanOptions {
   int frame_stride = 1;                   // keep frames at positions 0, s, 2s, ... of the scene
   double min_valid_depth_fraction = 0.1;  // at the working resolution
-  double min_depth_m = 0.0;               // validity range (depth.h IsValidDepth)
-  double max_depth_m = 1000.0;
+  double min_depth_m = kDefaultMinDepthM;  // validity range (depth.h IsValidDepth)
+  double max_depth_m = kDefaultMaxDepthM;
 
   bool Check(std::string* error) const;
 };

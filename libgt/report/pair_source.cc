@@ -6,13 +6,14 @@
 #include <opencv2/imgproc.hpp>
 
 #include "libgt/core/error.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/image.h"
 #include "libgt/io/npy.h"
-#include "libgt/io/reader.h"
 #include "libgt/shards/tar_shard.h"
+#include "libgt/truth/pair_settings.h"
 #include "libgt/truth/pair_truth.h"
 
 namespace gt::report {
@@ -348,7 +349,8 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
                        "expected \"format\", \"scene\", \"frame0\" and \"frame1\" "
                        "({\"id\": ..., \"number\": ...}) to find the colour images under --root");
     }
-    const auto reader = gt::io::MakeReader(meta["format"].get<std::string>());
+    const auto reader = gt::datasets::MakeReader(
+        gt::ParseDatasetFormat(meta["format"].get<std::string>(), meta_path + ": format"));
     const gt::Scene scene = reader->ReadScene(dataset_root, meta["scene"].get<std::string>());
     for (int k = 0; k < 2; ++k) {
       const std::string id = frame_id(k == 0 ? "frame0" : "frame1")->get<std::string>();
@@ -367,48 +369,30 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
   return PairFromFields(fields, dir, img0, img1);
 }
 
-bool ComputePairOptions::Check(std::string* error) const {
-  if (width <= 0 || height <= 0) {
-    *error = "resolution: expected positive width and height";
-    return false;
-  }
-  if (!patches.Check(error)) return false;
-  if (!bins.Check(error)) return false;
-  if (!(voxel_size_m > 0)) {
-    *error = "voxel_size_m: expected > 0";
-    return false;
-  }
-  return true;
-}
-
-PairData ComputePairFromScene(const std::string& root, const std::string& format,
+PairData ComputePairFromScene(const std::string& root, DatasetFormat format,
                               const std::string& scene_name, const std::string& id0,
-                              const std::string& id1, const ComputePairOptions& options) {
+                              const std::string& id1, const truth::PairSettings& settings,
+                              const truth::Resolution& resolution) {
   std::string error;
-  if (!options.Check(&error)) throw InputError("inspect options", error);
-  const gt::Scene scene = gt::io::MakeReader(format)->ReadScene(root, scene_name);
+  if (!resolution.Check(&error)) throw InputError("--resolution", error);
+  const gt::Scene scene = gt::datasets::MakeReader(format)->ReadScene(root, scene_name);
+  const gt::truth::PairTruthOptions o =
+      gt::truth::ResolvePairTruthOptions(settings, gt::truth::DepthRangeOf(scene));
+  if (!o.Check(&error)) throw InputError("pair options", error);
   const gt::Frame& f0 = scene.frames[gt::truth::FindFrame(scene, id0)];
   const gt::Frame& f1 = scene.frames[gt::truth::FindFrame(scene, id1)];
-  const gt::truth::Resolution resolution{options.width, options.height};
-  gt::truth::PairTruthOptions o;
-  o.labels = gt::LabelPreset(options.preset);
-  gt::ApplyDatasetDepthRange(scene.min_depth_m, scene.max_depth_m, &o.labels);
-  o.patches = options.patches;
-  o.occupancy = options.occupancy;
-  o.fusion.voxel_size_m = options.voxel_size_m;
-  o.bins = options.bins;
   const gt::truth::PairTruth truth = gt::truth::ComputePairTruth(
       gt::truth::LoadWorkingFrame(f0, resolution), gt::truth::LoadWorkingFrame(f1, resolution), o);
   const gt::PairLabels& pl = truth.labels;
   PairData p;
   p.name = scene_name + " " + id0 + "," + id1;
-  p.width = options.width;
-  p.height = options.height;
+  p.width = resolution.width;
+  p.height = resolution.height;
   p.labels01 = {pl.l01.width, pl.l01.height, pl.l01.labels};
   p.labels10 = {pl.l10.width, pl.l10.height, pl.l10.labels};
   p.matches = pl.patches;
-  p.stride = options.patches.stride;
-  p.anchor = options.patches.anchor;
+  p.stride = o.patches.stride;
+  p.anchor = o.patches.anchor;
   cv::Mat img0, img1;
   if (!f0.color_path.empty()) img0 = BgrFromColor(gt::io::ReadFrameColor(f0));
   if (!f1.color_path.empty()) img1 = BgrFromColor(gt::io::ReadFrameColor(f1));

@@ -33,6 +33,8 @@
 #include "libgt/geometry/patches.h"
 #include "libgt/occupancy/frustum.h"
 #include "libgt/report/pictures.h"
+#include "libgt/truth/pair_settings.h"
+#include "libgt/truth/working_frame.h"
 
 namespace gt::report {
 
@@ -66,20 +68,13 @@ PairData LoadPairFromShard(const std::string& tar_path, const std::string& key);
 PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path = "",
                          const std::string& image1_path = "", const std::string& dataset_root = "");
 
-struct ComputePairOptions {
-  std::string preset = "default";  // label preset (GROUND_TRUTH.md §2)
-  int width = 640, height = 480;   // working resolution
-  gt::PatchOptions patches;        // stride 8, centre anchors, mutual
-  bool occupancy = true;           // also fuse the pair and bin it (64 linear bins)
-  gt::occupancy::BinOptions bins;  // near/far of the frustum bins
-  double voxel_size_m = 0.05;      // OctoMap resolution of the pair fusion
-  bool Check(std::string* error) const;
-};
-
-// Reads scene `scene` of `root` with the reader of `format`, and computes frames id0, id1.
-PairData ComputePairFromScene(const std::string& root, const std::string& format,
-                              const std::string& scene, const std::string& id0,
-                              const std::string& id1, const ComputePairOptions& options);
+// Reads scene `scene` of `root` with the reader of `format`, and computes frames id0, id1 at
+// `resolution` with the options `settings` resolve to for that scene
+// (truth::ResolvePairTruthOptions with the scene's depth range).
+PairData ComputePairFromScene(const std::string& root, DatasetFormat format,
+                              const std::string& scene_name, const std::string& id0,
+                              const std::string& id1, const truth::PairSettings& settings,
+                              const truth::Resolution& resolution);
 
 struct PairPictureOptions {
   MatchPictureOptions matches;  // stride/anchor are taken from the PairData

@@ -14,7 +14,7 @@
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/file_read.h"
-#include "libgt/io/scan.h"
+#include "libgt/datasets/scan.h"
 #include "libgt/report/eval_report.h"
 
 namespace gt::report {
@@ -216,8 +216,10 @@ std::vector<std::string> SplitWarnings(const SplitData& split) {
     }
     const json dataset = split.recipe.value("dataset", json::object());
     if (dataset.is_object() && dataset.contains("format") && dataset["format"].is_string()) {
-      for (auto& c : gt::io::DatasetCaveats(dataset["format"].get<std::string>())) {
-        w.push_back(c + ".");
+      const std::string name = dataset["format"].get<std::string>();
+      for (const DatasetFormat f : kAllDatasetFormats) {  // "synthetic" has no caveats
+        if (name != DatasetFormatName(f)) continue;
+        for (auto& c : gt::datasets::DatasetCaveats(f)) w.push_back(c + ".");
       }
     }
   }

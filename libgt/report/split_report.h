@@ -61,7 +61,7 @@ struct SplitData {
 
 // What a reader of the report must know before trusting the split, one sentence each: no
 // pairs, no images stored, frames skipped for lack of colour, and the dataset's caveats
-// (gt::io::DatasetCaveats of recipe.json's dataset.format). Empty when none applies.
+// (gt::datasets::DatasetCaveats of recipe.json's dataset.format). Empty when none applies.
 std::vector<std::string> SplitWarnings(const SplitData& split);
 
 // Which pairs the gallery shows: a seeded random choice, or the most occluded ones (largest

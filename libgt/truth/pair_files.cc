@@ -26,7 +26,7 @@ ordered_json SourceJson(const char* tool, const PairSource& s) {
   ordered_json j;
   j["tool"] = tool;
   j["occgt_version"] = kVersion;
-  j["format"] = s.format;
+  j["format"] = DatasetFormatName(s.format);
   j["scene"] = s.scene;
   j["frame0"] = {{"id", s.id0}, {"number", s.number0}};
   j["frame1"] = {{"id", s.id1}, {"number", s.number1}};
@@ -83,6 +83,24 @@ nlohmann::ordered_json LabelOptionsJson(const LabelOptions& lo) {
 
 nlohmann::ordered_json PatchOptionsJson(const PatchOptions& po) {
   return {{"stride", po.stride}, {"anchor", AnchorName(po.anchor)}, {"mutual", po.mutual}};
+}
+
+nlohmann::ordered_json OccupancyOptionsJson(const PairTruthOptions& o) {
+  const occupancy::BinOptions& bo = o.bins;
+  const occupancy::FusionOptions& fo = o.fusion;
+  return {{"mode", occupancy::OccupancyModeName(o.mode)},
+          {"bins",
+           {{"num_bins", bo.num_bins},
+            {"near_m", bo.near_m},
+            {"far_m", bo.far_m},
+            {"spacing", occupancy::BinSpacingName(bo.spacing)},
+            {"traversal", occupancy::TraversalName(bo.traversal)}}},
+          {"fusion",
+           {{"scope", occupancy::FusionScopeName(fo)},
+            {"voxel_size_m", fo.voxel_size_m},
+            {"max_range_m", fo.max_range_m},
+            {"downsample", fo.downsample},
+            {"remove_outliers", fo.remove_outliers}}}};
 }
 
 void WritePairFolder(const std::string& dir, const PairSource& source, const WorkingFrame& frame0,

@@ -47,10 +47,14 @@ nlohmann::json MatrixJson(const Eigen::MatrixXd& m);
 // "patch_options": {stride, anchor, mutual}).
 nlohmann::ordered_json LabelOptionsJson(const LabelOptions& lo);
 nlohmann::ordered_json PatchOptionsJson(const PatchOptions& po);
+// The occupancy options ("occupancy_options"): {mode, bins: {num_bins, near_m, far_m,
+// spacing, traversal}, fusion: {scope, voxel_size_m, max_range_m, downsample,
+// remove_outliers}}; occupancy.json's "mode", "bins" and "fusion" use the same names.
+nlohmann::ordered_json OccupancyOptionsJson(const PairTruthOptions& o);
 
 // Where a pair came from, for the records.
 struct PairSource {
-  std::string format;                // dataset format
+  DatasetFormat format = DatasetFormat::kGeneric;
   std::string scene;                 // scene name
   std::string id0, id1;              // frame ids
   int64_t number0 = 0, number1 = 0;  // the frames' numbers (Frame::number)

@@ -30,11 +30,18 @@ from ._occgt import (FORMATS, LABEL_NAMES, MATCH_TYPE_NAMES, PRESETS, Dataset, F
 
 __version__: str = _occgt.__version__
 
+#: The value each keyword argument of pair_ground_truth takes by default, from the C++ Options
+#: structs (truth::ResolvePairTruthOptions of default settings): the signatures below show
+#: them, none is written in Python.
+PAIR_DEFAULTS: Dict[str, Any] = dict(_occgt.PAIR_DEFAULTS)
+_D = PAIR_DEFAULTS
+
 __all__ = [
     "__version__",
     "FORMATS",
     "LABEL_NAMES",
     "MATCH_TYPE_NAMES",
+    "PAIR_DEFAULTS",
     "PRESETS",
     "Dataset",
     "Frame",
@@ -57,6 +64,7 @@ __all__ = [
     "open_dataset",
     "pair_from_scene",
     "pair_ground_truth",
+    "pair_options",
 ]
 
 #: Label codes (uint8) of label01/label10/cells0/cells1 (LABEL_NAMES[code] is the name):
@@ -124,7 +132,7 @@ def pair_ground_truth(
     K1: npt.ArrayLike,
     world_from_cam0: npt.ArrayLike,
     world_from_cam1: npt.ArrayLike,
-    preset: str = "default",
+    preset: str = _D["preset"],
     *,
     abs_tol_m: Optional[float] = None,
     rel_tol: Optional[float] = None,
@@ -134,18 +142,21 @@ def pair_ground_truth(
     bounds: Optional[str] = None,
     target_lookup: Optional[str] = None,
     missing_target: Optional[str] = None,
-    stride: int = 8,
-    anchor: str = "center",
-    mutual: bool = True,
+    stride: int = _D["stride"],
+    anchor: str = _D["anchor"],
+    mutual: bool = _D["mutual"],
     occupancy: bool = False,
-    voxel_m: float = 0.05,
+    voxel_m: float = _D["voxel_m"],
     max_range_m: Optional[float] = None,
-    near_m: float = 0.1,
-    far_m: float = 10.0,
-    bins: int = 64,
-    spacing: str = "linear",
-    traversal: str = "exact",
-    occupancy_mode: str = "octomap",
+    near_m: float = _D["near_m"],
+    far_m: float = _D["far_m"],
+    bins: int = _D["bins"],
+    spacing: str = _D["spacing"],
+    traversal: str = _D["traversal"],
+    occupancy_mode: str = _D["occupancy_mode"],
+    dataset_depth_range: Optional[Tuple[float, float]] = None,
+    dataset_min_depth_m: Optional[float] = None,
+    dataset_max_depth_m: Optional[float] = None,
     scope_map: Optional[ScopeMap] = None,
 ) -> PairGroundTruth:
     """The ground truth of one pair of posed depth frames (C++ ``truth::ComputePairTruth``).
@@ -170,9 +181,10 @@ def pair_ground_truth(
         abs_tol_m: absolute depth tolerance (metres); None = the preset's.
         rel_tol: relative depth tolerance (fraction of z or of B's depth); None = the preset's.
         min_depth_m: minimum valid depth (metres), also the cheirality threshold; None = the
-            preset's (0). ``occgt pair`` uses the dataset's (``Scene.min_depth_m``).
-        max_depth_m: maximum valid depth (metres); None = the preset's (1000). ``occgt pair``
-            uses the dataset's (``Scene.max_depth_m``).
+            dataset's range (``dataset_depth_range``), else the preset's
+            (``PAIR_DEFAULTS["min_depth_m"]``).
+        max_depth_m: maximum valid depth (metres); None = as min_depth_m
+            (``PAIR_DEFAULTS["max_depth_m"]``).
         relative_to: "projected" | "observed": what rel_tol multiplies; None = the preset's.
         bounds: "pixel-area" | "strict": which projections lie inside B; None = the preset's.
         target_lookup: "nearest" | "truncate": B's pixel of a projection; None = the preset's.
@@ -191,6 +203,14 @@ def pair_ground_truth(
         spacing: "linear" | "log" | "inverse": the bin edges.
         traversal: "exact" | "center": which voxels a bin's ray segment looks at.
         occupancy_mode: "octomap" (fused map) | "two_point" (the released Occ²Net target).
+        dataset_depth_range: (min, max) valid depth of the dataset the frames come from (a
+            reader's ``Scene.min_depth_m``, ``Scene.max_depth_m``; pair_from_scene passes it):
+            it replaces the preset's range unless the preset ignores datasets' ranges
+            (occ2net-compat). None: no dataset.
+        dataset_min_depth_m, dataset_max_depth_m: a range set for the whole dataset (a
+            recipe's ``dataset.min_depth_m``/``max_depth_m``), applied whatever the preset;
+            min_depth_m/max_depth_m still win over it. The order of all of these is
+            docs/GROUND_TRUTH.md's (libgt/truth/pair_settings.h).
         scope_map: a map fused over a window of frames or the whole scene (``Scene.fuse``;
             its voxel_m and max_range_m must be the ones given here): the volumes are read
             from it instead of fusing the two depth maps. None = fuse the pair.
@@ -206,7 +226,8 @@ def pair_ground_truth(
         each cell's anchor), T_0to1 float64 [4, 4] (cam1_from_cam0 = inverse(world_from_cam1)
         @ world_from_cam0), metrics01, metrics10 (Metrics); with occupancy=True also occ0,
         known0 uint64 [H0/2, W0/2], occ1, known1 uint64 [H1/2, W1/2] (bit k: bin k occupied /
-        known) and bin_edges_m float64 [bins + 1] (metres).
+        known) and bin_edges_m float64 [bins + 1] (metres); ``options``: the resolved options
+        as a shard's sample records them (label_options, patch_options, occupancy_options).
 
     Raises:
         ValueError: an argument of the wrong type, dtype, shape or value, naming it.
@@ -218,7 +239,21 @@ def pair_ground_truth(
         missing_target=missing_target, stride=stride, anchor=anchor, mutual=mutual,
         occupancy=occupancy, voxel_m=voxel_m, max_range_m=max_range_m, near_m=near_m,
         far_m=far_m, bins=bins, spacing=spacing, traversal=traversal,
-        occupancy_mode=occupancy_mode, scope_map=scope_map)
+        occupancy_mode=occupancy_mode, dataset_depth_range=dataset_depth_range,
+        dataset_min_depth_m=dataset_min_depth_m, dataset_max_depth_m=dataset_max_depth_m,
+        scope_map=scope_map)
+    return result
+
+
+def pair_options(preset: str = _D["preset"], **options: Any) -> Dict[str, Any]:
+    """The options pair_ground_truth resolves from the same arguments (its ``options``
+    entry), without computing anything: ``{"label_options": ..., "patch_options": ...,
+    "occupancy_options": ... or None}`` with the names of a shard sample's json.
+
+    Raises:
+        ValueError: a bad value, naming the argument; TypeError: an unknown keyword.
+    """
+    result: Dict[str, Any] = _occgt.pair_options(preset, **options)
     return result
 
 
@@ -279,8 +314,8 @@ def open_dataset(root: Union[str, "os.PathLike[str]"], format: str) -> Dataset:
     return Dataset(os.fspath(root), format)
 
 
-def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = 640, height: int = 480,
-                    preset: str = "default", scope: str = "pair",
+def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"],
+                    height: int = _D["height"], preset: str = _D["preset"], scope: str = "pair",
                     **options: Any) -> PairGroundTruth:
     """pair_ground_truth of frames id0, id1 of a scene at width x height, with the scene's
     depth range unless ``min_depth_m``/``max_depth_m`` are given (occ2net-compat: every finite
@@ -295,16 +330,23 @@ def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = 640, heigh
     """
     depth0, K0, world_from_cam0 = scene.load(id0, width, height)
     depth1, K1, world_from_cam1 = scene.load(id1, width, height)
-    if _occgt.preset_uses_dataset_depth_range(preset):  # not occ2net-compat
-        options.setdefault("min_depth_m", scene.min_depth_m)
-        options.setdefault("max_depth_m", scene.max_depth_m)
+    options.setdefault("dataset_depth_range", (scene.min_depth_m, scene.max_depth_m))
     if scope != "pair" and options.get("occupancy") and "scope_map" not in options:
-        given = options.get("max_range_m")  # None: far_m, pair_ground_truth's rule
-        max_range_m = float(options.get("far_m", 10.0) if given is None else given)
-        options["scope_map"] = scene.fuse(
-            id0, id1, width, height, scope=scope, voxel_m=options.get("voxel_m", 0.05),
-            max_range_m=max_range_m, min_depth_m=options.get("min_depth_m"),
-            max_depth_m=options.get("max_depth_m"))
+        options["scope_map"] = fuse_scope(scene, id0, id1, width, height, scope, preset, options)
     return pair_ground_truth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1, preset,
                              **options)
+
+
+#: The keyword arguments of pair_ground_truth that Scene.fuse takes too (the map must be
+#: fused with the options the pair uses).
+FUSE_OPTIONS = ("voxel_m", "max_range_m", "far_m", "min_depth_m", "max_depth_m",
+                "dataset_min_depth_m", "dataset_max_depth_m")
+
+
+def fuse_scope(scene: Scene, id0: str, id1: str, width: int, height: int, scope: str,
+               preset: str, options: Dict[str, Any]) -> ScopeMap:
+    """``Scene.fuse`` with the options of pair_ground_truth's keyword arguments ``options``
+    (those of FUSE_OPTIONS; the rest are not the fusion's)."""
+    return scene.fuse(id0, id1, width, height, scope=scope, preset=preset,
+                      **{k: options.get(k) for k in FUSE_OPTIONS})
 

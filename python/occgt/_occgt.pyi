@@ -1,6 +1,6 @@
 """Type stubs of the extension module occgt._occgt (python/src/*.cc). Use the package
 ``occgt``: its functions document every argument (python/occgt/__init__.py)."""
-from typing import Any, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -11,6 +11,8 @@ MATCH_TYPE_NAMES: Tuple[str, ...]  # index = uint8 match type code ("vv", "vo", 
 PRESETS: Tuple[str, ...]  # label presets
 FORMATS: Tuple[str, ...]  # dataset formats of open_dataset
 
+PAIR_DEFAULTS: Dict[str, Any]  # default of each pair_ground_truth argument, from the C++
+
 def pair_ground_truth(
     depth0: npt.ArrayLike,
     depth1: npt.ArrayLike,
@@ -18,31 +20,10 @@ def pair_ground_truth(
     K1: npt.ArrayLike,
     world_from_cam0: npt.ArrayLike,
     world_from_cam1: npt.ArrayLike,
-    preset: str = "default",
-    *,
-    abs_tol_m: Optional[float] = None,
-    rel_tol: Optional[float] = None,
-    min_depth_m: Optional[float] = None,
-    max_depth_m: Optional[float] = None,
-    relative_to: Optional[str] = None,
-    bounds: Optional[str] = None,
-    target_lookup: Optional[str] = None,
-    missing_target: Optional[str] = None,
-    stride: int = 8,
-    anchor: str = "center",
-    mutual: bool = True,
-    occupancy: bool = False,
-    voxel_m: float = 0.05,
-    max_range_m: Optional[float] = None,
-    near_m: float = 0.1,
-    far_m: float = 10.0,
-    bins: int = 64,
-    spacing: str = "linear",
-    traversal: str = "exact",
-    occupancy_mode: str = "octomap",
-    scope_map: Optional[ScopeMap] = None,
+    preset: str = ...,
+    **options: Any,
 ) -> Any: ...  # occgt.PairGroundTruth
-def preset_uses_dataset_depth_range(preset: str) -> bool: ...
+def pair_options(preset: str = ..., **options: Any) -> Dict[str, Any]: ...
 def gunzip(gz: Any, what: str) -> bytearray: ...  # bytes-like gzip member in
 def dense_volume(occ: npt.ArrayLike, known: npt.ArrayLike, bins: int = 64) -> npt.NDArray[np.uint8]: ...
 
@@ -137,7 +118,7 @@ class Scene:
     @property
     def frames(self) -> List[Frame]: ...
     def load(
-        self, frame_id: str, width: int = 640, height: int = 480
+        self, frame_id: str, width: int = ..., height: int = ...
     ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """(depth float32 [height, width] planar metres, 0 = invalid; K float64 [3, 3] at
         width x height; world_from_cam float64 [4, 4]) of a usable frame: depth resized with
@@ -145,15 +126,17 @@ class Scene:
         unusable frame_id or an unreadable depth file."""
         ...
     def fuse(
-        self, id0: str, id1: str, width: int = 640, height: int = 480, *, scope: str = "pair",
-        voxel_m: float = 0.05, max_range_m: float = 10.0, min_depth_m: Optional[float] = None,
-        max_depth_m: Optional[float] = None
+        self, id0: str, id1: str, width: int = ..., height: int = ..., *, scope: str = "pair",
+        voxel_m: Optional[float] = None, max_range_m: Optional[float] = None,
+        far_m: Optional[float] = None, min_depth_m: Optional[float] = None,
+        max_depth_m: Optional[float] = None, preset: str = ...,
+        dataset_min_depth_m: Optional[float] = None, dataset_max_depth_m: Optional[float] = None
     ) -> ScopeMap:
         """The occupancy map of the pair fused over scope ("pair", "window:N", "scene:S"), for
         pair_ground_truth(..., occupancy=True, scope_map=...)."""
         ...
     def load_color(
-        self, frame_id: str, width: int = 640, height: int = 480
+        self, frame_id: str, width: int = ..., height: int = ...
     ) -> npt.NDArray[np.uint8]:
         """Colour of a frame at width x height: uint8 [height, width, 3], R G B, resized
         bilinearly from the colour camera (the pixels of a shard's image0/image1). ValueError

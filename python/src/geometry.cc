@@ -19,14 +19,6 @@ void BindGeometry(py::module_& m) {
   m.attr("LABEL_NAMES") = names;  // index = uint8 code of label01/label10/cells0/cells1
   m.attr("MATCH_TYPE_NAMES") = py::make_tuple("vv", "vo", "ov");  // index = match_type code
   m.attr("PRESETS") = py::tuple(py::cast(gt::PresetNames()));
-  m.def(
-      "preset_uses_dataset_depth_range",
-      [](const std::string& preset) {
-        return Named("preset", [&] { return gt::LabelPreset(preset); }).dataset_depth_range;
-      },
-      "preset"_a,
-      "whether the dataset's depth range replaces the preset's (False for occ2net-compat, "
-      "which compares every finite depth > 0)");
 }
 
 }  // namespace occgt_py

@@ -18,10 +18,11 @@
 
 #include "libgt/core/error.h"
 #include "libgt/core/frame.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/io/gzip.h"
 #include "libgt/io/image.h"
-#include "libgt/io/reader.h"
 #include "libgt/occupancy/fusion.h"
+#include "libgt/truth/pair_settings.h"
 #include "libgt/truth/pair_truth.h"
 #include "libgt/truth/working_frame.h"
 #include "python/src/convert.h"
@@ -68,8 +69,8 @@ class PyScene {
       py::gil_scoped_release no_gil;
       const gt::Frame& frame = scene_->frames[gt::truth::FindFrame(*scene_, frame_id, "frame_id")];
       if (frame.color_path.empty()) {
-        throw gt::InputError("frame_id", "frame " + frame.id + " of scene " + scene_->name +
-                                             " has no colour image");
+        throw gt::InputError(
+            "frame_id", "frame " + frame.id + " of scene " + scene_->name + " has no colour image");
       }
       image = gt::io::ReadFrameColorResized(frame, width, height);
     }
@@ -78,19 +79,32 @@ class PyScene {
   }
 
   PyScopeMap Fuse(const std::string& id0, const std::string& id1, int width, int height,
-                  const std::string& scope, double voxel_m, double max_range_m,
-                  std::optional<double> min_depth_m, std::optional<double> max_depth_m) const {
+                  const std::string& scope, std::optional<double> voxel_m,
+                  std::optional<double> max_range_m, std::optional<double> far_m,
+                  std::optional<double> min_depth_m, std::optional<double> max_depth_m,
+                  const std::string& preset, std::optional<double> dataset_min_depth_m,
+                  std::optional<double> dataset_max_depth_m) const {
     const gt::truth::Resolution resolution{width, height};
     std::string error;
     if (!resolution.Check(&error)) ThrowValue("width, height", error);
-    gt::truth::PairTruthOptions o;
-    o.occupancy = true;
+    gt::truth::PairSettings settings;
+    Named("preset", [&] { gt::LabelPreset(preset); });
+    settings.labels.preset = preset;
+    settings.labels.min_depth_m = min_depth_m;  // the fusion's validity range: the labels'
+    settings.labels.max_depth_m = max_depth_m;
+    settings.occupancy.voxel_m = voxel_m;
+    settings.occupancy.max_range_m = max_range_m;
+    settings.occupancy.far_m = far_m;
+    gt::occupancy::FusionOptions parsed;
+    Named("scope", [&] { gt::occupancy::ParseFusionScope(scope, &parsed); });
+    settings.occupancy.scope = parsed.scope;
+    settings.occupancy.window = parsed.window;
+    settings.occupancy.scene_stride = parsed.scene_stride;
+    gt::truth::DatasetDepthRange range = gt::truth::DepthRangeOf(*scene_);
+    range.set_min_depth_m = dataset_min_depth_m;
+    range.set_max_depth_m = dataset_max_depth_m;
+    gt::truth::PairTruthOptions o = gt::truth::ResolvePairTruthOptions(settings, range);
     o.labels_and_matches = false;
-    o.labels.min_depth_m = min_depth_m.value_or(scene_->min_depth_m);
-    o.labels.max_depth_m = max_depth_m.value_or(scene_->max_depth_m);
-    o.fusion.voxel_size_m = voxel_m;
-    o.fusion.max_range_m = max_range_m;
-    Named("scope", [&] { gt::occupancy::ParseFusionScope(scope, &o.fusion); });
     if (!o.Check(&error)) ThrowValue("options", error);
     PyScopeMap out;
     {
@@ -99,14 +113,13 @@ class PyScene {
       const size_t i1 = gt::truth::FindFrame(*scene_, id1, "id1");
       const gt::Scene& scene = *scene_;
       out.fused = std::make_shared<const gt::truth::ScopeMap>(gt::truth::FuseScope(
-          scene, i0, i1, o, [&](size_t i) {
-            return gt::truth::LoadWorkingFrame(scene.frames[i], resolution);
-          }));
+          scene, i0, i1, o,
+          [&](size_t i) { return gt::truth::LoadWorkingFrame(scene.frames[i], resolution); }));
     }
     out.scene = scene_->name;
     out.scope = gt::occupancy::FusionScopeName(o.fusion);
-    out.voxel_m = voxel_m;
-    out.max_range_m = max_range_m;
+    out.voxel_m = o.fusion.voxel_size_m;
+    out.max_range_m = o.fusion.max_range_m;
     out.min_depth_m = o.labels.min_depth_m;
     out.max_depth_m = o.labels.max_depth_m;
     out.width = width;
@@ -121,9 +134,9 @@ class PyScene {
 class PyDataset {
  public:
   PyDataset(std::string root, std::string format)
-      : root_(std::move(root)),
-        format_(std::move(format)),
-        reader_(Named("format", [&] { return gt::io::MakeReader(format_); })) {}
+      : root_(std::move(root)), format_(std::move(format)), reader_(Named("format", [&] {
+          return gt::datasets::MakeReader(gt::ParseDatasetFormat(format_, "format"));
+        })) {}
 
   const std::string& root() const { return root_; }
   const std::string& format() const { return format_; }
@@ -139,13 +152,13 @@ class PyDataset {
 
  private:
   std::string root_, format_;
-  std::shared_ptr<const gt::io::DatasetReader> reader_;
+  std::shared_ptr<const gt::datasets::DatasetReader> reader_;
 };
 
 }  // namespace
 
 void BindIo(py::module_& m) {
-  m.attr("FORMATS") = py::tuple(py::cast(gt::io::KnownFormats()));
+  m.attr("FORMATS") = py::tuple(py::cast(gt::datasets::KnownFormats()));
 
   // A compressed shard member (sample.compression: deflate) inflated into a new bytearray
   // (occgt.torch.ShardDataset parses it in place): sized by io::GzipPlainSize, filled by
@@ -213,7 +226,8 @@ void BindIo(py::module_& m) {
       .def_property_readonly(
           "name", [](const PyScene& s) { return s.scene().name; }, "scene name")
       .def_property_readonly(
-          "format", [](const PyScene& s) { return s.scene().format; }, "reader format")
+          "format", [](const PyScene& s) { return gt::DatasetFormatName(s.scene().format); },
+          "reader format")
       .def_property_readonly(
           "path", [](const PyScene& s) { return s.scene().path; }, "folder or manifest read")
       .def_property_readonly(
@@ -225,30 +239,37 @@ void BindIo(py::module_& m) {
       .def_property_readonly(
           "frames", [](const PyScene& s) { return s.scene().frames; },
           "list[Frame], sorted by number (usable or not)")
-      .def("load", &PyScene::Load, "frame_id"_a, "width"_a = 640, "height"_a = 480,
+      .def("load", &PyScene::Load, "frame_id"_a, "width"_a = gt::truth::Resolution().width,
+           "height"_a = gt::truth::Resolution().height,
            "(depth float32 [height, width] planar metres (0 = invalid), K float64 [3, 3] at "
            "width x height, world_from_cam float64 [4, 4]) of a usable frame at the working "
            "resolution: depth resized with nearest neighbour, K rescaled with the pixel-area "
            "rule (truth::LoadWorkingFrame). ValueError for an unknown or unusable frame_id or "
            "an unreadable depth file.")
-      .def("fuse", &PyScene::Fuse, "id0"_a, "id1"_a, "width"_a = 640, "height"_a = 480,
-           py::kw_only(), "scope"_a = "pair", "voxel_m"_a = 0.05, "max_range_m"_a = 10.0,
+      .def("fuse", &PyScene::Fuse, "id0"_a, "id1"_a, "width"_a = gt::truth::Resolution().width,
+           "height"_a = gt::truth::Resolution().height, py::kw_only(), "scope"_a = "pair",
+           "voxel_m"_a = py::none(), "max_range_m"_a = py::none(), "far_m"_a = py::none(),
            "min_depth_m"_a = py::none(), "max_depth_m"_a = py::none(),
+           "preset"_a = gt::truth::LabelSettings().preset, "dataset_min_depth_m"_a = py::none(),
+           "dataset_max_depth_m"_a = py::none(),
            "ScopeMap: the occupancy map of the pair (id0, id1) fused over a scope (truth::"
            "FuseScope, `occgt occupancy --scope`): 'pair', 'window:N' (the usable frames within "
            "N positions of either frame) or 'scene:S' (every S-th usable frame: one map for all "
            "pairs of the scene), depth at width x height, voxel_m and max_range_m in metres, "
-           "the depth range the scene's unless given. Frames of the scope that cannot be read "
+           "the depth range the scene's (as `preset` takes it) unless given; None: the defaults of "
+           "pair_ground_truth (PAIR_DEFAULTS; max_range_m: far_m). Frames of the scope that cannot "
+           "be read "
            "are skipped and listed in ScopeMap.skipped. Pass it to "
            "pair_ground_truth(..., occupancy=True, scope_map=...).")
-      .def("load_color", &PyScene::LoadColor, "frame_id"_a, "width"_a = 640, "height"_a = 480,
+      .def("load_color", &PyScene::LoadColor, "frame_id"_a,
+           "width"_a = gt::truth::Resolution().width, "height"_a = gt::truth::Resolution().height,
            "colour of a frame at the working resolution: uint8 [height, width, 3], channels R, "
            "G, B, resized bilinearly from the colour camera's size (io::ReadColorResized: the "
            "pixels of a shard's image0/image1). ValueError when the frame has no colour image "
            "or it cannot be read.")
       .def("__repr__", [](const PyScene& s) {
-        return "<occgt.Scene " + s.scene().name + " (" + s.scene().format + ", " +
-               std::to_string(s.scene().frames.size()) + " frames)>";
+        return "<occgt.Scene " + s.scene().name + " (" + gt::DatasetFormatName(s.scene().format) +
+               ", " + std::to_string(s.scene().frames.size()) + " frames)>";
       });
 
   py::class_<PyDataset>(m, "Dataset", "A dataset root read by one of occgt's readers.")

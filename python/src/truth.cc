@@ -18,7 +18,9 @@
 #include "libgt/occupancy/frustum.h"
 #include "libgt/occupancy/pair_occupancy.h"
 #include "libgt/truth/pair_files.h"
+#include "libgt/truth/pair_settings.h"
 #include "libgt/truth/pair_truth.h"
+#include "libgt/truth/working_frame.h"
 #include "python/src/convert.h"
 #include "python/src/scope_map.h"
 
@@ -29,48 +31,88 @@ using namespace pybind11::literals;
 
 namespace {
 
+// The keyword arguments of pair_ground_truth and pair_options (python/occgt/__init__.py
+// documents them): None keeps the C++ default, and truth::ResolvePairTruthOptions resolves
+// them like every other entry point. An unknown keyword is a TypeError, as in Python.
 struct PairArguments {
-  std::string preset;
-  std::optional<double> abs_tol_m, rel_tol, min_depth_m, max_depth_m;
-  std::optional<std::string> relative_to, bounds, target_lookup, missing_target;
-  int stride;
-  std::string anchor;
-  bool mutual, occupancy;
-  double voxel_m;
-  std::optional<double> max_range_m;  // none: far_m (as a recipe and `occgt occupancy`)
-  double near_m, far_m;
-  int bins;
-  std::string spacing, traversal, occupancy_mode;
+  gt::truth::PairSettings settings;
+  gt::truth::DatasetDepthRange range;
   const PyScopeMap* scope_map = nullptr;  // Scene.fuse's map, or none (fuse the pair here)
 };
 
-gt::truth::PairTruthOptions MakeOptions(const PairArguments& a) {
-  gt::truth::PairTruthOptions o;
-  gt::LabelOptions& lo = o.labels;
-  lo = Named("preset", [&] { return gt::LabelPreset(a.preset); });
-  if (a.abs_tol_m) lo.abs_tol_m = *a.abs_tol_m;
-  if (a.rel_tol) lo.rel_tol = *a.rel_tol;
-  if (a.min_depth_m) lo.min_depth_m = *a.min_depth_m;
-  if (a.max_depth_m) lo.max_depth_m = *a.max_depth_m;
-  if (a.relative_to) lo.relative_to = gt::ParseRelativeTo(*a.relative_to, "relative_to");
-  if (a.bounds) lo.bounds = gt::ParseBounds(*a.bounds, "bounds");
-  if (a.target_lookup) lo.target_lookup = gt::ParseTargetLookup(*a.target_lookup, "target_lookup");
-  if (a.missing_target) {
-    lo.missing_target = gt::ParseMissingTarget(*a.missing_target, "missing_target");
+template <typename T>
+std::optional<T> Take(py::dict* kwargs, const char* name) {
+  if (!kwargs->contains(name)) return std::nullopt;
+  const py::object value = (*kwargs)[name];
+  PyDict_DelItemString(kwargs->ptr(), name);
+  if (value.is_none()) return std::nullopt;
+  try {
+    return value.cast<T>();
+  } catch (const py::cast_error&) {
+    ThrowValue(name, "expected " + std::string(py::type_id<T>()) + ", got " +
+                         std::string(py::str(value.get_type().attr("__name__"))));
   }
-  o.patches.stride = a.stride;
-  o.patches.anchor = gt::ParseAnchor(a.anchor, "anchor");
-  o.patches.mutual = a.mutual;
-  o.occupancy = a.occupancy;
-  o.fusion.voxel_size_m = a.voxel_m;
-  o.fusion.max_range_m = a.max_range_m.value_or(a.far_m);
-  o.bins.num_bins = a.bins;
-  o.bins.near_m = a.near_m;
-  o.bins.far_m = a.far_m;
-  o.bins.spacing = Named("spacing", [&] { return gt::occupancy::ParseBinSpacing(a.spacing); });
-  o.bins.traversal = Named("traversal", [&] { return gt::occupancy::ParseTraversal(a.traversal); });
-  o.mode =
-      Named("occupancy_mode", [&] { return gt::occupancy::ParseOccupancyMode(a.occupancy_mode); });
+}
+
+PairArguments ArgumentsFromKwargs(const std::string& preset, const py::kwargs& given) {
+  py::dict kw(given);  // a copy: keys are removed as they are read
+  PairArguments a;
+  gt::truth::PairSettings& st = a.settings;
+  gt::truth::LabelSettings& ls = st.labels;
+  Named("preset", [&] { gt::LabelPreset(preset); });  // a bad name names the argument
+  ls.preset = preset;
+  ls.abs_tol_m = Take<double>(&kw, "abs_tol_m");
+  ls.rel_tol = Take<double>(&kw, "rel_tol");
+  ls.min_depth_m = Take<double>(&kw, "min_depth_m");
+  ls.max_depth_m = Take<double>(&kw, "max_depth_m");
+  if (auto v = Take<std::string>(&kw, "relative_to"))
+    ls.relative_to = gt::ParseRelativeTo(*v, "relative_to");
+  if (auto v = Take<std::string>(&kw, "bounds")) ls.bounds = gt::ParseBounds(*v, "bounds");
+  if (auto v = Take<std::string>(&kw, "target_lookup")) {
+    ls.target_lookup = gt::ParseTargetLookup(*v, "target_lookup");
+  }
+  if (auto v = Take<std::string>(&kw, "missing_target")) {
+    ls.missing_target = gt::ParseMissingTarget(*v, "missing_target");
+  }
+  if (auto v = Take<int>(&kw, "stride")) st.patches.stride = *v;
+  if (auto v = Take<std::string>(&kw, "anchor")) st.patches.anchor = gt::ParseAnchor(*v, "anchor");
+  if (auto v = Take<bool>(&kw, "mutual")) st.patches.mutual = *v;
+  gt::truth::OccupancySettings& os = st.occupancy;
+  os.enabled = Take<bool>(&kw, "occupancy").value_or(false);
+  os.voxel_m = Take<double>(&kw, "voxel_m");
+  os.max_range_m = Take<double>(&kw, "max_range_m");
+  os.bins = Take<int>(&kw, "bins");
+  os.near_m = Take<double>(&kw, "near_m");
+  os.far_m = Take<double>(&kw, "far_m");
+  if (auto v = Take<std::string>(&kw, "spacing")) {
+    os.spacing = Named("spacing", [&] { return gt::occupancy::ParseBinSpacing(*v); });
+  }
+  if (auto v = Take<std::string>(&kw, "traversal")) {
+    os.traversal = Named("traversal", [&] { return gt::occupancy::ParseTraversal(*v); });
+  }
+  if (auto v = Take<std::string>(&kw, "occupancy_mode")) {
+    os.mode = Named("occupancy_mode", [&] { return gt::occupancy::ParseOccupancyMode(*v); });
+  }
+  if (auto v = Take<std::pair<double, double>>(&kw, "dataset_depth_range")) {
+    a.range.min_depth_m = v->first;
+    a.range.max_depth_m = v->second;
+  }
+  a.range.set_min_depth_m = Take<double>(&kw, "dataset_min_depth_m");
+  a.range.set_max_depth_m = Take<double>(&kw, "dataset_max_depth_m");
+  if (kw.contains("scope_map")) {
+    const py::object m = kw["scope_map"];
+    PyDict_DelItemString(kw.ptr(), "scope_map");
+    if (!m.is_none()) a.scope_map = Named("scope_map", [&] { return m.cast<const PyScopeMap*>(); });
+  }
+  for (const auto& item : kw) {
+    throw py::type_error("got an unexpected keyword argument '" + std::string(py::str(item.first)) +
+                         "'");
+  }
+  return a;
+}
+
+gt::truth::PairTruthOptions MakeOptions(const PairArguments& a) {
+  const gt::truth::PairTruthOptions o = gt::truth::ResolvePairTruthOptions(a.settings, a.range);
   std::string error;
   if (!o.Check(&error)) ThrowValue("options", error);
   return o;
@@ -85,6 +127,17 @@ gt::truth::WorkingFrame MakeFrame(py::handle depth, py::handle K, py::handle wor
   return f;
 }
 
+// The resolved options as the outputs record them (label_options, patch_options,
+// occupancy_options: pair_files.h), so that a caller can compare them with a shard's.
+py::dict OptionsDict(const gt::truth::PairTruthOptions& o) {
+  py::dict d;
+  d["label_options"] = JsonToPython(gt::truth::LabelOptionsJson(o.labels));
+  d["patch_options"] = JsonToPython(gt::truth::PatchOptionsJson(o.patches));
+  d["occupancy_options"] =
+      o.occupancy ? JsonToPython(gt::truth::OccupancyOptionsJson(o)) : py::object(py::none());
+  return d;
+}
+
 py::dict PairGroundTruth(py::handle depth0, py::handle depth1, py::handle K0, py::handle K1,
                          py::handle world_from_cam0, py::handle world_from_cam1,
                          const PairArguments& args) {
@@ -94,7 +147,8 @@ py::dict PairGroundTruth(py::handle depth0, py::handle depth1, py::handle K0, py
   const PyScopeMap* scope = args.scope_map;
   if (scope) {
     std::ostringstream problem;
-    if (!options.occupancy) problem << "given without occupancy=True";
+    if (!options.occupancy)
+      problem << "given without occupancy=True";
     else if (options.mode != gt::occupancy::OccupancyMode::kOctomap)
       problem << "used by occupancy_mode 'octomap' only";
     else if (scope->voxel_m != options.fusion.voxel_size_m ||
@@ -123,6 +177,7 @@ py::dict PairGroundTruth(py::handle depth0, py::handle depth1, py::handle K0, py
   out["T_0to1"] = MatrixToArray(p.cam1_from_cam0.matrix());
   out["metrics01"] = JsonToPython(gt::truth::MetricsJson<nlohmann::ordered_json>(p.m01));
   out["metrics10"] = JsonToPython(gt::truth::MetricsJson<nlohmann::ordered_json>(p.m10));
+  out["options"] = OptionsDict(options);
   if (truth.occupancy) {
     gt::occupancy::FrustumVolume& v0 = truth.occupancy->cam0;
     gt::occupancy::FrustumVolume& v1 = truth.occupancy->cam1;
@@ -160,6 +215,32 @@ py::array_t<uint8_t> DenseVolume(py::handle occ, py::handle known, int bins) {
   return ToArray(std::move(dense), {bins, v.height, v.width});
 }
 
+// The value every keyword argument of pair_ground_truth takes when None: the defaults of the
+// C++ Options structs as truth::ResolvePairTruthOptions gives them (the Python signatures
+// show these values; none is written in Python).
+py::dict PairDefaults() {
+  const gt::truth::PairSettings settings;
+  const gt::truth::PairTruthOptions o = gt::truth::ResolvePairTruthOptions(settings);
+  py::dict d;
+  d["preset"] = settings.labels.preset;
+  d["stride"] = o.patches.stride;
+  d["anchor"] = gt::AnchorName(o.patches.anchor);
+  d["mutual"] = o.patches.mutual;
+  d["voxel_m"] = o.fusion.voxel_size_m;
+  d["near_m"] = o.bins.near_m;
+  d["far_m"] = o.bins.far_m;
+  d["bins"] = o.bins.num_bins;
+  d["spacing"] = gt::occupancy::BinSpacingName(o.bins.spacing);
+  d["traversal"] = gt::occupancy::TraversalName(o.bins.traversal);
+  d["occupancy_mode"] = gt::occupancy::OccupancyModeName(o.mode);
+  d["min_depth_m"] = gt::kDefaultMinDepthM;
+  d["max_depth_m"] = gt::kDefaultMaxDepthM;
+  const gt::truth::Resolution resolution;
+  d["width"] = resolution.width;
+  d["height"] = resolution.height;
+  return d;
+}
+
 }  // namespace
 
 void BindTruth(py::module_& m) {
@@ -193,47 +274,24 @@ void BindTruth(py::module_& m) {
   m.def(
       "pair_ground_truth",
       [](py::handle depth0, py::handle depth1, py::handle K0, py::handle K1,
-         py::handle world_from_cam0, py::handle world_from_cam1, std::string preset,
-         std::optional<double> abs_tol_m, std::optional<double> rel_tol,
-         std::optional<double> min_depth_m, std::optional<double> max_depth_m,
-         std::optional<std::string> relative_to, std::optional<std::string> bounds,
-         std::optional<std::string> target_lookup, std::optional<std::string> missing_target,
-         int stride, std::string anchor, bool mutual, bool occupancy, double voxel_m,
-         std::optional<double> max_range_m, double near_m, double far_m, int bins, std::string spacing,
-         std::string traversal, std::string occupancy_mode, const PyScopeMap* scope_map) {
-        const PairArguments args{std::move(preset),
-                                 abs_tol_m,
-                                 rel_tol,
-                                 min_depth_m,
-                                 max_depth_m,
-                                 relative_to,
-                                 bounds,
-                                 target_lookup,
-                                 missing_target,
-                                 stride,
-                                 std::move(anchor),
-                                 mutual,
-                                 occupancy,
-                                 voxel_m,
-                                 max_range_m,
-                                 near_m,
-                                 far_m,
-                                 bins,
-                                 std::move(spacing),
-                                 std::move(traversal),
-                                 std::move(occupancy_mode),
-                                 scope_map};
-        return PairGroundTruth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1, args);
+         py::handle world_from_cam0, py::handle world_from_cam1, const std::string& preset,
+         const py::kwargs& kwargs) {
+        return PairGroundTruth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1,
+                               ArgumentsFromKwargs(preset, kwargs));
       },
       "depth0"_a, "depth1"_a, "K0"_a, "K1"_a, "world_from_cam0"_a, "world_from_cam1"_a,
-      "preset"_a = "default", py::kw_only(), "abs_tol_m"_a = py::none(), "rel_tol"_a = py::none(),
-      "min_depth_m"_a = py::none(), "max_depth_m"_a = py::none(), "relative_to"_a = py::none(),
-      "bounds"_a = py::none(), "target_lookup"_a = py::none(), "missing_target"_a = py::none(),
-      "stride"_a = 8, "anchor"_a = "center", "mutual"_a = true, "occupancy"_a = false,
-      "voxel_m"_a = 0.05, "max_range_m"_a = py::none(), "near_m"_a = 0.1, "far_m"_a = 10.0, "bins"_a = 64,
-      "spacing"_a = "linear", "traversal"_a = "exact", "occupancy_mode"_a = "octomap",
-      "scope_map"_a = py::none(),
-      "The ground truth of one pair (truth::ComputePairTruth); see occgt.pair_ground_truth.");
+      "preset"_a = gt::truth::LabelSettings().preset,
+      "The ground truth of one pair (truth::ComputePairTruth); see occgt.pair_ground_truth. "
+      "A keyword argument that is None keeps the C++ default (PAIR_DEFAULTS).");
+  m.def(
+      "pair_options",
+      [](const std::string& preset, const py::kwargs& kwargs) {
+        return OptionsDict(MakeOptions(ArgumentsFromKwargs(preset, kwargs)));
+      },
+      "preset"_a = gt::truth::LabelSettings().preset,
+      "The options pair_ground_truth resolves from the same arguments (its 'options' entry), "
+      "without computing anything; see occgt.pair_options.");
+  m.attr("PAIR_DEFAULTS") = PairDefaults();
   m.def("dense_volume", &DenseVolume, "occ"_a, "known"_a, "bins"_a = 64,
         "uint8 [bins, H/2, W/2] (0 free, 1 occupied, 255 unknown) of occupancy words "
         "(occupancy::DenseVolume); see occgt.dense_volume.");

@@ -4,15 +4,15 @@
 // Figures and commands: docs/PERFORMANCE.md.
 #include <benchmark/benchmark.h>
 
-#include "libgt/build/recipe.h"
-#include "libgt/build/sample.h"
-#include "libgt/io/reader.h"
+#include "libgt/pipeline/recipe.h"
+#include "libgt/pipeline/sample.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/pairs/selection.h"
 #include "libgt/truth/pair_truth.h"
 #include "tests/bench/seven_scenes_sample.h"
 #include "tests/support/test_support.h"
 
-namespace gt::build {
+namespace gt::pipeline {
 namespace {
 
 SampleOptions Options(const Scene& scene) {
@@ -21,7 +21,7 @@ SampleOptions Options(const Scene& scene) {
       "occupancy: {far_m: 8.0}\n",
       "bench.yaml", "/");
   SampleOptions o = RecipeSampleOptions(recipe);
-  o.truth.labels = RecipeLabelOptions(recipe, scene);
+  o.truth = RecipePairTruthOptions(recipe, scene);
   return o;
 }
 
@@ -61,6 +61,6 @@ void BM_PairTruth(benchmark::State& state) {
 BENCHMARK(BM_PairTruth)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
-}  // namespace gt::build
+}  // namespace gt::pipeline
 
 BENCHMARK_MAIN();

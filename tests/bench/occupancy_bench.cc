@@ -11,7 +11,7 @@
 #include <memory>
 
 #include "libgt/io/depth_io.h"
-#include "libgt/io/reader.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/occupancy/pair_occupancy.h"
 #include "tests/occupancy/reference_traversal.h"
 #include "tests/support/test_support.h"
@@ -33,7 +33,7 @@ const PairData& Data(int which) {
   const std::string format = which == 0 ? "tartanair" : "sevenscenes";
   const std::string root =
       gt::test::SharedData(which == 0 ? "tartanair/hospital_sample" : "sevenscenes/rgbd-frames");
-  const Scene s = io::MakeReader(format)->ReadScene(root, "");
+  const Scene s = datasets::MakeReader(ParseDatasetFormat(format))->ReadScene(root, "");
   const int64_t n0 = which == 0 ? 0 : 150, n1 = which == 0 ? 20 : 190;
   for (const Frame& f : s.frames) {
     if (f.number != n0 && f.number != n1) continue;

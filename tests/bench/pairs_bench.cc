@@ -4,7 +4,7 @@
 // Figures and commands: docs/PERFORMANCE.md.
 #include <benchmark/benchmark.h>
 
-#include "libgt/io/reader.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/pairs/selection.h"
 #include "libgt/truth/working_frame.h"
 #include "tests/bench/seven_scenes_sample.h"

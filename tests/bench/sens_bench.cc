@@ -1,4 +1,4 @@
-// ScanNet raw .sens read in place (libgt/io/sens.h): listing a scene (the offset table from
+// ScanNet raw .sens read in place (libgt/datasets/sens.h): listing a scene (the offset table from
 // the frame headers) and decoding one frame (pread + zlib depth 640x480 + JPEG colour
 // 1296x968, ScanNet's usual sizes), and scoring a scene for pair selection from a .sens
 // against the same frames in the exported layout (pose/, depth/ 16-bit PNG, color/,
@@ -17,7 +17,7 @@
 #include "libgt/io/depth_io.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/image.h"
-#include "libgt/io/reader.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/pairs/selection.h"
 #include "libgt/truth/working_frame.h"
 #include "tests/bench/seven_scenes_sample.h"
@@ -119,7 +119,7 @@ double BytesReadSoFar() {
 void BM_ListScene(benchmark::State& state) {
   const int frames = 5000;
   const std::string dir = WriteSens("list", frames, std::string(512, 'c'), std::string(512, 'd'));
-  const auto reader = io::MakeReader("scannet");
+  const auto reader = datasets::MakeReader(gt::DatasetFormat::kScanNet);
   const double before = BytesReadSoFar();
   for (auto _ : state) {
     const Scene s = reader->ReadScene(dir, "");
@@ -137,7 +137,7 @@ BENCHMARK(BM_ListScene)->Unit(benchmark::kMillisecond);
 void BM_DecodeFrame(benchmark::State& state) {
   const Payloads& p = RealPayloads();
   const std::string dir = WriteSens("frame", 3, p.color, p.depth);
-  const Scene s = io::MakeReader("scannet")->ReadScene(dir, "");
+  const Scene s = datasets::MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(dir, "");
   const Frame& f = s.frames.at(1);
   for (auto _ : state) {
     const DepthImage d = io::ReadDepth(f.depth, 640, 480);
@@ -153,7 +153,7 @@ BENCHMARK(BM_DecodeFrame)->Unit(benchmark::kMillisecond);
 void BM_DecodeDepthOnly(benchmark::State& state) {
   const Payloads& p = RealPayloads();
   const std::string dir = WriteSens("depth", 3, p.color, p.depth);
-  const Scene s = io::MakeReader("scannet")->ReadScene(dir, "");
+  const Scene s = datasets::MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(dir, "");
   for (auto _ : state)
     benchmark::DoNotOptimize(io::ReadDepth(s.frames.at(1).depth).values_m.data());
 }
@@ -228,7 +228,7 @@ const TwoLayouts& SampleBothWays() {
 // Pair selection's scoring work on one scene: the frame scan (every depth map decoded and
 // resized, cold cache) and both directions of the pairs 8 frames apart at score_stride 8.
 void ScoreScene(benchmark::State& state, const std::string& dir) {
-  const Scene scene = io::MakeReader("scannet")->ReadScene(dir, "");
+  const Scene scene = datasets::MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(dir, "");
   std::vector<Camera> cams;
   for (const auto& f : scene.frames) cams.push_back(truth::WorkingCamera(f, {640, 480}));
   LabelOptions labels = LabelPreset("default");

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "libgt/core/frame.h"
-#include "libgt/io/reader.h"
+#include "libgt/datasets/reader.h"
 #include "tests/support/test_support.h"
 
 namespace gt::bench {
@@ -13,7 +13,7 @@ namespace gt::bench {
 inline const Scene& SevenScenesSample() {
   static const Scene scene = [] {
     const std::string root = std::string(OCCGT_SHARED_DATA) + "/sevenscenes";
-    auto reader = io::MakeReader("sevenscenes");
+    auto reader = datasets::MakeReader(gt::DatasetFormat::kSevenScenes);
     return reader->ReadScene(root, reader->ListScenes(root).at(0));
   }();
   return scene;

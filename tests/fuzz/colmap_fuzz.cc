@@ -1,4 +1,4 @@
-// COLMAP sparse-model bytes -> gt::io::ParseColmap{Cameras,Images}{Binary,Text}: the first
+// COLMAP sparse-model bytes -> gt::datasets::ParseColmap{Cameras,Images}{Binary,Text}: the first
 // byte picks the parser (0 cameras.bin, 1 images.bin, 2 cameras.txt, 3 images.txt), the
 // rest is the file. Counts and sizes are checked against the bytes left before allocating;
 // every camera then goes through ColmapPinholeCamera and every image through the pose
@@ -7,7 +7,7 @@
 #include <string>
 
 #include "libgt/core/error.h"
-#include "libgt/io/colmap.h"
+#include "libgt/datasets/colmap.h"
 #include "tests/fuzz/fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -20,19 +20,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view bytes = gt::fuzz::Bytes(data + 1, size - 1);
   gt::fuzz::ExpectValueOrInputError(name, [&] {
     if (kind == 0 || kind == 2) {
-      const auto cameras = kind == 0 ? gt::io::ParseColmapCamerasBinary(bytes, name)
-                                     : gt::io::ParseColmapCamerasText(bytes, name);
+      const auto cameras = kind == 0 ? gt::datasets::ParseColmapCamerasBinary(bytes, name)
+                                     : gt::datasets::ParseColmapCamerasText(bytes, name);
       for (const auto& [id, c] : cameras) {
         try {
-          (void)gt::io::ColmapPinholeCamera(c, name);
+          (void)gt::datasets::ColmapPinholeCamera(c, name);
         } catch (const gt::InputError&) {
         }
       }
     } else {
-      const auto images = kind == 1 ? gt::io::ParseColmapImagesBinary(bytes, name)
-                                    : gt::io::ParseColmapImagesText(bytes, name);
+      const auto images = kind == 1 ? gt::datasets::ParseColmapImagesBinary(bytes, name)
+                                    : gt::datasets::ParseColmapImagesText(bytes, name);
       for (const auto& im : images) {
-        if (!gt::io::ColmapPoseProblem(im)) (void)gt::io::ColmapWorldFromCam(im);
+        if (!gt::datasets::ColmapPoseProblem(im)) (void)gt::datasets::ColmapWorldFromCam(im);
       }
     }
   });

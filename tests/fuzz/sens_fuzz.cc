@@ -1,4 +1,4 @@
-// ScanNet .sens bytes -> gt::io::ParseSensIndex (header fields, compression codes, image
+// ScanNet .sens bytes -> gt::datasets::ParseSensIndex (header fields, compression codes, image
 // sizes, frame count and per-frame byte counts checked against the file's size), then the
 // depth decoder on the first frames' payloads (zlib or raw uint16, inflated size checked).
 #include <algorithm>
@@ -6,20 +6,20 @@
 #include <cstring>
 
 #include "libgt/io/depth_io.h"
-#include "libgt/io/sens.h"
+#include "libgt/datasets/sens.h"
 #include "tests/fuzz/fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string name = "fuzz.sens";
-  const gt::io::SensReadAt read_at = [&](uint64_t offset, size_t n, void* dst) {
+  const gt::datasets::SensReadAt read_at = [&](uint64_t offset, size_t n, void* dst) {
     if (offset > size || n > size - offset) std::abort();  // the parser checks before reading
     std::memcpy(dst, data + offset, n);
   };
   gt::fuzz::ExpectValueOrInputError(name, [&] {
-    const gt::io::SensIndex index = gt::io::ParseSensIndex(name, size, read_at);
+    const gt::datasets::SensIndex index = gt::datasets::ParseSensIndex(name, size, read_at);
     gt::DepthSource src;
     src.path = name;
-    src.format = index.depth_compression == gt::io::SensDepthCompression::kZlib
+    src.format = index.depth_compression == gt::datasets::SensDepthCompression::kZlib
                      ? gt::DepthFormat::kSensZlib
                      : gt::DepthFormat::kSensRaw;
     src.scale_m_per_unit = 1.0 / index.depth_shift;

@@ -4,7 +4,7 @@
 #include <cstdint>
 
 #include "libgt/core/pose.h"
-#include "libgt/io/text_parsing.h"
+#include "libgt/datasets/text_parsing.h"
 #include "tests/fuzz/fuzz_support.h"
 
 namespace {
@@ -22,13 +22,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view text = gt::fuzz::Bytes(data, size);
   const std::string tartan = "pose_left.txt";
   gt::fuzz::ExpectValueOrInputError(tartan, [&] {
-    for (const auto& line : gt::io::ParseTQLines(text, tartan)) {
+    for (const auto& line : gt::datasets::ParseTQLines(text, tartan)) {
       CheckPose(line.translation, line.q_xyzw);
     }
   });
   const std::string tum = "groundtruth.txt";
   gt::fuzz::ExpectValueOrInputError(tum, [&] {
-    const auto poses = gt::io::ParseTimedPoses(text, tum);
+    const auto poses = gt::datasets::ParseTimedPoses(text, tum);
     for (size_t i = 0; i < poses.size(); ++i) {
       if (i > 0 && poses[i].t < poses[i - 1].t) std::abort();  // sorted by time
       CheckPose(poses[i].translation, poses[i].q_xyzw);

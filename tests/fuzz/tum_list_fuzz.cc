@@ -1,5 +1,5 @@
 // TUM "timestamp filename" lists (rgb.txt / depth.txt, the association input):
-// gt::io::ParseTimedPathList, then the whole TUM reader on a per-process scratch sequence
+// gt::datasets::ParseTimedPathList, then the whole TUM reader on a per-process scratch sequence
 // whose depth.txt, rgb.txt and groundtruth.txt are the input split at the first two NUL
 // bytes (association by nearest timestamp, pose checks, duplicate ids).
 #include <unistd.h>
@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "libgt/io/reader.h"
-#include "libgt/io/text_parsing.h"
+#include "libgt/datasets/reader.h"
+#include "libgt/datasets/text_parsing.h"
 #include "tests/fuzz/fuzz_support.h"
 
 namespace {
@@ -25,7 +25,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view text = gt::fuzz::Bytes(data, size);
   const std::string name = "depth.txt";
   gt::fuzz::ExpectValueOrInputError(name, [&] {
-    const auto list = gt::io::ParseTimedPathList(text, name);
+    const auto list = gt::datasets::ParseTimedPathList(text, name);
     for (size_t i = 1; i < list.size(); ++i) {
       if (list[i].t < list[i - 1].t) std::abort();
     }
@@ -42,10 +42,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   WriteFile(dir + "/depth.txt", text.substr(0, a));
   WriteFile(dir + "/rgb.txt", a == std::string_view::npos ? "" : text.substr(a + 1, b - a - 1));
   WriteFile(dir + "/groundtruth.txt", b == std::string_view::npos ? "" : text.substr(b + 1));
-  gt::io::ReaderOptions options;
+  gt::datasets::ReaderOptions options;
   options.check_depth_files = false;
   gt::fuzz::ExpectValueOrInputError(dir, [&] {
-    const gt::Scene scene = gt::io::MakeReader("tum", options)->ReadScene(dir, "");
+    const gt::Scene scene = gt::datasets::MakeReader(gt::DatasetFormat::kTum, options)->ReadScene(dir, "");
     for (const gt::Frame& f : scene.frames) {
       if (f.usable && !f.world_from_cam.matrix().allFinite()) std::abort();
     }

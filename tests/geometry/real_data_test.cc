@@ -4,7 +4,7 @@
 
 #include "libgt/geometry/pair.h"
 #include "libgt/io/depth_io.h"
-#include "libgt/io/reader.h"
+#include "libgt/datasets/reader.h"
 #include "tests/geometry/reference.h"
 #include "tests/support/test_support.h"
 
@@ -20,7 +20,7 @@ struct RealPair {
 
 RealPair Load(const std::string& format, const std::string& root, const std::string& id0,
               const std::string& id1) {
-  const auto reader = io::MakeReader(format);
+  const auto reader = datasets::MakeReader(ParseDatasetFormat(format));
   const auto names = reader->ListScenes(root);
   EXPECT_EQ(names.size(), 1u);
   const Scene scene = reader->ReadScene(root, names.at(0));

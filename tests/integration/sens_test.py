@@ -1,4 +1,4 @@
-"""ScanNet raw .sens read in place (libgt/io/sens.h): the same frames written as a .sens and
+"""ScanNet raw .sens read in place (libgt/datasets/sens.h): the same frames written as a .sens and
 in the exporter's layout (tests/support/write_sens.py) give the same scan (poses, K, usable
 frames and reasons) and bit-identical `occgt pair` outputs, for a synthetic scene (JPEG colour,
 a lost-tracking frame) and the real 7-Scenes sample frames (PNG colour); damaged files are one

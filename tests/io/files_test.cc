@@ -22,10 +22,11 @@
 #include "libgt/io/file_read.h"
 #include "libgt/io/image.h"
 #include "libgt/io/md5.h"
-#include "libgt/io/text_parsing.h"
+#include "libgt/datasets/text_parsing.h"
 #include "tests/support/test_support.h"
 
 namespace gt::io {
+using namespace gt::datasets;  // NOLINT: the readers' parsers, tested beside the files
 namespace {
 namespace fs = std::filesystem;
 

@@ -10,11 +10,12 @@
 #include "libgt/io/depth_io.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
-#include "libgt/io/readers.h"
-#include "libgt/io/text_parsing.h"
+#include "libgt/datasets/readers.h"
+#include "libgt/datasets/text_parsing.h"
 #include "tests/support/test_support.h"
 
 namespace gt::io {
+using namespace gt::datasets;  // NOLINT: the readers' parsers, tested beside the files
 namespace {
 
 // The InputError message of `f`, or "" when it does not throw one.

@@ -11,7 +11,7 @@
 #include <random>
 
 #include "libgt/io/depth_io.h"
-#include "libgt/io/reader.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/occupancy/frustum.h"
 #include "libgt/occupancy/fusion.h"
 #include "tests/support/test_support.h"
@@ -166,7 +166,7 @@ struct Loaded {
 
 Loaded Load(const std::string& format, const std::string& root) {
   Loaded l;
-  l.scene = io::MakeReader(format)->ReadScene(root, "");
+  l.scene = datasets::MakeReader(ParseDatasetFormat(format))->ReadScene(root, "");
   for (const Frame& f : l.scene.frames)
     l.depths.push_back(ResizeDepthNearest(io::ReadDepth(f.depth), 640, 480));
   return l;

@@ -8,7 +8,7 @@
 #include <cstdio>
 
 #include "libgt/io/depth_io.h"
-#include "libgt/io/reader.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/occupancy/pair_occupancy.h"
 #include "tests/support/test_support.h"
 
@@ -23,7 +23,7 @@ struct Loaded {
 
 Loaded Load(const std::string& format, const std::string& root, const std::string& name) {
   Loaded l;
-  l.scene = io::MakeReader(format)->ReadScene(root, name);
+  l.scene = datasets::MakeReader(ParseDatasetFormat(format))->ReadScene(root, name);
   l.depths.resize(l.scene.frames.size());
   for (size_t i = 0; i < l.scene.frames.size(); ++i) {
     const Frame& f = l.scene.frames[i];

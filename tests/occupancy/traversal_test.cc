@@ -12,7 +12,7 @@
 #include <random>
 
 #include "libgt/io/depth_io.h"
-#include "libgt/io/reader.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/occupancy/frustum.h"
 #include "libgt/occupancy/fusion.h"
 #include "tests/occupancy/reference_traversal.h"
@@ -198,7 +198,7 @@ struct Loaded {
 
 Loaded Load(const std::string& format, const std::string& root) {
   Loaded l;
-  l.scene = io::MakeReader(format)->ReadScene(root, "");
+  l.scene = datasets::MakeReader(ParseDatasetFormat(format))->ReadScene(root, "");
   for (const Frame& f : l.scene.frames)
     l.depths.push_back(ResizeDepthNearest(io::ReadDepth(f.depth), 640, 480));
   return l;

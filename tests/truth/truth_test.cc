@@ -10,7 +10,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/geometry/pair.h"
-#include "libgt/io/reader.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/occupancy/pair_occupancy.h"
 #include "libgt/synth/dataset.h"
 #include "libgt/truth/pair_truth.h"
@@ -32,7 +32,7 @@ const Scene& SynthScene() {
     o.width = 80;
     o.height = 60;
     synth::WriteSyntheticDataset(dir, o);
-    const auto reader = io::MakeReader("generic");
+    const auto reader = datasets::MakeReader(gt::DatasetFormat::kGeneric);
     return reader->ReadScene(dir, reader->ListScenes(dir).at(0));
   }();
   return scene;

@@ -172,7 +172,9 @@ class PairIndexDataset:
     """
 
     def __init__(self, pairs: Union[str, os.PathLike, Sequence[PairRef]], root: str, format: str,
-                 *, width: int = 640, height: int = 480, preset: str = "default",
+                 *, width: int = occgt.PAIR_DEFAULTS["width"],
+                 height: int = occgt.PAIR_DEFAULTS["height"],
+                 preset: str = occgt.PAIR_DEFAULTS["preset"],
                  images: bool = True, occupancy: Optional[str] = None, scope: str = "pair",
                  scene_names: Optional[Union[str, Sequence[str]]] = None,
                  npz_root: Optional[str] = None, **options: Any) -> None:
@@ -188,7 +190,7 @@ class PairIndexDataset:
         self.scope = scope
         self._scene_map: Optional[Tuple[str, occgt.ScopeMap]] = None
         self.options = dict(options)
-        self.bins = int(self.options.get("bins", 64))
+        self.bins = int(self.options.get("bins", occgt.PAIR_DEFAULTS["bins"]))
         self.dataset_name = _DATASET_NAMES.get(format, format)
         self._dataset: Optional[occgt.Dataset] = None
         self._pid = -1
@@ -223,16 +225,13 @@ class PairIndexDataset:
             root = dataset["root"] or os.path.join(split_dir, "data")
         if fmt == "synthetic":
             fmt = "generic"  # the build generated it as generic manifests
+        # The recipe's keys under pair_ground_truth's names, as they are: the C++ resolves them
+        # (truth::ResolvePairTruthOptions), as for the build.
         options: Dict[str, Any] = {
-            "stride": patches["stride"], "anchor": patches["anchor"], "mutual": patches["mutual"]}
-        for name in ("min_depth_m", "max_depth_m"):
-            value = labels["overrides"].get(name)
-            value = dataset.get(name) if value is None else value
-            if value is not None:
-                options[name] = value
-        for name in ("abs_tol_m", "rel_tol"):
-            if labels["overrides"].get(name) is not None:
-                options[name] = labels["overrides"][name]
+            "stride": patches["stride"], "anchor": patches["anchor"], "mutual": patches["mutual"],
+            "dataset_min_depth_m": dataset.get("min_depth_m"),
+            "dataset_max_depth_m": dataset.get("max_depth_m")}
+        options.update({k: v for k, v in labels["overrides"].items() if v is not None})
         with_occupancy = bool(occ["enabled"] and sample["occupancy"])
         if occupancy == "recipe":
             occupancy = ({"dense": "dense"}.get(occ["encoding"], "words")
@@ -241,7 +240,7 @@ class PairIndexDataset:
                  "scene": f"scene:{occ.get('scene_stride')}"}.get(occ["scope"], "pair")
         if occupancy is not None:
             options["scope"] = scope
-            options.update({"voxel_m": occ["voxel_m"], "max_range_m": occ["far_m"],
+            options.update({"voxel_m": occ["voxel_m"], "max_range_m": occ.get("max_range_m"),
                             "near_m": occ["near_m"], "far_m": occ["far_m"], "bins": occ["bins"],
                             "spacing": occ["spacing"], "traversal": occ["traversal"],
                             "occupancy_mode": occ["mode"]})
@@ -282,15 +281,22 @@ class PairIndexDataset:
         """The scope's map of the pair; a scene scope's map is kept for the scene's next pairs."""
         if self.scope.startswith("scene:") and self._scene_map and self._scene_map[0] == scene.name:
             return self._scene_map[1]
-        given = options.get("max_range_m")  # None: far_m, pair_ground_truth's rule
-        max_range_m = float(options.get("far_m", 10.0) if given is None else given)
-        fused = scene.fuse(id0, id1, self.width, self.height, scope=self.scope,
-                           voxel_m=options.get("voxel_m", 0.05), max_range_m=max_range_m,
-                           min_depth_m=options.get("min_depth_m"),
-                           max_depth_m=options.get("max_depth_m"))
+        fused = occgt.fuse_scope(scene, id0, id1, self.width, self.height, self.scope,
+                                 self.preset, options)
         if self.scope.startswith("scene:"):
             self._scene_map = (scene.name, fused)
         return fused
+
+    def _options_for(self, scene: occgt.Scene) -> Dict[str, Any]:
+        """pair_ground_truth's keyword arguments for a pair of ``scene``."""
+        return {"dataset_depth_range": (scene.min_depth_m, scene.max_depth_m), **self.options}
+
+    def pair_options(self, index: int) -> Dict[str, Any]:
+        """The options item ``index`` is computed with, resolved by the C++ as for the build
+        (``occgt.pair_options``: label_options, patch_options, occupancy_options)."""
+        scene, _ = self._scene(self.pairs[index].scene)
+        return occgt.pair_options(self.preset, occupancy=self.occupancy is not None,
+                                  **self._options_for(scene))
 
     def __getitem__(self, index: int) -> Dict[str, Any]:
         if not -len(self.pairs) <= index < len(self.pairs):
@@ -301,10 +307,7 @@ class PairIndexDataset:
         id0, id1 = self.frame_ids(index)
         depth0, K0, world_from_cam0 = scene.load(id0, self.width, self.height)
         depth1, K1, world_from_cam1 = scene.load(id1, self.width, self.height)
-        options: Dict[str, Any] = {}
-        if occgt._occgt.preset_uses_dataset_depth_range(self.preset):  # not occ2net-compat
-            options = {"min_depth_m": scene.min_depth_m, "max_depth_m": scene.max_depth_m}
-        options.update(self.options)
+        options = self._options_for(scene)
         if self.occupancy is not None and self.scope != "pair":
             options["scope_map"] = self._fused(scene, id0, id1, options)
         truth: Dict[str, Any] = dict(occgt.pair_ground_truth(

@@ -1,0 +1,46 @@
+#include "libgt/datasets/reader.h"
+
+#include <cmath>
+
+#include "libgt/core/error.h"
+#include "libgt/datasets/readers.h"
+
+namespace gt::datasets {
+
+bool ReaderOptions::Check(std::string* error) const {
+  if (!std::isfinite(tum_max_dt_s) || tum_max_dt_s < 0) {
+    if (error)
+      *error = "tum_max_dt_s must be a finite number >= 0, got " + std::to_string(tum_max_dt_s);
+    return false;
+  }
+  return true;
+}
+
+std::vector<std::string> KnownFormats() {
+  std::vector<std::string> names;
+  for (const DatasetFormat f : kAllDatasetFormats) names.emplace_back(DatasetFormatName(f));
+  return names;
+}
+
+std::unique_ptr<DatasetReader> MakeReader(DatasetFormat format, const ReaderOptions& options) {
+  std::string error;
+  if (!options.Check(&error)) throw InputError("reader options", error);
+  switch (format) {
+    case DatasetFormat::kScanNet:
+      return std::make_unique<ScanNetReader>(options);
+    case DatasetFormat::kTartanAir:
+      return std::make_unique<TartanAirReader>(options);
+    case DatasetFormat::kSevenScenes:
+      return std::make_unique<SevenScenesReader>(options);
+    case DatasetFormat::kTum:
+      return std::make_unique<TumReader>(options);
+    case DatasetFormat::kMegaDepth:
+      return std::make_unique<MegaDepthReader>(options);
+    case DatasetFormat::kGeneric:
+      return std::make_unique<GenericReader>(options);
+  }
+  GT_ASSERT(false && "unknown DatasetFormat");
+  return nullptr;
+}
+
+}  // namespace gt::datasets

@@ -1,0 +1,40 @@
+// One interface for every dataset layout (docs/DATASETS.md). A reader lists the scenes
+// under a root and reads one scene's frames: ids, K at the depth resolution,
+// world_from_cam in OpenCV axes, the depth source and the colour path with its K.
+// It never guesses silently: a missing file, a short pose file, a bad token or a size
+// mismatch throws InputError naming the file; a frame that is unusable (lost tracking,
+// non-rigid pose, missing depth) is kept with usable = false and the reason.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "libgt/core/frame.h"
+
+namespace gt::datasets {
+
+struct ReaderOptions {
+  double tum_max_dt_s = 0.02;     // TUM: max |t_depth - t_pose| and |t_depth - t_rgb| (seconds)
+  std::string exr_channel;        // generic manifest: default EXR channel when a frame has none
+  bool check_depth_files = true;  // stat every depth file while reading a scene
+
+  bool Check(std::string* error) const;
+};
+
+class DatasetReader {
+ public:
+  virtual ~DatasetReader() = default;
+  virtual DatasetFormat Format() const = 0;
+  // Scene names under root, sorted. A root that is itself one scene yields one name.
+  virtual std::vector<std::string> ListScenes(const std::string& root) const = 0;
+  virtual Scene ReadScene(const std::string& root, const std::string& scene_name) const = 0;
+};
+
+// The names of every format (DatasetFormatName of kAllDatasetFormats, in that order).
+std::vector<std::string> KnownFormats();
+// The reader of a format (core/frame.h ParseDatasetFormat turns a name into one); throws
+// InputError("reader options", ...) for options that fail Check.
+std::unique_ptr<DatasetReader> MakeReader(DatasetFormat format, const ReaderOptions& options = {});
+
+}  // namespace gt::datasets

@@ -1,0 +1,95 @@
+// Private to libgt/io: the reader classes behind MakeReader (reader.h), one .cc each.
+// Layouts, conventions and unusable reasons are documented in docs/DATASETS.md.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "libgt/datasets/reader.h"
+
+namespace gt::datasets {
+
+// ScanNet, SensReader exports: Python (color/, depth/, pose/, intrinsic/) or C++
+// (frame-XXXXXX.{color.jpg,depth.pgm,pose.txt} + _info.txt) (scannet.cc).
+class ScanNetReader : public DatasetReader {
+ public:
+  explicit ScanNetReader(const ReaderOptions& options) : options_(options) {}
+  DatasetFormat Format() const override { return DatasetFormat::kScanNet; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  Scene ReadCppExport(const std::string& folder, const std::string& scene_name) const;
+  Scene ReadSens(const std::string& folder, const std::string& scene_name) const;
+  ReaderOptions options_;
+};
+
+// TartanAir v1 trajectories, NED poses converted to OpenCV axes (tartanair.cc).
+class TartanAirReader : public DatasetReader {
+ public:
+  explicit TartanAirReader(const ReaderOptions& options) : options_(options) {}
+  DatasetFormat Format() const override { return DatasetFormat::kTartanAir; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  ReaderOptions options_;
+};
+
+// Microsoft 7-Scenes sequences: frame-NNNNNN.{color.png,depth.png,pose.txt} (sevenscenes.cc).
+class SevenScenesReader : public DatasetReader {
+ public:
+  explicit SevenScenesReader(const ReaderOptions& options) : options_(options) {}
+  DatasetFormat Format() const override { return DatasetFormat::kSevenScenes; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  ReaderOptions options_;
+};
+
+// TUM RGB-D sequences: rgb.txt, depth.txt, groundtruth.txt, associated by time (tum.cc).
+class TumReader : public DatasetReader {
+ public:
+  explicit TumReader(const ReaderOptions& options) : options_(options) {}
+  DatasetFormat Format() const override { return DatasetFormat::kTum; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  ReaderOptions options_;
+};
+
+// MegaDepth v1: dense0/depths/*.h5 with a COLMAP sparse model of the undistorted images
+// (megadepth.cc).
+class MegaDepthReader : public DatasetReader {
+ public:
+  explicit MegaDepthReader(const ReaderOptions& options) : options_(options) {}
+  DatasetFormat Format() const override { return DatasetFormat::kMegaDepth; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  ReaderOptions options_;
+};
+
+// occgt's own JSON manifest, schemas/manifest.schema.json (generic.cc).
+class GenericReader : public DatasetReader {
+ public:
+  explicit GenericReader(const ReaderOptions& options) : options_(options) {}
+  DatasetFormat Format() const override { return DatasetFormat::kGeneric; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  ReaderOptions options_;
+};
+
+// The generic reader's validation of one manifest already in memory: `manifest` is its
+// path (for messages and to resolve relative paths), `scene_name` overrides the manifest's
+// scene name when not empty. Throws InputError("<manifest>", "<field>: ...").
+Scene ParseGenericManifest(std::string_view text, const std::string& manifest,
+                           const std::string& scene_name, const ReaderOptions& options);
+
+}  // namespace gt::datasets

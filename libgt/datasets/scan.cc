@@ -1,0 +1,100 @@
+#include "libgt/datasets/scan.h"
+
+#include "libgt/core/depth.h"
+#include "libgt/core/error.h"
+#include "libgt/io/depth_io.h"
+
+namespace gt::datasets {
+
+bool ScanOptions::Check(std::string* error) const {
+  if (max_errors_listed < 0) {
+    if (error) *error = "max_errors_listed must be >= 0";
+    return false;
+  }
+  return true;
+}
+
+namespace {
+bool SameCamera(const Camera& a, const Camera& b) {
+  return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy &&
+         a.cx == b.cx && a.cy == b.cy;
+}
+}  // namespace
+
+std::vector<std::string> DatasetCaveats(DatasetFormat format) {
+  if (format == DatasetFormat::kSevenScenes) {
+    return {
+        "7-Scenes depth and colour come from different, unregistered cameras (no "
+        "extrinsics are published): labels follow the depth camera, and colour pixels are "
+        "only approximately aligned with them"};
+  }
+  if (format == DatasetFormat::kMegaDepth) {
+    return {
+        "MegaDepth depth is multi-view stereo with holes and errors, and its scale is "
+        "arbitrary per scene: expect a share of INCONSISTENT and UNKNOWN labels (see the "
+        "report), use relative tolerances (preset megadepth), and images of other aspect "
+        "ratios are stretched to the working resolution"};
+  }
+  return {};
+}
+
+SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
+  std::string error;
+  if (!options.Check(&error)) throw InputError("scan options", error);
+  SceneSummary s;
+  s.name = scene.name;
+  s.path = scene.path;
+  s.frames = scene.frames.size();
+  s.min_depth_m = scene.min_depth_m;
+  s.max_depth_m = scene.max_depth_m;
+  if (!scene.frames.empty()) s.depth_camera = scene.frames.front().depth_camera;
+  s.warnings = DatasetCaveats(scene.format);
+  bool have_color_camera = false;
+  s.depth_checked = options.check_depth;
+  double fraction_sum = 0.0;
+  for (const Frame& f : scene.frames) {
+    if (!SameCamera(f.depth_camera, s.depth_camera)) s.uniform_depth_camera = false;
+    if (!f.usable) {
+      ++s.unusable_reasons[f.unusable_reason];
+      continue;
+    }
+    if (options.check_depth) {
+      try {
+        const DepthImage d = io::ReadDepth(f.depth, f.depth_camera.width, f.depth_camera.height);
+        ++s.depth_files_read;
+        fraction_sum += ValidDepthFraction(d, scene.min_depth_m, scene.max_depth_m);
+      } catch (const InputError& e) {
+        ++s.depth_files_bad;
+        ++s.unusable_reasons[kReasonDepthUnreadable];
+        if (static_cast<int>(s.depth_errors.size()) < options.max_errors_listed) {
+          s.depth_errors.emplace_back(e.what());
+        }
+        continue;
+      }
+    }
+    ++s.usable;
+    if (!f.color_path.empty()) {
+      ++s.usable_with_color;
+      if (!have_color_camera) {
+        s.color_camera = f.color_camera;
+        have_color_camera = true;
+      } else if (!SameCamera(f.color_camera, s.color_camera)) {
+        s.uniform_color_camera = false;
+      }
+    }
+  }
+  if (s.depth_files_read > 0) s.mean_valid_fraction = fraction_sum / s.depth_files_read;
+  if (s.usable > 0 && s.usable_with_color == 0) {
+    s.warnings.emplace_back(
+        "no usable frame has a colour image: a build that stores images "
+        "stops (set sample.image: none)");
+  } else if (s.usable_with_color < s.usable) {
+    s.warnings.emplace_back(std::to_string(s.usable - s.usable_with_color) + " of " +
+                            std::to_string(s.usable) +
+                            " usable frames have no colour image: a build that stores images "
+                            "skips them (drop scan.no_color)");
+  }
+  return s;
+}
+
+}  // namespace gt::datasets

@@ -1,0 +1,101 @@
+// Microsoft RGB-D 7-Scenes reader (docs/DATASETS.md "7-Scenes").
+// Depth is uint16 millimetres with 0 and 65535 invalid; K defaults to 585/585/320/240 at
+// 640x480 unless camera-intrinsics.txt (3x3) sits in the sequence folder or its parent.
+// Colour and depth are not registered: the colour camera gets the same K (documented).
+#include <filesystem>
+
+#include "libgt/core/error.h"
+#include "libgt/datasets/readers.h"
+#include "libgt/datasets/text_parsing.h"
+#include "libgt/io/depth_io.h"
+#include "libgt/io/file_read.h"
+
+namespace gt::datasets {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr int kWidth = 640;
+constexpr int kHeight = 480;
+constexpr int kInvalidRaw = 65535;
+
+bool IsSequence(const std::string& folder) {
+  return !ListNumberedFiles(folder, "frame-", ".pose.txt").empty();
+}
+
+}  // namespace
+
+std::vector<std::string> SevenScenesReader::ListScenes(const std::string& root) const {
+  RequireRoot(root);
+  if (IsSequence(root)) return {FolderName(root)};
+  std::vector<std::string> out;
+  for (const auto& name : ListSubfolders(root)) {
+    if (IsSequence((fs::path(root) / name).string())) out.push_back(name);
+  }
+  if (out.empty()) {
+    throw InputError(root, "no 7-Scenes sequence found (expected frame-NNNNNN.pose.txt files)");
+  }
+  return out;
+}
+
+Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& scene_name) const {
+  const std::string folder = ResolveSceneFolder(root, scene_name, IsSequence(root));
+  Scene scene = NewFolderScene(folder, scene_name, Format(), 0.1, 10.0);
+
+  const auto poses = ListNumberedFiles(folder, "frame-", ".pose.txt");
+  if (poses.empty()) throw InputError(folder, "empty scene: no frame-NNNNNN.pose.txt files");
+
+  Eigen::Matrix3d K;
+  K << 585, 0, 320, 0, 585, 240, 0, 0, 1;
+  const fs::path abs_folder = fs::absolute(folder).lexically_normal();
+  for (const fs::path& dir : {abs_folder, abs_folder.parent_path()}) {
+    const std::string p = (dir / "camera-intrinsics.txt").string();
+    if (io::FileExists(p)) {
+      K = ReadIntrinsicsText(p);
+      break;
+    }
+  }
+  int width = kWidth, height = kHeight;
+  for (const auto& p : poses) {
+    const std::string d = (fs::path(folder) / ("frame-" + p.stem + ".depth.png")).string();
+    if (io::FileExists(d)) {
+      const io::ImageSize s = io::ReadImageSize(d);
+      width = s.width;
+      height = s.height;
+      break;
+    }
+  }
+  const Camera camera = Camera::FromK(K, width, height);
+
+  for (const auto& p : poses) {
+    const std::string base = (fs::path(folder) / ("frame-" + p.stem)).string();
+    Frame f;
+    f.id = p.stem;
+    f.number = p.number;
+    f.depth.path = base + ".depth.png";
+    f.depth.format = DepthFormat::kPng16;
+    f.depth.scale_m_per_unit = 0.001;
+    f.depth.invalid_value = kInvalidRaw;
+    f.depth_camera = camera;
+    // Colour as the releases have it: frame-NNNNNN.color.png, or .color.jpg.
+    for (const char* ext : {".color.png", ".color.jpg"}) {
+      if (io::FileExists(base + ext)) {
+        f.color_path = base + ext;
+        f.color_camera = camera;
+        break;
+      }
+    }
+    const Eigen::Matrix4d m = ReadMatrixText(p.path, 4, 4);
+    if (const auto problem = PoseProblem(m)) {
+      MarkUnusable(&f, PoseReason(*problem));
+    } else {
+      f.world_from_cam = RigidFromMatrix(m);
+    }
+    if (options_.check_depth_files && !io::FileExists(f.depth.path)) {
+      MarkUnusable(&f, kReasonDepthMissing);
+    }
+    scene.frames.push_back(std::move(f));
+  }
+  return scene;
+}
+
+}  // namespace gt::datasets

@@ -1,0 +1,350 @@
+#include "libgt/datasets/text_parsing.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+
+#include "libgt/core/error.h"
+#include "libgt/io/file_read.h"
+
+namespace gt::datasets {
+namespace fs = std::filesystem;
+
+std::string PoseReason(const std::string& problem) { return "pose: " + problem; }
+
+Eigen::MatrixXd ReadMatrixText(const std::string& path, int rows, int cols) {
+  return ParseMatrixText(io::ReadFileBytes(path), path, rows, cols);
+}
+
+Eigen::MatrixXd ParseMatrixText(std::string_view text, const std::string& name, int rows,
+                                int cols) {
+  const std::vector<std::string> lines = io::SplitLines(text);
+  std::vector<double> values;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const std::vector<double> row = ParseNumbers(lines[i], name, static_cast<int>(i) + 1);
+    values.insert(values.end(), row.begin(), row.end());
+  }
+  const size_t expected = static_cast<size_t>(rows) * cols;
+  if (values.size() != expected) {
+    std::ostringstream msg;
+    msg << "expected " << expected << " numbers (" << rows << "x" << cols << " matrix), found "
+        << values.size();
+    throw InputError(name, msg.str());
+  }
+  Eigen::MatrixXd m(rows, cols);
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) m(r, c) = values[static_cast<size_t>(r) * cols + c];
+  }
+  return m;
+}
+
+Eigen::Matrix3d ReadIntrinsicsText(const std::string& path) {
+  return ParseIntrinsicsText(io::ReadFileBytes(path), path);
+}
+
+Eigen::Matrix3d ParseIntrinsicsText(std::string_view text, const std::string& name) {
+  const std::vector<std::string> lines = io::SplitLines(text);
+  size_t count = 0;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    count += ParseNumbers(lines[i], name, static_cast<int>(i) + 1).size();
+  }
+  if (count != 9 && count != 16) {
+    throw InputError(name, "expected a 3x3 or 4x4 intrinsics matrix (9 or 16 numbers), found " +
+                               std::to_string(count) + " numbers");
+  }
+  const int n = count == 9 ? 3 : 4;
+  return CheckedIntrinsics(ParseMatrixText(text, name, n, n).topLeftCorner<3, 3>(), name);
+}
+
+Eigen::Matrix3d CheckedIntrinsics(const Eigen::Matrix3d& K, const std::string& where) {
+  if (!K.allFinite() || !(K(0, 0) > 0) || !(K(1, 1) > 0) || K(2, 0) != 0 || K(2, 1) != 0 ||
+      K(2, 2) != 1) {
+    throw InputError(where, "expected K = [[fx 0 cx] [0 fy cy] [0 0 1]] with finite fx, fy > 0");
+  }
+  return K;
+}
+
+std::vector<TextRecord> ReadRecords(const std::string& path) {
+  return ParseRecords(io::ReadFileBytes(path));
+}
+
+std::vector<TextRecord> ParseRecords(std::string_view text) {
+  const std::vector<std::string> lines = io::SplitLines(text);
+  std::vector<TextRecord> out;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const std::string& line = lines[i];
+    const size_t first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] == '#') continue;
+    TextRecord rec;
+    rec.line_no = static_cast<int>(i) + 1;
+    std::istringstream ss(line);
+    std::string tok;
+    while (ss >> tok) rec.tokens.push_back(tok);
+    out.push_back(std::move(rec));
+  }
+  return out;
+}
+
+namespace {
+
+std::string LineName(const std::string& name, int line_no) {
+  return name + ":" + std::to_string(line_no);
+}
+
+}  // namespace
+
+std::vector<TimedPath> ParseTimedPathList(std::string_view text, const std::string& name) {
+  std::vector<TimedPath> out;
+  for (const auto& rec : ParseRecords(text)) {
+    if (rec.tokens.size() != 2) {
+      throw InputError(
+          LineName(name, rec.line_no),
+          "expected 'timestamp filename', found " + std::to_string(rec.tokens.size()) + " fields");
+    }
+    const std::vector<double> v = ParseNumbers(rec.tokens[0], name, rec.line_no);
+    if (v.size() != 1 || !std::isfinite(v[0])) {
+      throw InputError(LineName(name, rec.line_no), "expected a finite timestamp");
+    }
+    out.push_back({v[0], rec.tokens[1]});
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const TimedPath& a, const TimedPath& b) { return a.t < b.t; });
+  return out;
+}
+
+std::vector<TimedPose> ParseTimedPoses(std::string_view text, const std::string& name) {
+  std::vector<TimedPose> out;
+  for (const auto& rec : ParseRecords(text)) {
+    std::string line;
+    for (const auto& tok : rec.tokens) line += tok + " ";
+    const std::vector<double> v = ParseNumbers(line, name, rec.line_no);
+    if (v.size() != 8) {
+      throw InputError(
+          LineName(name, rec.line_no),
+          "expected 8 numbers (timestamp tx ty tz qx qy qz qw), found " + std::to_string(v.size()));
+    }
+    if (!std::isfinite(v[0])) {
+      throw InputError(LineName(name, rec.line_no), "expected a finite timestamp");
+    }
+    out.push_back(
+        {v[0], Eigen::Vector3d(v[1], v[2], v[3]), Eigen::Vector4d(v[4], v[5], v[6], v[7])});
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const TimedPose& a, const TimedPose& b) { return a.t < b.t; });
+  return out;
+}
+
+std::vector<TQLine> ParseTQLines(std::string_view text, const std::string& name) {
+  const std::vector<std::string> lines = io::SplitLines(text);
+  std::vector<TQLine> out;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const int line_no = static_cast<int>(i) + 1;
+    const std::vector<double> v = ParseNumbers(lines[i], name, line_no);
+    if (v.empty()) continue;
+    if (v.size() != 7) {
+      throw InputError(
+          LineName(name, line_no),
+          "expected 7 numbers (tx ty tz qx qy qz qw), found " + std::to_string(v.size()));
+    }
+    out.push_back(
+        {line_no, Eigen::Vector3d(v[0], v[1], v[2]), Eigen::Vector4d(v[3], v[4], v[5], v[6])});
+  }
+  return out;
+}
+
+std::vector<NumberedFile> ListNumberedFiles(const std::string& folder, const std::string& prefix,
+                                            const std::string& suffix) {
+  std::vector<NumberedFile> out;
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) return out;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("._", 0) == 0) continue;  // AppleDouble
+    if (name.size() <= prefix.size() + suffix.size()) continue;
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    if (name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) continue;
+    const std::string digits =
+        name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+    if (digits.empty() || digits.size() > 15 ||
+        !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+      continue;
+    }
+    // A frame file that cannot be read (a folder, a dangling or looping link, a socket) is
+    // an error, never a silently missing frame.
+    if (!entry.is_regular_file(ec)) {
+      std::error_code lec;
+      const bool dangling = entry.is_symlink(lec) && !fs::exists(entry.path(), lec);
+      throw InputError(entry.path().string(),
+                       dangling ? "dangling symbolic link (expected a readable file)"
+                                : "expected a regular file, found a folder or special file");
+    }
+    NumberedFile f;
+    f.number = std::stoll(digits);
+    f.stem = digits;
+    f.path = entry.path().string();
+    out.push_back(std::move(f));
+  }
+  std::sort(out.begin(), out.end(), [](const NumberedFile& a, const NumberedFile& b) {
+    return a.number != b.number ? a.number < b.number : a.stem < b.stem;
+  });
+  // "1.txt" and "01.txt" would be two frames with the same number: refuse to guess.
+  for (size_t i = 1; i < out.size(); ++i) {
+    if (out[i].number == out[i - 1].number) {
+      throw InputError(folder, "files " + fs::path(out[i - 1].path).filename().string() + " and " +
+                                   fs::path(out[i].path).filename().string() +
+                                   " both give frame number " + std::to_string(out[i].number));
+    }
+  }
+  return out;
+}
+
+std::vector<std::string> ListSubfolders(const std::string& folder) {
+  std::vector<std::string> out;
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) return out;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || name[0] == '.') continue;
+    if (entry.is_directory(ec)) out.push_back(name);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+void RequireRoot(const std::string& root) {
+  std::error_code ec;
+  if (root.empty() || !fs::exists(root, ec)) throw InputError(root, "dataset root not found");
+}
+
+std::string FolderName(const std::string& path) {
+  fs::path p(path);
+  if (!p.has_filename()) p = p.parent_path();  // trailing '/'
+  std::string name = p.filename().string();
+  if (name == "." || name.empty()) name = fs::absolute(p).lexically_normal().filename().string();
+  if (name.empty()) name = fs::absolute(p).lexically_normal().parent_path().filename().string();
+  return name;
+}
+
+Scene NewFolderScene(const std::string& folder, const std::string& scene_name, DatasetFormat format,
+                     double min_depth_m, double max_depth_m) {
+  Scene scene;
+  scene.name = scene_name.empty() ? FolderName(folder) : scene_name;
+  scene.format = format;
+  scene.path = folder;
+  scene.min_depth_m = min_depth_m;
+  scene.max_depth_m = max_depth_m;
+  return scene;
+}
+
+std::string CheckSceneName(const std::string& name) {
+  if (name.empty()) return "";
+  if (name.front() == '/')
+    return "expected a scene name relative to the dataset root, got an absolute path";
+  size_t start = 0;
+  while (start <= name.size()) {
+    size_t slash = name.find('/', start);
+    if (slash == std::string::npos) slash = name.size();
+    if (name.compare(start, slash - start, "..") == 0 && slash - start == 2) {
+      return "expected a scene name inside the dataset root (no '..' components)";
+    }
+    start = slash + 1;
+  }
+  return "";
+}
+
+std::string ResolveSceneFolder(const std::string& root, const std::string& name,
+                               bool root_is_scene) {
+  RequireRoot(root);
+  if (root_is_scene && (name.empty() || name == FolderName(root))) return root;
+  if (name.empty()) throw InputError(root, "not a scene folder and no scene name given");
+  if (std::string e = CheckSceneName(name); !e.empty()) throw InputError("scene '" + name + "'", e);
+  const std::string folder = (fs::path(root) / name).string();
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) throw InputError(folder, "scene folder not found");
+  return folder;
+}
+
+void MarkUnusable(Frame* frame, const std::string& reason) {
+  if (!frame->usable) return;
+  frame->usable = false;
+  frame->unusable_reason = reason;
+}
+
+namespace {
+
+bool EqualsNoCase(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    char x = a[i], y = b[i];
+    if (x >= 'A' && x <= 'Z') x = static_cast<char>(x - 'A' + 'a');
+    if (y >= 'A' && y <= 'Z') y = static_cast<char>(y - 'A' + 'a');
+    if (x != y) return false;
+  }
+  return true;
+}
+
+// One token as a double: decimal/scientific notation, or inf/-inf/+inf/infinity/nan.
+bool ParseToken(std::string_view tok, double* value) {
+  std::string_view body = tok;
+  double sign = 1.0;
+  if (!body.empty() && (body[0] == '-' || body[0] == '+')) {
+    sign = body[0] == '-' ? -1.0 : 1.0;
+    body.remove_prefix(1);
+  }
+  if (EqualsNoCase(body, "inf") || EqualsNoCase(body, "infinity")) {
+    *value = sign * std::numeric_limits<double>::infinity();
+    return true;
+  }
+  if (EqualsNoCase(body, "nan")) {
+    *value = std::numeric_limits<double>::quiet_NaN();
+    return true;
+  }
+  // strtod also accepts hex floats and "nan(...)": only allow plain decimal characters.
+  for (char c : body) {
+    if (!((c >= '0' && c <= '9') || c == '.' || c == 'e' || c == 'E' || c == '-' || c == '+')) {
+      return false;
+    }
+  }
+  if (body.empty()) return false;
+  const std::string s(tok);
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(s.c_str(), &end);
+  if (end != s.c_str() + s.size()) return false;
+  *value = v;  // overflow gives +-HUGE_VAL (inf), which callers treat as non-finite
+  return true;
+}
+
+}  // namespace
+
+std::vector<double> ParseNumbers(std::string_view line, const std::string& path, int line_no) {
+  std::vector<double> out;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r' ||
+                               line[i] == '\n' || line[i] == ',')) {
+      ++i;
+    }
+    if (i >= line.size()) break;
+    size_t j = i;
+    while (j < line.size() && line[j] != ' ' && line[j] != '\t' && line[j] != '\r' &&
+           line[j] != '\n' && line[j] != ',') {
+      ++j;
+    }
+    const std::string_view tok = line.substr(i, j - i);
+    double v = 0;
+    if (!ParseToken(tok, &v)) {
+      throw InputError(path + ":" + std::to_string(line_no),
+                       "expected a number, found '" + std::string(tok) + "'");
+    }
+    out.push_back(v);
+    i = j;
+  }
+  return out;
+}
+
+}  // namespace gt::datasets

@@ -1,0 +1,154 @@
+// TUM RGB-D reader (docs/DATASETS.md "TUM RGB-D").
+// One frame per depth.txt entry; its pose is the groundtruth.txt entry nearest in time
+// (camera-to-world "t tx ty tz qx qy qz qw", OpenCV camera axes), its colour the nearest
+// rgb.txt entry, both within ReaderOptions::tum_max_dt_s. Depth is uint16 with
+// 5000 units per metre. Intrinsics by sequence name (freiburg1/2/3, default fr1).
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+#include "libgt/core/error.h"
+#include "libgt/datasets/readers.h"
+#include "libgt/datasets/text_parsing.h"
+#include "libgt/io/file_read.h"
+
+namespace gt::datasets {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr int kWidth = 640;
+constexpr int kHeight = 480;
+
+bool IsTumSequence(const std::string& folder) {
+  return io::FileExists((fs::path(folder) / "depth.txt").string());
+}
+
+// "timestamp filename" lists (rgb.txt, depth.txt), sorted by time, paths made absolute.
+struct FramePath {
+  double t = 0;
+  std::string path;
+};
+std::vector<FramePath> ReadTimedPaths(const std::string& folder, const std::string& name) {
+  const std::string path = (fs::path(folder) / name).string();
+  std::vector<FramePath> out;
+  for (const TimedPath& e : ParseTimedPathList(io::ReadFileBytes(path), path)) {
+    out.push_back({e.t, (fs::path(folder) / e.file).string()});
+  }
+  return out;
+}
+
+// Index of the entry nearest to t in a time-sorted vector (ties: the earlier), or -1.
+template <typename T>
+int Nearest(const std::vector<T>& sorted, double t, double max_dt) {
+  if (sorted.empty()) return -1;
+  const auto it = std::lower_bound(sorted.begin(), sorted.end(), t,
+                                   [](const T& e, double value) { return e.t < value; });
+  int best = -1;
+  double best_dt = max_dt;
+  auto consider = [&](typename std::vector<T>::const_iterator c) {
+    const double dt = std::abs(c->t - t);
+    if (dt < best_dt || (dt == best_dt && best < 0)) {
+      best = static_cast<int>(c - sorted.begin());
+      best_dt = dt;
+    }
+  };
+  if (it != sorted.begin()) consider(it - 1);
+  if (it != sorted.end()) consider(it);
+  return best;
+}
+
+Camera TumCamera(const std::string& sequence_name) {
+  Camera c;
+  c.width = kWidth;
+  c.height = kHeight;
+  const auto has = [&](const char* s) { return sequence_name.find(s) != std::string::npos; };
+  if (has("freiburg2") || has("fr2")) {
+    c.fx = 520.9, c.fy = 521.0, c.cx = 325.1, c.cy = 249.7;
+  } else if (has("freiburg3") || has("fr3")) {
+    c.fx = 535.4, c.fy = 539.2, c.cx = 320.1, c.cy = 247.6;
+  } else {  // freiburg1, and the documented default
+    c.fx = 517.3, c.fy = 516.5, c.cx = 318.6, c.cy = 255.3;
+  }
+  return c;
+}
+
+std::string Stem(const std::string& path) {
+  const std::string name = fs::path(path).filename().string();
+  const size_t dot = name.rfind('.');
+  return dot == std::string::npos || dot == 0 ? name : name.substr(0, dot);
+}
+
+}  // namespace
+
+std::vector<std::string> TumReader::ListScenes(const std::string& root) const {
+  RequireRoot(root);
+  if (IsTumSequence(root)) return {FolderName(root)};
+  std::vector<std::string> out;
+  for (const auto& name : ListSubfolders(root)) {
+    if (IsTumSequence((fs::path(root) / name).string())) out.push_back(name);
+  }
+  if (out.empty()) throw InputError(root, "no TUM sequence found (expected depth.txt)");
+  return out;
+}
+
+Scene TumReader::ReadScene(const std::string& root, const std::string& scene_name) const {
+  const std::string folder = ResolveSceneFolder(root, scene_name, IsTumSequence(root));
+  Scene scene = NewFolderScene(folder, scene_name, Format(), 0.1, 10.0);
+
+  const std::vector<FramePath> depths = ReadTimedPaths(folder, "depth.txt");
+  if (depths.empty()) {
+    throw InputError((fs::path(folder) / "depth.txt").string(), "empty scene: no depth entries");
+  }
+  const std::vector<FramePath> rgbs = io::FileExists((fs::path(folder) / "rgb.txt").string())
+                                          ? ReadTimedPaths(folder, "rgb.txt")
+                                          : std::vector<FramePath>{};
+  const std::string gt_path = (fs::path(folder) / "groundtruth.txt").string();
+  const std::vector<TimedPose> poses = ParseTimedPoses(io::ReadFileBytes(gt_path), gt_path);
+  const Camera camera = TumCamera(FolderName(folder));
+
+  std::ostringstream no_gt;
+  no_gt << "pose: no groundtruth within " << options_.tum_max_dt_s << "s";
+  for (size_t i = 0; i < depths.size(); ++i) {
+    Frame f;
+    f.id = Stem(depths[i].path);
+    f.number = static_cast<int64_t>(i);
+    f.timestamp_s = depths[i].t;
+    f.depth.path = depths[i].path;
+    f.depth.format = DepthFormat::kPng16;
+    f.depth.scale_m_per_unit = 1.0 / 5000.0;
+    f.depth_camera = camera;
+    const int rgb = Nearest(rgbs, depths[i].t, options_.tum_max_dt_s);
+    if (rgb >= 0) {
+      f.color_path = rgbs[static_cast<size_t>(rgb)].path;
+      f.color_camera = camera;
+    }
+    const int gt = Nearest(poses, depths[i].t, options_.tum_max_dt_s);
+    if (gt < 0) {
+      MarkUnusable(&f, no_gt.str());
+    } else {
+      const TimedPose& p = poses[static_cast<size_t>(gt)];
+      if (const auto problem = PoseProblemTQ(p.translation, p.q_xyzw)) {
+        MarkUnusable(&f, PoseReason(*problem));
+      } else {
+        f.world_from_cam = RigidFromTQ(p.translation, p.q_xyzw);
+      }
+    }
+    if (options_.check_depth_files && !io::FileExists(f.depth.path)) {
+      MarkUnusable(&f, kReasonDepthMissing);
+    }
+    scene.frames.push_back(std::move(f));
+  }
+  // Duplicate ids (two depth files with the same name) would break pair bookkeeping.
+  std::set<std::string> ids;
+  for (const Frame& f : scene.frames) {
+    if (!ids.insert(f.id).second) {
+      throw InputError((fs::path(folder) / "depth.txt").string(),
+                       "duplicate depth file name '" + f.id + "'");
+    }
+  }
+  return scene;
+}
+
+}  // namespace gt::datasets

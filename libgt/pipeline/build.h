@@ -1,0 +1,67 @@
+// The `occgt build` job: recipe → per-scene pair selection → samples → shards → indices →
+// summary (docs/USER_GUIDE.md; SCALE.md for the many-machine layout). It composes the
+// layers below it: the select stage (select.h, over libgt/pairs), the write stage
+// (write.h: truth::ComputePairTruth per sample, libgt/shards writer, merge, LoFTR export).
+//
+// Files under the output folder DIR:
+//   DIR/recipe.json        the normalised recipe; a re-run with a recipe of another options
+//                          digest into the same DIR is refused
+//   DIR/selection/...      stage select (select.h); task k of N takes the sorted scenes i
+//                          with i % N == k
+//   DIR/parts/, shards     stage write (write.h); task k of N writes the shards s with
+//                          s % N == k that are not complete yet
+//   DIR/index.json, DIR/pairs.jsonl, DIR/loftr/   when every shard is complete
+//   DIR/summary.json       the summary of the run that completed the split
+// So any task layout gives the same files. Threads: TBB inside a scene (frame scan,
+// scoring) and across samples; results are stored by index and written in order, so
+// outputs never depend on the thread count.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "libgt/pipeline/recipe.h"
+
+namespace gt::pipeline {
+
+enum class Stage { kSelect, kWrite, kAll };  // "select" | "write" | "all"
+Stage ParseStage(const std::string& text, const std::string& field);
+const char* StageName(Stage stage);
+
+struct BuildOptions {
+  std::string out_dir;          // DIR
+  int task = 0;                 // this task's index, 0 <= task < tasks
+  int tasks = 1;                // number of tasks the run is split into
+  Stage stage = Stage::kAll;    // which stages run
+  bool dry_run = false;         // select in memory, print the plan, write nothing
+  size_t depth_cache_mb = 512;  // per-scene LRU of decoded depth maps
+
+  bool Check(std::string* error) const;
+};
+
+// One progress report: `done` of `total` units of `stage`: scenes for select, pairs
+// (samples, reported after each shard) for write.
+struct Progress {
+  Stage stage = Stage::kSelect;
+  int64_t done = 0;
+  int64_t total = 0;
+  double elapsed_s = 0;  // since the stage started
+};
+using ProgressFn = std::function<void(const Progress&)>;
+
+// Runs the stages the options ask for and returns the summary (schemas/summary.schema.json;
+// also written to DIR/summary.json when the split is complete, not in a dry run). Throws
+// InputError for bad input (before any work where it can be detected up front).
+nlohmann::json RunBuild(const Recipe& recipe, const BuildOptions& options,
+                        const ProgressFn& progress);
+
+// Estimated bytes of one sample under the recipe (for shards.target_mb): label maps, cell
+// maps, occupancy, images (PNG ~ 2 bytes/pixel, JPG ~ 0.3), depth, ~64 kB of matches. With
+// sample.compression: deflate the arrays count at the gzip ratios of the real samples
+// (docs/PERFORMANCE.md "Sample compression"), rounded up: labels, cells and occupancy 0.06,
+// depth 0.2, matches 0.9.
+int64_t EstimatedSampleBytes(const Recipe& recipe);
+
+}  // namespace gt::pipeline

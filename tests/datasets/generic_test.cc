@@ -1,0 +1,248 @@
+// Generic manifest reader: a valid manifest with npy, png16 and exr frames; scene root
+// resolution (a .json file, a folder with scene.json, a folder of scene folders); and
+// malformed fields, each error naming the manifest and the field path.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "libgt/core/error.h"
+#include "libgt/datasets/reader.h"
+#include "libgt/io/atomic_file.h"
+#include "tests/support/test_support.h"
+
+namespace gt::datasets {
+using namespace gt::io;  // NOLINT: the file helpers of io/ beside the readers
+namespace {
+using nlohmann::json;
+
+json ValidManifest() {
+  const json K = {{100, 0, 31.5}, {0, 110, 23.5}, {0, 0, 1}};
+  const json I = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+  json shifted = I;
+  shifted[0][3] = 0.25;
+  return {{"format", "occgt-scene-manifest"},
+          {"version", 1},
+          {"scene", "room_01"},
+          {"depth_range_m", {0.2, 20}},
+          {"frames",
+           {{{"id", "f0"},
+             {"depth", {{"path", "depth/f0.npy"}, {"format", "npy"}}},
+             {"K", K},
+             {"width", 64},
+             {"height", 48},
+             {"world_from_cam", I},
+             {"color", {{"path", "color/f0.png"}, {"width", 128}, {"height", 96}}}},
+            {{"id", "f1"},
+             {"depth",
+              {{"path", "depth/f1.png"},
+               {"format", "png16"},
+               {"scale_m", 0.001},
+               {"invalid_value", 65535}}},
+             {"K", K},
+             {"width", 64},
+             {"height", 48},
+             {"world_from_cam", shifted}},
+            {{"id", "f2"},
+             {"depth", {{"path", "depth/f2.exr"}, {"format", "exr"}}},
+             {"K", K},
+             {"width", 64},
+             {"height", 48},
+             {"world_from_cam", I},
+             {"color",
+              {{"path", "/abs/c.jpg"},
+               {"K", {{300, 0, 63.5}, {0, 300, 47.5}, {0, 0, 1}}},
+               {"width", 128},
+               {"height", 96}}}}}}};
+}
+
+std::string WriteManifest(const std::string& dir, const json& j,
+                          const std::string& name = "scene.json") {
+  WriteFileAtomic(dir + "/" + name, j.dump(1));
+  return dir + "/" + name;
+}
+
+TEST(Generic, ReadsFramesWithDefaults) {
+  const std::string dir = test::ScratchDir("gen_ok");
+  WriteManifest(dir, ValidManifest());
+  ReaderOptions options;
+  options.exr_channel = "Depth.Z";
+  options.check_depth_files = false;
+  const auto reader = MakeReader(gt::DatasetFormat::kGeneric, options);
+  ASSERT_EQ(reader->ListScenes(dir), std::vector<std::string>{"room_01"});
+  const Scene s = reader->ReadScene(dir, "");
+  EXPECT_EQ(s.name, "room_01");
+  EXPECT_EQ(s.path, dir + "/scene.json");
+  EXPECT_EQ(s.min_depth_m, 0.2);
+  EXPECT_EQ(s.max_depth_m, 20.0);
+  ASSERT_EQ(s.frames.size(), 3u);
+  const Frame& f0 = s.frames[0];
+  EXPECT_EQ(f0.id, "f0");
+  EXPECT_EQ(f0.number, 0);
+  EXPECT_EQ(f0.depth.path, dir + "/depth/f0.npy");
+  EXPECT_EQ(f0.depth.format, DepthFormat::kNpyFloat32);
+  EXPECT_EQ(f0.depth_camera.fx, 100.0);
+  EXPECT_EQ(f0.depth_camera.fy, 110.0);
+  EXPECT_EQ(f0.depth_camera.width, 64);
+  EXPECT_EQ(f0.color_path, dir + "/color/f0.png");
+  // Colour K defaults to the depth K rescaled (x2): fx 200, cx 2 * 32 - 0.5.
+  EXPECT_EQ(f0.color_camera.width, 128);
+  EXPECT_DOUBLE_EQ(f0.color_camera.fx, 200.0);
+  EXPECT_DOUBLE_EQ(f0.color_camera.cx, 63.5);
+  EXPECT_TRUE(f0.usable);
+  EXPECT_EQ(s.frames[1].depth.format, DepthFormat::kPng16);
+  EXPECT_EQ(s.frames[1].depth.scale_m_per_unit, 0.001);
+  EXPECT_EQ(s.frames[1].depth.invalid_value, 65535);
+  EXPECT_EQ(s.frames[1].world_from_cam.translation().x(), 0.25);
+  EXPECT_EQ(s.frames[2].depth.exr_channel, "Depth.Z");  // the reader option
+  EXPECT_EQ(s.frames[2].color_path, "/abs/c.jpg");
+  EXPECT_EQ(s.frames[2].color_camera.fx, 300.0);
+  // With the default check_depth_files, the missing depth files make frames unusable.
+  const Scene checked = MakeReader(gt::DatasetFormat::kGeneric)->ReadScene(dir + "/scene.json", "");
+  EXPECT_EQ(checked.NumUsable(), 0u);
+  EXPECT_EQ(checked.frames[0].unusable_reason, "depth: missing file");
+}
+
+TEST(Generic, RootLayouts) {
+  const std::string root = test::ScratchDir("gen_roots");
+  json a = ValidManifest();
+  a["scene"] = "a";
+  json b = ValidManifest();
+  b["scene"] = "b";
+  WriteManifest(root + "/b_dir", b);
+  WriteManifest(root + "/a_dir", a);
+  std::filesystem::create_directories(root + "/not_a_scene");
+  const auto reader = MakeReader(gt::DatasetFormat::kGeneric);
+  EXPECT_EQ(reader->ListScenes(root), (std::vector<std::string>{"a_dir", "b_dir"}));
+  EXPECT_EQ(reader->ReadScene(root, "b_dir").path, root + "/b_dir/scene.json");
+  EXPECT_EQ(reader->ListScenes(root + "/a_dir/scene.json"), std::vector<std::string>{"a"});
+  try {
+    reader->ReadScene(root, "c_dir");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), root + "/c_dir/scene.json");
+  }
+  try {
+    reader->ListScenes(root + "/not_a_scene");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), root + "/not_a_scene");
+  }
+}
+
+struct BadCase {
+  std::string field;  // expected field path in the message
+  void (*mutate)(json&);
+};
+
+TEST(Generic, MalformedFieldsNameManifestAndField) {
+  const std::vector<BadCase> cases = {
+      {"format", [](json& j) { j["format"] = "other"; }},
+      {"version", [](json& j) { j["version"] = 2; }},
+      {"scene", [](json& j) { j["scene"] = "bad name/"; }},
+      {"extra", [](json& j) { j["extra"] = 1; }},
+      {"frames", [](json& j) { j.erase("frames"); }},
+      {"frames", [](json& j) { j["frames"] = json::array(); }},
+      {"depth_range_m[1]",
+       [](json& j) {
+         j["depth_range_m"] = {5, 1};
+       }},
+      {"frames[1].K",
+       [](json& j) {
+         j["frames"][1]["K"] = {{1, 0, 0}, {0, 1, 0}};
+       }},
+      {"frames[1].K", [](json& j) { j["frames"][1]["K"][0][0] = "100"; }},
+      {"frames[1].K", [](json& j) { j["frames"][1]["K"][0][0] = -100; }},
+      {"frames[2].world_from_cam",
+       [](json& j) {
+         j["frames"][2]["world_from_cam"][3] = {0, 0, 1};
+       }},
+      {"frames[0].width", [](json& j) { j["frames"][0]["width"] = 0; }},
+      {"frames[0].height", [](json& j) { j["frames"][0]["height"] = 4.5; }},
+      {"frames[0].id", [](json& j) { j["frames"][0]["id"] = "a b"; }},
+      {"frames[1].id", [](json& j) { j["frames"][1]["id"] = "f0"; }},  // duplicate
+      {"frames[0].depth.format", [](json& j) { j["frames"][0]["depth"]["format"] = "tiff"; }},
+      {"frames[0].depth.path", [](json& j) { j["frames"][0]["depth"]["path"] = ""; }},
+      {"frames[1].depth.scale_m", [](json& j) { j["frames"][1]["depth"].erase("scale_m"); }},
+      {"frames[1].depth.scale_m", [](json& j) { j["frames"][1]["depth"]["scale_m"] = 0; }},
+      {"frames[0].depth.channel", [](json& j) { j["frames"][0]["depth"]["channel"] = "Z"; }},
+      {"frames[1].depth.invalid_value",
+       [](json& j) { j["frames"][1]["depth"]["invalid_value"] = 70000; }},
+      {"frames[0].color.height", [](json& j) { j["frames"][0]["color"].erase("height"); }},
+      {"frames[0].color.oops", [](json& j) { j["frames"][0]["color"]["oops"] = 1; }},
+  };
+  const std::string dir = test::ScratchDir("gen_bad");
+  const auto reader = MakeReader(gt::DatasetFormat::kGeneric);
+  for (const auto& c : cases) {
+    json j = ValidManifest();
+    c.mutate(j);
+    const std::string path = WriteManifest(dir, j);
+    try {
+      reader->ReadScene(dir, "");
+      ADD_FAILURE() << "expected InputError for " << c.field;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where(), path) << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind(path + ": " + c.field + ": ", 0), 0u) << e.what();
+    }
+  }
+  WriteFileAtomic(dir + "/scene.json", "{\"format\": ");
+  try {
+    reader->ReadScene(dir, "");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), dir + "/scene.json");
+    EXPECT_NE(std::string(e.what()).find("invalid JSON"), std::string::npos);
+  }
+}
+
+TEST(Generic, FixturesDuplicateIdsAndBadK) {
+  const std::string fixtures = std::string(OCCGT_FIXTURES_DIR) + "/io";
+  const auto reader = MakeReader(gt::DatasetFormat::kGeneric);
+  try {
+    reader->ReadScene(fixtures + "/generic_duplicate_ids", "");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), fixtures +
+                                         "/generic_duplicate_ids/scene.json: frames[1].id: "
+                                         "duplicate frame id 'a'");
+  }
+  try {
+    reader->ReadScene(fixtures + "/generic_bad_k", "");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), fixtures +
+                                         "/generic_bad_k/scene.json: frames[1].K: expected a "
+                                         "3x3 array of numbers");
+  }
+}
+
+TEST(Generic, NonRigidPoseIsUnusable) {
+  const std::string dir = test::ScratchDir("gen_pose");
+  json j = ValidManifest();
+  j["frames"][0]["world_from_cam"][0][0] = 2.0;
+  WriteManifest(dir, j);
+  ReaderOptions options;
+  options.check_depth_files = false;
+  const Scene s = MakeReader(gt::DatasetFormat::kGeneric, options)->ReadScene(dir, "");
+  EXPECT_FALSE(s.frames[0].usable);
+  EXPECT_EQ(s.frames[0].unusable_reason.rfind("pose: rotation is not orthonormal", 0), 0u)
+      << s.frames[0].unusable_reason;
+  EXPECT_TRUE(s.frames[1].usable);
+}
+
+TEST(Readers, UnknownFormatAndKnownFormats) {
+  EXPECT_EQ(KnownFormats(), (std::vector<std::string>{"scannet", "tartanair", "sevenscenes", "tum",
+                                                      "megadepth", "generic"}));
+  for (const auto& f : KnownFormats()) {
+    EXPECT_EQ(DatasetFormatName(MakeReader(ParseDatasetFormat(f))->Format()), f);
+  }
+  try {
+    ParseDatasetFormat("colmap");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "--format");
+  }
+}
+
+}  // namespace
+}  // namespace gt::datasets

@@ -1,0 +1,254 @@
+// ScanNet reader: the real sample's poses and intrinsics against an independent parse
+// (std::ifstream >> double), numeric frame order, and the bad-input fixtures in
+// tests/fixtures/io (lost tracking, short pose file, bad token, empty scene) plus scratch
+// scenes for depth PNG sizes and intrinsic_color.txt.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "libgt/core/error.h"
+#include "libgt/datasets/reader.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/depth_io.h"
+#include "tests/support/test_support.h"
+
+namespace gt::datasets {
+using namespace gt::io;  // NOLINT: the file helpers of io/ beside the readers
+namespace {
+namespace fs = std::filesystem;
+
+const std::string kFixtures = std::string(OCCGT_FIXTURES_DIR) + "/io";
+
+Eigen::Matrix4d ReadMatrixWithStream(const std::string& path) {
+  std::ifstream in(path);
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      if (!(in >> m(r, c))) ADD_FAILURE() << "cannot parse " << path;
+    }
+  }
+  return m;
+}
+
+TEST(ScanNet, SamplePosesAndIntrinsicsExact) {
+  const std::string root = test::SharedData("scannet_posed_color/scene_sample");
+  ASSERT_FALSE(root.empty());
+  const auto reader = MakeReader(gt::DatasetFormat::kScanNet);
+  ASSERT_EQ(reader->ListScenes(root), std::vector<std::string>{"scene_sample"});
+  ASSERT_EQ(reader->ListScenes(fs::path(root).parent_path().string()),
+            std::vector<std::string>{"scene_sample"});
+  const Scene s = reader->ReadScene(root, "scene_sample");
+  EXPECT_EQ(s.min_depth_m, 0.1);
+  EXPECT_EQ(s.max_depth_m, 10.0);
+  ASSERT_EQ(s.frames.size(), 4u);
+  const std::vector<std::string> ids = {"0048", "0054", "0060", "0066"};
+  const Eigen::Matrix4d K4 = ReadMatrixWithStream(root + "/intrinsic/intrinsic_depth.txt");
+  for (size_t i = 0; i < 4; ++i) {
+    const Frame& f = s.frames[i];
+    EXPECT_EQ(f.id, ids[i]);
+    EXPECT_EQ(f.number, std::stoll(ids[i]));
+    EXPECT_EQ(f.depth_camera.fx, K4(0, 0));
+    EXPECT_EQ(f.depth_camera.fy, K4(1, 1));
+    EXPECT_EQ(f.depth_camera.cx, K4(0, 2));
+    EXPECT_EQ(f.depth_camera.cy, K4(1, 2));
+    EXPECT_EQ(f.depth_camera.width, 640);  // no depth/ folder: the documented default
+    EXPECT_EQ(f.depth_camera.height, 480);
+    // Colour is 640x480 in the sample and has no intrinsic_color.txt: the depth K.
+    EXPECT_EQ(f.color_path, root + "/color/" + ids[i] + ".png");
+    EXPECT_EQ(f.color_camera.width, 640);
+    EXPECT_EQ(f.color_camera.height, 480);
+    EXPECT_NEAR(f.color_camera.fx, K4(0, 0), 1e-9);
+    EXPECT_NEAR(f.color_camera.cx, K4(0, 2), 1e-9);
+    EXPECT_FALSE(f.usable);
+    EXPECT_EQ(f.unusable_reason, "depth: missing file");
+    const Eigen::Matrix4d m = ReadMatrixWithStream(root + "/pose/" + ids[i] + ".txt");
+    EXPECT_TRUE((f.world_from_cam.translation() - m.topRightCorner<3, 1>()).isZero(0.0));
+    // Rotation re-orthonormalised: equal to the file within its 6-decimal rounding.
+    EXPECT_LT((f.world_from_cam.linear() - m.topLeftCorner<3, 3>()).cwiseAbs().maxCoeff(), 2e-5);
+  }
+}
+
+TEST(ScanNet, LostTrackingTokensMakeFramesUnusableNotFatal) {
+  const std::string root = kFixtures + "/scannet_lost_tracking";
+  ReaderOptions options;
+  options.check_depth_files = false;  // the fixture has no depth: isolate the pose reasons
+  const Scene s = MakeReader(gt::DatasetFormat::kScanNet, options)->ReadScene(root, "");
+  ASSERT_EQ(s.frames.size(), 3u);
+  EXPECT_EQ(s.frames[0].id, "0");  // numeric order: 0, 7, 12
+  EXPECT_EQ(s.frames[1].id, "7");
+  EXPECT_EQ(s.frames[2].id, "12");
+  EXPECT_TRUE(s.frames[0].usable);
+  for (int i : {1, 2}) {
+    EXPECT_FALSE(s.frames[i].usable);
+    EXPECT_EQ(s.frames[i].unusable_reason, "pose: non-finite pose entries (lost tracking)");
+  }
+  EXPECT_EQ(s.frames[0].world_from_cam.translation(), Eigen::Vector3d(0.5, 0.25, -1.0));
+}
+
+void ExpectErrorWhere(const std::string& root, const std::string& where, const std::string& text) {
+  try {
+    MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(root, "");
+    ADD_FAILURE() << "expected InputError for " << root;
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), where) << e.what();
+    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+  }
+}
+
+TEST(ScanNet, ShortPoseFileIsFatal) {
+  ExpectErrorWhere(kFixtures + "/scannet_short_pose", kFixtures + "/scannet_short_pose/pose/1.txt",
+                   "expected 16 numbers (4x4 matrix), found 12");
+}
+
+TEST(ScanNet, NonNumberTokenIsFatalWithLine) {
+  ExpectErrorWhere(kFixtures + "/scannet_bad_token", kFixtures + "/scannet_bad_token/pose/3.txt:3",
+                   "'O.5'");
+}
+
+TEST(ScanNet, EmptySceneIsFatal) {
+  ExpectErrorWhere(kFixtures + "/scannet_empty", kFixtures + "/scannet_empty/pose", "empty scene");
+}
+
+TEST(ScanNet, MissingIntrinsicsIsFatal) {
+  const std::string dir = test::ScratchDir("sn_no_k");
+  WriteFileAtomic(dir + "/pose/0.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  ExpectErrorWhere(dir, dir + "/intrinsic/intrinsic_depth.txt", "cannot open");
+  WriteFileAtomic(dir + "/intrinsic/intrinsic_depth.txt", "500 0 320\n0 500 240\n0 0 0\n");
+  ExpectErrorWhere(dir, dir + "/intrinsic/intrinsic_depth.txt", "expected K");
+}
+
+TEST(ScanNet, DepthSizeFromPngAndColourIntrinsicsFile) {
+  const std::string dir = test::ScratchDir("sn_depth");
+  const std::string pose = "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  for (const char* n : {"2", "10", "100"}) WriteFileAtomic(dir + "/pose/" + n + ".txt", pose);
+  WriteFileAtomic(dir + "/intrinsic/intrinsic_depth.txt", "200 0 79.5\n0 200 59.5\n0 0 1\n");
+  WriteFileAtomic(dir + "/intrinsic/intrinsic_color.txt",
+                  "1100 0 647.5 0\n0 1100 483.5 0\n0 0 1 0\n0 0 0 1\n");
+  fs::create_directories(dir + "/depth");
+  fs::create_directories(dir + "/color");
+  cv::Mat depth(120, 160, CV_16UC1, cv::Scalar(1500));
+  depth.at<uint16_t>(3, 5) = 0;
+  ASSERT_TRUE(cv::imwrite(dir + "/depth/2.png", depth));
+  ASSERT_TRUE(cv::imwrite(dir + "/depth/100.png", cv::Mat(60, 80, CV_16UC1, cv::Scalar(1))));
+  ASSERT_TRUE(cv::imwrite(dir + "/color/10.jpg", cv::Mat(968, 1296, CV_8UC3, cv::Scalar(1, 2, 3))));
+  const Scene s = MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), 3u);
+  EXPECT_EQ(s.frames[0].id, "2");
+  EXPECT_EQ(s.frames[1].id, "10");
+  EXPECT_EQ(s.frames[2].id, "100");
+  EXPECT_TRUE(s.frames[0].usable);
+  EXPECT_FALSE(s.frames[1].usable);  // no depth/10.png
+  EXPECT_EQ(s.frames[0].depth_camera.width, 160);
+  EXPECT_EQ(s.frames[0].depth_camera.height, 120);
+  EXPECT_EQ(s.frames[1].color_path, dir + "/color/10.jpg");
+  EXPECT_EQ(s.frames[1].color_camera.width, 1296);
+  EXPECT_EQ(s.frames[1].color_camera.height, 968);
+  EXPECT_EQ(s.frames[1].color_camera.fx, 1100.0);
+  EXPECT_EQ(s.frames[1].color_camera.cx, 647.5);
+  EXPECT_TRUE(s.frames[0].color_path.empty());
+  const DepthImage d = ReadDepth(s.frames[0].depth, 160, 120);
+  EXPECT_FLOAT_EQ(d.at(0, 0), 1.5f);
+  EXPECT_EQ(d.at(5, 3), 0.0f);
+  // Depth of the wrong size (80x60 instead of the scene's 160x120).
+  try {
+    ReadDepth(s.frames[2].depth, s.frames[2].depth_camera.width, s.frames[2].depth_camera.height);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), dir + "/depth/100.png");
+    EXPECT_NE(std::string(e.what()).find("depth is 80x60, expected 160x120"), std::string::npos);
+  }
+}
+
+// The C++ SensReader export: frame-XXXXXX.{color.jpg,depth.pgm,pose.txt} + _info.txt, K and
+// sizes from _info.txt, depth in units of 1/m_depthShift metres, lost tracking skipped.
+void WriteCppExport(const std::string& dir, const std::string& info) {
+  const std::string pose = "1 0 0 0.5\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  WriteFileAtomic(dir + "/frame-000000.pose.txt", pose);
+  WriteFileAtomic(
+      dir + "/frame-000001.pose.txt",
+      "-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n-inf -inf -inf -inf\n");
+  WriteFileAtomic(dir + "/frame-000002.pose.txt", pose);
+  WriteFileAtomic(dir + "/_info.txt", info);
+  cv::Mat depth(24, 32, CV_16UC1, cv::Scalar(3000));
+  depth.at<uint16_t>(2, 7) = 0;
+  ASSERT_TRUE(cv::imwrite(dir + "/frame-000000.depth.pgm", depth));
+  ASSERT_TRUE(cv::imwrite(dir + "/frame-000001.depth.pgm", depth));
+  ASSERT_TRUE(
+      cv::imwrite(dir + "/frame-000000.color.jpg", cv::Mat(48, 64, CV_8UC3, cv::Scalar(9))));
+}
+
+const char* kCppInfo =
+    "m_versionNumber = 4\n"
+    "m_sensorName = StructureSensor\n"
+    "m_colorWidth = 64\n"
+    "m_colorHeight = 48\n"
+    "m_depthWidth = 32\n"
+    "m_depthHeight = 24\n"
+    "m_depthShift = 2000\n"
+    "m_calibrationColorIntrinsic = 60 0 31.5 0 0 61 23.5 0 0 0 1 0 0 0 0 1 \n"
+    "m_calibrationColorExtrinsic = 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1 \n"
+    "m_calibrationDepthIntrinsic = 30 0 15.5 0 0 30.5 11.5 0 0 0 1 0 0 0 0 1 \n"
+    "m_calibrationDepthExtrinsic = 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1 \n"
+    "m_frames.size = 3\n";
+
+TEST(ScanNet, CppExporterLayout) {
+  const std::string root = test::ScratchDir("sn_cpp");
+  const std::string dir = root + "/scene0001_00";
+  WriteCppExport(dir, kCppInfo);
+  const auto reader = MakeReader(gt::DatasetFormat::kScanNet);
+  ASSERT_EQ(reader->ListScenes(root), std::vector<std::string>{"scene0001_00"});
+  const Scene s = reader->ReadScene(root, "scene0001_00");
+  ASSERT_EQ(s.frames.size(), 3u);
+  EXPECT_EQ(s.frames[0].id, "000000");
+  EXPECT_EQ(s.frames[2].number, 2);
+  EXPECT_TRUE(s.frames[0].usable);
+  EXPECT_FALSE(s.frames[1].usable);  // -inf pose: lost tracking
+  EXPECT_NE(s.frames[1].unusable_reason.find("pose"), std::string::npos);
+  EXPECT_FALSE(s.frames[2].usable);  // no depth file
+  EXPECT_EQ(s.frames[2].unusable_reason, "depth: missing file");
+  const Frame& f = s.frames[0];
+  EXPECT_EQ(f.depth_camera.width, 32);
+  EXPECT_EQ(f.depth_camera.height, 24);
+  EXPECT_EQ(f.depth_camera.fx, 30.0);
+  EXPECT_EQ(f.depth_camera.fy, 30.5);
+  EXPECT_EQ(f.depth_camera.cx, 15.5);
+  EXPECT_EQ(f.depth_camera.cy, 11.5);
+  EXPECT_EQ(f.color_path, dir + "/frame-000000.color.jpg");
+  EXPECT_EQ(f.color_camera.width, 64);
+  EXPECT_EQ(f.color_camera.fx, 60.0);
+  EXPECT_EQ(f.color_camera.cy, 23.5);
+  EXPECT_TRUE(s.frames[2].color_path.empty());
+  EXPECT_EQ(f.world_from_cam.translation().x(), 0.5);
+  const DepthImage d = ReadDepth(f.depth, 32, 24);
+  EXPECT_FLOAT_EQ(d.at(0, 0), 1.5f);  // 3000 / m_depthShift 2000
+  EXPECT_EQ(d.at(7, 2), 0.0f);
+}
+
+TEST(ScanNet, CppExporterBadInfo) {
+  const std::string dir = test::ScratchDir("sn_cpp_bad");
+  std::string info = kCppInfo;
+  WriteCppExport(dir, info.substr(0, info.find("m_depthShift")) +
+                          info.substr(info.find("m_calibrationColorIntrinsic")));
+  ExpectErrorWhere(dir, dir + "/_info.txt", "m_depthShift: missing");
+  WriteFileAtomic(dir + "/_info.txt",
+                  "m_depthWidth = 32\nm_depthHeight = 24\nm_depthShift = 1000\n"
+                  "m_calibrationDepthIntrinsic = 30 0 15.5 0 30 11.5 0 0 1\n");
+  ExpectErrorWhere(dir, dir + "/_info.txt:4", "expected 16 (4x4) or 12 (3x4) numbers, found 9");
+  WriteFileAtomic(dir + "/_info.txt",
+                  "m_depthWidth = 32\nm_depthHeight = 24\nm_depthShift = 1000\n"
+                  "m_calibrationDepthIntrinsic = 0 0 15.5 0 0 30 11.5 0 0 0 1 0\n");
+  ExpectErrorWhere(dir, dir + "/_info.txt:4 m_calibrationDepthIntrinsic", "expected K");
+  WriteFileAtomic(dir + "/_info.txt",
+                  "m_depthWidth = -3\nm_depthHeight = 24\nm_depthShift = 1000\n"
+                  "m_calibrationDepthIntrinsic = 30 0 15.5 0 0 30 11.5 0 0 0 1 0\n");
+  ExpectErrorWhere(dir, dir + "/_info.txt:1", "positive integer");
+  WriteFileAtomic(dir + "/_info.txt",
+                  "m_depthWidth = 32\nm_depthHeight = 24\nm_depthShift = nan\n"
+                  "m_calibrationDepthIntrinsic = 30 0 15.5 0 0 30 11.5 0 0 0 1 0\n");
+  ExpectErrorWhere(dir, dir + "/_info.txt:3", "m_depthShift");
+}
+
+}  // namespace
+}  // namespace gt::datasets

@@ -1,0 +1,188 @@
+// 7-Scenes reader on the real sample (sevenscenes/rgbd-frames, frames 150-199): frame
+// listing, K from camera-intrinsics.txt, poses parsed independently, depth markers
+// (0 and 65535 -> 0) against a direct OpenCV decode, and reprojection of 150 <-> 160.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "libgt/core/error.h"
+#include "libgt/datasets/reader.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/depth_io.h"
+#include "libgt/io/file_read.h"
+#include "libgt/io/image.h"
+#include "tests/datasets/consistency.h"
+#include "tests/support/test_support.h"
+
+namespace gt::datasets {
+using namespace gt::io;  // NOLINT: the file helpers of io/ beside the readers
+namespace {
+
+TEST(SevenScenes, SampleFramesIntrinsicsAndPoses) {
+  const std::string parent = test::SharedData("sevenscenes");
+  ASSERT_FALSE(parent.empty());
+  const auto reader = MakeReader(gt::DatasetFormat::kSevenScenes);
+  ASSERT_EQ(reader->ListScenes(parent), std::vector<std::string>{"rgbd-frames"});
+  const std::string root = parent + "/rgbd-frames";
+  ASSERT_EQ(reader->ListScenes(root), std::vector<std::string>{"rgbd-frames"});
+  const Scene s = reader->ReadScene(parent, "rgbd-frames");
+  ASSERT_EQ(s.frames.size(), 50u);
+  EXPECT_EQ(s.NumUsable(), 50u);
+  // camera-intrinsics.txt, read with >>.
+  std::ifstream kin(parent + "/camera-intrinsics.txt");
+  double K[9];
+  for (double& k : K) ASSERT_TRUE(kin >> k);
+  for (size_t i = 0; i < s.frames.size(); ++i) {
+    const Frame& f = s.frames[i];
+    char id[32];
+    std::snprintf(id, sizeof(id), "%06zu", 150 + i);
+    ASSERT_EQ(f.id, id);
+    EXPECT_EQ(f.number, static_cast<int64_t>(150 + i));
+    EXPECT_EQ(f.depth_camera.fx, K[0]);
+    EXPECT_EQ(f.depth_camera.cx, K[2]);
+    EXPECT_EQ(f.depth_camera.fy, K[4]);
+    EXPECT_EQ(f.depth_camera.cy, K[5]);
+    EXPECT_EQ(f.depth_camera.width, 640);
+    EXPECT_EQ(f.depth_camera.height, 480);
+    EXPECT_EQ(f.depth.invalid_value, 65535);
+    EXPECT_EQ(f.depth.scale_m_per_unit, 0.001);
+    std::ifstream pin(root + "/frame-" + f.id + ".pose.txt");
+    Eigen::Matrix4d m;
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) ASSERT_TRUE(pin >> m(r, c));
+    }
+    // RigidFromMatrix re-orthonormalises R; the files are orthonormal to ~6e-5 only.
+    EXPECT_LT((f.world_from_cam.matrix() - m).cwiseAbs().maxCoeff(), 2e-4) << f.id;
+    EXPECT_TRUE((f.world_from_cam.translation() - m.topRightCorner<3, 1>()).isZero(0.0)) << f.id;
+  }
+}
+
+TEST(SevenScenes, DepthMarkersBecomeZeroAndMillimetresMetres) {
+  const std::string root = test::SharedData("sevenscenes/rgbd-frames");
+  ASSERT_FALSE(root.empty());
+  const Scene s = MakeReader(gt::DatasetFormat::kSevenScenes)->ReadScene(root, "");
+  const Frame& f = s.frames[0];
+  const DepthImage d = ReadDepth(f.depth, 640, 480);
+  const cv::Mat raw = cv::imread(f.depth.path, cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(raw.type(), CV_16UC1);
+  long invalid_raw = 0;
+  for (int v = 0; v < raw.rows; ++v) {
+    for (int u = 0; u < raw.cols; ++u) {
+      const uint16_t r = raw.at<uint16_t>(v, u);
+      if (r == 0 || r == 65535) {
+        ++invalid_raw;
+        ASSERT_EQ(d.at(u, v), 0.0f);
+      } else {
+        ASSERT_FLOAT_EQ(d.at(u, v), r * 0.001f);
+      }
+    }
+  }
+  EXPECT_GT(invalid_raw, 0);  // the sample has holes: the branch above was exercised
+}
+
+TEST(SevenScenes, Frames150And160ReprojectConsistently) {
+  const std::string root = test::SharedData("sevenscenes/rgbd-frames");
+  ASSERT_FALSE(root.empty());
+  const Scene s = MakeReader(gt::DatasetFormat::kSevenScenes)->ReadScene(root, "");
+  const Frame& a = s.frames[0];
+  const Frame& b = s.frames[10];
+  ASSERT_EQ(a.id, "000150");
+  ASSERT_EQ(b.id, "000160");
+  const DepthImage da = ReadDepth(a.depth, 640, 480);
+  const DepthImage db = ReadDepth(b.depth, 640, 480);
+  const auto ab = test::DepthConsistency(da, a.depth_camera, a.world_from_cam, db, b.depth_camera,
+                                         b.world_from_cam, s.min_depth_m, s.max_depth_m, 0.05);
+  const auto ba = test::DepthConsistency(db, b.depth_camera, b.world_from_cam, da, a.depth_camera,
+                                         a.world_from_cam, s.min_depth_m, s.max_depth_m, 0.05);
+  EXPECT_GT(ab.compared, 50000);
+  EXPECT_GE(ab.fraction(), 0.95);
+  EXPECT_GE(ba.fraction(), 0.95);
+  // Negative control: swapping the poses (a wrong convention) must do much worse.
+  const auto swapped =
+      test::DepthConsistency(da, a.depth_camera, a.world_from_cam.inverse(), db, b.depth_camera,
+                             b.world_from_cam.inverse(), s.min_depth_m, s.max_depth_m, 0.05);
+  std::printf("7-Scenes 150->160 %.4f, 160->150 %.4f, inverted poses %.4f\n", ab.fraction(),
+              ba.fraction(), swapped.fraction());
+  EXPECT_LT(swapped.fraction(), ab.fraction() - 0.2) << swapped.fraction();
+}
+
+TEST(SevenScenes, WrongDepthSizeNamesTheFile) {
+  const std::string root = test::SharedData("sevenscenes/rgbd-frames");
+  ASSERT_FALSE(root.empty());
+  const Scene s = MakeReader(gt::DatasetFormat::kSevenScenes)->ReadScene(root, "");
+  try {
+    ReadDepth(s.frames[0].depth, 320, 240);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), s.frames[0].depth.path);
+    EXPECT_NE(std::string(e.what()).find("depth is 640x480, expected 320x240"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(SevenScenes, EmptyAndMissingFolders) {
+  const auto reader = MakeReader(gt::DatasetFormat::kSevenScenes);
+  const std::string empty = test::ScratchDir("7s_empty");
+  try {
+    reader->ListScenes(empty);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), empty);
+  }
+  try {
+    reader->ReadScene(empty, "seq-01");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), empty + "/seq-01");
+  }
+  try {
+    reader->ReadScene(empty + "/nope", "");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), empty + "/nope");
+  }
+}
+
+TEST(SevenScenes, MissingDepthIsUnusableNotFatal) {
+  const std::string dir = test::ScratchDir("7s_missing_depth");
+  WriteFileAtomic(dir + "/seq-01/frame-000000.pose.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  const Scene s = MakeReader(gt::DatasetFormat::kSevenScenes)->ReadScene(dir, "seq-01");
+  ASSERT_EQ(s.frames.size(), 1u);
+  EXPECT_FALSE(s.frames[0].usable);
+  EXPECT_EQ(s.frames[0].unusable_reason, "depth: missing file");
+  EXPECT_EQ(s.frames[0].depth_camera.fx, 585.0);  // default K without camera-intrinsics.txt
+}
+
+// Releases ship colour as frame-NNNNNN.color.png or .color.jpg: both are read; a frame
+// with neither has no colour (and is counted by a build that asks for images).
+TEST(SevenScenes, ColourAsPngOrJpgAndFramesWithout) {
+  const std::string real = test::SharedData("sevenscenes/rgbd-frames");
+  ASSERT_FALSE(real.empty());
+  const std::string dir = test::ScratchDir("7s_color_jpg");
+  for (const char* id : {"000150", "000151", "000152"}) {
+    const std::string base = std::string("/frame-") + id;
+    for (const char* f : {".pose.txt", ".depth.png"}) {
+      WriteFileAtomic(dir + "/seq-01" + base + f, ReadFileBytes(real + base + f));
+    }
+  }
+  const cv::Mat bgr = cv::imread(real + "/frame-000150.color.png", cv::IMREAD_COLOR);
+  ASSERT_FALSE(bgr.empty());
+  std::vector<uint8_t> jpg;
+  ASSERT_TRUE(cv::imencode(".jpg", bgr, jpg));
+  WriteFileAtomic(dir + "/seq-01/frame-000150.color.jpg", std::string(jpg.begin(), jpg.end()));
+  WriteFileAtomic(dir + "/seq-01/frame-000151.color.png",
+                  ReadFileBytes(real + "/frame-000151.color.png"));
+  const Scene s = MakeReader(gt::DatasetFormat::kSevenScenes)->ReadScene(dir, "seq-01");
+  ASSERT_EQ(s.frames.size(), 3u);
+  EXPECT_EQ(s.frames[0].color_path, dir + "/seq-01/frame-000150.color.jpg");
+  EXPECT_EQ(s.frames[1].color_path, dir + "/seq-01/frame-000151.color.png");
+  EXPECT_TRUE(s.frames[2].color_path.empty());
+  EXPECT_EQ(s.frames[0].color_camera.width, 640);
+  const ColorImage c = ReadColor(s.frames[0].color_path);
+  EXPECT_EQ(c.width, 640);
+  EXPECT_EQ(c.height, 480);
+}
+
+}  // namespace
+}  // namespace gt::datasets

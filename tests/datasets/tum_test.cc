@@ -1,0 +1,146 @@
+// TUM RGB-D reader on a hand-made sequence written into a scratch folder with known
+// answers: nearest-in-time association of poses and colour (including timestamps that do
+// not associate), intrinsics by sequence name, depth scale 1/5000, and bad files.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
+#include "libgt/core/error.h"
+#include "libgt/datasets/reader.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/depth_io.h"
+#include "tests/support/test_support.h"
+
+namespace gt::datasets {
+using namespace gt::io;  // NOLINT: the file helpers of io/ beside the readers
+namespace {
+
+// depth at t = 10.00, 10.10, 10.20, 10.50; groundtruth at 9.99 (x=1), 10.015 (x=2),
+// 10.115 (x=3), 10.30 (x=4), 10.51 (x=5, bad quaternion); rgb at 10.005, 10.13, 10.49.
+std::string MakeSequence(const std::string& name) {
+  const std::string dir = test::ScratchDir(name);
+  WriteFileAtomic(dir + "/depth.txt",
+                  "# depth maps\n# file: 'x.bag'\n# timestamp filename\n"
+                  "10.100000 depth/10.100000.png\n"  // out of order on purpose
+                  "10.000000 depth/10.000000.png\n"
+                  "10.200000 depth/10.200000.png\n"
+                  "10.500000 depth/10.500000.png\n");
+  WriteFileAtomic(dir + "/rgb.txt",
+                  "# color images\n10.005 rgb/10.005.png\n10.130 rgb/10.130.png\n"
+                  "10.490 rgb/10.490.png\n");
+  WriteFileAtomic(dir + "/groundtruth.txt",
+                  "# ground truth trajectory\n# timestamp tx ty tz qx qy qz qw\n"
+                  "9.99 1 0 0 0 0 0 1\n"
+                  "10.015 2 0 0 0 0 0 1\n"
+                  "10.115 3 0 0 0 0.7071067811865476 0 0.7071067811865476\n"
+                  "10.30 4 0 0 0 0 0 1\n"
+                  "10.51 5 0 0 0 0 0 2\n");
+  std::filesystem::create_directories(dir + "/depth");
+  cv::Mat depth(480, 640, CV_16UC1, cv::Scalar(5000));
+  depth.at<uint16_t>(10, 20) = 0;
+  depth.at<uint16_t>(11, 20) = 12345;
+  for (const char* t : {"10.000000", "10.100000", "10.500000"}) {
+    EXPECT_TRUE(cv::imwrite(dir + "/depth/" + t + ".png", depth));
+  }
+  return dir;
+}
+
+TEST(Tum, AssociatesNearestWithinTolerance) {
+  const std::string root = MakeSequence("rgbd_dataset_freiburg2_xyz");
+  const auto reader = MakeReader(gt::DatasetFormat::kTum);
+  ASSERT_EQ(reader->ListScenes(root), std::vector<std::string>{"rgbd_dataset_freiburg2_xyz"});
+  const Scene s = reader->ReadScene(root, "");
+  ASSERT_EQ(s.frames.size(), 4u);
+  // Sorted by time.
+  EXPECT_EQ(s.frames[0].id, "10.000000");
+  EXPECT_EQ(s.frames[1].id, "10.100000");
+  EXPECT_EQ(s.frames[2].id, "10.200000");
+  EXPECT_EQ(s.frames[3].id, "10.500000");
+  EXPECT_DOUBLE_EQ(s.frames[1].timestamp_s, 10.1);
+  // t=10.00: gt 9.99 (dt 0.010) beats 10.015 (dt 0.015); rgb 10.005.
+  EXPECT_TRUE(s.frames[0].usable);
+  EXPECT_EQ(s.frames[0].world_from_cam.translation().x(), 1.0);
+  EXPECT_EQ(s.frames[0].color_path, root + "/rgb/10.005.png");
+  // t=10.10: gt 10.115 (dt 0.015, a 90 degree turn about y); rgb 10.13 is 0.03 away: none.
+  EXPECT_TRUE(s.frames[1].usable);
+  EXPECT_EQ(s.frames[1].world_from_cam.translation().x(), 3.0);
+  EXPECT_NEAR(
+      (s.frames[1].world_from_cam.linear() * Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitX())
+          .norm(),
+      0.0, 1e-12);
+  EXPECT_TRUE(s.frames[1].color_path.empty());
+  // t=10.20: nearest gt is 0.085 (10.115) / 0.10 (10.30) away: unusable; and no depth file.
+  EXPECT_FALSE(s.frames[2].usable);
+  EXPECT_EQ(s.frames[2].unusable_reason, "pose: no groundtruth within 0.02s");
+  // t=10.50: gt 10.51 has a quaternion of norm 2.
+  EXPECT_FALSE(s.frames[3].usable);
+  EXPECT_EQ(s.frames[3].unusable_reason.rfind("pose: quaternion norm", 0), 0u);
+  EXPECT_EQ(s.frames[3].color_path, root + "/rgb/10.490.png");
+  // fr2 intrinsics by folder name, depth 1/5000 m.
+  EXPECT_EQ(s.frames[0].depth_camera.fx, 520.9);
+  EXPECT_EQ(s.frames[0].depth_camera.cy, 249.7);
+  const DepthImage d = ReadDepth(s.frames[0].depth, 640, 480);
+  EXPECT_FLOAT_EQ(d.at(0, 0), 1.0f);
+  EXPECT_EQ(d.at(20, 10), 0.0f);
+  EXPECT_FLOAT_EQ(d.at(20, 11), 12345.0f / 5000.0f);
+}
+
+TEST(Tum, WiderToleranceAssociatesMore) {
+  const std::string root = MakeSequence("rgbd_dataset_freiburg3_office");
+  ReaderOptions options;
+  options.tum_max_dt_s = 0.09;
+  const Scene s = MakeReader(gt::DatasetFormat::kTum, options)->ReadScene(root, "");
+  EXPECT_TRUE(s.frames[1].usable);
+  EXPECT_EQ(s.frames[1].color_path, root + "/rgb/10.130.png");
+  EXPECT_EQ(s.frames[2].world_from_cam.translation().x(), 3.0);  // 10.115 is 0.085 away
+  EXPECT_EQ(s.frames[2].unusable_reason, "depth: missing file");
+  EXPECT_EQ(s.frames[0].depth_camera.fx, 535.4);  // fr3
+  options.tum_max_dt_s = -1;
+  EXPECT_THROW(MakeReader(gt::DatasetFormat::kTum, options), InputError);
+}
+
+TEST(Tum, DefaultIntrinsicsAreFreiburg1) {
+  const std::string root = MakeSequence("my_sequence");
+  const Scene s = MakeReader(gt::DatasetFormat::kTum)->ReadScene(root, "");
+  EXPECT_EQ(s.frames[0].depth_camera.fx, 517.3);
+  EXPECT_EQ(s.frames[0].depth_camera.cy, 255.3);
+}
+
+TEST(Tum, BadFilesNameFileAndLine) {
+  const auto reader = MakeReader(gt::DatasetFormat::kTum);
+  {
+    const std::string root = MakeSequence("tum_bad_gt");
+    WriteFileAtomic(root + "/groundtruth.txt", "# x\n10.0 1 2 3 0 0 0\n");
+    try {
+      reader->ReadScene(root, "");
+      FAIL();
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where(), root + "/groundtruth.txt:2") << e.what();
+    }
+  }
+  {
+    const std::string root = MakeSequence("tum_bad_token");
+    WriteFileAtomic(root + "/depth.txt", "10.0 depth/10.000000.png\nten depth/x.png\n");
+    try {
+      reader->ReadScene(root, "");
+      FAIL();
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where(), root + "/depth.txt:2") << e.what();
+    }
+  }
+  {
+    const std::string root = MakeSequence("tum_empty");
+    WriteFileAtomic(root + "/depth.txt", "# nothing\n");
+    try {
+      reader->ReadScene(root, "");
+      FAIL();
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where(), root + "/depth.txt");
+      EXPECT_NE(std::string(e.what()).find("empty scene"), std::string::npos);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace gt::datasets
