@@ -136,7 +136,9 @@ void AddInspectCommand(CLI::App& app) {
   pair->add_option("--frames", pa->frames, "two frame ids: A,B");
   pair->add_option("--preset", pa->preset, "label preset (with --root; default: default)");
   pair->add_option("--resolution", pa->resolution,
-                   "working resolution WxH (with --root; default 640x480)");
+                   "working resolution WxH (with --root; default " +
+                       Num(gt::truth::Resolution().width) + "x" +
+                       Num(gt::truth::Resolution().height) + ")");
   pair->add_flag("--no-occupancy", pa->no_occupancy, "skip the occupancy fusion (with --root)");
   pair->add_option("--max-lines", pa->max_lines, "match lines drawn at most")
       ->capture_default_str();

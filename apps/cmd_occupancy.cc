@@ -122,26 +122,22 @@ void RunOccupancy(const OccupancyArgs& args) {
 
 void AddOccupancyCommand(CLI::App& app) {
   auto args = std::make_shared<OccupancyArgs>();
+  // The defaults of the help text are the resolution's (the Options structs' values).
+  const gt::truth::PairTruthOptions def = gt::truth::ResolvePairTruthOptions({});
   auto* cmd = app.add_subcommand("occupancy", "64-bin occupancy target of one pair of frames");
   PairDatasetArgs& d = args->data;
-  cmd->add_option("--recipe", d.recipe,
-                  "build recipe: its resolution, depth range and occupancy options (flags "
-                  "override); also its dataset root and format unless given");
-  cmd->add_option("--root", d.root, "dataset root (default: the recipe's)");
-  cmd->add_option("--format", d.format, "dataset format (scannet, tartanair, ...)");
-  cmd->add_option("--scene", d.scene, "scene name (see occgt scan)")->required();
-  cmd->add_option("--frames", d.frames, "two frame ids: ID0,ID1")->required();
-  cmd->add_option("--out", d.out, "output folder")->required();
-  cmd->add_option("--resolution", d.resolution, "working resolution WxH (default 640x480)");
-  cmd->add_option("--min-depth-m", d.min_depth_m, "minimum valid depth (dataset default)");
-  cmd->add_option("--max-depth-m", d.max_depth_m, "maximum valid depth (dataset default)");
-  cmd->add_option("--voxel-m", args->voxel_m, "OctoMap resolution in metres (default 0.05)");
+  AddPairDatasetFlags(cmd, &d, "its resolution, depth range and occupancy options");
+  cmd->add_option("--voxel-m", args->voxel_m,
+                  "OctoMap resolution in metres (default " + Num(def.fusion.voxel_size_m) + ")");
   cmd->add_option("--max-range-m", args->max_range_m,
                   "ray truncation in metres, <= 0 unlimited (default: the last bin edge)");
-  cmd->add_option("--near-m", args->near_m, "first bin edge, planar depth (default 0.1)");
-  cmd->add_option("--far-m", args->far_m,
-                  "last bin edge, planar depth, and the ray range (default 10)");
-  cmd->add_option("--bins", args->bins, "number of depth bins, 1..64 (default 64)");
+  cmd->add_option("--near-m", args->near_m,
+                  "first bin edge, planar depth (default " + Num(def.bins.near_m) + ")");
+  cmd->add_option(
+      "--far-m", args->far_m,
+      "last bin edge, planar depth, and the ray range (default " + Num(def.bins.far_m) + ")");
+  cmd->add_option("--bins", args->bins,
+                  "number of depth bins, 1..64 (default " + Num(def.bins.num_bins) + ")");
   cmd->add_option("--spacing", args->spacing, "linear|log|inverse (default linear)");
   cmd->add_option("--traversal", args->traversal, "exact|center (default exact)");
   cmd->add_option("--scope", args->scope, "pair|window:N|scene:S (default pair)");

@@ -104,27 +104,20 @@ void AddPairCommand(CLI::App& app) {
   auto args = std::make_shared<PairArgs>();
   auto* cmd = app.add_subcommand("pair", "label one pair of frames and write its ground truth");
   PairDatasetArgs& d = args->data;
-  cmd->add_option("--recipe", d.recipe,
-                  "build recipe: its resolution, labels and patches (flags override); also "
-                  "its dataset root and format unless given");
-  cmd->add_option("--root", d.root, "dataset root (default: the recipe's)");
-  cmd->add_option("--format", d.format, "dataset format (scannet, tartanair, ...)");
-  cmd->add_option("--scene", d.scene, "scene name (see occgt scan)")->required();
-  cmd->add_option("--frames", d.frames, "two frame ids: ID0,ID1")->required();
-  cmd->add_option("--out", d.out, "output folder")->required();
+  AddPairDatasetFlags(cmd, &d, "its resolution, depth range, labels and patches");
   cmd->add_option("--preset", args->preset,
                   "label preset: default, occ2net, occ2net-compat, loftr, superglue, megadepth");
-  cmd->add_option("--resolution", d.resolution, "working resolution WxH (default 640x480)");
+  const gt::PatchOptions patches;  // the defaults of the help text
   cmd->add_option("--abs-tol-m", args->abs_tol_m, "absolute depth tolerance (m)");
   cmd->add_option("--rel-tol", args->rel_tol, "relative depth tolerance (fraction)");
   cmd->add_option("--relative-to", args->relative_to, "projected|observed");
   cmd->add_option("--bounds", args->bounds, "pixel-area|strict");
   cmd->add_option("--target-lookup", args->target_lookup, "nearest|truncate");
   cmd->add_option("--missing-target", args->missing_target, "unknown|as-zero-depth");
-  cmd->add_option("--min-depth-m", d.min_depth_m, "minimum valid depth (dataset default)");
-  cmd->add_option("--max-depth-m", d.max_depth_m, "maximum valid depth (dataset default)");
-  cmd->add_option("--stride", args->stride, "patch cell size in pixels (default 8)");
-  cmd->add_option("--anchor", args->anchor, "center|corner (default center)");
+  cmd->add_option("--stride", args->stride,
+                  "patch cell size in pixels (default " + Num(patches.stride) + ")");
+  cmd->add_option("--anchor", args->anchor,
+                  std::string("center|corner (default ") + gt::AnchorName(patches.anchor) + ")");
   auto* mutual = cmd->add_flag("--mutual", args->mutual,
                                "vv matches need the loop-back check (the default); overrides "
                                "the recipe's patches.mutual");

@@ -38,6 +38,23 @@ PairSetup StartPairSetup(const PairDatasetArgs& args) {
   return s;
 }
 
+void AddPairDatasetFlags(CLI::App* cmd, PairDatasetArgs* d, const std::string& recipe_gives) {
+  const gt::truth::Resolution res;  // the default of the help text
+  cmd->add_option("--recipe", d->recipe,
+                  "build recipe: " + recipe_gives +
+                      " (flags override); also its dataset root and format unless given");
+  cmd->add_option("--root", d->root, "dataset root (default: the recipe's)");
+  cmd->add_option("--format", d->format, "dataset format (scannet, tartanair, ...)");
+  cmd->add_option("--scene", d->scene, "scene name (see occgt scan)")->required();
+  cmd->add_option("--frames", d->frames, "two frame ids: ID0,ID1")->required();
+  cmd->add_option("--out", d->out, "output folder")->required();
+  cmd->add_option("--resolution", d->resolution,
+                  "working resolution WxH (default " + std::to_string(res.width) + "x" +
+                      std::to_string(res.height) + ")");
+  cmd->add_option("--min-depth-m", d->min_depth_m, "minimum valid depth (dataset default)");
+  cmd->add_option("--max-depth-m", d->max_depth_m, "maximum valid depth (dataset default)");
+}
+
 gt::truth::DatasetDepthRange DepthRangeFor(const PairSetup& setup, const gt::Scene& scene) {
   return setup.recipe ? gt::pipeline::RecipeDepthRange(*setup.recipe, scene)
                       : gt::truth::DepthRangeOf(scene);

@@ -6,6 +6,7 @@
 // truth::ResolvePairTruthOptions, as everywhere.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <optional>
 #include <string>
 
@@ -31,6 +32,10 @@ struct PairSetup {
   gt::truth::Resolution resolution;  // working resolution
   gt::truth::PairSettings settings;  // the recipe's (or the defaults), then the depth flags
 };
+
+// Adds the flags of PairDatasetArgs to a subcommand; `recipe_gives` says what the recipe
+// contributes (help text).
+void AddPairDatasetFlags(CLI::App* cmd, PairDatasetArgs* args, const std::string& recipe_gives);
 
 // Loads the recipe (when given) and resolves root, format, resolution and settings; throws
 // InputError naming the recipe file or the flag.

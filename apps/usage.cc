@@ -54,6 +54,12 @@ std::vector<std::string> FlagNames(const CLI::App* sub) {
 
 }  // namespace
 
+std::string Num(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g", value);
+  return text;
+}
+
 void ThrowOptionsError(const std::string& error, const std::string& what,
                        std::initializer_list<FieldFlag> fields) {
   // PairTruthOptions::Check names the section first ("labels: max_depth_m ...").

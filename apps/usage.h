@@ -35,6 +35,9 @@ struct FieldFlag {
   const char* flag;   // its flag, e.g. "--voxel-m"
   bool given;         // the flag is on the command line
 };
+// A default value as help text shows it ("0.05", "10", "64").
+std::string Num(double value);
+
 [[noreturn]] void ThrowOptionsError(const std::string& error, const std::string& what,
                                     std::initializer_list<FieldFlag> fields);
 

@@ -10,6 +10,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "libgt/core/error.h"
@@ -41,6 +42,17 @@ struct PairArguments {
 };
 
 template <typename T>
+const char* Expected() {
+  if constexpr (std::is_same_v<T, bool>) return "a bool";
+  if constexpr (std::is_same_v<T, int>) return "an int";
+  if constexpr (std::is_same_v<T, double>) return "a float";
+  if constexpr (std::is_same_v<T, std::string>) return "a str";
+  return "(min, max) floats";
+}
+
+// kwargs[name] (removed from kwargs), None when absent or None; a value of the wrong Python
+// type is a TypeError naming the argument, as pybind11's own conversions are.
+template <typename T>
 std::optional<T> Take(py::dict* kwargs, const char* name) {
   if (!kwargs->contains(name)) return std::nullopt;
   const py::object value = (*kwargs)[name];
@@ -49,7 +61,7 @@ std::optional<T> Take(py::dict* kwargs, const char* name) {
   try {
     return value.cast<T>();
   } catch (const py::cast_error&) {
-    ThrowValue(name, "expected " + std::string(py::type_id<T>()) + ", got " +
+    throw py::type_error(std::string(name) + ": expected " + Expected<T>() + ", got " +
                          std::string(py::str(value.get_type().attr("__name__"))));
   }
 }
@@ -102,7 +114,13 @@ PairArguments ArgumentsFromKwargs(const std::string& preset, const py::kwargs& g
   if (kw.contains("scope_map")) {
     const py::object m = kw["scope_map"];
     PyDict_DelItemString(kw.ptr(), "scope_map");
-    if (!m.is_none()) a.scope_map = Named("scope_map", [&] { return m.cast<const PyScopeMap*>(); });
+    if (!m.is_none()) {
+      if (!py::isinstance<PyScopeMap>(m)) {
+        throw py::type_error("scope_map: expected a ScopeMap (Scene.fuse), got " +
+                             std::string(py::str(m.get_type().attr("__name__"))));
+      }
+      a.scope_map = m.cast<const PyScopeMap*>();
+    }
   }
   for (const auto& item : kw) {
     throw py::type_error("got an unexpected keyword argument '" + std::string(py::str(item.first)) +

@@ -17,12 +17,12 @@
 #include <thread>
 
 #include "libgt/core/error.h"
+#include "libgt/datasets/text_parsing.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/image.h"
 #include "libgt/io/md5.h"
-#include "libgt/datasets/text_parsing.h"
 #include "tests/support/test_support.h"
 
 namespace gt::io {

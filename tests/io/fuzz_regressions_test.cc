@@ -6,12 +6,12 @@
 #include <string>
 
 #include "libgt/core/error.h"
+#include "libgt/datasets/readers.h"
+#include "libgt/datasets/text_parsing.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/depth_io.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
-#include "libgt/datasets/readers.h"
-#include "libgt/datasets/text_parsing.h"
 #include "tests/support/test_support.h"
 
 namespace gt::io {

@@ -79,7 +79,13 @@ TEST(Options, ChecksRejectBadValues) {
   EXPECT_FALSE(f.Check(&why));
   f = FusionOptions();
   f.scope = FusionScope::kWindow;
-  EXPECT_FALSE(f.Check(&why));  // window 0
+  EXPECT_TRUE(f.Check(&why));  // the default window, 2
+  f.window = 0;
+  EXPECT_FALSE(f.Check(&why));
+  f = FusionOptions();
+  f.scope = FusionScope::kScene;
+  f.scene_stride = 0;
+  EXPECT_FALSE(f.Check(&why));
 }
 
 TEST(Options, ParsersRoundTripAndRejectUnknownNames) {

@@ -15,13 +15,13 @@
 #include <string>
 #include <vector>
 
-#include "libgt/pipeline/select.h"
-#include "libgt/pipeline/synthetic.h"
-#include "libgt/pipeline/write.h"
 #include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
+#include "libgt/pipeline/select.h"
+#include "libgt/pipeline/synthetic.h"
+#include "libgt/pipeline/write.h"
 #include "libgt/shards/split.h"
 #include "libgt/shards/tar_shard.h"
 #include "tests/support/test_support.h"
