@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <utility>
 
 #include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
@@ -253,7 +254,7 @@ const char* NpyDescr<uint64_t>() {
   return "<u8";
 }
 
-NpyArray ParseNpy(std::string_view bytes, const std::string& name) {
+NpyHeader ParseNpyHeader(std::string_view bytes, const std::string& name) {
   if (bytes.size() < kMagicLen + 4 || std::memcmp(bytes.data(), kMagic, kMagicLen) != 0) {
     throw InputError(name, "not a .npy file (bad magic, expected \\x93NUMPY)");
   }
@@ -279,9 +280,19 @@ NpyArray ParseNpy(std::string_view bytes, const std::string& name) {
     throw InputError(name + ": header", "file ends inside the header");
   }
 
-  NpyArray array;
+  NpyHeader header;
   HeaderParser parser(bytes.substr(header_start, header_len), name);
-  parser.Parse(&array.descr, &array.fortran_order, &array.shape);
+  parser.Parse(&header.descr, &header.fortran_order, &header.shape);
+  header.data_offset = header_start + header_len;
+  return header;
+}
+
+NpyArray ParseNpy(std::string_view bytes, const std::string& name) {
+  NpyHeader header = ParseNpyHeader(bytes, name);
+  NpyArray array;
+  array.descr = std::move(header.descr);
+  array.shape = std::move(header.shape);
+  array.fortran_order = header.fortran_order;
 
   const std::string& d = array.descr;
   if (d.find('O') != std::string::npos) {
@@ -313,7 +324,7 @@ NpyArray ParseNpy(std::string_view bytes, const std::string& name) {
   }
 
   // Byte size, checked for overflow and against the file before allocating.
-  const size_t data_start = header_start + header_len;
+  const size_t data_start = header.data_offset;
   const uint64_t available = bytes.size() - data_start;
   uint64_t nbytes = item_size;
   constexpr uint64_t kMax = static_cast<uint64_t>(std::numeric_limits<int64_t>::max());

@@ -50,6 +50,20 @@ const char* NpyDescr<uint32_t>();
 template <>
 const char* NpyDescr<uint64_t>();
 
+// The header of .npy bytes as written: magic, version (1.0, 2.0 or 3.0), header length (at
+// most 10000 bytes) and the dict, checked for syntax only (a structured descr, a list, is
+// refused). descr, fortran_order and the data size are not checked against the reader
+// rules above: ParseNpy does that; a caller that maps descr with numpy
+// (occgt.torch.ShardDataset) applies numpy's. Throws InputError naming `name` (and the
+// header field) otherwise, with ParseNpy's messages.
+struct NpyHeader {
+  std::string descr;  // as written: "<f4", ">f4", "|O8", ...
+  std::vector<int64_t> shape;
+  bool fortran_order = false;
+  size_t data_offset = 0;  // bytes from the start of the .npy to the array data
+};
+NpyHeader ParseNpyHeader(std::string_view bytes, const std::string& name);
+
 // Parse .npy bytes; `name` is used in error messages (a path or "file.npz:member").
 NpyArray ParseNpy(std::string_view bytes, const std::string& name);
 NpyArray ReadNpy(const std::string& path);

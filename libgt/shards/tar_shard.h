@@ -69,18 +69,51 @@ class TarShardWriter {
 struct TarMemberInfo {
   std::string path;         // member path
   int64_t size = 0;         // data bytes
-  int64_t data_offset = 0;  // offset of the data in the tar file (multiple of 512)
+  int64_t data_offset = 0;  // offset of the data in the tar file (multiple of 512; after any
+                            // pax / GNU long-name record of the member)
   int64_t mtime = 0;
   int64_t uid = 0, gid = 0;
   int mode = 0;  // permission bits, e.g. 0644
   bool regular_file = false;
+  bool sparse = false;  // a GNU / pax sparse member: its bytes in the file are not its data
 };
 
-// Calls `visit` for every member in file order with its header and data. Throws
-// InputError naming the tar (and member) when it cannot be read or is truncated.
+// Calls `visit` for every member in file order with its header and data (libarchive).
+// Throws InputError naming the tar and what was expected when it cannot be read: a header
+// libarchive refuses is "<tar>: tar header at byte <n> (after member <m>): <why>" (checksum
+// mismatch, the file ends inside it, ...: said from the block, libarchive's words follow),
+// a member whose data runs past the end of the file "<tar>: <member>: ...", an archive that
+// ends without a zero end block "<tar>: ends at byte <n>, ..." (cut at a member boundary).
 void ForEachTarMember(
     const std::string& tar_path,
     const std::function<void(const TarMemberInfo&, std::string_view data)>& visit);
+// The same reading, header by header, without reading the data (libarchive skips it with a
+// seek): for an index of where the members are (ListShardSamples). The same errors.
+void ForEachTarHeader(const std::string& tar_path,
+                      const std::function<void(const TarMemberInfo&)>& visit);
+
+// Where a sample's members are in its shard file, for random access without reading the
+// shard (occgt.torch.ShardDataset reads a sample with one pread of [start, start + length)).
+struct ShardMemberRange {
+  std::string field;   // "label01.npy", "label01.npy.gz", "json", ...
+  int64_t offset = 0;  // of the member's data, from the sample's start
+  int64_t size = 0;    // data bytes
+};
+struct ShardSampleRange {
+  std::string key;
+  int64_t start = 0;   // offset of the first member's data in the file
+  int64_t length = 0;  // bytes from start to the end of the last member's data (the headers
+                       // of the members in between included)
+  std::vector<ShardMemberRange> members;  // in file order
+};
+// The samples of a shard from one pass over its headers (ForEachTarHeader: the data is not
+// read), grouped the WebDataset way: the regular-file members, each split by
+// SplitMemberPath; members without a dot in the basename, or whose basename starts with
+// "__" (__meta__.json), are not sample members and are left out; consecutive members with
+// the same key form one sample. Throws ForEachTarHeader's InputErrors, and
+// InputError("<tar>: <member>", ...) for a sparse member, for a sample whose members are
+// not consecutive and for a field that repeats within a sample.
+std::vector<ShardSampleRange> ListShardSamples(const std::string& tar_path);
 
 // All samples of a shard, grouped by key the WebDataset way (consecutive members with the
 // same key form one sample; fields in member order). Reads the whole shard into memory.

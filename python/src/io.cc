@@ -4,7 +4,8 @@
 // world_from_cam) at the working resolution (truth::LoadWorkingDepth / WorkingCamera, the
 // two halves of truth::LoadWorkingFrame), Scene.load_color(frame_id, width, height) -> RGB
 // at the working resolution (io::ReadColorResized, the image of a shard sample). Files are
-// read without the GIL.
+// read without the GIL. For occgt.torch.ShardDataset: gunzip (a .npy.gz member) and
+// npy_header (a .npy member's header, io::ParseNpyHeader).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -21,6 +22,7 @@
 #include "libgt/datasets/reader.h"
 #include "libgt/io/gzip.h"
 #include "libgt/io/image.h"
+#include "libgt/io/npy.h"
 #include "libgt/occupancy/fusion.h"
 #include "libgt/truth/pair_settings.h"
 #include "libgt/truth/pair_truth.h"
@@ -186,6 +188,33 @@ void BindIo(py::module_& m) {
       "gz"_a, "what"_a,
       "The plain bytes of the gzip member `gz` as a bytearray (ValueError naming `what` on "
       "bad data)");
+
+  // The header of a .npy shard member in place (io::ParseNpyHeader: no copy of the data);
+  // occgt.torch.ShardDataset maps descr with numpy and views the data with np.frombuffer.
+  m.def(
+      "npy_header",
+      [](py::buffer buf, py::ssize_t offset, py::ssize_t size, const std::string& what) {
+        const py::buffer_info in = buf.request();
+        if (in.ndim != 1 || in.itemsize != 1 || in.strides[0] != 1) {
+          throw gt::InputError(what, "npy_header: expected a contiguous byte buffer");
+        }
+        if (offset < 0 || size < 0 || offset > in.size || size > in.size - offset) {
+          throw gt::InputError(what, "npy_header: bytes [" + std::to_string(offset) + ", +" +
+                                         std::to_string(size) + ") outside the buffer of " +
+                                         std::to_string(in.size));
+        }
+        const gt::io::NpyHeader h = gt::io::ParseNpyHeader(
+            std::string_view(static_cast<const char*>(in.ptr) + offset, static_cast<size_t>(size)),
+            what);
+        py::tuple shape(h.shape.size());
+        for (size_t i = 0; i < h.shape.size(); ++i) shape[i] = py::int_(h.shape[i]);
+        return py::make_tuple(h.descr, h.fortran_order, std::move(shape), h.data_offset);
+      },
+      "buf"_a, "offset"_a, "size"_a, "what"_a,
+      "(descr, fortran_order, shape, data_offset) of the .npy bytes buf[offset:offset + size] "
+      "(io::ParseNpyHeader: magic, version, header dict; descr as written, e.g. '<f4', not "
+      "checked against a dtype list; data_offset from the member's start). ValueError naming "
+      "`what` and the header field on a bad header.");
 
   py::class_<gt::Frame>(m, "Frame",
                         "One frame of a scene as its reader lists it (metadata only; "

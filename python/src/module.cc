@@ -1,7 +1,8 @@
 // The extension module `occgt._occgt` (docs/PYTHON.md): one thin binding file per domain
 // (geometry.cc: label codes and presets; truth.cc: the per-pair ground truth; io.cc: the
-// dataset readers), the array conversions in convert.h. gt::InputError (bad input at a
-// boundary) becomes ValueError with the C++ message ("<field>: <what was expected>").
+// dataset readers; shards.cc: where a tar shard's members are), the array conversions in
+// convert.h. gt::InputError (bad input at a boundary) becomes ValueError with the C++
+// message ("<field>: <what was expected>").
 #include <pybind11/pybind11.h>
 
 #if defined(__GLIBC__)
@@ -20,6 +21,7 @@ void BindGeometry(py::module_& m);
 void BindTruth(py::module_& m);
 void BindIo(py::module_& m);
 void BindSupervision(py::module_& m);
+void BindShards(py::module_& m);
 
 // One pair's ground truth allocates ~8 MB at 640x480 (depth copies, label and warp maps) and
 // frees it on return. With glibc's dynamic thresholds that memory goes back to the kernel
@@ -56,4 +58,5 @@ PYBIND11_MODULE(_occgt, m) {
   occgt_py::BindTruth(m);
   occgt_py::BindIo(m);
   occgt_py::BindSupervision(m);
+  occgt_py::BindShards(m);
 }

@@ -15,10 +15,14 @@ before timing (page cache). Each repetition times, in a rotating order:
     random permutation (tensors of every array of the sample contract);
   - shard_dataset_images: the same with images=True (two PNG decodes + grey per sample);
   - tarfile: the plain NumPy reader of docs/READING_SHARDS.md (executed from the page)
-    over the same split, in shard order (its best case: tarfile cannot seek to a sample).
+    over the same split, in shard order (its best case: tarfile cannot seek to a sample);
+  - index: ShardDataset(split) constructed --index-reps times (index.json and one pass over
+    every shard's tar headers: the byte range of every member), samples indexed.
 Prints samples per wall second and per CPU second (time.process_time: what the process
 itself used, less inflated by other processes on a shared machine) for each repetition, the
-medians and the ratios shard_dataset / tarfile of the medians.
+medians and the ratios shard_dataset / tarfile of the medians, and the index's CPU time per
+construction. Only the public API is used, so the same script measures another checkout's
+package (PYTHONPATH) on the same split.
 """
 from __future__ import annotations
 
@@ -67,6 +71,8 @@ def main() -> None:
     ap.add_argument("--split", help="an existing split folder (default: build one)")
     ap.add_argument("--reps", type=int, default=7)
     ap.add_argument("--scratch", default="/tmp/occgt-shard-dataset-bench")
+    ap.add_argument("--index-reps", type=int, default=20,
+                    help="constructions of ShardDataset timed per repetition of 'index'")
     args = ap.parse_args()
 
     split = args.split
@@ -116,9 +122,15 @@ def main() -> None:
     def tarfile_reads() -> int:
         return sum(1 for _ in reader["iter_split"](split))
 
+    def index_split() -> int:
+        for _ in range(args.index_reps):
+            ShardDataset(split, occupancy="words", images=False)
+        return n * args.index_reps
+
     runs: Dict[str, Callable[[], int]] = {"shard_dataset": random_reads(words),
                                           "shard_dataset_images": random_reads(images),
-                                          "tarfile": tarfile_reads}
+                                          "tarfile": tarfile_reads,
+                                          "index": index_split}
     names = list(runs)
     wall: Dict[str, List[float]] = {k: [] for k in names}
     cpu: Dict[str, List[float]] = {k: [] for k in names}
@@ -136,6 +148,8 @@ def main() -> None:
             f"{k} {v:.0f} ({min(rates[k]):.0f}-{max(rates[k]):.0f})" for k, v in med.items()))
         print(f"  ratio shard_dataset / tarfile {med['shard_dataset'] / med['tarfile']:.2f}, "
               f"shard_dataset_images / tarfile {med['shard_dataset_images'] / med['tarfile']:.2f}")
+        print(f"  index: {1e3 * n / med['index']:.2f} ms per ShardDataset({len(shards)} shards, "
+              f"{n} samples), {1e6 / med['index']:.1f} us per sample")
     print(f"load {os.getloadavg()[0]:.1f}")
 
 

@@ -389,6 +389,81 @@ class ShardDatasetTest(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, r"x: expected a .npy file"):
             _npy(bytearray(b"PK\x03\x04" + bytes(20)), 0, 24, "x")
 
+    def test_member_ranges_come_from_the_cpp_reader(self) -> None:
+        """The byte ranges are the C++ shard reader's (occgt._occgt.shard_samples: libgt/shards,
+        libarchive): every member read through them is tarfile's, also in tarfile-written pax
+        and GNU archives (long-name records before a header); a shard with a damaged header
+        or cut inside a member raises ValueError naming the shard and the header or member."""
+        from occgt._occgt import shard_samples
+
+        ds = ShardDataset(self.full)
+        with open(os.path.join(self.full, "index.json")) as f:
+            urls = [e["url"] for e in json.load(f)["shardlist"]]
+        i = 0
+        for url in urls:
+            with tarfile.open(os.path.join(self.full, url)) as tf:
+                members = [m for m in tf if m.isfile()]
+                for key in dict.fromkeys(m.name.split(".", 1)[0] for m in members):
+                    want = {m.name.split(".", 1)[1]: m for m in members
+                            if m.name.split(".", 1)[0] == key}
+                    buf, ranges = ds.read_raw(i)
+                    self.assertEqual(ds.key(i), key)
+                    self.assertEqual(list(ranges), list(want), key)
+                    for field, (offset, size) in ranges.items():
+                        extracted = tf.extractfile(want[field])
+                        assert extracted is not None
+                        self.assertEqual(bytes(buf[offset:offset + size]), extracted.read(),
+                                         f"{key}.{field}")
+                    i += 1
+        self.assertEqual(i, len(ds))
+
+        folder = common.scratch("sd_pax_gnu")
+        long_key = "scene/" + "k" * 120 + "/000001_000002"
+        for fmt in (tarfile.PAX_FORMAT, tarfile.GNU_FORMAT):
+            path = os.path.join(folder, f"format{fmt}.tar")
+            with tarfile.open(path, "w", format=fmt) as tf:
+                for name, data in [("s/0_1.json", b"{}"), (long_key + ".json", b"[1]"),
+                                   (long_key + ".depth0.npy", bytes(range(256)) * 5),
+                                   ("s/2_3.json", b"[]")]:
+                    info = tarfile.TarInfo(name)
+                    info.size = len(data)
+                    tf.addfile(info, io.BytesIO(data))
+            with tarfile.open(path) as tf:
+                tar_ranges = [(m.name, m.offset_data, m.size) for m in tf]
+            listed = [(key + "." + field, start + offset, size)
+                      for key, start, _, fields in shard_samples(path)
+                      for field, (offset, size) in fields.items()]
+            self.assertEqual(listed, tar_ranges, f"format {fmt}")
+
+        damaged = copy_split(self.full, "sd_damaged_header")
+        tar = os.path.join(damaged, urls[-1])
+        with tarfile.open(tar) as tf:
+            before, third = list(tf)[1:3]
+        with open(tar, "r+b") as f:
+            f.seek(third.offset + 3)
+            byte = f.read(1)
+            f.seek(third.offset + 3)
+            f.write(bytes([byte[0] ^ 1]))
+        with self.assertRaisesRegex(ValueError, re.escape(
+                f"{tar}: tar header at byte {third.offset} (after member {before.name}): "
+                f"checksum mismatch")):
+            ShardDataset(damaged)
+
+        cut = copy_split(self.full, "sd_cut_member")
+        tar = os.path.join(cut, urls[0])
+        with tarfile.open(tar) as tf:
+            member = [m for m in tf if m.size > 1000][-1]
+        os.truncate(tar, member.offset_data + 1000)
+        with open(os.path.join(cut, "index.json")) as f:
+            index = json.load(f)
+        index["shardlist"][0]["filesize"] = os.path.getsize(tar)
+        with open(os.path.join(cut, "index.json"), "w") as f:
+            json.dump(index, f)
+        with self.assertRaisesRegex(ValueError, re.escape(
+                f"{tar}: {member.name}: member of {member.size} bytes at byte "
+                f"{member.offset_data} runs past the end of the file")):
+            ShardDataset(cut)
+
     def test_bad_folders(self) -> None:
         empty = common.scratch("sd_no_index")
         with self.assertRaisesRegex(ValueError, re.escape(os.path.join(empty, "index.json")) +

@@ -92,6 +92,42 @@ std::vector<RawMember> ParseUstar(const std::string& tar, int64_t* end_offset) {
   return members;
 }
 
+// A hand-made ustar member (header + data + padding), for archives the writer refuses to
+// make (a repeated key or field, other member types).
+std::string UstarMember(const std::string& name, const std::string& data, char type = '0',
+                        const std::string& link = "") {
+  std::string h(512, '\0');
+  h.replace(0, name.size(), name);
+  h.replace(157, link.size(), link);
+  h.replace(100, 7, "0000644");
+  h.replace(108, 7, "0000000");
+  h.replace(116, 7, "0000000");
+  char field[16];
+  std::snprintf(field, sizeof(field), "%011llo", static_cast<unsigned long long>(data.size()));
+  h.replace(124, 11, field);
+  h.replace(136, 11, "00000000000");
+  h.replace(148, 8, "        ");
+  h[156] = type;
+  h.replace(257, 6, std::string("ustar\0", 6));
+  h.replace(263, 2, "00");
+  unsigned sum = 0;
+  for (char c : h) sum += static_cast<unsigned char>(c);
+  std::snprintf(field, sizeof(field), "%06o", sum);
+  h.replace(148, 7, std::string(field, 6) + '\0');
+  return h + data + std::string((512 - data.size() % 512) % 512, '\0');
+}
+
+// The error message of f(), which must throw an InputError.
+std::string ErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError";
+  return "";
+}
+
 // ---- sample fixtures ---------------------------------------------------------------------
 Sample MakeSample(const std::string& key, int seed) {
   std::mt19937 rng(seed);
@@ -528,6 +564,141 @@ TEST(TarShard, MemberSizeBeyondTheArchiveFailsBeforeAllocating) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(huge), std::string::npos) << e.what();
   }
+}
+
+// ListShardSamples (occgt.torch.ShardDataset's index): from the headers only, each
+// sample's byte range and each member's offset and size are where the writer put them
+// (checked against the independent parser and the bytes), in both small and multi-MiB
+// members (seeked past, not read).
+TEST(TarShard, ListShardSamplesGivesTheOffsetsAndSizesTheWriterWrote) {
+  const std::string dir = test::ScratchDir("shards_tar_list");
+  for (const auto& samples : {MakeSamples(), LargeSamples(3, 5)}) {
+    const std::string path = dir + "/list-" + std::to_string(samples.size()) + ".tar";
+    WriteShard(path, samples);
+    const std::string tar = io::ReadFileBytes(path);
+    int64_t end = 0;
+    const std::vector<RawMember> raw = ParseUstar(tar, &end);
+    const std::vector<ShardSampleRange> listed = ListShardSamples(path);
+    ASSERT_EQ(listed.size(), samples.size());
+    size_t r = 0;
+    for (size_t k = 0; k < samples.size(); ++k) {
+      const ShardSampleRange& got = listed[k];
+      EXPECT_EQ(got.key, samples[k].key);
+      ASSERT_EQ(got.members.size(), samples[k].fields.size()) << got.key;
+      EXPECT_EQ(got.start, raw[r].data_offset) << got.key;
+      for (size_t f = 0; f < got.members.size(); ++f, ++r) {
+        const ShardMemberRange& m = got.members[f];
+        const SampleField& want = samples[k].fields[f];
+        EXPECT_EQ(m.field, want.name);
+        EXPECT_EQ(m.size, static_cast<int64_t>(want.bytes.size())) << m.field;
+        EXPECT_EQ(got.start + m.offset, raw[r].data_offset) << m.field;
+        EXPECT_TRUE(tar.compare(static_cast<size_t>(got.start + m.offset), want.bytes.size(),
+                                want.bytes) == 0)
+            << got.key << "." << m.field;
+      }
+      const ShardMemberRange& last = got.members.back();
+      EXPECT_EQ(got.length, last.offset + last.size);
+    }
+    EXPECT_EQ(r, raw.size());
+    // The header pass gives ForEachTarMember's headers.
+    std::vector<int64_t> offsets, header_offsets;
+    ForEachTarMember(path, [&](const TarMemberInfo& info, std::string_view) {
+      offsets.push_back(info.data_offset);
+    });
+    ForEachTarHeader(path, [&](const TarMemberInfo& info) {
+      header_offsets.push_back(info.data_offset);
+      EXPECT_TRUE(info.regular_file);
+      EXPECT_FALSE(info.sparse);
+    });
+    EXPECT_EQ(header_offsets, offsets);
+  }
+}
+
+TEST(TarShard, ListShardSamplesGroupsByKeyAndSkipsNonSampleMembers) {
+  const std::string dir = test::ScratchDir("shards_tar_list_grouping");
+  const std::string end(1024, '\0');
+  const std::string path = dir + "/g.tar";
+  // A folder, a member without a dot, __meta__.json, then two samples; the first has a
+  // hard and a symbolic link (not sample members: no data of their own).
+  io::WriteFileAtomic(path, UstarMember("s/", "", '5') + UstarMember("s/README", "r") +
+                                UstarMember("s/__meta__.json", "{}") +
+                                UstarMember("s/a.json", "{1}") +
+                                UstarMember("s/a.label01.npy.gz", std::string(600, 'l')) +
+                                UstarMember("s/a.hard", "", '1', "s/a.json") +
+                                UstarMember("s/a.soft", "", '2', "s/a.json") +
+                                UstarMember("s/b.json", "{2}") + end);
+  const std::vector<ShardSampleRange> listed = ListShardSamples(path);
+  ASSERT_EQ(listed.size(), 2u);
+  EXPECT_EQ(listed[0].key, "s/a");
+  ASSERT_EQ(listed[0].members.size(), 2u);
+  EXPECT_EQ(listed[0].start, 512 + 2 * 1024 + 512);  // after 3 members and its header
+  EXPECT_EQ(listed[0].members[0].field, "json");
+  EXPECT_EQ(listed[0].members[0].offset, 0);
+  EXPECT_EQ(listed[0].members[0].size, 3);
+  EXPECT_EQ(listed[0].members[1].field, "label01.npy.gz");
+  EXPECT_EQ(listed[0].members[1].offset, 1024);
+  EXPECT_EQ(listed[0].members[1].size, 600);
+  EXPECT_EQ(listed[0].length, 1024 + 600);
+  EXPECT_EQ(listed[1].key, "s/b");
+  EXPECT_EQ(listed[1].start, 3072 + 1024 + 1024 + 2 * 512 + 512);  // links: a header each
+
+  const std::string split = dir + "/split.tar";  // sample s/a, then s/b, then s/a again
+  io::WriteFileAtomic(split, UstarMember("s/a.json", "{}") + UstarMember("s/b.json", "{}") +
+                                 UstarMember("s/a.txt", "x") + end);
+  std::string e = ErrorOf([&] { ListShardSamples(split); });
+  EXPECT_NE(e.find(split + ": s/a.txt: members of sample s/a are not consecutive"),
+            std::string::npos)
+      << e;
+  const std::string twice = dir + "/twice.tar";
+  io::WriteFileAtomic(twice, UstarMember("s/a.json", "{}") + UstarMember("s/a.json", "{}") + end);
+  e = ErrorOf([&] { ListShardSamples(twice); });
+  EXPECT_NE(e.find(twice + ": s/a.json: sample s/a has two json members"), std::string::npos) << e;
+}
+
+// A damaged or cut shard: one InputError naming the file and the header byte or the
+// member, whether the data is read (ForEachTarMember) or only listed (ListShardSamples).
+TEST(TarShard, BadOrTruncatedTarErrorsNameTheFileAndTheMember) {
+  const std::string dir = test::ScratchDir("shards_tar_list_bad");
+  const ShardInfo info = WriteShard(dir + "/t-000000.tar", MakeSamples());
+  const std::string tar = io::ReadFileBytes(info.path);
+  int64_t end = 0;
+  const std::vector<RawMember> raw = ParseUstar(tar, &end);
+  ASSERT_GE(raw.size(), 3u);
+  const auto expect_both = [&](const std::string& name, const std::string& bytes,
+                               const std::string& message) {
+    const std::string path = dir + "/" + name + ".tar";
+    io::WriteFileAtomic(path, bytes);
+    for (const std::string& e :
+         {ErrorOf([&] { ListShardSamples(path); }), ErrorOf([&] { ReadShardSamples(path); })}) {
+      EXPECT_NE(e.find(path + ": " + message), std::string::npos)
+          << name << ": " << e << "\n  expected: " << message;
+    }
+  };
+  // Cut inside the second member's data.
+  expect_both("cut_data", tar.substr(0, static_cast<size_t>(raw[1].data_offset + 100)),
+              raw[1].name + ": member of " + std::to_string(raw[1].size) + " bytes at byte " +
+                  std::to_string(raw[1].data_offset) + " runs past the end of the file");
+  // Cut inside the third header, and at a member boundary (no end blocks).
+  expect_both("cut_header", tar.substr(0, static_cast<size_t>(raw[2].header_offset + 100)),
+              "tar header at byte " + std::to_string(raw[2].header_offset) + " (after member " +
+                  raw[1].name + "): the file ends inside the 512-byte header");
+  expect_both("cut_at_member", tar.substr(0, static_cast<size_t>(end)),
+              "ends at byte " + std::to_string(end) + ", after member " + raw.back().name +
+                  ", without the zero end-of-archive blocks");
+  // A flipped byte in the name of the first and of the third header.
+  for (const RawMember* m : {&raw[0], &raw[2]}) {
+    std::string bad = tar;
+    bad[static_cast<size_t>(m->header_offset) + 3] ^= 1;
+    expect_both("checksum" + std::to_string(m->header_offset), bad,
+                "tar header at byte " + std::to_string(m->header_offset) +
+                    (m == &raw[0] ? "" : " (after member " + raw[1].name + ")") +
+                    ": checksum mismatch");
+  }
+  expect_both("empty", "", "tar header at byte 0: the file ends inside the 512-byte header");
+  EXPECT_NE(ErrorOf([&] {
+              ListShardSamples(dir + "/none.tar");
+            }).find(dir + "/none.tar: cannot open the tar archive"),
+            std::string::npos);
 }
 
 // The one ".gz" rule of compressed members: PlainFieldName picks the field, DecodeMember

@@ -1,120 +1,68 @@
 """ShardDataset: map-style random access into the shards of one split built by ``occgt build``.
 
 The split folder's ``index.json`` lists the shards (docs/READING_SHARDS.md). At construction
-every shard's tar headers are read once (one pass, seeking past the data) to find the byte
-range of every member of every sample; nothing else is kept. A sample's members are
-consecutive in its tar, so ``ds[i]`` reads them with one ``os.preadv`` into one buffer, parses
-the ``.npy`` members in place (``np.frombuffer``, no copy; a compressed ``.npy.gz`` member of
-``sample.compression: deflate``, the default, is inflated first by libdeflate in C++), the
-``json`` member with ``json`` and the images with OpenCV (``python3-opencv``), and yields the
-sample contract of ``occgt.torch`` (see its docstring). Files are opened lazily in each
-process, so a ``DataLoader`` with worker processes never shares a file handle across ``fork``.
+the C++ shard reader lists every shard once (``occgt._occgt.shard_samples``: libgt/shards
+``ListShardSamples``, one pass over the tar headers with libarchive, seeking past the data,
+without the GIL) and gives the byte range of every member of every sample; nothing else is
+kept. A sample's members are consecutive in its tar, so ``ds[i]`` reads them with one
+``os.preadv`` into one buffer, parses the ``.npy`` members in place (the header by the C++,
+``occgt._occgt.npy_header`` = libgt/io ``ParseNpyHeader``; the dtype by numpy; the data
+``np.frombuffer``, no copy; a compressed ``.npy.gz`` member of ``sample.compression:
+deflate``, the default, is inflated first by libdeflate in C++), the ``json`` member with
+``json`` and the images with OpenCV (``python3-opencv``), and yields the sample contract of
+``occgt.torch`` (see its docstring). Files are opened lazily in each process, so a
+``DataLoader`` with worker processes never shares a file handle across ``fork``.
 """
 from __future__ import annotations
 
-import ast
 import json
 import math
 import os
-import re
 from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 import torch.utils.data
 
+from .._occgt import gunzip, npy_header, shard_samples
 from ._convert import to_tensor
 
 __all__ = ["ShardDataset"]
 
-_BLOCK = 512
-_PLAIN_HEADER = re.compile(rb"\{'descr': '([<>|=][a-zA-Z]\d*)', 'fortran_order': (True|False), "
-                           rb"'shape': \(((?:\d+, ?)*\d*)\), ?\} *\n")
 _OCCUPANCY_MODES = ("words", "dense", "none")
+_NPY_MAGIC = b"\x93NUMPY"
+_DTYPES: Dict[str, np.dtype] = {}  # descr -> numpy's dtype, for the few descrs of a split
+
 
 class _Sample:
     """Where one sample's members are: shard number, byte range and the members in it."""
 
     __slots__ = ("shard", "start", "length", "members")
 
-    def __init__(self, shard: int, start: int) -> None:
+    def __init__(self, shard: int, start: int, length: int,
+                 members: Dict[str, Tuple[int, int]]) -> None:
         self.shard = shard
         self.start = start
-        self.length = 0
-        self.members: Dict[str, Tuple[int, int]] = {}
-
-
-def _octal(field: bytes, what: str) -> int:
-    text = field.split(b"\0", 1)[0].strip()
-    try:
-        return int(text, 8) if text else 0
-    except ValueError:
-        raise ValueError(f"{what}: expected an octal number, got {field!r}") from None
+        self.length = length
+        self.members = members
 
 
 def _index_shard(path: str, shard: int, expected_size: int,
                  samples: List[_Sample], keys: List[str]) -> int:
     """Appends the samples of one shard to samples/keys; returns how many it holds."""
     try:
-        fd = os.open(path, os.O_RDONLY)
+        size = os.stat(path).st_size
     except FileNotFoundError:
         raise ValueError(f"{path}: shard missing (index.json lists it)") from None
-    try:
-        size = os.fstat(fd).st_size
-        if size != expected_size:
-            how = "shorter" if size < expected_size else "longer"
-            raise ValueError(f"{path}: {size} bytes, {how} than index.json's filesize "
-                             f"{expected_size}")
-        seen = set()
-        count = 0
-        current: Optional[_Sample] = None
-        offset = 0
-        while True:
-            header = os.pread(fd, _BLOCK, offset)
-            if len(header) < _BLOCK:
-                raise ValueError(f"{path}: ends at byte {offset} inside the archive (expected "
-                                 f"a 512-byte tar header or the two zero end blocks)")
-            if header == bytes(_BLOCK):
-                break
-            where = f"{path}: tar header at byte {offset}"
-            checksum = _octal(header[148:156], where + ", checksum")
-            if checksum != sum(header[:148]) + 8 * 32 + sum(header[156:]):
-                raise ValueError(f"{where}: checksum mismatch (expected a POSIX ustar header)")
-            kind = header[156:157]
-            name = header[:100].split(b"\0", 1)[0]
-            if header[257:263] == b"ustar\0" and header[345] != 0:
-                name = header[345:500].split(b"\0", 1)[0] + b"/" + name
-            member = name.decode("utf-8")
-            member_size = _octal(header[124:136], where + ", size")
-            data = offset + _BLOCK
-            offset = data + (member_size + _BLOCK - 1) // _BLOCK * _BLOCK
-            if offset > size:
-                raise ValueError(f"{path}: member {member} needs {member_size} bytes at byte "
-                                 f"{data}, past the end of the file ({size} bytes)")
-            if kind in (b"x", b"g", b"L", b"K"):
-                raise ValueError(f"{where}: pax/GNU extension record (occgt shards have only "
-                                 f"plain ustar members)")
-            if kind not in (b"0", b"\0"):
-                continue  # directories, links: not sample members
-            folder, _, base = member.rpartition("/")
-            stem, dot, field = base.partition(".")
-            if not dot or stem.startswith("__"):
-                continue  # not a sample member (e.g. __meta__.json)
-            key = folder + "/" + stem if folder else stem
-            if current is None or keys[-1] != key:
-                if key in seen:
-                    raise ValueError(f"{path}: members of sample {key} are not consecutive")
-                seen.add(key)
-                current = _Sample(shard, data)
-                samples.append(current)
-                keys.append(key)
-                count += 1
-            if field in current.members:
-                raise ValueError(f"{path}: sample {key} has two {field} members")
-            current.members[field] = (data - current.start, member_size)
-            current.length = data + member_size - current.start
-        return count
-    finally:
-        os.close(fd)
+    if size != expected_size:
+        how = "shorter" if size < expected_size else "longer"
+        raise ValueError(f"{path}: {size} bytes, {how} than index.json's filesize "
+                         f"{expected_size}")
+    # The C++ reader (ValueError naming the shard and the member or header on a bad tar).
+    listed = shard_samples(path)
+    for key, start, length, members in listed:
+        samples.append(_Sample(shard, start, length, members))
+        keys.append(key)
+    return len(listed)
 
 
 def _has(members: Dict[str, Tuple[int, int]], field: str) -> bool:
@@ -123,40 +71,23 @@ def _has(members: Dict[str, Tuple[int, int]], field: str) -> bool:
 
 
 def _npy(buf: bytearray, offset: int, size: int, where: str) -> np.ndarray:
-    """The array of a ``.npy`` member at buf[offset:offset + size], sharing buf's memory."""
-    view = memoryview(buf)
-    if size < 10 or view[offset:offset + 6] != b"\x93NUMPY":
+    """The array of a ``.npy`` member at buf[offset:offset + size], sharing buf's memory.
+
+    The header is parsed by the C++ (``npy_header``: magic, version, the header dict), the
+    dtype is numpy's of its descr (any numpy dtype but objects; either byte order; Fortran
+    order too)."""
+    if buf[offset:offset + 6] != _NPY_MAGIC or size < 10:  # this error's words, before the C++
         raise ValueError(f"{where}: expected a .npy file (magic \\x93NUMPY)")
-    major = buf[offset + 6]
-    if major == 1:
-        start = 10 + int.from_bytes(buf[offset + 8:offset + 10], "little")
-    elif major in (2, 3) and size >= 12:
-        start = 12 + int.from_bytes(buf[offset + 8:offset + 12], "little")
-    else:
-        raise ValueError(f"{where}: unsupported .npy version {major}")
-    if start > size:
-        raise ValueError(f"{where}: .npy header longer than the member")
-    # The header is a Python dict literal (numpy's format). The form numpy and occgt write
-    # ({'descr': '<u8', 'fortran_order': False, 'shape': (240, 320), }) is matched directly;
-    # any other is parsed with ast.literal_eval as numpy does (minus numpy's tokenize pass
-    # for Python-2 writers, which costs more than the rest of a sample's parsing).
-    text = bytes(view[offset + (10 if major == 1 else 12):offset + start])
     try:
-        m = _PLAIN_HEADER.fullmatch(text)
-        if m is not None:
-            descr = m.group(1).decode("latin1")
-            fortran = m.group(2) == b"True"
-            shape = tuple(int(n) for n in m.group(3).split(b",") if n.strip())
-        else:
-            header = ast.literal_eval(text.decode("utf-8" if major == 3 else "latin1"))
-            if not isinstance(header, dict) or set(header) != {"descr", "fortran_order",
-                                                               "shape"}:
-                raise ValueError("expected a dict with descr, fortran_order and shape")
-            descr, fortran = header["descr"], bool(header["fortran_order"])
-            shape = tuple(int(n) for n in header["shape"])
-        dtype = np.lib.format.descr_to_dtype(descr)
-    except (SyntaxError, ValueError, TypeError) as e:
-        raise ValueError(f"{where}: bad .npy header {text!r} ({e})") from None
+        descr, fortran, shape, start = npy_header(buf, offset, size, where)
+        dtype = _DTYPES.get(descr)
+        if dtype is None:
+            dtype = _DTYPES.setdefault(descr, np.lib.format.descr_to_dtype(descr))
+    except (TypeError, ValueError) as e:
+        detail = str(e)
+        if detail.startswith(where + ": "):
+            detail = detail[len(where) + 2:]
+        raise ValueError(f"{where}: bad .npy header: {detail}") from None
     if dtype.hasobject:
         raise ValueError(f"{where}: expected a plain dtype, got {dtype} (objects are refused)")
     count = math.prod(shape)
@@ -193,8 +124,9 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     Raises:
         ValueError: naming the file and what was expected, when ``index.json`` is missing or
             malformed, a shard is missing, has another size than index.json says, is not a
-            plain ustar archive or holds another number of samples, or a sample lacks a member
-            the options ask for.
+            readable tar (the C++ reader's message: the header byte or member, e.g. a checksum
+            mismatch or a truncated member) or holds another number of samples, or a sample
+            lacks a member the options ask for.
     """
 
     def __init__(self, split_dir: Union[str, "os.PathLike[str]"], *,
@@ -351,8 +283,7 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                 return _npy(buf, offset, size, f"{where}.{field}")
             # A compressed member (recipe sample.compression: deflate): "<field>.gz".
             offset, size = members[field + ".gz"]
-            from .._occgt import gunzip  # libdeflate, without the GIL (C++)
-
+            # libdeflate, without the GIL (C++).
             raw = gunzip(memoryview(buf)[offset:offset + size], f"{where}.{field}.gz")
             return _npy(raw, 0, len(raw), f"{where}.{field}.gz")
 

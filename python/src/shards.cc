@@ -1,0 +1,47 @@
+// Bindings of libgt/shards for occgt.torch.ShardDataset: shard_samples(path) lists where the
+// members of every sample of a tar shard are (shards::ListShardSamples: one pass over the
+// headers with libarchive, the data is not read), without the GIL. A bad or truncated shard
+// raises ValueError naming the file (and the member or header byte).
+#include <pybind11/pybind11.h>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "libgt/shards/tar_shard.h"
+
+namespace occgt_py {
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+void BindShards(py::module_& m) {
+  m.def(
+      "shard_samples",
+      [](const std::string& path) {
+        std::vector<gt::shards::ShardSampleRange> samples;
+        {
+          py::gil_scoped_release no_gil;
+          samples = gt::shards::ListShardSamples(path);
+        }
+        py::list out(samples.size());
+        for (size_t i = 0; i < samples.size(); ++i) {
+          const gt::shards::ShardSampleRange& s = samples[i];
+          py::dict members;
+          for (const gt::shards::ShardMemberRange& member : s.members) {
+            members[py::str(member.field)] = py::make_tuple(member.offset, member.size);
+          }
+          out[i] = py::make_tuple(s.key, s.start, s.length, std::move(members));
+        }
+        return out;
+      },
+      "path"_a,
+      "The samples of the tar shard `path`, in file order, as (key, start, length, members): "
+      "the sample's bytes are [start, start + length) of the file, members maps each field "
+      "('json', 'label01.npy', 'label01.npy.gz', ...) to (offset from start, size). One pass "
+      "over the tar headers (libarchive; the data is skipped). ValueError naming the file and "
+      "the member or header for a bad or truncated tar, a sample whose members are not "
+      "consecutive or a field that repeats.");
+}
+
+}  // namespace occgt_py
