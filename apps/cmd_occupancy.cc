@@ -101,9 +101,14 @@ void RunOccupancy(const OccupancyArgs& args) {
                      : gt::truth::LoadWorkingFrame(scene.frames[i], source.resolution);
   };
   std::optional<gt::truth::ScopeMap> scope;
-  if (o.mode == occ::OccupancyMode::kOctomap) scope = gt::truth::FuseScope(scene, i0, i1, o, load);
-  const gt::truth::PairTruth truth =
-      gt::truth::ComputePairTruth(w0, w1, o, scope ? &scope->map : nullptr);
+  gt::truth::PairTruth truth;
+  try {  // a voxel size whose key range cannot hold the frames is refused before fusing them
+    if (o.mode == occ::OccupancyMode::kOctomap)
+      scope = gt::truth::FuseScope(scene, i0, i1, o, load);
+    truth = gt::truth::ComputePairTruth(w0, w1, o, scope ? &scope->map : nullptr);
+  } catch (const gt::InputError& e) {
+    RethrowNamingFlag(e, {{"voxel_m", "--voxel-m", args.voxel_m.has_value()}});
+  }
   gt::truth::WriteOccupancyFolder(d.out, source, o, *truth.occupancy, scope ? &*scope : nullptr,
                                   args.dense);
   if (scope && !args.save_octree.empty()) scope->map.SaveBinary(args.save_octree);
@@ -116,6 +121,18 @@ void RunOccupancy(const OccupancyArgs& args) {
               c.occupied / total, c.free / total, c.unknown / total, d.out.c_str());
   if (scope && !scope->skipped.empty())
     std::printf("skipped %zu frame(s) of the scope (see occupancy.json)\n", scope->skipped.size());
+  if (const std::optional<occ::FusionStats>& st = truth.occupancy->fusion_stats) {
+    // Every dropped point is counted: a voxel size or range that drops many shows here.
+    std::printf("fusion: %lld pixels, %lld invalid, %lld outside the key range",
+                static_cast<long long>(st->pixels), static_cast<long long>(st->invalid_pixels),
+                static_cast<long long>(st->out_of_key_range));
+    if (fo.downsample)
+      std::printf(", %lld after downsampling", static_cast<long long>(st->after_downsample));
+    if (fo.remove_outliers)
+      std::printf(", %lld outliers removed", static_cast<long long>(st->outliers_removed));
+    std::printf(", %lld inserted (fusion.stats of occupancy.json)\n",
+                static_cast<long long>(st->inserted_points));
+  }
 }
 
 }  // namespace

@@ -77,6 +77,18 @@ void ThrowOptionsError(const std::string& error, const std::string& what,
   throw gt::InputError(what, error);
 }
 
+void RethrowNamingFlag(const gt::InputError& error, std::initializer_list<FieldFlag> fields) {
+  for (const FieldFlag& f : fields) {
+    if (f.given && error.where() == f.field) {
+      const std::string prefix = error.where() + ": ";
+      std::string problem = error.what();
+      if (problem.rfind(prefix, 0) == 0) problem.erase(0, prefix.size());
+      throw gt::InputError(f.flag, problem);
+    }
+  }
+  throw error;
+}
+
 int UsageError(const std::string& message) {
   std::fprintf(stderr, "occgt: error: %s\n", message.c_str());
   return kUsageExit;

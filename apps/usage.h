@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "libgt/core/error.h"
+
 namespace occgt {
 
 inline constexpr int kUsageExit = 2;
@@ -39,6 +41,13 @@ struct FieldFlag {
 std::string Num(double value);
 
 [[noreturn]] void ThrowOptionsError(const std::string& error, const std::string& what,
+                                    std::initializer_list<FieldFlag> fields);
+
+// An InputError of the work whose where() is an option's name (e.g. "voxel_m" of
+// occupancy::CheckKeyRange, which needs the frames to tell): rethrown under the flag of the
+// matching `fields` entry (its `field` is that name) when the flag was given (a usage
+// error, exit 2), else as it is.
+[[noreturn]] void RethrowNamingFlag(const gt::InputError& error,
                                     std::initializer_list<FieldFlag> fields);
 
 }  // namespace occgt

@@ -18,6 +18,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <mutex>
 #include <numeric>
@@ -34,6 +36,10 @@ namespace gt::occupancy {
 constexpr int64_t kMinSafeIndex = -32767;
 constexpr int64_t kMaxSafeIndex = 32766;
 constexpr int kKeyOffset = 32768;
+// Voxels from the world origin that a frame's reach must fit in (KeyRangeHalfExtentM): the
+// safe indices above less one more voxel, so that points within it, rounded to float, and
+// the rays to them stay inside [kMinSafeIndex, kMaxSafeIndex].
+constexpr double kReachVoxels = 32766.0;
 
 // The map lives in one of two forms, the other built on first use: own engine -> VoxelMap
 // (octree built for SaveBinary / NumLeafNodes); OctoMap engine -> the OcTree OctoMap's
@@ -119,7 +125,88 @@ std::vector<Eigen::Vector3f> FromPcl(const pcl::PointCloud<pcl::PointXYZ>& cloud
   return out;
 }
 
+// max_a |c[a]| + reach_m: the half extent a frame needs around the world origin.
+double NeededHalfExtentM(const Eigen::Vector3d& c, double reach_m) {
+  return std::max({std::abs(c.x()), std::abs(c.y()), std::abs(c.z())}) + reach_m;
+}
+
+// %.3g of a value; Up: the smallest 3-significant-digit value >= v (so that a smallest voxel
+// size printed works when given back).
+std::string Significant3(double v) {
+  if (v == 0) v = 0.0;  // no "-0"
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+std::string Significant3Up(double v) {
+  if (!(v > 0) || !std::isfinite(v)) return Significant3(v);
+  std::string text = Significant3(v);
+  if (std::strtod(text.c_str(), nullptr) >= v) return text;
+  const double step = std::pow(10.0, std::floor(std::log10(v)) - 2);
+  for (double up = (std::floor(v / step) + 1) * step;; up += step) {
+    text = Significant3(up);
+    if (std::strtod(text.c_str(), nullptr) >= v) return text;
+  }
+}
+
 }  // namespace
+
+double KeyRangeHalfExtentM(double voxel_size_m) { return kReachVoxels * voxel_size_m; }
+
+double FusionReachM(const FusionInput& frame, const FusionOptions& options) {
+  if (options.max_range_m > 0) return options.max_range_m;
+  const Camera& c = frame.camera;
+  const Eigen::Matrix3d R = frame.world_from_cam.linear();
+  double longest = 0.0;  // |R * ray| per metre of planar depth, at the farthest corner
+  for (const int u : {0, c.width - 1}) {
+    for (const int v : {0, c.height - 1}) {
+      const Eigen::Vector3d ray((u - c.cx) / c.fx, (v - c.cy) / c.fy, 1.0);
+      longest = std::max(longest, (R * ray).norm());
+    }
+  }
+  return frame.max_depth_m * longest;
+}
+
+double MinVoxelSizeM(const Eigen::Vector3d& camera_centre, double reach_m) {
+  const double needed = NeededHalfExtentM(camera_centre, reach_m);
+  if (!std::isfinite(needed)) return std::numeric_limits<double>::infinity();
+  if (needed <= 0) return 0.0;
+  const double inf = std::numeric_limits<double>::infinity();
+  double v = needed / kReachVoxels;
+  while (KeyRangeHalfExtentM(v) < needed) v = std::nextafter(v, inf);
+  while (KeyRangeHalfExtentM(std::nextafter(v, 0.0)) >= needed) v = std::nextafter(v, 0.0);
+  return v;
+}
+
+void CheckKeyRange(const FusionInput& frame, const FusionOptions& options,
+                   const std::string& frame_name) {
+  const Eigen::Vector3d c = frame.world_from_cam.translation();
+  const double reach_m = FusionReachM(frame, options);
+  const double needed = NeededHalfExtentM(c, reach_m);
+  const double held = KeyRangeHalfExtentM(options.voxel_size_m);
+  if (held >= needed) return;  // false for NaN
+  std::ostringstream m;
+  m << Significant3(options.voxel_size_m) << " m holds +-" << Significant3(held)
+    << " m around the world origin (OctoMap's 16-bit keys); " << frame_name << "'s camera at ("
+    << Significant3(c.x()) << ", " << Significant3(c.y()) << ", " << Significant3(c.z())
+    << ") with ";
+  if (options.max_range_m > 0) {
+    m << "max_range_m " << Significant3(options.max_range_m);
+  } else {
+    m << "unlimited max_range_m and max_depth_m " << Significant3(frame.max_depth_m)
+      << " (rays up to " << Significant3(reach_m) << " m through the image corners)";
+  }
+  m << " needs +-" << Significant3(needed) << " m";
+  const double smallest = MinVoxelSizeM(c, reach_m);
+  if (std::isfinite(smallest)) {
+    m << ": use voxel_m >= " << Significant3Up(smallest);
+    if (!(options.max_range_m > 0)) m << " or a max_range_m > 0";
+  } else {
+    m << ": no voxel size holds it";
+    if (!(options.max_range_m > 0)) m << "; set a max_range_m > 0";
+  }
+  throw InputError("voxel_m", m.str());
+}
 
 bool FusionOptions::Check(std::string* error) const {
   auto fail = [&](const std::string& m) {
@@ -441,9 +528,8 @@ OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionO
   } else {
     impl->voxels = std::make_unique<VoxelMap>(options.voxel_size_m, DefaultModel());
   }
-  const double inv_res = 1.0 / options.voxel_size_m;
-  const double max_range = options.max_range_m > 0 ? options.max_range_m : -1.0;
-  FusionStats& st = impl->stats;
+  // Every frame is checked before any fusion work (a voxel size too small for the range is
+  // refused at once, not after fusing the frames before it).
   for (size_t f = 0; f < frames.size(); ++f) {
     const FusionInput& in = frames[f];
     const std::string where = "frame " + std::to_string(f);
@@ -455,10 +541,13 @@ OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionO
                                   std::to_string(in.camera.height));
     if (in.depth->values_m.size() != static_cast<size_t>(in.depth->width) * in.depth->height)
       throw InputError(where, "depth buffer size does not match width * height");
+    CheckKeyRange(in, options, where);
+  }
+  const double inv_res = 1.0 / options.voxel_size_m;
+  const double max_range = options.max_range_m > 0 ? options.max_range_m : -1.0;
+  FusionStats& st = impl->stats;
+  for (const FusionInput& in : frames) {
     const Eigen::Vector3d origin = in.world_from_cam.translation();
-    if (!InsideKeyRange(origin, inv_res))
-      throw InputError(where, "camera centre outside the OctoMap key range (+-" +
-                                  std::to_string(kMaxSafeIndex * options.voxel_size_m) + " m)");
     ++st.frames;
     st.pixels += static_cast<int64_t>(in.depth->values_m.size());
     Eigen::Vector3f lo, hi;

@@ -19,9 +19,12 @@
 // reference of the tests and the benchmark's naive baseline).
 //
 // Key range: OctoMap keys are 16-bit per axis, so the map spans 2^16 * voxel_size_m per
-// axis centred on the world origin (3276.8 m at 5 cm). Points outside are dropped (and
-// counted) before insertion, because OctoMap's unchecked key conversion wraps around; a
-// frame whose camera centre lies outside is rejected with InputError.
+// axis centred on the world origin (3276.8 m at 5 cm). Before any fusion work, every frame
+// must fit in it (CheckKeyRange): its camera centre plus and minus its reach (FusionReachM:
+// max_range_m, else its longest valid ray) on every axis, or InputError("voxel_m", ...)
+// names the smallest voxel size that works. Points still outside (beyond max_range_m,
+// whose rays are truncated inside) are dropped and counted before insertion, because
+// OctoMap's unchecked key conversion wraps around.
 //
 // PCL and OctoMap types never appear here; OccupancyMap is an opaque handle.
 #pragma once
@@ -107,6 +110,35 @@ struct FusionStats {
   int64_t inserted_points = 0;
 };
 
+// The half extent of the map's usable key range on each axis (metres): 32766 voxels
+// around the world origin. OctoMap's checked keys are the voxel indices [-2^15, 2^15); one
+// voxel is kept as a margin on each side, so that float points and rays rounded at the
+// border never leave it.
+double KeyRangeHalfExtentM(double voxel_size_m);
+
+// How far from its camera centre the fusion of `frame` can mark voxels (metres, as a
+// distance; so on every axis too): max_range_m when > 0 (rays are truncated there), else
+// the frame's max_depth_m times its longest ray per metre of planar depth, the ray through
+// the farthest image corner: max over the corner pixels (u, v) of
+// |world_from_cam.linear() * ((u - cx) / fx, (v - cy) / fy, 1)| (exact for the pixels
+// back-projected; the rotation is used as given).
+double FusionReachM(const FusionInput& frame, const FusionOptions& options);
+
+// The smallest voxel size whose key range holds camera_centre +- reach_m on every axis:
+// the least v with KeyRangeHalfExtentM(v) >= max_a |camera_centre[a]| + reach_m (exact in
+// double: v is accepted, the next smaller double is not); +inf when that is not finite.
+double MinVoxelSizeM(const Eigen::Vector3d& camera_centre, double reach_m);
+
+// The check FuseOccupancy runs on every frame before any fusion work: throws
+// InputError("voxel_m", ...) unless KeyRangeHalfExtentM(options.voxel_size_m) holds the
+// frame's camera centre plus and minus FusionReachM on every axis (a camera centre outside
+// the key range fails it too). The one-line message gives the range held, the frame
+// (`frame_name`, e.g. "frame 1"), its camera centre and reach, the range needed and the
+// smallest voxel size that works (rounded up to 3 significant digits). Options must pass
+// Check.
+void CheckKeyRange(const FusionInput& frame, const FusionOptions& options,
+                   const std::string& frame_name);
+
 // Dense copy of a box of the map's finest-resolution voxel states. Voxel index
 // i = floor(x / voxel_size_m) per world axis (voxel i covers [i, i + 1) * voxel_size_m; the
 // OctoMap key is i + 2^15). state is row-major [size.z, size.y, size.x] (x fastest).
@@ -162,9 +194,10 @@ class OccupancyMap {
   std::unique_ptr<Impl> impl_;
 };
 
-// Fuses the frames (in order) into one map. Throws InputError for a frame whose depth is
-// missing or does not match its camera size, or whose camera centre is outside the key
-// range. Options must pass Check (GT_ASSERT otherwise).
+// Fuses the frames (in order) into one map. Every frame is checked first, before any
+// fusion work: throws InputError for a frame whose depth is missing or does not match its
+// camera size, and InputError("voxel_m", ...) for one that does not fit in the key range
+// (CheckKeyRange). Options must pass Check (GT_ASSERT otherwise).
 OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionOptions& options);
 
 // Downsampling used by FuseOccupancy, exposed for tests: one centroid per voxel

@@ -33,6 +33,7 @@ PairOccupancy ComputePairOccupancy(const FusionInput& frame0, const FusionInput&
     fused = FuseOccupancy({frame0, frame1}, fusion_options);
     map = &fused;
   }
+  out.fusion_stats = map->stats();
   // The two cameras' volumes are independent reads of the map: two tasks (a pair's
   // occupancy is often the last work of a build, when no other sample is left to run
   // beside it).

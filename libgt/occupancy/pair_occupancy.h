@@ -4,6 +4,7 @@
 // (frustum.h TwoPointVolume). Layouts as in frustum.h.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "libgt/occupancy/frustum.h"
@@ -18,6 +19,10 @@ std::string OccupancyModeName(OccupancyMode mode);
 struct PairOccupancy {
   FrustumVolume cam0;  // in frame0's camera (frame0.camera.HalfGrid())
   FrustumVolume cam1;
+  // kOctomap: what happened to the points of the map binned (the pair's own fusion, or the
+  // shared map's, summed over its frames): pixels, invalid and out-of-key-range points
+  // dropped, points inserted. Unset for kTwoPoint (no fusion).
+  std::optional<FusionStats> fusion_stats;
 };
 
 // frame0/frame1: the pair (depth at each camera's resolution). kOctomap: when shared_map is

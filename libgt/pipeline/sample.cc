@@ -187,7 +187,9 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
         {"voxel_m", options.truth.fusion.voxel_size_m},
         {"grid", {occ.cam0.width, occ.cam0.height}},
         {"counts0", {{"occupied", c0.occupied}, {"free", c0.free}, {"unknown", c0.unknown}}},
-        {"counts1", {{"occupied", c1.occupied}, {"free", c1.free}, {"unknown", c1.unknown}}}};
+        {"counts1", {{"occupied", c1.occupied}, {"free", c1.free}, {"unknown", c1.unknown}}},
+        {"fusion_stats",
+         occ.fusion_stats ? json(truth::FusionStatsJson(*occ.fusion_stats)) : json(nullptr)}};
   }
   json image_json = nullptr;
   if (with_images) {

@@ -103,6 +103,17 @@ nlohmann::ordered_json OccupancyOptionsJson(const PairTruthOptions& o) {
             {"remove_outliers", fo.remove_outliers}}}};
 }
 
+nlohmann::ordered_json FusionStatsJson(const occupancy::FusionStats& s) {
+  return {{"frames", s.frames},
+          {"pixels", s.pixels},
+          {"invalid_pixels", s.invalid_pixels},
+          {"out_of_key_range", s.out_of_key_range},
+          {"after_downsample", s.after_downsample},
+          {"downsample_fallbacks", s.downsample_fallbacks},
+          {"outliers_removed", s.outliers_removed},
+          {"inserted_points", s.inserted_points}};
+}
+
 void WritePairFolder(const std::string& dir, const PairSource& source, const WorkingFrame& frame0,
                      const WorkingFrame& frame1, const PairTruthOptions& options,
                      const PairTruth& truth, int score_stride) {
@@ -192,18 +203,12 @@ void WriteOccupancyFolder(const std::string& dir, const PairSource& source,
                  {"max_depth_m", options.labels.max_depth_m},
                  {"fused_frames", fused},
                  {"skipped_frames", skipped}};
-  if (scope) {
-    const occupancy::FusionStats& s = scope->map.stats();
-    j["fusion"]["stats"] = {{"frames", s.frames},
-                            {"pixels", s.pixels},
-                            {"invalid_pixels", s.invalid_pixels},
-                            {"out_of_key_range", s.out_of_key_range},
-                            {"after_downsample", s.after_downsample},
-                            {"downsample_fallbacks", s.downsample_fallbacks},
-                            {"outliers_removed", s.outliers_removed},
-                            {"inserted_points", s.inserted_points},
-                            {"leaf_nodes", scope->map.NumLeafNodes()}};
+  ordered_json stats = nullptr;  // two_point: no fusion
+  if (volumes.fusion_stats) {
+    stats = FusionStatsJson(*volumes.fusion_stats);
+    if (scope) stats["leaf_nodes"] = scope->map.NumLeafNodes();
   }
+  j["fusion"]["stats"] = stats;
   j["counts0"] = CountsJson(volumes.cam0);
   j["counts1"] = CountsJson(volumes.cam1);
   j["files"] = files;

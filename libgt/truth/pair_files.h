@@ -51,6 +51,11 @@ nlohmann::ordered_json PatchOptionsJson(const PatchOptions& po);
 // spacing, traversal}, fusion: {scope, voxel_size_m, max_range_m, downsample,
 // remove_outliers}}; occupancy.json's "mode", "bins" and "fusion" use the same names.
 nlohmann::ordered_json OccupancyOptionsJson(const PairTruthOptions& o);
+// What happened to the points of a fusion (occupancy::FusionStats, summed over its frames):
+// {frames, pixels, invalid_pixels, out_of_key_range, after_downsample, downsample_fallbacks,
+// outliers_removed, inserted_points}; occupancy.json's "fusion"."stats", a sample's
+// "occupancy"."fusion_stats" and Python's "fusion_stats" use these names.
+nlohmann::ordered_json FusionStatsJson(const occupancy::FusionStats& s);
 
 // Where a pair came from, for the records.
 struct PairSource {
@@ -70,7 +75,8 @@ void WritePairFolder(const std::string& dir, const PairSource& source, const Wor
                      const PairTruth& truth, int score_stride);
 
 // Writes the `occgt occupancy` folder. scope: the fused map and its frames for mode octomap
-// (null for two_point).
+// (null for two_point). occupancy.json's "fusion"."stats" are volumes.fusion_stats (null for
+// two_point), with the map's "leaf_nodes" when scope is given.
 void WriteOccupancyFolder(const std::string& dir, const PairSource& source,
                           const PairTruthOptions& options, const occupancy::PairOccupancy& volumes,
                           const ScopeMap* scope, bool dense);

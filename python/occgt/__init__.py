@@ -45,6 +45,7 @@ __all__ = [
     "PRESETS",
     "Dataset",
     "Frame",
+    "FusionStats",
     "Scene",
     "ScopeMap",
     "LoadedFrame",
@@ -102,6 +103,22 @@ class Metrics(TypedDict):
     occlusion_ratio_visible: float  # OCCLUDED / (VISIBLE + OCCLUDED) (the released code's)
 
 
+class FusionStats(TypedDict):
+    """What happened to the points of the occupancy fusion, summed over the fused frames
+    (occupancy::FusionStats; ``fusion.stats`` of ``occgt occupancy``'s occupancy.json). Every
+    pixel is counted once: invalid, out of the key range, merged by the downsampling,
+    removed as an outlier, or inserted."""
+
+    frames: int  # frames fused
+    pixels: int  # width * height summed
+    invalid_pixels: int  # dropped: no valid depth (outside [min_depth_m, max_depth_m])
+    out_of_key_range: int  # dropped: outside the map's 16-bit key range (beyond max_range_m)
+    after_downsample: int  # points left after the downsampling (= valid points when off)
+    downsample_fallbacks: int  # frames whose pcl::VoxelGrid would overflow int32
+    outliers_removed: int  # dropped by the statistical outlier removal
+    inserted_points: int  # points inserted as the end of a ray
+
+
 class _PairGroundTruthBase(TypedDict):
     label01: npt.NDArray[np.uint8]
     label10: npt.NDArray[np.uint8]
@@ -123,6 +140,7 @@ class PairGroundTruth(_PairGroundTruthBase, total=False):
     occ1: npt.NDArray[np.uint64]
     known1: npt.NDArray[np.uint64]
     bin_edges_m: npt.NDArray[np.float64]
+    fusion_stats: Optional[FusionStats]  # None for occupancy_mode "two_point"
 
 
 def pair_ground_truth(
@@ -226,11 +244,18 @@ def pair_ground_truth(
         each cell's anchor), T_0to1 float64 [4, 4] (cam1_from_cam0 = inverse(world_from_cam1)
         @ world_from_cam0), metrics01, metrics10 (Metrics); with occupancy=True also occ0,
         known0 uint64 [H0/2, W0/2], occ1, known1 uint64 [H1/2, W1/2] (bit k: bin k occupied /
-        known) and bin_edges_m float64 [bins + 1] (metres); ``options``: the resolved options
-        as a shard's sample records them (label_options, patch_options, occupancy_options).
+        known), bin_edges_m float64 [bins + 1] (metres) and fusion_stats (FusionStats of the
+        map binned, the pair's own fusion or scope_map's; None for occupancy_mode
+        "two_point": the points dropped as invalid or outside the key range are counted
+        there); ``options``: the resolved options as a shard's sample records them
+        (label_options, patch_options, occupancy_options).
 
     Raises:
-        ValueError: an argument of the wrong type, dtype, shape or value, naming it.
+        ValueError: an argument of the wrong type, dtype, shape or value, naming it; with
+            occupancy=True, "voxel_m: ..." when the map's 16-bit key range (+-32766 voxels
+            around the world origin) cannot hold a camera centre plus max_range_m (or, when
+            max_range_m <= 0, its longest valid ray): the message names the smallest voxel
+            size that works.
     """
     result: PairGroundTruth = _occgt.pair_ground_truth(
         depth0, depth1, K0, K1, world_from_cam0, world_from_cam1, preset,

@@ -102,6 +102,8 @@ class ScopeMap:
     @property
     def skipped(self) -> List[Tuple[str, str]]: ...  # (frame id, reason)
     @property
+    def fusion_stats(self) -> Dict[str, int]: ...  # occgt.FusionStats of the fused frames
+    @property
     def voxel_m(self) -> float: ...
     @property
     def max_range_m(self) -> float: ...

@@ -205,6 +205,9 @@ py::dict PairGroundTruth(py::handle depth0, py::handle depth1, py::handle K0, py
     out["occ1"] = ToArray(std::move(v1.occ), {v1.height, v1.width});
     out["known1"] = ToArray(std::move(v1.known), {v1.height, v1.width});
     out["bin_edges_m"] = ToArray(std::move(v0.edges_m), {n});
+    const std::optional<gt::occupancy::FusionStats>& stats = truth.occupancy->fusion_stats;
+    out["fusion_stats"] =
+        stats ? JsonToPython(gt::truth::FusionStatsJson(*stats)) : py::object(py::none());
   }
   return out;
 }
@@ -280,6 +283,12 @@ void BindTruth(py::module_& m) {
             return out;
           },
           "[(frame id, reason)] of the scope's frames that could not be read (not fused)")
+      .def_property_readonly(
+          "fusion_stats",
+          [](const PyScopeMap& s) {
+            return JsonToPython(gt::truth::FusionStatsJson(s.fused->map.stats()));
+          },
+          "what happened to the points of the fused frames (pair_ground_truth's fusion_stats)")
       .def_property_readonly(
           "voxel_m", [](const PyScopeMap& s) { return s.voxel_m; }, "voxel size (metres)")
       .def_property_readonly(

@@ -52,6 +52,11 @@ def main():
         assert counts["free"] == int((dense == 0).sum())
         assert counts["unknown"] == int((dense == 255).sum())
         assert 0 < counts["occupied"] and 0 < counts["free"], counts
+    # Every pixel of the two frames is counted: invalid, out of the key range, or inserted.
+    st = meta["fusion"]["stats"]
+    assert st["frames"] == 2 and st["pixels"] == 2 * 640 * 480, st
+    assert st["invalid_pixels"] + st["out_of_key_range"] + st["inserted_points"] == st["pixels"], st
+    assert st["inserted_points"] > 0 and st["leaf_nodes"] > 0, st
     with open(os.path.join(out, "map.bt"), "rb") as f:
         assert f.readline().startswith(b"# Octomap OcTree binary file")
 
@@ -71,6 +76,7 @@ def main():
                  "--bins", "32", "--spacing", "inverse")
     meta3 = json.load(open(os.path.join(out3, "occupancy.json")))
     jsonschema.validate(meta3, schema)
+    assert meta3["fusion"]["stats"] is None, "two_point fuses nothing"
     occ = np.load(os.path.join(out3, "occ0.npy"))
     assert np.all(occ >> np.uint64(32) == 0), "bits above num_bins set"
     out4 = common.scratch("occupancy_window")
@@ -90,6 +96,17 @@ def main():
                      check=False)
     assert r.returncode == 2 and r.stderr.startswith("occgt: error: --scope: "), r.stderr
     assert r.stderr.count("\n") == 1, r.stderr
+    assert os.listdir(out5) == []
+    # A voxel size whose 16-bit key range (+-32766 voxels around the origin) cannot hold the
+    # 10 m ray range would drop every point: refused before fusing, naming the flag and the
+    # smallest voxel size that works.
+    r = common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
+                     "--frames", "000000,000020", "--out", out5, "--voxel-m", "1e-6",
+                     check=False)
+    assert r.returncode == 2, (r.returncode, r.stderr)
+    assert re.fullmatch(r"occgt: error: --voxel-m: 1e-06 m holds \+-0\.0328 m around the world "
+                        r"origin .* with max_range_m 10 needs \+-.* m: use voxel_m >= \S+\n",
+                        r.stderr), r.stderr
     assert os.listdir(out5) == []
     print("occupancy integration: ok")
 

@@ -80,6 +80,8 @@ TEST(Fusion, InvalidDepthNeverBecomesAPointAtTheCameraCentre) {
 
 // A point beyond the 16-bit key range (3276.8 m at 5 cm) would wrap around in OctoMap's
 // unchecked key conversion: x = 3277.825 m wraps to key index 20, i.e. x in [1.0, 1.05).
+// The key-range check lets such a point through only beyond max_range_m (its ray is
+// truncated inside the range): it is dropped and counted.
 TEST(Fusion, PointsOutsideTheKeyRangeAreDroppedNotWrapped) {
   const Camera cam = SmallCamera(5, 5);
   DepthImage depth(5, 5, 0.0f);
@@ -89,17 +91,190 @@ TEST(Fusion, PointsOutsideTheKeyRangeAreDroppedNotWrapped) {
   Rigid3d world_from_cam = Rigid3d::Identity();
   world_from_cam.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
   FusionOptions opt;
-  opt.max_range_m = -1;  // unlimited: the far point would be inserted as a hit
+  opt.max_range_m = 10;  // a wrapped key would land within it as a hit
   opt.downsample = false;
   const OccupancyMap map = FuseOccupancy({{&depth, cam, world_from_cam, 0.1, 1e5}}, opt);
+  EXPECT_EQ(map.stats().pixels, 25);
+  EXPECT_EQ(map.stats().invalid_pixels, 23);
   EXPECT_EQ(map.stats().out_of_key_range, 1);
   EXPECT_EQ(map.stats().inserted_points, 1);
   EXPECT_NE(map.StateAt({1.025, 0.0, 0.0}), 1);  // where the wrapped hit would land
   EXPECT_EQ(map.NumOccupiedVoxels(), 1);
   EXPECT_EQ(map.StateAt({3277.825, 0.0, 0.0}), -1);  // outside: unknown, no crash
 
-  // A camera outside the key range is bad input.
-  EXPECT_THROW(FuseOccupancy({{&depth, cam, At({5000.0, 0, 0}), 0.1, 1e5}}, opt), InputError);
+  // With an unlimited range the same frame could reach 1e5 m: refused before any work.
+  opt.max_range_m = -1;
+  EXPECT_THROW(FuseOccupancy({{&depth, cam, world_from_cam, 0.1, 1e5}}, opt), InputError);
+  // A camera outside the key range is bad input, refused by the same check.
+  opt.max_range_m = 10;
+  try {
+    FuseOccupancy({{&depth, cam, At({5000.0, 0, 0}), 0.1, 1e5}}, opt);
+    ADD_FAILURE() << "a camera outside the key range was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "voxel_m");
+    EXPECT_NE(std::string(e.what()).find("needs +-5.01e+03 m: use voxel_m >= 0.153"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+std::string KeyRangeError(const FusionInput& in, const FusionOptions& opt) {
+  try {
+    CheckKeyRange(in, opt, "frame 0");
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "voxel_m");
+    return e.what();
+  }
+  return "";
+}
+
+// The voxel size given back by a refusal ("use voxel_m >= X").
+double SuggestedVoxel(const std::string& message) {
+  const std::string key = "use voxel_m >= ";
+  const size_t at = message.find(key);
+  if (at == std::string::npos) return 0.0;
+  return std::stod(message.substr(at + key.size()));
+}
+
+// The case: voxel 1e-6 m holds +-0.0328 m, and every point 3 m ahead would be
+// dropped as out of the key range, leaving an empty map. Refused at once, naming the
+// smallest voxel that works; the boundary is exact.
+TEST(KeyRange, VoxelTooSmallForTheRangeIsRefusedWithTheSmallestThatWorks) {
+  const Camera cam = SmallCamera(20, 16);
+  DepthImage depth(20, 16, 3.0f);
+  const FusionInput in{&depth, cam, Rigid3d::Identity(), 0.1, 20.0};
+  FusionOptions opt;
+  opt.voxel_size_m = 1e-6;
+  opt.max_range_m = 10;
+  const std::string e = KeyRangeError(in, opt);
+  EXPECT_EQ(e,
+            "voxel_m: 1e-06 m holds +-0.0328 m around the world origin (OctoMap's 16-bit keys); "
+            "frame 0's camera at (0, 0, 0) with max_range_m 10 needs +-10 m: use voxel_m >= "
+            "0.000306");
+  EXPECT_THROW(FuseOccupancy({in}, opt), InputError);
+
+  // The boundary: the smallest voxel size that works is accepted, the next smaller refused.
+  const double smallest = MinVoxelSizeM(Eigen::Vector3d::Zero(), 10.0);
+  EXPECT_NEAR(smallest, 10.0 / 32766, 1e-18);
+  EXPECT_GE(KeyRangeHalfExtentM(smallest), 10.0);
+  opt.voxel_size_m = smallest;
+  EXPECT_EQ(KeyRangeError(in, opt), "");
+  opt.voxel_size_m = std::nextafter(smallest, 0.0);
+  EXPECT_NE(KeyRangeError(in, opt), "");
+  // The suggested (rounded up) size works, and fuses a wall without dropping a point (a
+  // small, near one: rays of 0.3 mm voxels are long).
+  opt.voxel_size_m = SuggestedVoxel(e);
+  EXPECT_EQ(opt.voxel_size_m, 0.000306);
+  DepthImage near_wall(4, 4, 0.3f);
+  const OccupancyMap map =
+      FuseOccupancy({{&near_wall, SmallCamera(4, 4), Rigid3d::Identity(), 0.1, 20.0}}, opt);
+  EXPECT_EQ(map.stats().out_of_key_range, 0);
+  EXPECT_EQ(map.stats().inserted_points, 16);
+  EXPECT_EQ(map.StateAt({-0.0375, -0.0375, 0.3}), 1);  // pixel (1, 1)
+  EXPECT_EQ(map.StateAt({-0.01875, -0.01875, 0.15}), 0);
+}
+
+TEST(KeyRange, CameraFarFromTheOriginNeedsItsOffsetToo) {
+  const Camera cam = SmallCamera(20, 16);
+  DepthImage depth(20, 16, 3.0f);
+  const Eigen::Vector3d centre(1000.0, -2000.0, 5.0);
+  const FusionInput in{&depth, cam, At(centre), 0.1, 20.0};
+  FusionOptions opt;  // 5 cm holds +-1638 m; the camera needs 2000 + 10 m on y
+  const std::string e = KeyRangeError(in, opt);
+  EXPECT_NE(e.find("voxel_m: 0.05 m holds +-1.64e+03 m"), std::string::npos) << e;
+  EXPECT_NE(e.find("camera at (1e+03, -2e+03, 5) with max_range_m 10 needs +-2.01e+03 m: use "
+                   "voxel_m >= 0.0614"),
+            std::string::npos)
+      << e;
+  const double smallest = MinVoxelSizeM(centre, 10.0);
+  EXPECT_NEAR(smallest, 2010.0 / 32766, 1e-15);
+  opt.voxel_size_m = smallest;
+  EXPECT_EQ(KeyRangeError(in, opt), "");
+  opt.voxel_size_m = std::nextafter(smallest, 0.0);
+  EXPECT_NE(KeyRangeError(in, opt), "");
+  opt.voxel_size_m = SuggestedVoxel(e);
+  const OccupancyMap map = FuseOccupancy({in}, opt);
+  EXPECT_EQ(map.stats().out_of_key_range, 0);
+  EXPECT_EQ(map.StateAt(centre + Eigen::Vector3d(0.075, 0.075, 3.0)), 1);  // pixel (10, 8)
+  EXPECT_EQ(map.StateAt(centre + Eigen::Vector3d(0.0375, 0.0375, 1.5)), 0);
+  // Every frame is checked before any is fused: a good frame first does not hide a bad one.
+  opt.voxel_size_m = 0.05;
+  const FusionInput near{&depth, cam, Rigid3d::Identity(), 0.1, 20.0};
+  try {
+    FuseOccupancy({near, in}, opt);
+    ADD_FAILURE() << "the far frame was accepted";
+  } catch (const InputError& e1) {
+    EXPECT_NE(std::string(e1.what()).find("frame 1's camera"), std::string::npos) << e1.what();
+  }
+}
+
+// Unlimited range: the reach is the valid depth bound times the longest corner ray (the
+// pixel rays are longer than their planar depth), whatever the camera's orientation.
+TEST(KeyRange, UnlimitedRangeUsesTheLongestValidRay) {
+  const Camera cam = SmallCamera(5, 5);  // corner rays (+-0.4, +-0.4, 1) per metre of depth
+  DepthImage depth(5, 5, 2.0f);
+  Rigid3d world_from_cam = Rigid3d::Identity();
+  world_from_cam.linear() =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  FusionOptions opt;
+  opt.max_range_m = 0;  // unlimited
+  const FusionInput in{&depth, cam, world_from_cam, 0.1, 1500.0};
+  const double reach = FusionReachM(in, opt);
+  EXPECT_NEAR(reach, 1500.0 * std::sqrt(1.32), 1e-9);
+  // The reach bounds every point the frame can give: depth at the bound, every pixel.
+  DepthImage far(5, 5, 1500.0f);
+  const FusionInput far_in{&far, cam, world_from_cam, 0.1, 1500.0};
+  double longest = 0;
+  for (const auto& p : BackProjectValid(far_in))
+    longest = std::max(longest, p.cast<double>().norm());
+  EXPECT_NEAR(longest, reach, 1e-3);
+  const std::string e = KeyRangeError(in, opt);  // 1723 m > 1638 m at 5 cm
+  EXPECT_NE(e.find("unlimited max_range_m and max_depth_m 1.5e+03 (rays up to 1.72e+03 m "
+                   "through the image corners) needs +-1.72e+03 m: use voxel_m >= 0.0526 or a "
+                   "max_range_m > 0"),
+            std::string::npos)
+      << e;
+  opt.voxel_size_m = SuggestedVoxel(e);
+  EXPECT_EQ(KeyRangeError(in, opt), "");
+  opt.max_range_m = 10;  // a range: its own reach
+  opt.voxel_size_m = 0.05;
+  EXPECT_EQ(FusionReachM(in, opt), 10.0);
+  EXPECT_EQ(KeyRangeError(in, opt), "");
+  // No voxel size holds an unbounded reach.
+  opt.max_range_m = 0;
+  const FusionInput unbounded{&depth, cam, world_from_cam, 0.1,
+                              std::numeric_limits<double>::infinity()};
+  EXPECT_NE(KeyRangeError(unbounded, opt).find("no voxel size holds it; set a max_range_m > 0"),
+            std::string::npos);
+}
+
+// Every pixel is accounted for: invalid, outside the key range, or inserted.
+TEST(Fusion, DroppedPointsAreCounted) {
+  const Camera cam = SmallCamera(20, 16);
+  DepthImage depth(20, 16, 3.0f);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  int invalid = 0;
+  for (int v = 0; v < 16; ++v) {
+    for (int u = 0; u < 20; ++u) {
+      if ((u * 3 + v) % 5 == 0) {
+        depth.at(u, v) = (u + v) % 2 ? nan : 0.0f;
+        ++invalid;
+      }
+    }
+  }
+  depth.at(1, 1) = 30.0f;  // beyond max_depth_m: invalid too
+  ++invalid;
+  ASSERT_GT(invalid, 60);
+  FusionOptions opt;
+  const OccupancyMap map = FuseOccupancy(
+      {{&depth, cam, Rigid3d::Identity(), 0.1, 20.0}, {&depth, cam, At({1, 0, 0}), 0.1, 20.0}},
+      opt);
+  const FusionStats& st = map.stats();
+  EXPECT_EQ(st.frames, 2);
+  EXPECT_EQ(st.pixels, 2 * 20 * 16);
+  EXPECT_EQ(st.invalid_pixels, 2 * invalid);
+  EXPECT_EQ(st.out_of_key_range, 0);
+  EXPECT_EQ(st.inserted_points, st.pixels - st.invalid_pixels);
 }
 
 // Reference: centroid of each voxel floor(p / leaf), double accumulation.

@@ -128,11 +128,66 @@ class BadInput(unittest.TestCase):
         near = rot_z(0.3).astype(np.float32)
         near[0, 1] += 5e-4
         occgt.pair_ground_truth(**{**good(), "world_from_cam0": near})
-        # A camera centre outside the fused map's key range (2^15 voxels per half axis).
+        # A camera centre outside the fused map's key range (2^15 voxels per half axis): the
+        # voxel size cannot hold it (docs/OCCUPANCY.md, "key range").
         far = np.eye(4)
         far[0, 3] = 1e5
-        with self.assertRaisesRegex(ValueError, "key range"):
+        with self.assertRaisesRegex(ValueError, r"^voxel_m: 0\.05 m holds \+-1\.64e\+03 m .*"
+                                    r"frame 1's camera at \(1e\+05, 0, 0\) .*use voxel_m >= 3\.06$"):
             occgt.pair_ground_truth(**{**good(), "world_from_cam1": far}, occupancy=True)
+
+    def test_voxel_too_small_for_the_range(self) -> None:
+        """voxel_m=1e-6 holds +-0.0328 m around the origin: every point 2 m away would be
+        dropped (an empty volume). Refused, naming the smallest voxel size that works, which
+        is then accepted."""
+        with self.assertRaisesRegex(
+                ValueError, r"^voxel_m: 1e-06 m holds \+-0\.0328 m around the world origin .*"
+                r"camera at \(0, 0, 0\) with max_range_m 10 needs \+-10 m: "
+                r"use voxel_m >= 0\.000306$"):
+            occgt.pair_ground_truth(**good(), occupancy=True, voxel_m=1e-6)
+        with self.assertRaisesRegex(ValueError, r"^voxel_m: .*max_range_m 3 needs \+-3 m: "
+                                    r"use voxel_m >= 9\.16e-05$"):
+            occgt.pair_ground_truth(**good(), occupancy=True, voxel_m=9e-5, max_range_m=3.0)
+        # No occupancy: the voxel size is not used.
+        occgt.pair_ground_truth(**good(), voxel_m=1e-6)
+        # At the smallest size for a 2.5 m range, the wall is fused with nothing dropped (a
+        # small frame: rays of 0.1 mm voxels are long).
+        small = np.full((4, 4), 0.5, np.float32)
+        K = np.array([[4.0, 0, 1.5], [0, 4.0, 1.5], [0, 0, 1]])
+        r = occgt.pair_ground_truth(small, small, K, K, np.eye(4), np.eye(4), stride=4,
+                                    occupancy=True, voxel_m=7.63e-05, max_range_m=2.5, far_m=2.5)
+        self.assertEqual(r["fusion_stats"]["out_of_key_range"], 0)
+        self.assertEqual(r["fusion_stats"]["inserted_points"], 32)
+        self.assertGreater(int(np.count_nonzero(r["occ0"])), 0)
+
+    def test_fusion_stats(self) -> None:
+        """Every pixel of the fused frames is counted: invalid, out of the key range or
+        inserted; invalid pixels are those outside the depth range."""
+        args = good()
+        depth1 = args["depth1"].copy()
+        depth1[::3, ::5] = np.nan
+        depth1[1, 1] = 0.0
+        args["depth1"] = depth1
+        invalid = int(np.count_nonzero(~(depth1 > 0)))
+        r = occgt.pair_ground_truth(**args, occupancy=True)
+        st = r["fusion_stats"]
+        self.assertEqual(set(st), {"frames", "pixels", "invalid_pixels", "out_of_key_range",
+                                   "after_downsample", "downsample_fallbacks",
+                                   "outliers_removed", "inserted_points"})
+        self.assertEqual(st["frames"], 2)
+        self.assertEqual(st["pixels"], 2 * H * W)
+        self.assertEqual(st["invalid_pixels"], invalid)
+        self.assertEqual(st["out_of_key_range"], 0)
+        self.assertEqual(st["inserted_points"], 2 * H * W - invalid)
+        self.assertEqual(st["after_downsample"], st["inserted_points"])
+        # A depth range drops more, and says so.
+        st = occgt.pair_ground_truth(**args, occupancy=True, max_depth_m=1.5)["fusion_stats"]
+        self.assertEqual(st["invalid_pixels"], 2 * H * W)
+        self.assertEqual(st["inserted_points"], 0)
+        # two_point fuses nothing: None; no occupancy: no key.
+        r = occgt.pair_ground_truth(**args, occupancy=True, occupancy_mode="two_point")
+        self.assertIsNone(r["fusion_stats"])
+        self.assertNotIn("fusion_stats", occgt.pair_ground_truth(**args))
 
     def test_options(self) -> None:
         self.check(r"^preset: expected one of default, occ2net", preset="occ2")

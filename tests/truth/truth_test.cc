@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "libgt/core/error.h"
@@ -157,6 +158,67 @@ TEST(ComputePairTruth, EqualsTheFunctionsItComposes) {
   // Options are checked before any work.
   o.bins.num_bins = 65;
   EXPECT_NE(ErrorOf([&] { ComputePairTruth(a, b, o); }).find("pair options: occupancy"),
+            std::string::npos);
+}
+
+// The pair's own fusion reports what it dropped (not only a scope map), and a voxel size
+// whose key range cannot hold the ray range is refused, naming voxel_m.
+TEST(ComputePairTruth, ReportsFusionStatsAndRefusesAVoxelTooSmall) {
+  const Scene& scene = SynthScene();
+  const WorkingFrame a = LoadWorkingFrame(scene.frames[1], {80, 60});
+  WorkingFrame b = LoadWorkingFrame(scene.frames[2], {80, 60});
+  auto depth = std::make_shared<DepthImage>(*b.depth);
+  for (int u = 0; u < 80; u += 3) depth->at(u, 7) = 0.0f;  // 27 more invalid pixels
+  b.depth = depth;
+  PairTruthOptions o;
+  o.labels.min_depth_m = scene.min_depth_m;
+  o.labels.max_depth_m = scene.max_depth_m;
+  o.fusion.voxel_size_m = 0.1;
+  int64_t invalid = 0;
+  for (const WorkingFrame* f : std::initializer_list<const WorkingFrame*>{&a, &b}) {
+    for (float z : f->depth->values_m)
+      invalid += IsValidDepth(z, o.labels.min_depth_m, o.labels.max_depth_m) ? 0 : 1;
+  }
+  ASSERT_GE(invalid, 27);
+  const PairTruth t = ComputePairTruth(a, b, o);
+  ASSERT_TRUE(t.occupancy && t.occupancy->fusion_stats);
+  const occupancy::FusionStats& st = *t.occupancy->fusion_stats;
+  EXPECT_EQ(st.frames, 2);
+  EXPECT_EQ(st.pixels, 2 * 80 * 60);
+  EXPECT_EQ(st.invalid_pixels, invalid);
+  EXPECT_EQ(st.out_of_key_range, 0);
+  EXPECT_EQ(st.inserted_points, st.pixels - invalid);
+  // With a scope map, its stats.
+  o.fusion.scope = occupancy::FusionScope::kWindow;
+  o.fusion.window = 1;
+  const ScopeMap m = FuseScope(scene, 1, 2, o, [&](size_t i) {
+    return LoadWorkingFrame(scene.frames[i], {80, 60});
+  });
+  const PairTruth ts = ComputePairTruth(a, b, o, &m.map);
+  EXPECT_EQ(ts.occupancy->fusion_stats->frames, 4);  // frames 0..3
+  EXPECT_EQ(ts.occupancy->fusion_stats->pixels, m.map.stats().pixels);
+  // two_point fuses nothing.
+  o.fusion.scope = occupancy::FusionScope::kPair;
+  o.mode = occupancy::OccupancyMode::kTwoPoint;
+  EXPECT_FALSE(ComputePairTruth(a, b, o).occupancy->fusion_stats.has_value());
+
+  o.mode = occupancy::OccupancyMode::kOctomap;
+  o.fusion.voxel_size_m = 1e-6;  // +-0.0328 m around the origin; the range is 10 m
+  try {
+    ComputePairTruth(a, b, o);
+    ADD_FAILURE() << "voxel 1e-6 accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "voxel_m");
+    EXPECT_NE(std::string(e.what()).find("with max_range_m 10 needs"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("use voxel_m >= "), std::string::npos) << e.what();
+  }
+  o.fusion.scope = occupancy::FusionScope::kWindow;  // FuseScope refuses it as well
+  EXPECT_NE(ErrorOf([&] {
+              FuseScope(scene, 1, 2, o, [&](size_t i) {
+                return LoadWorkingFrame(scene.frames[i], {80, 60});
+              });
+            }).rfind("voxel_m: 1e-06 m holds", 0),
             std::string::npos);
 }
 
