@@ -1,6 +1,7 @@
 // occgt scan ROOT --format F [--scene NAME] [--json] [--check-depth]: lists the scenes of
-// a dataset root with frame counts, unusable frames by reason, depth size and K
-// (docs/CLI.md; JSON output follows schemas/scan.schema.json).
+// a dataset root with frame counts, unusable frames by reason (with the first few frames of
+// each and where their problem is), depth size and K (docs/CLI.md; JSON output follows
+// schemas/scan.schema.json).
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -33,6 +34,16 @@ nlohmann::ordered_json ReasonsJson(const std::map<std::string, size_t>& reasons)
   return j;
 }
 
+nlohmann::ordered_json ExamplesJson(
+    const std::map<std::string, std::vector<gt::datasets::UnusableExample>>& examples) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
+  for (const auto& [reason, list] : examples) {
+    j[reason] = nlohmann::ordered_json::array();
+    for (const auto& e : list) j[reason].push_back({{"frame", e.frame}, {"detail", e.detail}});
+  }
+  return j;
+}
+
 nlohmann::ordered_json SceneJson(const gt::datasets::SceneSummary& s) {
   nlohmann::ordered_json j;
   j["name"] = s.name;
@@ -41,6 +52,7 @@ nlohmann::ordered_json SceneJson(const gt::datasets::SceneSummary& s) {
   j["usable"] = s.usable;
   j["unusable"] = s.unusable();
   j["unusable_reasons"] = ReasonsJson(s.unusable_reasons);
+  j["unusable_examples"] = ExamplesJson(s.unusable_examples);
   j["depth_size"] = {s.depth_camera.width, s.depth_camera.height};
   j["K"] = {{"fx", s.depth_camera.fx},
             {"fy", s.depth_camera.fy},
@@ -86,6 +98,13 @@ void PrintSceneText(const gt::datasets::SceneSummary& s) {
       << s.min_depth_m << ", " << s.max_depth_m << "] m\n";
   for (const auto& [reason, count] : s.unusable_reasons) {
     out << "  unusable " << count << ": " << reason << "\n";
+    const auto it = s.unusable_examples.find(reason);
+    const size_t listed = it == s.unusable_examples.end() ? 0 : it->second.size();
+    for (size_t i = 0; i < listed; ++i) {
+      const gt::datasets::UnusableExample& e = it->second[i];
+      out << "    frame " << e.frame << (e.detail.empty() ? "" : ": " + e.detail) << "\n";
+    }
+    if (listed > 0 && listed < count) out << "    ... and " << count - listed << " more\n";
   }
   const gt::Camera& cc = s.color_camera;
   out << "  colour " << s.usable_with_color << " of " << s.usable << " usable frames";

@@ -57,6 +57,9 @@ struct DepthSource {
   ByteRange range;                // sens*: the payload inside `path`
   int width = 0;                  // sens*: size of the map (the container's header)
   int height = 0;
+  // sens*: the frame's index in the container, named in the errors of both its payloads
+  // (depth and colour); -1 otherwise.
+  int64_t frame_index = -1;
 };
 
 struct Frame {
@@ -66,14 +69,26 @@ struct Frame {
   Camera depth_camera;  // K at the depth map's resolution
   Rigid3d world_from_cam = Rigid3d::Identity();
   bool usable = true;
-  std::string unusable_reason;  // set when !usable (pose problem, missing depth, ...)
-  std::string color_path;       // may be empty when the dataset has no colour
-  Camera color_camera;          // K at the colour image's resolution (0x0 when unknown)
-  double timestamp_s = 0.0;     // TUM only
+  // Set when !usable: one stable category (pose problem, missing depth, ...), the string
+  // `occgt scan` counts frames by, and where in the input it is and what was found
+  // ("<file>:<line>: non-finite value"; "" when the category says it all). docs/DATASETS.md
+  // "Errors and unusable frames".
+  std::string unusable_reason;
+  std::string unusable_detail;
+  std::string color_path;    // may be empty when the dataset has no colour
+  Camera color_camera;       // K at the colour image's resolution (0x0 when unknown)
+  double timestamp_s = 0.0;  // TUM only
   // .sens: the colour payload inside color_path (size 0: color_path is the image file), JPEG
   // or PNG bytes, or with color_raw_rgb, color_camera.width x height x 3 bytes R, G, B.
   ByteRange color_range;
   bool color_raw_rgb = false;
+
+  // Why the frame is unusable, for a message about this frame: the reason, then the
+  // detail when there is one ("pose: non-finite pose entries; <file>:<line>: non-finite
+  // value").
+  std::string UnusableMessage() const {
+    return unusable_detail.empty() ? unusable_reason : unusable_reason + "; " + unusable_detail;
+  }
 };
 
 struct Scene {

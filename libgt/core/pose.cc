@@ -6,20 +6,42 @@
 
 namespace gt {
 
-std::optional<std::string> PoseProblem(const Eigen::Matrix4d& m) {
-  if (!m.allFinite()) return std::string("non-finite pose entries (lost tracking)");
+std::optional<PoseDefect> FindPoseDefect(const Eigen::Matrix4d& m) {
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      if (!std::isfinite(m(r, c))) {
+        return PoseDefect{PoseDefectKind::kNonFinite, r, c,
+                          "non-finite pose entries (lost tracking)"};
+      }
+    }
+  }
   if (std::abs(m(3, 0)) > 1e-6 || std::abs(m(3, 1)) > 1e-6 || std::abs(m(3, 2)) > 1e-6 ||
       std::abs(m(3, 3) - 1.0) > 1e-6) {
-    return std::string("last row of the pose is not [0 0 0 1]");
+    return PoseDefect{PoseDefectKind::kLastRow, 3, -1, "last row of the pose is not [0 0 0 1]"};
   }
   const Eigen::Matrix3d R = m.topLeftCorner<3, 3>();
   const double err = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (err > kRigidTolerance) {
     std::ostringstream s;
     s << "rotation is not orthonormal (|R^T R - I| = " << err << " > " << kRigidTolerance << ")";
-    return s.str();
+    // Entry (i, j) of R R^T - I involves rows i and j only: a wrong value in row i shows in
+    // the whole of row i, and in one entry of each other row.
+    const Eigen::Vector3d row_error =
+        (R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().rowwise().sum();
+    int worst = 0;
+    for (int r = 1; r < 3; ++r) {
+      if (row_error[r] > row_error[worst]) worst = r;
+    }
+    return PoseDefect{PoseDefectKind::kNotOrthonormal, worst, -1, s.str()};
   }
-  if (R.determinant() < 0) return std::string("rotation has det < 0 (a reflection)");
+  if (R.determinant() < 0) {
+    return PoseDefect{PoseDefectKind::kReflection, -1, -1, "rotation has det < 0 (a reflection)"};
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> PoseProblem(const Eigen::Matrix4d& m) {
+  if (auto defect = FindPoseDefect(m)) return std::move(defect->text);
   return std::nullopt;
 }
 
@@ -32,14 +54,21 @@ Rigid3d RigidFromMatrix(const Eigen::Matrix4d& m) {
   return T;
 }
 
-std::optional<std::string> PoseProblemTQ(const Eigen::Vector3d& t, const Eigen::Vector4d& q) {
-  if (!t.allFinite() || !q.allFinite()) return std::string("non-finite pose entries");
+std::optional<PoseDefect> FindPoseDefectTQ(const Eigen::Vector3d& t, const Eigen::Vector4d& q) {
+  if (!t.allFinite() || !q.allFinite()) {
+    return PoseDefect{PoseDefectKind::kNonFinite, -1, -1, "non-finite pose entries"};
+  }
   const double n = q.norm();
-  if (std::abs(n - 1.0) > 1e-3) {
+  if (std::abs(n - 1.0) > kQuaternionNormTolerance) {
     std::ostringstream s;
     s << "quaternion norm is " << n << ", expected 1";
-    return s.str();
+    return PoseDefect{PoseDefectKind::kQuaternionNorm, -1, -1, s.str()};
   }
+  return std::nullopt;
+}
+
+std::optional<std::string> PoseProblemTQ(const Eigen::Vector3d& t, const Eigen::Vector4d& q) {
+  if (auto defect = FindPoseDefectTQ(t, q)) return std::move(defect->text);
   return std::nullopt;
 }
 

@@ -370,8 +370,8 @@ Eigen::Vector4d Xyzw(const Eigen::Vector4d& wxyz) {
 }
 }  // namespace
 
-std::optional<std::string> ColmapPoseProblem(const ColmapImage& image) {
-  return PoseProblemTQ(image.tvec, Xyzw(image.qvec_wxyz));
+std::optional<PoseDefect> ColmapPoseDefect(const ColmapImage& image) {
+  return FindPoseDefectTQ(image.tvec, Xyzw(image.qvec_wxyz));
 }
 
 Rigid3d ColmapWorldFromCam(const ColmapImage& image) {

@@ -77,9 +77,9 @@ ColmapModel ReadColmapModel(const std::string& folder);
 Camera ColmapPinholeCamera(const ColmapCamera& camera, const std::string& cameras_path);
 
 // world_from_cam of an image: the inverse of cam_from_world (R(qvec), tvec), the quaternion
-// normalised; ColmapPoseProblem (PoseProblemTQ: non-finite entries, |q| not within 1e-3 of
-// 1) says when it cannot be used.
-std::optional<std::string> ColmapPoseProblem(const ColmapImage& image);
+// normalised; ColmapPoseDefect (FindPoseDefectTQ: non-finite entries, |q| not within 1e-3
+// of 1) says when it cannot be used.
+std::optional<PoseDefect> ColmapPoseDefect(const ColmapImage& image);
 Rigid3d ColmapWorldFromCam(const ColmapImage& image);
 
 }  // namespace gt::datasets

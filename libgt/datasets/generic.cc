@@ -271,12 +271,9 @@ Scene ParseGenericManifest(std::string_view text, const std::string& manifest,
       f.depth.exr_channel = options.exr_channel;
     }
 
-    const Eigen::Matrix4d m = val.Matrix(fj["world_from_cam"], fp + ".world_from_cam", 4, 4);
-    if (const auto problem = PoseProblem(m)) {
-      MarkUnusable(&f, PoseReason(*problem));
-    } else {
-      f.world_from_cam = RigidFromMatrix(m);
-    }
+    const std::string pose_field = fp + ".world_from_cam";
+    SetMatrixPose(val.Matrix(fj["world_from_cam"], pose_field, 4, 4),
+                  PoseLocator::JsonField(manifest, pose_field), &f);
 
     if (fj.contains("color")) {
       const std::string cp = fp + ".color";

@@ -182,8 +182,9 @@ Scene MegaDepthReader::ReadScene(const std::string& root, const std::string& sce
         break;
       }
     }
-    if (const auto problem = ColmapPoseProblem(im)) {
-      MarkUnusable(&f, PoseReason(*problem));
+    if (const auto defect = ColmapPoseDefect(im)) {
+      MarkUnusable(&f, PoseUnusable(*defect, PoseLocator::Whole(model.images_path + ": image " +
+                                                                std::to_string(im.id))));
     } else {
       f.world_from_cam = ColmapWorldFromCam(im);
     }

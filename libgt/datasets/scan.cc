@@ -11,6 +11,10 @@ bool ScanOptions::Check(std::string* error) const {
     if (error) *error = "max_errors_listed must be >= 0";
     return false;
   }
+  if (max_examples_listed < 0) {
+    if (error) *error = "max_examples_listed must be >= 0";
+    return false;
+  }
   return true;
 }
 
@@ -52,10 +56,16 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
   bool have_color_camera = false;
   s.depth_checked = options.check_depth;
   double fraction_sum = 0.0;
+  const auto count_unusable = [&](const Frame& f, const std::string& reason,
+                                  const std::string& detail) {
+    if (static_cast<int>(s.unusable_reasons[reason]++) < options.max_examples_listed) {
+      s.unusable_examples[reason].push_back({f.id, detail});
+    }
+  };
   for (const Frame& f : scene.frames) {
     if (!SameCamera(f.depth_camera, s.depth_camera)) s.uniform_depth_camera = false;
     if (!f.usable) {
-      ++s.unusable_reasons[f.unusable_reason];
+      count_unusable(f, f.unusable_reason, f.unusable_detail);
       continue;
     }
     if (options.check_depth) {
@@ -65,7 +75,7 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
         fraction_sum += ValidDepthFraction(d, scene.min_depth_m, scene.max_depth_m);
       } catch (const InputError& e) {
         ++s.depth_files_bad;
-        ++s.unusable_reasons[kReasonDepthUnreadable];
+        count_unusable(f, kReasonDepthUnreadable, e.what());
         if (static_cast<int>(s.depth_errors.size()) < options.max_errors_listed) {
           s.depth_errors.emplace_back(e.what());
         }

@@ -1,7 +1,9 @@
-// Scene summaries for `occgt scan`: frame counts, unusable frames counted by reason, the
-// depth camera, and (optionally) a read of every depth file that checks its size against
-// the frame's depth camera and measures the fraction of valid depth pixels
-// (IsValidDepth with the scene's [min_depth_m, max_depth_m]).
+// Scene summaries for `occgt scan`: frame counts, unusable frames counted by reason (the
+// stable category, Frame::unusable_reason) with the first few of them listed as examples
+// (frame id and Frame::unusable_detail, "<file>:<line>: non-finite value"), the depth
+// camera, and (optionally) a read of every depth file that checks its size against the
+// frame's depth camera and measures the fraction of valid depth pixels (IsValidDepth with
+// the scene's [min_depth_m, max_depth_m]).
 // A depth file that fails to read marks its frame unusable with kReasonDepthUnreadable
 // and its error message is kept (the first ScanOptions::max_errors_listed of them).
 #pragma once
@@ -18,10 +20,17 @@ namespace gt::datasets {
 inline constexpr const char* kReasonDepthUnreadable = "depth: unreadable or wrong size";
 
 struct ScanOptions {
-  bool check_depth = false;   // read every usable frame's depth file
-  int max_errors_listed = 5;  // depth read errors kept per scene (>= 0)
+  bool check_depth = false;     // read every usable frame's depth file
+  int max_errors_listed = 5;    // depth read errors kept per scene (>= 0)
+  int max_examples_listed = 5;  // unusable frames listed per reason and scene (>= 0)
 
   bool Check(std::string* error) const;
+};
+
+// One unusable frame listed under its reason.
+struct UnusableExample {
+  std::string frame;   // Frame::id
+  std::string detail;  // Frame::unusable_detail ("" when the reader gives none)
 };
 
 struct SceneSummary {
@@ -30,8 +39,11 @@ struct SceneSummary {
   size_t frames = 0;
   size_t usable = 0;
   std::map<std::string, size_t> unusable_reasons;  // reason -> frame count (sorted by reason)
-  Camera depth_camera;                             // of the first frame
-  bool uniform_depth_camera = true;                // every frame has the same size and K
+  // reason -> its first ScanOptions::max_examples_listed frames, in frame order (a reason
+  // is absent when none is listed).
+  std::map<std::string, std::vector<UnusableExample>> unusable_examples;
+  Camera depth_camera;               // of the first frame
+  bool uniform_depth_camera = true;  // every frame has the same size and K
   double min_depth_m = 0.0;
   double max_depth_m = 0.0;
   // Colour coverage: usable frames with a colour file, and the colour camera of the first

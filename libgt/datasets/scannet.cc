@@ -53,17 +53,6 @@ bool IsScanNetScene(const std::string& folder) {
   return IsPythonExport(folder) || IsCppExport(folder) || IsSensScene(folder);
 }
 
-// Pose of frame f from a 4x4 camera-to-world text file; a non-finite or non-rigid pose
-// (lost tracking is written as -inf) marks the frame unusable with the reason.
-void SetPose(const std::string& pose_path, Frame* f) {
-  const Eigen::Matrix4d m = ReadMatrixText(pose_path, 4, 4);
-  if (const auto problem = PoseProblem(m)) {
-    MarkUnusable(f, PoseReason(*problem));
-  } else {
-    f->world_from_cam = RigidFromMatrix(m);
-  }
-}
-
 // The C++ exporter's _info.txt: every "key = value" line, values as numbers.
 struct CppInfo {
   std::string path;
@@ -75,7 +64,7 @@ struct CppInfo {
   }
   std::string Where(const std::string& key) const {
     const auto it = values.find(key);
-    return it == values.end() ? path : path + ":" + std::to_string(it->second.first);
+    return it == values.end() ? path : LineWhere(path, it->second.first);
   }
   double Number(const std::string& key) const {
     const std::vector<double>* v = Find(key);
@@ -115,7 +104,7 @@ CppInfo ReadCppInfo(const std::string& path) {
     const size_t eq = line.find('=');
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     if (eq == std::string::npos) {
-      throw InputError(path + ":" + std::to_string(i + 1), "expected 'key = value'");
+      throw InputError(LineWhere(path, static_cast<int>(i) + 1), "expected 'key = value'");
     }
     std::string key = line.substr(0, eq);
     key.erase(0, key.find_first_not_of(" \t"));
@@ -216,7 +205,7 @@ Scene ScanNetReader::ReadScene(const std::string& root, const std::string& scene
     f.depth_camera = depth_camera;
     f.color_path = ColorPath(folder, p.stem);
     if (!f.color_path.empty()) f.color_camera = color_camera;
-    SetPose(p.path, &f);
+    SetPoseFromText(p.path, &f);  // lost tracking (-inf) marks the frame unusable
     if (options_.check_depth_files && !io::FileExists(f.depth.path)) {
       MarkUnusable(&f, kReasonDepthMissing);
     }
@@ -260,7 +249,7 @@ Scene ScanNetReader::ReadCppExport(const std::string& folder, const std::string&
         f.color_camera = depth_camera.Resized(s.width, s.height);
       }
     }
-    SetPose(p.path, &f);
+    SetPoseFromText(p.path, &f);  // lost tracking (-inf) marks the frame unusable
     if (options_.check_depth_files && !io::FileExists(f.depth.path)) {
       MarkUnusable(&f, kReasonDepthMissing);
     }
@@ -292,6 +281,7 @@ Scene ScanNetReader::ReadSens(const std::string& folder, const std::string& scen
     f.depth.range = e.depth;
     f.depth.width = sens.depth_width;
     f.depth.height = sens.depth_height;
+    f.depth.frame_index = static_cast<int64_t>(i);
     f.depth_camera = depth_camera;
     if (e.color.size > 0) {
       f.color_path = path;
@@ -299,12 +289,11 @@ Scene ScanNetReader::ReadSens(const std::string& folder, const std::string& scen
       f.color_raw_rgb = sens.color_compression == SensColorCompression::kRaw;
       f.color_camera = color_camera;
     }
-    if (const auto problem = PoseProblem(e.world_from_cam)) {
-      MarkUnusable(&f, PoseReason(*problem));
-    } else {
-      f.world_from_cam = RigidFromMatrix(e.world_from_cam);
+    const std::string frame_where = io::ContainerFrameWhere(path, static_cast<int64_t>(i));
+    SetMatrixPose(e.world_from_cam, PoseLocator::Whole(frame_where), &f);
+    if (e.depth.size == 0) {
+      MarkUnusable(&f, kReasonDepthMissing, frame_where + ": depthBytes is 0 (no depth payload)");
     }
-    if (e.depth.size == 0) MarkUnusable(&f, kReasonDepthMissing);
     scene.frames.push_back(std::move(f));
   }
   return scene;

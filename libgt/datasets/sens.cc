@@ -140,26 +140,27 @@ SensIndex ParseSensIndex(const std::string& path, uint64_t file_size, const Sens
   index.frames.reserve(static_cast<size_t>(num_frames));
   for (uint64_t i = 0; i < num_frames; ++i) {
     const std::string frame = "frame " + std::to_string(i);
+    const std::string where = io::ContainerFrameWhere(path, static_cast<int64_t>(i));
     SensFrameEntry e;
-    e.world_from_cam = in.Matrix((frame + " cameraToWorld").c_str());
+    e.world_from_cam = in.Matrix((frame + ": cameraToWorld").c_str());
     uint64_t head[4];  // timestampColor, timestampDepth, colorBytes, depthBytes
-    in.Read(head, sizeof(head), (frame + " header").c_str());
+    in.Read(head, sizeof(head), (frame + ": header").c_str());
     const uint64_t color_bytes = head[2], depth_bytes = head[3];
     if (color_bytes > in.Remaining() || depth_bytes > in.Remaining() - color_bytes) {
-      throw InputError(path, frame + ": colorBytes " + std::to_string(color_bytes) +
-                                 " + depthBytes " + std::to_string(depth_bytes) + " at byte " +
-                                 std::to_string(in.offset()) + " run past the end of the file (" +
-                                 std::to_string(file_size) + " bytes; truncated .sens?)");
+      throw InputError(where, "colorBytes " + std::to_string(color_bytes) + " + depthBytes " +
+                                  std::to_string(depth_bytes) + " at byte " +
+                                  std::to_string(in.offset()) + " run past the end of the file (" +
+                                  std::to_string(file_size) + " bytes; truncated .sens?)");
     }
     if (index.depth_compression == SensDepthCompression::kRaw && depth_bytes != 0 &&
         depth_bytes != raw_depth_bytes) {
-      throw InputError(path, frame + ": depthBytes " + std::to_string(depth_bytes) + ", expected " +
-                                 std::to_string(raw_depth_bytes) + " (raw uint16 depth)");
+      throw InputError(where, "depthBytes " + std::to_string(depth_bytes) + ", expected " +
+                                  std::to_string(raw_depth_bytes) + " (raw uint16 depth)");
     }
     if (index.color_compression == SensColorCompression::kRaw && color_bytes != 0 &&
         color_bytes != raw_color_bytes) {
-      throw InputError(path, frame + ": colorBytes " + std::to_string(color_bytes) + ", expected " +
-                                 std::to_string(raw_color_bytes) + " (raw RGB colour)");
+      throw InputError(where, "colorBytes " + std::to_string(color_bytes) + ", expected " +
+                                  std::to_string(raw_color_bytes) + " (raw RGB colour)");
     }
     e.color = {in.offset(), color_bytes};
     in.Skip(color_bytes);

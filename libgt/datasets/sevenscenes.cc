@@ -84,12 +84,7 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
         break;
       }
     }
-    const Eigen::Matrix4d m = ReadMatrixText(p.path, 4, 4);
-    if (const auto problem = PoseProblem(m)) {
-      MarkUnusable(&f, PoseReason(*problem));
-    } else {
-      f.world_from_cam = RigidFromMatrix(m);
-    }
+    SetPoseFromText(p.path, &f);
     if (options_.check_depth_files && !io::FileExists(f.depth.path)) {
       MarkUnusable(&f, kReasonDepthMissing);
     }

@@ -156,14 +156,11 @@ Scene TartanAirReader::ReadScene(const std::string& root, const std::string& sce
       f.color_path = color;
       f.color_camera = camera;
     }
-    const Eigen::Vector3d& t = pose_rows[static_cast<size_t>(number)].translation;
-    const Eigen::Vector4d& q = pose_rows[static_cast<size_t>(number)].q_xyzw;
-    if (const auto problem = PoseProblemTQ(t, q)) {
-      MarkUnusable(&f, PoseReason(*problem));
-    } else {
-      const Rigid3d world_from_body = RigidFromTQ(t, q);
-      f.world_from_cam = world_from_body;
-      f.world_from_cam.linear() = world_from_body.linear() * body_from_cam;
+    // The line's pose is world_from_body; world_from_cam = world_from_body * body_from_cam.
+    const TQLine& pose = pose_rows[static_cast<size_t>(number)];
+    if (SetTQPose(pose.translation, pose.q_xyzw,
+                  PoseLocator::Whole(LineWhere(pose_path, pose.line_no)), &f)) {
+      f.world_from_cam.linear() = f.world_from_cam.linear() * body_from_cam;
     }
     if (options_.check_depth_files && !io::FileExists(f.depth.path)) {
       MarkUnusable(&f, kReasonDepthMissing);

@@ -14,19 +14,134 @@
 namespace gt::datasets {
 namespace fs = std::filesystem;
 
-std::string PoseReason(const std::string& problem) { return "pose: " + problem; }
-
-Eigen::MatrixXd ReadMatrixText(const std::string& path, int rows, int cols) {
-  return ParseMatrixText(io::ReadFileBytes(path), path, rows, cols);
+std::string LineWhere(const std::string& path, int line_no) {
+  return path + ":" + std::to_string(line_no);
 }
 
-Eigen::MatrixXd ParseMatrixText(std::string_view text, const std::string& name, int rows,
-                                int cols) {
+std::string PoseReason(const PoseDefect& defect) {
+  std::ostringstream s;
+  s << "pose: ";
+  switch (defect.kind) {
+    case PoseDefectKind::kNonFinite:
+      // The words of PoseProblem / PoseProblemTQ, unchanged: they hold no measured value.
+    case PoseDefectKind::kLastRow:
+    case PoseDefectKind::kReflection:
+      s << defect.text;
+      break;
+    case PoseDefectKind::kNotOrthonormal:
+      s << "rotation is not orthonormal (|R^T R - I| > " << kRigidTolerance << ")";
+      break;
+    case PoseDefectKind::kQuaternionNorm:
+      s << "quaternion norm is not within " << kQuaternionNormTolerance << " of 1";
+      break;
+  }
+  return s.str();
+}
+
+PoseLocator PoseLocator::Whole(std::string where) {
+  PoseLocator l;
+  l.kind_ = Kind::kWhole;
+  l.name_ = std::move(where);
+  return l;
+}
+
+PoseLocator PoseLocator::TextLines(std::string path, const std::array<int, 16>& line_of) {
+  PoseLocator l;
+  l.kind_ = Kind::kText;
+  l.name_ = std::move(path);
+  l.line_of_ = line_of;
+  return l;
+}
+
+PoseLocator PoseLocator::JsonField(std::string manifest, std::string field) {
+  PoseLocator l;
+  l.kind_ = Kind::kJson;
+  l.name_ = std::move(manifest);
+  l.field_ = std::move(field);
+  return l;
+}
+
+std::string PoseLocator::Entry(int row, int col) const {
+  switch (kind_) {
+    case Kind::kWhole:
+      break;
+    case Kind::kText:
+      return LineWhere(name_, line_of_[static_cast<size_t>(4 * row + col)]);
+    case Kind::kJson:
+      return name_ + ": " + field_ + "[" + std::to_string(row) + "][" + std::to_string(col) + "]";
+  }
+  return name_;
+}
+
+std::string PoseLocator::Rows(int first_row, int last_row) const {
+  switch (kind_) {
+    case Kind::kWhole:
+      break;
+    case Kind::kText: {
+      const auto begin = line_of_.begin() + 4 * first_row;
+      const auto end = line_of_.begin() + 4 * (last_row + 1);
+      const int first = *std::min_element(begin, end);
+      const int last = *std::max_element(begin, end);
+      return LineWhere(name_, first) + (last == first ? "" : "-" + std::to_string(last));
+    }
+    case Kind::kJson:
+      return name_ + ": " + field_ +
+             (first_row == last_row ? "[" + std::to_string(first_row) + "]" : "");
+  }
+  return name_;
+}
+
+Unusable PoseUnusable(const PoseDefect& defect, const PoseLocator& where) {
+  Unusable u;
+  u.reason = PoseReason(defect);
+  std::string place;
+  if (defect.kind == PoseDefectKind::kReflection) {
+    place = where.Rows(0, 2);
+  } else if (defect.row < 0) {
+    place = where.All();  // a translation + quaternion record
+  } else if (defect.col >= 0) {
+    place = where.Entry(defect.row, defect.col);
+  } else {
+    place = where.Rows(defect.row, defect.row);
+  }
+  u.detail =
+      place + ": " + (defect.kind == PoseDefectKind::kNonFinite ? "non-finite value" : defect.text);
+  return u;
+}
+
+bool SetMatrixPose(const Eigen::Matrix4d& world_from_cam, const PoseLocator& where, Frame* frame) {
+  if (const auto defect = FindPoseDefect(world_from_cam)) {
+    MarkUnusable(frame, PoseUnusable(*defect, where));
+    return false;
+  }
+  frame->world_from_cam = RigidFromMatrix(world_from_cam);
+  return true;
+}
+
+bool SetTQPose(const Eigen::Vector3d& t, const Eigen::Vector4d& q_xyzw, const PoseLocator& where,
+               Frame* frame) {
+  if (const auto defect = FindPoseDefectTQ(t, q_xyzw)) {
+    MarkUnusable(frame, PoseUnusable(*defect, where));
+    return false;
+  }
+  frame->world_from_cam = RigidFromTQ(t, q_xyzw);
+  return true;
+}
+
+namespace {
+
+// All numbers of `text`, row-major, exactly rows * cols of them, and the 1-based line of
+// each (line_of may be null).
+Eigen::MatrixXd ParseMatrixEntries(std::string_view text, const std::string& name, int rows,
+                                   int cols, std::vector<int>* line_of) {
   const std::vector<std::string> lines = io::SplitLines(text);
   std::vector<double> values;
+  std::vector<int> value_lines;
   for (size_t i = 0; i < lines.size(); ++i) {
-    const std::vector<double> row = ParseNumbers(lines[i], name, static_cast<int>(i) + 1);
+    const int line_no = static_cast<int>(i) + 1;
+    const std::vector<double> row = ParseNumbers(lines[i], name, line_no);
     values.insert(values.end(), row.begin(), row.end());
+    value_lines.insert(value_lines.end(), row.size(), line_no);
   }
   const size_t expected = static_cast<size_t>(rows) * cols;
   if (values.size() != expected) {
@@ -39,7 +154,38 @@ Eigen::MatrixXd ParseMatrixText(std::string_view text, const std::string& name, 
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) m(r, c) = values[static_cast<size_t>(r) * cols + c];
   }
+  if (line_of != nullptr) *line_of = std::move(value_lines);
   return m;
+}
+
+}  // namespace
+
+PoseText ReadPoseText(const std::string& path) {
+  return ParsePoseText(io::ReadFileBytes(path), path);
+}
+
+PoseText ParsePoseText(std::string_view text, const std::string& name) {
+  std::vector<int> line_of;
+  PoseText out;
+  out.world_from_cam = ParseMatrixEntries(text, name, 4, 4, &line_of);
+  std::array<int, 16> lines{};
+  std::copy(line_of.begin(), line_of.end(), lines.begin());
+  out.where = PoseLocator::TextLines(name, lines);
+  return out;
+}
+
+bool SetPoseFromText(const std::string& path, Frame* frame) {
+  const PoseText pose = ReadPoseText(path);
+  return SetMatrixPose(pose.world_from_cam, pose.where, frame);
+}
+
+Eigen::MatrixXd ReadMatrixText(const std::string& path, int rows, int cols) {
+  return ParseMatrixText(io::ReadFileBytes(path), path, rows, cols);
+}
+
+Eigen::MatrixXd ParseMatrixText(std::string_view text, const std::string& name, int rows,
+                                int cols) {
+  return ParseMatrixEntries(text, name, rows, cols, nullptr);
 }
 
 Eigen::Matrix3d ReadIntrinsicsText(const std::string& path) {
@@ -89,25 +235,17 @@ std::vector<TextRecord> ParseRecords(std::string_view text) {
   return out;
 }
 
-namespace {
-
-std::string LineName(const std::string& name, int line_no) {
-  return name + ":" + std::to_string(line_no);
-}
-
-}  // namespace
-
 std::vector<TimedPath> ParseTimedPathList(std::string_view text, const std::string& name) {
   std::vector<TimedPath> out;
   for (const auto& rec : ParseRecords(text)) {
     if (rec.tokens.size() != 2) {
       throw InputError(
-          LineName(name, rec.line_no),
+          LineWhere(name, rec.line_no),
           "expected 'timestamp filename', found " + std::to_string(rec.tokens.size()) + " fields");
     }
     const std::vector<double> v = ParseNumbers(rec.tokens[0], name, rec.line_no);
     if (v.size() != 1 || !std::isfinite(v[0])) {
-      throw InputError(LineName(name, rec.line_no), "expected a finite timestamp");
+      throw InputError(LineWhere(name, rec.line_no), "expected a finite timestamp");
     }
     out.push_back({v[0], rec.tokens[1]});
   }
@@ -124,14 +262,14 @@ std::vector<TimedPose> ParseTimedPoses(std::string_view text, const std::string&
     const std::vector<double> v = ParseNumbers(line, name, rec.line_no);
     if (v.size() != 8) {
       throw InputError(
-          LineName(name, rec.line_no),
+          LineWhere(name, rec.line_no),
           "expected 8 numbers (timestamp tx ty tz qx qy qz qw), found " + std::to_string(v.size()));
     }
     if (!std::isfinite(v[0])) {
-      throw InputError(LineName(name, rec.line_no), "expected a finite timestamp");
+      throw InputError(LineWhere(name, rec.line_no), "expected a finite timestamp");
     }
-    out.push_back(
-        {v[0], Eigen::Vector3d(v[1], v[2], v[3]), Eigen::Vector4d(v[4], v[5], v[6], v[7])});
+    out.push_back({rec.line_no, v[0], Eigen::Vector3d(v[1], v[2], v[3]),
+                   Eigen::Vector4d(v[4], v[5], v[6], v[7])});
   }
   std::stable_sort(out.begin(), out.end(),
                    [](const TimedPose& a, const TimedPose& b) { return a.t < b.t; });
@@ -147,7 +285,7 @@ std::vector<TQLine> ParseTQLines(std::string_view text, const std::string& name)
     if (v.empty()) continue;
     if (v.size() != 7) {
       throw InputError(
-          LineName(name, line_no),
+          LineWhere(name, line_no),
           "expected 7 numbers (tx ty tz qx qy qz qw), found " + std::to_string(v.size()));
     }
     out.push_back(
@@ -268,10 +406,15 @@ std::string ResolveSceneFolder(const std::string& root, const std::string& name,
   return folder;
 }
 
-void MarkUnusable(Frame* frame, const std::string& reason) {
+void MarkUnusable(Frame* frame, const std::string& reason, const std::string& detail) {
   if (!frame->usable) return;
   frame->usable = false;
   frame->unusable_reason = reason;
+  frame->unusable_detail = detail;
+}
+
+void MarkUnusable(Frame* frame, const Unusable& why) {
+  MarkUnusable(frame, why.reason, why.detail);
 }
 
 namespace {
@@ -338,7 +481,7 @@ std::vector<double> ParseNumbers(std::string_view line, const std::string& path,
     const std::string_view tok = line.substr(i, j - i);
     double v = 0;
     if (!ParseToken(tok, &v)) {
-      throw InputError(path + ":" + std::to_string(line_no),
+      throw InputError(LineWhere(path, line_no),
                        "expected a number, found '" + std::string(tok) + "'");
     }
     out.push_back(v);

@@ -6,9 +6,14 @@
 // Matrices are read row-major from all numbers of the file (blank lines ignored); the
 // count must match exactly, otherwise InputError("<path>", "expected 16 numbers (4x4),
 // found 12"). A token that is not a number is InputError("<path>:<line>", ...).
+//
+// A pose that parses but cannot be used (non-finite, not rigid) makes its frame unusable,
+// not the scene: the frame gets a stable reason (the category `occgt scan` counts) and a
+// detail naming where the pose was read, "<file>:<line>: non-finite value" (PoseLocator).
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -16,6 +21,7 @@
 #include <vector>
 
 #include "libgt/core/frame.h"
+#include "libgt/core/pose.h"
 
 namespace gt::datasets {
 
@@ -24,10 +30,73 @@ namespace gt::datasets {
 // token that is not a number.
 std::vector<double> ParseNumbers(std::string_view line, const std::string& path, int line_no);
 
+// "<path>:<line>": where a message about one line of a text file points.
+std::string LineWhere(const std::string& path, int line_no);
+
+// Why a frame is unusable (Frame::unusable_reason / unusable_detail): `reason` is one
+// stable category per kind of problem, the string `occgt scan` counts frames by; `detail`
+// is "<where>: <what was found>", "" when the reason says it all.
+struct Unusable {
+  std::string reason;
+  std::string detail;
+};
+
 // Stable reasons for unusable frames (counted by `occgt scan`).
 inline constexpr const char* kReasonDepthMissing = "depth: missing file";
-// "pose: " + PoseProblem(...) text, e.g. "pose: non-finite pose entries (lost tracking)".
-std::string PoseReason(const std::string& problem);
+// The pose reasons: "pose: " + the category of a PoseDefect (core/pose.h), without the
+// measured value (that goes to the detail), e.g. "pose: non-finite pose entries (lost
+// tracking)" (a 4x4 matrix), "pose: non-finite pose entries" (translation + quaternion),
+// "pose: rotation is not orthonormal (|R^T R - I| > 0.001)".
+std::string PoseReason(const PoseDefect& defect);
+
+// Names where the entries of a pose were read, for the detail of an unusable frame.
+class PoseLocator {
+ public:
+  // Every entry is `where`: one record ("<file>:<line>" of a "tx ty tz qx qy qz qw" line,
+  // "<file>: frame 10" of a .sens, "<file>: image 5" of a COLMAP model).
+  static PoseLocator Whole(std::string where);
+  // A 4x4 matrix from a text file, entry (r, c) on line line_of[4 * r + c] (1-based):
+  // "<path>:<line>", or "<path>:<first>-<last>" for rows spread over several lines.
+  static PoseLocator TextLines(std::string path, const std::array<int, 16>& line_of);
+  // A 4x4 matrix as a JSON array of rows at `field` of `manifest`:
+  // "<manifest>: <field>[r][c]", a row "<field>[r]", several rows "<field>".
+  static PoseLocator JsonField(std::string manifest, std::string field);
+
+  std::string Entry(int row, int col) const;
+  std::string Rows(int first_row, int last_row) const;
+  std::string All() const { return Rows(0, 3); }
+
+ private:
+  enum class Kind { kWhole, kText, kJson };
+  Kind kind_ = Kind::kWhole;
+  std::string name_;   // where (kWhole), the file (kText, kJson)
+  std::string field_;  // kJson
+  std::array<int, 16> line_of_{};
+};
+
+// The Unusable of a pose defect read at `where`: PoseReason, and the detail
+// "<where of the entry, row or rows>: <what>", what being "non-finite value" or the
+// defect's words with the measured value ("quaternion norm is 2, expected 1").
+Unusable PoseUnusable(const PoseDefect& defect, const PoseLocator& where);
+
+// Sets frame->world_from_cam from a 4x4 camera-to-world matrix (RigidFromMatrix), or, when
+// FindPoseDefect finds a defect, marks the frame unusable with PoseUnusable. Returns
+// whether the pose was set.
+bool SetMatrixPose(const Eigen::Matrix4d& world_from_cam, const PoseLocator& where, Frame* frame);
+// The same for a translation + quaternion (x, y, z, w) pose (RigidFromTQ).
+bool SetTQPose(const Eigen::Vector3d& t, const Eigen::Vector4d& q_xyzw, const PoseLocator& where,
+               Frame* frame);
+
+// A 4x4 pose text file (ScanNet pose/<n>.txt, frame-XXXXXX.pose.txt, 7-Scenes): the matrix
+// (as ReadMatrixText(path, 4, 4), with its errors) and the line of each entry.
+struct PoseText {
+  Eigen::Matrix4d world_from_cam = Eigen::Matrix4d::Identity();
+  PoseLocator where;
+};
+PoseText ReadPoseText(const std::string& path);
+PoseText ParsePoseText(std::string_view text, const std::string& name);
+// ReadPoseText + SetMatrixPose: malformed text throws, a bad pose marks the frame.
+bool SetPoseFromText(const std::string& path, Frame* frame);
 
 // All numbers of a text file, row-major, with exactly rows * cols entries.
 Eigen::MatrixXd ReadMatrixText(const std::string& path, int rows, int cols);
@@ -62,8 +131,9 @@ std::vector<TimedPath> ParseTimedPathList(std::string_view text, const std::stri
 
 // "timestamp tx ty tz qx qy qz qw" lines (TUM groundtruth.txt), sorted by time (stable);
 // '#' comments and blank lines skipped. Exactly 8 numbers a line and a finite timestamp,
-// else InputError("<name>:<line>", ...). Pose values are not checked here (PoseProblemTQ).
+// else InputError("<name>:<line>", ...). Pose values are not checked here (SetTQPose).
 struct TimedPose {
+  int line_no = 0;
   double t = 0;
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   Eigen::Vector4d q_xyzw = Eigen::Vector4d(0, 0, 0, 1);
@@ -110,7 +180,9 @@ std::string FolderName(const std::string& path);
 Scene NewFolderScene(const std::string& folder, const std::string& scene_name, DatasetFormat format,
                      double min_depth_m, double max_depth_m);
 
-// Marks a frame unusable with `reason` unless it already is (the first reason wins).
-void MarkUnusable(Frame* frame, const std::string& reason);
+// Marks a frame unusable with `reason` (and `detail`) unless it already is (the first
+// reason wins).
+void MarkUnusable(Frame* frame, const std::string& reason, const std::string& detail = "");
+void MarkUnusable(Frame* frame, const Unusable& why);
 
 }  // namespace gt::datasets

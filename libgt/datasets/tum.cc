@@ -129,11 +129,7 @@ Scene TumReader::ReadScene(const std::string& root, const std::string& scene_nam
       MarkUnusable(&f, no_gt.str());
     } else {
       const TimedPose& p = poses[static_cast<size_t>(gt)];
-      if (const auto problem = PoseProblemTQ(p.translation, p.q_xyzw)) {
-        MarkUnusable(&f, PoseReason(*problem));
-      } else {
-        f.world_from_cam = RigidFromTQ(p.translation, p.q_xyzw);
-      }
+      SetTQPose(p.translation, p.q_xyzw, PoseLocator::Whole(LineWhere(gt_path, p.line_no)), &f);
     }
     if (options_.check_depth_files && !io::FileExists(f.depth.path)) {
       MarkUnusable(&f, kReasonDepthMissing);

@@ -320,7 +320,8 @@ DepthImage DecodeSensDepth(std::string_view bytes, const DepthSource& src) {
   const size_t n = static_cast<size_t>(src.width) * static_cast<size_t>(src.height);
   std::vector<uint16_t> raw(n);
   const std::string where =
-      src.path + " (depth payload at byte " + std::to_string(src.range.offset) + ")";
+      (src.frame_index >= 0 ? ContainerFrameWhere(src.path, src.frame_index) : src.path) +
+      " (depth payload at byte " + std::to_string(src.range.offset) + ")";
   if (src.format == DepthFormat::kSensRaw) {
     if (bytes.size() != n * 2) {
       throw InputError(where, "expected " + std::to_string(n * 2) + " bytes of raw uint16, got " +

@@ -113,6 +113,10 @@ std::string ReadFileRange(const std::string& path, uint64_t offset, uint64_t siz
   return bytes;
 }
 
+std::string ContainerFrameWhere(const std::string& path, int64_t index) {
+  return path + ": frame " + std::to_string(index);
+}
+
 uint64_t FileSizeBytes(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) {

@@ -20,6 +20,9 @@ bool FileExists(const std::string& path);
 // before allocating. `what` names the payload in messages ("frame 12 depth").
 std::string ReadFileRange(const std::string& path, uint64_t offset, uint64_t size,
                           const std::string& what);
+// "<path>: frame <index>": where a message about one frame of a container file (a ScanNet
+// .sens) points, in the reader's errors and unusable-frame details and in payload reads.
+std::string ContainerFrameWhere(const std::string& path, int64_t index);
 // Size of a file in bytes; InputError naming it when it cannot be opened.
 uint64_t FileSizeBytes(const std::string& path);
 

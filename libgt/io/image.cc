@@ -85,8 +85,10 @@ ColorImage ReadColor(const std::string& path) {
 
 ColorImage ReadFrameColor(const Frame& frame) {
   if (frame.color_range.size == 0) return ReadColor(frame.color_path);
-  const std::string where = frame.color_path + " (colour payload at byte " +
-                            std::to_string(frame.color_range.offset) + ")";
+  const int64_t index = frame.depth.frame_index;  // the frame's index in its container
+  const std::string where =
+      (index >= 0 ? ContainerFrameWhere(frame.color_path, index) : frame.color_path) +
+      " (colour payload at byte " + std::to_string(frame.color_range.offset) + ")";
   const Camera& camera = frame.color_camera;
   if (frame.color_raw_rgb) {
     const uint64_t expected = uint64_t(camera.width) * uint64_t(camera.height) * 3;

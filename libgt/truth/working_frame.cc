@@ -54,7 +54,7 @@ size_t FindFrame(const Scene& scene, const std::string& id, const std::string& f
   for (size_t i = 0; i < scene.frames.size(); ++i) {
     const Frame& f = scene.frames[i];
     if (f.id != id) continue;
-    if (!f.usable) throw InputError(field, "frame " + id + " is unusable: " + f.unusable_reason);
+    if (!f.usable) throw InputError(field, "frame " + id + " is unusable: " + f.UnusableMessage());
     return i;
   }
   // A frame number given for an id ("40" for TartanAir's "000040"): name the id.

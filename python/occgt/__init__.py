@@ -332,8 +332,8 @@ def open_dataset(root: Union[str, "os.PathLike[str]"], format: str) -> Dataset:
 
     Returns:
         A Dataset: ``.scenes()`` lists the scene names, ``.scene(name)`` reads one scene
-        (``.frames``: id, number, usable, reason, K at the depth resolution, world_from_cam;
-        ``.load(frame_id, width=640, height=480)`` -> (depth float32 [H, W] metres,
+        (``.frames``: id, number, usable, reason, detail, K at the depth resolution,
+        world_from_cam; ``.load(frame_id, width=640, height=480)`` -> (depth float32 [H, W] metres,
         K float64 [3, 3] at W x H, world_from_cam float64 [4, 4])).
     """
     return Dataset(os.fspath(root), format)

@@ -76,7 +76,9 @@ class Frame:
     @property
     def usable(self) -> bool: ...
     @property
-    def reason(self) -> str: ...  # why unusable ('' when usable)
+    def reason(self) -> str: ...  # why unusable: a stable category ('' when usable)
+    @property
+    def detail(self) -> str: ...  # where it was found: '<file>:<line>: non-finite value' ('' if none)
     @property
     def width(self) -> int: ...  # of the depth map, pixels
     @property

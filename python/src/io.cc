@@ -228,7 +228,11 @@ void BindIo(py::module_& m) {
           "False when the frame must not be used (lost tracking, non-rigid pose, no depth)")
       .def_property_readonly(
           "reason", [](const gt::Frame& f) { return f.unusable_reason; },
-          "why the frame is unusable ('' when usable)")
+          "why the frame is unusable: a stable category ('' when usable)")
+      .def_property_readonly(
+          "detail", [](const gt::Frame& f) { return f.unusable_detail; },
+          "where in the input the reason was found and what, e.g. "
+          "'.../pose_left.txt:11: non-finite value' ('' when none)")
       .def_property_readonly(
           "width", [](const gt::Frame& f) { return f.depth_camera.width; },
           "width of the depth map (pixels)")
@@ -248,7 +252,7 @@ void BindIo(py::module_& m) {
           "color_path", [](const gt::Frame& f) { return f.color_path; },
           "colour image ('' when the dataset has none)")
       .def("__repr__", [](const gt::Frame& f) {
-        return "<occgt.Frame " + f.id + (f.usable ? "" : " unusable: " + f.unusable_reason) + ">";
+        return "<occgt.Frame " + f.id + (f.usable ? "" : " unusable: " + f.UnusableMessage()) + ">";
       });
 
   py::class_<PyScene>(m, "Scene", "One scene of a dataset: its frames and how to load them.")

@@ -52,6 +52,63 @@ TEST(Pose, ProblemsAreReported) {
   EXPECT_LT((RigidFromMatrix(m).linear() - Eigen::Matrix3d::Identity()).norm(), 1e-3);
 }
 
+TEST(Pose, DefectsSayWhereInTheMatrix) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  EXPECT_FALSE(FindPoseDefect(m).has_value());
+  m(2, 1) = std::nan("");
+  m(3, 0) = std::numeric_limits<double>::infinity();  // later in row-major order
+  auto d = FindPoseDefect(m);
+  ASSERT_TRUE(d.has_value());
+  EXPECT_EQ(d->kind, PoseDefectKind::kNonFinite);
+  EXPECT_EQ(d->row, 2);
+  EXPECT_EQ(d->col, 1);
+  EXPECT_EQ(d->text, *PoseProblem(m));
+  m = Eigen::Matrix4d::Identity();
+  m(3, 2) = 1;
+  d = FindPoseDefect(m);
+  ASSERT_TRUE(d.has_value());
+  EXPECT_EQ(d->kind, PoseDefectKind::kLastRow);
+  EXPECT_EQ(d->row, 3);
+  // One wrong value in a rotation row: that row, whichever it is.
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) {
+      m = Eigen::Matrix4d::Identity();
+      m(row, col) += 0.5;
+      d = FindPoseDefect(m);
+      ASSERT_TRUE(d.has_value()) << row << col;
+      EXPECT_EQ(d->kind, PoseDefectKind::kNotOrthonormal);
+      EXPECT_EQ(d->row, row) << "wrong value at (" << row << ", " << col << ")";
+      EXPECT_EQ(d->col, -1);
+    }
+  }
+  // A row scaled by 2 in a rotated frame.
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).matrix();
+  m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = R;
+  m.row(2).head<3>() *= 2.0;
+  d = FindPoseDefect(m);
+  ASSERT_TRUE(d.has_value());
+  EXPECT_EQ(d->row, 2);
+  m = Eigen::Matrix4d::Identity();
+  m(1, 1) = -1;
+  d = FindPoseDefect(m);
+  ASSERT_TRUE(d.has_value());
+  EXPECT_EQ(d->kind, PoseDefectKind::kReflection);
+  EXPECT_EQ(d->row, -1);
+}
+
+TEST(Pose, QuaternionDefects) {
+  EXPECT_FALSE(FindPoseDefectTQ({0, 0, 0}, {0, 0, 0, 1}).has_value());
+  auto d = FindPoseDefectTQ({0, 0, 0}, {0, 0, 0, 2});
+  ASSERT_TRUE(d.has_value());
+  EXPECT_EQ(d->kind, PoseDefectKind::kQuaternionNorm);
+  EXPECT_EQ(d->text, "quaternion norm is 2, expected 1");
+  EXPECT_EQ(d->row, -1);
+  d = FindPoseDefectTQ({0, 0, std::numeric_limits<double>::infinity()}, {0, 0, 0, 1});
+  ASSERT_TRUE(d.has_value());
+  EXPECT_EQ(d->kind, PoseDefectKind::kNonFinite);
+}
+
 TEST(Pose, QuaternionNormChecked) {
   EXPECT_FALSE(PoseProblemTQ({0, 0, 0}, {0, 0, 0, 1}).has_value());
   EXPECT_TRUE(PoseProblemTQ({0, 0, 0}, {0, 0, 0, 2}).has_value());

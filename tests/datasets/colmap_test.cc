@@ -129,7 +129,7 @@ void CheckModel(const ColmapModel& m) {
   EXPECT_EQ(im.id, 9);
   EXPECT_EQ(im.name, "0002.png");
   EXPECT_EQ(im.camera_id, 7);
-  EXPECT_FALSE(ColmapPoseProblem(im).has_value());
+  EXPECT_FALSE(ColmapPoseDefect(im).has_value());
   // cam_from_world: R = 90 degrees about z (x -> y), t = (1, 2, 3). The camera centre in
   // the world is -R^T t = -(2, -1, 3); the world x axis is the camera's y axis.
   const Rigid3d world_from_cam = ColmapWorldFromCam(im);

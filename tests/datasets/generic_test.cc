@@ -225,9 +225,50 @@ TEST(Generic, NonRigidPoseIsUnusable) {
   options.check_depth_files = false;
   const Scene s = MakeReader(gt::DatasetFormat::kGeneric, options)->ReadScene(dir, "");
   EXPECT_FALSE(s.frames[0].usable);
-  EXPECT_EQ(s.frames[0].unusable_reason.rfind("pose: rotation is not orthonormal", 0), 0u)
-      << s.frames[0].unusable_reason;
+  EXPECT_EQ(s.frames[0].unusable_reason, "pose: rotation is not orthonormal (|R^T R - I| > 0.001)");
   EXPECT_TRUE(s.frames[1].usable);
+}
+
+// A manifest's bad pose names the manifest and the JSON field path of the pose: the row
+// holding the wrong value, or the whole matrix for a reflection. JSON has no NaN or inf, so
+// a non-finite pose cannot be written: such a token (or a number beyond double's range) is
+// invalid JSON, an error naming the manifest.
+TEST(Generic, BadPoseNamesTheFieldPath) {
+  const std::string dir = test::ScratchDir("gen_pose_where");
+  json j = ValidManifest();
+  j["frames"][0]["world_from_cam"][1][1] = 2.0;
+  j["frames"][1]["world_from_cam"][3][2] = 0.5;
+  j["frames"][2]["world_from_cam"][2][2] = -1.0;
+  const std::string manifest = WriteManifest(dir, j);
+  ReaderOptions options;
+  options.check_depth_files = false;
+  const auto reader = MakeReader(gt::DatasetFormat::kGeneric, options);
+  const Scene s = reader->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), 3u);
+  EXPECT_EQ(s.frames[0].unusable_detail,
+            manifest +
+                ": frames[0].world_from_cam[1]: rotation is not orthonormal (|R^T R - I| = 3 > "
+                "0.001)");
+  EXPECT_EQ(s.frames[1].unusable_reason, "pose: last row of the pose is not [0 0 0 1]");
+  EXPECT_EQ(s.frames[1].unusable_detail,
+            manifest + ": frames[1].world_from_cam[3]: last row of the pose is not [0 0 0 1]");
+  EXPECT_EQ(s.frames[2].unusable_detail,
+            manifest + ": frames[2].world_from_cam: rotation has det < 0 (a reflection)");
+  for (const char* token : {"NaN", "Infinity", "1e999"}) {
+    // frames[0].world_from_cam[0][0]: the first '1' after the key (keys are sorted).
+    std::string text = j.dump(1);
+    const size_t at = text.find('1', text.find("\"world_from_cam\""));
+    ASSERT_NE(at, std::string::npos) << text;
+    text.replace(at, 1, token);
+    WriteFileAtomic(manifest, text);
+    try {
+      reader->ReadScene(dir, "");
+      ADD_FAILURE() << token << ": expected InputError";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where(), manifest) << e.what();
+      EXPECT_NE(std::string(e.what()).find("invalid JSON"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(Readers, UnknownFormatAndKnownFormats) {

@@ -143,7 +143,11 @@ TEST(MegaDepth, FramesPosesKAndReasons) {
   EXPECT_EQ(s.frames[3].unusable_reason,
             "depth: under 100 KiB (an ordinal or mask map, not metric depth)");
   EXPECT_EQ(s.frames[4].unusable_reason, "depth: missing file");
-  EXPECT_EQ(s.frames[5].unusable_reason, "pose: quaternion norm is 2, expected 1");
+  EXPECT_EQ(s.frames[5].unusable_reason, "pose: quaternion norm is not within 0.001 of 1");
+  EXPECT_EQ(s.frames[5].unusable_detail,
+            Download() +
+                "/phoenix/S6/zl548/MegaDepth_v1/0001/dense0/sparse/images.txt: image 6: "
+                "quaternion norm is 2, expected 1");
   const DepthImage d = ReadDepth(a.depth, 192, 144);
   EXPECT_EQ(d.at(5, 0), 0.0f);
   EXPECT_EQ(d.at(5, 1), 10.0f);

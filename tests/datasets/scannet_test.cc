@@ -83,8 +83,37 @@ TEST(ScanNet, LostTrackingTokensMakeFramesUnusableNotFatal) {
   for (int i : {1, 2}) {
     EXPECT_FALSE(s.frames[i].usable);
     EXPECT_EQ(s.frames[i].unusable_reason, "pose: non-finite pose entries (lost tracking)");
+    // The first non-finite value of the file, on its first line.
+    EXPECT_EQ(s.frames[i].unusable_detail,
+              root + "/pose/" + s.frames[i].id + ".txt:1: non-finite value");
   }
   EXPECT_EQ(s.frames[0].world_from_cam.translation(), Eigen::Vector3d(0.5, 0.25, -1.0));
+}
+
+// A bad value in one pose file names the file and its line; non-rigid rotations name the
+// row (line) holding the wrong value, a reflection the rotation's lines.
+TEST(ScanNet, BadPoseValuesNameFileAndLine) {
+  const std::string dir = test::ScratchDir("sn_bad_pose");
+  WriteFileAtomic(dir + "/intrinsic/intrinsic_depth.txt", "500 0 320\n0 500 240\n0 0 1\n");
+  WriteFileAtomic(dir + "/pose/0.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  WriteFileAtomic(dir + "/pose/1.txt", "1 0 0 0\n0 1 0 0\n0 0 1 nan\n0 0 0 1\n");
+  WriteFileAtomic(dir + "/pose/2.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 INF\n");
+  WriteFileAtomic(dir + "/pose/3.txt", "1 0 0 0\n0.2 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  WriteFileAtomic(dir + "/pose/4.txt", "0 1 0 0\n1 0 0 0\n0 0 1 0\n0 0 0 1\n");
+  ReaderOptions options;
+  options.check_depth_files = false;
+  const Scene s = MakeReader(gt::DatasetFormat::kScanNet, options)->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), 5u);
+  EXPECT_TRUE(s.frames[0].usable);
+  EXPECT_EQ(s.frames[1].unusable_detail, dir + "/pose/1.txt:3: non-finite value");
+  EXPECT_EQ(s.frames[2].unusable_detail, dir + "/pose/2.txt:4: non-finite value");
+  EXPECT_EQ(s.frames[3].unusable_reason, "pose: rotation is not orthonormal (|R^T R - I| > 0.001)");
+  EXPECT_EQ(
+      s.frames[3].unusable_detail.rfind(dir + "/pose/3.txt:2: rotation is not orthonormal (", 0),
+      0u)
+      << s.frames[3].unusable_detail;
+  EXPECT_EQ(s.frames[4].unusable_detail,
+            dir + "/pose/4.txt:1-3: rotation has det < 0 (a reflection)");
 }
 
 void ExpectErrorWhere(const std::string& root, const std::string& where, const std::string& text) {
@@ -205,7 +234,8 @@ TEST(ScanNet, CppExporterLayout) {
   EXPECT_EQ(s.frames[2].number, 2);
   EXPECT_TRUE(s.frames[0].usable);
   EXPECT_FALSE(s.frames[1].usable);  // -inf pose: lost tracking
-  EXPECT_NE(s.frames[1].unusable_reason.find("pose"), std::string::npos);
+  EXPECT_EQ(s.frames[1].unusable_reason, "pose: non-finite pose entries (lost tracking)");
+  EXPECT_EQ(s.frames[1].unusable_detail, dir + "/frame-000001.pose.txt:1: non-finite value");
   EXPECT_FALSE(s.frames[2].usable);  // no depth file
   EXPECT_EQ(s.frames[2].unusable_reason, "depth: missing file");
   const Frame& f = s.frames[0];

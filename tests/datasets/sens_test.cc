@@ -95,6 +95,8 @@ void CheckScene(const Scene& scene, DepthFormat format) {
   ASSERT_EQ(scene.frames.size(), size_t{kFrames});
   EXPECT_EQ(scene.NumUsable(), size_t{kFrames - 1});
   EXPECT_EQ(scene.frames[2].unusable_reason, "pose: non-finite pose entries (lost tracking)");
+  EXPECT_EQ(scene.frames[2].unusable_detail,
+            scene.path + "/scene0001_00.sens: frame 2: non-finite value");
   for (int f : {3, 0, 1}) {  // any order
     const Frame& fr = scene.frames[static_cast<size_t>(f)];
     EXPECT_EQ(fr.id, std::to_string(f));
@@ -200,6 +202,40 @@ TEST(Sens, BadInputIsOneLine) {
             std::string::npos);
 }
 
+// A bad frame of a .sens names the frame's index: its pose (lost tracking, a non-rigid
+// rotation) or a frame without depth bytes makes it unusable; its header's errors name it.
+TEST(Sens, BadFrameNamesItsIndex) {
+  constexpr size_t kFrameBytes = 64 + 32 + kCw * kCh * 3 + kDw * kDh * 2;  // raw payloads
+  std::string b = SensBytes(0);
+  const float scaled = 2.0f;  // frame 1: R(0, 0) = 2, not orthonormal
+  std::memcpy(&b[kFrame0 + kFrameBytes], &scaled, 4);
+  b = Patched(b, kFrame0 + 3 * kFrameBytes + 64 + 24, 0, 8);  // frame 3: depthBytes 0
+  const std::string dir = WriteScene("bad_frames", b);
+  const std::string path = dir + "/scene0001_00.sens";
+  const Scene scene = MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(dir, "");
+  ASSERT_EQ(scene.frames.size(), size_t{kFrames});
+  EXPECT_TRUE(scene.frames[0].usable);
+  EXPECT_EQ(scene.frames[1].unusable_reason,
+            "pose: rotation is not orthonormal (|R^T R - I| > 0.001)");
+  EXPECT_EQ(scene.frames[1].unusable_detail,
+            path + ": frame 1: rotation is not orthonormal (|R^T R - I| = 3 > 0.001)");
+  EXPECT_EQ(scene.frames[2].unusable_detail, path + ": frame 2: non-finite value");
+  EXPECT_EQ(scene.frames[3].unusable_reason, "depth: missing file");
+  EXPECT_EQ(scene.frames[3].unusable_detail,
+            path + ": frame 3: depthBytes is 0 (no depth payload)");
+  try {
+    (void)MakeReader(gt::DatasetFormat::kScanNet)
+        ->ReadScene(
+            WriteScene("bad_size", Patched(SensBytes(0), kFrame0 + kFrameBytes + 64 + 24, 10, 8)),
+            "");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where().substr(e.where().rfind(".sens")), ".sens: frame 1") << e.what();
+    EXPECT_NE(std::string(e.what()).find("depthBytes 10, expected 48"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Sens, DamagedZlibPayloadNamesItsOffset) {
   std::string b = SensBytes(1);
   const std::string dir = WriteScene("zlib", b);
@@ -212,9 +248,9 @@ TEST(Sens, DamagedZlibPayloadNamesItsOffset) {
     (void)ReadDepth(scene2.frames[0].depth);
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(
-        std::string(e.what()).find("(depth payload at byte " + std::to_string(r.offset) + ")"),
-        std::string::npos)
+    EXPECT_NE(std::string(e.what()).find(": frame 0 (depth payload at byte " +
+                                         std::to_string(r.offset) + ")"),
+              std::string::npos)
         << e.what();
   }
 }

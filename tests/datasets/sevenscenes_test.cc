@@ -184,5 +184,43 @@ TEST(SevenScenes, ColourAsPngOrJpgAndFramesWithout) {
   EXPECT_EQ(c.height, 480);
 }
 
+// One pose file per frame: a bad pose names its file and the line (1..4 of the matrix, as
+// the file lays it out) where the bad value is; the frame is unusable, not the scene.
+TEST(SevenScenes, BadPoseValuesNameFileAndLine) {
+  const std::string dir = test::ScratchDir("7s_bad_pose") + "/seq-01";
+  const std::vector<std::pair<std::string, std::string>> poses = {
+      {"000000", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n"},
+      {"000001", "1 0 0 0\n0 1 NaN 0\n0 0 1 0\n0 0 0 1\n"},
+      {"000002", "\n1 0 0 0\n0 1 0 inf\n0 0 1 0\n0 0 0 1\n"},  // a blank first line
+      {"000003", "1 0 0 0\n0 1 0 0\n0 0 1.5 0\n0 0 0 1\n"},    // a typo in row 3
+      {"000004", "1 0 0 0\n0 -1 0 0\n0 0 1 0\n0 0 0 1\n"},
+      {"000005", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n"},
+      {"000006", "1 0 0 0 0 1 0 0\n0 0 1 0 0 0 0 -inf\n"},  // two rows a line
+  };
+  for (const auto& [id, text] : poses) WriteFileAtomic(dir + "/frame-" + id + ".pose.txt", text);
+  ReaderOptions options;
+  options.check_depth_files = false;  // no depth: isolate the pose reasons
+  const Scene s = MakeReader(gt::DatasetFormat::kSevenScenes, options)->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), poses.size());
+  EXPECT_TRUE(s.frames[0].usable);
+  const auto file = [&](int i) { return dir + "/frame-00000" + std::to_string(i) + ".pose.txt"; };
+  const std::vector<std::pair<std::string, std::string>> expected = {
+      {"pose: non-finite pose entries (lost tracking)", file(1) + ":2: non-finite value"},
+      {"pose: non-finite pose entries (lost tracking)", file(2) + ":3: non-finite value"},
+      {"pose: rotation is not orthonormal (|R^T R - I| > 0.001)",
+       file(3) + ":3: rotation is not orthonormal (|R^T R - I| = 1.25 > 0.001)"},
+      {"pose: rotation has det < 0 (a reflection)",
+       file(4) + ":1-3: rotation has det < 0 (a reflection)"},
+      {"pose: last row of the pose is not [0 0 0 1]",
+       file(5) + ":4: last row of the pose is not [0 0 0 1]"},
+      {"pose: non-finite pose entries (lost tracking)", file(6) + ":2: non-finite value"},
+  };
+  for (size_t i = 1; i < s.frames.size(); ++i) {
+    EXPECT_FALSE(s.frames[i].usable) << i;
+    EXPECT_EQ(s.frames[i].unusable_reason, expected[i - 1].first) << i;
+    EXPECT_EQ(s.frames[i].unusable_detail, expected[i - 1].second) << i;
+  }
+}
+
 }  // namespace
 }  // namespace gt::datasets

@@ -154,8 +154,40 @@ TEST(TartanAir, NonUnitQuaternionMakesFrameUnusable) {
   ASSERT_EQ(s.frames.size(), 2u);
   EXPECT_TRUE(s.frames[0].usable);
   EXPECT_FALSE(s.frames[1].usable);
-  EXPECT_EQ(s.frames[1].unusable_reason.rfind("pose: quaternion norm", 0), 0u)
-      << s.frames[1].unusable_reason;
+  EXPECT_EQ(s.frames[1].unusable_reason, "pose: quaternion norm is not within 0.001 of 1");
+  EXPECT_EQ(s.frames[1].unusable_detail,
+            dir + "/pose_left.txt:2: quaternion norm is 2, expected 1");
+}
+
+// Issue #32: a bad pose line names its file and line; the frame is unusable, not the scene,
+// and the counted reason stays one category whatever the line.
+TEST(TartanAir, BadPoseValuesNameFileAndLine) {
+  std::string poses;
+  for (int i = 0; i < 12; ++i) {
+    poses += i == 10  ? "0.5 nan 0 0 0 0 1\n"
+             : i == 5 ? "0 0 -inf 0 0 0 1\n"
+             : i == 7 ? "0 0 0 0 0 0 2\n"
+                      : "0 0 0 0 0 0 1\n";
+  }
+  const std::string dir = MakeTrajectory("ta_bad_values", 12, poses);
+  const Scene s = MakeReader(gt::DatasetFormat::kTartanAir)->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), 12u);
+  EXPECT_EQ(s.NumUsable(), 9u);
+  const std::string file = dir + "/pose_left.txt";
+  EXPECT_FALSE(s.frames[10].usable);
+  EXPECT_EQ(s.frames[10].unusable_reason, "pose: non-finite pose entries");
+  EXPECT_EQ(s.frames[10].unusable_detail, file + ":11: non-finite value");
+  EXPECT_EQ(s.frames[10].UnusableMessage(),
+            "pose: non-finite pose entries; " + file + ":11: non-finite value");
+  EXPECT_EQ(s.frames[5].unusable_reason, "pose: non-finite pose entries");
+  EXPECT_EQ(s.frames[5].unusable_detail, file + ":6: non-finite value");
+  EXPECT_EQ(s.frames[7].unusable_detail, file + ":8: quaternion norm is 2, expected 1");
+  EXPECT_TRUE(s.frames[9].unusable_detail.empty());
+  // Blank lines do not count as poses but do count as lines.
+  const std::string gap =
+      MakeTrajectory("ta_bad_line_gap", 2, "0 0 0 0 0 0 1\n\n  \n0 0 0 inf 0 0 1\n");
+  const Scene g = MakeReader(gt::DatasetFormat::kTartanAir)->ReadScene(gap, "");
+  EXPECT_EQ(g.frames[1].unusable_detail, gap + "/pose_left.txt:4: non-finite value");
 }
 
 TEST(TartanAir, AppleDoubleFilesIgnoredAndEnvLayoutListed) {

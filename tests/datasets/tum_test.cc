@@ -75,7 +75,10 @@ TEST(Tum, AssociatesNearestWithinTolerance) {
   EXPECT_EQ(s.frames[2].unusable_reason, "pose: no groundtruth within 0.02s");
   // t=10.50: gt 10.51 has a quaternion of norm 2.
   EXPECT_FALSE(s.frames[3].usable);
-  EXPECT_EQ(s.frames[3].unusable_reason.rfind("pose: quaternion norm", 0), 0u);
+  EXPECT_EQ(s.frames[3].unusable_reason, "pose: quaternion norm is not within 0.001 of 1");
+  EXPECT_EQ(s.frames[3].unusable_detail,
+            root + "/groundtruth.txt:7: quaternion norm is 2, expected 1");
+  EXPECT_TRUE(s.frames[2].unusable_detail.empty());  // the reason says it all
   EXPECT_EQ(s.frames[3].color_path, root + "/rgb/10.490.png");
   // fr2 intrinsics by folder name, depth 1/5000 m.
   EXPECT_EQ(s.frames[0].depth_camera.fx, 520.9);
@@ -105,6 +108,29 @@ TEST(Tum, DefaultIntrinsicsAreFreiburg1) {
   const Scene s = MakeReader(gt::DatasetFormat::kTum)->ReadScene(root, "");
   EXPECT_EQ(s.frames[0].depth_camera.fx, 517.3);
   EXPECT_EQ(s.frames[0].depth_camera.cy, 255.3);
+}
+
+// A non-finite groundtruth value makes its frame unusable, naming the file and the line as
+// written (groundtruth.txt is sorted by time after reading: the line is not the index).
+TEST(Tum, NonFiniteGroundtruthNamesFileAndLine) {
+  const std::string root = MakeSequence("tum_nan_gt");
+  WriteFileAtomic(root + "/groundtruth.txt",
+                  "# ground truth\n"
+                  "10.115 3 0 0 0 0 0 1\n"
+                  "10.000 nan 0 0 0 0 0 1\n"
+                  "10.100 0 0 0 0 0 inf 1\n"
+                  "10.500 0 0 0 0 0 0 1\n");
+  const Scene s = MakeReader(gt::DatasetFormat::kTum)->ReadScene(root, "");
+  ASSERT_EQ(s.frames.size(), 4u);
+  const std::string file = root + "/groundtruth.txt";
+  for (int i : {0, 1}) {
+    EXPECT_FALSE(s.frames[i].usable);
+    EXPECT_EQ(s.frames[i].unusable_reason, "pose: non-finite pose entries");
+  }
+  EXPECT_EQ(s.frames[0].unusable_detail, file + ":3: non-finite value");
+  EXPECT_EQ(s.frames[1].unusable_detail, file + ":4: non-finite value");
+  EXPECT_TRUE(s.frames[3].usable);
+  EXPECT_EQ(s.frames[3].world_from_cam.translation(), Eigen::Vector3d::Zero());
 }
 
 TEST(Tum, BadFilesNameFileAndLine) {

@@ -32,7 +32,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       const auto images = kind == 1 ? gt::datasets::ParseColmapImagesBinary(bytes, name)
                                     : gt::datasets::ParseColmapImagesText(bytes, name);
       for (const auto& im : images) {
-        if (!gt::datasets::ColmapPoseProblem(im)) (void)gt::datasets::ColmapWorldFromCam(im);
+        if (!gt::datasets::ColmapPoseDefect(im)) (void)gt::datasets::ColmapWorldFromCam(im);
       }
     }
   });

@@ -6,7 +6,8 @@ the real `occgt` binary, and checked:
   `occgt: error: <where>: <problem>`, matching the case's regex (which names the file,
   field or argument and the problem); no traceback-like or bad_alloc text;
 - per-frame cases: exit 0 and the frame counted as skipped with its reason
-  (`occgt scan --json` unusable_reasons, or the drops of the `occgt build` summary);
+  (`occgt scan --json` unusable_reasons, where it is in the input: unusable_examples'
+  details, or the drops of the `occgt build` summary);
 - validate cases: exit 1, the problem on a stdout line, one error line on stderr;
 - always: no `*.tmp` left anywhere in the case folder, and no published partial output
   (per case: nothing published, or only complete shards with their part records).
@@ -146,6 +147,11 @@ def check_case(spec, case_dir):
                 got = sum(n for k, n in reasons.items() if re.search(pattern, k))
                 if got != count:
                     fail(cid, f"expected {count} frame(s) skipped for /{pattern}/, got {reasons}")
+            details = [x["detail"] for s in doc["scenes"]
+                       for examples in s["unusable_examples"].values() for x in examples]
+            for pattern in expect.get("details", []):
+                if not any(re.search(pattern, d) for d in details):
+                    fail(cid, f"no unusable frame's detail matches /{pattern}/: {details}")
             if "unusable" in expect and doc["totals"]["unusable"] != expect["unusable"]:
                 fail(cid, f"expected {expect['unusable']} unusable frames, got {doc['totals']}")
             if "depth_errors" in expect:
@@ -288,7 +294,8 @@ def expected_text(e):
         return f"exit {e.get('exit', 1)}, one stderr line /{e['line']}/{extra}{fast}"
     if kind == "skipped":
         reasons = ", ".join(f"{n} x /{r}/" for r, n in e["reasons"].items())
-        return f"exit 0; scan --json counts {reasons}"
+        details = "".join(f", detail /{d}/" for d in e.get("details", []))
+        return f"exit 0; scan --json counts {reasons}{details}"
     if kind == "drops":
         return "exit 0; build summary drops " + ", ".join(f"{k} = {n}" for k, n in e["drops"].items())
     if kind == "problem":

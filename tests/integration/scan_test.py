@@ -1,5 +1,7 @@
 """occgt scan --json on each real sample: schema-valid output (Draft 2020-12) and the
-expected counts; a bad input exits non-zero with one line naming the file."""
+expected counts; unusable frames counted by a stable reason, the first few listed with
+where their problem is ("pose_left.txt:11: non-finite value"); a bad input exits non-zero
+with one line naming the file."""
 import json
 import os
 import sys
@@ -26,6 +28,8 @@ def scan(root, fmt, *extra):
     for s in doc["scenes"]:
         assert s["usable"] + s["unusable"] == s["frames"]
         assert sum(s["unusable_reasons"].values()) == s["unusable"]
+        for reason, examples in s["unusable_examples"].items():
+            assert len(examples) == min(5, s["unusable_reasons"][reason]), (reason, examples)
     return doc
 
 
@@ -94,9 +98,47 @@ assert [s["name"] for s in doc["scenes"]] == ["scene_sample"]
 
 # Lost tracking is counted, not fatal.
 fixtures = os.path.join(common.SOURCE, "tests", "fixtures", "io")
-doc = scan(os.path.join(fixtures, "scannet_lost_tracking"), "scannet")
+lost = os.path.join(fixtures, "scannet_lost_tracking")
+doc = scan(lost, "scannet")
 assert doc["totals"]["unusable_reasons"] == {"depth: missing file": 1,
                                              "pose: non-finite pose entries (lost tracking)": 2}
+assert doc["scenes"][0]["unusable_examples"] == {
+    "depth: missing file": [{"frame": "0", "detail": ""}],
+    "pose: non-finite pose entries (lost tracking)": [
+        {"frame": n, "detail": os.path.join(lost, "pose", n + ".txt") + ":1: non-finite value"}
+        for n in ("7", "12")]}, doc["scenes"][0]["unusable_examples"]
+
+# Issue #32: a NaN on line 11 of a TartanAir pose_left.txt (frame 000010) and on the six lines
+# after it. Frames are unusable, the scene is not; scan counts one reason and lists the first
+# five frames with the file and line; `occgt pair` on frame 000010 says where.
+src = common.shared("tartanair/hospital_sample")
+nan_traj = os.path.join(common.scratch("scan_nan_pose"), "P000")
+os.makedirs(nan_traj)
+for name in ("depth_left", "image_left"):
+    os.symlink(os.path.join(src, name), os.path.join(nan_traj, name))
+pose_lines = open(os.path.join(src, "pose_left.txt")).read().splitlines()
+for i in range(10, 17):
+    pose_lines[i] = "nan " + " ".join(pose_lines[i].split()[1:])
+pose_file = os.path.join(nan_traj, "pose_left.txt")
+with open(pose_file, "w") as f:
+    f.write("\n".join(pose_lines) + "\n")
+doc = scan(nan_traj, "tartanair")
+s = doc["scenes"][0]
+assert s["frames"] == 24 and s["usable"] == 17, s
+assert s["unusable_reasons"] == {"pose: non-finite pose entries": 7}, s["unusable_reasons"]
+assert s["unusable_examples"] == {"pose: non-finite pose entries": [
+    {"frame": "%06d" % n, "detail": f"{pose_file}:{n + 1}: non-finite value"}
+    for n in range(10, 15)]}, s["unusable_examples"]
+text = common.occgt("scan", nan_traj, "--format", "tartanair").stdout
+assert ("  unusable 7: pose: non-finite pose entries\n"
+        f"    frame 000010: {pose_file}:11: non-finite value\n") in text, text
+assert f"    frame 000014: {pose_file}:15: non-finite value\n    ... and 2 more\n" in text, text
+r = common.occgt("pair", "--root", nan_traj, "--format", "tartanair", "--scene", "P000",
+                 "--frames", "000000,000010",
+                 "--out", os.path.join(common.scratch("scan_nan_pair"), "out"), check=False)
+assert r.returncode == 2, (r.returncode, r.stderr)  # it names a flag: a usage error
+assert r.stderr == ("occgt: error: --frames: frame 000010 is unusable: pose: non-finite pose "
+                    f"entries; {pose_file}:11: non-finite value\n"), r.stderr
 
 # Bad inputs: exit 1, one line on stderr naming the file, nothing on stdout.
 bad = [

@@ -31,12 +31,21 @@ a, b = scan(sens_root, "--check-depth"), scan(export_root, "--check-depth")
 assert [s["name"] for s in a["scenes"]] == ["seven", "synth"], a["scenes"]
 for sa, sb in zip(a["scenes"], b["scenes"]):
     for key in sa:
-        if key != "path":
+        if key == "unusable_examples":  # the same frames; each detail names its own file
+            frames = [{r: [x["frame"] for x in v] for r, v in s[key].items()} for s in (sa, sb)]
+            assert frames[0] == frames[1], (sa["name"], frames)
+        elif key != "path":
             assert sa[key] == sb[key], (sa["name"], key, sa[key], sb[key])
 synth = a["scenes"][1]
 assert synth["frames"] == 5 and synth["usable"] == 4, synth
+lost = "pose: non-finite pose entries (lost tracking)"
+sens_file = os.path.join(sens_root, "synth", "synth.sens")
+assert synth["unusable_examples"] == {
+    lost: [{"frame": "2", "detail": sens_file + ": frame 2: non-finite value"}]}, synth
+assert b["scenes"][1]["unusable_examples"][lost][0]["detail"] == \
+    os.path.join(export_root, "synth", "pose", "2.txt") + ":1: non-finite value", b["scenes"][1]
 text = common.occgt("scan", sens_root, "--format", "scannet").stdout
-assert "unusable 1: pose: non-finite pose entries (lost tracking)" in text, text
+assert f"unusable 1: {lost}\n    frame 2: {sens_file}: frame 2: non-finite value\n" in text, text
 
 # pair: every output file bit for bit (labels, matches, meta.json with its K and poses).
 for scene, frames, res in [("seven", "0,10", "320x240"), ("seven", "5,40", "160x120"),
@@ -115,6 +124,8 @@ with open(os.path.join(builds[0], "summary.json")) as f:
 r = common.occgt("pair", "--root", sens_root, "--format", "scannet", "--scene", "synth",
                  "--frames", "0,2", "--out", os.path.join(out, "pair_lost"), check=False)
 assert r.returncode != 0 and "lost tracking" in r.stderr, r.stderr
+assert r.stderr.rstrip().endswith(": frame 2 is unusable: " + lost + "; " + sens_file +
+                                  ": frame 2: non-finite value"), r.stderr
 
 # Damaged files: one line naming the .sens and the field, no crash, no huge allocation.
 with open(os.path.join(sens_root, "synth", "synth.sens"), "rb") as f:
@@ -168,5 +179,6 @@ with open(os.path.join(scene, "z.sens"), "wb") as f:
 r = common.occgt("pair", "--root", scene, "--format", "scannet", "--scene", "z", "--frames", "0,1",
                  "--out", os.path.join(out, "pair_z"), check=False)
 lines = r.stderr.strip().splitlines()
-assert r.returncode == 1 and len(lines) == 1 and "z.sens (depth payload at byte" in lines[0], r.stderr
+assert r.returncode == 1 and len(lines) == 1 and "z.sens: frame 0 (depth payload at byte" in lines[0], \
+    r.stderr
 print("sens: ok")

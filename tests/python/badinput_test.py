@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import sys
 import unittest
 from typing import Any, Dict
@@ -246,8 +247,13 @@ class BadInput(unittest.TestCase):
         scene = occgt.open_dataset(root, "generic").scene("synth_000")
         bad = scene.frames[1]
         self.assertFalse(bad.usable)
-        self.assertIn("orthonormal", bad.reason)
-        with self.assertRaisesRegex(ValueError, r"^frame_id: frame .* is unusable"):
+        self.assertEqual(bad.reason, "pose: rotation is not orthonormal (|R^T R - I| > 0.001)")
+        # Where: the manifest and the JSON field path of a row (all three rows are scaled alike).
+        self.assertRegex(bad.detail, "^" + re.escape(manifest) + r": frames\[1\]\.world_from_cam"
+                         r"\[[0-2]\]: rotation is not orthonormal \(\|R\^T R - I\| = 3 > 0\.001\)$")
+        self.assertEqual(scene.frames[0].detail, "")
+        with self.assertRaisesRegex(ValueError, r"^frame_id: frame .* is unusable: pose: rotation "
+                                    r"is not orthonormal .*; .*scene\.json: frames\[1\]"):
             scene.load(bad.id)
 
     def test_dense_volume(self) -> None:

@@ -34,9 +34,15 @@ class Sens(unittest.TestCase):
             a, b = self.sens.scene(name), self.export.scene(name)
             self.assertEqual([(f.id, f.usable, f.reason) for f in a.frames],
                              [(f.id, f.usable, f.reason) for f in b.frames])
+            details = {f.id: f.detail for f in b.frames}
             for f in a.frames:
                 if not f.usable:
                     self.assertIn("lost tracking", f.reason)
+                    # Where: the frame's index in the .sens, the pose file's line in the export.
+                    self.assertTrue(f.detail.endswith(f"{name}.sens: frame {f.id}: non-finite value"),
+                                    f.detail)
+                    self.assertTrue(details[f.id].endswith(
+                        os.path.join("pose", f.id + ".txt") + ":1: non-finite value"), details[f.id])
                     continue
                 for x, y in zip(a.load(f.id, *size), b.load(f.id, *size)):
                     np.testing.assert_array_equal(x, y)

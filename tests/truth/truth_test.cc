@@ -10,8 +10,8 @@
 #include <string>
 
 #include "libgt/core/error.h"
-#include "libgt/geometry/pair.h"
 #include "libgt/datasets/reader.h"
+#include "libgt/geometry/pair.h"
 #include "libgt/occupancy/pair_occupancy.h"
 #include "libgt/synth/dataset.h"
 #include "libgt/truth/pair_truth.h"
@@ -88,6 +88,12 @@ TEST(FindFrame, NamesUnknownAndUnusableFramesAndSuggestsTheIdOfANumber) {
   EXPECT_NE(u.find("--x: frame " + scene.frames[2].id + " is unusable: pose: non-finite"),
             std::string::npos)
       << u;
+  // With a detail (where the reader found it), the message adds it.
+  scene.frames[2].unusable_detail = "pose_left.txt:3: non-finite value";
+  const std::string d = ErrorOf([&] { FindFrame(scene, scene.frames[2].id, "--x"); });
+  EXPECT_EQ(d, "--x: frame " + scene.frames[2].id +
+                   " is unusable: pose: non-finite pose entries (lost tracking); pose_left.txt:3: "
+                   "non-finite value");
 }
 
 TEST(LoadWorkingFrame, ResizesNearestAndRescalesK) {
