@@ -7,9 +7,13 @@
 #   scripts/fuzz.sh --seconds S     every target, at most S seconds each (no run limit)
 #   scripts/fuzz.sh --only NAME     only fuzz_NAME (may be repeated), with any of the above
 #
+# The targets run OCCGT_FUZZ_JOBS at a time (default: the cores, at most 2), one core each;
+# the summary lines come in target order.
+#
 # Installs clang-14 and libclang-rt-14-dev when missing (idempotent), configures
 # build-fuzz/ with clang, ASan + UBSan and -DOCCGT_BUILD_FUZZ=ON, builds only the fuzz
-# targets (they need gt_core and gt_io, not the PCL/OctoMap layers), builds each target's
+# targets (gt_core and gt_io; fuzz_recipe links gt_pipeline and so the layers below it,
+# the PCL/OctoMap sources included), builds each target's
 # seed corpus from ../shared/data and tests/fixtures (tests/fuzz/make_seeds.py), runs
 # each target on its corpus and exits non-zero when any target crashes, leaks, hits UB,
 # times out or runs out of memory. The corpus grows in build-fuzz/corpus/<target>/; crash
@@ -83,33 +87,52 @@ rm -rf "$seeds"
 
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:halt_on_error=1:abort_on_error=1:allocator_may_return_null=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
-failed=()
 logs="$build/logs"
 mkdir -p "$logs"
-for name in "${targets[@]}"; do
-  short="${name#fuzz_}"
-  corpus="$build/corpus/$short"
-  artifacts="$build/artifacts/$short/"
+# run_target NAME: one target on its corpus; its output goes to $logs/<short>.log, its exit
+# code to $logs/<short>.rc and its summary line to $logs/<short>.summary.
+run_target() {
+  local name="$1" short="${1#fuzz_}"
+  local corpus="$build/corpus/$short" artifacts="$build/artifacts/$short/"
   mkdir -p "$corpus" "$artifacts"
-  limit=(-runs="$runs")
+  local limit=(-runs="$runs")
   ((seconds > 0)) && limit=(-max_total_time="$seconds")
   # Inputs up to the largest seed, between 64 KiB and 256 KiB: the real samples (npz
   # 72 KB, 7-Scenes depth PNG 90 KB) fit whole; a real 1.2 MB TartanAir .npy is cut,
   # which keeps its real header while each execution stays fast.
+  local max_len
   max_len=$(find "$seeds/$short" -type f -printf '%s\n' | sort -n | tail -1)
   ((${max_len:-0} < 65536)) && max_len=65536
   ((max_len > 262144)) && max_len=262144
+  local start rc=0
   start=$(date +%s)
-  set +e
   "$build/tests/fuzz/$name" "${limit[@]}" -max_len="$max_len" -timeout=20 -rss_limit_mb=3072 \
     -print_final_stats=1 -artifact_prefix="$artifacts" "$corpus" "$seeds/$short" \
-    >"$logs/$short.log" 2>&1
-  rc=$?
-  set -e
-  took=$(($(date +%s) - start))
+    >"$logs/$short.log" 2>&1 || rc=$?
+  local took=$(($(date +%s) - start)) stats execs
   stats="$(grep -E '^#[0-9]+.*(DONE|INITED|REDUCE|NEW|pulse)' "$logs/$short.log" | tail -1 || true)"
   execs="$(grep -E '^stat::number_of_executed_units' "$logs/$short.log" | awk '{print $2}' || true)"
-  echo "fuzz.sh: $name rc=$rc ${took}s execs=${execs:-?} ${stats#*	}" >&2
+  echo "fuzz.sh: $name rc=$rc ${took}s execs=${execs:-?} ${stats#*	}" >"$logs/$short.summary"
+  echo "$rc" >"$logs/$short.rc"
+}
+# The targets run $jobs at a time (each is one process on one core); the summaries are
+# printed in target order.
+rm -f "$logs"/*.rc "$logs"/*.summary
+running=0
+for name in "${targets[@]}"; do
+  if ((running >= jobs)); then
+    wait -n || true
+    running=$((running - 1))
+  fi
+  run_target "$name" &
+  running=$((running + 1))
+done
+wait || true
+failed=()
+for name in "${targets[@]}"; do
+  short="${name#fuzz_}"
+  cat "$logs/$short.summary" >&2 2>/dev/null || echo "fuzz.sh: $name did not report" >&2
+  rc="$(cat "$logs/$short.rc" 2>/dev/null || echo 1)"
   if ((rc != 0)); then
     failed+=("$name")
     grep -E 'ERROR|SUMMARY|unexpected|does not name|Test unit written' "$logs/$short.log" | head -8 >&2 || true
