@@ -97,6 +97,10 @@ struct Scene {
   std::string path;                                // folder (or manifest) the scene was read from
   double min_depth_m = kDefaultMinDepthM;  // the reader's validity range (recipes may override)
   double max_depth_m = kDefaultMaxDepthM;
+  // The scene's triangle mesh in the frames' world frame (ScanNet's <scene>_vh_clean_2.ply,
+  // ScanNet++'s scans/mesh_aligned_0.05.ply, or a path from the recipe); "" when none.
+  // Depth rendered from it (docs/GROUND_TRUTH.md "Depth sources") uses the frames' poses.
+  std::string mesh_path;
   std::vector<Frame> frames;  // sorted by number
 
   size_t NumUsable() const {
