@@ -3,7 +3,8 @@ the way a trainer would: tarfile + numpy grouping members by key, every array's 
 dtype, labels consistent with metrics, cells and matches; JSON validated against schemas/;
 LoFTR test.npz read with numpy. Then: two runs give byte-identical shards, a deleted shard
 is rebuilt by a re-run and nothing else is rewritten, a 2-task split gives the same files,
---dry-run writes nothing, and bad recipes fail before any work with one line."""
+--dry-run writes nothing, and bad recipes fail before any work with one line.
+Under a sanitizer the recipe is built at half its width and height (common.py)."""
 import glob
 import gzip
 import io
@@ -189,14 +190,22 @@ def file_bytes(out, pattern):
 
 
 def main():
+    import yaml
     recipe = os.path.join(common.SOURCE, "recipes", "demo.yaml")
     root = common.scratch("build_demo")
+    with open(recipe) as f:
+        doc = yaml.safe_load(f)
+    width, height = common.half_size_when_sanitized(doc)
+    if common.SANITIZER:  # the same recipe at half the size (common.py)
+        recipe = os.path.join(root, "demo-half.yaml")
+        with open(recipe, "w") as f:
+            yaml.safe_dump(doc, f)
     out = os.path.join(root, "a")
     r = common.occgt("build", "--json", recipe, "--out", out)
     summary_stdout = json.loads(r.stdout)
     validate(summary_stdout, "summary.schema.json")
     assert "[write]" in r.stderr and "[select]" in r.stderr
-    keys, metas, lines, summary = read_split(out, "demo", 320, 240)
+    keys, metas, lines, summary = read_split(out, "demo", width, height)
     assert len(keys) == 24, len(keys)  # 2 scenes, quota 12
     assert summary["pairs_per_scene"] == {"synth_000": 12, "synth_001": 12}
     for p in lines:
@@ -210,7 +219,6 @@ def main():
     assert [int(x) for x in t["name"][:, 2]] == [p["frame0"]["number"] for p in lines]
 
     # LoFTR train export (ScanNet style) of the same recipe: names and overlap scores.
-    import yaml
     with open(recipe) as f:
         doc = yaml.safe_load(f)
     doc["loftr_export"] = {"kind": "train"}

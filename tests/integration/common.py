@@ -8,6 +8,23 @@ BINARY = os.environ.get("OCCGT_BINARY", "")
 SHARED = os.environ.get("OCCGT_SHARED_DATA", "")
 SOURCE = os.environ.get("OCCGT_SOURCE_DIR", "")
 SCRATCH = os.environ.get("OCCGT_SCRATCH", "/tmp/occgt-scratch")
+# "asan" or "tsan" when scripts/test-sanitize runs the test (it exports OCCGT_SANITIZER),
+# "" otherwise. The tests that run many builds then build their recipes at half the width
+# and height (half_size_when_sanitized): the same code paths, threads, file layout and
+# checks on a quarter of the pixels, which is what keeps the sanitizer stages of CI short
+# (docs/RELIABILITY.md "CI time").
+SANITIZER = os.environ.get("OCCGT_SANITIZER", "")
+
+
+def half_size_when_sanitized(doc):
+    """Under a sanitizer, halves a recipe's working resolution (and a synthetic dataset's
+    image size, which must match it); returns the recipe's (width, height) either way."""
+    if SANITIZER:
+        doc["resolution"] = [doc["resolution"][0] // 2, doc["resolution"][1] // 2]
+        synthetic = doc.get("dataset", {}).get("synthetic")
+        if synthetic is not None:
+            synthetic["width"], synthetic["height"] = doc["resolution"]
+    return tuple(doc["resolution"])
 
 
 def shared(rel):

@@ -11,7 +11,8 @@
 3. `--tasks 3` (select then write, every task one process), then `occgt merge` publishing
    index.json and pairs.jsonl, gives the same files as one process.
 (build_demo_test covers the default thread count against --threads 1 and a 2-task split
-whose last task publishes the indices.)"""
+whose last task publishes the indices.)
+Under a sanitizer both recipes are built at half their width and height (common.py)."""
 import glob
 import json
 import os
@@ -32,6 +33,7 @@ def make_recipe(root):
     doc["name"] = doc["split"] = "crash"
     doc["dataset"]["synthetic"].update(scenes=3, frames=24)
     doc["shards"] = {"samples_per_shard": 4}
+    common.half_size_when_sanitized(doc)
     path = os.path.join(root, "crash.yaml")
     with open(path, "w") as f:
         yaml.safe_dump(doc, f)
@@ -101,6 +103,13 @@ def main():
     common.shared("sevenscenes")
     env = dict(os.environ, OCCGT_SHARED_DATA=common.SHARED)
     seven = os.path.join(common.SOURCE, "recipes", "sevenscenes-sample.yaml")
+    if common.SANITIZER:
+        with open(seven) as f:
+            doc = yaml.safe_load(f)
+        common.half_size_when_sanitized(doc)
+        seven = os.path.join(root, "sevenscenes-half.yaml")
+        with open(seven, "w") as f:
+            yaml.safe_dump(doc, f)
     for threads in ("1", "2"):
         build(seven, os.path.join(root, "seven-t" + threads), "--threads", threads, env=env)
     n7 = common.assert_same_outputs(os.path.join(root, "seven-t2"), os.path.join(root, "seven-t1"))
