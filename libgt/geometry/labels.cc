@@ -491,8 +491,10 @@ void LabelDirectionBits(const DepthImage& depth_a, const Camera& cam_a,
   kernels.reserve(targets.size());
   columns.reserve(targets.size());
   for (const BitTarget& t : targets) {
-    if (t.depth_b == nullptr || t.cam_b == nullptr) throw InputError("targets", "expected a depth map and a camera");
-    if (t.bit < 0 || t.bit > 31) throw InputError("bit", "expected 0..31, got " + std::to_string(t.bit));
+    if (t.depth_b == nullptr || t.cam_b == nullptr)
+      throw InputError("targets", "expected a depth map and a camera");
+    if (t.bit < 0 || t.bit > 31)
+      throw InputError("bit", "expected 0..31, got " + std::to_string(t.bit));
     CheckInputs(depth_a, cam_a, *t.depth_b, *t.cam_b, options);
     kernels.push_back(MakeKernel(cam_a, *t.cam_b, t.b_from_a, *t.depth_b, options));
     columns.emplace_back(kernels.back(), cam_a.width, 1);

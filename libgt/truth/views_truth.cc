@@ -25,8 +25,8 @@ constexpr int kRowsPerTask = 32;
 // Uniform in [0, n) from the raw outputs of the generator (rejection: no modulo bias), so
 // the draws are the same with every standard library.
 uint64_t UniformBelow(uint64_t n, std::mt19937_64* rng) {
-  const uint64_t limit = std::numeric_limits<uint64_t>::max() -
-                         std::numeric_limits<uint64_t>::max() % n;
+  const uint64_t limit =
+      std::numeric_limits<uint64_t>::max() - std::numeric_limits<uint64_t>::max() % n;
   for (;;) {
     const uint64_t x = (*rng)();
     if (x < limit) return x % n;
@@ -50,16 +50,16 @@ void CheckViews(const std::vector<WorkingFrame>& views) {
     if (d.width != d0.width || d.height != d0.height ||
         d.values_m.size() != static_cast<size_t>(d.width) * d.height) {
       std::ostringstream msg;
-      msg << "expected " << d0.width << "x" << d0.height << " (the size of view 0), got "
-          << d.width << "x" << d.height;
+      msg << "expected " << d0.width << "x" << d0.height << " (the size of view 0), got " << d.width
+          << "x" << d.height;
       throw InputError(ViewField(i, "depth"), msg.str());
     }
     std::string error;
     if (!f.camera.Check(&error)) throw InputError(ViewField(i, "K"), error);
     if (f.camera.width != d.width || f.camera.height != d.height) {
       std::ostringstream msg;
-      msg << "expected a camera of the depth map's size " << d.width << "x" << d.height
-          << ", got " << f.camera.width << "x" << f.camera.height;
+      msg << "expected a camera of the depth map's size " << d.width << "x" << d.height << ", got "
+          << f.camera.width << "x" << f.camera.height;
       throw InputError(ViewField(i, "K"), msg.str());
     }
     if (const auto problem = PoseProblem(f.world_from_cam.matrix())) {
@@ -221,8 +221,8 @@ ViewsTruth ComputeViewsTruth(const std::vector<WorkingFrame>& views,
   const int q = options.query_view;
   out.query_view = q;
   const WorkingFrame& fq = views[q];
-  out.queries = queries_uv ? *queries_uv
-                           : SampleQueries(*fq.depth, lo, options.num_tracks, options.seed);
+  out.queries =
+      queries_uv ? *queries_uv : SampleQueries(*fq.depth, lo, options.num_tracks, options.seed);
   if (out.queries.size() % 2 != 0) throw InputError("queries", "expected (u, v) pairs");
   for (size_t k = 0; k < out.queries.size(); k += 2) {
     const int u = out.queries[k], v = out.queries[k + 1];

@@ -287,10 +287,10 @@ py::dict ViewsGroundTruth(py::handle depths, py::handle Ks, py::handle world_fro
     const gt::DepthImage& di = *views[i].depth;
     const gt::DepthImage& d0 = *views[0].depth;
     if (di.width != d0.width || di.height != d0.height) {
-      ThrowValue("depths" + index, "expected (" + std::to_string(d0.height) + ", " +
-                                       std::to_string(d0.width) + ") (the shape of depths[0]), got (" +
-                                       std::to_string(di.height) + ", " +
-                                       std::to_string(di.width) + ")");
+      ThrowValue("depths" + index,
+                 "expected (" + std::to_string(d0.height) + ", " + std::to_string(d0.width) +
+                     ") (the shape of depths[0]), got (" + std::to_string(di.height) + ", " +
+                     std::to_string(di.width) + ")");
     }
   }
   std::optional<std::vector<int32_t>> query_uv;

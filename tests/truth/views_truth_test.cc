@@ -2,6 +2,8 @@
 // directly here) for every ordered pair, the diagonal included, bit for bit; tracks equal the
 // pair warps at the query pixels; statistics against a count done here; the same result with
 // 1 and 2 threads; the sampling rule; bad inputs named.
+#include "libgt/truth/views_truth.h"
+
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
@@ -16,7 +18,6 @@
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/synth/dataset.h"
-#include "libgt/truth/views_truth.h"
 #include "libgt/truth/working_frame.h"
 #include "tests/support/test_support.h"
 
@@ -258,8 +259,9 @@ TEST(ComputeViewsTruth, BadInputsAreNamed) {
   q.query_view = 2;
   EXPECT_EQ(ErrorOf([&] { ComputeViewsTruth(few, q); }),
             "options: query_view: expected < 2 (the number of views), got 2");
-  EXPECT_NE(ErrorOf([&] { ComputeViewsTruth(few, o, std::vector<int32_t>{80, 0}); })
-                .find("queries: expected pixels (u, v) inside the 80x60 image, got (80, 0)"),
+  EXPECT_NE(ErrorOf([&] {
+              ComputeViewsTruth(few, o, std::vector<int32_t>{80, 0});
+            }).find("queries: expected pixels (u, v) inside the 80x60 image, got (80, 0)"),
             std::string::npos);
   ViewsTruthOptions neg = o;
   neg.num_tracks = -1;
