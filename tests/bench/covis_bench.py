@@ -2,7 +2,7 @@
 """The covisibility graph of one long synthetic room (docs/PERFORMANCE.md, "Covisibility graph").
 
     tests/bench/covis_bench.py [--binary build/apps/occgt] [--frames 2000] [--threads 2]
-        [--scratch /tmp/occgt-covis-bench] [--pruning default|none]
+        [--scratch /tmp/occgt-covis-bench] [--pruning default|none] [--frame-stride S]
 
 Generates `occgt synth --frames N --resolution 640x480` once (kept in the scratch folder),
 then times `occgt covis` of a generic-format recipe over it: every pair of kept frames is a
@@ -26,7 +26,7 @@ RECIPE = """name: covis-bench
 split: covis-bench
 seed: 0
 resolution: [640, 480]
-dataset: {{format: generic, root: {root}, frame_stride: 1, min_valid_depth_fraction: 0.3}}
+dataset: {{format: generic, root: {root}, frame_stride: {stride}, min_valid_depth_fraction: 0.3}}
 labels: {{preset: default}}
 selection:
   pruning: {pruning}
@@ -45,6 +45,8 @@ def main() -> int:
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--scratch", default="/tmp/occgt-covis-bench")
     ap.add_argument("--pruning", choices=sorted(PRUNING), default="default")
+    ap.add_argument("--frame-stride", type=int, default=1,
+                    help="keep every n-th frame of the room (how the cost grows with frames)")
     args = ap.parse_args()
     data = os.path.join(args.scratch, f"synth{args.frames}")
     if not os.path.isdir(data):
@@ -53,10 +55,11 @@ def main() -> int:
                         str(args.frames), "--resolution", "640x480", "--seed", "0"], check=True,
                        stdout=subprocess.DEVNULL)
         print(f"synth: {time.perf_counter() - t0:.1f} s", file=sys.stderr)
-    recipe = os.path.join(args.scratch, f"covis{args.frames}-{args.pruning}.yaml")
+    tag = f"{args.frames}-s{args.frame_stride}-{args.pruning}"
+    recipe = os.path.join(args.scratch, f"covis{tag}.yaml")
     with open(recipe, "w") as f:
-        f.write(RECIPE.format(root=data, pruning=PRUNING[args.pruning]))
-    out = os.path.join(args.scratch, f"out{args.frames}-{args.pruning}")
+        f.write(RECIPE.format(root=data, pruning=PRUNING[args.pruning], stride=args.frame_stride))
+    out = os.path.join(args.scratch, f"out{tag}")
     subprocess.run(["rm", "-rf", out], check=True)
     t0 = time.perf_counter()
     r = subprocess.run([args.binary, "covis", recipe, "--out", out, "--threads",
@@ -64,7 +67,8 @@ def main() -> int:
     wall = time.perf_counter() - t0
     s = json.loads(r.stdout)
     rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-    print(f"frames {args.frames}, threads {args.threads}, pruning {args.pruning}: "
+    print(f"frames {args.frames} / stride {args.frame_stride}, threads {args.threads}, "
+          f"pruning {args.pruning}: "
           f"wall {wall:.1f} s, candidates {s['candidates']}, scored {s['pairs_scored']} "
           f"({s['pairs_scored'] / max(s['candidates'], 1):.3f}), "
           f"{s['pairs_scored'] / wall:.0f} pairs/s, peak RSS {rss:.0f} MB, drops {s['drops']}")
