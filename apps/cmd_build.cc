@@ -55,10 +55,12 @@ std::optional<int> EnvIndex(const char* name) {
   return static_cast<int>(v);
 }
 
+}  // namespace
+
 // Task layout of a Slurm array task: task = SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN,
 // tasks = SLURM_ARRAY_TASK_COUNT. The array must be contiguous with step 1 (0-7, or 1-8),
 // so that the tasks cover 0..tasks-1 exactly once. False when not in an array job.
-bool TaskFromSlurm(gt::pipeline::BuildOptions* build) {
+bool TaskFromSlurm(int* task, int* tasks) {
   const std::optional<int> id = EnvIndex("SLURM_ARRAY_TASK_ID");
   if (!id) return false;
   const int min = EnvIndex("SLURM_ARRAY_TASK_MIN").value_or(0);
@@ -87,10 +89,12 @@ bool TaskFromSlurm(gt::pipeline::BuildOptions* build) {
                              std::to_string(*id) + " (SLURM_ARRAY_TASK_MIN " + std::to_string(min) +
                              ")");
   }
-  build->task = *id - min;
-  build->tasks = *count;
+  *task = *id - min;
+  *tasks = *count;
   return true;
 }
+
+namespace {
 
 void PrintProgress(const gt::pipeline::Progress& p) {
   static const bool tty = ::isatty(STDERR_FILENO);
@@ -191,7 +195,7 @@ std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
 void Run(const BuildArgs& args_in) {
   BuildArgs args = args_in;
   args.build.stage = gt::pipeline::ParseStage(args.stage, "--stage");
-  const bool from_slurm = !args.task_given && TaskFromSlurm(&args.build);
+  const bool from_slurm = !args.task_given && TaskFromSlurm(&args.build.task, &args.build.tasks);
   gt::pipeline::RecipeOverrides overrides;
   overrides.root = args.root;
   const gt::pipeline::Recipe recipe = gt::pipeline::LoadRecipe(args.recipe, overrides);

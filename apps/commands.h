@@ -20,5 +20,10 @@ std::string DefaultSchemasDir();
 void AddBuildCommand(CLI::App& app);    // cmd_build.cc
 void AddInspectCommand(CLI::App& app);  // cmd_inspect.cc
 void AddEvalCommand(CLI::App& app);     // cmd_eval.cc
+void AddCovisCommand(CLI::App& app);    // cmd_covis.cc
+void AddTuplesCommand(CLI::App& app);   // cmd_tuples.cc
+// Task layout of a Slurm array task (SLURM_ARRAY_TASK_ID - MIN of COUNT; cmd_build.cc): false
+// when not in an array job; InputError naming the variable for an inconsistent array.
+bool TaskFromSlurm(int* task, int* tasks);
 
 }  // namespace occgt

@@ -61,6 +61,8 @@ int main(int argc, char** argv) {
   occgt::AddBuildCommand(app);
   occgt::AddInspectCommand(app);
   occgt::AddEvalCommand(app);
+  occgt::AddCovisCommand(app);
+  occgt::AddTuplesCommand(app);
   // Usage errors (docs/CLI.md): one line, exit 2. Bad input (files, data): one line, exit 1.
   const std::vector<std::string> args(argv + 1, argv + argc);
   if (const std::optional<int> code = occgt::HandleHelpOrUnknownCommand(app, args)) return *code;

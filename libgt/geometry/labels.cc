@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "libgt/core/error.h"
 
@@ -119,22 +121,30 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
 // u = 0, stride, 2·stride, … (the same for every row; the kernel adds b·v + c per row).
 struct Columns {
   std::vector<float> x, y, z;
+  Columns() = default;
   Columns(const Kernel& kn, int n, int stride) : x(n), y(n), z(n) {
+    for (int i = 0; i < n; ++i) Set(kn, i, i * stride);
+  }
+  // Entry i for column u (the same float products as above).
+  void Set(const Kernel& kn, int i, int u) {
     const float ax = static_cast<float>(kn.a[0]), ay = static_cast<float>(kn.a[1]),
                 az = static_cast<float>(kn.a[2]);
-    for (int i = 0; i < n; ++i) {
-      const float u = static_cast<float>(i * stride);  // exact (below 2^24)
-      x[i] = ax * u;
-      y[i] = ay * u;
-      z[i] = az * u;
-    }
+    const float uf = static_cast<float>(u);  // exact (below 2^24)
+    x[i] = ax * uf;
+    y[i] = ay * uf;
+    z[i] = az * uf;
   }
 };
 
 // Labels the n sampled pixels u = 0, stride, 2·stride, … (cols) of row v of A, whose depths are
-// dep[0 .. n): codes[i] = PixelLabel code (int32, so that the loop runs on 32-bit lanes
-// only) and xy[2i], xy[2i + 1] = warped (x, y) (NaN where not projected) if kMaps; else
-// adds the number of pixels of each label to counts[0 .. 6) (metrics: no maps written).
+// dep[0 .. n), and, by mode:
+//   kMaps    codes[i] = PixelLabel code (int32, so that the loop runs on 32-bit lanes only)
+//            and xy[2i], xy[2i + 1] = warped (x, y) (NaN where not projected);
+//   kCounts  adds the number of pixels of each label to counts[0 .. 6) (metrics: no maps);
+//   kBits    sets bit `bit` of vis[i] / occ[i] when the label is VISIBLE / OCCLUDED (the
+//            N-view bitmasks; other bits untouched);
+//   kPoints  as kMaps, and z[i] = the projected depth (NaN where not projected).
+// Every mode computes the label with the same operations, so they agree label for label.
 //
 // float32, like the tensors of LoFTR / Occ²Net: the per-row coefficients a, r = b·v + c, k
 // are computed in double and rounded once; every threshold is converted to the float that
@@ -151,13 +161,30 @@ struct Columns {
 // gives bit-identical results.
 // The body is a template inlined into two non-template clone sets (clang refuses
 // target_clones on a function template; g++ inlines the body and vectorises each clone).
-template <bool kMaps>
-inline __attribute__((always_inline)) void LabelRowBody(
-    const Kernel& kn, const Columns& cols, const float* __restrict dep, int n, int v,
-    int32_t* __restrict codes, float* __restrict xy, int64_t* __restrict counts) {
-  const float* __restrict col_x = cols.x.data();
-  const float* __restrict col_y = cols.y.data();
-  const float* __restrict col_z = cols.z.data();
+enum class RowMode { kMaps, kCounts, kBits, kPoints };
+struct RowOut {
+  int32_t* __restrict codes = nullptr;  // kMaps, kPoints
+  float* __restrict xy = nullptr;       // kMaps, kPoints
+  float* __restrict z = nullptr;        // kPoints
+  int64_t* __restrict counts = nullptr;  // kCounts
+  uint32_t* __restrict vis = nullptr;    // kBits
+  uint32_t* __restrict occ = nullptr;    // kBits
+  int bit = 0;                           // kBits
+};
+template <RowMode kMode>
+inline __attribute__((always_inline)) void LabelRowBody(const Kernel& kn,
+                                                        const float* __restrict col_x,
+                                                        const float* __restrict col_y,
+                                                        const float* __restrict col_z,
+                                                        const float* __restrict dep, int n, int v,
+                                                        const RowOut& out) {
+  constexpr bool kMaps = kMode == RowMode::kMaps || kMode == RowMode::kPoints;
+  int32_t* __restrict codes = out.codes;
+  float* __restrict xy = out.xy;
+  float* __restrict zs = out.z;
+  uint32_t* __restrict vis = out.vis;
+  uint32_t* __restrict occ = out.occ;
+  const int bit = out.bit;
   const auto f = [](double x) { return static_cast<float>(x); };
   const double vv = v;
   const float rx = f(kn.b[0] * vv + kn.c[0]);
@@ -174,7 +201,7 @@ inline __attribute__((always_inline)) void LabelRowBody(
   const float ty_cap = std::nextafter(static_cast<float>(kn.height_b), 0.0f);
   const float* __restrict depth_b = kn.depth_b;
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  int32_t c0 = 0, c1 = 0, c2 = 0, c3 = 0, c4 = 0;  // per-label counts (!kMaps; 5 = the rest)
+  int32_t c0 = 0, c1 = 0, c2 = 0, c3 = 0, c4 = 0;  // per-label counts (kCounts; 5 = the rest)
   for (int i = 0; i < n; ++i) {
     const float d = dep[i];
     const float z = d * (col_z[i] + rz) + kz;
@@ -201,6 +228,10 @@ inline __attribute__((always_inline)) void LabelRowBody(
       codes[i] = label;
       xy[2 * i] = projected ? x : nan;
       xy[2 * i + 1] = projected ? y : nan;
+      if constexpr (kMode == RowMode::kPoints) zs[i] = projected ? z : nan;
+    } else if constexpr (kMode == RowMode::kBits) {
+      vis[i] |= static_cast<uint32_t>(label == 2) << bit;
+      occ[i] |= static_cast<uint32_t>(label == 3) << bit;
     } else {
       c0 += label == 0;
       c1 += label == 1;
@@ -209,7 +240,8 @@ inline __attribute__((always_inline)) void LabelRowBody(
       c4 += label == 4;
     }
   }
-  if constexpr (!kMaps) {
+  if constexpr (kMode == RowMode::kCounts) {
+    int64_t* __restrict counts = out.counts;
     counts[0] += c0;
     counts[1] += c1;
     counts[2] += c2;
@@ -222,13 +254,40 @@ inline __attribute__((always_inline)) void LabelRowBody(
 __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRowMaps(
     const Kernel& kn, const Columns& cols, const float* __restrict dep, int n, int v,
     int32_t* __restrict codes, float* __restrict xy) {
-  LabelRowBody<true>(kn, cols, dep, n, v, codes, xy, nullptr);
+  RowOut out;
+  out.codes = codes;
+  out.xy = xy;
+  LabelRowBody<RowMode::kMaps>(kn, cols.x.data(), cols.y.data(), cols.z.data(), dep, n, v, out);
 }
 
 __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRowCounts(
     const Kernel& kn, const Columns& cols, const float* __restrict dep, int n, int v,
     int64_t* __restrict counts) {
-  LabelRowBody<false>(kn, cols, dep, n, v, nullptr, nullptr, counts);
+  RowOut out;
+  out.counts = counts;
+  LabelRowBody<RowMode::kCounts>(kn, cols.x.data(), cols.y.data(), cols.z.data(), dep, n, v,
+                                 out);
+}
+
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRowBits(
+    const Kernel& kn, const Columns& cols, const float* __restrict dep, int n, int v, int bit,
+    uint32_t* __restrict vis, uint32_t* __restrict occ) {
+  RowOut out;
+  out.vis = vis;
+  out.occ = occ;
+  out.bit = bit;
+  LabelRowBody<RowMode::kBits>(kn, cols.x.data(), cols.y.data(), cols.z.data(), dep, n, v, out);
+}
+
+// One pixel (column entry i of cols, row v, depth d): its code, (x, y) and z.
+void LabelPoint(const Kernel& kn, const Columns& cols, int i, float d, int v, int32_t* code,
+                float* xy, float* z) {
+  RowOut out;
+  out.codes = code;
+  out.xy = xy;
+  out.z = z;
+  LabelRowBody<RowMode::kPoints>(kn, cols.x.data() + i, cols.y.data() + i, cols.z.data() + i, &d,
+                                 1, v, out);
 }
 
 // labels[i] = codes[i] for i < n, and counts[k] += the number of codes k (0 .. 5; every
@@ -417,6 +476,72 @@ DirectionLabels LabelDirection(const DepthImage& depth_a, const Camera& cam_a,
     StoreLabels(codes.data(), out.width, out.labels.data() + w * v, counts.data());
   }
   out.counts = counts;
+  return out;
+}
+
+void LabelDirectionBits(const DepthImage& depth_a, const Camera& cam_a,
+                        const std::vector<BitTarget>& targets, const LabelOptions& options,
+                        int row_begin, int row_end, uint32_t* visible_bits,
+                        uint32_t* occluded_bits) {
+  if (row_begin < 0 || row_end > cam_a.height || row_begin > row_end) {
+    throw InputError("rows", "expected 0 <= begin <= end <= " + std::to_string(cam_a.height));
+  }
+  std::vector<Kernel> kernels;
+  std::vector<Columns> columns;
+  kernels.reserve(targets.size());
+  columns.reserve(targets.size());
+  for (const BitTarget& t : targets) {
+    if (t.depth_b == nullptr || t.cam_b == nullptr)
+      throw InputError("targets", "expected a depth map and a camera");
+    if (t.bit < 0 || t.bit > 31)
+      throw InputError("bit", "expected 0..31, got " + std::to_string(t.bit));
+    CheckInputs(depth_a, cam_a, *t.depth_b, *t.cam_b, options);
+    kernels.push_back(MakeKernel(cam_a, *t.cam_b, t.b_from_a, *t.depth_b, options));
+    columns.emplace_back(kernels.back(), cam_a.width, 1);
+  }
+  const size_t w = static_cast<size_t>(cam_a.width);
+  for (int v = row_begin; v < row_end; ++v) {
+    const float* dep = depth_a.values_m.data() + v * w;
+    for (size_t t = 0; t < targets.size(); ++t) {
+      LabelRowBits(kernels[t], columns[t], dep, cam_a.width, v, targets[t].bit,
+                   visible_bits + v * w, occluded_bits + v * w);
+    }
+  }
+}
+
+PointLabels LabelPoints(const DepthImage& depth_a, const Camera& cam_a, const DepthImage& depth_b,
+                        const Camera& cam_b, const Rigid3d& b_from_a, const LabelOptions& options,
+                        const std::vector<int32_t>& pixels_uv) {
+  CheckInputs(depth_a, cam_a, depth_b, cam_b, options);
+  if (pixels_uv.size() % 2 != 0) throw InputError("pixels", "expected (u, v) pairs");
+  const size_t q = pixels_uv.size() / 2;
+  const Kernel kn = MakeKernel(cam_a, cam_b, b_from_a, depth_b, options);
+  Columns cols;
+  cols.x.resize(q);
+  cols.y.resize(q);
+  cols.z.resize(q);
+  for (size_t i = 0; i < q; ++i) {
+    const int u = pixels_uv[2 * i], v = pixels_uv[2 * i + 1];
+    if (u < 0 || u >= cam_a.width || v < 0 || v >= cam_a.height) {
+      std::ostringstream msg;
+      msg << "expected pixels inside the " << cam_a.width << "x" << cam_a.height
+          << " image, got (" << u << ", " << v << ") at " << i;
+      throw InputError("pixels", msg.str());
+    }
+    cols.Set(kn, static_cast<int>(i), u);
+  }
+  PointLabels out;
+  out.labels.resize(q);
+  out.xy.resize(2 * q);
+  out.z_m.resize(q);
+  const size_t w = static_cast<size_t>(cam_a.width);
+  for (size_t i = 0; i < q; ++i) {
+    const int u = pixels_uv[2 * i], v = pixels_uv[2 * i + 1];
+    int32_t code = 0;
+    LabelPoint(kn, cols, static_cast<int>(i), depth_a.values_m[v * w + u], v, &code,
+               &out.xy[2 * i], &out.z_m[i]);
+    out.labels[i] = static_cast<uint8_t>(code);
+  }
   return out;
 }
 

@@ -153,6 +153,38 @@ DirectionLabels LabelDirection(const DepthImage& depth_a, const Camera& cam_a,
                                const DepthImage& depth_b, const Camera& cam_b,
                                const Rigid3d& b_from_a, const LabelOptions& options);
 
+// The N-view form of LabelDirection (views_truth.h): labels A against several targets
+// with the same row kernel (so every label equals LabelDirection's) and keeps two bits per
+// target. For each target t and each pixel p of rows [row_begin, row_end) of A, bit
+// targets[t].bit of visible_bits[p] (occluded_bits[p]) is set when p is kVisible
+// (kOccluded) in that target; other bits are left as they are. visible_bits and
+// occluded_bits point to A's whole [height, width] row-major array. Rows are labelled
+// outer, targets inner (a row's words stay in L1). Throws InputError as LabelDirection, and
+// ("bit"/"rows") for a bit outside 0..31 or a row range outside A.
+struct BitTarget {
+  const DepthImage* depth_b = nullptr;  // [H_B, W_B] of cam_b's size
+  const Camera* cam_b = nullptr;
+  Rigid3d b_from_a = Rigid3d::Identity();
+  int bit = 0;  // 0..31
+};
+void LabelDirectionBits(const DepthImage& depth_a, const Camera& cam_a,
+                        const std::vector<BitTarget>& targets, const LabelOptions& options,
+                        int row_begin, int row_end, uint32_t* visible_bits,
+                        uint32_t* occluded_bits);
+
+// Labels of single pixels of A in B, with the same kernel (label for label and bit for bit
+// LabelDirection's labels and warped_xy at those pixels), and the projected depth.
+// pixels_uv: [Q * 2] int32 (u, v), each inside A (InputError("pixels") otherwise).
+struct PointLabels {
+  std::vector<uint8_t> labels;  // [Q] PixelLabel codes
+  std::vector<float> xy;        // [Q * 2] (x, y) in B's pixels; NaN where not projected
+  std::vector<float> z_m;       // [Q] z of the point in B's camera (float32 as the kernel
+                                // computes it); NaN where not projected
+};
+PointLabels LabelPoints(const DepthImage& depth_a, const Camera& cam_a, const DepthImage& depth_b,
+                        const Camera& cam_b, const Rigid3d& b_from_a, const LabelOptions& options,
+                        const std::vector<int32_t>& pixels_uv);
+
 // Metrics of one direction (GROUND_TRUTH.md §3) over the sampled grid: pixels (u, v) with
 // u % score_stride == 0 and v % score_stride == 0 (stride 1 = every pixel).
 struct DirectionMetrics {

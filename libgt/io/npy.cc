@@ -1,5 +1,6 @@
 // NumPy .npy / .npz reading and writing (rules in npy.h and SHARDS.md).
 #include "libgt/io/npy.h"
+#include "libgt/io/npz_members.h"
 
 #include <zip.h>
 
@@ -396,19 +397,35 @@ void WriteNpy(const std::string& path, const std::vector<int64_t>& shape,
 
 namespace {
 
-// The members of an open archive; `path` names it in messages.
-std::map<std::string, NpyArray> ReadNpzMembers(zip_t* archive, const std::string& path);
+// The members of an open archive as .npy bytes; `path` names it in messages.
+std::map<std::string, std::string> ReadNpzMemberBytes(zip_t* archive, const std::string& path);
 
-}  // namespace
+std::map<std::string, NpyArray> ReadNpzMembers(zip_t* archive, const std::string& path) {
+  std::map<std::string, NpyArray> out;
+  for (auto& [key, bytes] : ReadNpzMemberBytes(archive, path)) {
+    out.emplace(key, ParseNpy(bytes, path + ":" + key + ".npy"));
+  }
+  return out;
+}
 
-std::map<std::string, NpyArray> ReadNpz(const std::string& path) {
+std::unique_ptr<zip_t, ZipCloser> OpenNpz(const std::string& path) {
   int code = 0;
   std::unique_ptr<zip_t, ZipCloser> archive(zip_open(path.c_str(), ZIP_RDONLY, &code));
   if (!archive) {
     if (!FileExists(path)) throw InputError(path, "cannot open (no such file)");
     throw InputError(path, "not a readable .npz (zip) archive: " + ZipErrorText(code));
   }
-  return ReadNpzMembers(archive.get(), path);
+  return archive;
+}
+
+}  // namespace
+
+std::map<std::string, NpyArray> ReadNpz(const std::string& path) {
+  return ReadNpzMembers(OpenNpz(path).get(), path);
+}
+
+std::map<std::string, std::string> ReadNpzBytes(const std::string& path) {
+  return ReadNpzMemberBytes(OpenNpz(path).get(), path);
 }
 
 std::map<std::string, NpyArray> ParseNpz(std::string_view bytes, const std::string& name) {
@@ -434,8 +451,8 @@ std::map<std::string, NpyArray> ParseNpz(std::string_view bytes, const std::stri
 
 namespace {
 
-std::map<std::string, NpyArray> ReadNpzMembers(zip_t* archive, const std::string& path) {
-  std::map<std::string, NpyArray> out;
+std::map<std::string, std::string> ReadNpzMemberBytes(zip_t* archive, const std::string& path) {
+  std::map<std::string, std::string> out;
   const zip_int64_t count = zip_get_num_entries(archive, 0);
   for (zip_int64_t i = 0; i < count; ++i) {
     zip_stat_t st;
@@ -477,7 +494,7 @@ std::map<std::string, NpyArray> ReadNpzMembers(zip_t* archive, const std::string
     if (bytes.size() != st.size) throw InputError(where, "member shorter than declared");
     std::string key = member.substr(0, member.size() - suffix.size());
     if (out.count(key) != 0) throw InputError(where, "duplicate member");
-    out.emplace(std::move(key), ParseNpy(bytes, where));
+    out.emplace(std::move(key), std::move(bytes));
   }
   return out;
 }

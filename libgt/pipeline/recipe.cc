@@ -565,6 +565,14 @@ json Recipe::ToJson() const {
       {"balance_bins", selection.balance_bins},
       {"import_pairs",
        {{"format", selection.import_pairs.format}, {"path", selection.import_pairs.path}}}};
+  if (tuples) {  // only when set, so that recipes without tuples keep their digest
+    j["selection"]["views"] = {tuples->min_views, tuples->max_views};
+    j["selection"]["tuples"] = {{"edge_threshold", tuples->edge_threshold},
+                                {"pair_covisibility", {tuples->pair_lo, tuples->pair_hi}},
+                                {"min_spread", tuples->min_spread_score},
+                                {"restarts", tuples->restarts},
+                                {"quota_per_scene", tuples->quota}};
+  }
   // The values the keys resolve to (defaults included); max_range_m only when set apart
   // from far_m, so that recipes without it keep their digest.
   truth::PairSettings settings = RecipePairSettings(*this);
@@ -701,6 +709,34 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     }
     Get(s, "quota_per_scene", &o.quota_per_scene, file);
     Get(s, "balance_bins", &o.balance_bins, file);
+    if (s.contains("views") || s.contains("tuples")) {
+      if (!s.contains("views")) {
+        throw InputError(file, "selection.tuples: expected selection.views (N or [min, max]) "
+                               "beside it");
+      }
+      pairs::TupleOptions t;
+      const json& v = s["views"];
+      if (v.is_array()) {
+        t.min_views = v[0].get<int>();
+        t.max_views = v[1].get<int>();
+      } else {
+        t.min_views = t.max_views = v.get<int>();
+      }
+      if (s.contains("tuples")) {
+        const json& tj = s["tuples"];
+        Get(tj, "edge_threshold", &t.edge_threshold, file);
+        if (tj.contains("pair_covisibility")) {
+          t.pair_lo = tj["pair_covisibility"][0].get<double>();
+          t.pair_hi = tj["pair_covisibility"][1].get<double>();
+        }
+        Get(tj, "min_spread", &t.min_spread_score, file);
+        Get(tj, "restarts", &t.restarts, file);
+        Get(tj, "quota_per_scene", &t.quota, file);
+      }
+      std::string error;
+      if (!t.Check(&error)) throw InputError(file, "selection." + error);
+      r.tuples = t;
+    }
     if (s.contains("import_pairs")) {
       Get(s["import_pairs"], "format", &o.import_pairs.format, file);
       o.import_pairs.path = ResolvePath(s["import_pairs"]["path"].get<std::string>(),

@@ -27,6 +27,7 @@
 #include "libgt/occupancy/fusion.h"
 #include "libgt/occupancy/pair_occupancy.h"
 #include "libgt/pairs/selection.h"
+#include "libgt/pairs/tuples.h"
 #include "libgt/pipeline/sample.h"
 #include "libgt/truth/pair_settings.h"
 
@@ -116,6 +117,9 @@ struct Recipe {
   LoftrScore loftr_score = LoftrScore::kOverlap;  // loftr_export.score
   bool gluefactory_export = false;  // DIR/gluefactory/: glue-factory's posed-image layout
   bool dust3r_export = false;       // DIR/dust3r/: DUSt3R's preprocessed ScanNet++ layout
+  // selection.views (N or [min, max]) and selection.tuples: the N-view tuples of `occgt
+  // tuples` (pairs/tuples.h); unset: the recipe has no tuples (and its digest is unchanged).
+  std::optional<pairs::TupleOptions> tuples;
 
   // Cross-field checks after the schema (ranges lo <= hi, stride divides the resolution,
   // near < far ...). On failure *error is "<field>: expected ...".

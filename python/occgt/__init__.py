@@ -12,6 +12,8 @@ Functions:
     dense_volume       occupancy words -> uint8 [bins, H/2, W/2] (0 free, 1 occupied, 255 unknown)
     open_dataset       occgt's dataset readers: scenes, frames, frames at a working resolution
     pair_from_scene    pair_ground_truth of two frames of a scene, as ``occgt pair`` computes it
+    views_ground_truth N views (N <= 32): per-pixel visibility of every view in every other
+                       view as bitmasks, and tracks of query pixels with a state per view
 
 Bad arguments raise ValueError naming the argument (``"depth0: expected ..."``). The work runs
 without the GIL, so threads calling these functions run in parallel. Docs: docs/PYTHON.md.
@@ -19,14 +21,14 @@ without the GIL, so threads calling these functions run in parallel. Docs: docs/
 from __future__ import annotations
 
 import os
-from typing import Any, Dict, Optional, Tuple, TypedDict, Union
+from typing import Any, Dict, Optional, Sequence, Tuple, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
 
 from . import _occgt
-from ._occgt import (FORMATS, LABEL_NAMES, MATCH_TYPE_NAMES, PRESETS, Dataset, Frame, Scene,
-                     ScopeMap)
+from ._occgt import (FORMATS, LABEL_NAMES, MATCH_TYPE_NAMES, PRESETS, TRACK_STATE_NAMES, Dataset,
+                     Frame, Scene, ScopeMap)
 
 __version__: str = _occgt.__version__
 
@@ -43,6 +45,7 @@ __all__ = [
     "MATCH_TYPE_NAMES",
     "PAIR_DEFAULTS",
     "PRESETS",
+    "TRACK_STATE_NAMES",
     "Dataset",
     "Frame",
     "FusionStats",
@@ -66,6 +69,13 @@ __all__ = [
     "pair_from_scene",
     "pair_ground_truth",
     "pair_options",
+    "views_ground_truth",
+    "ViewsGroundTruth",
+    "TRACK_VISIBLE",
+    "TRACK_OCCLUDED",
+    "TRACK_OUT_OF_VIEW",
+    "TRACK_NO_DEPTH",
+    "TRACK_INCONSISTENT",
 ]
 
 #: Label codes (uint8) of label01/label10/cells0/cells1 (LABEL_NAMES[code] is the name):
@@ -84,6 +94,16 @@ UNKNOWN: int = LABEL_NAMES.index("UNKNOWN")
 VV: int = MATCH_TYPE_NAMES.index("vv")
 VO: int = MATCH_TYPE_NAMES.index("vo")
 OV: int = MATCH_TYPE_NAMES.index("ov")
+
+#: Track state codes (uint8) of views_ground_truth's track_state (TRACK_STATE_NAMES[code]):
+#: VISIBLE the view sees the point; OCCLUDED a surface of the view lies in front of it;
+#: OUT_OF_VIEW behind the view's camera or outside its image; NO_DEPTH the query pixel has no
+#: depth or the view has none where the point lands; INCONSISTENT the view sees past the point.
+TRACK_VISIBLE: int = TRACK_STATE_NAMES.index("VISIBLE")
+TRACK_OCCLUDED: int = TRACK_STATE_NAMES.index("OCCLUDED")
+TRACK_OUT_OF_VIEW: int = TRACK_STATE_NAMES.index("OUT_OF_VIEW")
+TRACK_NO_DEPTH: int = TRACK_STATE_NAMES.index("NO_DEPTH")
+TRACK_INCONSISTENT: int = TRACK_STATE_NAMES.index("INCONSISTENT")
 
 #: What Scene.load returns: (depth float32 [H, W] metres, K float64 [3, 3], world_from_cam
 #: float64 [4, 4]).
@@ -279,6 +299,86 @@ def pair_options(preset: str = _D["preset"], **options: Any) -> Dict[str, Any]:
         ValueError: a bad value, naming the argument; TypeError: an unknown keyword.
     """
     result: Dict[str, Any] = _occgt.pair_options(preset, **options)
+    return result
+
+
+class ViewsGroundTruth(TypedDict):
+    """What views_ground_truth returns (N views of H x W, Q tracks)."""
+
+    visible_in: npt.NDArray[np.uint32]  # [N, H, W] bit j: the pixel is VISIBLE in view j
+    occluded_in: npt.NDArray[np.uint32]  # [N, H, W] bit j: the pixel is OCCLUDED in view j
+    valid: npt.NDArray[np.uint8]  # [N, H, W] 1: the view's own depth is valid
+    seen_by: npt.NDArray[np.uint8]  # [N, H, W] other views in which the pixel is VISIBLE
+    seen_by_histogram: npt.NDArray[np.int64]  # [N, N] [i, k]: valid pixels seen by k others
+    query_view: int
+    queries: npt.NDArray[np.int32]  # [Q, 2] (u, v) pixels of the query view
+    track_xy: npt.NDArray[np.float32]  # [N, Q, 2] (x, y) in each view; NaN: not projected
+    track_depth: npt.NDArray[np.float32]  # [N, Q] z in each view's camera (m); NaN: not projected
+    track_state: npt.NDArray[np.uint8]  # [N, Q] TRACK_STATE_NAMES codes
+    label_options: Dict[str, Any]  # the resolved label options (a shard's label_options)
+
+
+def views_ground_truth(
+    depths: Union[npt.ArrayLike, Sequence[npt.ArrayLike]],
+    Ks: Union[npt.ArrayLike, Sequence[npt.ArrayLike]],
+    world_from_cams: Union[npt.ArrayLike, Sequence[npt.ArrayLike]],
+    *,
+    preset: str = _D["preset"],
+    queries: Optional[npt.ArrayLike] = None,
+    num_tracks: int = 512,
+    query_view: int = 0,
+    seed: int = 0,
+    abs_tol_m: Optional[float] = None,
+    rel_tol: Optional[float] = None,
+    min_depth_m: Optional[float] = None,
+    max_depth_m: Optional[float] = None,
+    relative_to: Optional[str] = None,
+    bounds: Optional[str] = None,
+    target_lookup: Optional[str] = None,
+    missing_target: Optional[str] = None,
+    dataset_depth_range: Optional[Tuple[float, float]] = None,
+    dataset_min_depth_m: Optional[float] = None,
+    dataset_max_depth_m: Optional[float] = None,
+) -> ViewsGroundTruth:
+    """The dense ground truth of N posed depth views (C++ ``truth::ComputeViewsTruth``,
+    docs/MULTIVIEW.md), from the pair labels: bit j of ``visible_in[i]`` is pixel-for-pixel
+    ``pair_ground_truth(depths[i], depths[j], ...)["label01"] == VISIBLE`` (the same options),
+    the diagonal j == i included; the same for ``occluded_in`` and OCCLUDED.
+
+    Args:
+        depths: N depth maps of one size [H, W] (a list, or one array [N, H, W]), float32 or
+            float64, planar metres; 1 <= N <= 32.
+        Ks: N intrinsics [3, 3] at the depth maps' size (a list or [N, 3, 3]).
+        world_from_cams: N camera-to-world poses [4, 4] (a list or [N, 4, 4]), OpenCV axes,
+            rigid as for pair_ground_truth.
+        preset, abs_tol_m, rel_tol, min_depth_m, max_depth_m, relative_to, bounds,
+            target_lookup, missing_target, dataset_depth_range, dataset_min_depth_m,
+            dataset_max_depth_m: the label options, exactly as pair_ground_truth's.
+        queries: integer [Q, 2] (u, v) pixels of the query view to track; None: sample
+            num_tracks of its valid pixels (seeded, without replacement, returned in raster
+            order; all of them when there are fewer).
+        num_tracks: how many to sample (>= 0) when queries is None.
+        query_view: the view whose pixels are the queries, 0..N-1.
+        seed: of the sampling (the same seed gives the same queries on every machine).
+
+    Returns:
+        A dict (ViewsGroundTruth) of arrays that own their memory. ``track_xy[j]`` is the
+        pair warp of the queries into view j (bit for bit), ``track_state[j]`` the state
+        (TRACK_STATE_NAMES) of the pair label query_view -> j, ``track_depth[j]`` the point's
+        depth in view j's camera. VGGT's ``tracks`` is track_xy and its ``track_vis_mask`` is
+        ``track_state == TRACK_VISIBLE``.
+
+    Raises:
+        ValueError: a bad argument, naming it (more than 32 views, mismatched counts or
+            shapes, a pose that is not rigid, a query outside the image, a bad option).
+    """
+    result: ViewsGroundTruth = _occgt.views_ground_truth(
+        depths, Ks, world_from_cams, preset=preset, queries=queries, num_tracks=num_tracks,
+        query_view=query_view, seed=seed, abs_tol_m=abs_tol_m, rel_tol=rel_tol,
+        min_depth_m=min_depth_m, max_depth_m=max_depth_m, relative_to=relative_to,
+        bounds=bounds, target_lookup=target_lookup, missing_target=missing_target,
+        dataset_depth_range=dataset_depth_range, dataset_min_depth_m=dataset_min_depth_m,
+        dataset_max_depth_m=dataset_max_depth_m)
     return result
 
 

@@ -24,6 +24,19 @@ def pair_ground_truth(
     **options: Any,
 ) -> Any: ...  # occgt.PairGroundTruth
 def pair_options(preset: str = ..., **options: Any) -> Dict[str, Any]: ...
+TRACK_STATE_NAMES: Tuple[str, ...]  # index = uint8 code of views_ground_truth's track_state
+def views_ground_truth(
+    depths: Any,
+    Ks: Any,
+    world_from_cams: Any,
+    *,
+    preset: str = ...,
+    queries: Optional[npt.ArrayLike] = ...,
+    num_tracks: int = ...,
+    query_view: int = ...,
+    seed: int = ...,
+    **options: Any,
+) -> Any: ...  # occgt.ViewsGroundTruth
 def gunzip(gz: Any, what: str) -> bytearray: ...  # bytes-like gzip member in
 # (descr, fortran_order, shape, data_offset) of the .npy member buf[offset:offset + size]
 def npy_header(buf: Any, offset: int, size: int, what: str) -> Tuple[str, bool, Tuple[int, ...], int]: ...

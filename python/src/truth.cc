@@ -21,6 +21,7 @@
 #include "libgt/truth/pair_files.h"
 #include "libgt/truth/pair_settings.h"
 #include "libgt/truth/pair_truth.h"
+#include "libgt/truth/views_truth.h"
 #include "libgt/truth/working_frame.h"
 #include "python/src/convert.h"
 #include "python/src/scope_map.h"
@@ -66,11 +67,12 @@ std::optional<T> Take(py::dict* kwargs, const char* name) {
   }
 }
 
-PairArguments ArgumentsFromKwargs(const std::string& preset, const py::kwargs& given) {
-  py::dict kw(given);  // a copy: keys are removed as they are read
-  PairArguments a;
-  gt::truth::PairSettings& st = a.settings;
-  gt::truth::LabelSettings& ls = st.labels;
+// The label keywords (and the dataset's depth range) of kw into *a, removed from kw: shared
+// by pair_ground_truth, pair_options and views_ground_truth.
+void TakeLabelArguments(const std::string& preset, py::dict* kw_ptr, PairArguments* a_ptr) {
+  py::dict& kw = *kw_ptr;
+  PairArguments& a = *a_ptr;
+  gt::truth::LabelSettings& ls = a.settings.labels;
   Named("preset", [&] { gt::LabelPreset(preset); });  // a bad name names the argument
   ls.preset = preset;
   ls.abs_tol_m = Take<double>(&kw, "abs_tol_m");
@@ -86,6 +88,26 @@ PairArguments ArgumentsFromKwargs(const std::string& preset, const py::kwargs& g
   if (auto v = Take<std::string>(&kw, "missing_target")) {
     ls.missing_target = gt::ParseMissingTarget(*v, "missing_target");
   }
+  if (auto v = Take<std::pair<double, double>>(&kw, "dataset_depth_range")) {
+    a.range.min_depth_m = v->first;
+    a.range.max_depth_m = v->second;
+  }
+  a.range.set_min_depth_m = Take<double>(&kw, "dataset_min_depth_m");
+  a.range.set_max_depth_m = Take<double>(&kw, "dataset_max_depth_m");
+}
+
+void RejectUnknownKeywords(const py::dict& kw) {
+  for (const auto& item : kw) {
+    throw py::type_error("got an unexpected keyword argument '" + std::string(py::str(item.first)) +
+                         "'");
+  }
+}
+
+PairArguments ArgumentsFromKwargs(const std::string& preset, const py::kwargs& given) {
+  py::dict kw(given);  // a copy: keys are removed as they are read
+  PairArguments a;
+  gt::truth::PairSettings& st = a.settings;
+  TakeLabelArguments(preset, &kw, &a);
   if (auto v = Take<int>(&kw, "stride")) st.patches.stride = *v;
   if (auto v = Take<std::string>(&kw, "anchor")) st.patches.anchor = gt::ParseAnchor(*v, "anchor");
   if (auto v = Take<bool>(&kw, "mutual")) st.patches.mutual = *v;
@@ -105,12 +127,6 @@ PairArguments ArgumentsFromKwargs(const std::string& preset, const py::kwargs& g
   if (auto v = Take<std::string>(&kw, "occupancy_mode")) {
     os.mode = Named("occupancy_mode", [&] { return gt::occupancy::ParseOccupancyMode(*v); });
   }
-  if (auto v = Take<std::pair<double, double>>(&kw, "dataset_depth_range")) {
-    a.range.min_depth_m = v->first;
-    a.range.max_depth_m = v->second;
-  }
-  a.range.set_min_depth_m = Take<double>(&kw, "dataset_min_depth_m");
-  a.range.set_max_depth_m = Take<double>(&kw, "dataset_max_depth_m");
   if (kw.contains("scope_map")) {
     const py::object m = kw["scope_map"];
     PyDict_DelItemString(kw.ptr(), "scope_map");
@@ -122,10 +138,7 @@ PairArguments ArgumentsFromKwargs(const std::string& preset, const py::kwargs& g
       a.scope_map = m.cast<const PyScopeMap*>();
     }
   }
-  for (const auto& item : kw) {
-    throw py::type_error("got an unexpected keyword argument '" + std::string(py::str(item.first)) +
-                         "'");
-  }
+  RejectUnknownKeywords(kw);
   return a;
 }
 
@@ -209,6 +222,118 @@ py::dict PairGroundTruth(py::handle depth0, py::handle depth1, py::handle K0, py
     out["fusion_stats"] =
         stats ? JsonToPython(gt::truth::FusionStatsJson(*stats)) : py::object(py::none());
   }
+  return out;
+}
+
+// A list/tuple of arrays, or one array stacked on its first axis, as a list of items named
+// "<argument>[i]" (item_ndim: the dimensions of one item).
+std::vector<py::object> Items(py::handle obj, const std::string& argument, int item_ndim) {
+  std::vector<py::object> items;
+  if (py::isinstance<py::list>(obj) || py::isinstance<py::tuple>(obj)) {
+    for (py::handle h : obj) items.push_back(py::reinterpret_borrow<py::object>(h));
+    return items;
+  }
+  const py::array a = AsArray(obj, argument);
+  if (a.ndim() != item_ndim + 1) {
+    ThrowValue(argument, "expected a list of arrays or one array of " +
+                             std::to_string(item_ndim + 1) + " dimensions, got shape " +
+                             ShapeText(a));
+  }
+  for (py::ssize_t i = 0; i < a.shape(0); ++i) items.push_back(a[py::int_(i)]);
+  return items;
+}
+
+py::dict ViewsGroundTruth(py::handle depths, py::handle Ks, py::handle world_from_cams,
+                          const std::string& preset, py::handle queries, int num_tracks,
+                          int query_view, uint64_t seed, const py::kwargs& given) {
+  py::dict kw(given);
+  PairArguments a;
+  TakeLabelArguments(preset, &kw, &a);
+  RejectUnknownKeywords(kw);
+  gt::truth::ViewsTruthOptions options;
+  options.labels = MakeOptions(a).labels;
+  options.num_tracks = num_tracks;
+  options.query_view = query_view;
+  options.seed = seed;
+  if (num_tracks < 0) ThrowValue("num_tracks", "expected >= 0, got " + std::to_string(num_tracks));
+  const std::vector<py::object> d = Items(depths, "depths", 2);
+  const std::vector<py::object> k = Items(Ks, "Ks", 2);
+  const std::vector<py::object> p = Items(world_from_cams, "world_from_cams", 2);
+  const size_t n = d.size();
+  if (n < 1 || n > static_cast<size_t>(gt::truth::kMaxViews)) {
+    ThrowValue("depths", "expected 1.." + std::to_string(gt::truth::kMaxViews) +
+                             " depth maps, got " + std::to_string(n));
+  }
+  if (k.size() != n) {
+    ThrowValue("Ks", "expected " + std::to_string(n) + " matrices (one per depth map), got " +
+                         std::to_string(k.size()));
+  }
+  if (p.size() != n) {
+    ThrowValue("world_from_cams", "expected " + std::to_string(n) +
+                                      " poses (one per depth map), got " +
+                                      std::to_string(p.size()));
+  }
+  if (query_view < 0 || static_cast<size_t>(query_view) >= n) {
+    ThrowValue("query_view", "expected 0.." + std::to_string(n - 1) + ", got " +
+                                 std::to_string(query_view));
+  }
+  std::vector<gt::truth::WorkingFrame> views(n);
+  for (size_t i = 0; i < n; ++i) {
+    const std::string index = "[" + std::to_string(i) + "]";
+    views[i].depth = DepthFromArray(d[i], "depths" + index);
+    views[i].camera =
+        CameraFromArray(k[i], views[i].depth->width, views[i].depth->height, "Ks" + index);
+    views[i].world_from_cam = PoseFromArray(p[i], "world_from_cams" + index);
+    const gt::DepthImage& di = *views[i].depth;
+    const gt::DepthImage& d0 = *views[0].depth;
+    if (di.width != d0.width || di.height != d0.height) {
+      ThrowValue("depths" + index,
+                 "expected (" + std::to_string(d0.height) + ", " + std::to_string(d0.width) +
+                     ") (the shape of depths[0]), got (" + std::to_string(di.height) + ", " +
+                     std::to_string(di.width) + ")");
+    }
+  }
+  std::optional<std::vector<int32_t>> query_uv;
+  if (!queries.is_none()) {
+    const py::array q = AsArray(queries, "queries");
+    if (q.ndim() != 2 || q.shape(1) != 2 || q.dtype().kind() == 'f' ||
+        (q.dtype().kind() != 'i' && q.dtype().kind() != 'u')) {
+      ThrowValue("queries", "expected an integer array [Q, 2] of (u, v) pixels, got " +
+                                DtypeText(q) + " " + ShapeText(q));
+    }
+    const py::array_t<int64_t, py::array::c_style | py::array::forcecast> q64(q);
+    query_uv.emplace(static_cast<size_t>(q64.size()));
+    const int64_t* src = q64.data();
+    for (py::ssize_t i = 0; i < q64.size(); ++i) {
+      const int64_t lim = i % 2 == 0 ? views[0].depth->width : views[0].depth->height;
+      if (src[i] < 0 || src[i] >= lim) {
+        ThrowValue("queries", "expected pixels (u, v) inside the " +
+                                  std::to_string(views[0].depth->width) + "x" +
+                                  std::to_string(views[0].depth->height) + " image, got " +
+                                  std::to_string(src[i]) + " at row " + std::to_string(i / 2));
+      }
+      (*query_uv)[static_cast<size_t>(i)] = static_cast<int32_t>(src[i]);
+    }
+  }
+  gt::truth::ViewsTruth t;
+  {
+    py::gil_scoped_release no_gil;
+    t = gt::truth::ComputeViewsTruth(views, options, query_uv);
+  }
+  const py::ssize_t nv = t.num_views, h = t.height, w = t.width;
+  const py::ssize_t nq = static_cast<py::ssize_t>(t.num_queries());
+  py::dict out;
+  out["visible_in"] = ToArray(std::move(t.visible_in), {nv, h, w});
+  out["occluded_in"] = ToArray(std::move(t.occluded_in), {nv, h, w});
+  out["valid"] = ToArray(std::move(t.valid), {nv, h, w});
+  out["seen_by"] = ToArray(std::move(t.seen_by), {nv, h, w});
+  out["seen_by_histogram"] = ToArray(std::move(t.seen_by_histogram), {nv, nv});
+  out["query_view"] = t.query_view;
+  out["queries"] = ToArray(std::move(t.queries), {nq, 2});
+  out["track_xy"] = ToArray(std::move(t.track_xy), {nv, nq, 2});
+  out["track_depth"] = ToArray(std::move(t.track_depth), {nv, nq});
+  out["track_state"] = ToArray(std::move(t.track_state), {nv, nq});
+  out["label_options"] = JsonToPython(gt::truth::LabelOptionsJson(options.labels));
   return out;
 }
 
@@ -319,6 +444,29 @@ void BindTruth(py::module_& m) {
       "The options pair_ground_truth resolves from the same arguments (its 'options' entry), "
       "without computing anything; see occgt.pair_options.");
   m.attr("PAIR_DEFAULTS") = PairDefaults();
+  m.def(
+      "views_ground_truth",
+      [](py::handle depths, py::handle Ks, py::handle world_from_cams, const std::string& preset,
+         py::handle queries, int num_tracks, int query_view, uint64_t seed,
+         const py::kwargs& kwargs) {
+        return ViewsGroundTruth(depths, Ks, world_from_cams, preset, queries, num_tracks,
+                                query_view, seed, kwargs);
+      },
+      "depths"_a, "Ks"_a, "world_from_cams"_a, py::kw_only(),
+      "preset"_a = gt::truth::LabelSettings().preset, "queries"_a = py::none(),
+      "num_tracks"_a = gt::truth::ViewsTruthOptions().num_tracks,
+      "query_view"_a = gt::truth::ViewsTruthOptions().query_view,
+      "seed"_a = gt::truth::ViewsTruthOptions().seed,
+      "The dense ground truth of N views (truth::ComputeViewsTruth); see "
+      "occgt.views_ground_truth.");
+  {
+    py::tuple names(gt::truth::kNumTrackStates);
+    for (int s = 0; s < gt::truth::kNumTrackStates; ++s) {
+      names[s] = gt::truth::TrackStateName(static_cast<gt::truth::TrackState>(s));
+    }
+    m.attr("TRACK_STATE_NAMES") = names;
+  }
+
   m.def("dense_volume", &DenseVolume, "occ"_a, "known"_a, "bins"_a = 64,
         "uint8 [bins, H/2, W/2] (0 free, 1 occupied, 255 unknown) of occupancy words "
         "(occupancy::DenseVolume); see occgt.dense_volume.");

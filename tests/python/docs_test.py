@@ -40,6 +40,8 @@ class Docs(unittest.TestCase):
         sys.stdout.write(printed)
         self.assertRegex(printed, r"overlap 0->1 0\.\d+, occlusion 0\.\d+")
         self.assertIn("OUT_OF_VIEW VISIBLE", printed)
+        self.assertRegex(printed, r"view 0: 0\.\d\d of its pixels seen by all 3 others")
+        self.assertRegex(printed, r"tracks \(4, 256, 2\) visible in every view: \d+")
         self.assertIn("depth0: expected a depth map of dtype float32 or float64", printed)
         # The training loop over a LoFTR index saw all 4 pairs, with matches and a finite loss.
         losses = re.findall(r"batch \[(\d+), (\d+)\]: (\d+) matches \((\d+) vv\), loss ([0-9.]+)",

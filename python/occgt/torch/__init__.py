@@ -20,6 +20,11 @@ A sample (a dict) has the same keys whichever dataset yields it:
   ``image0.png``) converted with ``cv2.COLOR_RGB2GRAY``, divided by 255; ``pair_names`` are
   ``("<scene>/<frame id>", "<scene>/<frame id>")``.
 - On request, ``color0``, ``color1`` uint8 [3, H, W] RGB (``ShardDataset(color=True)``).
+
+N-view tuples (``TupleIndexDataset``, docs/MULTIVIEW.md) have their own keys: VGGT's
+(``images``, ``depths``, ``extrinsics``, ``intrinsics``, ``point_masks``, ``tracks``,
+``track_vis_mask``) and occgt's (``visible_in``, ``occluded_in``, ``track_state``,
+``seen_by``); ``collate_tuples`` batches tuples of different sizes.
 """
 from __future__ import annotations
 
@@ -28,6 +33,7 @@ from .collate import VARIABLE_KEYS, Collate, collate
 from .pairs import PairIndexDataset, PairRef, read_pair_index
 from .shards import ShardDataset
 from .supervision import loftr_supervision
+from .tuples import TupleIndexDataset, TupleRef, collate_tuples, read_tuples
 
 __all__ = [
     "VARIABLE_KEYS",
@@ -35,6 +41,10 @@ __all__ = [
     "PairIndexDataset",
     "PairRef",
     "ShardDataset",
+    "TupleIndexDataset",
+    "TupleRef",
+    "collate_tuples",
+    "read_tuples",
     "collate",
     "loftr_supervision",
     "read_pair_index",

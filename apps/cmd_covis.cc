@@ -1,0 +1,101 @@
+// occgt covis RECIPE --out DIR [--dense] [--threads N] [--task K --tasks N] [--root PATH]
+//                   [--depth-cache-mb MB] [--json]
+// The covisibility graph of every scene of a recipe's dataset (libgt/pipeline/covisibility.h,
+// docs/MULTIVIEW.md): DIR/covisibility/<scene>.npz, and with --dense MapAnything's
+// DIR/covisibility/<scene>/pairwise_covisibility--FxF.npy. A re-run skips finished scenes;
+// without --task/--tasks a Slurm array task takes its place from SLURM_ARRAY_TASK_* (as
+// `occgt build`). This file parses flags and prints; the job is pipeline::RunCovisibility.
+#include <tbb/global_control.h>
+
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "apps/commands.h"
+#include "libgt/core/error.h"
+#include "libgt/pipeline/covisibility.h"
+#include "libgt/pipeline/recipe.h"
+
+namespace occgt {
+namespace {
+
+struct CovisArgs {
+  std::string recipe, root;
+  int threads = 0;
+  bool json = false;
+  bool task_given = false;
+  gt::pipeline::CovisibilityOptions options;
+};
+
+void Run(const CovisArgs& args_in) {
+  CovisArgs args = args_in;
+  if (!args.task_given) TaskFromSlurm(&args.options.task, &args.options.tasks);
+  if (args.threads < 0)
+    throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
+  std::string error;
+  if (!args.options.Check(&error)) {  // "--flag: expected ...": a usage error naming the flag
+    const size_t colon = error.find(": ");
+    throw gt::InputError(error.substr(0, colon), error.substr(colon + 2));
+  }
+  gt::pipeline::RecipeOverrides overrides;
+  overrides.root = args.root;
+  const gt::pipeline::Recipe recipe = gt::pipeline::LoadRecipe(args.recipe, overrides);
+  std::unique_ptr<tbb::global_control> limit;
+  if (args.threads > 0) {
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                  args.threads);
+  }
+  const nlohmann::json s =
+      gt::pipeline::RunCovisibility(recipe, args.options, [](int64_t done, int64_t total) {
+        std::fprintf(stderr, "[covis] %lld/%lld scenes\n", static_cast<long long>(done),
+                     static_cast<long long>(total));
+      });
+  if (args.json) {
+    std::cout << s.dump(2) << std::endl;
+  } else {
+    std::printf(
+        "%lld scenes written, %lld already complete; %lld of %lld candidate pairs scored "
+        "(%.1f s); graphs in %s/covisibility/\n",
+        static_cast<long long>(s["written"].get<int64_t>()),
+        static_cast<long long>(s["skipped_complete"].get<int64_t>()),
+        static_cast<long long>(s["pairs_scored"].get<int64_t>()),
+        static_cast<long long>(s["candidates"].get<int64_t>()), s["seconds"].get<double>(),
+        args.options.out_dir.c_str());
+  }
+}
+
+}  // namespace
+
+void AddCovisCommand(CLI::App& app) {
+  auto args = std::make_shared<CovisArgs>();
+  auto* cmd = app.add_subcommand(
+      "covis", "Covisibility graph of every scene of a recipe (docs/MULTIVIEW.md)");
+  cmd->add_option("recipe", args->recipe,
+                  "Recipe YAML file: dataset, resolution, labels, selection.pruning and "
+                  "selection.score_stride are used (docs/RECIPES.md)")
+      ->required();
+  cmd->add_option("--out", args->options.out_dir, "Output folder")->required();
+  cmd->add_flag("--dense", args->options.dense,
+                "Also write MapAnything's pairwise_covisibility--FxF.npy per scene");
+  cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)");
+  cmd->add_flag("--json", args->json, "Print the summary as JSON");
+  auto* task = cmd->add_option(
+      "--task", args->options.task,
+      "This task's index (0-based) when split in --tasks (default: from SLURM_ARRAY_TASK_ID)");
+  auto* tasks = cmd->add_option(
+      "--tasks", args->options.tasks,
+      "Number of tasks the run is split into (default: SLURM_ARRAY_TASK_COUNT, else 1)");
+  cmd->add_option("--depth-cache-mb", args->options.depth_cache_mb,
+                  "Budget of decoded depth maps held per scene (LRU, default 512)");
+  cmd->add_option(
+      "--root", args->root,
+      "Dataset root overriding the recipe's dataset.root (relative to the working folder)");
+  cmd->callback([args, task, tasks] {
+    args->task_given = task->count() > 0 || tasks->count() > 0;
+    Run(*args);
+  });
+}
+
+}  // namespace occgt

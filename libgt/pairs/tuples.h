@@ -1,0 +1,62 @@
+// Seeded N-view tuples grown on a scene's covisibility graph (docs/MULTIVIEW.md "Tuples"):
+// a walk with backtracking on the thresholded graph, as MapAnything samples its views.
+//
+// Graph: F frames, pairs (i, j) with both directions' visible overlap c_ij, c_ji
+// (pipeline/covisibility.h). The score of a pair is (c_ij + c_ji) / 2 (0 for a pair not in the
+// graph); two frames are neighbours when their score >= edge_threshold.
+//
+// One tuple: its size N is drawn in [min_views, max_views]; a start frame is drawn among the
+// frames with a neighbour; then, with a stack holding the walk, a frame is drawn among the
+// neighbours of the top of the stack that are not in the tuple and that keep every pair of
+// the tuple within [pair_lo, pair_hi] (the score of the new frame with each chosen one); it is
+// added and pushed; a top with no such neighbour is popped (backtracking). The walk stops at N
+// frames or an empty stack; up to `restarts` more walks start from a frame drawn among those
+// not tried yet; the first walk of N frames is the tuple, else the longest if it has at least
+// min_views frames, else none (counted). The spread bound: the tuple's smallest pair score
+// must be >= min_spread_score (0 = off; every pair then sees every other pair's views).
+// A tuple equal (as a set) to one drawn before is dropped and counted. `quota` tuples per
+// scene at most, from at most 4·quota + 16 draws.
+//
+// Determinism: std::mt19937_64(seed) raw outputs only (UniformBelow of selection.h),
+// candidate lists in increasing frame index; no threads. Frames of a tuple are listed in the
+// order they were added (the first is the start, a natural reference view).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "libgt/pairs/selection.h"
+
+namespace gt::pairs {
+
+struct TupleOptions {
+  int min_views = 2, max_views = 2;     // recipe `tuples.views`: N or [min, max]; 2..32
+  double edge_threshold = 0.25;         // neighbours: pair score >= this (MapAnything: 0.25)
+  double pair_lo = 0.0, pair_hi = 1.0;  // every pair of a tuple within [lo, hi]
+  double min_spread_score = 0.0;        // unused bound when 0 (see above)
+  int restarts = 4;                     // extra walks per tuple
+  int quota = 100;                      // tuples per scene (>= 1)
+
+  bool Check(std::string* error) const;
+};
+
+struct CovisibilityPairs {
+  int num_frames = 0;
+  std::vector<int32_t> i, j;      // i < j
+  std::vector<float> c_ij, c_ji;  // visible overlap of i → j and j → i
+};
+
+struct Tuple {
+  std::vector<int32_t> frames;  // indices into the graph's frames, in the order added
+};
+
+// Tuples of one scene; drops: "tuples.too_small" (no walk reached min_views),
+// "tuples.duplicate", "tuples.spread".
+std::vector<Tuple> SampleTuples(const CovisibilityPairs& graph, const TupleOptions& options,
+                                uint64_t seed, DropCounts* drops);
+
+// The pair score (c_ij + c_ji) / 2 of every pair of frames, dense [F, F] (diagonal 0).
+std::vector<float> PairScores(const CovisibilityPairs& graph);
+
+}  // namespace gt::pairs

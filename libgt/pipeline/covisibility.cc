@@ -1,0 +1,231 @@
+#include "libgt/pipeline/covisibility.h"
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "libgt/core/error.h"
+#include "libgt/datasets/reader.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/file_read.h"
+#include "libgt/io/folder_lock.h"
+#include "libgt/io/md5.h"
+#include "libgt/io/npy.h"
+#include "libgt/io/npz_members.h"
+#include "libgt/pipeline/select.h"
+#include "libgt/pipeline/synthetic.h"
+#include "libgt/truth/working_frame.h"
+
+namespace gt::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Strings as a NumPy unicode array (descr "<U<n>": UTF-32LE code units, n the longest).
+// Frame ids are bytes; each byte becomes one code unit (ids are ASCII in every reader).
+std::string EncodeStrings(const std::vector<std::string>& values) {
+  size_t n = 1;
+  for (const std::string& s : values) n = std::max(n, s.size());
+  std::string data(values.size() * n * 4, '\0');
+  for (size_t k = 0; k < values.size(); ++k) {
+    for (size_t c = 0; c < values[k].size(); ++c) {
+      data[(k * n + c) * 4] = values[k][c];
+    }
+  }
+  // EncodeNpy takes numeric dtypes only: the same .npy 1.0 layout written here (header
+  // padded with spaces and ended by '\n' so that the data starts at a multiple of 64).
+  std::string header = "{'descr': '<U" + std::to_string(n) +
+                       "', 'fortran_order': False, 'shape': (" + std::to_string(values.size()) +
+                       ",), }";
+  const size_t unpadded = 10 + header.size() + 1;
+  header.append((64 - unpadded % 64) % 64, ' ');
+  header.push_back('\n');
+  std::string out = std::string("\x93NUMPY\x01\x00", 8);
+  out.push_back(static_cast<char>(header.size() & 0xff));
+  out.push_back(static_cast<char>(header.size() >> 8));
+  return out + header + data;
+}
+
+// The digest stored in a graph (the recipe's md5, 32 hex characters), or "" when none.
+std::string StoredDigest(const std::string& path) {
+  const std::map<std::string, std::string> npz = io::ReadNpzBytes(path);  // frame_ids: '<U'
+  auto it = npz.find("options_digest");
+  if (it == npz.end()) return "";
+  return io::ParseNpy(it->second, path + ":options_digest.npy").data;
+}
+
+}  // namespace
+
+std::string CovisibilityDigest(const Recipe& recipe) {
+  const nlohmann::json r = recipe.ToJson();
+  nlohmann::json j = {{"resolution", r["resolution"]},
+                      {"dataset", r["dataset"]},
+                      {"labels", r["labels"]},
+                      {"pruning", r["selection"]["pruning"]},
+                      {"score_stride", r["selection"]["score_stride"]}};
+  j["dataset"].erase("root");
+  j["dataset"].erase("split_file");
+  j["dataset"].erase("scenes");
+  return io::Md5Hex(j.dump());
+}
+
+SceneCovisibility ComputeSceneCovisibility(const Recipe& r, const Scene& scene,
+                                           pairs::DepthCache* cache) {
+  using namespace pairs;  // NOLINT(google-build-using-namespace): the stage's vocabulary
+  std::vector<Camera> cams;
+  cams.reserve(scene.frames.size());
+  for (const Frame& f : scene.frames) cams.push_back(truth::WorkingCamera(f, {r.width, r.height}));
+  const LabelOptions labels = RecipePairTruthOptions(r, scene).labels;
+  SceneCovisibility out;
+  out.scene = scene.name;
+  out.score_stride = r.selection.score_stride;
+  FrameScanOptions scan;
+  scan.frame_stride = r.dataset.frame_stride;
+  scan.min_valid_depth_fraction = r.dataset.min_valid_depth_fraction;
+  scan.min_depth_m = labels.min_depth_m;
+  scan.max_depth_m = labels.max_depth_m;
+  const ScanResult scanned = ScanFrames(scene, scan, cache);
+  AddCounts(scanned.drops, &out.drops);
+  const std::vector<CandidatePair> candidates = GenerateCandidates(scanned.kept, 0);
+  out.candidates = static_cast<int64_t>(candidates.size());
+  const std::vector<CandidatePair> pruned = PruneCandidates(
+      scene, cams, candidates, scanned.median_depth_m, r.selection.pruning, &out.drops);
+  const std::vector<ScoredPair> scored =
+      ScorePairs(scene, cams, pruned, labels, r.selection.score_stride, cache, &out.drops);
+  // Kept frames → their position in frame_ids.
+  std::map<size_t, int32_t> position;
+  for (size_t k = 0; k < scanned.kept.size(); ++k) {
+    position[scanned.kept[k]] = static_cast<int32_t>(k);
+    out.frame_ids.push_back(scene.frames[scanned.kept[k]].id);
+    const size_t f = scanned.kept[k];
+    const std::shared_ptr<const DepthImage> d = cache->Get(f);
+    out.self.push_back(
+        static_cast<float>(ScoreDirection(*d, cams[f], *d, cams[f], Rigid3d::Identity(), labels,
+                                          r.selection.score_stride)
+                               .consistent_overlap));
+  }
+  for (const ScoredPair& s : scored) {  // candidate order: increasing (i0, i1)
+    out.i.push_back(position.at(s.pair.i0));
+    out.j.push_back(position.at(s.pair.i1));
+    out.c_ij.push_back(static_cast<float>(s.m01.consistent_overlap));
+    out.c_ji.push_back(static_cast<float>(s.m10.consistent_overlap));
+    out.o_ij.push_back(static_cast<float>(s.m01.overlap));
+    out.o_ji.push_back(static_cast<float>(s.m10.overlap));
+  }
+  return out;
+}
+
+std::vector<float> DenseCovisibility(const SceneCovisibility& g) {
+  const size_t f = g.frame_ids.size();
+  std::vector<float> c(f * f, 0.0f);
+  for (size_t k = 0; k < f; ++k) c[k * f + k] = g.self[k];
+  for (size_t p = 0; p < g.i.size(); ++p) {
+    const size_t i = static_cast<size_t>(g.i[p]), j = static_cast<size_t>(g.j[p]);
+    c[i * f + j] = g.c_ij[p];
+    c[j * f + i] = g.c_ji[p];
+  }
+  return c;
+}
+
+bool CovisibilityOptions::Check(std::string* error) const {
+  if (out_dir.empty()) return *error = "--out: expected a folder", false;
+  if (tasks < 1) return *error = "--tasks: expected an integer >= 1", false;
+  if (task < 0 || task >= tasks) return *error = "--task: expected 0 <= task < tasks", false;
+  if (depth_cache_mb < 1) return *error = "--depth-cache-mb: expected >= 1", false;
+  return true;
+}
+
+std::string CovisibilityPath(const std::string& out_dir, const std::string& scene) {
+  return out_dir + "/covisibility/" + SceneFileName(scene) + ".npz";
+}
+
+void WriteSceneCovisibility(const std::string& path, const SceneCovisibility& g,
+                            const std::string& options_digest) {
+  const int64_t p = static_cast<int64_t>(g.i.size());
+  const int64_t f = static_cast<int64_t>(g.frame_ids.size());
+  std::map<std::string, std::string> m;
+  m["frame_ids"] = EncodeStrings(g.frame_ids);
+  m["i"] = io::EncodeNpy<int32_t>({p}, g.i);
+  m["j"] = io::EncodeNpy<int32_t>({p}, g.j);
+  m["c_ij"] = io::EncodeNpy<float>({p}, g.c_ij);
+  m["c_ji"] = io::EncodeNpy<float>({p}, g.c_ji);
+  m["o_ij"] = io::EncodeNpy<float>({p}, g.o_ij);
+  m["o_ji"] = io::EncodeNpy<float>({p}, g.o_ji);
+  m["self"] = io::EncodeNpy<float>({f}, g.self);
+  m["score_stride"] = io::EncodeNpy<int32_t>({}, std::vector<int32_t>{g.score_stride});
+  m["options_digest"] = io::EncodeNpy("|u1", {static_cast<int64_t>(options_digest.size())},
+                                      options_digest.data(), options_digest.size());
+  fs::create_directories(fs::path(path).parent_path());
+  io::WriteNpz(path, m);
+}
+
+nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOptions& options,
+                               const std::function<void(int64_t, int64_t)>& progress) {
+  std::string error;
+  if (!options.Check(&error)) throw InputError("options", error);
+  const auto t0 = std::chrono::steady_clock::now();
+  Recipe recipe = recipe_in;
+  if (recipe.dataset.is_synthetic) {  // as the build: generated once under DIR/data
+    if (recipe.dataset.root.empty()) recipe.dataset.root = options.out_dir + "/data";
+    io::FolderLock lock(options.out_dir);
+    EnsureSyntheticDataset(recipe.dataset.root, recipe.dataset.synthetic);
+    recipe.dataset.is_synthetic = false;
+    recipe.dataset.format = DatasetFormat::kGeneric;
+  }
+  const std::string digest = CovisibilityDigest(recipe_in);
+  const std::unique_ptr<datasets::DatasetReader> reader =
+      datasets::MakeReader(recipe.dataset.format);
+  const std::vector<std::string> scenes = ResolveScenes(recipe, *reader, nullptr);
+  std::vector<std::string> mine;
+  for (size_t s = 0; s < scenes.size(); ++s) {
+    if (static_cast<int>(s % options.tasks) == options.task) mine.push_back(scenes[s]);
+  }
+  int64_t written = 0, skipped = 0, scored = 0, candidates = 0, done = 0;
+  pairs::DropCounts drops;
+  for (const std::string& name : mine) {
+    const std::string path = CovisibilityPath(options.out_dir, name);
+    if (io::FileExists(path)) {
+      const std::string stored = StoredDigest(path);
+      if (stored != digest) {
+        throw InputError(path, "written under another recipe (options digest " + stored +
+                                   ", this one " + digest +
+                                   "); remove it or write into another --out");
+      }
+      ++skipped;
+    } else {
+      const Scene scene = reader->ReadScene(recipe.dataset.root, name);
+      pairs::DepthCache cache(scene, recipe.width, recipe.height, options.depth_cache_mb << 20);
+      const SceneCovisibility g = ComputeSceneCovisibility(recipe, scene, &cache);
+      if (options.dense) {
+        const int64_t f = static_cast<int64_t>(g.frame_ids.size());
+        const std::string dir = options.out_dir + "/covisibility/" + SceneFileName(name);
+        fs::create_directories(dir);
+        io::WriteNpy<float>(
+            dir + "/pairwise_covisibility--" + std::to_string(f) + "x" + std::to_string(f) + ".npy",
+            {f, f}, DenseCovisibility(g));
+      }
+      WriteSceneCovisibility(path, g, digest);  // last: completes the scene
+      ++written;
+      scored += static_cast<int64_t>(g.i.size());
+      candidates += g.candidates;
+      pairs::AddCounts(g.drops, &drops);
+    }
+    if (progress) progress(++done, static_cast<int64_t>(mine.size()));
+  }
+  nlohmann::json out = {{"scenes", static_cast<int64_t>(scenes.size())},
+                        {"scenes_this_task", static_cast<int64_t>(mine.size())},
+                        {"written", written},
+                        {"skipped_complete", skipped},
+                        {"candidates", candidates},
+                        {"pairs_scored", scored},
+                        {"drops", drops}};
+  out["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace gt::pipeline

@@ -1,0 +1,255 @@
+#include "libgt/truth/views_truth.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "libgt/core/depth.h"
+#include "libgt/core/error.h"
+#include "libgt/core/pose.h"
+
+namespace gt::truth {
+namespace {
+
+// Rows per task: with N targets per row, a block of 32 rows at 640 px is ~N · 0.03 ms of
+// labelling, enough to hide the per-task setup (N kernels and their column terms).
+constexpr int kRowsPerTask = 32;
+
+// Uniform in [0, n) from the raw outputs of the generator (rejection: no modulo bias), so
+// the draws are the same with every standard library.
+uint64_t UniformBelow(uint64_t n, std::mt19937_64* rng) {
+  const uint64_t limit =
+      std::numeric_limits<uint64_t>::max() - std::numeric_limits<uint64_t>::max() % n;
+  for (;;) {
+    const uint64_t x = (*rng)();
+    if (x < limit) return x % n;
+  }
+}
+
+std::string ViewField(size_t i, const char* what) {
+  return "views[" + std::to_string(i) + "]." + what;
+}
+
+void CheckViews(const std::vector<WorkingFrame>& views) {
+  if (views.empty() || views.size() > static_cast<size_t>(kMaxViews)) {
+    throw InputError("views", "expected 1.." + std::to_string(kMaxViews) + " views, got " +
+                                  std::to_string(views.size()));
+  }
+  for (size_t i = 0; i < views.size(); ++i) {
+    const WorkingFrame& f = views[i];
+    if (!f.depth) throw InputError(ViewField(i, "depth"), "expected a depth map");
+    const DepthImage& d = *f.depth;
+    const DepthImage& d0 = *views[0].depth;
+    if (d.width != d0.width || d.height != d0.height ||
+        d.values_m.size() != static_cast<size_t>(d.width) * d.height) {
+      std::ostringstream msg;
+      msg << "expected " << d0.width << "x" << d0.height << " (the size of view 0), got " << d.width
+          << "x" << d.height;
+      throw InputError(ViewField(i, "depth"), msg.str());
+    }
+    std::string error;
+    if (!f.camera.Check(&error)) throw InputError(ViewField(i, "K"), error);
+    if (f.camera.width != d.width || f.camera.height != d.height) {
+      std::ostringstream msg;
+      msg << "expected a camera of the depth map's size " << d.width << "x" << d.height << ", got "
+          << f.camera.width << "x" << f.camera.height;
+      throw InputError(ViewField(i, "K"), msg.str());
+    }
+    if (const auto problem = PoseProblem(f.world_from_cam.matrix())) {
+      throw InputError(ViewField(i, "world_from_cam"), *problem);
+    }
+  }
+}
+
+}  // namespace
+
+const char* TrackStateName(TrackState state) {
+  switch (state) {
+    case TrackState::kVisible:
+      return "VISIBLE";
+    case TrackState::kOccluded:
+      return "OCCLUDED";
+    case TrackState::kOutOfView:
+      return "OUT_OF_VIEW";
+    case TrackState::kNoDepth:
+      return "NO_DEPTH";
+    case TrackState::kInconsistent:
+      return "INCONSISTENT";
+  }
+  return "?";
+}
+
+TrackState TrackStateOf(PixelLabel label) {
+  switch (label) {
+    case PixelLabel::kVisible:
+      return TrackState::kVisible;
+    case PixelLabel::kOccluded:
+      return TrackState::kOccluded;
+    case PixelLabel::kOutOfView:
+      return TrackState::kOutOfView;
+    case PixelLabel::kInconsistent:
+      return TrackState::kInconsistent;
+    case PixelLabel::kNoDepth:
+    case PixelLabel::kUnknown:
+      return TrackState::kNoDepth;
+  }
+  GT_ASSERT(false);
+  return TrackState::kNoDepth;
+}
+
+bool ViewsTruthOptions::Check(std::string* error) const {
+  if (!labels.Check(error)) return false;
+  if (num_tracks < 0) {
+    *error = "num_tracks: expected >= 0, got " + std::to_string(num_tracks);
+    return false;
+  }
+  if (query_view < 0) {
+    *error = "query_view: expected >= 0, got " + std::to_string(query_view);
+    return false;
+  }
+  return true;
+}
+
+std::vector<int32_t> SampleQueries(const DepthImage& depth, const LabelOptions& labels,
+                                   int num_tracks, uint64_t seed) {
+  std::vector<int32_t> valid;  // raster indices
+  for (size_t p = 0; p < depth.values_m.size(); ++p) {
+    if (IsValidDepth(depth.values_m[p], labels.min_depth_m, labels.max_depth_m)) {
+      valid.push_back(static_cast<int32_t>(p));
+    }
+  }
+  const size_t k = std::min(valid.size(), static_cast<size_t>(std::max(num_tracks, 0)));
+  if (k < valid.size()) {
+    std::mt19937_64 rng(seed);
+    for (size_t i = 0; i < k; ++i) {  // partial Fisher–Yates: valid[0 .. k) is the sample
+      const size_t j = i + static_cast<size_t>(UniformBelow(valid.size() - i, &rng));
+      std::swap(valid[i], valid[j]);
+    }
+    valid.resize(k);
+    std::sort(valid.begin(), valid.end());
+  }
+  std::vector<int32_t> uv(2 * k);
+  for (size_t i = 0; i < k; ++i) {
+    uv[2 * i] = valid[i] % depth.width;
+    uv[2 * i + 1] = valid[i] / depth.width;
+  }
+  return uv;
+}
+
+ViewsTruth ComputeViewsTruth(const std::vector<WorkingFrame>& views,
+                             const ViewsTruthOptions& options,
+                             const std::optional<std::vector<int32_t>>& queries_uv) {
+  std::string error;
+  if (!options.Check(&error)) throw InputError("options", error);
+  CheckViews(views);
+  const int n = static_cast<int>(views.size());
+  if (options.query_view >= n) {
+    throw InputError("options", "query_view: expected < " + std::to_string(n) +
+                                    " (the number of views), got " +
+                                    std::to_string(options.query_view));
+  }
+  ViewsTruth out;
+  out.num_views = n;
+  out.width = views[0].depth->width;
+  out.height = views[0].depth->height;
+  const size_t hw = static_cast<size_t>(out.width) * out.height;
+  const size_t total = hw * n;
+  out.visible_in.assign(total, 0u);
+  out.occluded_in.assign(total, 0u);
+  out.valid.resize(total);
+  out.seen_by.resize(total);
+  out.seen_by_histogram.assign(static_cast<size_t>(n) * n, 0);
+
+  // Targets of each source view: every view, itself included (bit j = view j).
+  std::vector<std::vector<BitTarget>> targets(n);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      BitTarget t;
+      t.depth_b = views[j].depth.get();
+      t.cam_b = &views[j].camera;
+      t.b_from_a = RelativePose(views[i].world_from_cam, views[j].world_from_cam);
+      t.bit = j;
+      targets[i].push_back(t);
+    }
+  }
+  const int blocks = (out.height + kRowsPerTask - 1) / kRowsPerTask;
+  // Per task: its rows' bits, then their statistics (while the words are in cache); the
+  // histogram of a task is summed after the loop in task order (integers: exact anyway).
+  std::vector<int64_t> block_hist(static_cast<size_t>(n) * blocks * n, 0);
+  const LabelOptions& lo = options.labels;
+  tbb::parallel_for(tbb::blocked_range<int>(0, n * blocks), [&](const tbb::blocked_range<int>& r) {
+    for (int task = r.begin(); task != r.end(); ++task) {
+      const int i = task / blocks, block = task % blocks;
+      const int row_begin = block * kRowsPerTask;
+      const int row_end = std::min(out.height, row_begin + kRowsPerTask);
+      const WorkingFrame& f = views[i];
+      uint32_t* vis = out.visible_in.data() + hw * i;
+      uint32_t* occ = out.occluded_in.data() + hw * i;
+      LabelDirectionBits(*f.depth, f.camera, targets[i], lo, row_begin, row_end, vis, occ);
+      const size_t p0 = static_cast<size_t>(row_begin) * out.width;
+      const size_t p1 = static_cast<size_t>(row_end) * out.width;
+      const uint32_t others = ~(1u << i);
+      const float* depth = f.depth->values_m.data();
+      uint8_t* valid = out.valid.data() + hw * i;
+      uint8_t* seen = out.seen_by.data() + hw * i;
+      int64_t* hist = block_hist.data() + static_cast<size_t>(task) * n;
+      for (size_t p = p0; p < p1; ++p) {
+        const bool ok = IsValidDepth(depth[p], lo.min_depth_m, lo.max_depth_m);
+        const int k = __builtin_popcount(vis[p] & others);
+        valid[p] = ok ? 1 : 0;
+        seen[p] = static_cast<uint8_t>(k);
+        hist[k] += ok ? 1 : 0;
+      }
+    }
+  });
+  for (int task = 0; task < n * blocks; ++task) {
+    const int i = task / blocks;
+    for (int k = 0; k < n; ++k) {
+      out.seen_by_histogram[static_cast<size_t>(i) * n + k] +=
+          block_hist[static_cast<size_t>(task) * n + k];
+    }
+  }
+
+  // Tracks: the query pixels of view q labelled in every view with the same kernel.
+  const int q = options.query_view;
+  out.query_view = q;
+  const WorkingFrame& fq = views[q];
+  out.queries =
+      queries_uv ? *queries_uv : SampleQueries(*fq.depth, lo, options.num_tracks, options.seed);
+  if (out.queries.size() % 2 != 0) throw InputError("queries", "expected (u, v) pairs");
+  for (size_t k = 0; k < out.queries.size(); k += 2) {
+    const int u = out.queries[k], v = out.queries[k + 1];
+    if (u < 0 || u >= out.width || v < 0 || v >= out.height) {
+      std::ostringstream msg;
+      msg << "expected pixels (u, v) inside the " << out.width << "x" << out.height
+          << " image, got (" << u << ", " << v << ") at row " << k / 2;
+      throw InputError("queries", msg.str());
+    }
+  }
+  const size_t nq = out.num_queries();
+  out.track_xy.resize(static_cast<size_t>(n) * nq * 2);
+  out.track_depth.resize(static_cast<size_t>(n) * nq);
+  out.track_state.resize(static_cast<size_t>(n) * nq);
+  tbb::parallel_for(0, n, [&](int j) {
+    const WorkingFrame& fj = views[j];
+    const PointLabels pts =
+        LabelPoints(*fq.depth, fq.camera, *fj.depth, fj.camera,
+                    RelativePose(fq.world_from_cam, fj.world_from_cam), lo, out.queries);
+    std::copy(pts.xy.begin(), pts.xy.end(), out.track_xy.begin() + 2 * nq * j);
+    std::copy(pts.z_m.begin(), pts.z_m.end(), out.track_depth.begin() + nq * j);
+    for (size_t k = 0; k < nq; ++k) {
+      out.track_state[nq * j + k] =
+          static_cast<uint8_t>(TrackStateOf(static_cast<PixelLabel>(pts.labels[k])));
+    }
+  });
+  return out;
+}
+
+}  // namespace gt::truth

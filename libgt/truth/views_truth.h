@@ -1,0 +1,95 @@
+// The dense ground truth of N posed depth views (docs/MULTIVIEW.md): for every pixel of every
+// view, whether it is VISIBLE / OCCLUDED in each of the N views, and tracks of query pixels
+// through all of them. Built from the pair labels only: bit j of pixel p of view i is the
+// pair label of p for the direction i → j (geometry/labels.h LabelDirection with
+// b_from_a = RelativePose(world_from_cam_i, world_from_cam_j), the same kernel, so the bits
+// equal `occgt pair`'s label01 of that pair bit for bit, the diagonal i → i included).
+//
+// Layouts (row-major, N views of one size H × W, N <= 32):
+//   visible_in, occluded_in  uint32 [N, H, W]  bit j of [i, v, u]: pixel (u, v) of view i is
+//                            VISIBLE (OCCLUDED) in view j. A pixel with neither bit for j is
+//                            OUT_OF_VIEW, NO_DEPTH, UNKNOWN or INCONSISTENT there (label01).
+//   valid                    uint8 [N, H, W]    1 where the view's own depth is valid (the
+//                            labels' depth range: core/depth.h IsValidDepth)
+//   seen_by                  uint8 [N, H, W]    number of other views j != i in which the
+//                            pixel is VISIBLE (popcount of visible_in without bit i)
+//   seen_by_histogram        int64 [N, N]       [i, k]: valid pixels of view i seen by exactly
+//                            k other views
+// Tracks (VGGT's tracks with explicit states), Q query pixels (u, v) of view q = query_view:
+//   queries      int32 [Q, 2]      the query pixels (given, or sampled: below)
+//   track_xy     float32 [N, Q, 2] position in view j (LabelDirection's warped_xy of q → j at
+//                                  the query pixel, bit for bit); NaN where not projected
+//   track_depth  float32 [N, Q]    depth of the point in view j's camera (planar z, metres, as
+//                                  the kernel computes it); NaN where not projected
+//   track_state  uint8 [N, Q]      TrackState of the point in view j (from label q → j)
+// Sampling: the valid pixels of view q in raster order, num_tracks of them drawn without
+// replacement by a partial Fisher–Yates shuffle driven by std::mt19937_64(seed) (raw outputs,
+// rejection for an unbiased index: portable), then sorted in raster order; all of them when
+// there are no more than num_tracks.
+//
+// Work: one task per (view, block of rows) on TBB, each writing only its own rows, so the
+// result is the same whatever the number of threads.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "libgt/geometry/labels.h"
+#include "libgt/truth/working_frame.h"
+
+namespace gt::truth {
+
+inline constexpr int kMaxViews = 32;  // the bits of a uint32 word
+
+// State of a track in one view (stable uint8 codes, stored in files).
+enum class TrackState : uint8_t {
+  kVisible = 0,       // label VISIBLE: the view sees the point
+  kOccluded = 1,      // label OCCLUDED: a surface of the view lies in front of it
+  kOutOfView = 2,     // label OUT_OF_VIEW: behind the camera or outside the image
+  kNoDepth = 3,       // NO_DEPTH at the query pixel, or UNKNOWN: the view has no depth there
+  kInconsistent = 4,  // label INCONSISTENT: the view sees past the point (depth/pose error)
+};
+inline constexpr int kNumTrackStates = 5;
+// "VISIBLE", "OCCLUDED", "OUT_OF_VIEW", "NO_DEPTH", "INCONSISTENT".
+const char* TrackStateName(TrackState state);
+TrackState TrackStateOf(PixelLabel label);
+
+struct ViewsTruthOptions {
+  LabelOptions labels;   // as the pair labels (truth::ResolvePairTruthOptions(...).labels)
+  int num_tracks = 512;  // query pixels sampled when none are given (>= 0)
+  int query_view = 0;    // the view whose pixels are the queries (< the number of views)
+  uint64_t seed = 0;     // of the sampling
+
+  bool Check(std::string* error) const;  // labels valid, num_tracks >= 0, query_view >= 0
+};
+
+struct ViewsTruth {
+  int num_views = 0, width = 0, height = 0;
+  std::vector<uint32_t> visible_in, occluded_in;  // [N, H, W]
+  std::vector<uint8_t> valid, seen_by;            // [N, H, W]
+  std::vector<int64_t> seen_by_histogram;         // [N, N]
+  int query_view = 0;
+  std::vector<int32_t> queries;      // [Q, 2] (u, v)
+  std::vector<float> track_xy;       // [N, Q, 2]
+  std::vector<float> track_depth;    // [N, Q]
+  std::vector<uint8_t> track_state;  // [N, Q] TrackState codes
+  size_t num_queries() const { return queries.size() / 2; }
+};
+
+// views: 1..kMaxViews frames of one size (depth [H, W], K at W×H, rigid world_from_cam).
+// queries_uv: [Q * 2] (u, v) pixels of the query view; nullopt: sample options.num_tracks.
+// Throws InputError("views", ...) for 0 or more than 32 views, ("views[i].depth" / ".K" /
+// ".world_from_cam", ...) naming the view for a size, camera or pose problem, ("options", ...)
+// for options that fail Check or a query view out of range, ("queries", ...) for a pixel
+// outside the image.
+ViewsTruth ComputeViewsTruth(const std::vector<WorkingFrame>& views,
+                             const ViewsTruthOptions& options,
+                             const std::optional<std::vector<int32_t>>& queries_uv = std::nullopt);
+
+// The sampled queries alone (the rule above): [Q * 2] (u, v).
+std::vector<int32_t> SampleQueries(const DepthImage& depth, const LabelOptions& labels,
+                                   int num_tracks, uint64_t seed);
+
+}  // namespace gt::truth

@@ -1,0 +1,208 @@
+"""TupleIndexDataset: N-view samples with dense visibility, computed on the fly from a tuple
+index (``occgt tuples``' tuples.jsonl, or lists of frame ids) and the dataset on disk.
+
+Each ``__getitem__`` reads the tuple's frames with occgt's readers at the working resolution
+and computes ``occgt.views_ground_truth`` (C++, GIL released) in the DataLoader worker.
+Items carry VGGT's sample keys and occgt's; ``views="dust3r"`` gives DUSt3R's list of view
+dicts instead. ``collate_tuples`` batches tuples of different sizes. docs/MULTIVIEW.md,
+docs/PYTHON.md.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import torch
+
+import occgt
+
+from ._convert import to_tensor
+
+
+@dataclasses.dataclass(frozen=True)
+class TupleRef:
+    """One tuple: the scene and its frame ids (the first is the reference / query view)."""
+
+    scene: str
+    frame_ids: Tuple[str, ...]
+
+
+def read_tuples(path: Union[str, os.PathLike]) -> List[TupleRef]:
+    """The tuples of an ``occgt tuples`` tuples.jsonl (schemas/tuples_line.schema.json), in
+    order; ValueError naming the line of a bad one."""
+    refs = []
+    p = os.fspath(path)
+    with open(p) as f:
+        for number, line in enumerate(f, 1):
+            if not line.strip():
+                continue
+            try:
+                t = json.loads(line)
+                refs.append(TupleRef(str(t["scene"]), tuple(str(i) for i in t["frame_ids"])))
+            except (ValueError, KeyError, TypeError) as e:
+                raise ValueError(f"{p}:{number}: expected a tuple line with scene and frame_ids "
+                                 f"({e})") from None
+    return refs
+
+
+TupleLike = Union[TupleRef, Tuple[str, Sequence[str]]]
+
+
+class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
+    """N-view samples of a tuple index, ground truth computed on the fly.
+
+    Args:
+        tuples: a tuples.jsonl path, or a list of ``TupleRef`` / ``(scene, [frame ids])``.
+        root, format: the dataset (``occgt.open_dataset``).
+        width, height: the working resolution of every view.
+        preset, **label_options: the label options of ``occgt.views_ground_truth`` (the
+            scene's depth range is passed as ``dataset_depth_range``).
+        num_tracks: tracks sampled from the first view's valid pixels (seed ``seed + index``,
+            so an item is the same in every epoch and worker).
+        images: read the colour images (``images``; a frame without colour raises ValueError).
+        views: ``"vggt"`` (default): one dict of stacked views; ``"dust3r"``: a list of view
+            dicts.
+
+    A ``"vggt"`` item (S views, P tracks): ``images`` float32 [S, 3, H, W] RGB in [0, 1];
+    ``depths`` float32 [S, H, W] (0 = none); ``extrinsics`` float32 [S, 3, 4] camera-from-world
+    (OpenCV); ``intrinsics`` float32 [S, 3, 3]; ``point_masks`` bool [S, H, W] (the view's own
+    valid depth); ``tracks`` float32 [S, P, 2] (x, y) of the first view's query pixels in each
+    view (0 where they do not project); ``track_vis_mask`` bool [S, P] (VISIBLE);
+    ``track_state`` uint8 [S, P] (``occgt.TRACK_STATE_NAMES``); ``visible_in``,
+    ``occluded_in`` int32 [S, H, W] (the uint32 bitmasks' bits: bit j = VISIBLE / OCCLUDED
+    in view j); ``seen_by`` uint8 [S, H, W]; ``ids`` int64 [S] (frame numbers);
+    ``frame_ids``, ``scene_id``, ``tuple_id``.
+
+    A ``"dust3r"`` item: a list of S dicts ``{img float32 [3, H, W] in [-1, 1] (DUSt3R's
+    normalisation), depthmap, camera_pose float32 [4, 4] cam-to-world, camera_intrinsics,
+    dataset, label (scene), instance (frame id), idx, true_shape, valid_mask, visible_in,
+    occluded_in}``.
+    """
+
+    def __init__(self, tuples: Union[str, os.PathLike, Sequence[TupleLike]], root: str,
+                 format: str, *, width: int = occgt.PAIR_DEFAULTS["width"],
+                 height: int = occgt.PAIR_DEFAULTS["height"],
+                 preset: str = occgt.PAIR_DEFAULTS["preset"], num_tracks: int = 512,
+                 seed: int = 0, images: bool = True, views: str = "vggt",
+                 **label_options: Any) -> None:
+        if views not in ("vggt", "dust3r"):
+            raise ValueError(f"views: expected 'vggt' or 'dust3r', got {views!r}")
+        if isinstance(tuples, (str, os.PathLike)):
+            self.tuples = read_tuples(tuples)
+        else:
+            self.tuples = [t if isinstance(t, TupleRef) else TupleRef(str(t[0]), tuple(t[1]))
+                           for t in tuples]
+        for k, t in enumerate(self.tuples):
+            if not 1 <= len(t.frame_ids) <= 32:
+                raise ValueError(f"tuples[{k}]: expected 1..32 frame ids, got "
+                                 f"{len(t.frame_ids)}")
+        self.root, self.format = root, format
+        self.width, self.height = int(width), int(height)
+        self.preset, self.num_tracks, self.seed = preset, int(num_tracks), int(seed)
+        self.images, self.views = bool(images), views
+        self.label_options = dict(label_options)
+        self._dataset: Optional[occgt.Dataset] = None
+        self._pid = -1
+        self._scenes: Dict[str, occgt.Scene] = {}
+        occgt.open_dataset(root, format)  # fail here, not in a worker, on a bad root/format
+
+    def __len__(self) -> int:
+        return len(self.tuples)
+
+    def _scene(self, name: str) -> occgt.Scene:
+        if self._pid != os.getpid():  # a forked worker opens its own readers
+            self._dataset, self._scenes, self._pid = occgt.open_dataset(self.root, self.format), \
+                {}, os.getpid()
+        if name not in self._scenes:
+            assert self._dataset is not None
+            self._scenes[name] = self._dataset.scene(name)
+        return self._scenes[name]
+
+    def __getitem__(self, index: int) -> Any:
+        if not -len(self.tuples) <= index < len(self.tuples):
+            raise IndexError(f"index {index} out of range for {len(self.tuples)} tuples")
+        index %= len(self.tuples)
+        ref = self.tuples[index]
+        scene = self._scene(ref.scene)
+        loaded = [scene.load(i, self.width, self.height) for i in ref.frame_ids]
+        depths = np.stack([d for d, _, _ in loaded])
+        Ks = np.stack([K for _, K, _ in loaded])
+        poses = np.stack([T for _, _, T in loaded])
+        truth = occgt.views_ground_truth(
+            depths, Ks, poses, preset=self.preset, num_tracks=self.num_tracks, query_view=0,
+            seed=self.seed + index,
+            dataset_depth_range=(scene.min_depth_m, scene.max_depth_m), **self.label_options)
+        colors = None
+        if self.images:
+            colors = np.stack([scene.load_color(i, self.width, self.height)
+                               for i in ref.frame_ids]).transpose(0, 3, 1, 2)  # [S, 3, H, W]
+        numbers = {f.id: f.number for f in scene.frames}
+        if self.views == "dust3r":
+            out = []
+            for s, frame_id in enumerate(ref.frame_ids):
+                view: Dict[str, Any] = {
+                    "depthmap": to_tensor(depths[s]),
+                    "camera_pose": to_tensor(poses[s].astype(np.float32)),
+                    "camera_intrinsics": to_tensor(Ks[s].astype(np.float32)),
+                    "dataset": self.format, "label": ref.scene, "instance": frame_id,
+                    "idx": (index, s), "true_shape": np.array([self.height, self.width]),
+                    "valid_mask": to_tensor(truth["valid"][s].astype(bool)),
+                    "visible_in": to_tensor(truth["visible_in"][s]),
+                    "occluded_in": to_tensor(truth["occluded_in"][s]),
+                }
+                if colors is not None:
+                    view["img"] = to_tensor(colors[s].astype(np.float32) / 127.5 - 1.0)
+                out.append(view)
+            return out
+        cam_from_world = np.linalg.inv(poses)[:, :3, :].astype(np.float32)
+        xy = truth["track_xy"]
+        sample: Dict[str, Any] = {
+            "depths": to_tensor(depths),
+            "extrinsics": to_tensor(cam_from_world),
+            "intrinsics": to_tensor(Ks.astype(np.float32)),
+            "point_masks": to_tensor(truth["valid"].astype(bool)),
+            "tracks": to_tensor(np.where(np.isnan(xy), np.float32(0), xy)),
+            "track_vis_mask": to_tensor(truth["track_state"] == occgt.TRACK_VISIBLE),
+            "track_state": to_tensor(truth["track_state"]),
+            "visible_in": to_tensor(truth["visible_in"]),
+            "occluded_in": to_tensor(truth["occluded_in"]),
+            "seen_by": to_tensor(truth["seen_by"]),
+            "ids": to_tensor(np.array([numbers[i] for i in ref.frame_ids], np.int64)),
+            "frame_ids": ref.frame_ids, "scene_id": ref.scene, "tuple_id": index,
+        }
+        if colors is not None:
+            sample["images"] = to_tensor(colors.astype(np.float32) / 255.0)
+        return sample
+
+
+def collate_tuples(batch: Sequence[Dict[str, Any]]) -> Dict[str, Any]:
+    """Batches "vggt" items of different sizes: tensors whose first axis is the view axis S
+    (and, for tracks, the track axis P) are zero-padded to the largest in the batch and
+    stacked; ``view_mask`` bool [B, S_max] marks real views and ``track_vis_mask`` stays False
+    on padded tracks; other values become lists."""
+    if not batch:
+        raise ValueError("batch: expected at least one item")
+    s_max = max(int(b["depths"].shape[0]) for b in batch)
+    p_max = max(int(b["tracks"].shape[1]) for b in batch)
+    out: Dict[str, Any] = {}
+    for key, value in batch[0].items():
+        if not isinstance(value, torch.Tensor):
+            out[key] = [b[key] for b in batch]
+            continue
+        padded = []
+        for b in batch:
+            t = b[key]
+            shape = list(t.shape)
+            shape[0] = s_max
+            if key in ("tracks", "track_vis_mask", "track_state"):
+                shape[1] = p_max
+            z = torch.zeros(shape, dtype=t.dtype)
+            z[tuple(slice(0, n) for n in t.shape)] = t
+            padded.append(z)
+        out[key] = torch.stack(padded)
+    out["view_mask"] = torch.stack([torch.arange(s_max) < int(b["depths"].shape[0])
+                                    for b in batch])
+    return out

@@ -1,0 +1,264 @@
+"""occgt covis and occgt tuples (libgt/pipeline/covisibility.h, tuple_stage.h,
+docs/MULTIVIEW.md): the covisibility graph of
+each scene equals the pair scorer's values (the select stage of `occgt build` with every
+candidate kept: no frame gap, no filters, no quota), the same bytes with 1 and 2 threads and
+with the scenes split over 2 tasks, the dense matrix is the sparse graph laid out (MapAnything's
+orientation), a re-run skips finished scenes, and a graph of other options is refused; the
+tuples satisfy every constraint, carry the graph's values, are seeded and identical over
+graphs of any thread count or task split."""
+from __future__ import annotations
+
+import glob
+import json
+import os
+import subprocess
+import unittest
+from typing import Dict, Tuple
+
+import jsonschema
+import numpy as np
+
+import common
+import occgt
+
+RECIPE = """name: covis-test
+split: covis
+seed: 0
+resolution: [160, 120]
+dataset:
+  format: synthetic
+  synthetic: {scenes: 3, frames: 14, width: 160, height: 120, seed: 3}
+  frame_stride: 1
+  min_valid_depth_fraction: 0.3
+labels: {preset: default}
+selection:
+  max_frame_gap: 0
+  pruning: {max_distance_m: 4.0, max_view_angle_deg: 120, frustum: true}
+  score_stride: 4
+  overlap: [0.0, 1.0]
+  visible_overlap: [0.0, 1.0]
+  occlusion: [0.0, 1.0]
+  quota_per_scene: 0
+  views: [3, 5]
+  tuples: {edge_threshold: 0.2, pair_covisibility: [0.0, 0.97], restarts: 4, quota_per_scene: 6}
+occupancy: {enabled: false}
+sample: {image: none, depth: true, labels: true, occupancy: false}
+"""
+
+
+def read_dir(out: str) -> Dict[str, bytes]:
+    files = {}
+    for p in sorted(glob.glob(os.path.join(out, "covisibility", "**", "*"), recursive=True)):
+        if os.path.isfile(p):
+            files[os.path.relpath(p, out)] = common.read_bytes(p)
+    return files
+
+
+class Covis(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.dir = common.scratch("covis")
+        cls.recipe = os.path.join(cls.dir, "recipe.yaml")
+        with open(cls.recipe, "w") as f:
+            f.write(RECIPE)
+        cls.data = os.path.join(cls.dir, "data")
+        cls.out1 = os.path.join(cls.dir, "t1")
+        common.occgt("covis", cls.recipe, "--out", cls.out1, "--threads", 1, "--dense",
+                     "--root", cls.data)
+
+    def test_equals_the_pair_scorer(self) -> None:
+        sel = os.path.join(self.dir, "select")
+        common.occgt("build", self.recipe, "--out", sel, "--stage", "select", "--root", self.data)
+        scored: Dict[Tuple[str, str, str], Tuple[float, float, float, float]] = {}
+        for path in glob.glob(os.path.join(sel, "selection", "*.jsonl")):
+            with open(path) as f:
+                rows = [json.loads(line) for line in f]
+            for p in rows:
+                m01, m10 = p["score_metrics"]["01"], p["score_metrics"]["10"]
+                self.assertEqual(p["score_stride"], 4)
+                scored[(p["scene"], p["frame0"]["id"], p["frame1"]["id"])] = (
+                    m01["consistent_overlap"], m10["consistent_overlap"], m01["overlap"],
+                    m10["overlap"])
+        graphs = sorted(glob.glob(os.path.join(self.out1, "covisibility", "*.npz")))
+        self.assertEqual(len(graphs), 3)
+        seen = 0
+        for path in graphs:
+            g = np.load(path)
+            scene = os.path.basename(path)[:-4]
+            ids = list(g["frame_ids"])
+            self.assertEqual(g["i"].dtype, np.int32)
+            self.assertEqual(g["c_ij"].dtype, np.float32)
+            self.assertTrue(np.all(g["i"] < g["j"]))
+            self.assertEqual(int(g["score_stride"]), 4)
+            for k in range(len(g["i"])):
+                key = (scene, ids[g["i"][k]], ids[g["j"][k]])
+                self.assertIn(key, scored)
+                want = np.array(scored.pop(key), dtype=np.float32)
+                got = np.array([g["c_ij"][k], g["c_ji"][k], g["o_ij"][k], g["o_ji"][k]])
+                np.testing.assert_array_equal(got, want, err_msg=str(key))
+                seen += 1
+            # Dense: C[i, j] = c_ij, C[j, i] = c_ji, diagonal self, 0 elsewhere.
+            n = len(ids)
+            dense = np.load(os.path.join(self.out1, "covisibility", scene,
+                                         f"pairwise_covisibility--{n}x{n}.npy"))
+            self.assertEqual(dense.dtype, np.float32)
+            expect = np.zeros((n, n), np.float32)
+            expect[g["i"], g["j"]] = g["c_ij"]
+            expect[g["j"], g["i"]] = g["c_ji"]
+            expect[np.arange(n), np.arange(n)] = g["self"]
+            np.testing.assert_array_equal(dense, expect)
+            self.assertTrue(np.all(g["self"] > 0.3))  # a frame sees its valid pixels
+        self.assertEqual(scored, {})  # every scored pair is in a graph
+        self.assertGreater(seen, 50)
+        # Pruning dropped some pairs (the graph is sparse) and kept some.
+        counts = json.loads(common.occgt("covis", self.recipe, "--out", self.out1, "--json",
+                                         "--root", self.data).stdout)
+        with open(os.path.join(common.SOURCE, "schemas", "covis_summary.schema.json")) as f:
+            jsonschema.validate(counts, json.load(f))
+        self.assertEqual(counts["skipped_complete"], 3)
+        self.assertEqual(counts["written"], 0)
+
+    def test_same_bytes_for_threads_and_tasks(self) -> None:
+        out2 = os.path.join(self.dir, "t2")
+        common.occgt("covis", self.recipe, "--out", out2, "--threads", 2, "--dense",
+                     "--root", self.data)
+        split = os.path.join(self.dir, "split")
+        for k in range(2):
+            common.occgt("covis", self.recipe, "--out", split, "--threads", 2, "--dense",
+                         "--task", k, "--tasks", 2, "--root", self.data)
+        one = read_dir(self.out1)
+        self.assertGreater(len(one), 5)
+        self.assertEqual(one, read_dir(out2))
+        self.assertEqual(one, read_dir(split))
+
+    def test_another_recipe_is_refused_and_bad_flags_exit_2(self) -> None:
+        other = os.path.join(self.dir, "other.yaml")
+        with open(other, "w") as f:
+            f.write(RECIPE.replace("score_stride: 4", "score_stride: 8"))
+        r = subprocess.run([common.BINARY, "covis", other, "--out", self.out1, "--root",
+                            self.data], capture_output=True, text=True)
+        self.assertEqual(r.returncode, 1)
+        self.assertIn("written under another recipe", r.stderr)
+        r = subprocess.run([common.BINARY, "covis", self.recipe, "--out", self.out1, "--task",
+                            "2", "--tasks", "2"], capture_output=True, text=True)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--task: expected 0 <= task < tasks", r.stderr)
+
+    def test_tuples(self) -> None:
+        r = json.loads(common.occgt("tuples", self.recipe, "--out", self.out1, "--json",
+                                    "--root", self.data).stdout)
+        with open(os.path.join(common.SOURCE, "schemas", "tuples_line.schema.json")) as f:
+            schema = json.load(f)
+        text = common.read_bytes(os.path.join(self.out1, "tuples.jsonl"))
+        lines = [json.loads(x) for x in text.decode().splitlines()]
+        self.assertEqual(len(lines), r["tuples"])
+        self.assertGreater(len(lines), 6)
+        graphs = {}
+        for path in glob.glob(os.path.join(self.out1, "covisibility", "*.npz")):
+            g = np.load(path)
+            ids = list(g["frame_ids"])
+            n = len(ids)
+            dense = np.zeros((n, n), np.float32)
+            dense[g["i"], g["j"]] = g["c_ij"]
+            dense[g["j"], g["i"]] = g["c_ji"]
+            dense[np.arange(n), np.arange(n)] = g["self"]
+            graphs[os.path.basename(path)[:-4]] = (ids, dense)
+        per_scene: Dict[str, int] = {}
+        sizes = set()
+        drawn = set()
+        for t in lines:
+            jsonschema.validate(t, schema)
+            ids, dense = graphs[t["scene"]]
+            idx = [ids.index(i) for i in t["frame_ids"]]
+            n = len(idx)
+            sizes.add(n)
+            self.assertTrue(3 <= n <= 5, t)
+            sub = dense[np.ix_(idx, idx)]
+            np.testing.assert_array_equal(np.array(t["covisibility"], np.float32), sub)
+            score = np.float32(0.5) * (sub + sub.T)
+            for k in range(1, n):  # each new view is a neighbour of an earlier one
+                self.assertTrue(any(float(score[a, k]) >= 0.2 for a in range(k)), t)
+            for a in range(n):
+                for b in range(a + 1, n):
+                    self.assertTrue(0.0 <= float(score[a, b]) <= 0.97, t)
+            per_scene[t["scene"]] = per_scene.get(t["scene"], 0) + 1
+            key = (t["scene"], tuple(sorted(t["frame_ids"])))
+            self.assertNotIn(key, drawn)  # no tuple twice
+            drawn.add(key)
+        self.assertTrue(all(c <= 6 for c in per_scene.values()), per_scene)
+        self.assertGreaterEqual(len(sizes), 2)  # sizes drawn in [3, 5]
+        # Seeded: the same bytes again, and from the graphs of 2 threads / 2 tasks.
+        common.occgt("tuples", self.recipe, "--out", self.out1, "--root", self.data)
+        self.assertEqual(common.read_bytes(os.path.join(self.out1, "tuples.jsonl")), text)
+        split = os.path.join(self.dir, "split_tuples")
+        for k in range(2):
+            common.occgt("covis", self.recipe, "--out", split, "--threads", 2, "--task", k,
+                         "--tasks", 2, "--root", self.data)
+        common.occgt("tuples", self.recipe, "--out", split, "--root", self.data)
+        self.assertEqual(common.read_bytes(os.path.join(split, "tuples.jsonl")), text)
+        # Another seed, other tuples.
+        seeded = os.path.join(self.dir, "seed1.yaml")
+        with open(seeded, "w") as f:
+            f.write(RECIPE.replace("seed: 0", "seed: 1"))
+        common.occgt("tuples", seeded, "--out", split, "--root", self.data)
+        self.assertNotEqual(common.read_bytes(os.path.join(split, "tuples.jsonl")), text)
+        # Without graphs: one line naming the missing file.
+        r2 = subprocess.run([common.BINARY, "tuples", self.recipe, "--out",
+                             os.path.join(self.dir, "none"), "--root", self.data],
+                            capture_output=True, text=True)
+        self.assertEqual(r2.returncode, 1)
+        self.assertIn("missing: run `occgt covis`", r2.stderr)
+
+
+class ShippedRecipe(unittest.TestCase):
+    def test_tartanair_tuples(self) -> None:
+        """docs/RECIPES.md's example: recipes/tartanair-tuples.yaml on the real TartanAir
+        sample; a few graph values recomputed from pair_ground_truth's label01 at the stride."""
+        common.shared("tartanair/hospital_sample")
+        recipe = os.path.join(common.SOURCE, "recipes", "tartanair-tuples.yaml")
+        out = common.scratch("covis_tartanair")
+        env = dict(os.environ, OCCGT_SHARED_DATA=common.SHARED)
+        for cmd in (["covis", recipe, "--out", out, "--dense"], ["tuples", recipe, "--out", out]):
+            r = subprocess.run([common.BINARY, *cmd], capture_output=True, text=True, env=env)
+            self.assertEqual(r.returncode, 0, r.stderr)
+        graphs = glob.glob(os.path.join(out, "covisibility", "*.npz"))
+        self.assertEqual(len(graphs), 1)
+        g = np.load(graphs[0])
+        self.assertGreater(len(g["i"]), 20)
+        ds = occgt.open_dataset(os.path.join(common.SHARED, "tartanair", "hospital_sample"),
+                                "tartanair")
+        scene = ds.scene(ds.scenes()[0])
+        ids = list(g["frame_ids"])
+        for k in range(0, len(g["i"]), max(1, len(g["i"]) // 4)):
+            a, b = ids[g["i"][k]], ids[g["j"][k]]
+            (d0, K0, T0), (d1, K1, T1) = scene.load(a), scene.load(b)
+            p = occgt.pair_ground_truth(d0, d1, K0, K1, T0, T1, max_depth_m=None,
+                                        dataset_depth_range=(scene.min_depth_m,
+                                                             scene.max_depth_m),
+                                        dataset_max_depth_m=100.0)
+            for label, c in ((p["label01"], g["c_ij"][k]), (p["label10"], g["c_ji"][k])):
+                grid = label[::8, ::8]
+                self.assertEqual(np.float32((grid == occgt.VISIBLE).sum() / grid.size), c)
+        with open(os.path.join(common.SOURCE, "schemas", "tuples_line.schema.json")) as f:
+            schema = json.load(f)
+        with open(os.path.join(out, "tuples.jsonl")) as f:
+            lines = [json.loads(x) for x in f]
+        self.assertGreater(len(lines), 0)
+        n = len(ids)
+        dense = np.zeros((n, n), np.float32)
+        dense[g["i"], g["j"]] = g["c_ij"]
+        dense[g["j"], g["i"]] = g["c_ji"]
+        for t in lines:
+            jsonschema.validate(t, schema)
+            self.assertTrue(4 <= len(t["frame_ids"]) <= 8)
+            idx = [ids.index(i) for i in t["frame_ids"]]
+            sub = dense[np.ix_(idx, idx)]
+            score = np.float32(0.5) * (sub + sub.T)
+            for a in range(len(idx)):  # the recipe's pair_covisibility [0.05, 0.95]
+                self.assertTrue(any(float(score[b, a]) >= 0.25 for b in range(a)) or a == 0)
+                for b in range(a + 1, len(idx)):
+                    self.assertTrue(0.05 <= float(score[a, b]) <= 0.95, t)
+
+
+if __name__ == "__main__":
+    unittest.main()

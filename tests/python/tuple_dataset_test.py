@@ -1,0 +1,121 @@
+"""occgt.torch.TupleIndexDataset and collate_tuples (docs/MULTIVIEW.md): an item's ground truth
+is occgt.views_ground_truth of its frames (same seed rule), VGGT's keys have their layouts
+(extrinsics = inverse poses, images in [0, 1], track_vis_mask = VISIBLE), the DUSt3R list of
+views carries the same arrays, tuples.jsonl is read, and tuples of 3 and 5 views collate with
+padding and a view mask; bad arguments raise ValueError."""
+from __future__ import annotations
+
+import json
+import os
+import unittest
+
+import numpy as np
+import torch
+
+import common
+import occgt
+from occgt.torch import TupleIndexDataset, TupleRef, collate_tuples, read_tuples
+
+
+class TupleDataset(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.root = common.synth_dataset("tuple_dataset", frames=10, resolution="96x72")
+        ds = occgt.open_dataset(cls.root, "generic")
+        cls.scene_name = ds.scenes()[0]
+        cls.scene = ds.scene(cls.scene_name)
+        cls.ids = [f.id for f in cls.scene.frames]
+        cls.tuples = [(cls.scene_name, cls.ids[0:3]), TupleRef(cls.scene_name, tuple(cls.ids[2:7]))]
+
+    def dataset(self, **kw: object) -> TupleIndexDataset:
+        return TupleIndexDataset(self.tuples, self.root, "generic", width=96, height=72,
+                                 num_tracks=40, seed=3, **kw)  # type: ignore[arg-type]
+
+    def test_item_is_the_views_ground_truth(self) -> None:
+        ds = self.dataset()
+        self.assertEqual(len(ds), 2)
+        item = ds[1]
+        ids = self.tuples[1].frame_ids  # type: ignore[union-attr]
+        frames = [self.scene.load(i, 96, 72) for i in ids]
+        truth = occgt.views_ground_truth(
+            [f[0] for f in frames], [f[1] for f in frames], [f[2] for f in frames],
+            num_tracks=40, seed=3 + 1,
+            dataset_depth_range=(self.scene.min_depth_m, self.scene.max_depth_m))
+        s = 5
+        np.testing.assert_array_equal(item["visible_in"].numpy().view(np.uint32),
+                                      truth["visible_in"])
+        np.testing.assert_array_equal(item["occluded_in"].numpy().view(np.uint32),
+                                      truth["occluded_in"])
+        np.testing.assert_array_equal(item["track_state"].numpy(), truth["track_state"])
+        np.testing.assert_array_equal(item["track_vis_mask"].numpy(),
+                                      truth["track_state"] == occgt.TRACK_VISIBLE)
+        xy = truth["track_xy"]
+        np.testing.assert_array_equal(item["tracks"].numpy(), np.where(np.isnan(xy), 0, xy))
+        self.assertEqual(tuple(item["images"].shape), (s, 3, 72, 96))
+        self.assertEqual(item["images"].dtype, torch.float32)
+        self.assertTrue(0 <= float(item["images"].min()) and float(item["images"].max()) <= 1)
+        self.assertGreater(float(item["images"].max()), 0.2)
+        self.assertEqual(tuple(item["extrinsics"].shape), (s, 3, 4))
+        for k in range(s):
+            T = np.eye(4)
+            T[:3] = item["extrinsics"][k].numpy()
+            np.testing.assert_allclose(T @ frames[k][2], np.eye(4), atol=1e-5)
+            np.testing.assert_array_equal(item["depths"][k].numpy(), frames[k][0])
+            np.testing.assert_allclose(item["intrinsics"][k].numpy(), frames[k][1], rtol=1e-6)
+        np.testing.assert_array_equal(item["point_masks"].numpy(), truth["valid"] == 1)
+        self.assertEqual(item["frame_ids"], ids)
+        self.assertEqual(item["ids"].tolist(),
+                         [f.number for i in ids for f in self.scene.frames if f.id == i])
+        # Deterministic: the same item again.
+        again = ds[1]
+        self.assertTrue(torch.equal(again["tracks"], item["tracks"]))
+
+    def test_dust3r_views(self) -> None:
+        views = self.dataset(views="dust3r")[0]
+        self.assertEqual(len(views), 3)
+        flat = self.dataset()[0]
+        for s, v in enumerate(views):
+            self.assertEqual(v["instance"], self.ids[s])
+            self.assertEqual(v["label"], self.scene_name)
+            self.assertTrue(torch.equal(v["visible_in"], flat["visible_in"][s]))
+            self.assertTrue(torch.equal(v["depthmap"], flat["depths"][s]))
+            pose = v["camera_pose"].numpy()
+            T = np.eye(4, dtype=np.float32)
+            T[:3] = flat["extrinsics"][s].numpy()
+            np.testing.assert_allclose(T @ pose, np.eye(4), atol=1e-5)
+            self.assertTrue(-1 <= float(v["img"].min()) and float(v["img"].max()) <= 1)
+
+    def test_collate_of_different_sizes(self) -> None:
+        ds = self.dataset()
+        batch = collate_tuples([ds[0], ds[1]])
+        self.assertEqual(tuple(batch["images"].shape), (2, 5, 3, 72, 96))
+        self.assertEqual(batch["view_mask"].tolist(), [[True] * 3 + [False] * 2, [True] * 5])
+        self.assertEqual(tuple(batch["tracks"].shape), (2, 5, 40, 2))
+        self.assertFalse(bool(batch["track_vis_mask"][0, 3:].any()))
+        self.assertTrue(torch.equal(batch["visible_in"][0, :3], ds[0]["visible_in"]))
+        self.assertEqual(batch["scene_id"], [self.scene_name] * 2)
+        loader = torch.utils.data.DataLoader(ds, batch_size=2, collate_fn=collate_tuples)
+        self.assertEqual(len(list(loader)), 1)
+
+    def test_jsonl_and_bad_arguments(self) -> None:
+        path = os.path.join(common.scratch("tuple_dataset_jsonl"), "tuples.jsonl")
+        with open(path, "w") as f:
+            for ids in (self.ids[0:2], self.ids[4:8]):
+                f.write(json.dumps({"scene": self.scene_name, "frame_ids": ids,
+                                    "covisibility": [[1.0] * len(ids)] * len(ids)}) + "\n")
+        refs = read_tuples(path)
+        self.assertEqual(refs[1], TupleRef(self.scene_name, tuple(self.ids[4:8])))
+        self.assertEqual(len(TupleIndexDataset(path, self.root, "generic", width=96,
+                                               height=72)[1]["depths"]), 4)
+        with open(path, "a") as f:
+            f.write('{"scene": "x"}\n')
+        with self.assertRaisesRegex(ValueError, "tuples.jsonl:3: expected a tuple line"):
+            read_tuples(path)
+        with self.assertRaisesRegex(ValueError, "views: expected 'vggt' or 'dust3r'"):
+            self.dataset(views="mast3r")
+        with self.assertRaisesRegex(ValueError, r"tuples\[0\]: expected 1..32 frame ids"):
+            TupleIndexDataset([(self.scene_name, [])], self.root, "generic")
+
+
+if __name__ == "__main__":
+    unittest.main()
