@@ -1,6 +1,8 @@
 #include "libgt/render/frame_depth.h"
 
+#include <algorithm>
 #include <cmath>
+#include <deque>
 #include <map>
 #include <mutex>
 
@@ -125,23 +127,36 @@ DepthAgreement CompareSensorAndMesh(const DepthImage& sensor, const DepthImage& 
 }
 
 std::shared_ptr<const MeshRenderer> SharedMeshRenderer(const std::string& path) {
-  // One entry per path; the BVH is built outside the map's lock, under the entry's own.
+  // One entry per path, built once under the entry's own flag (outside the map's lock). The
+  // map holds entries weakly; the kKeep most recently asked-for meshes are also held
+  // strongly, so that the frames of a scene reuse its BVH while a build over thousands of
+  // scenes does not keep every one.
+  constexpr size_t kKeep = 4;
   struct Entry {
     std::once_flag once;
     std::shared_ptr<const MeshRenderer> renderer;
   };
   static std::mutex mutex;
-  static std::map<std::string, std::shared_ptr<Entry>> cache;
+  static std::map<std::string, std::weak_ptr<Entry>> cache;
+  static std::deque<std::shared_ptr<Entry>> recent;
   std::shared_ptr<Entry> entry;
   {
     std::lock_guard<std::mutex> lock(mutex);
-    auto& slot = cache[path];
-    if (!slot) slot = std::make_shared<Entry>();
-    entry = slot;
+    entry = cache[path].lock();
+    if (!entry) {
+      entry = std::make_shared<Entry>();
+      cache[path] = entry;
+    }
+    const auto it = std::find(recent.begin(), recent.end(), entry);
+    if (it != recent.end()) recent.erase(it);
+    recent.push_front(entry);
+    if (recent.size() > kKeep) recent.pop_back();
+    for (auto c = cache.begin(); c != cache.end();) c = c->second.expired() ? cache.erase(c) : std::next(c);
   }
   std::call_once(entry->once, [&] {
     entry->renderer = std::make_shared<const MeshRenderer>(ReadPlyMesh(path));
   });
+  if (!entry->renderer) throw InputError(path, "the mesh could not be read before (see the first error)");
   return entry->renderer;
 }
 
