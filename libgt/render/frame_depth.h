@@ -68,8 +68,9 @@ DepthAgreement CompareSensorAndMesh(const DepthImage& sensor, const DepthImage& 
                                     double min_depth_m, double max_depth_m,
                                     const FusedDepthOptions& options);
 
-// The renderer of a mesh file, built once per process and shared (thread-safe; a mesh used
-// by several scenes or calls is read once). Throws InputError naming the file.
+// The renderer of a mesh file, shared (thread-safe): built once while in use, the 4 most
+// recently asked-for meshes kept (the frames of a scene reuse its BVH; a build over many
+// scenes does not hold them all). Throws InputError naming the file.
 std::shared_ptr<const MeshRenderer> SharedMeshRenderer(const std::string& path);
 
 // Depth rendered from the scene's mesh in `camera` at the frame's pose, as a DepthImage.
