@@ -37,7 +37,7 @@ Camera WorkingCamera(const Frame& frame, const Resolution& resolution) {
 }
 
 DepthImage LoadWorkingDepth(const Frame& frame, const Resolution& resolution) {
-  DepthImage full = io::ReadDepth(frame.depth, frame.depth_camera.width, frame.depth_camera.height);
+  DepthImage full = io::ReadFrameDepth(frame);
   if (full.width == resolution.width && full.height == resolution.height) return full;
   return ResizeDepthNearest(full, resolution.width, resolution.height);
 }
