@@ -3,7 +3,8 @@ ScanNet++'s (COLMAP text models with an OPENCV_FISHEYE / OPENCV camera and COLMA
 principal point, a binary PLY mesh, uint16 depth PNGs, an LZ4-record depth.bin); `occgt scan
 --format scannetpp --json` validates against schemas/scan.schema.json and explains every
 unusable image for both devices; a recipe with dataset.device iphone builds shards whose
-images are the undistorted frames and whose depth has no value on anonymised pixels."""
+images are the undistorted frames and whose depth has no value on anonymised pixels, and its
+DUSt3R ScanNet++ export reads back through a reader written from DUSt3R's dataset class."""
 import gzip
 import io
 import json
@@ -17,6 +18,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 import common  # noqa: E402
+import posed_readers  # noqa: E402
 
 FRAMES = 5
 
@@ -70,6 +72,21 @@ def read_shard(path):
                 field, data = field[:-3], gzip.decompress(data)
             samples.setdefault(f"{folder}/{stem}", {})[field] = data
     return samples
+
+
+def occgt_samples(build):
+    """{(scene, number0, number1): (pairs.jsonl line, sample json, depth0, depth1)}."""
+    out = {}
+    with open(os.path.join(build, "pairs.jsonl")) as f:
+        lines = [json.loads(line) for line in f if line.strip()]
+    for line in lines:
+        with tarfile.open(os.path.join(build, line["shard"])) as tf:
+            meta = json.load(tf.extractfile(line["key"] + ".json"))
+            d = [np.load(io.BytesIO(gzip.decompress(
+                tf.extractfile(line["key"] + f".depth{k}.npy.gz").read()))) for k in "01"]
+        out[(line["scene"], line["frame0"]["number"], line["frame1"]["number"])] = (
+            line, meta, d[0], d[1])
+    return out
 
 
 def main():
@@ -126,6 +143,7 @@ occupancy:
   enabled: false
 sample: {{image: png, depth: true, labels: true, occupancy: false}}
 shards: {{samples_per_shard: 8}}
+dust3r_export: true
 """)
     out = os.path.join(root, "out")
     common.occgt("build", recipe, "--out", out)
@@ -140,6 +158,12 @@ shards: {{samples_per_shard: 8}}
         depth = np.load(io.BytesIO(members["depth0.npy"]))
         assert depth.shape == (96, 128) and depth.dtype == np.float32, depth.shape
         assert (depth > 0).mean() > 0.5, key
+    # The DUSt3R ScanNet++ export of the same build, read back by the reader written from
+    # DUSt3R's ScanNetpp dataset class (posed_readers.py): K, poses, depth in mm (0 on
+    # anonymised pixels, as the shard's depth), images, scores.
+    posed = occgt_samples(out)
+    posed_readers.check_dust3r("scannetpp iphone", out, posed,
+                               posed_readers.shard_images(out, posed))
     print("scannetpp:", summary.get("samples"), "samples in", len(shards), "shard(s)")
 
 
