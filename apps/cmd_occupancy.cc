@@ -76,7 +76,10 @@ void RunOccupancy(const OccupancyArgs& args) {
   gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, "", setup.resolution};
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 
-  const gt::Scene scene = gt::datasets::MakeReader(setup.format)->ReadScene(setup.root, d.scene);
+  gt::datasets::ReaderOptions reader_options;
+  reader_options.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(source.id0);
+  const gt::Scene scene =
+      gt::datasets::MakeReader(setup.format, reader_options)->ReadScene(setup.root, d.scene);
   source.scene = scene.name;
   // The scene's depth range: the validity range of the fusion.
   o = gt::truth::ResolvePairTruthOptions(setup.settings, DepthRangeFor(setup, scene));

@@ -26,6 +26,10 @@ ScanNetPPDevice ParseScanNetPPDevice(std::string_view name, const std::string& f
   throw InputError(field, "unknown device '" + std::string(name) + "', expected dslr or iphone");
 }
 
+ScanNetPPDevice ScanNetPPDeviceOfFrameId(std::string_view frame_id) {
+  return frame_id.rfind("frame_", 0) == 0 ? ScanNetPPDevice::kIphone : ScanNetPPDevice::kDslr;
+}
+
 std::vector<std::string> KnownFormats() {
   std::vector<std::string> names;
   for (const DatasetFormat f : kAllDatasetFormats) names.emplace_back(DatasetFormatName(f));

@@ -21,6 +21,10 @@ const char* ScanNetPPDeviceName(ScanNetPPDevice device);  // "dslr", "iphone"
 // InputError(field, "unknown device '<name>', expected dslr or iphone").
 ScanNetPPDevice ParseScanNetPPDevice(std::string_view name, const std::string& field);
 
+// The device whose frame ids look like `frame_id`: iPhone frames are frame_%06d, DSLR images
+// DSC%05d (for commands given frame ids without a device).
+ScanNetPPDevice ScanNetPPDeviceOfFrameId(std::string_view frame_id);
+
 struct ReaderOptions {
   double tum_max_dt_s = 0.02;     // TUM: max |t_depth - t_pose| and |t_depth - t_rgb| (seconds)
   std::string exr_channel;        // generic manifest: default EXR channel when a frame has none
