@@ -31,6 +31,7 @@ namespace occgt {
 namespace {
 
 struct BuildArgs {
+  std::string depth_source;  // --depth-source: overrides dataset.depth_source
   std::string recipe;
   std::string root;
   int threads = 0;
@@ -194,6 +195,9 @@ void Run(const BuildArgs& args_in) {
   const bool from_slurm = !args.task_given && TaskFromSlurm(&args.build);
   gt::pipeline::RecipeOverrides overrides;
   overrides.root = args.root;
+  if (!args.depth_source.empty()) {
+    overrides.depth_source = gt::render::ParseDepthSourceMode(args.depth_source, "--depth-source");
+  }
   const gt::pipeline::Recipe recipe = gt::pipeline::LoadRecipe(args.recipe, overrides);
   if (args.threads < 0)
     throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
@@ -247,6 +251,8 @@ void AddBuildCommand(CLI::App& app) {
   cmd->add_option("--stage", args->stage, "select | write | all (default all)");
   cmd->add_option("--depth-cache-mb", args->build.depth_cache_mb,
                   "Budget of decoded depth maps held per scene (LRU, default 512)");
+  cmd->add_option("--depth-source", args->depth_source,
+                  "sensor|mesh|fused: overrides the recipe's dataset.depth_source");
   cmd->add_option(
       "--root", args->root,
       "Dataset root overriding the recipe's dataset.root (relative to the working folder)");

@@ -76,10 +76,7 @@ void RunOccupancy(const OccupancyArgs& args) {
   gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, "", setup.resolution};
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 
-  gt::datasets::ReaderOptions reader_options;
-  reader_options.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(source.id0);
-  const gt::Scene scene =
-      gt::datasets::MakeReader(setup.format, reader_options)->ReadScene(setup.root, d.scene);
+  const gt::Scene scene = ReadSetupScene(setup, d.scene, source.id0);
   source.scene = scene.name;
   // The scene's depth range: the validity range of the fusion.
   o = gt::truth::ResolvePairTruthOptions(setup.settings, DepthRangeFor(setup, scene));
@@ -94,14 +91,10 @@ void RunOccupancy(const OccupancyArgs& args) {
   const size_t i1 = gt::truth::FindFrame(scene, source.id1);
   source.number0 = scene.frames[i0].number;
   source.number1 = scene.frames[i1].number;
-  const gt::truth::WorkingFrame w0 =
-      gt::truth::LoadWorkingFrame(scene.frames[i0], source.resolution);
-  const gt::truth::WorkingFrame w1 =
-      gt::truth::LoadWorkingFrame(scene.frames[i1], source.resolution);
+  const gt::truth::WorkingFrame w0 = LoadSetupFrame(setup, scene, scene.frames[i0]);
+  const gt::truth::WorkingFrame w1 = LoadSetupFrame(setup, scene, scene.frames[i1]);
   auto load = [&](size_t i) {  // the pair's frames are read once
-    return i == i0   ? w0
-           : i == i1 ? w1
-                     : gt::truth::LoadWorkingFrame(scene.frames[i], source.resolution);
+    return i == i0 ? w0 : i == i1 ? w1 : LoadSetupFrame(setup, scene, scene.frames[i]);
   };
   std::optional<gt::truth::ScopeMap> scope;
   gt::truth::PairTruth truth;

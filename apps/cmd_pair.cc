@@ -60,10 +60,7 @@ void RunPair(const PairArgs& args) {
   gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, ls.preset, setup.resolution};
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 
-  gt::datasets::ReaderOptions reader_options;
-  reader_options.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(source.id0);
-  const gt::Scene scene =
-      gt::datasets::MakeReader(setup.format, reader_options)->ReadScene(setup.root, d.scene);
+  const gt::Scene scene = ReadSetupScene(setup, d.scene, source.id0);
   source.scene = scene.name;
   const gt::truth::PairTruthOptions o =
       gt::truth::ResolvePairTruthOptions(st, DepthRangeFor(setup, scene));
@@ -78,8 +75,8 @@ void RunPair(const PairArgs& args) {
   const gt::Frame& f1 = scene.frames[gt::truth::FindFrame(scene, source.id1)];
   source.number0 = f0.number;
   source.number1 = f1.number;
-  const gt::truth::WorkingFrame w0 = gt::truth::LoadWorkingFrame(f0, source.resolution);
-  const gt::truth::WorkingFrame w1 = gt::truth::LoadWorkingFrame(f1, source.resolution);
+  const gt::truth::WorkingFrame w0 = LoadSetupFrame(setup, scene, f0);
+  const gt::truth::WorkingFrame w1 = LoadSetupFrame(setup, scene, f1);
   const gt::truth::PairTruth truth = gt::truth::ComputePairTruth(w0, w1, o);
   gt::truth::WritePairFolder(d.out, source, w0, w1, o, truth, args.score_stride);
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -15,6 +16,9 @@
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/datasets/scan.h"
+#include "libgt/pipeline/recipe.h"
+#include "libgt/render/frame_depth.h"
+#include "libgt/truth/working_frame.h"
 
 namespace occgt {
 namespace {
@@ -27,7 +31,58 @@ struct ScanArgs {
   bool json = false;
   gt::datasets::ReaderOptions reader;
   gt::datasets::ScanOptions scan;
+  std::string mesh;     // --mesh: every scene's mesh ({scene} = its name); "" = the reader's
+  int mesh_stride = 1;  // --mesh-stride: compare every n-th usable frame with the mesh
+  gt::render::FusedDepthOptions tolerance;
 };
+
+// The sensor-vs-mesh comparison of a scene that has a mesh (docs/GROUND_TRUTH.md "Depth
+// sources"): per compared frame and in total.
+struct MeshAgreement {
+  std::string mesh;
+  std::vector<std::pair<std::string, gt::render::DepthAgreement>> frames;
+  gt::render::DepthAgreement total;
+};
+
+MeshAgreement CompareWithMesh(const gt::Scene& scene, const ScanArgs& args) {
+  MeshAgreement out;
+  out.mesh = scene.mesh_path;
+  gt::render::FrameDepthOptions options;
+  options.source = gt::render::DepthSourceMode::kMesh;
+  options.fused = args.tolerance;
+  int k = 0;
+  for (const gt::Frame& f : scene.frames) {
+    if (!f.usable || k++ % args.mesh_stride != 0) continue;
+    gt::render::DepthAgreement a;
+    gt::truth::LoadWorkingDepth(scene, f, {f.depth_camera.width, f.depth_camera.height}, options, &a);
+    out.total += a;
+    out.frames.emplace_back(f.id, a);
+  }
+  return out;
+}
+
+nlohmann::ordered_json SharesJson(const gt::render::DepthAgreement& a) {
+  const double n = static_cast<double>(std::max<int64_t>(1, a.Total()));
+  return {{"pixels", a.Total()},
+          {"sensor_only", a.sensor_only / n},
+          {"mesh_only", a.mesh_only / n},
+          {"agree", a.agree / n},
+          {"disagree", a.disagree / n}};
+}
+
+nlohmann::ordered_json MeshAgreementJson(const MeshAgreement& m, const ScanArgs& args) {
+  nlohmann::ordered_json j;
+  j["mesh"] = m.mesh;
+  j["tolerance"] = {{"abs_tol_m", args.tolerance.abs_tol_m}, {"rel_tol", args.tolerance.rel_tol}};
+  j["frames"] = nlohmann::ordered_json::array();
+  for (const auto& [id, a] : m.frames) {
+    nlohmann::ordered_json f = SharesJson(a);
+    f["id"] = id;
+    j["frames"].push_back(f);
+  }
+  j["total"] = SharesJson(m.total);
+  return j;
+}
 
 nlohmann::ordered_json ReasonsJson(const std::map<std::string, size_t>& reasons) {
   nlohmann::ordered_json j = nlohmann::ordered_json::object();
@@ -139,10 +194,17 @@ void RunScan(const ScanArgs& args) {
   } else {
     names = reader->ListScenes(args.root);
   }
+  if (args.mesh_stride < 1) throw gt::InputError("--mesh-stride", "expected an integer >= 1");
+  std::string error;
+  if (!args.tolerance.Check(&error)) throw gt::InputError("--abs-tol-m/--rel-tol", error);
   std::vector<gt::datasets::SceneSummary> summaries;
+  std::vector<std::optional<MeshAgreement>> agreements;
   for (const auto& name : names) {
-    const gt::Scene scene = reader->ReadScene(args.root, name);
+    gt::Scene scene = reader->ReadScene(args.root, name);
+    gt::pipeline::ApplyMeshPath(args.mesh, &scene);
     summaries.push_back(gt::datasets::SummarizeScene(scene, args.scan));
+    agreements.emplace_back();
+    if (!scene.mesh_path.empty()) agreements.back() = CompareWithMesh(scene, args);
   }
   size_t frames = 0, usable = 0, with_color = 0;
   std::map<std::string, size_t> reasons;
@@ -161,7 +223,10 @@ void RunScan(const ScanArgs& args) {
     j["check_depth"] = args.scan.check_depth;
     if (format == gt::DatasetFormat::kScanNetPP) j["device"] = args.device;
     j["scenes"] = nlohmann::ordered_json::array();
-    for (const auto& s : summaries) j["scenes"].push_back(SceneJson(s));
+    for (size_t i = 0; i < summaries.size(); ++i) {
+      j["scenes"].push_back(SceneJson(summaries[i]));
+      if (agreements[i]) j["scenes"].back()["mesh_depth"] = MeshAgreementJson(*agreements[i], args);
+    }
     j["totals"] = {{"scenes", summaries.size()},
                    {"frames", frames},
                    {"usable", usable},
@@ -171,7 +236,17 @@ void RunScan(const ScanArgs& args) {
     std::cout << j.dump(2) << "\n";
     return;
   }
-  for (const auto& s : summaries) PrintSceneText(s);
+  for (size_t i = 0; i < summaries.size(); ++i) {
+    PrintSceneText(summaries[i]);
+    if (const auto& m = agreements[i]) {
+      const double n = static_cast<double>(std::max<int64_t>(1, m->total.Total()));
+      std::printf("  mesh %s, %zu frames vs sensor (within %.3g m + %.3g of depth): agree %.3f, "
+                  "disagree %.3f, mesh only %.3f, sensor only %.3f\n",
+                  m->mesh.c_str(), m->frames.size(), args.tolerance.abs_tol_m, args.tolerance.rel_tol,
+                  m->total.agree / n, m->total.disagree / n, m->total.mesh_only / n,
+                  m->total.sensor_only / n);
+    }
+  }
   std::cout << "total: " << summaries.size() << " scene(s), " << frames << " frames, " << usable
             << " usable (" << with_color << " with colour), " << frames - usable << " unusable\n";
 }
@@ -196,6 +271,14 @@ void AddScanCommand(CLI::App& app) {
   cmd->add_option("--device", args->device, "ScanNet++: dslr or iphone")->capture_default_str();
   cmd->add_option("--exr-channel", args->reader.exr_channel,
                   "Generic: default EXR depth channel (name or suffix)");
+  cmd->add_option("--mesh", args->mesh,
+                  "A mesh for the scenes ({scene} = the scene's name; default: the dataset's own, "
+                  "e.g. ScanNet's <scene>_vh_clean_2.ply): sensor vs rendered depth per frame");
+  cmd->add_option("--mesh-stride", args->mesh_stride,
+                  "With a mesh: compare every n-th usable frame (default 1)");
+  cmd->add_option("--abs-tol-m", args->tolerance.abs_tol_m,
+                  "With a mesh: sensor and mesh agree within abs-tol-m + rel-tol * depth (0.2)");
+  cmd->add_option("--rel-tol", args->tolerance.rel_tol, "With a mesh: see --abs-tol-m (0.01)");
   cmd->callback([args] { RunScan(*args); });
 }
 

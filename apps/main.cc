@@ -58,6 +58,7 @@ int main(int argc, char** argv) {
   occgt::AddOccupancyCommand(app);
   occgt::AddMergeCommand(app);
   occgt::AddValidateCommand(app);
+  occgt::AddRenderCommand(app);
   occgt::AddBuildCommand(app);
   occgt::AddInspectCommand(app);
   occgt::AddEvalCommand(app);

@@ -1,6 +1,7 @@
 #include "apps/pair_recipe.h"
 
 #include "libgt/core/error.h"
+#include "libgt/datasets/reader.h"
 
 namespace occgt {
 
@@ -28,6 +29,10 @@ PairSetup StartPairSetup(const PairDatasetArgs& args) {
     }
   }
   if (s.root.empty()) throw gt::InputError("--root", "required (or --recipe)");
+  s.depth = gt::pipeline::RecipeFrameDepthOptions(r);
+  if (args.depth_source)
+    s.depth.source = gt::render::ParseDepthSourceMode(*args.depth_source, "--depth-source");
+  s.mesh_path = args.mesh.empty() ? r.dataset.mesh_path : args.mesh;
   if (!args.format.empty()) {
     s.format = gt::ParseDatasetFormat(args.format, "--format");
   } else if (s.recipe) {
@@ -53,6 +58,27 @@ void AddPairDatasetFlags(CLI::App* cmd, PairDatasetArgs* d, const std::string& r
                       std::to_string(res.height) + ")");
   cmd->add_option("--min-depth-m", d->min_depth_m, "minimum valid depth (dataset default)");
   cmd->add_option("--max-depth-m", d->max_depth_m, "maximum valid depth (dataset default)");
+  cmd->add_option("--depth-source", d->depth_source,
+                  "sensor|mesh|fused: depth files, rendered from the scene's mesh, or both "
+                  "(default: the recipe's, else sensor)");
+  cmd->add_option("--mesh", d->mesh,
+                  "the scene's mesh (PLY, in the poses' world frame; default: the recipe's "
+                  "dataset.mesh_path, else the dataset's own)");
+}
+
+gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name,
+                         const std::string& frame_id) {
+  gt::datasets::ReaderOptions reader_options;
+  reader_options.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(frame_id);
+  gt::Scene scene =
+      gt::datasets::MakeReader(setup.format, reader_options)->ReadScene(setup.root, scene_name);
+  gt::pipeline::ApplyMeshPath(setup.mesh_path, &scene);
+  return scene;
+}
+
+gt::truth::WorkingFrame LoadSetupFrame(const PairSetup& setup, const gt::Scene& scene,
+                                       const gt::Frame& frame) {
+  return gt::truth::LoadWorkingFrame(scene, frame, setup.resolution, setup.depth);
 }
 
 gt::truth::DatasetDepthRange DepthRangeFor(const PairSetup& setup, const gt::Scene& scene) {

@@ -23,15 +23,27 @@ struct PairDatasetArgs {
   std::string recipe, root, format, scene, frames, out;
   std::optional<std::string> resolution;           // WxH; default the recipe's or 640x480
   std::optional<double> min_depth_m, max_depth_m;  // default the recipe's or the dataset's
+  std::optional<std::string> depth_source;         // sensor|mesh|fused; default the recipe's
+  std::string mesh;                                // the scene's mesh; default the recipe's
 };
 
 struct PairSetup {
   std::optional<gt::pipeline::Recipe> recipe;
   std::string root;  // resolved as above
   gt::DatasetFormat format = gt::DatasetFormat::kGeneric;
-  gt::truth::Resolution resolution;  // working resolution
-  gt::truth::PairSettings settings;  // the recipe's (or the defaults), then the depth flags
+  gt::truth::Resolution resolution;     // working resolution
+  gt::truth::PairSettings settings;     // the recipe's (or the defaults), then the depth flags
+  gt::render::FrameDepthOptions depth;  // the recipe's depth source, then --depth-source
+  std::string mesh_path;                // --mesh, else the recipe's dataset.mesh_path
 };
+
+// The scene of the setup (its mesh path applied) and its frames at the working resolution
+// with the setup's depth source.
+// frame_id: one of the frames asked for (ScanNet++: frame_%06d ids are the iPhone's).
+gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name,
+                         const std::string& frame_id = "");
+gt::truth::WorkingFrame LoadSetupFrame(const PairSetup& setup, const gt::Scene& scene,
+                                       const gt::Frame& frame);
 
 // Adds the flags of PairDatasetArgs to a subcommand; `recipe_gives` says what the recipe
 // contributes (help text).

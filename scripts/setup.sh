@@ -35,7 +35,7 @@ done
 packages=(
   build-essential cmake ninja-build pkg-config ccache
   libeigen3-dev libopencv-dev libopenexr-dev libpcl-dev liboctomap-dev libpng-dev libjpeg-dev zlib1g-dev libdeflate-dev liblz4-dev libssl-dev
-  nlohmann-json3-dev libcli11-dev libyaml-cpp-dev libarchive-dev libzip-dev libtbb-dev libhdf5-dev
+  nlohmann-json3-dev libcli11-dev libyaml-cpp-dev libarchive-dev libzip-dev libtbb-dev libhdf5-dev libembree-dev
   libgtest-dev libbenchmark-dev libvalijson-dev gnuplot-nox
   pybind11-dev python3-dev
 )

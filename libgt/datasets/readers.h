@@ -21,6 +21,8 @@ class ScanNetReader : public DatasetReader {
 
  private:
   Scene ReadCppExport(const std::string& folder, const std::string& scene_name) const;
+  // The scene of a resolved folder, whatever its layout (ReadScene adds the mesh path).
+  Scene ReadSceneFolder(const std::string& folder, const std::string& scene_name) const;
   Scene ReadSens(const std::string& folder, const std::string& scene_name) const;
   ReaderOptions options_;
 };

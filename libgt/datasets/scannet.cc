@@ -154,8 +154,28 @@ std::vector<std::string> ScanNetReader::ListScenes(const std::string& root) cons
   return out;
 }
 
+namespace {
+// ScanNet's reconstructed mesh of a scene folder, in the poses' world frame: the download's
+// <scene>_vh_clean_2.ply inside the folder (beside <scene>.sens), or beside the folder; ""
+// when neither exists (docs/DATASETS.md "ScanNet meshes").
+std::string ScanNetMeshPath(const std::string& folder) {
+  const fs::path dir(folder);
+  const std::string name = dir.filename().string() + "_vh_clean_2.ply";
+  for (const fs::path& p : {dir / name, dir.parent_path() / name}) {
+    if (io::FileExists(p.string())) return p.string();
+  }
+  return "";
+}
+}  // namespace
+
 Scene ScanNetReader::ReadScene(const std::string& root, const std::string& scene_name) const {
   const std::string folder = ResolveSceneFolder(root, scene_name, IsScanNetScene(root));
+  Scene scene = ReadSceneFolder(folder, scene_name);
+  scene.mesh_path = ScanNetMeshPath(folder);
+  return scene;
+}
+
+Scene ScanNetReader::ReadSceneFolder(const std::string& folder, const std::string& scene_name) const {
   if (!IsPythonExport(folder) && IsCppExport(folder)) return ReadCppExport(folder, scene_name);
   if (!IsPythonExport(folder) && IsSensScene(folder)) return ReadSens(folder, scene_name);
   const std::string pose_dir = (fs::path(folder) / "pose").string();

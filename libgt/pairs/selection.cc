@@ -21,8 +21,9 @@ void AddCounts(const DropCounts& from, DropCounts* to) {
 
 // ---- DepthCache -------------------------------------------------------------------
 
-DepthCache::DepthCache(const Scene& scene, int width, int height, size_t max_bytes)
-    : scene_(scene), width_(width), height_(height), max_bytes_(max_bytes) {}
+DepthCache::DepthCache(const Scene& scene, int width, int height, size_t max_bytes,
+                       render::FrameDepthOptions depth)
+    : scene_(scene), width_(width), height_(height), max_bytes_(max_bytes), depth_(depth) {}
 
 std::shared_ptr<const DepthImage> DepthCache::Get(size_t frame_index) {
   GT_ASSERT(frame_index < scene_.frames.size());
@@ -37,7 +38,7 @@ std::shared_ptr<const DepthImage> DepthCache::Get(size_t frame_index) {
     ++misses_;
   }
   auto map = std::make_shared<const DepthImage>(
-      truth::LoadWorkingDepth(scene_.frames[frame_index], {width_, height_}));
+      truth::LoadWorkingDepth(scene_, scene_.frames[frame_index], {width_, height_}, depth_));
   const size_t map_bytes = map->values_m.size() * sizeof(float);
   std::lock_guard<std::mutex> lock(mutex_);
   auto it = maps_.find(frame_index);

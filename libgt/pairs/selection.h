@@ -31,6 +31,7 @@
 #include "libgt/core/frame.h"
 #include "libgt/geometry/aggregate.h"
 #include "libgt/geometry/labels.h"
+#include "libgt/render/frame_depth.h"
 
 namespace gt::pairs {
 
@@ -81,7 +82,9 @@ void AddCounts(const DropCounts& from, DropCounts* to);
 // is always kept). A read error propagates as gt::InputError naming the file.
 class DepthCache {
  public:
-  DepthCache(const Scene& scene, int width, int height, size_t max_bytes = size_t{512} << 20);
+  // Maps from `depth.source` (render/frame_depth.h; the sensor's by default).
+  DepthCache(const Scene& scene, int width, int height, size_t max_bytes = size_t{512} << 20,
+             render::FrameDepthOptions depth = {});
   std::shared_ptr<const DepthImage> Get(size_t frame_index);
   // Whether the frame's map is held now (a hint: another thread may add or drop it).
   bool Contains(size_t frame_index) const;
@@ -95,6 +98,7 @@ class DepthCache {
   const Scene& scene_;
   int width_, height_;
   size_t max_bytes_;
+  render::FrameDepthOptions depth_;
   mutable std::mutex mutex_;
   std::list<size_t> lru_;  // front = most recent
   std::unordered_map<size_t,

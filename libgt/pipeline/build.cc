@@ -96,8 +96,9 @@ std::map<std::string, SceneSelection> SelectStage(const Recipe& recipe,
         selections[name] = std::move(*s);
         ++reused;
       } else {
-        const Scene scene = reader.ReadScene(recipe.dataset.root, name);
-        pairs::DepthCache cache(scene, recipe.width, recipe.height, options.depth_cache_mb << 20);
+        const Scene scene = ReadRecipeScene(recipe, reader, name);
+        pairs::DepthCache cache(scene, recipe.width, recipe.height, options.depth_cache_mb << 20,
+                                RecipeFrameDepthOptions(recipe));
         SceneSelection& sel = selections[name];
         sel = SelectScene(recipe, scene, &cache, imports.get());  // scene.name == name
         if (!options.dry_run) bytes += WriteSelection(options.out_dir, sel);

@@ -447,6 +447,7 @@ bool DatasetOptions::Check(std::string* error) const {
   if (min_depth_m && max_depth_m && !(*min_depth_m < *max_depth_m)) {
     return fail("dataset.max_depth_m: expected a number > dataset.min_depth_m");
   }
+  if (!fused_depth.Check(error)) return fail("dataset.fused_depth: " + *error);
   if (!scenes.empty() && !split_file.empty()) {
     return fail(
         "dataset.split_file: expected either dataset.scenes or dataset.split_file, not both");
@@ -533,6 +534,14 @@ json Recipe::ToJson() const {
   d["min_valid_depth_fraction"] = dataset.min_valid_depth_fraction;
   d["min_depth_m"] = dataset.min_depth_m ? json(*dataset.min_depth_m) : json(nullptr);
   d["max_depth_m"] = dataset.max_depth_m ? json(*dataset.max_depth_m) : json(nullptr);
+  // The depth source only when not the default, so that the digest of existing recipes (and
+  // every file that records it) is unchanged.
+  if (dataset.depth_source != render::DepthSourceMode::kSensor) {
+    d["depth_source"] = render::DepthSourceModeName(dataset.depth_source);
+    d["fused_depth"] = {{"abs_tol_m", dataset.fused_depth.abs_tol_m},
+                        {"rel_tol", dataset.fused_depth.rel_tol}};
+  }
+  if (!dataset.mesh_path.empty()) d["mesh_path"] = dataset.mesh_path;
   if (dataset.is_synthetic) {
     d["synthetic"] = {{"scenes", dataset.synthetic.scenes},
                       {"frames", dataset.synthetic.frames},
@@ -644,6 +653,17 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   Get(d, "min_valid_depth_fraction", &r.dataset.min_valid_depth_fraction, file);
   GetOpt(d, "min_depth_m", &r.dataset.min_depth_m, file);
   GetOpt(d, "max_depth_m", &r.dataset.max_depth_m, file);
+  if (d.contains("depth_source")) {
+    r.dataset.depth_source =
+        render::ParseDepthSourceMode(d["depth_source"].get<std::string>(), file + ": dataset.depth_source");
+  }
+  if (d.contains("mesh_path")) {
+    r.dataset.mesh_path = ResolvePath(d["mesh_path"].get<std::string>(), file + ": dataset.mesh_path", base_dir);
+  }
+  if (d.contains("fused_depth")) {
+    Get(d["fused_depth"], "abs_tol_m", &r.dataset.fused_depth.abs_tol_m, file);
+    Get(d["fused_depth"], "rel_tol", &r.dataset.fused_depth.rel_tol, file);
+  }
   if (d.contains("synthetic")) {
     const json& s = d["synthetic"];
     Get(s, "scenes", &r.dataset.synthetic.scenes, file);
@@ -655,6 +675,7 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   if (!overrides.root.empty()) {
     r.dataset.root = fs::absolute(overrides.root).lexically_normal().string();
   }
+  if (overrides.depth_source) r.dataset.depth_source = *overrides.depth_source;
   if (j.contains("labels")) {
     const json& l = j["labels"];
     Get(l, "preset", &r.labels.preset, file);
@@ -830,6 +851,34 @@ SampleOptions RecipeSampleOptions(const Recipe& recipe) {
   s.recipe_name = recipe.name;
   s.split = recipe.split;
   return s;
+}
+
+}  // namespace gt::pipeline
+
+namespace gt::pipeline {
+
+render::FrameDepthOptions RecipeFrameDepthOptions(const Recipe& recipe) {
+  render::FrameDepthOptions o;
+  o.source = recipe.dataset.depth_source;
+  o.fused = recipe.dataset.fused_depth;
+  return o;
+}
+
+void ApplyMeshPath(const std::string& mesh_path, Scene* scene) {
+  if (mesh_path.empty()) return;
+  std::string path = mesh_path;
+  for (size_t at = path.find("{scene}"); at != std::string::npos; at = path.find("{scene}", at)) {
+    path.replace(at, 7, scene->name);
+    at += scene->name.size();
+  }
+  scene->mesh_path = path;
+}
+
+Scene ReadRecipeScene(const Recipe& recipe, const datasets::DatasetReader& reader,
+                      const std::string& name) {
+  Scene scene = reader.ReadScene(recipe.dataset.root, name);
+  ApplyMeshPath(recipe.dataset.mesh_path, &scene);
+  return scene;
 }
 
 }  // namespace gt::pipeline

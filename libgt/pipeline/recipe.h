@@ -29,6 +29,7 @@
 #include "libgt/occupancy/pair_occupancy.h"
 #include "libgt/pairs/selection.h"
 #include "libgt/pipeline/sample.h"
+#include "libgt/render/frame_depth.h"
 #include "libgt/truth/pair_settings.h"
 
 namespace gt::pipeline {
@@ -71,6 +72,14 @@ struct DatasetOptions {
   std::optional<double> min_depth_m;      // overrides the dataset's validity range (metres)
   std::optional<double> max_depth_m;
   SyntheticDatasetOptions synthetic;
+  // dataset.depth_source: where frames' depth comes from (render/frame_depth.h,
+  // docs/GROUND_TRUTH.md "Depth sources"): sensor (default) | mesh | fused.
+  render::DepthSourceMode depth_source = render::DepthSourceMode::kSensor;
+  // dataset.mesh_path: the scenes' mesh, in the frames' world frame; "{scene}" is replaced by
+  // the scene's name. Absolute after loading; "" = the reader's (ScanNet's
+  // <scene>_vh_clean_2.ply beside the scene), if any.
+  std::string mesh_path;
+  render::FusedDepthOptions fused_depth;  // dataset.fused_depth: {abs_tol_m, rel_tol}
 
   bool Check(std::string* error) const;
 };
@@ -140,9 +149,20 @@ truth::PairTruthOptions RecipePairTruthOptions(const Recipe& recipe, const Scene
 // scene (the write stage sets it per scene with RecipePairTruthOptions).
 SampleOptions RecipeSampleOptions(const Recipe& recipe);
 
+// The recipe's depth source as the frame-depth options of every scene (render range: the
+// defaults of render::FrameDepthOptions).
+render::FrameDepthOptions RecipeFrameDepthOptions(const Recipe& recipe);
+// A scene read by `reader` with dataset.mesh_path applied (Scene::mesh_path, "{scene}"
+// replaced by its name).
+Scene ReadRecipeScene(const Recipe& recipe, const datasets::DatasetReader& reader,
+                      const std::string& name);
+// Scene::mesh_path from a dataset.mesh_path / --mesh value ("" keeps the reader's).
+void ApplyMeshPath(const std::string& mesh_path, Scene* scene);
+
 // Overrides applied from the command line after parsing (before Check).
 struct RecipeOverrides {
   std::string root;  // --root: replaces dataset.root (relative to the working directory)
+  std::optional<render::DepthSourceMode> depth_source;  // --depth-source
 };
 
 // Reads, validates and checks a recipe file; throws InputError("<file>: <field>", ...).

@@ -50,6 +50,30 @@ WorkingFrame LoadWorkingFrame(const Frame& frame, const Resolution& resolution) 
   return f;
 }
 
+DepthImage LoadWorkingDepth(const Scene& scene, const Frame& frame, const Resolution& resolution,
+                            const render::FrameDepthOptions& depth, render::DepthAgreement* agreement) {
+  if (depth.source == render::DepthSourceMode::kSensor && agreement == nullptr) {
+    return LoadWorkingDepth(frame, resolution);
+  }
+  if (depth.source == render::DepthSourceMode::kMesh && agreement == nullptr) {
+    return render::LoadFrameDepth(scene, frame, WorkingCamera(frame, resolution), depth);  // no sensor read
+  }
+  // A frame without a depth file (ScanNet++ DSLR) has no sensor depth anywhere.
+  const DepthImage sensor = frame.depth.path.empty()
+                                ? DepthImage(resolution.width, resolution.height)
+                                : LoadWorkingDepth(frame, resolution);
+  return render::LoadFrameDepth(scene, frame, WorkingCamera(frame, resolution), depth, agreement, &sensor);
+}
+
+WorkingFrame LoadWorkingFrame(const Scene& scene, const Frame& frame, const Resolution& resolution,
+                              const render::FrameDepthOptions& depth) {
+  WorkingFrame f;
+  f.depth = std::make_shared<const DepthImage>(LoadWorkingDepth(scene, frame, resolution, depth));
+  f.camera = WorkingCamera(frame, resolution);
+  f.world_from_cam = frame.world_from_cam;
+  return f;
+}
+
 size_t FindFrame(const Scene& scene, const std::string& id, const std::string& field) {
   for (size_t i = 0; i < scene.frames.size(); ++i) {
     const Frame& f = scene.frames[i];

@@ -18,6 +18,7 @@
 #include "libgt/core/depth.h"
 #include "libgt/core/frame.h"
 #include "libgt/core/pose.h"
+#include "libgt/render/frame_depth.h"
 
 namespace gt::truth {
 
@@ -45,6 +46,15 @@ Camera WorkingCamera(const Frame& frame, const Resolution& resolution);
 // The frame's depth map at the working resolution; throws InputError naming the file.
 DepthImage LoadWorkingDepth(const Frame& frame, const Resolution& resolution);
 WorkingFrame LoadWorkingFrame(const Frame& frame, const Resolution& resolution);
+// The same with the depth from `depth.source` (render/frame_depth.h: sensor, mesh, fused),
+// the mesh rendered directly at the working resolution in the working camera. The sensor
+// source is exactly LoadWorkingDepth(frame, resolution). *agreement, when given, counts the
+// sensor-vs-mesh comparison (mesh and fused sources).
+DepthImage LoadWorkingDepth(const Scene& scene, const Frame& frame, const Resolution& resolution,
+                            const render::FrameDepthOptions& depth,
+                            render::DepthAgreement* agreement = nullptr);
+WorkingFrame LoadWorkingFrame(const Scene& scene, const Frame& frame, const Resolution& resolution,
+                              const render::FrameDepthOptions& depth);
 
 // Index into scene.frames of the frame with id `id`; throws InputError(field, ...) when
 // there is none or it is unusable (with the reader's reason).

@@ -12,6 +12,8 @@ Functions:
     dense_volume       occupancy words -> uint8 [bins, H/2, W/2] (0 free, 1 occupied, 255 unknown)
     open_dataset       occgt's dataset readers: scenes, frames, frames at a working resolution
     pair_from_scene    pair_ground_truth of two frames of a scene, as ``occgt pair`` computes it
+    load_mesh          a triangle mesh (PLY) and its ray-casting BVH, built once
+    render_depth       planar depth of a mesh seen by a pinhole, OpenCV or OpenCV-fisheye camera
 
 Bad arguments raise ValueError naming the argument (``"depth0: expected ..."``). The work runs
 without the GIL, so threads calling these functions run in parallel. Docs: docs/PYTHON.md.
@@ -25,8 +27,8 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _occgt
-from ._occgt import (FORMATS, LABEL_NAMES, MATCH_TYPE_NAMES, PRESETS, Dataset, Frame, Scene,
-                     ScopeMap)
+from ._occgt import (FORMATS, LABEL_NAMES, MATCH_TYPE_NAMES, PRESETS, Dataset, Frame, Mesh,
+                     Scene, ScopeMap)
 
 __version__: str = _occgt.__version__
 
@@ -46,6 +48,7 @@ __all__ = [
     "Dataset",
     "Frame",
     "FusionStats",
+    "Mesh",
     "Scene",
     "ScopeMap",
     "LoadedFrame",
@@ -62,10 +65,12 @@ __all__ = [
     "PairGroundTruth",
     "dense_volume",
     "depth_at_image_size",
+    "load_mesh",
     "open_dataset",
     "pair_from_scene",
     "pair_ground_truth",
     "pair_options",
+    "render_depth",
 ]
 
 #: Label codes (uint8) of label01/label10/cells0/cells1 (LABEL_NAMES[code] is the name):
@@ -322,6 +327,61 @@ def depth_at_image_size(
     return _occgt.depth_at_image_size(depth, K, (float(scale[0]), float(scale[1])), width, height)
 
 
+def load_mesh(path: Union[str, "os.PathLike[str]"]) -> Mesh:
+    """A triangle mesh read from a PLY file, with its ray-casting BVH (Embree) built once.
+
+    The Mesh is immutable: reuse it for every render_depth call, from any number of threads.
+
+    Args:
+        path: a PLY file (ASCII or binary; vertex x, y, z float or double; faces
+            ``list uchar|int int|uint``; other properties ignored), metres.
+
+    Raises:
+        ValueError: an unreadable, malformed, truncated or oversized file (the message names it).
+    """
+    return _occgt.load_mesh(os.fspath(path))
+
+
+def render_depth(
+    mesh: Mesh,
+    K: npt.ArrayLike,
+    world_from_cam: npt.ArrayLike,
+    width: int,
+    height: int,
+    *,
+    model: str = "pinhole",
+    dist: Optional[npt.ArrayLike] = None,
+    near_m: float = 0.05,
+    far_m: float = 20.0,
+) -> npt.NDArray[np.float32]:
+    """Planar depth of a mesh seen by a camera (docs/GROUND_TRUTH.md "Depth sources").
+
+    The ray of pixel (u, v) passes through the pixel's centre, the continuous point (u, v)
+    (through its exact undistorted direction for a distorted camera); the first surface hit
+    gives the pixel's camera z in metres.
+
+    Args:
+        mesh: from load_mesh.
+        K: intrinsics [3, 3] of the (distorted) image, OpenCV's pixel convention.
+        world_from_cam: rigid pose [4, 4], camera to the mesh's frame, OpenCV axes, metres.
+        width, height: image size in pixels.
+        model: "pinhole", "opencv" (dist = k1, k2, p1, p2[, k3]) or "opencv_fisheye"
+            (dist = k1, k2, k3, k4).
+        dist: the distortion coefficients; None for "pinhole".
+        near_m, far_m: a first surface outside [near_m, far_m] gives 0.
+
+    Returns:
+        float32 [height, width] planar depth in metres; 0 where the ray hits nothing, its first
+        surface is outside [near_m, far_m], or the pixel has no ray (outside a lens model's
+        monotonic range).
+
+    Raises:
+        ValueError: a bad argument (the message names it).
+    """
+    return _occgt.render_depth(mesh, K, world_from_cam, width, height, model=model, dist=dist,
+                               near_m=near_m, far_m=far_m)
+
+
 def open_dataset(root: Union[str, "os.PathLike[str]"], format: str, *,
                  device: str = "dslr") -> Dataset:
     """A dataset read by occgt's own readers (docs/DATASETS.md).
@@ -343,7 +403,7 @@ def open_dataset(root: Union[str, "os.PathLike[str]"], format: str, *,
 
 def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"],
                     height: int = _D["height"], preset: str = _D["preset"], scope: str = "pair",
-                    **options: Any) -> PairGroundTruth:
+                    depth_source: str = "sensor", **options: Any) -> PairGroundTruth:
     """pair_ground_truth of frames id0, id1 of a scene at width x height, with the scene's
     depth range unless ``min_depth_m``/``max_depth_m`` are given (occ2net-compat: every finite
     depth > 0, as its release compares them): the arrays and metrics that
@@ -353,10 +413,16 @@ def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"
     ``scope``: the frames fused for the occupancy volumes: "pair", "window:N" or "scene:S"
     (``Scene.fuse``; a scene map is fused again at each call: to share one map between the
     pairs of a scene, call ``Scene.fuse`` once and pass ``scope_map``). ``options`` are the
-    keyword arguments of pair_ground_truth.
+    keyword arguments of pair_ground_truth. ``depth_source``: "sensor" (the depth files),
+    "mesh" or "fused" (``Scene.mesh_path`` rendered, or fused with the files;
+    docs/GROUND_TRUTH.md "Depth sources"), as ``occgt pair --depth-source``; with another
+    scope than "pair" only "sensor" (the scope's frames are fused from their depth files).
     """
-    depth0, K0, world_from_cam0 = scene.load(id0, width, height)
-    depth1, K1, world_from_cam1 = scene.load(id1, width, height)
+    if depth_source != "sensor" and scope != "pair" and options.get("occupancy"):
+        raise ValueError("depth_source: a scope other than 'pair' fuses sensor depth; use "
+                         f"scope='pair' with depth_source {depth_source!r}")
+    depth0, K0, world_from_cam0 = scene.load(id0, width, height, depth_source=depth_source)
+    depth1, K1, world_from_cam1 = scene.load(id1, width, height, depth_source=depth_source)
     options.setdefault("dataset_depth_range", (scene.min_depth_m, scene.max_depth_m))
     if scope != "pair" and options.get("occupancy") and "scope_map" not in options:
         options["scope_map"] = fuse_scope(scene, id0, id1, width, height, scope, preset, options)

@@ -26,6 +26,7 @@
 #include "libgt/occupancy/fusion.h"
 #include "libgt/truth/pair_settings.h"
 #include "libgt/truth/pair_truth.h"
+#include "libgt/render/frame_depth.h"
 #include "libgt/truth/working_frame.h"
 #include "python/src/convert.h"
 #include "python/src/scope_map.h"
@@ -43,17 +44,31 @@ class PyScene {
 
   const gt::Scene& scene() const { return *scene_; }
 
-  py::tuple Load(const std::string& frame_id, int width, int height) const {
+  // Scene::mesh_path (a copy of the scene: the frames are shared by value, once).
+  void SetMeshPath(const std::string& path) {
+    auto copy = std::make_shared<gt::Scene>(*scene_);
+    copy->mesh_path = path;
+    scene_ = std::move(copy);
+  }
+
+  py::tuple Load(const std::string& frame_id, int width, int height,
+                 const std::string& depth_source) const {
     const gt::truth::Resolution resolution{width, height};
     std::string error;
     if (!resolution.Check(&error)) ThrowValue("width, height", error);
+    gt::render::FrameDepthOptions depth_options;
+    depth_options.source = Named("depth_source", [&] {
+      return gt::render::ParseDepthSourceMode(depth_source, "depth_source");
+    });
     gt::DepthImage depth;
     gt::Camera camera;
     gt::Rigid3d world_from_cam;
     {
       py::gil_scoped_release no_gil;
       const gt::Frame& frame = scene_->frames[gt::truth::FindFrame(*scene_, frame_id, "frame_id")];
-      depth = gt::truth::LoadWorkingDepth(frame, resolution);
+      depth = Named("depth_source", [&] {
+        return gt::truth::LoadWorkingDepth(*scene_, frame, resolution, depth_options);
+      });
       camera = gt::truth::WorkingCamera(frame, resolution);
       world_from_cam = frame.world_from_cam;
     }
@@ -274,13 +289,19 @@ void BindIo(py::module_& m) {
       .def_property_readonly(
           "frames", [](const PyScene& s) { return s.scene().frames; },
           "list[Frame], sorted by number (usable or not)")
+      .def_property(
+          "mesh_path", [](const PyScene& s) { return s.scene().mesh_path; }, &PyScene::SetMeshPath,
+          "the scene's mesh (PLY, in the frames' world frame) that depth_source 'mesh' and "
+          "'fused' render; '' when none (the reader's: ScanNet's <scene>_vh_clean_2.ply)")
       .def("load", &PyScene::Load, "frame_id"_a, "width"_a = gt::truth::Resolution().width,
-           "height"_a = gt::truth::Resolution().height,
+           "height"_a = gt::truth::Resolution().height, py::kw_only(), "depth_source"_a = "sensor",
            "(depth float32 [height, width] planar metres (0 = invalid), K float64 [3, 3] at "
            "width x height, world_from_cam float64 [4, 4]) of a usable frame at the working "
            "resolution: depth resized with nearest neighbour, K rescaled with the pixel-area "
-           "rule (truth::LoadWorkingFrame). ValueError for an unknown or unusable frame_id or "
-           "an unreadable depth file.")
+           "rule (truth::LoadWorkingFrame); depth_source 'mesh' renders mesh_path at that size, "
+           "'fused' combines both (docs/GROUND_TRUTH.md 'Depth sources'). ValueError for an "
+           "unknown or unusable frame_id, an unreadable depth file or mesh, or a scene without "
+           "a mesh.")
       .def("fuse", &PyScene::Fuse, "id0"_a, "id1"_a, "width"_a = gt::truth::Resolution().width,
            "height"_a = gt::truth::Resolution().height, py::kw_only(), "scope"_a = "pair",
            "voxel_m"_a = py::none(), "max_range_m"_a = py::none(), "far_m"_a = py::none(),

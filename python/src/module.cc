@@ -1,6 +1,6 @@
 // The extension module `occgt._occgt` (docs/PYTHON.md): one thin binding file per domain
 // (geometry.cc: label codes and presets; truth.cc: the per-pair ground truth; io.cc: the
-// dataset readers; shards.cc: where a tar shard's members are), the array conversions in
+// dataset readers; shards.cc: where a tar shard's members are; render.cc: meshes and rendered depth), the array conversions in
 // convert.h. gt::InputError (bad input at a boundary) becomes ValueError with the C++
 // message ("<field>: <what was expected>").
 #include <pybind11/pybind11.h>
@@ -22,6 +22,7 @@ void BindTruth(py::module_& m);
 void BindIo(py::module_& m);
 void BindSupervision(py::module_& m);
 void BindShards(py::module_& m);
+void BindRender(py::module_& m);
 
 // One pair's ground truth allocates ~8 MB at 640x480 (depth copies, label and warp maps) and
 // frees it on return. With glibc's dynamic thresholds that memory goes back to the kernel
@@ -59,4 +60,5 @@ PYBIND11_MODULE(_occgt, m) {
   occgt_py::BindIo(m);
   occgt_py::BindSupervision(m);
   occgt_py::BindShards(m);
+  occgt_py::BindRender(m);
 }

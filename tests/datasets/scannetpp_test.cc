@@ -12,12 +12,17 @@
 #include "libgt/datasets/reader.h"
 #include "libgt/datasets/scan.h"
 #include "libgt/datasets/undistorted_camera.h"
+#include "libgt/geometry/labels.h"
+#include "libgt/io/codec.h"
 #include "libgt/io/depth_io.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/image.h"
 #include "libgt/io/iphone_depth.h"
 #include "libgt/io/undistort.h"
+#include "libgt/render/frame_depth.h"
 #include "libgt/synth/render.h"
 #include "libgt/synth/scannetpp_layout.h"
+#include "libgt/truth/working_frame.h"
 
 namespace gt {
 namespace {
@@ -210,6 +215,73 @@ TEST_F(ScanNetPP, IphoneDepthIsTheExactDepthAlongTheNearestDistortedRay) {
   }
   EXPECT_GT(checked, o.frames * 256 * 192 * 8 / 10);
   EXPECT_GT(masked, 0);  // frame 1 has an anonymised rectangle
+}
+
+TEST_F(ScanNetPP, DslrDepthIsRenderedInTheUndistortedCameraAndLabelsMatchTheExactOnes) {
+  // depth_source mesh: rendered from scans/mesh_aligned_0.05.ply in the undistorted pinhole
+  // camera at the working size, anonymised pixels 0; against the analytic scene's depth.
+  const auto truth = synth::MakeScanNetPPSynthScene(SmallOptions(), 0);
+  const Scene scene = Read(datasets::ScanNetPPDevice::kDslr);
+  ASSERT_FALSE(scene.mesh_path.empty());
+  render::FrameDepthOptions mesh;
+  mesh.source = render::DepthSourceMode::kMesh;
+  const truth::Resolution res{160, 104};
+  std::vector<DepthImage> loaded, exact;
+  std::vector<Camera> cams;
+  std::vector<Rigid3d> poses;
+  for (int i = 0; i < 3; ++i) {  // frames 0 and 2 have an anonymised rectangle
+    const std::string name = synth::ScanNetPPSynthDslrName(i);
+    const Frame* f = Find(scene, name.substr(0, name.size() - 4));
+    ASSERT_NE(f, nullptr);
+    ASSERT_TRUE(f->usable);
+    const Camera cam = truth::WorkingCamera(*f, res);
+    const DepthImage got = truth::LoadWorkingDepth(scene, *f, res, mesh, nullptr);
+    const DepthImage want = synth::RenderDepth(truth.scene, cam, f->world_from_cam);
+    // The mask in this camera (border 255, < 255 -> 0).
+    const cv::Mat m =
+        io::DecodeImageBytes(io::ReadFileBytes(f->mask_path), io::ChannelOrder::kRgb, f->mask_path);
+    const cv::Mat1b valid = io::UndistortMask(m, *f->color_lens, cam);
+    int masked = 0, compared = 0;
+    for (int v = 0; v < cam.height; ++v) {
+      for (int u = 0; u < cam.width; ++u) {
+        if (valid(v, u) != 255) {
+          ASSERT_EQ(got.at(u, v), 0.0f) << name << " " << u << "," << v;
+          ++masked;
+          continue;
+        }
+        ASSERT_NEAR(got.at(u, v), want.at(u, v), 1e-4) << name << " " << u << "," << v;
+        ++compared;
+      }
+    }
+    EXPECT_EQ(masked > 0, i % 2 == 0) << name;
+    EXPECT_GT(compared, cam.width * cam.height / 2);
+    // The exact depth with the same anonymised pixels removed: labels then differ only by the
+    // mesh's float precision.
+    DepthImage want_masked = want;
+    for (int v = 0; v < cam.height; ++v) {
+      for (int u = 0; u < cam.width; ++u) {
+        if (valid(v, u) != 255) want_masked.at(u, v) = 0.0f;
+      }
+    }
+    loaded.push_back(got);
+    exact.push_back(want_masked);
+    cams.push_back(cam);
+    poses.push_back(f->world_from_cam);
+  }
+  // Labels of frame 1 towards frames 0 and 2 (which have anonymised rectangles), from the
+  // loaded depth and from the exact depth with the same pixels anonymised: equal.
+  for (int b : {0, 2}) {
+    const Rigid3d b_from_a = poses[b].inverse() * poses[1];
+    const LabelOptions o = LabelPreset("default");
+    const DirectionLabels got = LabelDirection(loaded[1], cams[1], loaded[b], cams[b], b_from_a, o);
+    const DirectionLabels want = LabelDirection(exact[1], cams[1], exact[b], cams[b], b_from_a, o);
+    int64_t same = 0, n = 0;
+    for (size_t i = 0; i < got.labels.size(); ++i) {
+      ++n;
+      same += got.labels[i] == want.labels[i];
+    }
+    EXPECT_GT(double(same) / n, 0.999) << "frame 1 -> " << b;
+  }
 }
 
 TEST_F(ScanNetPP, IphoneDepthBinGivesThePngsValues) {

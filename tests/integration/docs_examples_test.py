@@ -23,6 +23,11 @@ sys.path.insert(0, os.path.dirname(__file__))
 import common  # noqa: E402
 
 RUN_HERE = {
+    "docs/CLI.md": [
+        "occgt render --root ../shared/data/sevenscenes --format sevenscenes --scene rgbd-frames "
+        "--mesh ../shared/data/meshes/sevenscenes-rgbd-frames-tsdf.ply --frames 000150,000175 "
+        "--out out/render",
+    ],
     "docs/INSPECT.md": [
         "occgt inspect pair --shard out/demo/demo-000000.tar --key synth_000/000000_000001 --out pics",
         "occgt inspect pair --pair-dir pairdir --root ../shared/data/tartanair/hospital_sample --out pics",
@@ -214,6 +219,9 @@ def main():
         if "inspect pair" in text:
             made = sorted(os.listdir(os.path.join(ws, "pics")))
             assert "labels.png" in made or "occupancy.png" in made, (text, made)
+    for text in RUN_HERE["docs/CLI.md"]:  # occgt render on the 7-Scenes sample
+        run(ws, text, env)
+        assert os.path.isfile(os.path.join(ws, "out", "render", "000175_depth.png")), text
     for folder in ("out/demo/inspect", "report"):
         assert os.path.isfile(os.path.join(ws, folder, "report.html")), folder
 

@@ -118,17 +118,24 @@ def main():
     assert r.returncode != 0 and "--device" in r.stderr, r.stderr
 
     # A recipe reading the iPhone frames.
-    recipe = os.path.join(root, "iphone.yaml")
+    build_and_check(root, "iphone", "[128, 96]", "", export=True)
+    # The DSLR: depth rendered from the mesh in the undistorted camera (the posed exports
+    # read depth files, which the DSLR has not: shards only).
+    build_and_check(root, "dslr", "[160, 120]", "  depth_source: mesh\n", export=False)
+
+
+def build_and_check(root, device, resolution, extra, export):
+    recipe = os.path.join(root, device + ".yaml")
     with open(recipe, "w") as f:
         f.write(f"""name: spp
 split: spp
 seed: 0
-resolution: [128, 96]
+resolution: {resolution}
 dataset:
   format: scannetpp
   root: {root}
-  device: iphone
-  min_valid_depth_fraction: 0.3
+  device: {device}
+{extra}  min_valid_depth_fraction: 0.3
 labels:
   preset: default
 selection:
@@ -143,9 +150,9 @@ occupancy:
   enabled: false
 sample: {{image: png, depth: true, labels: true, occupancy: false}}
 shards: {{samples_per_shard: 8}}
-dust3r_export: true
+dust3r_export: {"true" if export else "false"}
 """)
-    out = os.path.join(root, "out")
+    out = os.path.join(root, "out_" + device)
     common.occgt("build", recipe, "--out", out)
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
@@ -156,15 +163,18 @@ dust3r_export: true
     for key, members in samples.items():
         assert "image0.png" in members and "depth0.npy" in members, (key, sorted(members))
         depth = np.load(io.BytesIO(members["depth0.npy"]))
-        assert depth.shape == (96, 128) and depth.dtype == np.float32, depth.shape
+        assert depth.dtype == np.float32 and depth.shape == tuple(
+            reversed(json.loads(resolution))), depth.shape
         assert (depth > 0).mean() > 0.5, key
     # The DUSt3R ScanNet++ export of the same build, read back by the reader written from
     # DUSt3R's ScanNetpp dataset class (posed_readers.py): K, poses, depth in mm (0 on
     # anonymised pixels, as the shard's depth), images, scores.
-    posed = occgt_samples(out)
-    posed_readers.check_dust3r("scannetpp iphone", out, posed,
-                               posed_readers.shard_images(out, posed))
-    print("scannetpp:", summary.get("samples"), "samples in", len(shards), "shard(s)")
+    if export:
+        posed = occgt_samples(out)
+        posed_readers.check_dust3r("scannetpp " + device, out, posed,
+                                   posed_readers.shard_images(out, posed))
+    print("scannetpp", device + ":", summary.get("samples"), "samples in", len(shards),
+          "shard(s)")
 
 
 if __name__ == "__main__":

@@ -40,6 +40,13 @@ class Docs(unittest.TestCase):
         sys.stdout.write(printed)
         self.assertRegex(printed, r"overlap 0->1 0\.\d+, occlusion 0\.\d+")
         self.assertIn("OUT_OF_VIEW VISIBLE", printed)
+        # Rendered depth: the TSDF mesh reproduces the sensor within millimetres, fills holes.
+        median = re.search(r"median \|sensor - mesh\| ([0-9.]+) m over (\d+) pixels", printed)
+        self.assertIsNotNone(median, printed)
+        self.assertLess(float(median.group(1)), 0.01)
+        valid = re.search(r"valid pixels: sensor (\d+), fused (\d+)", printed)
+        self.assertIsNotNone(valid, printed)
+        self.assertGreater(int(valid.group(2)), int(valid.group(1)) * 0.95)
         self.assertIn("depth0: expected a depth map of dtype float32 or float64", printed)
         # The training loop over a LoFTR index saw all 4 pairs, with matches and a finite loss.
         losses = re.findall(r"batch \[(\d+), (\d+)\]: (\d+) matches \((\d+) vv\), loss ([0-9.]+)",

@@ -177,7 +177,14 @@ class PairIndexDataset:
                  preset: str = occgt.PAIR_DEFAULTS["preset"],
                  images: bool = True, occupancy: Optional[str] = None, scope: str = "pair",
                  scene_names: Optional[Union[str, Sequence[str]]] = None,
-                 npz_root: Optional[str] = None, **options: Any) -> None:
+                 npz_root: Optional[str] = None, depth_source: str = "sensor",
+                 mesh_path: Optional[str] = None, **options: Any) -> None:
+        if depth_source not in ("sensor", "mesh", "fused"):
+            raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")
+        if depth_source != "sensor" and occupancy is not None and scope != "pair":
+            raise ValueError("depth_source: a scope other than 'pair' fuses sensor depth; "
+                             "use scope='pair' with depth_source " + repr(depth_source))
+        self.depth_source, self.mesh_path = depth_source, mesh_path
         if occupancy not in (None, "words", "dense"):
             raise ValueError(f"occupancy: expected None, 'words' or 'dense', got {occupancy!r}")
         self.pairs: List[PairRef] = (read_pair_index(pairs, scene_names, npz_root)
@@ -259,6 +266,8 @@ class PairIndexDataset:
         if name not in self._scenes:
             assert self._dataset is not None
             scene = self._dataset.scene(name)
+            if self.mesh_path is not None:  # "{scene}" = the scene's name, as in a recipe
+                scene.mesh_path = self.mesh_path.replace("{scene}", name)
             self._scenes[name] = (scene, {f.number: f.id for f in scene.frames})
         return self._scenes[name]
 
@@ -305,8 +314,10 @@ class PairIndexDataset:
         ref = self.pairs[index]
         scene, _ = self._scene(ref.scene)
         id0, id1 = self.frame_ids(index)
-        depth0, K0, world_from_cam0 = scene.load(id0, self.width, self.height)
-        depth1, K1, world_from_cam1 = scene.load(id1, self.width, self.height)
+        depth0, K0, world_from_cam0 = scene.load(id0, self.width, self.height,
+                                                 depth_source=self.depth_source)
+        depth1, K1, world_from_cam1 = scene.load(id1, self.width, self.height,
+                                                 depth_source=self.depth_source)
         options = self._options_for(scene)
         if self.occupancy is not None and self.scope != "pair":
             options["scope_map"] = self._fused(scene, id0, id1, options)

@@ -1,0 +1,203 @@
+// occgt render --root R --format F --scene S [--mesh M] [--frames ID,ID,...] [--stride N]
+//   [--resolution WxH] [--near-m A] [--far-m B] [--abs-tol-m T] [--rel-tol R] --out DIR
+// Depth rendered from the scene's mesh (libgt/render) at the frames' poses, in their depth
+// camera: per frame <id>_depth.npy (float32 metres), <id>_depth.png (uint16 mm), and
+// <id>_triangles.npy (int32, -1 = none), <id>_picture.png (sensor | rendered | agreement when
+// the frame has sensor depth), and render.json (schemas/render.schema.json) with the
+// sensor-vs-mesh counts of every frame and in total. docs/CLI.md "render".
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "apps/commands.h"
+#include "libgt/core/error.h"
+#include "libgt/datasets/reader.h"
+#include "libgt/io/atomic_file.h"
+#include "libgt/io/codec.h"
+#include "libgt/io/file_read.h"
+#include "libgt/io/npy.h"
+#include "libgt/pipeline/recipe.h"
+#include "libgt/render/depth_picture.h"
+#include "libgt/render/frame_depth.h"
+#include "libgt/truth/working_frame.h"
+
+namespace occgt {
+namespace {
+
+struct RenderArgs {
+  std::string root, format, scene, mesh, frames, out;
+  std::string device = "dslr";  // scannetpp
+  int stride = 1;
+  std::optional<std::string> resolution;
+  gt::render::FrameDepthOptions depth;
+};
+
+nlohmann::ordered_json AgreementJson(const gt::render::DepthAgreement& a) {
+  const double n = static_cast<double>(std::max<int64_t>(1, a.Total()));
+  nlohmann::ordered_json j;
+  j["pixels"] = a.Total();
+  j["sensor_only"] = a.sensor_only;
+  j["mesh_only"] = a.mesh_only;
+  j["agree"] = a.agree;
+  j["disagree"] = a.disagree;
+  j["neither"] = a.neither;
+  j["shares"] = {{"sensor_only", a.sensor_only / n},
+                 {"mesh_only", a.mesh_only / n},
+                 {"agree", a.agree / n},
+                 {"disagree", a.disagree / n}};
+  return j;
+}
+
+std::vector<std::string> SplitComma(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item.empty()) throw gt::InputError("--frames", "expected ID,ID,... without empty ids");
+    out.push_back(item);
+  }
+  return out;
+}
+
+void RunRender(const RenderArgs& args) {
+  std::string error;
+  if (!args.depth.Check(&error))
+    throw gt::InputError("--near-m/--far-m/--abs-tol-m/--rel-tol", error);
+  if (args.stride < 1) throw gt::InputError("--stride", "expected an integer >= 1");
+  const gt::DatasetFormat format = gt::ParseDatasetFormat(args.format, "--format");
+  std::optional<gt::truth::Resolution> resolution;
+  if (args.resolution) resolution = gt::truth::ParseResolution(*args.resolution, "--resolution");
+  gt::datasets::ReaderOptions reader_options;
+  reader_options.scannetpp_device = gt::datasets::ParseScanNetPPDevice(args.device, "--device");
+  gt::Scene scene =
+      gt::datasets::MakeReader(format, reader_options)->ReadScene(args.root, args.scene);
+  gt::pipeline::ApplyMeshPath(args.mesh, &scene);
+  if (scene.mesh_path.empty()) {
+    throw gt::InputError("--mesh", "scene " + scene.name + " has no mesh of its own: give one");
+  }
+  std::vector<size_t> frames;
+  if (!args.frames.empty()) {
+    for (const std::string& id : SplitComma(args.frames))
+      frames.push_back(gt::truth::FindFrame(scene, id));
+  } else {
+    int k = 0;
+    for (size_t i = 0; i < scene.frames.size(); ++i) {
+      if (scene.frames[i].usable && k++ % args.stride == 0) frames.push_back(i);
+    }
+  }
+  const auto renderer = gt::render::SharedMeshRenderer(scene.mesh_path);
+  std::error_code ec;
+  std::filesystem::create_directories(args.out, ec);
+  if (ec) throw gt::InputError("--out", "cannot create the folder: " + ec.message());
+  gt::render::RenderOptions options;
+  options.near_m = args.depth.near_m;
+  options.far_m = args.depth.far_m;
+  options.triangle_ids = true;
+
+  nlohmann::ordered_json report;
+  report["scene"] = scene.name;
+  report["format"] = gt::DatasetFormatName(format);
+  report["mesh"] = scene.mesh_path;
+  report["triangles"] = renderer->NumTriangles();
+  report["near_m"] = options.near_m;
+  report["far_m"] = options.far_m;
+  report["tolerance"] = {{"abs_tol_m", args.depth.fused.abs_tol_m},
+                         {"rel_tol", args.depth.fused.rel_tol}};
+  report["frames"] = nlohmann::ordered_json::array();
+  gt::render::DepthAgreement total;
+  bool any_sensor = false;
+  for (size_t i : frames) {
+    const gt::Frame& frame = scene.frames[i];
+    const gt::Camera camera =
+        resolution ? gt::truth::WorkingCamera(frame, *resolution) : frame.depth_camera;
+    const gt::render::RenderedDepth r = renderer->Render(camera, frame.world_from_cam, options);
+    gt::DepthImage mesh(camera.width, camera.height);
+    mesh.values_m.assign(r.depth_m.begin(), r.depth_m.end());
+    std::vector<int32_t> ids(r.triangle_id.begin(), r.triangle_id.end());
+    std::vector<uint16_t> mm(mesh.values_m.size());
+    for (size_t k = 0; k < mm.size(); ++k) {
+      const double v = std::round(mesh.values_m[k] * 1000.0);
+      mm[k] = v >= 1 && v <= 65535 ? static_cast<uint16_t>(v) : 0;  // beyond 65.535 m: none
+    }
+    std::optional<gt::DepthImage> sensor;
+    if (!frame.depth.path.empty() && gt::io::FileExists(frame.depth.path)) {
+      sensor = gt::truth::LoadWorkingDepth(frame, {camera.width, camera.height});
+    }
+    nlohmann::ordered_json fj;
+    fj["id"] = frame.id;
+    fj["size"] = {camera.width, camera.height};
+    int64_t hits = 0;
+    for (float d : mesh.values_m) hits += d > 0;
+    fj["rendered_fraction"] = static_cast<double>(hits) / std::max<size_t>(1, mesh.values_m.size());
+    if (sensor) {
+      const gt::render::DepthAgreement a = gt::render::CompareSensorAndMesh(
+          *sensor, mesh, scene.min_depth_m, scene.max_depth_m, args.depth.fused);
+      total += a;
+      any_sensor = true;
+      fj["sensor"] = AgreementJson(a);
+    } else {
+      fj["sensor"] = nullptr;
+    }
+    const std::vector<int64_t> shape = {camera.height, camera.width};
+    const cv::Mat png16(camera.height, camera.width, CV_16UC1, mm.data());
+    const cv::Mat picture = gt::render::DepthComparisonPicture(
+        sensor ? &*sensor : nullptr, mesh, scene.min_depth_m, scene.max_depth_m, args.depth.fused);
+    const std::string base = args.out + "/" + frame.id;
+    gt::io::WriteFileAtomic(base + "_depth.npy", gt::io::EncodeNpy<float>(shape, mesh.values_m));
+    gt::io::WriteFileAtomic(
+        base + "_depth.png",
+        gt::io::EncodePngBytes(png16, gt::io::ChannelOrder::kRgb, 6, base + "_depth.png"));
+    gt::io::WriteFileAtomic(base + "_triangles.npy", gt::io::EncodeNpy<int32_t>(shape, ids));
+    gt::io::WriteFileAtomic(
+        base + "_picture.png",
+        gt::io::EncodePngBytes(picture, gt::io::ChannelOrder::kRgb, 6, base + "_picture.png"));
+    report["frames"].push_back(fj);
+  }
+  report["total"] = any_sensor ? AgreementJson(total) : nlohmann::ordered_json(nullptr);
+  gt::io::WriteFileAtomic(args.out + "/render.json", report.dump(2) + "\n");
+  std::printf("render %s: %zu frames of %s (%zu triangles)", scene.name.c_str(), frames.size(),
+              scene.mesh_path.c_str(), renderer->NumTriangles());
+  if (any_sensor) {
+    const double n = static_cast<double>(std::max<int64_t>(1, total.Total()));
+    std::printf(
+        "; vs sensor (tolerance %.3g m + %.3g of depth): agree %.3f, disagree %.3f, mesh only "
+        "%.3f, "
+        "sensor only %.3f",
+        args.depth.fused.abs_tol_m, args.depth.fused.rel_tol, total.agree / n, total.disagree / n,
+        total.mesh_only / n, total.sensor_only / n);
+  }
+  std::printf(" -> %s\n", args.out.c_str());
+}
+
+}  // namespace
+
+void AddRenderCommand(CLI::App& app) {
+  auto args = std::make_shared<RenderArgs>();
+  auto* cmd = app.add_subcommand(
+      "render", "render depth and triangle ids of frames from the scene's mesh (docs/CLI.md)");
+  cmd->add_option("--root", args->root, "dataset root")->required();
+  cmd->add_option("--format", args->format, "dataset format (scannet, sevenscenes, ...)")
+      ->required();
+  cmd->add_option("--device", args->device, "scannetpp: dslr or iphone")->capture_default_str();
+  cmd->add_option("--scene", args->scene, "scene name (see occgt scan)")->required();
+  cmd->add_option("--mesh", args->mesh,
+                  "the scene's mesh (PLY, in the poses' world frame; default: the dataset's own)");
+  cmd->add_option("--frames", args->frames, "frame ids ID,ID,... (default: every usable frame)");
+  cmd->add_option("--stride", args->stride,
+                  "without --frames: every n-th usable frame (default 1)");
+  cmd->add_option("--resolution", args->resolution, "WxH (default: the depth camera's size)");
+  cmd->add_option("--near-m", args->depth.near_m, "nearest depth rendered (m, default 0.05)");
+  cmd->add_option("--far-m", args->depth.far_m, "farthest depth rendered (m, default 20)");
+  cmd->add_option("--abs-tol-m", args->depth.fused.abs_tol_m,
+                  "sensor and mesh agree within abs-tol-m + rel-tol * depth (default 0.2)");
+  cmd->add_option("--rel-tol", args->depth.fused.rel_tol, "(default 0.01)");
+  cmd->add_option("--out", args->out, "output folder")->required();
+  cmd->callback([args] { RunRender(*args); });
+}
+
+}  // namespace occgt
