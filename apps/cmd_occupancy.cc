@@ -76,7 +76,7 @@ void RunOccupancy(const OccupancyArgs& args) {
   gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, "", setup.resolution};
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 
-  const gt::Scene scene = ReadSetupScene(setup, d.scene);
+  const gt::Scene scene = ReadSetupScene(setup, d.scene, source.id0);
   source.scene = scene.name;
   // The scene's depth range: the validity range of the fusion.
   o = gt::truth::ResolvePairTruthOptions(setup.settings, DepthRangeFor(setup, scene));

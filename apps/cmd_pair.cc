@@ -60,7 +60,7 @@ void RunPair(const PairArgs& args) {
   gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, ls.preset, setup.resolution};
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 
-  const gt::Scene scene = ReadSetupScene(setup, d.scene);
+  const gt::Scene scene = ReadSetupScene(setup, d.scene, source.id0);
   source.scene = scene.name;
   const gt::truth::PairTruthOptions o =
       gt::truth::ResolvePairTruthOptions(st, DepthRangeFor(setup, scene));

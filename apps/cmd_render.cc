@@ -31,6 +31,7 @@ namespace {
 
 struct RenderArgs {
   std::string root, format, scene, mesh, frames, out;
+  std::string device = "dslr";  // scannetpp
   int stride = 1;
   std::optional<std::string> resolution;
   gt::render::FrameDepthOptions depth;
@@ -71,7 +72,10 @@ void RunRender(const RenderArgs& args) {
   const gt::DatasetFormat format = gt::ParseDatasetFormat(args.format, "--format");
   std::optional<gt::truth::Resolution> resolution;
   if (args.resolution) resolution = gt::truth::ParseResolution(*args.resolution, "--resolution");
-  gt::Scene scene = gt::datasets::MakeReader(format)->ReadScene(args.root, args.scene);
+  gt::datasets::ReaderOptions reader_options;
+  reader_options.scannetpp_device = gt::datasets::ParseScanNetPPDevice(args.device, "--device");
+  gt::Scene scene =
+      gt::datasets::MakeReader(format, reader_options)->ReadScene(args.root, args.scene);
   gt::pipeline::ApplyMeshPath(args.mesh, &scene);
   if (scene.mesh_path.empty()) {
     throw gt::InputError("--mesh", "scene " + scene.name + " has no mesh of its own: give one");
@@ -179,6 +183,7 @@ void AddRenderCommand(CLI::App& app) {
   cmd->add_option("--root", args->root, "dataset root")->required();
   cmd->add_option("--format", args->format, "dataset format (scannet, sevenscenes, ...)")
       ->required();
+  cmd->add_option("--device", args->device, "scannetpp: dslr or iphone")->capture_default_str();
   cmd->add_option("--scene", args->scene, "scene name (see occgt scan)")->required();
   cmd->add_option("--mesh", args->mesh,
                   "the scene's mesh (PLY, in the poses' world frame; default: the dataset's own)");

@@ -27,6 +27,7 @@ struct ScanArgs {
   std::string root;
   std::string format;
   std::string scene;
+  std::string device = "dslr";
   bool json = false;
   gt::datasets::ReaderOptions reader;
   gt::datasets::ScanOptions scan;
@@ -184,7 +185,9 @@ void RunScan(const ScanArgs& args) {
                                              std::to_string(args.reader.tum_max_dt_s));
   }
   const gt::DatasetFormat format = gt::ParseDatasetFormat(args.format, "--format");
-  const auto reader = gt::datasets::MakeReader(format, args.reader);
+  gt::datasets::ReaderOptions reader_options = args.reader;
+  reader_options.scannetpp_device = gt::datasets::ParseScanNetPPDevice(args.device, "--device");
+  const auto reader = gt::datasets::MakeReader(format, reader_options);
   std::vector<std::string> names;
   if (!args.scene.empty()) {
     names.push_back(args.scene);
@@ -218,6 +221,7 @@ void RunScan(const ScanArgs& args) {
     j["format"] = args.format;
     j["root"] = args.root;
     j["check_depth"] = args.scan.check_depth;
+    if (format == gt::DatasetFormat::kScanNetPP) j["device"] = args.device;
     j["scenes"] = nlohmann::ordered_json::array();
     for (size_t i = 0; i < summaries.size(); ++i) {
       j["scenes"].push_back(SceneJson(summaries[i]));
@@ -254,7 +258,8 @@ void AddScanCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("scan", "List the scenes and frames of a dataset root");
   cmd->add_option("root", args->root, "Dataset root, scene folder or manifest")->required();
   cmd->add_option("--format", args->format,
-                  "Dataset layout: scannet, tartanair, sevenscenes, tum, megadepth, generic")
+                  "Dataset layout: scannet, tartanair, sevenscenes, tum, megadepth, generic, "
+                  "scannetpp")
       ->required();
   cmd->add_option("--scene", args->scene, "Only this scene (a name listed by scan)");
   cmd->add_flag("--json", args->json, "Print one JSON document (schemas/scan.schema.json)");
@@ -263,6 +268,7 @@ void AddScanCommand(CLI::App& app) {
   cmd->add_option("--tum-max-dt", args->reader.tum_max_dt_s,
                   "TUM: max time difference for pose/colour association (s)")
       ->capture_default_str();
+  cmd->add_option("--device", args->device, "ScanNet++: dslr or iphone")->capture_default_str();
   cmd->add_option("--exr-channel", args->reader.exr_channel,
                   "Generic: default EXR depth channel (name or suffix)");
   cmd->add_option("--mesh", args->mesh,

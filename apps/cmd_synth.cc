@@ -11,6 +11,7 @@
 #include "apps/commands.h"
 #include "libgt/core/error.h"
 #include "libgt/synth/dataset.h"
+#include "libgt/synth/scannetpp_layout.h"
 
 namespace occgt {
 namespace {
@@ -18,9 +19,31 @@ namespace {
 struct SynthArgs {
   std::string out;
   std::string resolution = "640x480";
+  std::string layout = "generic";
   bool no_holes = false;
   gt::synth::SynthOptions options;
 };
+
+// --layout scannetpp: the fixture of libgt/synth/scannetpp_layout.h (DSLR at --resolution).
+void RunScanNetPPSynth(const SynthArgs& args) {
+  gt::synth::ScanNetPPSynthOptions o;
+  o.scenes = args.options.scenes;
+  o.frames = args.options.frames_per_scene;
+  o.dslr_width = args.options.width;
+  o.dslr_height = args.options.height;
+  o.seed = args.options.seed;
+  std::string error;
+  if (!o.Check(&error)) throw gt::InputError("occgt synth --layout scannetpp", error);
+  const auto start = std::chrono::steady_clock::now();
+  const gt::synth::ScanNetPPSynthSummary summary = gt::synth::WriteScanNetPPSynth(args.out, o);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::cout << "synth: " << summary.scene_names.size() << " scenes in ScanNet++'s layout, "
+            << o.frames << " DSLR and " << o.frames << " iPhone frames each (DSLR " << o.dslr_width
+            << "x" << o.dslr_height << ", seed " << o.seed << ") written to " << args.out << " in "
+            << std::fixed << std::setprecision(2) << seconds << " s\n"
+            << "  read it with --format scannetpp " << args.out << "\n";
+}
 
 void RunSynth(SynthArgs& args) {
   static const std::regex kResolution("([0-9]{1,5})x([0-9]{1,5})");
@@ -32,6 +55,9 @@ void RunSynth(SynthArgs& args) {
   args.options.width = std::stoi(m[1]);
   args.options.height = std::stoi(m[2]);
   args.options.holes = !args.no_holes;
+  if (args.layout != "generic" && args.layout != "scannetpp") {
+    throw gt::InputError("--layout", "expected generic or scannetpp, got '" + args.layout + "'");
+  }
   // Each flag's range first, so that the usage error names the flag (exit 2).
   const gt::synth::SynthOptions& o = args.options;
   if (o.scenes < 1 || o.scenes > 1000) throw gt::InputError("--scenes", "expected 1..1000");
@@ -40,6 +66,10 @@ void RunSynth(SynthArgs& args) {
   }
   if (o.width < 16 || o.height < 16 || o.width > 8192 || o.height > 8192) {
     throw gt::InputError("--resolution", "expected 16..8192 pixels per side");
+  }
+  if (args.layout == "scannetpp") {
+    RunScanNetPPSynth(args);
+    return;
   }
   std::string error;
   if (!args.options.Check(&error)) throw gt::InputError("occgt synth", error);
@@ -68,6 +98,10 @@ void AddSynthCommand(CLI::App& app) {
   cmd->add_option("--resolution", args->resolution, "Image size WxH")->capture_default_str();
   cmd->add_option("--seed", args->options.seed, "Random seed")->capture_default_str();
   cmd->add_flag("--no-holes", args->no_holes, "Do not punch invalid-depth holes");
+  cmd->add_option("--layout", args->layout,
+                  "generic (occgt's manifest) or scannetpp (ScanNet++'s folders, distorted "
+                  "cameras, a mesh)")
+      ->capture_default_str();
   cmd->callback([args] { RunSynth(*args); });
 }
 

@@ -30,7 +30,8 @@ PairSetup StartPairSetup(const PairDatasetArgs& args) {
   }
   if (s.root.empty()) throw gt::InputError("--root", "required (or --recipe)");
   s.depth = gt::pipeline::RecipeFrameDepthOptions(r);
-  if (args.depth_source) s.depth.source = gt::render::ParseDepthSourceMode(*args.depth_source, "--depth-source");
+  if (args.depth_source)
+    s.depth.source = gt::render::ParseDepthSourceMode(*args.depth_source, "--depth-source");
   s.mesh_path = args.mesh.empty() ? r.dataset.mesh_path : args.mesh;
   if (!args.format.empty()) {
     s.format = gt::ParseDatasetFormat(args.format, "--format");
@@ -65,8 +66,12 @@ void AddPairDatasetFlags(CLI::App* cmd, PairDatasetArgs* d, const std::string& r
                   "dataset.mesh_path, else the dataset's own)");
 }
 
-gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name) {
-  gt::Scene scene = gt::datasets::MakeReader(setup.format)->ReadScene(setup.root, scene_name);
+gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name,
+                         const std::string& frame_id) {
+  gt::datasets::ReaderOptions reader_options;
+  reader_options.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(frame_id);
+  gt::Scene scene =
+      gt::datasets::MakeReader(setup.format, reader_options)->ReadScene(setup.root, scene_name);
   gt::pipeline::ApplyMeshPath(setup.mesh_path, &scene);
   return scene;
 }

@@ -31,15 +31,17 @@ struct PairSetup {
   std::optional<gt::pipeline::Recipe> recipe;
   std::string root;  // resolved as above
   gt::DatasetFormat format = gt::DatasetFormat::kGeneric;
-  gt::truth::Resolution resolution;  // working resolution
-  gt::truth::PairSettings settings;  // the recipe's (or the defaults), then the depth flags
+  gt::truth::Resolution resolution;     // working resolution
+  gt::truth::PairSettings settings;     // the recipe's (or the defaults), then the depth flags
   gt::render::FrameDepthOptions depth;  // the recipe's depth source, then --depth-source
   std::string mesh_path;                // --mesh, else the recipe's dataset.mesh_path
 };
 
 // The scene of the setup (its mesh path applied) and its frames at the working resolution
 // with the setup's depth source.
-gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name);
+// frame_id: one of the frames asked for (ScanNet++: frame_%06d ids are the iPhone's).
+gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name,
+                         const std::string& frame_id = "");
 gt::truth::WorkingFrame LoadSetupFrame(const PairSetup& setup, const gt::Scene& scene,
                                        const gt::Frame& frame);
 

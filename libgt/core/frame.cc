@@ -18,6 +18,8 @@ const char* DatasetFormatName(DatasetFormat format) {
       return "megadepth";
     case DatasetFormat::kGeneric:
       return "generic";
+    case DatasetFormat::kScanNetPP:
+      return "scannetpp";
   }
   GT_ASSERT(false && "unknown DatasetFormat");
   return "";

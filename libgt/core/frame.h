@@ -4,12 +4,14 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "libgt/core/camera.h"
 #include "libgt/core/depth.h"
+#include "libgt/core/lens.h"
 #include "libgt/core/pose.h"
 
 namespace gt {
@@ -23,10 +25,12 @@ enum class DatasetFormat {
   kTum,          // "tum"
   kMegaDepth,    // "megadepth"
   kGeneric,      // "generic": occgt's own JSON manifest
+  kScanNetPP,    // "scannetpp": ScanNet++ (DSLR or iPhone), undistorted at load
 };
 inline constexpr DatasetFormat kAllDatasetFormats[] = {
     DatasetFormat::kScanNet, DatasetFormat::kTartanAir, DatasetFormat::kSevenScenes,
-    DatasetFormat::kTum,     DatasetFormat::kMegaDepth, DatasetFormat::kGeneric};
+    DatasetFormat::kTum,     DatasetFormat::kMegaDepth, DatasetFormat::kGeneric,
+    DatasetFormat::kScanNetPP};
 const char* DatasetFormatName(DatasetFormat format);
 // Throws InputError(field, "unknown format '<name>', expected one of: ...").
 DatasetFormat ParseDatasetFormat(std::string_view name, const std::string& field = "--format");
@@ -40,6 +44,10 @@ enum class DepthFormat {
   kSensZlib,  // zlib stream of the uint16 values
   kSensRaw,   // the uint16 values as they are
   kHdf5,      // HDF5 file, 2-D float dataset "depth" (MegaDepth v1), metres; 0 invalid
+  // ScanNet++ iPhone depth.bin (io/iphone_depth.h), width x height per frame:
+  kIphoneBinDeflate,  // the whole file one raw-deflate stream of float32 metres; frame_index-th map
+  kIphoneBinRecord,   // bytes `range`: one record's payload, LZ4 block of uint16 mm or raw
+                      // deflate of float32 metres
 };
 
 // Bytes [offset, offset + size) of a file: a payload inside a container (.sens).
@@ -55,7 +63,7 @@ struct DepthSource {
   std::string exr_channel;        // exr: channel name or suffix ("Z", "Depth.Z"); "" = auto
   int invalid_value = -1;         // png16: a raw value that means "no depth" (7-Scenes: 65535)
   ByteRange range;                // sens*: the payload inside `path`
-  int width = 0;                  // sens*: size of the map (the container's header)
+  int width = 0;                  // sens*, iphone*: size of the map (the container's header)
   int height = 0;
   // sens*: the frame's index in the container, named in the errors of both its payloads
   // (depth and colour); -1 otherwise.
@@ -82,6 +90,18 @@ struct Frame {
   // or PNG bytes, or with color_raw_rgb, color_camera.width x height x 3 bytes R, G, B.
   ByteRange color_range;
   bool color_raw_rgb = false;
+  // A distorted colour camera (ScanNet++): color_path is an image of color_lens->pinhole's
+  // size, presented undistorted in color_camera (a pinhole camera) by io::ReadFrameColor
+  // (io/undistort.h: bilinear, BORDER_REFLECT_101).
+  std::optional<LensCamera> color_lens;
+  // An anonymisation mask of the (distorted) colour image, 8-bit, 255 = valid, anything else
+  // anonymised (ScanNet++); "" when none. Its pixels have no depth: io::ReadFrameDepth remaps
+  // it into depth_camera (border 255, < 255 -> 0) and zeroes the depth there.
+  std::string mask_path;
+  // Depth measured in a distorted camera (ScanNet++ iPhone: ARKit depth in the OPENCV camera
+  // at the depth map's size): io::ReadFrameDepth resamples it (nearest, no new values) into
+  // depth_camera. Unset: the depth map is in depth_camera.
+  std::optional<LensCamera> depth_lens;
 
   // Why the frame is unusable, for a message about this frame: the reason, then the
   // detail when there is one ("pose: non-finite pose entries; <file>:<line>: non-finite

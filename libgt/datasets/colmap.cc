@@ -364,6 +364,51 @@ Camera ColmapPinholeCamera(const ColmapCamera& c, const std::string& cameras_pat
   return cam;
 }
 
+LensCamera ColmapLensCamera(const ColmapCamera& c, const std::string& cameras_path) {
+  const std::string where = "camera " + std::to_string(c.id);
+  LensCamera lens;
+  lens.pinhole.width = c.width;
+  lens.pinhole.height = c.height;
+  const std::vector<double>& p = c.params;
+  auto expect = [&](size_t n) {
+    if (p.size() != n) {
+      throw InputError(cameras_path, where + ": model " + c.model + " has " + std::to_string(n) +
+                                         " parameters, got " + std::to_string(p.size()));
+    }
+  };
+  auto set_k = [&](double fx, double fy, double cx, double cy) {
+    lens.pinhole.fx = fx;
+    lens.pinhole.fy = fy;
+    lens.pinhole.cx = cx - 0.5;  // COLMAP's first pixel centre is (0.5, 0.5)
+    lens.pinhole.cy = cy - 0.5;
+  };
+  if (c.model == "PINHOLE") {
+    expect(4);
+    set_k(p[0], p[1], p[2], p[3]);
+  } else if (c.model == "SIMPLE_PINHOLE") {
+    expect(3);
+    set_k(p[0], p[0], p[1], p[2]);
+  } else if (c.model == "SIMPLE_RADIAL" || c.model == "RADIAL") {
+    expect(c.model == "RADIAL" ? 5 : 4);
+    set_k(p[0], p[0], p[1], p[2]);
+    lens.model = LensModel::kOpenCv;
+    lens.coeffs = {p[3], c.model == "RADIAL" ? p[4] : 0.0, 0.0, 0.0, 0.0};
+  } else if (c.model == "OPENCV" || c.model == "OPENCV_FISHEYE") {
+    expect(8);
+    set_k(p[0], p[1], p[2], p[3]);
+    lens.model = c.model == "OPENCV" ? LensModel::kOpenCv : LensModel::kOpenCvFisheye;
+    lens.coeffs = {p[4], p[5], p[6], p[7], 0.0};
+  } else {
+    throw InputError(cameras_path,
+                     where + ": model " + c.model +
+                         " is not supported (expected PINHOLE, SIMPLE_PINHOLE, SIMPLE_RADIAL, "
+                         "RADIAL, OPENCV or OPENCV_FISHEYE)");
+  }
+  std::string error;
+  if (!lens.Check(&error)) throw InputError(cameras_path, where + " (" + c.model + "): " + error);
+  return lens;
+}
+
 namespace {
 Eigen::Vector4d Xyzw(const Eigen::Vector4d& wxyz) {
   return Eigen::Vector4d(wxyz[1], wxyz[2], wxyz[3], wxyz[0]);

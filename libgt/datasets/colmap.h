@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "libgt/core/camera.h"
+#include "libgt/core/lens.h"
 #include "libgt/core/pose.h"
 
 namespace gt::datasets {
@@ -75,6 +76,12 @@ ColmapModel ReadColmapModel(const std::string& folder);
 // the top-left pixel at (0.5, 0.5); occgt's pixel centres are integers (camera.h), so
 // cx_occgt = cx_colmap - 0.5 (and likewise cy).
 Camera ColmapPinholeCamera(const ColmapCamera& camera, const std::string& cameras_path);
+// The camera with its lens (core/lens.h), principal point converted as above: PINHOLE,
+// SIMPLE_PINHOLE (kPinhole), SIMPLE_RADIAL (f cx cy k), RADIAL (f cx cy k1 k2), OPENCV
+// (fx fy cx cy k1 k2 p1 p2) (kOpenCv) and OPENCV_FISHEYE (fx fy cx cy k1 k2 k3 k4)
+// (kOpenCvFisheye). Another model, or a camera that fails LensCamera::Check, is
+// InputError(cameras_path, "camera N: ...").
+LensCamera ColmapLensCamera(const ColmapCamera& camera, const std::string& cameras_path);
 
 // world_from_cam of an image: the inverse of cam_from_world (R(qvec), tvec), the quaternion
 // normalised; ColmapPoseDefect (FindPoseDefectTQ: non-finite entries, |q| not within 1e-3

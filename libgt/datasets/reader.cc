@@ -16,6 +16,20 @@ bool ReaderOptions::Check(std::string* error) const {
   return true;
 }
 
+const char* ScanNetPPDeviceName(ScanNetPPDevice device) {
+  return device == ScanNetPPDevice::kDslr ? "dslr" : "iphone";
+}
+
+ScanNetPPDevice ParseScanNetPPDevice(std::string_view name, const std::string& field) {
+  if (name == "dslr") return ScanNetPPDevice::kDslr;
+  if (name == "iphone") return ScanNetPPDevice::kIphone;
+  throw InputError(field, "unknown device '" + std::string(name) + "', expected dslr or iphone");
+}
+
+ScanNetPPDevice ScanNetPPDeviceOfFrameId(std::string_view frame_id) {
+  return frame_id.rfind("frame_", 0) == 0 ? ScanNetPPDevice::kIphone : ScanNetPPDevice::kDslr;
+}
+
 std::vector<std::string> KnownFormats() {
   std::vector<std::string> names;
   for (const DatasetFormat f : kAllDatasetFormats) names.emplace_back(DatasetFormatName(f));
@@ -38,6 +52,8 @@ std::unique_ptr<DatasetReader> MakeReader(DatasetFormat format, const ReaderOpti
       return std::make_unique<MegaDepthReader>(options);
     case DatasetFormat::kGeneric:
       return std::make_unique<GenericReader>(options);
+    case DatasetFormat::kScanNetPP:
+      return std::make_unique<ScanNetPPReader>(options);
   }
   GT_ASSERT(false && "unknown DatasetFormat");
   return nullptr;

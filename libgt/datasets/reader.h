@@ -8,16 +8,28 @@
 
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "libgt/core/frame.h"
 
 namespace gt::datasets {
 
+// ScanNet++: which camera's images a scene's frames are (dataset option `device`).
+enum class ScanNetPPDevice { kDslr, kIphone };
+const char* ScanNetPPDeviceName(ScanNetPPDevice device);  // "dslr", "iphone"
+// InputError(field, "unknown device '<name>', expected dslr or iphone").
+ScanNetPPDevice ParseScanNetPPDevice(std::string_view name, const std::string& field);
+
+// The device whose frame ids look like `frame_id`: iPhone frames are frame_%06d, DSLR images
+// DSC%05d (for commands given frame ids without a device).
+ScanNetPPDevice ScanNetPPDeviceOfFrameId(std::string_view frame_id);
+
 struct ReaderOptions {
   double tum_max_dt_s = 0.02;     // TUM: max |t_depth - t_pose| and |t_depth - t_rgb| (seconds)
   std::string exr_channel;        // generic manifest: default EXR channel when a frame has none
   bool check_depth_files = true;  // stat every depth file while reading a scene
+  ScanNetPPDevice scannetpp_device = ScanNetPPDevice::kDslr;  // scannetpp: dslr/ or iphone/
 
   bool Check(std::string* error) const;
 };

@@ -76,6 +76,20 @@ class MegaDepthReader : public DatasetReader {
   ReaderOptions options_;
 };
 
+// ScanNet++: data/<scene>/dslr (OPENCV_FISHEYE COLMAP model, resized images and anonymisation
+// masks) or iphone (OPENCV model, extracted frames, masks, depth PNGs or depth.bin), frames
+// presented undistorted (scannetpp.cc, docs/DATASETS.md "ScanNet++").
+class ScanNetPPReader : public DatasetReader {
+ public:
+  explicit ScanNetPPReader(const ReaderOptions& options) : options_(options) {}
+  DatasetFormat Format() const override { return DatasetFormat::kScanNetPP; }
+  std::vector<std::string> ListScenes(const std::string& root) const override;
+  Scene ReadScene(const std::string& root, const std::string& scene_name) const override;
+
+ private:
+  ReaderOptions options_;
+};
+
 // occgt's own JSON manifest, schemas/manifest.schema.json (generic.cc).
 class GenericReader : public DatasetReader {
  public:

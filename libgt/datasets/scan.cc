@@ -2,7 +2,9 @@
 
 #include "libgt/core/depth.h"
 #include "libgt/core/error.h"
+#include "libgt/io/codec.h"
 #include "libgt/io/depth_io.h"
+#include "libgt/io/file_read.h"
 
 namespace gt::datasets {
 
@@ -32,6 +34,13 @@ std::vector<std::string> DatasetCaveats(DatasetFormat format) {
         "extrinsics are published): labels follow the depth camera, and colour pixels are "
         "only approximately aligned with them"};
   }
+  if (format == DatasetFormat::kScanNetPP) {
+    return {
+        "ScanNet++ frames are undistorted at load into ScanNet++'s pinhole camera (fisheye: "
+        "balance 0, principal point (w/2, h/2); OPENCV: the optimal new K); DSLR images have "
+        "no sensor depth: it is rendered from scans/mesh_aligned_0.05.ply, and anonymised "
+        "pixels have none"};
+  }
   if (format == DatasetFormat::kMegaDepth) {
     return {
         "MegaDepth depth is multi-view stereo with holes and errors, and its scale is "
@@ -41,6 +50,25 @@ std::vector<std::string> DatasetCaveats(DatasetFormat format) {
   }
   return {};
 }
+
+namespace {
+// "" when the mask has a valid (255) pixel, kReasonMaskCoversImage when none, else the error.
+std::string MaskProblem(const std::string& path) {
+  try {
+    const cv::Mat m = io::DecodeImageBytes(io::ReadFileBytes(path), io::ChannelOrder::kRgb, path);
+    if (m.type() != CV_8UC1) return path + ": mask: expected an 8-bit grey image";
+    for (int v = 0; v < m.rows; ++v) {
+      const uint8_t* row = m.ptr<uint8_t>(v);
+      for (int u = 0; u < m.cols; ++u) {
+        if (row[u] == 255) return "";
+      }
+    }
+    return kReasonMaskCoversImage;
+  } catch (const InputError& e) {
+    return e.what();
+  }
+}
+}  // namespace
 
 SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
   std::string error;
@@ -68,9 +96,19 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
       count_unusable(f, f.unusable_reason, f.unusable_detail);
       continue;
     }
+    if (options.check_masks && !f.mask_path.empty()) {
+      const std::string problem = MaskProblem(f.mask_path);
+      if (!problem.empty()) {
+        count_unusable(f, problem == kReasonMaskCoversImage ? kReasonMaskCoversImage
+                                                            : kReasonMaskUnreadable,
+                       problem == kReasonMaskCoversImage ? f.mask_path + ": no pixel is 255"
+                                                         : problem);
+        continue;
+      }
+    }
     if (options.check_depth) {
       try {
-        const DepthImage d = io::ReadDepth(f.depth, f.depth_camera.width, f.depth_camera.height);
+        const DepthImage d = io::ReadFrameDepth(f);
         ++s.depth_files_read;
         fraction_sum += ValidDepthFraction(d, scene.min_depth_m, scene.max_depth_m);
       } catch (const InputError& e) {

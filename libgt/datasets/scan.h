@@ -18,11 +18,15 @@
 namespace gt::datasets {
 
 inline constexpr const char* kReasonDepthUnreadable = "depth: unreadable or wrong size";
+// A frame whose anonymisation mask (Frame::mask_path) has no valid pixel, or cannot be read.
+inline constexpr const char* kReasonMaskCoversImage = "mask: covers the whole image";
+inline constexpr const char* kReasonMaskUnreadable = "mask: unreadable";
 
 struct ScanOptions {
   bool check_depth = false;     // read every usable frame's depth file
   int max_errors_listed = 5;    // depth read errors kept per scene (>= 0)
   int max_examples_listed = 5;  // unusable frames listed per reason and scene (>= 0)
+  bool check_masks = true;      // read every usable frame's anonymisation mask (Frame::mask_path)
 
   bool Check(std::string* error) const;
 };

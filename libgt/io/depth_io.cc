@@ -15,6 +15,7 @@
 #include <fstream>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
@@ -23,7 +24,9 @@
 #include "libgt/io/codec.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/hdf5_depth.h"
+#include "libgt/io/iphone_depth.h"
 #include "libgt/io/npy.h"
+#include "libgt/io/undistort.h"
 
 namespace gt::io {
 namespace {
@@ -357,15 +360,77 @@ DepthImage DecodeSensDepth(std::string_view bytes, const DepthSource& src) {
 }  // namespace
 
 void PrefetchDepth(const DepthSource& source) {
-  if (source.format == DepthFormat::kSensZlib || source.format == DepthFormat::kSensRaw) {
+  if (source.format == DepthFormat::kSensZlib || source.format == DepthFormat::kSensRaw ||
+      source.format == DepthFormat::kIphoneBinRecord) {
     PrefetchFileRange(source.path, source.range.offset, source.range.size);
   } else {
     PrefetchFile(source.path);
   }
 }
 
+void ApplyFrameMask(const Frame& frame, DepthImage* depth) {
+  if (frame.mask_path.empty()) return;
+  const cv::Mat m =
+      DecodeImageBytes(ReadFileBytes(frame.mask_path), ChannelOrder::kRgb, frame.mask_path);
+  if (m.type() != CV_8UC1) {
+    throw InputError(frame.mask_path, "mask: expected an 8-bit grey image");
+  }
+  // The mask's camera: the distorted colour camera, else the colour camera.
+  LensCamera lens;
+  if (frame.color_lens) {
+    lens = *frame.color_lens;
+  } else {
+    lens.pinhole = frame.color_camera;
+  }
+  if (m.cols != lens.pinhole.width || m.rows != lens.pinhole.height) {
+    throw InputError(frame.mask_path, "mask is " + std::to_string(m.cols) + "x" +
+                                          std::to_string(m.rows) + ", expected " +
+                                          std::to_string(lens.pinhole.width) + "x" +
+                                          std::to_string(lens.pinhole.height));
+  }
+  const Camera target = frame.depth_camera.Resized(depth->width, depth->height);
+  const cv::Mat1b valid = UndistortMask(m, lens, target);
+  for (int v = 0; v < depth->height; ++v) {
+    const uint8_t* row = valid.ptr<uint8_t>(v);
+    for (int u = 0; u < depth->width; ++u) {
+      if (row[u] != 255) depth->at(u, v) = 0.0f;
+    }
+  }
+}
+
+DepthImage ReadFrameDepth(const Frame& frame) {
+  if (!frame.depth_lens) {
+    DepthImage d = ReadDepth(frame.depth, frame.depth_camera.width, frame.depth_camera.height);
+    ApplyFrameMask(frame, &d);
+    return d;
+  }
+  const LensCamera& lens = *frame.depth_lens;
+  const DepthImage raw = ReadDepth(frame.depth, lens.pinhole.width, lens.pinhole.height);
+  // Nearest neighbour, the distorted pixel whose area holds the ray's point: floor(x + 0.5)
+  // (explicit: cv::remap's INTER_NEAREST rounds its fixed-point maps its own way).
+  const UndistortMaps& maps = GetUndistortMaps(lens, frame.depth_camera);
+  DepthImage d(frame.depth_camera.width, frame.depth_camera.height);
+  for (int v = 0; v < d.height; ++v) {
+    for (int u = 0; u < d.width; ++u) {
+      const double x = std::floor(static_cast<double>(maps.map_x(v, u)) + 0.5);
+      const double y = std::floor(static_cast<double>(maps.map_y(v, u)) + 0.5);
+      if (x >= 0 && y >= 0 && x < raw.width && y < raw.height) {
+        d.at(u, v) = raw.at(static_cast<int>(x), static_cast<int>(y));
+      }
+    }
+  }
+  ApplyFrameMask(frame, &d);
+  return d;
+}
+
 DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected_height) {
-  if (source.format == DepthFormat::kSensZlib || source.format == DepthFormat::kSensRaw) {
+  if (source.path.empty()) {
+    throw InputError("depth",
+                     "the frame has no depth file (ScanNet++ DSLR images have no "
+                     "sensor depth: it is rendered from the scene's mesh)");
+  }
+  if (source.format == DepthFormat::kSensZlib || source.format == DepthFormat::kSensRaw ||
+      source.format == DepthFormat::kIphoneBinRecord) {
     return DecodeDepth(
         ReadFileRange(source.path, source.range.offset, source.range.size, "depth payload"), source,
         expected_width, expected_height);
@@ -402,6 +467,10 @@ DepthImage DecodeDepth(std::string_view bytes, const DepthSource& source, int ex
     case DepthFormat::kHdf5:
       d = DecodeHdf5Depth(bytes, source.path, expected_width, expected_height);
       for (float& v : d.values_m) v = Sanitize(v);
+      break;
+    case DepthFormat::kIphoneBinDeflate:
+    case DepthFormat::kIphoneBinRecord:
+      d = DecodeIphoneDepth(bytes, source);
       break;
   }
   if (expected_width > 0 && expected_height > 0 &&

@@ -16,6 +16,15 @@ namespace gt::io {
 // Depth maps are at most 65536 pixels a side and 2^27 pixels in all (checked from the
 // header, before any pixel buffer is allocated).
 DepthImage ReadDepth(const DepthSource& source, int expected_width = 0, int expected_height = 0);
+// A frame's depth in its depth_camera: ReadDepth of frame.depth (at frame.depth_lens's size
+// when the map is in a distorted camera, else at depth_camera's), resampled into
+// depth_camera (nearest neighbour, 0 outside the distorted image) when depth_lens is set, and
+// zeroed where frame.mask_path's mask, remapped into depth_camera, is anonymised.
+DepthImage ReadFrameDepth(const Frame& frame);
+// Zeroes the depth (in frame.depth_camera, any size: the mask is remapped into that camera
+// resized to the depth's size) where frame.mask_path is anonymised; nothing without a mask.
+// InputError naming the mask when it is missing, not 8-bit grey or of the wrong size.
+void ApplyFrameMask(const Frame& frame, DepthImage* depth);
 // Asks the kernel to read a frame's depth file (or its payload inside a container) ahead
 // (io::PrefetchFile / PrefetchFileRange); a hint only.
 void PrefetchDepth(const DepthSource& source);

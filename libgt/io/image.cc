@@ -9,6 +9,7 @@
 #include "libgt/io/codec.h"
 #include "libgt/io/depth_io.h"
 #include "libgt/io/file_read.h"
+#include "libgt/io/undistort.h"
 
 namespace gt::io {
 namespace {
@@ -84,6 +85,18 @@ ColorImage ReadColor(const std::string& path) {
 }
 
 ColorImage ReadFrameColor(const Frame& frame) {
+  if (frame.color_lens) {
+    // A distorted image: undistorted into the frame's pinhole colour camera.
+    const ColorImage distorted = ReadColor(frame.color_path);
+    const LensCamera& lens = *frame.color_lens;
+    if (distorted.width != lens.pinhole.width || distorted.height != lens.pinhole.height) {
+      throw InputError(frame.color_path, SizeMismatch(distorted.width, distorted.height,
+                                                      lens.pinhole));
+    }
+    const cv::Mat src(distorted.height, distorted.width, CV_8UC3,
+                      const_cast<uint8_t*>(distorted.rgb.data()));
+    return FromRgbMat(UndistortImage(src, lens, frame.color_camera));
+  }
   if (frame.color_range.size == 0) return ReadColor(frame.color_path);
   const int64_t index = frame.depth.frame_index;  // the frame's index in its container
   const std::string where =
@@ -119,7 +132,7 @@ ColorImage ReadFrameColor(const Frame& frame) {
 
 ColorImage ReadFrameColorResized(const Frame& frame, int new_width, int new_height,
                                  Camera* resized_camera) {
-  if (frame.color_range.size == 0) {
+  if (frame.color_range.size == 0 && !frame.color_lens) {
     return ReadColorResized(frame.color_path, frame.color_camera, new_width, new_height,
                             resized_camera);
   }

@@ -42,7 +42,9 @@ ColorImage ReadColorResized(const std::string& path, const Camera& camera, int n
 
 // A frame's colour: the file frame.color_path, or its payload frame.color_range inside a
 // container (.sens: JPEG/PNG bytes, or raw RGB888 at color_camera's size with
-// color_raw_rgb). InputError naming the file (and the payload's offset) on any problem.
+// color_raw_rgb); with frame.color_lens, the distorted image undistorted into
+// frame.color_camera (io/undistort.h). InputError naming the file (and the payload's
+// offset) on any problem.
 ColorImage ReadFrameColor(const Frame& frame);
 // ReadColorResized for a frame's colour (its camera is frame.color_camera).
 ColorImage ReadFrameColorResized(const Frame& frame, int new_width, int new_height,

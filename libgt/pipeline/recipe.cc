@@ -528,6 +528,9 @@ json Recipe::ToJson() const {
   d["scenes"] = dataset.scenes;
   d["split_file"] = dataset.split_file;
   d["frame_stride"] = dataset.frame_stride;
+  if (dataset.format == DatasetFormat::kScanNetPP && !dataset.is_synthetic) {
+    d["device"] = datasets::ScanNetPPDeviceName(dataset.device);
+  }
   d["min_valid_depth_fraction"] = dataset.min_valid_depth_fraction;
   d["min_depth_m"] = dataset.min_depth_m ? json(*dataset.min_depth_m) : json(nullptr);
   d["max_depth_m"] = dataset.max_depth_m ? json(*dataset.max_depth_m) : json(nullptr);
@@ -651,6 +654,10 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
         ResolvePath(d["split_file"].get<std::string>(), file + ": dataset.split_file", base_dir);
   }
   Get(d, "frame_stride", &r.dataset.frame_stride, file);
+  if (d.contains("device")) {
+    r.dataset.device =
+        datasets::ParseScanNetPPDevice(d["device"].get<std::string>(), file + ": dataset.device");
+  }
   Get(d, "min_valid_depth_fraction", &r.dataset.min_valid_depth_fraction, file);
   GetOpt(d, "min_depth_m", &r.dataset.min_depth_m, file);
   GetOpt(d, "max_depth_m", &r.dataset.max_depth_m, file);

@@ -174,6 +174,7 @@ DepthImage RenderFrameDepth(const Scene& scene, const Frame& frame, const Camera
   const RenderedDepth rendered = renderer->Render(camera, frame.world_from_cam, render);
   DepthImage depth(camera.width, camera.height);
   depth.values_m.assign(rendered.depth_m.begin(), rendered.depth_m.end());
+  io::ApplyFrameMask(frame, &depth);  // anonymised pixels (ScanNet++) have no depth
   return depth;
 }
 
@@ -184,8 +185,10 @@ DepthImage LoadFrameDepth(const Scene& scene, const Frame& frame, const Camera& 
   if (!options.Check(&error)) throw InputError("depth source", error);
   auto read_sensor = [&] {
     if (sensor) return *sensor;
-    DepthImage full =
-        io::ReadDepth(frame.depth, frame.depth_camera.width, frame.depth_camera.height);
+    // A frame without a depth file (ScanNet++ DSLR) has no sensor depth anywhere.
+    if (frame.depth.path.empty()) return DepthImage(camera.width, camera.height);
+    // Undistorted and masked as the frame says (io::ReadFrameDepth).
+    DepthImage full = io::ReadFrameDepth(frame);
     if (full.width == camera.width && full.height == camera.height) return full;
     return ResizeDepthNearest(full, camera.width, camera.height);
   };

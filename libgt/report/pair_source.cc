@@ -349,14 +349,20 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
                        "expected \"format\", \"scene\", \"frame0\" and \"frame1\" "
                        "({\"id\": ..., \"number\": ...}) to find the colour images under --root");
     }
-    const auto reader = gt::datasets::MakeReader(
-        gt::ParseDatasetFormat(meta["format"].get<std::string>(), meta_path + ": format"));
+    const gt::DatasetFormat format =
+        gt::ParseDatasetFormat(meta["format"].get<std::string>(), meta_path + ": format");
+    gt::datasets::ReaderOptions reader_options;
+    reader_options.scannetpp_device =
+        gt::datasets::ScanNetPPDeviceOfFrameId(frame_id("frame0")->get<std::string>());
+    const auto reader = gt::datasets::MakeReader(format, reader_options);
     const gt::Scene scene = reader->ReadScene(dataset_root, meta["scene"].get<std::string>());
     for (int k = 0; k < 2; ++k) {
       const std::string id = frame_id(k == 0 ? "frame0" : "frame1")->get<std::string>();
       for (const auto& f : scene.frames) {
         if (f.id != id || f.color_path.empty()) continue;
-        if (f.color_range.size > 0) {  // a payload inside a container (.sens)
+        // A payload inside a container (.sens), or a distorted image (ScanNet++): decoded
+        // through the frame.
+        if (f.color_range.size > 0 || f.color_lens) {
           (k == 0 ? img0 : img1) = BgrFromColor(gt::io::ReadFrameColor(f));
         } else {
           (k == 0 ? p0 : p1) = f.color_path;
@@ -375,7 +381,10 @@ PairData ComputePairFromScene(const std::string& root, DatasetFormat format,
                               const truth::Resolution& resolution) {
   std::string error;
   if (!resolution.Check(&error)) throw InputError("--resolution", error);
-  const gt::Scene scene = gt::datasets::MakeReader(format)->ReadScene(root, scene_name);
+  gt::datasets::ReaderOptions reader_options;
+  reader_options.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(id0);
+  const gt::Scene scene =
+      gt::datasets::MakeReader(format, reader_options)->ReadScene(root, scene_name);
   const gt::truth::PairTruthOptions o =
       gt::truth::ResolvePairTruthOptions(settings, gt::truth::DepthRangeOf(scene));
   if (!o.Check(&error)) throw InputError("pair options", error);

@@ -25,7 +25,7 @@ bool IsJpegPath(const std::string& path) {
 
 std::string DepthPngBytes(const Frame& f, int width, int height, double units_per_m, int png_level,
                           size_t* zeroed) {
-  DepthImage depth = io::ReadDepth(f.depth, f.depth_camera.width, f.depth_camera.height);
+  DepthImage depth = io::ReadFrameDepth(f);
   if (depth.width != width || depth.height != height) {
     depth = ResizeDepthNearest(depth, width, height);
   }

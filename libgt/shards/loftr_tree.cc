@@ -28,6 +28,7 @@ std::string Lower(std::string s) {
 // Already ScanNet's depth: 16-bit PNG in millimetres, no marker but 0, at 640x480.
 bool DepthIsScanNetForm(const Frame& f) {
   return f.depth.format == DepthFormat::kPng16 && f.depth.scale_m_per_unit == 0.001 &&
+         !f.depth_lens && f.mask_path.empty() &&
          (f.depth.invalid_value < 0 || f.depth.invalid_value == 0) &&
          Lower(fs::path(f.depth.path).extension().string()) == ".png" &&
          f.depth_camera.width == kLoftrWidth && f.depth_camera.height == kLoftrHeight;
@@ -59,7 +60,7 @@ FrameOutput ExportFrame(const Frame& f, const std::string& folder,
   const std::string color_dst = folder + "/color/" + n + ".jpg";
   // A JPEG file is linked; a payload inside a container (.sens) or another format is
   // decoded and written as JPEG.
-  if (f.color_range.size == 0 && IsJpegPath(f.color_path)) {
+  if (f.color_range.size == 0 && !f.color_lens && IsJpegPath(f.color_path)) {
     out.links.emplace_back(f.color_path, color_dst);
     ++out.linked;
     if (f.color_camera.width > 0) {

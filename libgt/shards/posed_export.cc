@@ -89,6 +89,7 @@ bool DepthIsMillimetrePng(const Frame& f, int width, int height) {
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
   return f.depth.format == DepthFormat::kPng16 && f.depth.scale_m_per_unit == 0.001 &&
+         !f.depth_lens && f.mask_path.empty() &&
          (f.depth.invalid_value < 0 || f.depth.invalid_value == 0) && ext == ".png" &&
          f.depth_camera.width == width && f.depth_camera.height == height;
 }
@@ -109,7 +110,7 @@ ViewOutput ExportView(const std::string& what, const Frame& f, const std::string
   // Colour at W x H: a JPEG file of that size is linked, anything else decoded, resized
   // (bilinear, as the shards' images) and written as JPEG.
   bool link_color = false;
-  if (f.color_range.size == 0 && IsJpegPath(f.color_path)) {
+  if (f.color_range.size == 0 && !f.color_lens && IsJpegPath(f.color_path)) {
     int w = f.color_camera.width, h = f.color_camera.height;
     if (w <= 0) {
       const io::ImageSize size = io::ReadImageSize(f.color_path);

@@ -37,7 +37,7 @@ Camera WorkingCamera(const Frame& frame, const Resolution& resolution) {
 }
 
 DepthImage LoadWorkingDepth(const Frame& frame, const Resolution& resolution) {
-  DepthImage full = io::ReadDepth(frame.depth, frame.depth_camera.width, frame.depth_camera.height);
+  DepthImage full = io::ReadFrameDepth(frame);
   if (full.width == resolution.width && full.height == resolution.height) return full;
   return ResizeDepthNearest(full, resolution.width, resolution.height);
 }
@@ -58,7 +58,10 @@ DepthImage LoadWorkingDepth(const Scene& scene, const Frame& frame, const Resolu
   if (depth.source == render::DepthSourceMode::kMesh && agreement == nullptr) {
     return render::LoadFrameDepth(scene, frame, WorkingCamera(frame, resolution), depth);  // no sensor read
   }
-  const DepthImage sensor = LoadWorkingDepth(frame, resolution);
+  // A frame without a depth file (ScanNet++ DSLR) has no sensor depth anywhere.
+  const DepthImage sensor = frame.depth.path.empty()
+                                ? DepthImage(resolution.width, resolution.height)
+                                : LoadWorkingDepth(frame, resolution);
   return render::LoadFrameDepth(scene, frame, WorkingCamera(frame, resolution), depth, agreement, &sensor);
 }
 

@@ -482,13 +482,15 @@ def render_depth(
                                near_m=near_m, far_m=far_m)
 
 
-def open_dataset(root: Union[str, "os.PathLike[str]"], format: str) -> Dataset:
+def open_dataset(root: Union[str, "os.PathLike[str]"], format: str, *,
+                 device: str = "dslr") -> Dataset:
     """A dataset read by occgt's own readers (docs/DATASETS.md).
 
     Args:
         root: the dataset folder (or a scene folder / generic manifest folder).
         format: one of FORMATS: "scannet", "tartanair", "sevenscenes", "tum", "megadepth",
-            "generic".
+            "generic", "scannetpp".
+        device: "scannetpp" only: "dslr" or "iphone" (the camera whose frames are read).
 
     Returns:
         A Dataset: ``.scenes()`` lists the scene names, ``.scene(name)`` reads one scene
@@ -496,7 +498,7 @@ def open_dataset(root: Union[str, "os.PathLike[str]"], format: str) -> Dataset:
         world_from_cam; ``.load(frame_id, width=640, height=480)`` -> (depth float32 [H, W] metres,
         K float64 [3, 3] at W x H, world_from_cam float64 [4, 4])).
     """
-    return Dataset(os.fspath(root), format)
+    return Dataset(os.fspath(root), format, device=device)
 
 
 def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"],

@@ -150,9 +150,11 @@ class PyScene {
 
 class PyDataset {
  public:
-  PyDataset(std::string root, std::string format)
+  PyDataset(std::string root, std::string format, const std::string& device)
       : root_(std::move(root)), format_(std::move(format)), reader_(Named("format", [&] {
-          return gt::datasets::MakeReader(gt::ParseDatasetFormat(format_, "format"));
+          gt::datasets::ReaderOptions options;
+          options.scannetpp_device = gt::datasets::ParseScanNetPPDevice(device, "device");
+          return gt::datasets::MakeReader(gt::ParseDatasetFormat(format_, "format"), options);
         })) {}
 
   const std::string& root() const { return root_; }
@@ -327,7 +329,8 @@ void BindIo(py::module_& m) {
       });
 
   py::class_<PyDataset>(m, "Dataset", "A dataset root read by one of occgt's readers.")
-      .def(py::init<std::string, std::string>(), "root"_a, "format"_a)
+      .def(py::init<std::string, std::string, std::string>(), "root"_a, "format"_a,
+           py::kw_only(), "device"_a = "dslr")
       .def_property_readonly("root", &PyDataset::root, "dataset root folder")
       .def_property_readonly("format", &PyDataset::format, "reader format")
       .def("scenes", &PyDataset::Scenes, "scene names under the root, sorted")

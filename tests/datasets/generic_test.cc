@@ -273,7 +273,7 @@ TEST(Generic, BadPoseNamesTheFieldPath) {
 
 TEST(Readers, UnknownFormatAndKnownFormats) {
   EXPECT_EQ(KnownFormats(), (std::vector<std::string>{"scannet", "tartanair", "sevenscenes", "tum",
-                                                      "megadepth", "generic"}));
+                                                      "megadepth", "generic", "scannetpp"}));
   for (const auto& f : KnownFormats()) {
     EXPECT_EQ(DatasetFormatName(MakeReader(ParseDatasetFormat(f))->Format()), f);
   }
