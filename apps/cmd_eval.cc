@@ -1,8 +1,8 @@
 // occgt eval SPLIT_DIR --predictions P [--predictions Q ...] --out eval.json: scores a
 // matcher's predictions against the split's ground truth (docs/EVAL.md): relative pose AUC
-// (LoFTR's protocol by default; other estimators, threshold sweeps and named protocols), epipolar precision, per-type precision
-// and recall, all stratified by occlusion ratio and visible overlap. Prints a one-screen
-// summary; writes eval.json (schemas/eval.schema.json) atomically.
+// (LoFTR's protocol by default; other estimators, threshold sweeps and named protocols), epipolar
+// precision, per-type precision and recall, all stratified by occlusion ratio and visible overlap.
+// Prints a one-screen summary; writes eval.json (schemas/eval.schema.json) atomically.
 #include <tbb/global_control.h>
 
 #include <cstdio>
@@ -61,8 +61,8 @@ struct Args {
 void SetEstimators(const Args& args, gt::eval::EvalOptions* options) {
   if (!args.protocol.empty()) {
     if (!args.estimator_flags.empty()) {
-      throw gt::InputError("--protocol", args.protocol + " fixes the estimators; drop " +
-                                             args.estimator_flags[0]);
+      throw gt::InputError(
+          "--protocol", args.protocol + " fixes the estimators; drop " + args.estimator_flags[0]);
     }
     const gt::eval::Protocol p =
         gt::eval::ExpandProtocol(gt::eval::ParseProtocolName(args.protocol, "--protocol"));

@@ -26,8 +26,8 @@
 
 #include "libgt/eval/match_quality.h"
 #include "libgt/eval/pose.h"
-#include "libgt/eval/protocol.h"
 #include "libgt/eval/predictions.h"
+#include "libgt/eval/protocol.h"
 #include "libgt/geometry/aggregate.h"
 #include "libgt/io/npy.h"
 
@@ -49,7 +49,7 @@ struct EvalOptions {
   // set's pose figure is chosen among them (protocol.h).
   ProtocolName protocol = ProtocolName::kLoftr;
   Selection selection = Selection::kEvery;
-  std::vector<double> auc_thresholds_deg{5, 10, 20};                     // increasing, > 0
+  std::vector<double> auc_thresholds_deg{5, 10, 20};  // increasing, > 0
   double epipolar_threshold = 5e-4;  // symmetric epipolar distance (LoFTR ScanNet; 1e-4 MegaDepth)
   QualityOptions quality;            // px for per-type precision/recall
   std::vector<OcclusionDefinition> occlusion_definitions{OcclusionDefinition::kImage,
@@ -125,7 +125,7 @@ PairQuality ScoreSampleMatches(const std::string& tar, const std::string& key, i
 // Best-of-sweep selection (protocol.h Selection::kBestOfSweep) of one set over all pairs:
 // estimators grouped by equal settings but the threshold, in order of first appearance.
 struct SweepSelection {
-  std::vector<double> mean_auc_percent;    // per estimator: mean of its overall AUCs
+  std::vector<double> mean_auc_percent;     // per estimator: mean of its overall AUCs
   std::vector<std::vector<size_t>> groups;  // estimator indices per group
   std::vector<size_t> group_best;           // per group: the chosen estimator
   size_t best = 0;                          // the chosen estimator

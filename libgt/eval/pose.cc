@@ -14,9 +14,9 @@
 namespace gt::eval {
 
 PoseMethod ParsePoseMethod(const std::string& text, const std::string& field) {
-  for (const PoseMethod m : {PoseMethod::kRansac, PoseMethod::kLmeds, PoseMethod::kUsacDefault,
-                             PoseMethod::kUsacAccurate, PoseMethod::kUsacMagsac,
-                             PoseMethod::kUsacProsac}) {
+  for (const PoseMethod m :
+       {PoseMethod::kRansac, PoseMethod::kLmeds, PoseMethod::kUsacDefault,
+        PoseMethod::kUsacAccurate, PoseMethod::kUsacMagsac, PoseMethod::kUsacProsac}) {
     if (text == PoseMethodName(m)) return m;
   }
   throw InputError(field,
@@ -95,7 +95,8 @@ std::string PoseEstimatorName(const PoseEstimatorOptions& e) {
                 e.ransac_px, e.confidence);
   std::string name = buf;
   if (e.max_iters != 1000) name += " iters " + std::to_string(e.max_iters);
-  if (e.focal_mean != FocalMean::kLoftr) name += std::string(" focal ") + FocalMeanName(e.focal_mean);
+  if (e.focal_mean != FocalMean::kLoftr)
+    name += std::string(" focal ") + FocalMeanName(e.focal_mean);
   return name;
 }
 
@@ -217,13 +218,10 @@ RecoveredPose RecoverPose(const Eigen::Matrix3d& E, const std::vector<double>& p
   return out;
 }
 
-std::optional<PoseEstimate> EstimateRelativePose(const std::vector<float>& kpts0,
-                                                 const std::vector<float>& kpts1,
-                                                 const Eigen::Matrix3d& K0,
-                                                 const Eigen::Matrix3d& K1,
-                                                 const PoseEstimatorOptions& options,
-                                                 const std::vector<float>* confidence,
-                                                 uint64_t rng_seed) {
+std::optional<PoseEstimate> EstimateRelativePose(
+    const std::vector<float>& kpts0, const std::vector<float>& kpts1, const Eigen::Matrix3d& K0,
+    const Eigen::Matrix3d& K1, const PoseEstimatorOptions& options,
+    const std::vector<float>* confidence, uint64_t rng_seed) {
   GT_ASSERT(kpts0.size() == kpts1.size() && kpts0.size() % 2 == 0);
   const int n = static_cast<int>(kpts0.size() / 2);
   if (n < options.min_matches) return std::nullopt;
@@ -253,10 +251,10 @@ std::optional<PoseEstimate> EstimateRelativePose(const std::vector<float>& kpts0
   const cv::Mat identity = cv::Mat::eye(3, 3, CV_64F);
   cv::Mat mask_cv;
   cv::theRNG().state = rng_seed;
-  const cv::Mat E = cv::findEssentialMat(
-      cv::Mat(n, 2, CV_64F, p0.data()), cv::Mat(n, 2, CV_64F, p1.data()), identity,
-      PoseMethodOpenCVFlag(options.method), options.confidence, threshold, options.max_iters,
-      mask_cv);
+  const cv::Mat E =
+      cv::findEssentialMat(cv::Mat(n, 2, CV_64F, p0.data()), cv::Mat(n, 2, CV_64F, p1.data()),
+                           identity, PoseMethodOpenCVFlag(options.method), options.confidence,
+                           threshold, options.max_iters, mask_cv);
   if (E.empty() || E.cols != 3 || E.rows % 3 != 0) return std::nullopt;
   GT_ASSERT(mask_cv.isContinuous() && mask_cv.total() == static_cast<size_t>(n));
   // The same mask for every block: recoverPose narrows it in place (LoFTR's loop).

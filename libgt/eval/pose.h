@@ -81,13 +81,10 @@ struct PoseEstimate {
 // kpts0, kpts1: row-major [N, 2] pixels (x, y) at the resolution of K0, K1. `confidence`
 // ([N] or nullptr) orders the matches for kUsacProsac, which needs it (a bug otherwise).
 // Deterministic (see above); thread-safe.
-std::optional<PoseEstimate> EstimateRelativePose(const std::vector<float>& kpts0,
-                                                 const std::vector<float>& kpts1,
-                                                 const Eigen::Matrix3d& K0,
-                                                 const Eigen::Matrix3d& K1,
-                                                 const PoseEstimatorOptions& options,
-                                                 const std::vector<float>* confidence = nullptr,
-                                                 uint64_t rng_seed = 1);
+std::optional<PoseEstimate> EstimateRelativePose(
+    const std::vector<float>& kpts0, const std::vector<float>& kpts1, const Eigen::Matrix3d& K0,
+    const Eigen::Matrix3d& K1, const PoseEstimatorOptions& options,
+    const std::vector<float>* confidence = nullptr, uint64_t rng_seed = 1);
 
 // cv::recoverPose(E, p0, p1, I, R, t, distance_thresh, mask) of OpenCV 4.6 on normalised
 // points p0, p1 (row-major [N, 2]), with the same result: E split by

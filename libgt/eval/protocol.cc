@@ -5,13 +5,13 @@
 namespace gt::eval {
 
 ProtocolName ParseProtocolName(const std::string& text, const std::string& field) {
-  for (const ProtocolName p : {ProtocolName::kLoftr, ProtocolName::kSuperglue,
-                               ProtocolName::kGluefactory, ProtocolName::kEloftr,
-                               ProtocolName::kEloftrLo}) {
+  for (const ProtocolName p :
+       {ProtocolName::kLoftr, ProtocolName::kSuperglue, ProtocolName::kGluefactory,
+        ProtocolName::kEloftr, ProtocolName::kEloftrLo}) {
     if (text == ProtocolNameText(p)) return p;
   }
-  throw InputError(field, "expected loftr, superglue, gluefactory, eloftr or eloftr-lo, got '" +
-                              text + "'");
+  throw InputError(
+      field, "expected loftr, superglue, gluefactory, eloftr or eloftr-lo, got '" + text + "'");
 }
 
 const char* ProtocolNameText(ProtocolName p) {

@@ -15,13 +15,13 @@
 namespace gt::eval {
 
 enum class ProtocolName {
-  kLoftr,         // "loftr": LoFTR's test (OpenCV RANSAC 0.5 px, 0.99999); occgt's default
-  kSuperglue,     // "superglue": SuperGlue's match_pairs.py (OpenCV RANSAC 1 px, 0.99999)
-  kGluefactory,   // "gluefactory": glue-factory's RelativePosePipeline (two estimators x
-                  // 0.5, 1.5, 2, 3 px, best by mean AUC)
-  kEloftr,        // "eloftr": EfficientLoFTR's test, POSE_ESTIMATION_METHOD RANSAC
-  kEloftrLo,      // "eloftr-lo": EfficientLoFTR's LO-RANSAC (PoseLib) at 2 px
-  kCustom,        // "custom": the estimator flags as given (no paper)
+  kLoftr,        // "loftr": LoFTR's test (OpenCV RANSAC 0.5 px, 0.99999); occgt's default
+  kSuperglue,    // "superglue": SuperGlue's match_pairs.py (OpenCV RANSAC 1 px, 0.99999)
+  kGluefactory,  // "gluefactory": glue-factory's RelativePosePipeline (two estimators x
+                 // 0.5, 1.5, 2, 3 px, best by mean AUC)
+  kEloftr,       // "eloftr": EfficientLoFTR's test, POSE_ESTIMATION_METHOD RANSAC
+  kEloftrLo,     // "eloftr-lo": EfficientLoFTR's LO-RANSAC (PoseLib) at 2 px
+  kCustom,       // "custom": the estimator flags as given (no paper)
 };
 ProtocolName ParseProtocolName(const std::string& text, const std::string& field);
 const char* ProtocolNameText(ProtocolName p);

@@ -297,7 +297,6 @@ std::vector<NamedImage> MakeEvalPlots(const EvalReportData& data, const SplitRep
   std::vector<std::string> outputs{"eval_cumulative.png", "eval_auc_by_occlusion.png",
                                    "eval_auc_by_overlap.png"};
   std::string dis_plot;
-  std::string dis_title;
   for (size_t k = 0; k < data.sets.size(); ++k) {
     const EvalSetView& v = data.sets[k];
     const auto ab = DisagreementEstimators(v);
@@ -314,19 +313,16 @@ std::vector<NamedImage> MakeEvalPlots(const EvalReportData& data, const SplitRep
     }
     write("dis" + std::to_string(k) + ".dat", text.empty() ? "NaN NaN\n" : text);
     const json& est = v.options.at("estimators");
-    const std::string label = v.label + ": " + est[ab->second].at("name").get<std::string>() +
-                              " minus " + est[ab->first].at("name").get<std::string>();
+    const std::string label = v.label + ": B " + est[ab->second].at("name").get<std::string>() +
+                              ", A " + est[ab->first].at("name").get<std::string>();
     dis_plot += std::string(dis_plot.empty() ? "plot " : ", ") + "'dis" + std::to_string(k) +
                 ".dat' using 1:2 with points pt 7 ps 0.6 title " + GnuplotString(label);
-    if (dis_title.empty()) dis_title = label;
   }
   if (!dis_plot.empty()) {
     gp << "set output 'eval_estimator_disagreement.png'\nset title "
-       << GnuplotString("Per-pair pose-error difference of two estimators (failure = 180 deg, "
-                        "clipped to +-30) over the occlusion ratio (" +
-                        def + ")")
+       << GnuplotString("Per pair: pose error of B minus A (failure = 180 deg, clipped to +-30)")
        << "\nset xlabel " << GnuplotString("occlusion ratio (" + def + ")")
-       << "\nset ylabel 'error difference (deg); below 0: the first named is better'\n"
+       << "\nset ylabel 'error(B) - error(A) (deg); below 0: B is better'\n"
        << "set xtics auto norotate\nset autoscale x\nset yrange [-31:31]\n"
        << dis_plot << ", 0 with lines lc rgb '#999999' dt 2 notitle\n";
     outputs.push_back("eval_estimator_disagreement.png");
@@ -495,7 +491,8 @@ std::string EstimatorMatrix(const EvalReportData& data) {
       const json& x = est[e];
       std::string g = "opencv-" + x.value("estimator", std::string("ransac")) + " conf " +
                       Num(x.at("confidence").get<double>(), 6);
-      if (x.value("max_iters", 1000) != 1000) g += " iters " + std::to_string(x.value("max_iters", 1000));
+      if (x.value("max_iters", 1000) != 1000)
+        g += " iters " + std::to_string(x.value("max_iters", 1000));
       if (x.value("focal_mean", std::string("loftr")) != "loftr") {
         g += " focal " + x.value("focal_mean", std::string());
       }
@@ -519,11 +516,11 @@ std::string EstimatorMatrix(const EvalReportData& data) {
         }
         const bool starred = static_cast<int64_t>(e) == best;
         h << "<tr data-set=\"" << HtmlEscape(v.label) << "\"" << (starred ? " class=\"best\"" : "")
-          << "><td>" << HtmlEscape(v.label) << "</td><td>" << (j == 0 ? HtmlEscape(group_names[g]) : "")
-          << "</td><td class=\"n\">" << Num(est[e].at("ransac_px").get<double>(), 6)
-          << "</td><td class=\"n\">" << cells << "</td><td class=\"n\">"
-          << Cell(json(auc.empty() ? 0.0 : sum / auc.size()), 2) << (starred ? " ★" : "")
-          << "</td></tr>\n";
+          << "><td>" << HtmlEscape(v.label) << "</td><td>"
+          << (j == 0 ? HtmlEscape(group_names[g]) : "") << "</td><td class=\"n\">"
+          << Num(est[e].at("ransac_px").get<double>(), 6) << "</td><td class=\"n\">" << cells
+          << "</td><td class=\"n\">" << Cell(json(auc.empty() ? 0.0 : sum / auc.size()), 2)
+          << (starred ? " ★" : "") << "</td></tr>\n";
       }
     }
   }

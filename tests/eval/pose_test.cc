@@ -9,8 +9,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <opencv2/calib3d.hpp>
 #include <map>
+#include <opencv2/calib3d.hpp>
 #include <random>
 #include <thread>
 
@@ -112,9 +112,9 @@ TEST(EstimateRelativePose, ExactMatchesGiveTheTruePose) {
   EXPECT_FALSE(bad.Check(&error));
 }
 
-const PoseMethod kAllMethods[] = {PoseMethod::kRansac,       PoseMethod::kLmeds,
-                                  PoseMethod::kUsacDefault,  PoseMethod::kUsacAccurate,
-                                  PoseMethod::kUsacMagsac,   PoseMethod::kUsacProsac};
+const PoseMethod kAllMethods[] = {PoseMethod::kRansac,      PoseMethod::kLmeds,
+                                  PoseMethod::kUsacDefault, PoseMethod::kUsacAccurate,
+                                  PoseMethod::kUsacMagsac,  PoseMethod::kUsacProsac};
 
 // Confidences for PROSAC: any order works on exact matches.
 std::vector<float> Confidences(size_t n, uint32_t seed) {
@@ -170,7 +170,8 @@ NoisyScene MakeNoisyScene(std::mt19937* rng, int n, double noise_px, double outl
     const bool out_i = static_cast<int>(fresh.kpts0.size() / 2) < n_out;
     fresh.kpts0.insert(fresh.kpts0.end(), {static_cast<float>(x0.x()), static_cast<float>(x0.y())});
     if (out_i) {
-      fresh.kpts1.insert(fresh.kpts1.end(), {static_cast<float>(x(*rng)), static_cast<float>(y(*rng))});
+      fresh.kpts1.insert(fresh.kpts1.end(),
+                         {static_cast<float>(x(*rng)), static_cast<float>(y(*rng))});
       out.confidence.push_back(c_out(*rng));
     } else {
       fresh.kpts1.insert(fresh.kpts1.end(), {static_cast<float>(x1.x() + g(*rng)),
@@ -200,11 +201,9 @@ TEST(EstimateRelativePose, RobustMethodsBeatPlainRansacOnNoisyMatches) {
       PoseEstimatorOptions o;
       o.method = m;
       o.ransac_px = 1.0;
-      const auto pose =
-          EstimateRelativePose(ns.scene.kpts0, ns.scene.kpts1, ns.scene.K, ns.scene.K, o,
-                               &ns.confidence, PairRngSeed("trial", trial));
-      errors[m].push_back(pose ? RelativePoseError(ns.scene.R, ns.scene.t,
-                                                   pose->cam1_from_cam0_R,
+      const auto pose = EstimateRelativePose(ns.scene.kpts0, ns.scene.kpts1, ns.scene.K, ns.scene.K,
+                                             o, &ns.confidence, PairRngSeed("trial", trial));
+      errors[m].push_back(pose ? RelativePoseError(ns.scene.R, ns.scene.t, pose->cam1_from_cam0_R,
                                                    pose->cam1_from_cam0_t)
                                      .max_deg
                                : 180.0);
@@ -241,8 +240,7 @@ TEST(EstimateRelativePose, SameAnswerWhateverTheRngStateAndThread) {
     // Another state of the caller's generator, and OpenCV's own seeds: same bits.
     cv::theRNG().state = 0x1234567;
     for (const uint64_t seed : {uint64_t{5}, uint64_t{99}, PairRngSeed("a/b", 3)}) {
-      const auto again =
-          EstimateRelativePose(s.kpts0, s.kpts1, s.K, s.K, o, &ns.confidence, seed);
+      const auto again = EstimateRelativePose(s.kpts0, s.kpts1, s.K, s.K, o, &ns.confidence, seed);
       ASSERT_TRUE(again.has_value());
       EXPECT_EQ(again->cam1_from_cam0_R, first->cam1_from_cam0_R);
       EXPECT_EQ(again->cam1_from_cam0_t, first->cam1_from_cam0_t);
