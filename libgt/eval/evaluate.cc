@@ -899,6 +899,11 @@ std::string EvalSummary(const EvalResult& r) {
   s << "protocol: " << ProtocolNameText(o.protocol) << " (" << o.estimators.size()
     << " estimator setting(s), selection " << SelectionName(o.selection) << ", OpenCV "
     << CV_VERSION << ")\n";
+  if (o.protocol != ProtocolName::kCustom) {
+    const Protocol p = ExpandProtocol(o.protocol);
+    s << "  keypoints at: " << p.resolution_rule << "; failed pair: " << p.failure_rule
+      << "; differs from the paper's code: " << p.differences << "\n";
+  }
   s << "pose AUC (%) at";
   for (const double t : o.auc_thresholds_deg) s << " " << t;
   s << " deg; epipolar precision (%) at " << o.epipolar_threshold << "; per-type precision / "

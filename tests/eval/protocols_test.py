@@ -141,6 +141,7 @@ def main():
             outs.append(f.read())
     assert outs[0] == outs[1], "--protocol gluefactory: eval.json differs between 1 and 2 threads"
     assert "protocol: gluefactory" in r.stdout and "optimistic" in r.stdout, r.stdout
+    assert "keypoints at: keypoints in pixels of the resized images" in r.stdout, r.stdout
     doc = json.loads(outs[0])
     check_schema(doc)
     est = doc["options"]["estimators"]
