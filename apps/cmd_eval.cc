@@ -52,7 +52,7 @@ struct Args {
   int ransac_iters = 1000;
   gt::eval::EvalOptions options;
   int threads = 0;
-  // Estimator flags given on the command line (they conflict with --protocol).
+  // Estimator and failure flags given on the command line (they conflict with --protocol).
   std::vector<std::string> estimator_flags;
 };
 
@@ -61,8 +61,9 @@ struct Args {
 void SetEstimators(const Args& args, gt::eval::EvalOptions* options) {
   if (!args.protocol.empty()) {
     if (!args.estimator_flags.empty()) {
-      throw gt::InputError(
-          "--protocol", args.protocol + " fixes the estimators; drop " + args.estimator_flags[0]);
+      throw gt::InputError("--protocol", args.protocol +
+                                             " fixes the estimators and the failure rule; drop " +
+                                             args.estimator_flags[0]);
     }
     const gt::eval::Protocol p =
         gt::eval::ExpandProtocol(gt::eval::ParseProtocolName(args.protocol, "--protocol"));
@@ -250,8 +251,8 @@ void AddEvalCommand(CLI::App& app) {
   cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)");
   cmd->callback([args, cmd] {
     args->estimator_flags.clear();
-    for (const char* flag :
-         {"--estimator", "--ransac-px", "--ransac-conf", "--ransac-iters", "--focal-mean"}) {
+    for (const char* flag : {"--estimator", "--ransac-px", "--ransac-conf", "--ransac-iters",
+                             "--focal-mean", "--failure-error"}) {
       if (cmd->count(flag) > 0) args->estimator_flags.push_back(flag);
     }
     Run(*args);

@@ -176,6 +176,7 @@ def main():
     # 6. Errors: a protocol with estimator flags, unknown names -> exit 2; PROSAC without
     #    confidences -> exit 1 naming the file; nothing written.
     for args in (["--protocol", "gluefactory", "--ransac-px", "1"], ["--protocol", "magic"],
+                 ["--protocol", "eloftr-lo", "--failure-error", "180"],
                  ["--estimator", "magsac"], ["--ransac-iters", "0"], ["--focal-mean", "x"]):
         o = os.path.join(work, "x.json")
         r = run(o, *args, check=False)
