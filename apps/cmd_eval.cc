@@ -1,8 +1,8 @@
 // occgt eval SPLIT_DIR --predictions P [--predictions Q ...] --out eval.json: scores a
 // matcher's predictions against the split's ground truth (docs/EVAL.md): relative pose AUC
-// (LoFTR's protocol, one or more RANSAC settings), epipolar precision, per-type precision
-// and recall, all stratified by occlusion ratio and visible overlap. Prints a one-screen
-// summary; writes eval.json (schemas/eval.schema.json) atomically.
+// (LoFTR's protocol by default; other estimators, threshold sweeps and named protocols), epipolar
+// precision, per-type precision and recall, all stratified by occlusion ratio and visible overlap.
+// Prints a one-screen summary; writes eval.json (schemas/eval.schema.json) atomically.
 #include <tbb/global_control.h>
 
 #include <cstdio>
@@ -46,21 +46,67 @@ struct Args {
   std::string split_dir, out;
   std::vector<std::string> predictions;
   std::string ransac_px = "0.5", occlusion = "image,visible", occlusion_bins, overlap_bins,
-              auc = "5,10,20", aggregate = "mean";
+              auc = "5,10,20", aggregate = "mean", estimator = "ransac", focal_mean = "loftr",
+              protocol;
   double ransac_conf = 0.99999;
+  int ransac_iters = 1000;
   gt::eval::EvalOptions options;
   int threads = 0;
+  // Estimator and failure flags given on the command line (they conflict with --protocol).
+  std::vector<std::string> estimator_flags;
 };
+
+// The estimator settings: a named protocol's, or --estimator x --ransac-px (each method
+// at each threshold, method-major) with --ransac-conf, --ransac-iters, --focal-mean.
+void SetEstimators(const Args& args, gt::eval::EvalOptions* options) {
+  if (!args.protocol.empty()) {
+    if (!args.estimator_flags.empty()) {
+      throw gt::InputError("--protocol", args.protocol +
+                                             " fixes the estimators and the failure rule; drop " +
+                                             args.estimator_flags[0]);
+    }
+    const gt::eval::Protocol p =
+        gt::eval::ExpandProtocol(gt::eval::ParseProtocolName(args.protocol, "--protocol"));
+    options->protocol = p.name;
+    options->estimators = p.estimators;
+    options->selection = p.selection;
+    options->failure_error_deg = p.failure_error_deg;
+    return;
+  }
+  std::vector<double> thresholds;
+  if (args.ransac_px == "sweep") {
+    thresholds = gt::eval::GluefactorySweepPx();
+    options->selection = gt::eval::Selection::kBestOfSweep;
+  } else {
+    thresholds = ParseList(args.ransac_px, "--ransac-px");
+  }
+  options->estimators.clear();
+  std::stringstream methods(args.estimator);
+  for (std::string m; std::getline(methods, m, ',');) {
+    for (const double px : thresholds) {
+      gt::eval::PoseEstimatorOptions e;
+      e.method = gt::eval::ParsePoseMethod(m, "--estimator");
+      e.ransac_px = px;
+      e.confidence = args.ransac_conf;
+      e.max_iters = args.ransac_iters;
+      e.focal_mean = gt::eval::ParseFocalMean(args.focal_mean, "--focal-mean");
+      options->estimators.push_back(e);
+    }
+  }
+  if (options->estimators.empty()) throw gt::InputError("--estimator", "expected a method");
+  // The defaults are LoFTR's protocol exactly; anything else is a custom one.
+  const bool loftr = options->estimators.size() == 1 &&
+                     options->estimators[0].method == gt::eval::PoseMethod::kRansac &&
+                     options->estimators[0].ransac_px == 0.5 &&
+                     options->estimators[0].confidence == 0.99999 &&
+                     options->estimators[0].max_iters == 1000 &&
+                     options->estimators[0].focal_mean == gt::eval::FocalMean::kLoftr;
+  options->protocol = loftr ? gt::eval::ProtocolName::kLoftr : gt::eval::ProtocolName::kCustom;
+}
 
 void Run(const Args& args) {
   gt::eval::EvalOptions options = args.options;
-  options.estimators.clear();
-  for (const double px : ParseList(args.ransac_px, "--ransac-px")) {
-    gt::eval::PoseEstimatorOptions e;
-    e.ransac_px = px;
-    e.confidence = args.ransac_conf;
-    options.estimators.push_back(e);
-  }
+  SetEstimators(args, &options);
   options.auc_thresholds_deg = ParseList(args.auc, "--auc");
   if (!args.occlusion_bins.empty()) {
     options.occlusion_bins = ParseList(args.occlusion_bins, "--occlusion-bins");
@@ -80,6 +126,7 @@ void Run(const Args& args) {
     static const std::map<std::string, std::string> kFlags = {
         {"ransac_px", "--ransac-px"},
         {"confidence", "--ransac-conf"},
+        {"max_iters", "--ransac-iters"},
         {"auc_thresholds_deg", "--auc"},
         {"epipolar_threshold", "--epipolar-threshold"},
         {"px", "--px"},
@@ -170,9 +217,21 @@ void AddEvalCommand(CLI::App& app) {
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--out", args->out, "eval.json to write")->required();
+  cmd->add_option("--protocol", args->protocol,
+                  "A paper's settings: loftr (the default), superglue, gluefactory, eloftr, "
+                  "eloftr-lo (docs/EVAL.md)");
+  cmd->add_option("--estimator", args->estimator,
+                  "Methods, each at every --ransac-px: ransac (default), lmeds, usac_default, "
+                  "usac_accurate, usac_magsac, usac_prosac (needs confidence)");
   cmd->add_option("--ransac-px", args->ransac_px,
-                  "RANSAC thresholds in pixels, one estimator each (e.g. 0.5,1.0)");
+                  "Thresholds in pixels, one estimator setting each (e.g. 0.5,1.0), or 'sweep' "
+                  "(glue-factory's 0.5,1.5,2,3 and the best by mean AUC)");
   cmd->add_option("--ransac-conf", args->ransac_conf, "RANSAC confidence (default 0.99999)");
+  cmd->add_option("--ransac-iters", args->ransac_iters,
+                  "Iteration cap of the robust estimator (default 1000, OpenCV's)");
+  cmd->add_option("--focal-mean", args->focal_mean,
+                  "Pixel threshold / mean focal: loftr (K0 fx, K1 fy; default) or all (fx, fy "
+                  "of both, glue-factory)");
   cmd->add_option("--auc", args->auc, "AUC thresholds in degrees (default 5,10,20)");
   cmd->add_option("--epipolar-threshold", args->options.epipolar_threshold,
                   "Symmetric epipolar distance threshold (default 5e-4; MegaDepth 1e-4)");
@@ -190,7 +249,14 @@ void AddEvalCommand(CLI::App& app) {
   cmd->add_option("--min-confidence", args->options.min_confidence,
                   "Drop matches with confidence below this (needs 'confidence')");
   cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)");
-  cmd->callback([args] { Run(*args); });
+  cmd->callback([args, cmd] {
+    args->estimator_flags.clear();
+    for (const char* flag : {"--estimator", "--ransac-px", "--ransac-conf", "--ransac-iters",
+                             "--focal-mean", "--failure-error"}) {
+      if (cmd->count(flag) > 0) args->estimator_flags.push_back(flag);
+    }
+    Run(*args);
+  });
 }
 
 }  // namespace occgt

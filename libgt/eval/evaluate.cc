@@ -494,13 +494,29 @@ EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& s
       if (it != sets[k].pairs.end()) prediction[i * nsets + k] = &it->second;
     }
   }
+  bool prosac = false;
+  for (const PoseEstimatorOptions& e : options.estimators) {
+    prosac = prosac || e.method == PoseMethod::kUsacProsac;
+  }
+  for (size_t k = 0; prosac && k < nsets; ++k) {
+    for (size_t i = 0; i < n; ++i) {
+      const PairPrediction* p = prediction[i * nsets + k];
+      if (p != nullptr && !p->has_confidence) {
+        throw InputError(sets[k].path, "usac_prosac orders matches by confidence, but pair " +
+                                           split.keys[i] + " has no 'confidence'");
+      }
+    }
+  }
+  // Each task seeds cv::theRNG() with PairRngSeed(key, estimator) (pose.h): the same
+  // numbers whichever thread runs it, and after whatever ran before.
   tbb::parallel_for(size_t{0}, n * nsets * nest, size_t{1}, [&](size_t task) {
     const size_t e = task % nest, k = (task / nest) % nsets, i = task / (nest * nsets);
     const PairPrediction* p = prediction[i * nsets + k];
     if (p == nullptr) return;
     const PairGeometry& g = geometry[i];
-    const std::optional<PoseEstimate> pose =
-        EstimateRelativePose(p->kpts0, p->kpts1, g.K0, g.K1, options.estimators[e]);
+    const std::optional<PoseEstimate> pose = EstimateRelativePose(
+        p->kpts0, p->kpts1, g.K0, g.K1, options.estimators[e],
+        p->has_confidence ? &p->confidence : nullptr, PairRngSeed(split.keys[i], e));
     SetPairResult& r = result.pairs[i].sets[k];
     if (pose) {
       r.pose[e] = RelativePoseError(g.R, g.t, pose->cam1_from_cam0_R, pose->cam1_from_cam0_t);
@@ -664,13 +680,47 @@ json Cumulative(const EvalResult& r, size_t set, size_t def) {
   return points;
 }
 
-std::string EstimatorName(const PoseEstimatorOptions& e) {
-  char buf[160];
-  std::snprintf(buf, sizeof buf, "opencv-ransac %.6g px conf %.6g", e.ransac_px, e.confidence);
-  return buf;
-}
-
 }  // namespace
+
+SweepSelection SelectBestOfSweep(const EvalResult& r, size_t set) {
+  const EvalOptions& o = r.options;
+  SweepSelection out;
+  std::vector<double> errors(r.pairs.size());
+  for (size_t e = 0; e < o.estimators.size(); ++e) {
+    for (size_t i = 0; i < r.pairs.size(); ++i) errors[i] = r.pairs[i].sets[set].pose[e].max_deg;
+    const std::vector<double> auc = PoseAuc(errors, o.auc_thresholds_deg);
+    double sum = 0;
+    for (const double a : auc) sum += a;
+    out.mean_auc_percent.push_back(100.0 * sum / static_cast<double>(auc.size()));
+    // Its group: the first earlier estimator with the same settings but the threshold.
+    const PoseEstimatorOptions& x = o.estimators[e];
+    size_t g = 0;
+    for (; g < out.groups.size(); ++g) {
+      const PoseEstimatorOptions& y = o.estimators[out.groups[g][0]];
+      if (x.method == y.method && x.confidence == y.confidence && x.max_iters == y.max_iters &&
+          x.min_matches == y.min_matches && x.focal_mean == y.focal_mean) {
+        break;
+      }
+    }
+    if (g == out.groups.size()) out.groups.emplace_back();
+    out.groups[g].push_back(e);
+  }
+  // glue-factory: max over a dict in threshold order (the first maximum), then the last
+  // group reaching the maximum (its dict keyed by mean AUC keeps the last writer).
+  double best_value = -1;
+  for (const std::vector<size_t>& group : out.groups) {
+    size_t b = group[0];
+    for (const size_t e : group) {
+      if (out.mean_auc_percent[e] > out.mean_auc_percent[b]) b = e;
+    }
+    out.group_best.push_back(b);
+    if (out.mean_auc_percent[b] >= best_value) {
+      best_value = out.mean_auc_percent[b];
+      out.best = b;
+    }
+  }
+  return out;
+}
 
 std::string EvalJson(const EvalResult& r) {
   const EvalOptions& o = r.options;
@@ -683,14 +733,34 @@ std::string EvalJson(const EvalResult& r) {
                   {"resolution", {r.split.width, r.split.height}}};
   json estimators = json::array();
   for (const PoseEstimatorOptions& e : o.estimators) {
-    estimators.push_back({{"name", EstimatorName(e)},
-                          {"method",
-                           "cv::findEssentialMat(RANSAC) on K-normalised points, "
-                           "cv::recoverPose per 3x3 block, most inliers"},
-                          {"opencv_version", CV_VERSION},
-                          {"ransac_px", e.ransac_px},
-                          {"confidence", e.confidence},
-                          {"min_matches", e.min_matches}});
+    const bool prosac = e.method == PoseMethod::kUsacProsac;
+    estimators.push_back(
+        {{"name", PoseEstimatorName(e)},
+         {"estimator", PoseMethodName(e.method)},
+         {"method", std::string("cv::findEssentialMat(") +
+                        (e.method == PoseMethod::kRansac ? "RANSAC" : PoseMethodName(e.method)) +
+                        ", prob, threshold, maxIters) on K-normalised points" +
+                        (prosac ? " sorted by decreasing confidence" : "") +
+                        ", cv::recoverPose per 3x3 block, most inliers"},
+         {"opencv_version", CV_VERSION},
+         {"ransac_px", e.ransac_px},
+         {"confidence", e.confidence},
+         {"max_iters", e.max_iters},
+         {"focal_mean", FocalMeanName(e.focal_mean)},
+         {"min_matches", e.min_matches}});
+  }
+  json protocol = {{"name", ProtocolNameText(o.protocol)}};
+  if (o.protocol == ProtocolName::kCustom) {
+    protocol["resolution_rule"] = nullptr;
+    protocol["failure_rule"] = nullptr;
+    protocol["differences"] = nullptr;
+    protocol["sources"] = nullptr;
+  } else {
+    const Protocol p = ExpandProtocol(o.protocol);
+    protocol["resolution_rule"] = p.resolution_rule;
+    protocol["failure_rule"] = p.failure_rule;
+    protocol["differences"] = p.differences;
+    protocol["sources"] = p.sources;
   }
   json defs = json::array();
   for (const OcclusionDefinition d : o.occlusion_definitions)
@@ -705,7 +775,14 @@ std::string EvalJson(const EvalResult& r) {
                     {"aggregate", AggregateName(o.aggregate)},
                     {"curve_step", o.curve_step},
                     {"failure_error_deg", o.failure_error_deg},
-                    {"min_confidence", o.min_confidence}};
+                    {"min_confidence", o.min_confidence},
+                    {"protocol", protocol},
+                    {"selection", SelectionName(o.selection)},
+                    {"opencv_version", CV_VERSION},
+                    {"rng_seed",
+                     "cv::theRNG() set per (pair, estimator) to FNV-1a 64 of the sample key "
+                     "then of the estimator index (8 bytes, little-endian); OpenCV 4.6's "
+                     "findEssentialMat methods also seed their own generators per call"}};
   doc["match_quality"] = r.has_quality
                              ? json({{"available", true}, {"reason", nullptr}})
                              : json({{"available", false}, {"reason", r.quality_missing_reason}});
@@ -736,6 +813,28 @@ std::string EvalJson(const EvalResult& r) {
     s["cumulative"] = cumulative;
     s["by_visible_overlap"] =
         Binned(r, k, o.overlap_bins, [](const PairInfo& p) { return p.visible_overlap; });
+    if (o.selection == Selection::kBestOfSweep) {
+      const SweepSelection sel = SelectBestOfSweep(r, k);
+      json groups = json::array();
+      for (size_t g = 0; g < sel.groups.size(); ++g) {
+        groups.push_back({{"estimators", sel.groups[g]}, {"best", sel.group_best[g]}});
+      }
+      const json& best = s["overall"]["pose"][sel.best];
+      s["selection"] = {
+          {"rule", SelectionName(o.selection)},
+          {"mean_auc_percent", sel.mean_auc_percent},
+          {"groups", groups},
+          {"best", sel.best},
+          {"estimator", PoseEstimatorName(o.estimators[sel.best])},
+          {"ransac_px", o.estimators[sel.best].ransac_px},
+          {"auc_percent", best["auc_percent"]},
+          {"optimistic", true},
+          {"note",
+           "the threshold and estimator were chosen on these pairs by their own mean AUC: an "
+           "optimistic figure, not a held-out one"}};
+    } else {
+      s["selection"] = nullptr;
+    }
     sets.push_back(s);
   }
   doc["sets"] = sets;
@@ -797,6 +896,14 @@ std::string EvalSummary(const EvalResult& r) {
   s << buf;
   std::vector<size_t> all(r.pairs.size());
   for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+  s << "protocol: " << ProtocolNameText(o.protocol) << " (" << o.estimators.size()
+    << " estimator setting(s), selection " << SelectionName(o.selection) << ", OpenCV "
+    << CV_VERSION << ")\n";
+  if (o.protocol != ProtocolName::kCustom) {
+    const Protocol p = ExpandProtocol(o.protocol);
+    s << "  keypoints at: " << p.resolution_rule << "; failed pair: " << p.failure_rule
+      << "; differs from the paper's code: " << p.differences << "\n";
+  }
   s << "pose AUC (%) at";
   for (const double t : o.auc_thresholds_deg) s << " " << t;
   s << " deg; epipolar precision (%) at " << o.epipolar_threshold << "; per-type precision / "
@@ -813,12 +920,22 @@ std::string EvalSummary(const EvalResult& r) {
                       : st["epipolar_precision_percent"].get<double>());
     s << buf;
     for (size_t e = 0; e < o.estimators.size(); ++e) {
-      s << "  " << EstimatorName(o.estimators[e]) << ": AUC";
+      s << "  " << PoseEstimatorName(o.estimators[e]) << ": AUC";
       for (const json& a : st["pose"][e]["auc_percent"]) {
         std::snprintf(buf, sizeof buf, " %.2f", a.get<double>());
         s << buf;
       }
       s << ", failures " << st["pose"][e]["failures"].get<int64_t>() << "\n";
+    }
+    if (o.selection == Selection::kBestOfSweep) {
+      const SweepSelection sel = SelectBestOfSweep(r, k);
+      s << "  best of sweep by mean AUC (optimistic: chosen on these pairs): "
+        << PoseEstimatorName(o.estimators[sel.best]) << ": AUC";
+      for (const json& a : st["pose"][sel.best]["auc_percent"]) {
+        std::snprintf(buf, sizeof buf, " %.2f", a.get<double>());
+        s << buf;
+      }
+      s << "\n";
     }
     if (st["types"].is_null()) {
       s << "  per-type: not available (" << r.quality_missing_reason << ")\n";

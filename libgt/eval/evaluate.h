@@ -27,6 +27,7 @@
 #include "libgt/eval/match_quality.h"
 #include "libgt/eval/pose.h"
 #include "libgt/eval/predictions.h"
+#include "libgt/eval/protocol.h"
 #include "libgt/geometry/aggregate.h"
 #include "libgt/io/npy.h"
 
@@ -44,7 +45,11 @@ const char* OcclusionDefinitionName(OcclusionDefinition d);
 
 struct EvalOptions {
   std::vector<PoseEstimatorOptions> estimators{PoseEstimatorOptions{}};  // >= 1
-  std::vector<double> auc_thresholds_deg{5, 10, 20};                     // increasing, > 0
+  // The protocol the estimators came from (recorded; kCustom: set by hand) and how a
+  // set's pose figure is chosen among them (protocol.h).
+  ProtocolName protocol = ProtocolName::kLoftr;
+  Selection selection = Selection::kEvery;
+  std::vector<double> auc_thresholds_deg{5, 10, 20};  // increasing, > 0
   double epipolar_threshold = 5e-4;  // symmetric epipolar distance (LoFTR ScanNet; 1e-4 MegaDepth)
   QualityOptions quality;            // px for per-type precision/recall
   std::vector<OcclusionDefinition> occlusion_definitions{OcclusionDefinition::kImage,
@@ -117,7 +122,18 @@ PairQuality ScoreSampleMatches(const std::string& tar, const std::string& key, i
                                int height, const PairPrediction& prediction,
                                const QualityOptions& options, std::vector<MatchVerdict>* verdicts);
 
-// Scores every prediction set on the split. Throws InputError on a broken shard or sample.
+// Best-of-sweep selection (protocol.h Selection::kBestOfSweep) of one set over all pairs:
+// estimators grouped by equal settings but the threshold, in order of first appearance.
+struct SweepSelection {
+  std::vector<double> mean_auc_percent;     // per estimator: mean of its overall AUCs
+  std::vector<std::vector<size_t>> groups;  // estimator indices per group
+  std::vector<size_t> group_best;           // per group: the chosen estimator
+  size_t best = 0;                          // the chosen estimator
+};
+SweepSelection SelectBestOfSweep(const EvalResult& result, size_t set);
+
+// Scores every prediction set on the split. Throws InputError on a broken shard or sample,
+// and when a set lacks the confidences a usac_prosac estimator needs.
 EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& sets,
                     const EvalOptions& options);
 

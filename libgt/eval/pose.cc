@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <numeric>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/core/hal/hal.hpp>
@@ -10,6 +12,62 @@
 #include "libgt/core/error.h"
 
 namespace gt::eval {
+
+PoseMethod ParsePoseMethod(const std::string& text, const std::string& field) {
+  for (const PoseMethod m :
+       {PoseMethod::kRansac, PoseMethod::kLmeds, PoseMethod::kUsacDefault,
+        PoseMethod::kUsacAccurate, PoseMethod::kUsacMagsac, PoseMethod::kUsacProsac}) {
+    if (text == PoseMethodName(m)) return m;
+  }
+  throw InputError(field,
+                   "expected ransac, lmeds, usac_default, usac_accurate, usac_magsac or "
+                   "usac_prosac, got '" +
+                       text + "'");
+}
+
+const char* PoseMethodName(PoseMethod m) {
+  switch (m) {
+    case PoseMethod::kRansac:
+      return "ransac";
+    case PoseMethod::kLmeds:
+      return "lmeds";
+    case PoseMethod::kUsacDefault:
+      return "usac_default";
+    case PoseMethod::kUsacAccurate:
+      return "usac_accurate";
+    case PoseMethod::kUsacMagsac:
+      return "usac_magsac";
+    case PoseMethod::kUsacProsac:
+      return "usac_prosac";
+  }
+  return "?";
+}
+
+int PoseMethodOpenCVFlag(PoseMethod m) {
+  switch (m) {
+    case PoseMethod::kRansac:
+      return cv::RANSAC;
+    case PoseMethod::kLmeds:
+      return cv::LMEDS;
+    case PoseMethod::kUsacDefault:
+      return cv::USAC_DEFAULT;
+    case PoseMethod::kUsacAccurate:
+      return cv::USAC_ACCURATE;
+    case PoseMethod::kUsacMagsac:
+      return cv::USAC_MAGSAC;
+    case PoseMethod::kUsacProsac:
+      return cv::USAC_PROSAC;
+  }
+  return cv::RANSAC;
+}
+
+FocalMean ParseFocalMean(const std::string& text, const std::string& field) {
+  if (text == "loftr") return FocalMean::kLoftr;
+  if (text == "all") return FocalMean::kAll;
+  throw InputError(field, "expected loftr or all, got '" + text + "'");
+}
+
+const char* FocalMeanName(FocalMean f) { return f == FocalMean::kLoftr ? "loftr" : "all"; }
 
 bool PoseEstimatorOptions::Check(std::string* error) const {
   if (!(ransac_px > 0) || !std::isfinite(ransac_px)) {
@@ -20,11 +78,37 @@ bool PoseEstimatorOptions::Check(std::string* error) const {
     *error = "confidence: expected a number in (0, 1)";
     return false;
   }
+  if (max_iters < 1) {
+    *error = "max_iters: expected an integer >= 1";
+    return false;
+  }
   if (min_matches < 5) {
     *error = "min_matches: expected an integer >= 5 (the five-point solver's minimum)";
     return false;
   }
   return true;
+}
+
+std::string PoseEstimatorName(const PoseEstimatorOptions& e) {
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "opencv-%s %.6g px conf %.6g", PoseMethodName(e.method),
+                e.ransac_px, e.confidence);
+  std::string name = buf;
+  if (e.max_iters != 1000) name += " iters " + std::to_string(e.max_iters);
+  if (e.focal_mean != FocalMean::kLoftr)
+    name += std::string(" focal ") + FocalMeanName(e.focal_mean);
+  return name;
+}
+
+uint64_t PairRngSeed(const std::string& key, uint64_t estimator) {
+  uint64_t h = 14695981039346656037ull;
+  auto mix = [&h](uint8_t byte) {
+    h ^= byte;
+    h *= 1099511628211ull;
+  };
+  for (const char c : key) mix(static_cast<uint8_t>(c));
+  for (int b = 0; b < 8; ++b) mix(static_cast<uint8_t>(estimator >> (8 * b)));
+  return h == 0 ? 1 : h;
 }
 
 namespace {
@@ -134,22 +218,43 @@ RecoveredPose RecoverPose(const Eigen::Matrix3d& E, const std::vector<double>& p
   return out;
 }
 
-std::optional<PoseEstimate> EstimateRelativePose(const std::vector<float>& kpts0,
-                                                 const std::vector<float>& kpts1,
-                                                 const Eigen::Matrix3d& K0,
-                                                 const Eigen::Matrix3d& K1,
-                                                 const PoseEstimatorOptions& options) {
+std::optional<PoseEstimate> EstimateRelativePose(
+    const std::vector<float>& kpts0, const std::vector<float>& kpts1, const Eigen::Matrix3d& K0,
+    const Eigen::Matrix3d& K1, const PoseEstimatorOptions& options,
+    const std::vector<float>* confidence, uint64_t rng_seed) {
   GT_ASSERT(kpts0.size() == kpts1.size() && kpts0.size() % 2 == 0);
   const int n = static_cast<int>(kpts0.size() / 2);
   if (n < options.min_matches) return std::nullopt;
-  const double threshold = options.ransac_px / ((K0(0, 0) + K1(1, 1) + K0(0, 0) + K1(1, 1)) / 4.0);
+  const double focal = options.focal_mean == FocalMean::kLoftr
+                           ? (K0(0, 0) + K1(1, 1) + K0(0, 0) + K1(1, 1)) / 4.0
+                           : (K0(0, 0) + K0(1, 1) + K1(0, 0) + K1(1, 1)) / 4.0;
+  const double threshold = options.ransac_px / focal;
   std::vector<double> p0 = Normalise(kpts0, K0);
   std::vector<double> p1 = Normalise(kpts1, K1);
+  if (options.method == PoseMethod::kUsacProsac) {
+    // PROSAC draws from the front of the list first: best confidence first, ties in order.
+    GT_ASSERT(confidence != nullptr && confidence->size() == static_cast<size_t>(n));
+    std::vector<int> order(n);
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int a, int b) { return (*confidence)[a] > (*confidence)[b]; });
+    std::vector<double> q0(p0.size()), q1(p1.size());
+    for (int i = 0; i < n; ++i) {
+      for (int c = 0; c < 2; ++c) {
+        q0[2 * i + c] = p0[2 * order[i] + c];
+        q1[2 * i + c] = p1[2 * order[i] + c];
+      }
+    }
+    p0.swap(q0);
+    p1.swap(q1);
+  }
   const cv::Mat identity = cv::Mat::eye(3, 3, CV_64F);
   cv::Mat mask_cv;
+  cv::theRNG().state = rng_seed;
   const cv::Mat E =
       cv::findEssentialMat(cv::Mat(n, 2, CV_64F, p0.data()), cv::Mat(n, 2, CV_64F, p1.data()),
-                           identity, cv::RANSAC, options.confidence, threshold, mask_cv);
+                           identity, PoseMethodOpenCVFlag(options.method), options.confidence,
+                           threshold, options.max_iters, mask_cv);
   if (E.empty() || E.cols != 3 || E.rows % 3 != 0) return std::nullopt;
   GT_ASSERT(mask_cv.isContinuous() && mask_cv.total() == static_cast<size_t>(n));
   // The same mask for every block: recoverPose narrows it in place (LoFTR's loop).

@@ -1,15 +1,23 @@
-// Relative pose from matches and its error, the LoFTR/SuperGlue protocol
-// (GROUND_TRUTH.md §7, docs/EVAL.md "Relative pose").
+// Relative pose from matches and its error, the LoFTR/SuperGlue protocol and the robust
+// estimators of OpenCV 4.6 that other papers' evaluations use or come closest to
+// (GROUND_TRUTH.md §7, docs/EVAL.md "Relative pose" and "Estimators and protocols").
 //
 // Keypoints are pixels at the split's working resolution, pixel centres at integer
-// coordinates (libgt/core/camera.h). They are normalised by K ((x - c) / f); the RANSAC
-// threshold in pixels is divided by the mean of K0[0,0], K1[1,1], K0[0,0], K1[1,1];
-// cv::findEssentialMat(RANSAC, prob = confidence) on the normalised points with K = I;
+// coordinates (libgt/core/camera.h). They are normalised by K ((x - c) / f); the threshold
+// in pixels is divided by a mean focal length (FocalMean: LoFTR's mean of K0[0,0], K1[1,1],
+// K0[0,0], K1[1,1], or glue-factory's mean of all four); cv::findEssentialMat(method,
+// prob = confidence, maxIters) on the normalised points with K = I (USAC_PROSAC on the
+// matches sorted by decreasing confidence, stable);
 // cv::recoverPose(E_k, ..., I, distanceThresh 1e9, mask) on each 3x3 block E_k of E, the
 // same mask passed on from block to block (OpenCV updates it in place, as LoFTR's Python
 // loop does), the block with most inliers wins; fewer than `min_matches` matches, no E, or
 // no block with an inlier -> no pose (pose error +inf). recoverPose is RecoverPose below:
 // the same numbers, computed only where they count.
+// Randomness: every findEssentialMat method of OpenCV 4.6 seeds its own generator on each
+// call (RANSAC and LMEDS a cv::RNG(-1), USAC its fixed generator state), so the answer is
+// a function of the inputs and their order; in addition cv::theRNG() of the calling thread
+// is set to the caller's `rng_seed` before the call, so that nothing can depend on what
+// ran before on that thread (tests/eval/pose_test.cc checks both).
 // Errors (degrees): rotation arccos(clip((tr(R^T R_gt) - 1) / 2, -1, 1)); translation the
 // angle between t and t_gt folded to min(e, 180 - e) (t is known up to sign and scale);
 // pose error = max of the two. AUC at threshold T: errors sorted with 0 prepended, recall
@@ -25,13 +33,44 @@
 
 namespace gt::eval {
 
+// The robust method of cv::findEssentialMat (OpenCV 4.6's flags).
+enum class PoseMethod {
+  kRansac,        // "ransac": cv::RANSAC (LoFTR, SuperGlue, glue-factory's "opencv")
+  kLmeds,         // "lmeds": cv::LMEDS (least median; the threshold is not used)
+  kUsacDefault,   // "usac_default": LO-RANSAC, MSAC score (closest to PoseLib's LO-RANSAC)
+  kUsacAccurate,  // "usac_accurate": GC-RANSAC local optimisation, SPRT
+  kUsacMagsac,    // "usac_magsac": MAGSAC++ (the threshold is the largest noise scale)
+  kUsacProsac,    // "usac_prosac": PROSAC sampling; needs match confidences
+};
+PoseMethod ParsePoseMethod(const std::string& text, const std::string& field);  // InputError
+const char* PoseMethodName(PoseMethod m);
+int PoseMethodOpenCVFlag(PoseMethod m);  // cv::RANSAC, cv::LMEDS, cv::USAC_*
+
+// The focal length that turns the pixel threshold into a normalised one.
+enum class FocalMean {
+  kLoftr,  // "loftr": mean(K0[0,0], K1[1,1], K0[0,0], K1[1,1]) (LoFTR, SuperGlue)
+  kAll,    // "all": mean(K0[0,0], K0[1,1], K1[0,0], K1[1,1]) (glue-factory's OpenCV estimator)
+};
+FocalMean ParseFocalMean(const std::string& text, const std::string& field);
+const char* FocalMeanName(FocalMean f);
+
 // The essential-matrix estimator and its settings; recorded with every result.
 struct PoseEstimatorOptions {
-  double ransac_px = 0.5;       // RANSAC inlier threshold in pixels (LoFTR 0.5, SuperGlue 1)
-  double confidence = 0.99999;  // RANSAC confidence, in (0, 1)
+  PoseMethod method = PoseMethod::kRansac;
+  double ransac_px = 0.5;       // inlier threshold in pixels (LoFTR 0.5, SuperGlue 1)
+  double confidence = 0.99999;  // in (0, 1)
+  int max_iters = 1000;         // iteration cap (OpenCV's default); >= 1
   int min_matches = 5;          // fewer matches -> no pose (error +inf); >= 5
+  FocalMean focal_mean = FocalMean::kLoftr;
   bool Check(std::string* error) const;
 };
+// "<method> <px> px conf <c>" (+ " iters N" unless 1000, + " focal all" for kAll): the
+// label of an estimator in eval.json, the summary and the report.
+std::string PoseEstimatorName(const PoseEstimatorOptions& e);
+// The seed occgt gives cv::theRNG() before estimating pair `key` with estimator number
+// `estimator` (see above): FNV-1a 64 of the key's bytes, then of the estimator number's
+// 8 little-endian bytes; 0 (which cv::RNG would replace) becomes 1.
+uint64_t PairRngSeed(const std::string& key, uint64_t estimator);
 
 struct PoseEstimate {
   Eigen::Matrix3d cam1_from_cam0_R;  // rotation of the winning block
@@ -39,13 +78,13 @@ struct PoseEstimate {
   int inliers = 0;                   // recoverPose's count for the winning block
 };
 
-// kpts0, kpts1: row-major [N, 2] pixels (x, y) at the resolution of K0, K1.
-// Deterministic (OpenCV's RANSAC seeds its own generator per call); thread-safe.
-std::optional<PoseEstimate> EstimateRelativePose(const std::vector<float>& kpts0,
-                                                 const std::vector<float>& kpts1,
-                                                 const Eigen::Matrix3d& K0,
-                                                 const Eigen::Matrix3d& K1,
-                                                 const PoseEstimatorOptions& options);
+// kpts0, kpts1: row-major [N, 2] pixels (x, y) at the resolution of K0, K1. `confidence`
+// ([N] or nullptr) orders the matches for kUsacProsac, which needs it (a bug otherwise).
+// Deterministic (see above); thread-safe.
+std::optional<PoseEstimate> EstimateRelativePose(
+    const std::vector<float>& kpts0, const std::vector<float>& kpts1, const Eigen::Matrix3d& K0,
+    const Eigen::Matrix3d& K1, const PoseEstimatorOptions& options,
+    const std::vector<float>* confidence = nullptr, uint64_t rng_seed = 1);
 
 // cv::recoverPose(E, p0, p1, I, R, t, distance_thresh, mask) of OpenCV 4.6 on normalised
 // points p0, p1 (row-major [N, 2]), with the same result: E split by

@@ -165,6 +165,11 @@ EvalReportData LoadEvalReport(const std::vector<std::string>& eval_paths, const 
           v.error_deg.push_back(err.is_number() ? err.get<double>() : kInf);
           v.epipolar.push_back(s.at("epipolar_precision").get<double>());
           v.predicted.push_back(s.at("predicted").get<bool>());
+          v.occlusion.push_back(p.at("occlusion").at(def).get<double>());
+          for (const json& e : s.at("pose")) (void)e.at("error_deg");
+          if (s.at("pose").size() != estimators) {
+            throw json::other_error::create(501, "pose: one per estimator", &s);
+          }
           v.pair.push_back(s);
         }
         ++name_count[v.label];
@@ -186,6 +191,21 @@ EvalReportData LoadEvalReport(const std::vector<std::string>& eval_paths, const 
   }
   data.sets = std::move(sets);
   return data;
+}
+
+std::optional<std::pair<size_t, size_t>> DisagreementEstimators(const EvalSetView& v) {
+  const json& estimators = v.options.at("estimators");
+  if (estimators.size() < 2) return std::nullopt;
+  const json& sel = v.set.value("selection", json());
+  if (sel.is_object() && sel.at("groups").size() >= 2) {
+    return std::make_pair(sel["groups"][0].at("best").get<size_t>(),
+                          sel["groups"][1].at("best").get<size_t>());
+  }
+  const std::string first = estimators[0].value("estimator", "ransac");
+  for (size_t e = 1; e < estimators.size(); ++e) {
+    if (estimators[e].value("estimator", "ransac") != first) return std::make_pair(size_t{0}, e);
+  }
+  return std::make_pair(size_t{0}, size_t{1});
 }
 
 std::vector<NamedImage> MakeEvalPlots(const EvalReportData& data, const SplitReportOptions& options,
@@ -272,10 +292,43 @@ std::vector<NamedImage> MakeEvalPlots(const EvalReportData& data, const SplitRep
      << Num(data.overlap_bins.size() - 1.5, 8) << "]\n"
      << xtics(data.overlap_bins, data.sets[0].set.at("by_visible_overlap"))
      << plot_sets("ovl", "1:2") << "\n";
+  // Per-pair disagreement of two estimators (DisagreementEstimators) over the occlusion
+  // ratio: error(B) - error(A), a failure counted as 180 degrees, clipped to +-30.
+  std::vector<std::string> outputs{"eval_cumulative.png", "eval_auc_by_occlusion.png",
+                                   "eval_auc_by_overlap.png"};
+  std::string dis_plot;
+  for (size_t k = 0; k < data.sets.size(); ++k) {
+    const EvalSetView& v = data.sets[k];
+    const auto ab = DisagreementEstimators(v);
+    if (!ab) continue;
+    std::string text;
+    for (size_t i = 0; i < v.pair.size(); ++i) {
+      if (!v.predicted[i]) continue;
+      auto err = [&](size_t e) {
+        const json& x = v.pair[i].at("pose").at(e).at("error_deg");
+        return x.is_number() ? x.get<double>() : 180.0;
+      };
+      const double d = std::clamp(err(ab->second) - err(ab->first), -30.0, 30.0);
+      text += Num(v.occlusion[i], 8) + " " + Num(d, 8) + "\n";
+    }
+    write("dis" + std::to_string(k) + ".dat", text.empty() ? "NaN NaN\n" : text);
+    const json& est = v.options.at("estimators");
+    const std::string label = v.label + ": B " + est[ab->second].at("name").get<std::string>() +
+                              ", A " + est[ab->first].at("name").get<std::string>();
+    dis_plot += std::string(dis_plot.empty() ? "plot " : ", ") + "'dis" + std::to_string(k) +
+                ".dat' using 1:2 with points pt 7 ps 0.6 title " + GnuplotString(label);
+  }
+  if (!dis_plot.empty()) {
+    gp << "set output 'eval_estimator_disagreement.png'\nset title "
+       << GnuplotString("Per pair: pose error of B minus A (failure = 180 deg, clipped to +-30)")
+       << "\nset xlabel " << GnuplotString("occlusion ratio (" + def + ")")
+       << "\nset ylabel 'error(B) - error(A) (deg); below 0: B is better'\n"
+       << "set xtics auto norotate\nset autoscale x\nset yrange [-31:31]\n"
+       << dis_plot << ", 0 with lines lc rgb '#999999' dt 2 notitle\n";
+    outputs.push_back("eval_estimator_disagreement.png");
+  }
   gt::io::WriteFileAtomic((fs::path(scratch_dir) / "eval.gp").string(), gp.str());
-  return RunGnuplot(
-      options.gnuplot, scratch_dir, "eval.gp",
-      {"eval_cumulative.png", "eval_auc_by_occlusion.png", "eval_auc_by_overlap.png"});
+  return RunGnuplot(options.gnuplot, scratch_dir, "eval.gp", outputs);
 }
 
 std::vector<size_t> PickWorstPairs(const EvalSetView& set, int count) {
@@ -409,6 +462,79 @@ std::vector<EvalGallery> MakeEvalGalleries(const EvalReportData& data, const Spl
   return out;
 }
 
+namespace {
+
+// "Estimators side by side": per set, one row per estimator group (settings equal but the
+// threshold), one column per threshold, AUC at each angle and their mean; the best-of-sweep
+// choice starred. Empty when every set has a single estimator.
+std::string EstimatorMatrix(const EvalReportData& data) {
+  bool several = false;
+  for (const EvalSetView& v : data.sets) several = several || v.options.at("estimators").size() > 1;
+  if (!several) return "";
+  std::ostringstream h;
+  bool any_selection = false;
+  h << "<h3>Estimators side by side</h3>\n<table class=\"eval-estimators\"><tr><th>set</th>"
+    << "<th>estimator</th><th>threshold (px)</th><th>AUC@";
+  for (size_t t = 0; t < data.auc_thresholds_deg.size(); ++t) {
+    h << (t ? "/" : "") << Num(data.auc_thresholds_deg[t]);
+  }
+  h << "° (%)</th><th>mean AUC (%)</th></tr>\n";
+  for (const EvalSetView& v : data.sets) {
+    const json& est = v.options.at("estimators");
+    const json& sel = v.set.value("selection", json());
+    const int64_t best = sel.is_object() ? sel.at("best").get<int64_t>() : -1;
+    any_selection = any_selection || sel.is_object();
+    // Groups in order of first appearance.
+    std::vector<std::string> group_names;
+    std::vector<std::vector<size_t>> groups;
+    for (size_t e = 0; e < est.size(); ++e) {
+      const json& x = est[e];
+      std::string g = "opencv-" + x.value("estimator", std::string("ransac")) + " conf " +
+                      Num(x.at("confidence").get<double>(), 6);
+      if (x.value("max_iters", 1000) != 1000)
+        g += " iters " + std::to_string(x.value("max_iters", 1000));
+      if (x.value("focal_mean", std::string("loftr")) != "loftr") {
+        g += " focal " + x.value("focal_mean", std::string());
+      }
+      const auto it = std::find(group_names.begin(), group_names.end(), g);
+      if (it == group_names.end()) {
+        group_names.push_back(g);
+        groups.push_back({e});
+      } else {
+        groups[it - group_names.begin()].push_back(e);
+      }
+    }
+    for (size_t g = 0; g < groups.size(); ++g) {
+      for (size_t j = 0; j < groups[g].size(); ++j) {
+        const size_t e = groups[g][j];
+        const json& auc = v.set.at("overall").at("pose").at(e).at("auc_percent");
+        double sum = 0;
+        std::string cells;
+        for (size_t t = 0; t < auc.size(); ++t) {
+          cells += (t ? " / " : "") + Cell(auc[t], 2);
+          sum += auc[t].get<double>();
+        }
+        const bool starred = static_cast<int64_t>(e) == best;
+        h << "<tr data-set=\"" << HtmlEscape(v.label) << "\"" << (starred ? " class=\"best\"" : "")
+          << "><td>" << HtmlEscape(v.label) << "</td><td>"
+          << (j == 0 ? HtmlEscape(group_names[g]) : "") << "</td><td class=\"n\">"
+          << Num(est[e].at("ransac_px").get<double>(), 6) << "</td><td class=\"n\">" << cells
+          << "</td><td class=\"n\">" << Cell(json(auc.empty() ? 0.0 : sum / auc.size()), 2)
+          << (starred ? " ★" : "") << "</td></tr>\n";
+      }
+    }
+  }
+  h << "</table>\n";
+  if (any_selection) {
+    h << "<p class=\"note\">★ best of the sweep by mean AUC (glue-factory's rule). This figure "
+         "is optimistic: the threshold and the estimator were chosen on these same pairs, "
+         "not on held-out ones.</p>\n";
+  }
+  return h.str();
+}
+
+}  // namespace
+
 std::string RenderEvalSection(const EvalReportData& data, const std::vector<NamedImage>& plots,
                               const std::vector<EvalGallery>& galleries) {
   std::ostringstream h;
@@ -443,6 +569,7 @@ std::string RenderEvalSection(const EvalReportData& data, const std::vector<Name
     }
   }
   h << "</table>\n";
+  h << EstimatorMatrix(data);
   // Per-type table.
   const std::string px = data.sets.empty() ? "" : Num(data.sets[0].options.at("px").get<double>());
   h << "<h3>Per-type precision and recall (within " << px << " px of the ground truth)</h3>\n"

@@ -26,7 +26,9 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "libgt/report/page.h"
@@ -45,7 +47,14 @@ struct EvalSetView {
   std::vector<double> epipolar;      // per pair, epipolar precision (0..1)
   std::vector<bool> predicted;       // per pair
   std::vector<nlohmann::json> pair;  // per pair, its entry of pairs[].sets
+  std::vector<double> occlusion;     // per pair, its ratio under the first definition
 };
+
+// The two estimators of a set whose per-pair disagreement the report plots: with a
+// best-of-sweep selection of two or more groups, the chosen thresholds of the first two
+// groups; else the first estimator and the first one of another method (else the second).
+// nullopt with a single estimator.
+std::optional<std::pair<size_t, size_t>> DisagreementEstimators(const EvalSetView& set);
 
 struct EvalReportData {
   std::vector<EvalSetView> sets;  // files in the given order, sets in file order

@@ -1,9 +1,11 @@
 #!/usr/bin/python3
-"""Speed of `occgt eval` (docs/EVAL.md; issue 21's target: 1500 pairs x 2000 matches in
-<= 30 s on 2 cores).
+"""Speed of `occgt eval` (docs/EVAL.md; targets: 1500 pairs x 2000 matches in <= 30 s on
+2 cores with LoFTR's protocol (issue 21), <= 60 s with `--protocol gluefactory`, its 8
+estimator settings (issue 35)).
 
     tests/bench/eval_bench.py [--build build] [--scratch /tmp/occgt-eval-bench]
                               [--pairs 1500] [--matches 2000] [--reps 3] [--noise-px 0.5]
+                              [--protocols loftr,gluefactory]
 
 1. A synthetic split of --pairs pairs (occgt synth rooms at 640x480 through a demo-like
    recipe, written once into the scratch folder and reused).
@@ -11,8 +13,8 @@
    with the shards' depth, plus --noise-px Gaussian noise in image 1) and 20 % random
    outliers. RANSAC's iterations, hence the time, grow fast as the noise nears the 0.5 px
    threshold (fewer points pass it): the figure depends on the predictions.
-3. `occgt eval --threads 1` and `--threads 2`, --reps times each in alternation; medians of
-   wall time. Baseline in the same run: tests/eval/reference.py's LoFTR-style Python loop
+3. Per protocol of --protocols: `occgt eval --protocol P --threads 2` (and for loftr also
+   `--threads 1`), --reps times each in alternation; medians of wall time. Baseline in the same run: tests/eval/reference.py's LoFTR-style Python loop
    (cv2, one process) on the same predictions, pose only, once; the ratios are printed.
 """
 import argparse
@@ -92,6 +94,8 @@ def main():
     ap.add_argument("--matches", type=int, default=2000)
     ap.add_argument("--reps", type=int, default=3)
     ap.add_argument("--noise-px", type=float, default=0.5)
+    ap.add_argument("--protocols", default="loftr,gluefactory")
+    ap.add_argument("--skip-reference", action="store_true", help="no Python baseline")
     args = ap.parse_args()
     binary = os.path.join(args.build, "apps", "occgt")
     os.makedirs(args.scratch, exist_ok=True)
@@ -106,24 +110,33 @@ def main():
     arrays, metas = make_predictions(split, args.matches, args.noise_px, preds)
     print(f"split: {len(metas)} pairs, {args.matches} matches each, 80 % inliers with "
           f"{args.noise_px} px noise")
-    times = {"1": [], "2": []}
+    runs = []
+    for proto in args.protocols.split(","):
+        runs += [(proto, "1"), (proto, "2")] if proto == "loftr" else [(proto, "2")]
+    times = {run: [] for run in runs}
     for _ in range(args.reps):
-        for t in ("1", "2"):
+        for proto, t in runs:
             t0 = time.perf_counter()
             subprocess.run([binary, "eval", split, "--predictions", preds, "--out",
-                            os.path.join(args.scratch, f"eval_t{t}.json"), "--threads", t],
-                           check=True, stdout=subprocess.DEVNULL)
-            times[t].append(time.perf_counter() - t0)
-    t0 = time.perf_counter()
-    for key, (K0, K1, T) in metas.items():
-        reference.estimate_pose(arrays[key + "/kpts0"], arrays[key + "/kpts1"], K0, K1, 0.5, 0.99999)
-    ref = time.perf_counter() - t0
-    m1, m2 = statistics.median(times["1"]), statistics.median(times["2"])
-    print(f"occgt eval --threads 1: median {m1:.2f} s {sorted(round(x, 2) for x in times['1'])}")
-    print(f"occgt eval --threads 2: median {m2:.2f} s {sorted(round(x, 2) for x in times['2'])}")
-    print(f"python reference (cv2 loop, pose only): {ref:.2f} s; ratio reference / t2 = "
-          f"{ref / m2:.2f}, t1 / t2 = {m1 / m2:.2f}")
-    print(f"scaled to 1500 pairs: t2 {m2 * 1500 / len(metas):.1f} s")
+                            os.path.join(args.scratch, f"eval_{proto}_t{t}.json"), "--threads", t,
+                            "--protocol", proto], check=True, stdout=subprocess.DEVNULL)
+            times[(proto, t)].append(time.perf_counter() - t0)
+    ref = None
+    if not args.skip_reference:
+        t0 = time.perf_counter()
+        for key, (K0, K1, T) in metas.items():
+            reference.estimate_pose(arrays[key + "/kpts0"], arrays[key + "/kpts1"], K0, K1, 0.5,
+                                    0.99999)
+        ref = time.perf_counter() - t0
+    for (proto, t), xs in times.items():
+        m = statistics.median(xs)
+        print(f"occgt eval --protocol {proto} --threads {t}: median {m:.2f} s "
+              f"{sorted(round(x, 2) for x in xs)}; scaled to 1500 pairs "
+              f"{m * 1500 / len(metas):.1f} s")
+    if ref is not None and ("loftr", "2") in times:
+        m2 = statistics.median(times[("loftr", "2")])
+        print(f"python reference (cv2 loop, pose only, loftr): {ref:.2f} s; ratio reference / "
+              f"loftr t2 = {ref / m2:.2f}")
 
 
 if __name__ == "__main__":

@@ -5,6 +5,10 @@
 //  - BM_CvRecoverPose: cv::recoverPose(E, ..., I, 1e9, mask), the baseline;
 //  - BM_RecoverPose: occgt's RecoverPose on the same E and mask (same answer, checked
 //    once before timing).
+//  - BM_Estimate/<setting>: the whole EstimateRelativePose (findEssentialMat and the
+//    recoverPose loop) for each estimator setting of --protocol gluefactory (0-3: usac_default
+//    at 0.5, 1.5, 2, 3 px; 4-7: ransac at the same) and LoFTR's (8), on the same pair in
+//    pixels (f = 500): what each setting costs against LoFTR's.
 // The ratio BM_CvRecoverPose / BM_RecoverPose is the speed-up docs/PERFORMANCE.md quotes.
 #include <benchmark/benchmark.h>
 
@@ -15,6 +19,7 @@
 #include <random>
 
 #include "libgt/eval/pose.h"
+#include "libgt/eval/protocol.h"
 
 namespace {
 
@@ -107,6 +112,31 @@ void BM_RecoverPose(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_RecoverPose)->Unit(benchmark::kMillisecond);
+
+void BM_Estimate(benchmark::State& state) {
+  const PosePair& s = GetPair();
+  Eigen::Matrix3d K;
+  K << 500, 0, 320, 0, 500, 240, 0, 0, 1;
+  std::vector<float> k0(s.p0.size()), k1(s.p1.size());
+  for (size_t i = 0; i < s.p0.size(); i += 2) {
+    k0[i] = static_cast<float>(s.p0[i] * 500 + 320);
+    k0[i + 1] = static_cast<float>(s.p0[i + 1] * 500 + 240);
+    k1[i] = static_cast<float>(s.p1[i] * 500 + 320);
+    k1[i + 1] = static_cast<float>(s.p1[i + 1] * 500 + 240);
+  }
+  const std::vector<gt::eval::PoseEstimatorOptions> settings = [] {
+    auto v = gt::eval::ExpandProtocol(gt::eval::ProtocolName::kGluefactory).estimators;
+    v.push_back(gt::eval::ExpandProtocol(gt::eval::ProtocolName::kLoftr).estimators[0]);
+    return v;
+  }();
+  const gt::eval::PoseEstimatorOptions& o = settings.at(state.range(0));
+  state.SetLabel(gt::eval::PoseEstimatorName(o));
+  for (auto _ : state) {
+    const auto pose = gt::eval::EstimateRelativePose(k0, k1, K, K, o);
+    benchmark::DoNotOptimize(pose);
+  }
+}
+BENCHMARK(BM_Estimate)->DenseRange(0, 8)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -1,6 +1,7 @@
 """docs/EVAL.md's examples run as written: the loop (build the demo, the SIFT baseline,
 occgt eval with two estimator settings; eval.json valid against its schema; the split
-report with its evaluation section) and the
+report with its evaluation section), the protocols block (glue-factory's protocol, a
+sweep of two methods, the report with estimators side by side) and the
 Python blocks that write predictions by sample key and by LoFTR pair name (read back by
 occgt eval, whose only complaint is that the made-up pair is not in the demo split)."""
 import json
@@ -47,6 +48,27 @@ def main():
     assert len(doc["options"]["estimators"]) == 2 and doc["sets"][0]["name"] == "sift"
     assert sum(p["sets"][0]["matches"] for p in doc["pairs"]) > 0
 
+    # The protocols block: glue-factory's protocol (8 estimator settings, best of sweep),
+    # a two-method sweep, and the report with the estimators side by side.
+    for line in block(text, "protocols", "sh").strip().splitlines():
+        argv = shlex.split(line)
+        argv[0] = common.BINARY
+        r = subprocess.run(argv, cwd=work, capture_output=True, text=True)
+        assert r.returncode == 0, (line, r.returncode, r.stderr)
+        if argv[1] == "eval":
+            assert "optimistic" in r.stdout, r.stdout
+    with open(os.path.join(work, "out", "gf.json")) as f:
+        gf = json.load(f)
+    assert len(gf["options"]["estimators"]) == 8 and gf["sets"][0]["selection"]["optimistic"]
+    with open(os.path.join(work, "out", "sweep.json")) as f:
+        sweep = json.load(f)
+    assert [e["estimator"] for e in sweep["options"]["estimators"]] == ["ransac"] * 4 + \
+        ["usac_magsac"] * 4
+    with open(os.path.join(work, "out", "report_gf", "report.html"), encoding="utf-8") as f:
+        page = f.read()
+    assert "Estimators side by side" in page and "optimistic" in page
+    assert os.path.exists(os.path.join(work, "out", "report_gf", "eval_estimator_disagreement.png"))
+
     # Each predictions block, run as written, is read back; the made-up pair is the only
     # complaint.
     for name, npz, complaint in (
@@ -63,7 +85,7 @@ def main():
         lines = r.stderr.splitlines()
         assert r.returncode == 1 and len(lines) == 1, (name, r.stderr)
         assert complaint in lines[0], (name, lines)
-    print("docs/EVAL.md: loop, predictions and LoFTR-name examples ran")
+    print("docs/EVAL.md: loop, protocols, predictions and LoFTR-name examples ran")
 
 
 if __name__ == "__main__":

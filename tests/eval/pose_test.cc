@@ -9,10 +9,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <opencv2/calib3d.hpp>
 #include <random>
+#include <thread>
 
+#include "libgt/core/error.h"
+#include "libgt/eval/evaluate.h"
 #include "libgt/eval/match_quality.h"
+#include "libgt/eval/protocol.h"
 
 namespace gt::eval {
 namespace {
@@ -105,6 +110,266 @@ TEST(EstimateRelativePose, ExactMatchesGiveTheTruePose) {
   bad = PoseEstimatorOptions{};
   bad.confidence = 1;
   EXPECT_FALSE(bad.Check(&error));
+}
+
+const PoseMethod kAllMethods[] = {PoseMethod::kRansac,      PoseMethod::kLmeds,
+                                  PoseMethod::kUsacDefault, PoseMethod::kUsacAccurate,
+                                  PoseMethod::kUsacMagsac,  PoseMethod::kUsacProsac};
+
+// Confidences for PROSAC: any order works on exact matches.
+std::vector<float> Confidences(size_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0, 1);
+  std::vector<float> c(n);
+  for (float& x : c) x = u(rng);
+  return c;
+}
+
+TEST(EstimateRelativePose, EveryMethodRecoversTheExactPose) {
+  const Scene s = MakeScene(300, 5);
+  const std::vector<float> conf = Confidences(s.kpts0.size() / 2, 9);
+  for (const PoseMethod m : kAllMethods) {
+    for (const FocalMean f : {FocalMean::kLoftr, FocalMean::kAll}) {
+      SCOPED_TRACE(std::string(PoseMethodName(m)) + " focal " + FocalMeanName(f));
+      PoseEstimatorOptions o;
+      o.method = m;
+      o.focal_mean = f;
+      const auto pose = EstimateRelativePose(s.kpts0, s.kpts1, s.K, s.K, o, &conf, 7);
+      ASSERT_TRUE(pose.has_value());
+      const PoseError e =
+          RelativePoseError(s.R, s.t, pose->cam1_from_cam0_R, pose->cam1_from_cam0_t);
+      EXPECT_LT(e.max_deg, 0.05);
+      EXPECT_GT(pose->inliers, 290);
+    }
+  }
+}
+
+// Matches of a random scene in pixels (K of MakeScene): Gaussian noise `noise_px` in
+// image 1, the first `outliers` share replaced by uniform points; confidences lower for
+// outliers (uniform 0..0.6) than for inliers (0.3..1), as a matcher's would be.
+struct NoisyScene {
+  Scene scene;
+  std::vector<float> confidence;
+};
+NoisyScene MakeNoisyScene(std::mt19937* rng, int n, double noise_px, double outliers) {
+  std::uniform_real_distribution<double> angle(5, 20), axis(-1, 1);
+  NoisyScene out;
+  Scene fresh;
+  fresh.K << 500, 0, 319.5, 0, 520, 239.5, 0, 0, 1;
+  fresh.R = Rot(angle(*rng), {axis(*rng), axis(*rng), axis(*rng)});
+  fresh.t = Eigen::Vector3d(axis(*rng), axis(*rng), axis(*rng)).normalized() * 0.8;
+  std::uniform_real_distribution<double> u(-2, 2), z(3, 8), x(0, 639), y(0, 479);
+  std::normal_distribution<double> g(0, noise_px);
+  std::uniform_real_distribution<float> c_out(0, 0.6f), c_in(0.3f, 1);
+  const int n_out = static_cast<int>(outliers * n);
+  while (static_cast<int>(fresh.kpts0.size() / 2) < n) {
+    const Eigen::Vector3d p0(u(*rng), u(*rng), z(*rng));
+    const Eigen::Vector3d p1 = fresh.R * p0 + fresh.t;
+    if (p1.z() <= 0.5) continue;
+    const Eigen::Vector3d x0 = fresh.K * p0 / p0.z(), x1 = fresh.K * p1 / p1.z();
+    const bool out_i = static_cast<int>(fresh.kpts0.size() / 2) < n_out;
+    fresh.kpts0.insert(fresh.kpts0.end(), {static_cast<float>(x0.x()), static_cast<float>(x0.y())});
+    if (out_i) {
+      fresh.kpts1.insert(fresh.kpts1.end(),
+                         {static_cast<float>(x(*rng)), static_cast<float>(y(*rng))});
+      out.confidence.push_back(c_out(*rng));
+    } else {
+      fresh.kpts1.insert(fresh.kpts1.end(), {static_cast<float>(x1.x() + g(*rng)),
+                                             static_cast<float>(x1.y() + g(*rng))});
+      out.confidence.push_back(c_in(*rng));
+    }
+  }
+  out.scene = fresh;
+  return out;
+}
+
+double MedianOf(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : (v[v.size() / 2 - 1] + v[v.size() / 2]) / 2;
+}
+
+// The property behind "robust estimators": on noisy matches with outliers (1 px noise,
+// 30 % outliers, 1 px threshold, fixed seed, 40 scenes) every USAC method's mean and
+// median pose error are below plain RANSAC's. (LMEDS is not among them: it has no
+// threshold and its least-median fit of noisy inliers is no better than RANSAC's here.)
+TEST(EstimateRelativePose, RobustMethodsBeatPlainRansacOnNoisyMatches) {
+  std::mt19937 rng(2024);
+  std::map<PoseMethod, std::vector<double>> errors;
+  for (int trial = 0; trial < 40; ++trial) {
+    const NoisyScene ns = MakeNoisyScene(&rng, 500, 1.0, 0.3);
+    for (const PoseMethod m : kAllMethods) {
+      PoseEstimatorOptions o;
+      o.method = m;
+      o.ransac_px = 1.0;
+      const auto pose = EstimateRelativePose(ns.scene.kpts0, ns.scene.kpts1, ns.scene.K, ns.scene.K,
+                                             o, &ns.confidence, PairRngSeed("trial", trial));
+      errors[m].push_back(pose ? RelativePoseError(ns.scene.R, ns.scene.t, pose->cam1_from_cam0_R,
+                                                   pose->cam1_from_cam0_t)
+                                     .max_deg
+                               : 180.0);
+    }
+  }
+  auto mean = [](const std::vector<double>& v) {
+    double s = 0;
+    for (const double x : v) s += x;
+    return s / static_cast<double>(v.size());
+  };
+  const double ransac_mean = mean(errors[PoseMethod::kRansac]);
+  const double ransac_median = MedianOf(errors[PoseMethod::kRansac]);
+  EXPECT_GT(ransac_median, 0.3);  // the case is hard enough to separate the methods
+  for (const PoseMethod m : {PoseMethod::kUsacDefault, PoseMethod::kUsacAccurate,
+                             PoseMethod::kUsacMagsac, PoseMethod::kUsacProsac}) {
+    SCOPED_TRACE(PoseMethodName(m));
+    EXPECT_LT(mean(errors[m]), ransac_mean);
+    EXPECT_LT(MedianOf(errors[m]), ransac_median);
+  }
+}
+
+// Determinism: the answer depends on the inputs only, not on cv::theRNG()'s state before
+// the call nor on the thread; every method.
+TEST(EstimateRelativePose, SameAnswerWhateverTheRngStateAndThread) {
+  std::mt19937 rng(11);
+  const NoisyScene ns = MakeNoisyScene(&rng, 400, 0.8, 0.25);
+  const Scene& s = ns.scene;
+  for (const PoseMethod m : kAllMethods) {
+    SCOPED_TRACE(PoseMethodName(m));
+    PoseEstimatorOptions o;
+    o.method = m;
+    const auto first = EstimateRelativePose(s.kpts0, s.kpts1, s.K, s.K, o, &ns.confidence, 5);
+    ASSERT_TRUE(first.has_value());
+    // Another state of the caller's generator, and OpenCV's own seeds: same bits.
+    cv::theRNG().state = 0x1234567;
+    for (const uint64_t seed : {uint64_t{5}, uint64_t{99}, PairRngSeed("a/b", 3)}) {
+      const auto again = EstimateRelativePose(s.kpts0, s.kpts1, s.K, s.K, o, &ns.confidence, seed);
+      ASSERT_TRUE(again.has_value());
+      EXPECT_EQ(again->cam1_from_cam0_R, first->cam1_from_cam0_R);
+      EXPECT_EQ(again->cam1_from_cam0_t, first->cam1_from_cam0_t);
+      EXPECT_EQ(again->inliers, first->inliers);
+    }
+    // Four threads at once.
+    std::vector<std::optional<PoseEstimate>> got(4);
+    std::vector<std::thread> threads;
+    for (size_t k = 0; k < got.size(); ++k) {
+      threads.emplace_back([&, k] {
+        got[k] = EstimateRelativePose(s.kpts0, s.kpts1, s.K, s.K, o, &ns.confidence, 5);
+      });
+    }
+    for (std::thread& t : threads) t.join();
+    for (const auto& g : got) {
+      ASSERT_TRUE(g.has_value());
+      EXPECT_EQ(g->cam1_from_cam0_R, first->cam1_from_cam0_R);
+      EXPECT_EQ(g->inliers, first->inliers);
+    }
+  }
+}
+
+TEST(PairRngSeed, FnvOfKeyAndIndex) {
+  // FNV-1a 64 by hand for key "" and index 0: eight zero bytes, each h = (h ^ 0) * prime.
+  uint64_t h = 14695981039346656037ull;
+  for (int i = 0; i < 8; ++i) h *= 1099511628211ull;
+  EXPECT_EQ(PairRngSeed("", 0), h);
+  // "a" then index 1: 'a' = 0x61, then 0x01 and seven zeros.
+  uint64_t a = 14695981039346656037ull;
+  a = (a ^ 0x61) * 1099511628211ull;
+  a = (a ^ 0x01) * 1099511628211ull;
+  for (int i = 0; i < 7; ++i) a *= 1099511628211ull;
+  EXPECT_EQ(PairRngSeed("a", 1), a);
+  EXPECT_NE(PairRngSeed("scene/1_2", 0), PairRngSeed("scene/1_2", 1));
+}
+
+TEST(PoseEstimatorOptions, ChecksAndNames) {
+  std::string error;
+  PoseEstimatorOptions o;
+  EXPECT_TRUE(o.Check(&error));
+  EXPECT_EQ(PoseEstimatorName(o), "opencv-ransac 0.5 px conf 0.99999");
+  o.method = PoseMethod::kUsacMagsac;
+  o.max_iters = 5000;
+  o.focal_mean = FocalMean::kAll;
+  EXPECT_EQ(PoseEstimatorName(o), "opencv-usac_magsac 0.5 px conf 0.99999 iters 5000 focal all");
+  o.max_iters = 0;
+  EXPECT_FALSE(o.Check(&error));
+  EXPECT_EQ(error.substr(0, 9), "max_iters");
+  for (const PoseMethod m : kAllMethods) EXPECT_EQ(ParsePoseMethod(PoseMethodName(m), "f"), m);
+  EXPECT_THROW(ParsePoseMethod("magsac", "--estimator"), InputError);
+}
+
+// Protocols expand to the settings docs/EVAL.md's table states.
+TEST(Protocol, ExpandsAsDocumented) {
+  const Protocol loftr = ExpandProtocol(ProtocolName::kLoftr);
+  ASSERT_EQ(loftr.estimators.size(), 1u);
+  EXPECT_EQ(PoseEstimatorName(loftr.estimators[0]), PoseEstimatorName(PoseEstimatorOptions{}));
+  EXPECT_EQ(loftr.selection, Selection::kEvery);
+  const Protocol sg = ExpandProtocol(ProtocolName::kSuperglue);
+  ASSERT_EQ(sg.estimators.size(), 1u);
+  EXPECT_EQ(PoseEstimatorName(sg.estimators[0]), "opencv-ransac 1 px conf 0.99999");
+  const Protocol gf = ExpandProtocol(ProtocolName::kGluefactory);
+  ASSERT_EQ(gf.estimators.size(), 8u);
+  EXPECT_EQ(gf.selection, Selection::kBestOfSweep);
+  const std::vector<double> sweep{0.5, 1.5, 2.0, 3.0};
+  EXPECT_EQ(GluefactorySweepPx(), sweep);
+  for (size_t i = 0; i < 8; ++i) {
+    const PoseEstimatorOptions& e = gf.estimators[i];
+    EXPECT_EQ(e.ransac_px, sweep[i % 4]);
+    EXPECT_EQ(e.focal_mean, FocalMean::kAll);
+    if (i < 4) {
+      const char* px[] = {"0.5", "1.5", "2", "3"};
+      EXPECT_EQ(PoseEstimatorName(e), std::string("opencv-usac_default ") + px[i] +
+                                          " px conf 0.9999 iters 100000 focal all");
+    } else {
+      EXPECT_EQ(e.method, PoseMethod::kRansac);
+      EXPECT_EQ(e.confidence, 0.99999);
+      EXPECT_EQ(e.max_iters, 1000);
+    }
+  }
+  const Protocol lo = ExpandProtocol(ProtocolName::kEloftrLo);
+  ASSERT_EQ(lo.estimators.size(), 1u);
+  EXPECT_EQ(lo.estimators[0].method, PoseMethod::kUsacDefault);
+  EXPECT_EQ(lo.estimators[0].ransac_px, 2.0);
+  EXPECT_EQ(lo.failure_error_deg, 90);
+  EXPECT_EQ(ExpandProtocol(ProtocolName::kEloftr).estimators[0].ransac_px, 0.5);
+  for (const char* name : {"loftr", "superglue", "gluefactory", "eloftr", "eloftr-lo"}) {
+    EXPECT_EQ(ProtocolNameText(ParseProtocolName(name, "--protocol")), std::string(name));
+    EXPECT_FALSE(ExpandProtocol(ParseProtocolName(name, "--protocol")).sources.empty());
+  }
+  EXPECT_THROW(ParseProtocolName("custom", "--protocol"), InputError);
+}
+
+// Best-of-sweep on hand-made errors: the threshold with the best mean AUC per group (ties:
+// the first), then the best group (ties: the last), as glue-factory's code picks them.
+TEST(SelectBestOfSweep, FirstThresholdLastGroupOnTies) {
+  EvalResult r;
+  r.options.auc_thresholds_deg = {10};
+  r.options.estimators.clear();
+  PoseEstimatorOptions a, b;
+  b.method = PoseMethod::kUsacMagsac;
+  for (const double px : {0.5, 1.0, 2.0}) {
+    a.ransac_px = px;
+    r.options.estimators.push_back(a);
+  }
+  for (const double px : {0.5, 1.0}) {
+    b.ransac_px = px;
+    r.options.estimators.push_back(b);
+  }
+  // Per estimator the same error e on two pairs: the curve (0, 0), (e, 1/2), (e, 1), then
+  // flat, so AUC@10 = (e / 4 + 10 - e) / 10 = 1 - 0.075 e.
+  const std::vector<double> error = {4, 2, 2, 3, 2};
+  for (int i = 0; i < 2; ++i) {
+    PairInfo p;
+    p.sets.resize(1);
+    for (const double e : error) p.sets[0].pose.push_back({e, 0, e});
+    r.pairs.push_back(p);
+  }
+  const SweepSelection sel = SelectBestOfSweep(r, 0);
+  ASSERT_EQ(sel.groups.size(), 2u);
+  EXPECT_EQ(sel.groups[0], (std::vector<size_t>{0, 1, 2}));
+  EXPECT_EQ(sel.groups[1], (std::vector<size_t>{3, 4}));
+  EXPECT_EQ(sel.group_best, (std::vector<size_t>{1, 4}));  // 1.0 px before 2.0 px
+  EXPECT_EQ(sel.best, 4u);                                 // equal mean AUC: the last group
+  EXPECT_NEAR(sel.mean_auc_percent[0], 70, 1e-9);
+  EXPECT_NEAR(sel.mean_auc_percent[1], 85, 1e-9);
+  // A strictly better first group wins.
+  for (auto& p : r.pairs) p.sets[0].pose[0] = {1, 0, 1};
+  EXPECT_EQ(SelectBestOfSweep(r, 0).best, 0u);
 }
 
 // RecoverPose is cv::recoverPose(E, p0, p1, I, R, t, 1e9, mask) computed differently; the

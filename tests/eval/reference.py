@@ -7,16 +7,33 @@ import cv2
 import numpy as np
 
 
+METHODS = {"ransac": cv2.RANSAC, "lmeds": cv2.LMEDS, "usac_default": cv2.USAC_DEFAULT,
+           "usac_accurate": cv2.USAC_ACCURATE, "usac_magsac": cv2.USAC_MAGSAC,
+           "usac_prosac": cv2.USAC_PROSAC}
+
+
 def estimate_pose(kpts0: np.ndarray, kpts1: np.ndarray, K0: np.ndarray, K1: np.ndarray,
-                  thresh_px: float, conf: float) -> Optional[Tuple[np.ndarray, np.ndarray]]:
-    """(R, t) of cam1_from_cam0, or None (< 5 matches, no E, no block with an inlier)."""
+                  thresh_px: float, conf: float, method: str = "ransac", max_iters: int = 1000,
+                  focal_mean: str = "loftr", confidence: Optional[np.ndarray] = None
+                  ) -> Optional[Tuple[np.ndarray, np.ndarray]]:
+    """(R, t) of cam1_from_cam0, or None (< 5 matches, no E, no block with an inlier).
+    method: a cv::findEssentialMat method (docs/EVAL.md); usac_prosac takes the matches
+    sorted by decreasing `confidence` (stable). focal_mean: "loftr" divides the pixel
+    threshold by mean(K0 fx, K1 fy, K0 fx, K1 fy), "all" by mean(fx, fy of both)."""
     if len(kpts0) < 5:
         return None
-    thr = thresh_px / np.mean([K0[0, 0], K1[1, 1], K0[0, 0], K1[1, 1]])
+    if focal_mean == "loftr":
+        f = np.mean([K0[0, 0], K1[1, 1], K0[0, 0], K1[1, 1]])
+    else:
+        f = np.mean([K0[0, 0], K0[1, 1], K1[0, 0], K1[1, 1]])
+    thr = thresh_px / f
     p0 = (kpts0.astype(np.float64) - K0[[0, 1], [2, 2]][None]) / K0[[0, 1], [0, 1]][None]
     p1 = (kpts1.astype(np.float64) - K1[[0, 1], [2, 2]][None]) / K1[[0, 1], [0, 1]][None]
-    E, mask = cv2.findEssentialMat(p0, p1, np.eye(3), threshold=thr, prob=conf,
-                                   method=cv2.RANSAC)
+    if method == "usac_prosac":
+        order = np.argsort(-np.asarray(confidence), kind="stable")
+        p0, p1 = p0[order], p1[order]
+    E, mask = cv2.findEssentialMat(p0, p1, np.eye(3), method=METHODS[method], prob=conf,
+                                   threshold=thr, maxIters=max_iters)
     if E is None:
         return None
     best, best_n = None, 0
@@ -25,6 +42,18 @@ def estimate_pose(kpts0: np.ndarray, kpts1: np.ndarray, K0: np.ndarray, K1: np.n
         if n > best_n:
             best, best_n = (R, t[:, 0]), n
     return best
+
+
+def best_of_sweep(mean_auc: Sequence[float], groups: Sequence[Sequence[int]]) -> int:
+    """glue-factory's choice (gluefactory/eval/utils.py eval_poses, eval_pipeline.py
+    run_eval): per group max() over a dict in threshold order (first maximum wins), then
+    a dict keyed by the mean AUC (the last group with the maximum wins)."""
+    best_by_value = {}
+    for g in groups:
+        per_th = {i: mean_auc[i] for i in g}
+        b = max(per_th, key=per_th.get)
+        best_by_value[per_th[b]] = b
+    return best_by_value[max(best_by_value)]
 
 
 def pose_error(T_0to1: np.ndarray, R: np.ndarray, t: np.ndarray) -> float:

@@ -186,6 +186,37 @@ def main():
         p4 = f.read()
     assert p4.count("were not found") == 0, "mine.npz next to e.json not found"
 
+    # Estimators side by side: a sweep of two methods on the noisy set. One row per
+    # estimator with the AUCs of eval.json and their mean; the best-of-sweep row starred and
+    # called optimistic; the disagreement plot drawn (and absent with one estimator).
+    sw_json = os.path.join(work, "sweep.json")
+    common.occgt("eval", split, "--out", sw_json, "--predictions", os.path.join(preds, "noisy.npz"),
+                 "--estimator", "ransac,usac_magsac", "--ransac-px", "sweep")
+    sw = load(sw_json)
+    check_schema(sw)
+    out5 = os.path.join(work, "report5")
+    r = common.occgt("inspect", "split", split, "--eval", sw_json, "--out", out5)
+    dis = os.path.join(out5, "eval_estimator_disagreement.png")
+    assert dis in r.stdout, r.stdout
+    inspect_test.not_blank(inspect_test.png(dis), "disagreement")
+    with open(os.path.join(out5, "report.html"), encoding="utf-8") as f:
+        p5 = f.read()
+    m = re.search(r'<table class="eval-estimators">(.*?)</table>', p5, re.S)
+    assert m and "optimistic" in p5, "no estimators table"
+    rows = re.findall(r'<tr data-set="noisy"( class="best")?>(.*?)</tr>', m.group(1), re.S)
+    est = sw["options"]["estimators"]
+    assert len(rows) == len(est) == 8, len(rows)
+    best = sw["sets"][0]["selection"]["best"]
+    for e, (star, row) in enumerate(rows):
+        cells = [html.unescape(c) for c in re.findall(r"<td[^>]*>(.*?)</td>", row, re.S)]
+        auc = sw["sets"][0]["overall"]["pose"][e]["auc_percent"]
+        assert cells[2] == "%g" % est[e]["ransac_px"], cells
+        assert cells[3] == " / ".join(fmt(x, 2) for x in auc), (cells, auc)
+        assert cells[4].startswith(fmt(sum(auc) / len(auc), 2)), cells
+        assert bool(star) == (e == best) and cells[4].endswith("★") == (e == best), (e, cells)
+    assert not os.path.exists(os.path.join(out, "eval_estimator_disagreement.png"))
+    assert "Estimators side by side" not in page
+
     # Bad eval files: one line naming the file, exit 1 (bad input; usage errors exit 2), no
     # report written.
     def bad(name, doc_or_text, expect, extra=()):

@@ -82,6 +82,11 @@ ELSEWHERE = {
         "occgt eval out/demo --predictions out/sift.npz --ransac-px 0.5,1.0 --out out/eval.json":
             "eval/docs_test.py",
         "occgt inspect split out/demo --eval out/eval.json --out out/report": "eval/docs_test.py",
+        "occgt eval out/demo --predictions out/sift.npz --protocol gluefactory --out out/gf.json":
+            "eval/docs_test.py",
+        "occgt eval out/demo --predictions out/sift.npz --estimator ransac,usac_magsac "
+        "--ransac-px sweep --out out/sweep.json": "eval/docs_test.py",
+        "occgt inspect split out/demo --eval out/gf.json --out out/report_gf": "eval/docs_test.py",
     },
     "docs/PYTHON.md": {
         "scripts/setup.sh": "python/install_test.py",
