@@ -175,9 +175,28 @@ EncodedSample ComputeViewsSample(const ViewsScene& d, const TupleLine& line, int
   out.pair_line = json{{"scene", line.scene},
                        {"tuple_index", index},
                        {"frame_ids", ids},
+                       {"options_digest", options.digest},
                        {"occluded_fraction", occluded_fraction}}
                       .dump();
   return out;
+}
+
+// A complete shard is kept only when it holds these tuples under these options: its part
+// record's lines name the same scene, frames and options digest, sample by sample.
+void CheckCompleteShard(const std::string& dir, const Recipe& recipe, int64_t shard, int64_t start,
+                        const std::vector<TupleLine>& lines) {
+  const shards::PartRecord r = shards::ReadPartRecord(dir, recipe.split, shard);
+  const std::string digest = RecipeSampleOptions(recipe).digest;
+  for (size_t k = 0; k < r.pair_lines.size(); ++k) {
+    const json line = json::parse(r.pair_lines[k]);
+    const TupleLine& want = lines.at(static_cast<size_t>(start) + k);
+    if (line.value("scene", "") != want.scene || line.value("options_digest", "") != digest ||
+        line.value("frame_ids", std::vector<std::string>{}) != want.frame_ids) {
+      throw InputError(
+          shards::PartRecordPath(dir, recipe.split, shard),
+          "written for other tuples or options (sample " + r.keys[k] + "); use a fresh --out");
+    }
+  }
 }
 
 }  // namespace
@@ -202,6 +221,7 @@ json WriteViewsShards(const Recipe& recipe, const datasets::DatasetReader& reade
   int64_t written = 0, skipped = 0;
   for (int64_t s = 0, start = 0; s < static_cast<int64_t>(sizes.size()); start += sizes[s], ++s) {
     if (shards::IsShardComplete(options.out_dir, recipe.split, s)) {
+      CheckCompleteShard(options.out_dir, recipe, s, start, lines);
       ++skipped;
       continue;
     }

@@ -20,7 +20,8 @@
 //
 // Work: shards in order, each computed in chunks of samples in parallel (TBB) and added in
 // order, so the files are byte-identical for any thread count. A complete shard (part record
-// and tar of the recorded size) is skipped on a re-run; a plan of other sizes is refused.
+// and tar of the recorded size) is skipped on a re-run when its record's lines name the same
+// tuples and options digest (else an InputError); a plan of other sizes is refused.
 #pragma once
 
 #include <cstdint>

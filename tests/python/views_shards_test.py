@@ -196,6 +196,15 @@ class ViewsShards(unittest.TestCase):
         self.assertEqual(third["shards"]["shards_written"], 1)
         self.assertEqual(read_tree(self.views), one)
         self.assertFalse(glob.glob(os.path.join(self.views, "*.tmp*")))
+        # Other options (here the image format) over the complete shards: refused, untouched.
+        other = os.path.join(self.dir, "jpg.yaml")
+        with open(other, "w") as f:
+            f.write(RECIPE.replace("image: png", "image: jpg"))
+        r = subprocess.run([common.BINARY, "tuples", other, "--out", self.out1, "--shards",
+                            "--root", self.data], capture_output=True, text=True)
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertIn("written for other tuples or options", r.stderr)
+        self.assertEqual(read_tree(self.views), one)
 
 
 class ShippedRecipe(unittest.TestCase):
