@@ -1,7 +1,10 @@
-// occgt tuples RECIPE --out DIR [--root PATH] [--json]
+// occgt tuples RECIPE --out DIR [--shards] [--threads N] [--root PATH] [--json]
 // Seeded N-view tuples of every scene (recipe selection.views / selection.tuples) on the
-// covisibility graphs `occgt covis` wrote into DIR: DIR/tuples.jsonl (docs/MULTIVIEW.md). The
+// covisibility graphs `occgt covis` wrote into DIR: DIR/tuples.jsonl (docs/MULTIVIEW.md), and
+// with --shards the N-view shards of those tuples in DIR/views/ (views_write.h). The
 // job is pipeline::RunTuples (libgt/pipeline/tuple_stage.h); this file parses flags and prints.
+#include <tbb/global_control.h>
+
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -9,6 +12,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "libgt/core/error.h"
 #include "libgt/pipeline/recipe.h"
 #include "libgt/pipeline/tuple_stage.h"
 
@@ -17,20 +21,36 @@ namespace {
 
 struct TuplesArgs {
   std::string recipe, root, out_dir;
-  bool json = false;
+  bool json = false, shards = false;
+  int threads = 0;
 };
 
 void Run(const TuplesArgs& args) {
+  if (args.threads < 0)
+    throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
+  std::unique_ptr<tbb::global_control> limit;
+  if (args.threads > 0) {
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                  args.threads);
+  }
   gt::pipeline::RecipeOverrides overrides;
   overrides.root = args.root;
   const gt::pipeline::Recipe recipe = gt::pipeline::LoadRecipe(args.recipe, overrides);
-  const nlohmann::json s = gt::pipeline::RunTuples(recipe, args.out_dir);
+  const nlohmann::json s = gt::pipeline::RunTuples(recipe, args.out_dir, args.shards);
   if (args.json) {
     std::cout << s.dump(2) << std::endl;
   } else {
     std::printf("%lld tuples from %lld scenes written to %s/tuples.jsonl\n",
                 static_cast<long long>(s["tuples"].get<int64_t>()),
                 static_cast<long long>(s["scenes"].get<int64_t>()), args.out_dir.c_str());
+    if (s.contains("shards")) {
+      std::printf("%lld N-view samples in %lld shards in %s (%lld written, %lld complete)\n",
+                  static_cast<long long>(s["shards"]["samples"].get<int64_t>()),
+                  static_cast<long long>(s["shards"]["shards"].get<int64_t>()),
+                  s["shards"]["dir"].get<std::string>().c_str(),
+                  static_cast<long long>(s["shards"]["shards_written"].get<int64_t>()),
+                  static_cast<long long>(s["shards"]["shards_skipped"].get<int64_t>()));
+    }
   }
 }
 
@@ -48,6 +68,9 @@ void AddTuplesCommand(CLI::App& app) {
   cmd->add_option(
       "--root", args->root,
       "Dataset root overriding the recipe's dataset.root (relative to the working folder)");
+  cmd->add_flag("--shards", args->shards,
+                "Also write one N-view sample per tuple into DIR/views/ (docs/MULTIVIEW.md)");
+  cmd->add_option("--threads", args->threads, "Worker threads of --shards (0 = all cores)");
   cmd->add_flag("--json", args->json, "Print the summary as JSON");
   cmd->callback([args] { Run(*args); });
 }

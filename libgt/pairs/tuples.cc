@@ -1,6 +1,7 @@
 #include "libgt/pairs/tuples.h"
 
 #include <algorithm>
+#include <map>
 #include <random>
 #include <set>
 #include <string>
@@ -29,6 +30,9 @@ bool TupleOptions::Check(std::string* error) const {
   }
   if (restarts < 0) return *error = "restarts: expected an integer >= 0", false;
   if (quota < 1) return *error = "quota_per_scene: expected an integer >= 1", false;
+  if (balance_occlusion < 0 || balance_occlusion > 100) {
+    return *error = "balance_occlusion: expected an integer in [0, 100]", false;
+  }
   return true;
 }
 
@@ -45,10 +49,67 @@ std::vector<float> PairScores(const CovisibilityPairs& g) {
   return s;
 }
 
+double TupleOcclusion(const CovisibilityPairs& g, const std::vector<int32_t>& frames) {
+  const size_t f = static_cast<size_t>(g.num_frames);
+  if (g.o_ij.size() != g.i.size() || g.o_ji.size() != g.i.size() || g.self.size() != f) {
+    throw InputError("tuples", "balance_occlusion: the graph has no overlap (o_ij, o_ji, self)");
+  }
+  // (a, b) -> pair index, for the tuple's pairs only.
+  std::map<std::pair<int32_t, int32_t>, size_t> at;
+  std::set<int32_t> members(frames.begin(), frames.end());
+  for (size_t p = 0; p < g.i.size(); ++p) {
+    if (members.count(g.i[p]) && members.count(g.j[p])) at[{g.i[p], g.j[p]}] = p;
+  }
+  double in_view = 0, hidden = 0;
+  for (int32_t a : frames) {
+    for (int32_t b : frames) {
+      if (a == b) continue;
+      auto it = at.find({std::min(a, b), std::max(a, b)});
+      if (it == at.end()) continue;
+      const size_t p = it->second;
+      const double o = a < b ? g.o_ij[p] : g.o_ji[p];
+      const double c = a < b ? g.c_ij[p] : g.c_ji[p];
+      const double v = o * static_cast<double>(g.self[a]);
+      in_view += v;
+      hidden += std::max(0.0, v - c);
+    }
+  }
+  return in_view > 0 ? hidden / in_view : 0.0;
+}
+
 std::vector<Tuple> SampleTuples(const CovisibilityPairs& g, const TupleOptions& o, uint64_t seed,
                                 DropCounts* drops) {
   std::string error;
   if (!o.Check(&error)) throw InputError("tuples", error);
+  if (o.balance_occlusion > 0) {
+    TupleOptions candidates = o;
+    candidates.balance_occlusion = 0;
+    candidates.quota = 4 * o.quota;
+    std::vector<Tuple> pool = SampleTuples(g, candidates, seed, drops);
+    const int nb = o.balance_occlusion;
+    std::vector<std::vector<size_t>> bins(nb);
+    double lo = 1, hi = 0;
+    for (Tuple& t : pool) {
+      t.occlusion = TupleOcclusion(g, t.frames);
+      lo = std::min(lo, t.occlusion);
+      hi = std::max(hi, t.occlusion);
+    }
+    for (size_t k = 0; k < pool.size(); ++k) {
+      const int b = hi > lo ? static_cast<int>((pool[k].occlusion - lo) / (hi - lo) * nb) : 0;
+      bins[std::clamp(b, 0, nb - 1)].push_back(k);
+    }
+    std::vector<Tuple> out;
+    const size_t target = std::min(pool.size(), static_cast<size_t>(o.quota));
+    for (size_t round = 0; out.size() < target; ++round) {
+      for (const std::vector<size_t>& bin : bins) {
+        if (round < bin.size() && out.size() < target) out.push_back(pool[bin[round]]);
+      }
+    }
+    if (pool.size() > out.size()) {
+      (*drops)["tuples.balance"] += static_cast<int64_t>(pool.size() - out.size());
+    }
+    return out;
+  }
   const int f = g.num_frames;
   const std::vector<float> score = PairScores(g);
   const auto sc = [&](int a, int b) { return score[static_cast<size_t>(a) * f + b]; };

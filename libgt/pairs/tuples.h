@@ -37,6 +37,12 @@ struct TupleOptions {
   double min_spread_score = 0.0;        // unused bound when 0 (see above)
   int restarts = 4;                     // extra walks per tuple
   int quota = 100;                      // tuples per scene (>= 1)
+  // > 0: balance the tuples on their occlusion (TupleOcclusion) over this many equal bins of
+  // [lo, hi], the smallest and largest occlusion of the scene's candidates: 4·quota candidates
+  // are sampled as above (quota 4·quota, same seed), then taken round robin over the bins
+  // (ascending, each bin in draw order) until the quota; the rest are dropped
+  // ("tuples.balance"). 0 = off. In [0, 100].
+  int balance_occlusion = 0;
 
   bool Check(std::string* error) const;
 };
@@ -45,14 +51,26 @@ struct CovisibilityPairs {
   int num_frames = 0;
   std::vector<int32_t> i, j;      // i < j
   std::vector<float> c_ij, c_ji;  // visible overlap of i → j and j → i
+  // Needed by balance_occlusion only (else may be empty): overlap of i → j and j → i, and each
+  // frame's visible overlap with itself (covisibility.h o_ij, o_ji, self).
+  std::vector<float> o_ij, o_ji, self;
 };
 
 struct Tuple {
   std::vector<int32_t> frames;  // indices into the graph's frames, in the order added
+  double occlusion = 0;         // TupleOcclusion, set when balance_occlusion > 0
 };
 
+// The graph's estimate of a tuple's occlusion: over the ordered pairs (a, b), a != b, the
+// in-view mass v_ab = o_ab · self_a (in-view valid pixels of a over the sampled grid, exact
+// when a frame sees all its valid pixels, as under the default preset) and its part not
+// VISIBLE m_ab = max(0, v_ab − c_ab) (OCCLUDED, INCONSISTENT or UNKNOWN); returns
+// Σ m_ab / Σ v_ab (0 when Σ v_ab = 0), summed in the tuple's order, a then b, in double. A
+// pair absent from the graph contributes nothing. Requires o_ij, o_ji and self.
+double TupleOcclusion(const CovisibilityPairs& graph, const std::vector<int32_t>& frames);
+
 // Tuples of one scene; drops: "tuples.too_small" (no walk reached min_views),
-// "tuples.duplicate", "tuples.spread".
+// "tuples.duplicate", "tuples.spread", "tuples.balance".
 std::vector<Tuple> SampleTuples(const CovisibilityPairs& graph, const TupleOptions& options,
                                 uint64_t seed, DropCounts* drops);
 

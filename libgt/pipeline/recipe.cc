@@ -584,6 +584,9 @@ json Recipe::ToJson() const {
                                 {"min_spread", tuples->min_spread_score},
                                 {"restarts", tuples->restarts},
                                 {"quota_per_scene", tuples->quota}};
+    if (tuples->balance_occlusion > 0) {  // only when set: digests of earlier recipes unchanged
+      j["selection"]["tuples"]["balance_occlusion"] = tuples->balance_occlusion;
+    }
   }
   // The values the keys resolve to (defaults included); max_range_m only when set apart
   // from far_m, so that recipes without it keep their digest.
@@ -760,6 +763,7 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
         Get(tj, "min_spread", &t.min_spread_score, file);
         Get(tj, "restarts", &t.restarts, file);
         Get(tj, "quota_per_scene", &t.quota, file);
+        Get(tj, "balance_occlusion", &t.balance_occlusion, file);
       }
       std::string error;
       if (!t.Check(&error)) throw InputError(file, "selection." + error);

@@ -76,6 +76,16 @@ const char* VolumeEncodingName(VolumeEncoding encoding) {
   return "packed";
 }
 
+void AddSampleField(shards::Sample* sample, const std::string& name, std::string bytes,
+                    SampleCompression compression) {
+  const bool array = name.size() > 4 && name.compare(name.size() - 4, 4, ".npy") == 0;
+  if (array && compression == SampleCompression::kDeflate) {
+    sample->fields.push_back({name + ".gz", io::GzipBytes(bytes, 1)});
+  } else {
+    sample->fields.push_back({name, std::move(bytes)});
+  }
+}
+
 std::string EncodeFrameImage(const Frame& frame, const SampleOptions& options) {
   const io::ColorImage c =
       io::ReadFrameColorResized(frame, options.resolution.width, options.resolution.height);
@@ -137,12 +147,7 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
   sample.key = key;
   const int64_t W = options.resolution.width, H = options.resolution.height;
   auto add = [&](const std::string& name, std::string bytes) {
-    const bool array = name.size() > 4 && name.compare(name.size() - 4, 4, ".npy") == 0;
-    if (array && options.compression == SampleCompression::kDeflate) {
-      sample.fields.push_back({name + ".gz", io::GzipBytes(bytes, 1)});
-    } else {
-      sample.fields.push_back({name, std::move(bytes)});
-    }
+    AddSampleField(&sample, name, std::move(bytes), options.compression);
   };
 
   // Metadata first (the json member), filled below; its slot is reserved now.

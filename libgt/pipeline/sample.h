@@ -76,6 +76,11 @@ struct EncodedSample {
   std::string pair_line;  // pairs.jsonl object (no shard/key), compact JSON
 };
 
+// Appends a member: "<name>.gz" (the gzip of `bytes`, level 1) for a ".npy" name under
+// kDeflate, else `name` as is (pair samples and N-view samples alike).
+void AddSampleField(shards::Sample* sample, const std::string& name, std::string bytes,
+                    SampleCompression compression);
+
 // The colour of a frame at W×H, bilinear, encoded as options.image ("png" or "jpg").
 // Throws InputError naming the file when it cannot be read.
 std::string EncodeFrameImage(const Frame& frame, const SampleOptions& options);

@@ -13,6 +13,7 @@
 #include "libgt/io/npz_members.h"
 #include "libgt/pipeline/covisibility.h"
 #include "libgt/pipeline/select.h"
+#include "libgt/pipeline/views_write.h"
 
 namespace gt::pipeline {
 namespace {
@@ -81,8 +82,12 @@ LoadedGraph LoadGraph(const std::string& path, const std::string& digest) {
   g.pairs.c_ij = Member<float>(m, "c_ij", path);
   g.pairs.c_ji = Member<float>(m, "c_ji", path);
   g.self = Member<float>(m, "self", path);
+  g.pairs.o_ij = Member<float>(m, "o_ij", path);
+  g.pairs.o_ji = Member<float>(m, "o_ji", path);
+  g.pairs.self = g.self;
   const size_t p = g.pairs.i.size();
   bool ok = g.pairs.j.size() == p && g.pairs.c_ij.size() == p && g.pairs.c_ji.size() == p &&
+            g.pairs.o_ij.size() == p && g.pairs.o_ji.size() == p &&
             g.self.size() == g.frame_ids.size();
   for (size_t k = 0; ok && k < p; ++k) {
     ok = g.pairs.i[k] >= 0 && g.pairs.i[k] < g.pairs.j[k] && g.pairs.j[k] < g.pairs.num_frames;
@@ -93,7 +98,7 @@ LoadedGraph LoadGraph(const std::string& path, const std::string& digest) {
 
 }  // namespace
 
-json RunTuples(const Recipe& recipe_in, const std::string& out_dir) {
+json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_shards) {
   if (!recipe_in.tuples) {
     throw InputError(recipe_in.file, "selection.views: expected N or [min, max] (the tuple size)");
   }
@@ -111,6 +116,7 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir) {
   pairs::DropCounts drops;
   std::map<std::string, int64_t> sizes;
   int64_t total = 0;
+  std::vector<TupleLine> rows;
   for (const std::string& scene : scenes) {
     const LoadedGraph g = LoadGraph(CovisibilityPath(out_dir, scene), digest);
     const std::vector<float> dense = [&] {
@@ -128,23 +134,33 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir) {
         pairs::SampleTuples(g.pairs, *recipe.tuples, pairs::SceneSeed(recipe.seed, scene), &drops);
     for (const pairs::Tuple& t : tuples) {
       json ids = json::array(), cov = json::array();
+      TupleLine tl;
+      tl.scene = scene;
       for (int32_t a : t.frames) {
         ids.push_back(g.frame_ids[a]);
+        tl.frame_ids.push_back(g.frame_ids[a]);
         json row = json::array();
-        for (int32_t b : t.frames) row.push_back(dense[static_cast<size_t>(a) * f + b]);
+        for (int32_t b : t.frames) {
+          row.push_back(dense[static_cast<size_t>(a) * f + b]);
+          tl.covisibility.push_back(dense[static_cast<size_t>(a) * f + b]);
+        }
         cov.push_back(row);
       }
-      const json line = {{"scene", scene}, {"frame_ids", ids}, {"covisibility", cov}};
+      rows.push_back(std::move(tl));
+      json line = {{"scene", scene}, {"frame_ids", ids}, {"covisibility", cov}};
+      if (recipe.tuples->balance_occlusion > 0) line["occlusion"] = t.occlusion;
       lines += line.dump() + "\n";
       ++sizes[std::to_string(t.frames.size())];
       ++total;
     }
   }
   io::WriteFileAtomic(out_dir + "/tuples.jsonl", lines);
-  return {{"scenes", static_cast<int64_t>(scenes.size())},
-          {"tuples", total},
-          {"views", sizes},
-          {"drops", drops}};
+  json summary = {{"scenes", static_cast<int64_t>(scenes.size())},
+                  {"tuples", total},
+                  {"views", sizes},
+                  {"drops", drops}};
+  if (write_shards) summary["shards"] = WriteViewsShards(recipe, *reader, out_dir, rows);
+  return summary;
 }
 
 }  // namespace gt::pipeline

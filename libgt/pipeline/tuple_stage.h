@@ -22,7 +22,10 @@
 
 namespace gt::pipeline {
 
-// Returns the summary {scenes, tuples, views: {N: count}, drops}.
-nlohmann::json RunTuples(const Recipe& recipe, const std::string& out_dir);
+// Returns the summary {scenes, tuples, views: {N: count}, drops}. With write_shards, then
+// writes the N-view shards of the tuples (views_write.h, DIR/views/) and adds their summary
+// as "shards".
+nlohmann::json RunTuples(const Recipe& recipe, const std::string& out_dir,
+                         bool write_shards = false);
 
 }  // namespace gt::pipeline

@@ -56,6 +56,8 @@ ELSEWHERE = {
         "occgt covis recipes/tartanair-tuples.yaml --out out/ta-tuples --dense":
             "python/covis_test.py",
         "occgt tuples recipes/tartanair-tuples.yaml --out out/ta-tuples": "python/covis_test.py",
+        "occgt tuples recipes/tartanair-tuples.yaml --out out/ta-tuples --shards":
+            "python/views_shards_test.py",
     },
     "README.md": {"scripts/occgt build recipes/demo.yaml --out out/demo": "integration/readme_test.py",
                   "scripts/test": "integration/readme_test.py"},
