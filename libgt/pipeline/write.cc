@@ -301,6 +301,18 @@ WriteResult WriteShards(const Recipe& recipe, const datasets::DatasetReader& rea
 
 namespace {
 
+// The depth the exports write (shards/frame_files.h): the build's own when it is not the
+// sensor's file (dataset.depth_source mesh or fused: the working depth, rendered directly at
+// the export's size in the frame's working camera, exactly as the shards' depth at that
+// size); empty for `sensor`, where the exports read (or link) the depth files.
+shards::FrameDepthLoader ExportDepthLoader(const Recipe& recipe) {
+  if (recipe.dataset.depth_source == render::DepthSourceMode::kSensor) return {};
+  const render::FrameDepthOptions depth = RecipeFrameDepthOptions(recipe);
+  return [depth](const Scene& scene, const Frame& frame, int width, int height) {
+    return truth::LoadWorkingDepth(scene, frame, truth::Resolution{width, height}, depth);
+  };
+}
+
 // DIR/gluefactory/ and DIR/dust3r/ (libgt/shards/posed_export.h): the pairs with their
 // selection score and both overlaps, the frames at the working resolution.
 void PublishPosedExports(const Recipe& recipe, const BuildOptions& options,
@@ -322,6 +334,7 @@ void PublishPosedExports(const Recipe& recipe, const BuildOptions& options,
   shards::PosedExportOptions posed;
   posed.width = recipe.width;
   posed.height = recipe.height;
+  posed.load_depth = ExportDepthLoader(recipe);
   if (recipe.gluefactory_export) {
     shards::ExportGlueFactory(options.out_dir + "/gluefactory", scene_ptrs, pairs, posed);
   }
@@ -408,7 +421,7 @@ void PublishIndices(const Recipe& recipe, const datasets::DatasetReader& reader,
   std::map<std::string, Scene> scenes;
   for (const SelectedPair* p : all) {
     if (!scenes.count(p->scene)) {
-      scenes.emplace(p->scene, reader.ReadScene(recipe.dataset.root, p->scene));
+      scenes.emplace(p->scene, ReadRecipeScene(recipe, reader, p->scene));
     }
   }
   if (recipe.gluefactory_export || recipe.dust3r_export) {
@@ -470,8 +483,10 @@ void PublishIndices(const Recipe& recipe, const datasets::DatasetReader& reader,
     }
     tree.push_back(std::move(t));
   }
+  shards::LoftrTreeOptions tree_options;
+  tree_options.load_depth = ExportDepthLoader(recipe);
   const shards::LoftrTreeStats stats =
-      shards::ExportLoftrTree(options.out_dir + "/loftr/data", tree, shards::LoftrTreeOptions{});
+      shards::ExportLoftrTree(options.out_dir + "/loftr/data", tree, tree_options);
   const nlohmann::json doc = {{"frames", stats.frames},
                               {"linked", stats.linked},
                               {"converted", stats.converted},

@@ -29,6 +29,11 @@ std::string DepthPngBytes(const Frame& f, int width, int height, double units_pe
   if (depth.width != width || depth.height != height) {
     depth = ResizeDepthNearest(depth, width, height);
   }
+  return DepthPngBytes(depth, f.depth.path, units_per_m, png_level, zeroed);
+}
+
+std::string DepthPngBytes(const DepthImage& depth, const std::string& name, double units_per_m,
+                          int png_level, size_t* zeroed) {
   cv::Mat units(depth.height, depth.width, CV_16UC1);
   size_t n_zeroed = 0;
   for (int v = 0; v < depth.height; ++v) {
@@ -49,7 +54,7 @@ std::string DepthPngBytes(const Frame& f, int width, int height, double units_pe
     }
   }
   *zeroed = n_zeroed;
-  return io::EncodePngBytes(units, io::ChannelOrder::kRgb, png_level, f.depth.path);
+  return io::EncodePngBytes(units, io::ChannelOrder::kRgb, png_level, name);
 }
 
 std::string Matrix4Text(const Eigen::Matrix4d& m) {

@@ -6,9 +6,11 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <functional>
 #include <set>
 #include <string>
 
+#include "libgt/core/depth.h"
 #include "libgt/core/frame.h"
 
 namespace gt::shards {
@@ -23,6 +25,17 @@ bool IsJpegPath(const std::string& path);
 // (counted in *zeroed). InputError naming the file when it cannot be read.
 std::string DepthPngBytes(const Frame& f, int width, int height, double units_per_m, int png_level,
                           size_t* zeroed);
+
+// The depth an export writes for a frame of a scene at width x height (planar metres, 0 or
+// NaN = invalid), when it is not the sensor's depth file: the pipeline passes the build's
+// depth source (dataset.depth_source: mesh or fused, render/frame_depth.h) down as this, so
+// that the exports write the depth the shards used. An empty loader means the depth file.
+using FrameDepthLoader =
+    std::function<DepthImage(const Scene& scene, const Frame& frame, int width, int height)>;
+
+// `depth` (already at its output size) as the PNG above; `name` names it in errors.
+std::string DepthPngBytes(const DepthImage& depth, const std::string& name, double units_per_m,
+                          int png_level, size_t* zeroed);
 
 // 4 lines of 4 numbers, one space apart, LF after each line, %.17g.
 std::string Matrix4Text(const Eigen::Matrix4d& m);

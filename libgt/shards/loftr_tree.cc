@@ -48,7 +48,7 @@ struct FrameOutput {
   size_t linked = 0, converted = 0, zeroed = 0;
 };
 
-FrameOutput ExportFrame(const Frame& f, const std::string& folder,
+FrameOutput ExportFrame(const Scene& scene, const Frame& f, const std::string& folder,
                         const LoftrTreeOptions& options) {
   FrameOutput out;
   const std::string n = std::to_string(f.number);
@@ -81,7 +81,12 @@ FrameOutput ExportFrame(const Frame& f, const std::string& folder,
   }
   // Depth.
   const std::string depth_dst = folder + "/depth/" + n + ".png";
-  if (DepthIsScanNetForm(f)) {
+  if (options.load_depth) {
+    out.files.push_back(
+        {depth_dst, DepthPngBytes(options.load_depth(scene, f, kLoftrWidth, kLoftrHeight),
+                                  depth_dst, 1000.0, options.png_level, &out.zeroed)});
+    ++out.converted;
+  } else if (DepthIsScanNetForm(f)) {
     out.links.emplace_back(f.depth.path, depth_dst);
     ++out.linked;
   } else {
@@ -158,7 +163,7 @@ LoftrTreeStats ExportLoftrTree(const std::string& tree_dir,
       const size_t end = std::min(frames.size(), begin + kChunk);
       std::vector<FrameOutput> outputs(end - begin);
       tbb::parallel_for(begin, end, [&](size_t i) {
-        outputs[i - begin] = ExportFrame(*frames[i], folder, options);
+        outputs[i - begin] = ExportFrame(*s.scene, *frames[i], folder, options);
       });
       std::vector<io::FileToWrite> files;
       for (FrameOutput& o : outputs) {

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "libgt/core/frame.h"
+#include "libgt/shards/frame_files.h"
 
 namespace gt::shards {
 
@@ -44,6 +45,9 @@ std::map<std::string, std::string> LoftrSceneFolders(const std::set<std::string>
 struct LoftrTreeOptions {
   int jpeg_quality = 95;  // converted colour (1..100)
   int png_level = 1;      // zlib level of converted depth PNGs (0..9): fast, still lossless
+  // The depth written, when not the depth file (frame_files.h: the build's depth source);
+  // empty = the depth file, linked or converted as above. Given, every depth is converted.
+  FrameDepthLoader load_depth;
   bool Check(std::string* error) const;
 };
 

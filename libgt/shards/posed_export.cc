@@ -100,9 +100,9 @@ struct ViewOutput {
   size_t linked = 0, converted = 0, zeroed = 0;
 };
 
-ViewOutput ExportView(const std::string& what, const Frame& f, const std::string& image_dst,
-                      const std::string& depth_dst, double units_per_m,
-                      const PosedExportOptions& options) {
+ViewOutput ExportView(const std::string& what, const Scene& scene, const Frame& f,
+                      const std::string& image_dst, const std::string& depth_dst,
+                      double units_per_m, const PosedExportOptions& options) {
   ViewOutput out;
   if (f.color_path.empty()) {
     throw InputError(f.depth.path, what + ": frame " + f.id + " has no colour image");
@@ -129,7 +129,12 @@ ViewOutput ExportView(const std::string& what, const Frame& f, const std::string
                                                         options.jpeg_quality, f.color_path)});
     ++out.converted;
   }
-  if (units_per_m == 1000.0 && DepthIsMillimetrePng(f, options.width, options.height)) {
+  if (options.load_depth) {
+    out.files.push_back(
+        {depth_dst, DepthPngBytes(options.load_depth(scene, f, options.width, options.height),
+                                  depth_dst, units_per_m, options.png_level, &out.zeroed)});
+    ++out.converted;
+  } else if (units_per_m == 1000.0 && DepthIsMillimetrePng(f, options.width, options.height)) {
     out.links.emplace_back(f.depth.path, depth_dst);
     ++out.linked;
   } else {
@@ -152,7 +157,7 @@ void WriteViewFiles(const std::string& what, const SceneViews& s, const std::str
     tbb::parallel_for(begin, end, [&](size_t i) {
       const std::string n = std::to_string(s.frames[i]->number);
       outputs[i - begin] =
-          ExportView(what, *s.frames[i], scene_dir + "/" + image_sub + "/" + n + ".jpg",
+          ExportView(what, *s.scene, *s.frames[i], scene_dir + "/" + image_sub + "/" + n + ".jpg",
                      scene_dir + "/" + depth_sub + "/" + n + ".png", units_per_m, options);
     });
     std::vector<io::FileToWrite> files;
@@ -324,7 +329,8 @@ PosedExportStats ExportDust3r(const std::string& out_dir,
   if (std::string e; !options.Check(&e)) throw InputError(what + " options", e);
   const std::vector<SceneViews> views = CollectViews(what, scenes, pairs);
   PosedExportStats stats;
-  std::set<std::string> keep = {"all_metadata.npz", "export.json"};
+  std::set<std::string> keep = {"all_metadata.npz", "export.json", "scene_list.json"};
+  nlohmann::json scene_list = nlohmann::json::array();
   std::vector<std::string> scene_names, images;
   std::vector<int64_t> counts, sceneids;
   std::vector<double> intrinsics, trajectories, all_pairs;
@@ -333,10 +339,11 @@ PosedExportStats ExportDust3r(const std::string& out_dir,
     const SceneViews& s = views[si];
     const std::string dir = out_dir + "/" + s.folder;
     WriteViewFiles(what, s, dir, "images", "depth", kDust3rDepthUnits, options, &stats);
-    std::vector<std::string> scene_images;
-    std::vector<double> scene_k, scene_t, scene_pairs;
+    std::vector<std::string> scene_images, stems;
+    std::vector<double> scene_k, scene_t, scene_pairs, selected_pairs, selected_overlaps;
     for (const Frame* f : s.frames) {
       scene_images.push_back(std::to_string(f->number));
+      stems.push_back(fs::path(f->color_path).stem().string());
       AppendMatrix(f->depth_camera.Resized(options.width, options.height).K(), &scene_k);
       AppendMatrix(f->world_from_cam.matrix(), &scene_t);
     }
@@ -344,6 +351,8 @@ PosedExportStats ExportDust3r(const std::string& out_dir,
       const double i = static_cast<double>(s.index.at(p->frame0));
       const double j = static_cast<double>(s.index.at(p->frame1));
       scene_pairs.insert(scene_pairs.end(), {i, j, p->score, p->overlap01, p->overlap10});
+      selected_pairs.insert(selected_pairs.end(), {i, j, p->score});
+      selected_overlaps.insert(selected_overlaps.end(), {p->overlap01, p->overlap10});
       all_pairs.insert(all_pairs.end(),
                        {i + static_cast<double>(offset), j + static_cast<double>(offset), p->score,
                         p->overlap01, p->overlap10});
@@ -355,7 +364,14 @@ PosedExportStats ExportDust3r(const std::string& out_dir,
                   {"intrinsics", io::EncodeNpy<double>({v, 3, 3}, scene_k)},
                   {"pairs", io::EncodeNpy<double>({np, 5}, scene_pairs)},
                   {"trajectories", io::EncodeNpy<double>({v, 4, 4}, scene_t)}});
-    RemoveOthers(dir, {"images", "depth", "scene_metadata.npz"});
+    // DUSt3R's precomputed pairs (its preprocessing reads <pairs dir>/<scene>/
+    // selected_pairs.npz: `selection` the image stems, `pairs` rows (i, j, score)).
+    io::WriteNpz(dir + "/selected_pairs.npz",
+                 {{"overlaps", io::EncodeNpy<double>({np, 2}, selected_overlaps)},
+                  {"pairs", io::EncodeNpy<double>({np, 3}, selected_pairs)},
+                  {"selection", EncodeAsciiStringsNpy(stems)}});
+    RemoveOthers(dir, {"images", "depth", "scene_metadata.npz", "selected_pairs.npz"});
+    scene_list.push_back(s.folder);
     scene_names.push_back(s.folder);
     counts.push_back(offset);
     for (int64_t k = 0; k < v; ++k) sceneids.push_back(static_cast<int64_t>(si));
@@ -376,6 +392,7 @@ PosedExportStats ExportDust3r(const std::string& out_dir,
                 {"sceneids", io::EncodeNpy<int64_t>({nv}, sceneids)},
                 {"scenes", EncodeAsciiStringsNpy(scene_names)},
                 {"trajectories", io::EncodeNpy<double>({nv, 4, 4}, trajectories)}});
+  io::WriteFileAtomic(out_dir + "/scene_list.json", scene_list.dump() + "\n");
   RemoveOthers(out_dir, keep);
   WriteExportJson(out_dir + "/export.json", "dust3r", kDust3rDepthUnits, views, options, stats);
   return stats;

@@ -47,6 +47,7 @@
 #include <vector>
 
 #include "libgt/core/frame.h"
+#include "libgt/shards/frame_files.h"
 
 namespace gt::shards {
 
@@ -64,6 +65,10 @@ struct PosedExportOptions {
   int height = 480;
   int jpeg_quality = 95;  // converted colour (1..100)
   int png_level = 1;      // zlib level of the depth PNGs (0..9)
+  // The depth written, when not the depth file (frame_files.h: the build's depth source,
+  // e.g. depth rendered from the mesh for ScanNet++'s DSLR, which has no depth file); empty =
+  // the depth file, linked or converted. Given, every depth is converted.
+  FrameDepthLoader load_depth;
   bool Check(std::string* error) const;
 };
 

@@ -20,6 +20,7 @@
 #include "libgt/io/iphone_depth.h"
 #include "libgt/io/undistort.h"
 #include "libgt/render/frame_depth.h"
+#include "libgt/shards/posed_export.h"
 #include "libgt/synth/render.h"
 #include "libgt/synth/scannetpp_layout.h"
 #include "libgt/truth/working_frame.h"
@@ -282,6 +283,74 @@ TEST_F(ScanNetPP, DslrDepthIsRenderedInTheUndistortedCameraAndLabelsMatchTheExac
     }
     EXPECT_GT(double(same) / n, 0.999) << "frame 1 -> " << b;
   }
+}
+
+TEST_F(ScanNetPP, DslrDust3rExportWritesTheRenderedDepthInMillimetres) {
+  // The DSLR has no depth file: the DUSt3R export writes the depth the build uses (rendered
+  // from the mesh, passed in as the export's depth loader) as uint16 mm, anonymised pixels 0,
+  // which must be the analytic scene's depth rounded to the millimetre.
+  const auto truth = synth::MakeScanNetPPSynthScene(SmallOptions(), 0);
+  const Scene scene = Read(datasets::ScanNetPPDevice::kDslr);
+  render::FrameDepthOptions mesh;
+  mesh.source = render::DepthSourceMode::kMesh;
+  shards::PosedExportOptions options;
+  options.width = 160;
+  options.height = 104;
+  std::vector<int64_t> numbers;
+  for (int i = 0; i < 3; ++i) {
+    const std::string name = synth::ScanNetPPSynthDslrName(i);
+    const Frame* f = Find(scene, name.substr(0, name.size() - 4));
+    ASSERT_NE(f, nullptr);
+    numbers.push_back(f->number);
+  }
+  const std::vector<shards::PosedPair> pairs = {
+      {scene.name, numbers[0], numbers[1], 0.5, 0.4, 0.6},
+      {scene.name, numbers[1], numbers[2], 0.5, 0.6, 0.4}};
+  const std::map<std::string, const Scene*> scenes = {{scene.name, &scene}};
+  const fs::path out = *root_ / "export_dust3r";
+  // Without the loader: the missing depth file is an error, as before.
+  EXPECT_THROW(shards::ExportDust3r(out.string(), scenes, pairs, options), InputError);
+  options.load_depth = [&](const Scene& s, const Frame& f, int w, int h) {
+    return truth::LoadWorkingDepth(s, f, truth::Resolution{w, h}, mesh);
+  };
+  const shards::PosedExportStats stats = shards::ExportDust3r(out.string(), scenes, pairs, options);
+  EXPECT_EQ(stats.views, 3u);
+  const std::string folder = shards::PosedSceneFolders({scene.name}).at(scene.name);
+  for (int i = 0; i < 3; ++i) {
+    const std::string name = synth::ScanNetPPSynthDslrName(i);
+    const Frame* f = Find(scene, name.substr(0, name.size() - 4));
+    const Camera cam = truth::WorkingCamera(*f, {options.width, options.height});
+    const DepthImage exact = synth::RenderDepth(truth.scene, cam, f->world_from_cam);
+    const std::string png =
+        (out / folder / "depth" / (std::to_string(f->number) + ".png")).string();
+    const cv::Mat got = io::DecodeImageBytes(io::ReadFileBytes(png), io::ChannelOrder::kRgb, png);
+    ASSERT_EQ(got.type(), CV_16UC1) << png;
+    ASSERT_EQ(got.cols, options.width);
+    ASSERT_EQ(got.rows, options.height);
+    const cv::Mat m =
+        io::DecodeImageBytes(io::ReadFileBytes(f->mask_path), io::ChannelOrder::kRgb, f->mask_path);
+    const cv::Mat1b valid = io::UndistortMask(m, *f->color_lens, cam);
+    int masked = 0, compared = 0;
+    for (int v = 0; v < cam.height; ++v) {
+      for (int u = 0; u < cam.width; ++u) {
+        const uint16_t mm = got.at<uint16_t>(v, u);
+        if (valid(v, u) != 255) {
+          ASSERT_EQ(mm, 0) << name << " " << u << "," << v;
+          ++masked;
+          continue;
+        }
+        const float d = exact.at(u, v);
+        if (!(d > 0.0f)) continue;
+        // Rounded to the millimetre: within half a millimetre plus the render's 1e-4 m.
+        ASSERT_NEAR(mm / 1000.0, d, 0.0005 + 1e-4) << name << " " << u << "," << v;
+        ++compared;
+      }
+    }
+    EXPECT_EQ(masked > 0, i % 2 == 0) << name;
+    EXPECT_GT(compared, cam.width * cam.height / 2) << name;
+  }
+  EXPECT_TRUE(fs::is_regular_file(out / folder / "selected_pairs.npz"));
+  EXPECT_TRUE(fs::is_regular_file(out / "scene_list.json"));
 }
 
 TEST_F(ScanNetPP, IphoneDepthBinGivesThePngsValues) {

@@ -4,7 +4,10 @@ principal point, a binary PLY mesh, uint16 depth PNGs, an LZ4-record depth.bin);
 --format scannetpp --json` validates against schemas/scan.schema.json and explains every
 unusable image for both devices; a recipe with dataset.device iphone builds shards whose
 images are the undistorted frames and whose depth has no value on anonymised pixels, and its
-DUSt3R ScanNet++ export reads back through a reader written from DUSt3R's dataset class."""
+DUSt3R ScanNet++ export reads back through a reader written from DUSt3R's dataset class. The
+DSLR (no depth files) builds with depth_source mesh, and its DUSt3R export holds that rendered
+depth: checked against a brute-force ray cast of the fixture's own boxes (exact planar
+geometry), anonymised pixels 0, plus selected_pairs.npz and scene_list.json."""
 import gzip
 import io
 import json
@@ -13,6 +16,7 @@ import struct
 import sys
 import tarfile
 
+import cv2
 import jsonschema
 import numpy as np
 
@@ -119,9 +123,147 @@ def main():
 
     # A recipe reading the iPhone frames.
     build_and_check(root, "iphone", "[128, 96]", "", export=True)
-    # The DSLR: depth rendered from the mesh in the undistorted camera (the posed exports
-    # read depth files, which the DSLR has not: shards only).
-    build_and_check(root, "dslr", "[160, 120]", "  depth_source: mesh\n", export=False)
+    # The DSLR: depth rendered from the mesh in the undistorted camera, in the shards and in
+    # the DUSt3R export (which has no depth file to read).
+    out = build_and_check(root, "dslr", "[160, 120]", "  depth_source: mesh\n", export=True)
+    check_dslr_export_depth(scene, os.path.join(out, "dust3r"))
+    check_selected_pairs(os.path.join(out, "dust3r"))
+    # The shipped recipe (DSLR, depth_source mesh) on the fixture: it builds, and its DUSt3R
+    # export reads back.
+    shipped = os.path.join(root, "out_shipped")
+    common.occgt("build", os.path.join(common.SOURCE, "recipes", "scannetpp-dust3r.yaml"),
+                 "--root", root, "--out", shipped)
+    posed = occgt_samples(shipped)
+    assert posed, "the shipped recipe selects no pair on the fixture"
+    posed_readers.check_dust3r("scannetpp shipped recipe", shipped, posed,
+                               posed_readers.shard_images(shipped, posed))
+    check_selected_pairs(os.path.join(shipped, "dust3r"))
+
+
+def read_box_mesh(path):
+    """The fixture's PLY (binary LE: float x, y, z, uchar r, g, b; faces list uchar int) as
+    triangles [T, 3, 3]."""
+    with open(path, "rb") as f:
+        data = f.read()
+    head, body = data.split(b"end_header\n", 1)
+    counts = {}
+    for line in head.decode().splitlines():
+        if line.startswith("element"):
+            _, name, n = line.split()
+            counts[name] = int(n)
+    vdt = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("rgb", "u1", 3)])
+    fdt = np.dtype([("n", "u1"), ("i", "<i4", 3)])
+    nv, nf = counts["vertex"], counts["face"]
+    assert len(body) == nv * vdt.itemsize + nf * fdt.itemsize, (len(body), nv, nf)
+    v = np.frombuffer(body, vdt, nv)
+    faces = np.frombuffer(body, fdt, nf, offset=nv * vdt.itemsize)
+    assert (faces["n"] == 3).all()
+    xyz = np.stack([v["x"], v["y"], v["z"]], axis=1).astype(np.float64)
+    return xyz[faces["i"]]
+
+
+def ray_cast_depth(tris, K, world_from_cam, width, height, near=0.05, far=20.0):
+    """Planar depth by brute force (Moller-Trumbore over every triangle), pixel centres at
+    integer coordinates (GROUND_TRUTH.md section 1); 0 = no hit in [near, far]."""
+    u, v = np.meshgrid(np.arange(width, dtype=np.float64), np.arange(height, dtype=np.float64))
+    d_cam = np.stack([(u - K[0, 2]) / K[0, 0], (v - K[1, 2]) / K[1, 1], np.ones_like(u)], -1)
+    d = d_cam.reshape(-1, 3) @ world_from_cam[:3, :3].T  # z_cam = 1: t is the planar depth
+    o = world_from_cam[:3, 3]
+    best = np.full(len(d), np.inf)
+    for a, b, c in tris:
+        e1, e2 = b - a, c - a
+        p = np.cross(d, e2)
+        det = p @ e1
+        ok = np.abs(det) > 1e-12
+        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        s = o - a
+        bu = (p @ s) * inv
+        q = np.cross(s, e1)
+        bv = (d @ q) * inv
+        t = (q @ e2) * inv
+        hit = ok & (bu >= 0) & (bv >= 0) & (bu + bv <= 1) & (t >= near) & (t <= far)
+        best = np.where(hit & (t < best), t, best)
+    best[~np.isfinite(best)] = 0
+    return best.reshape(height, width)
+
+
+def undistorted_mask(scene, image_name, K, width, height):
+    """The fixture's anonymisation mask (0 = anonymised) in the export's pinhole camera,
+    nearest-neighbour through OpenCV's fisheye model."""
+    with open(os.path.join(scene, "dslr", "colmap", "cameras.txt")) as f:
+        cam = [line.split() for line in f if line.strip() and not line.startswith("#")][0]
+    fx, fy, cx, cy, k1, k2, k3, k4 = map(float, cam[4:12])
+    # COLMAP's pixel centres are at +0.5; OpenCV's at integers.
+    Kd = np.array([[fx, 0, cx - 0.5], [0, fy, cy - 0.5], [0, 0, 1]])
+    mask = cv2.imread(os.path.join(scene, "dslr", "resized_anon_masks", image_name + ".png"),
+                      cv2.IMREAD_GRAYSCALE)
+    assert mask is not None, image_name
+    mx, my = cv2.fisheye.initUndistortRectifyMap(Kd, np.array([k1, k2, k3, k4]), np.eye(3),
+                                                 K, (width, height), cv2.CV_32FC1)
+    return cv2.remap(mask, mx, my, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT,
+                     borderValue=0)
+
+
+def check_dslr_export_depth(scene, dust3r):
+    """Every exported DSLR depth PNG: uint16 mm equal to the exact depth rounded (within half
+    a millimetre plus float precision) where the mask keeps the pixel, 0 where it is
+    anonymised (pixels 2 away from the mask's edges, whose resampling may differ)."""
+    tris = read_box_mesh(os.path.join(scene, "scans", "mesh_aligned_0.05.ply"))
+    with np.load(os.path.join(dust3r, "all_metadata.npz")) as m:
+        images, K, T = m["images"], m["intrinsics"], m["trajectories"]
+        folder = str(m["scenes"][0])
+    with np.load(os.path.join(dust3r, folder, "selected_pairs.npz")) as sp:
+        stems = sp["selection"]
+    assert len(stems) == len(images), (stems, images)
+    kernel = np.ones((5, 5), np.uint8)
+    anonymised_total = compared_total = 0
+    for i, name in enumerate(images):
+        raw = cv2.imread(os.path.join(dust3r, folder, "depth", str(name) + ".png"),
+                         cv2.IMREAD_UNCHANGED)
+        assert raw is not None and raw.dtype == np.uint16, name
+        h, w = raw.shape
+        exact = ray_cast_depth(tris, K[i], T[i], w, h)
+        mask = undistorted_mask(scene, str(stems[i]), K[i], w, h)
+        keep = cv2.erode((mask == 255).astype(np.uint8), kernel).astype(bool)
+        anonymised = cv2.erode((mask < 255).astype(np.uint8), kernel).astype(bool)
+        anonymised &= exact > 0
+        assert not raw[anonymised].any(), (name, int(np.count_nonzero(raw[anonymised])))
+        sel = keep & (exact > 0)
+        err = np.abs(raw[sel] / 1000.0 - exact[sel])
+        bad = err > 0.0005 + 1e-4
+        # Rays grazing a box edge may hit either face: at most a few such pixels.
+        assert bad.sum() <= 0.002 * sel.size, (name, int(bad.sum()), float(err.max()))
+        assert sel.sum() > 0.5 * raw.size, (name, int(sel.sum()))
+        anonymised_total += int(anonymised.sum())
+        compared_total += int(sel.sum())
+    # The fixture anonymises a rectangle in every other DSLR image.
+    assert anonymised_total > 0, anonymised_total
+    print("scannetpp dslr export depth:", compared_total, "pixels equal to the exact depth,",
+          anonymised_total, "anonymised pixels 0")
+
+
+def check_selected_pairs(dust3r):
+    """scene_list.json and <scene>/selected_pairs.npz as DUSt3R's ScanNet++ preprocessing reads
+    them (selection = image stems, pairs rows (i, j, score)) with occgt's overlaps, matching
+    scene_metadata.npz."""
+    with open(os.path.join(dust3r, "scene_list.json")) as f:
+        scenes = json.load(f)
+    with open(os.path.join(common.SOURCE, "schemas", "dust3r_scene_list.schema.json")) as f:
+        jsonschema.validate(scenes, json.load(f))
+    with np.load(os.path.join(dust3r, "all_metadata.npz")) as m:
+        assert scenes == [str(s) for s in m["scenes"]], (scenes, m["scenes"])
+    for scene in scenes:
+        with np.load(os.path.join(dust3r, scene, "selected_pairs.npz")) as sp, \
+                np.load(os.path.join(dust3r, scene, "scene_metadata.npz")) as sm:
+            assert sp["selection"].dtype.kind == "U", sp["selection"].dtype
+            assert all(str(s).startswith("DSC") for s in sp["selection"]), sp["selection"]
+            assert len(sp["selection"]) == len(sm["images"])
+            pairs, overlaps = sp["pairs"], sp["overlaps"]
+            assert pairs.shape == (len(sm["pairs"]), 3) and overlaps.shape == (len(pairs), 2)
+            assert np.array_equal(pairs, sm["pairs"][:, :3]), (pairs, sm["pairs"])
+            assert np.array_equal(overlaps, sm["pairs"][:, 3:]), (overlaps, sm["pairs"])
+            idx = pairs[:, :2].astype(int)
+            assert (idx >= 0).all() and (idx < len(sp["selection"])).all(), idx
 
 
 def build_and_check(root, device, resolution, extra, export):
@@ -175,6 +317,7 @@ dust3r_export: {"true" if export else "false"}
                                    posed_readers.shard_images(out, posed))
     print("scannetpp", device + ":", summary.get("samples"), "samples in", len(shards),
           "shard(s)")
+    return out
 
 
 if __name__ == "__main__":

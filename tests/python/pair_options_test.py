@@ -184,8 +184,10 @@ class ResolvedOptions(unittest.TestCase):
                 recipe = yaml.safe_load(f)
             preset, kwargs, _ = recipe_kwargs(recipe)
             presets.add(preset)
+            # The demo's scene has no mesh: a recipe rendering depth reads the sensor's here.
+            sensor = ["--depth-source", "sensor"] if recipe["dataset"].get("depth_source") else []
             cli = self.cli_options(path, kwargs["occupancy"], scene, id0, id1,
-                                   ["--root", root, "--format", "generic"], env=env)
+                                   ["--root", root, "--format", "generic", *sensor], env=env)
             py = self.python_options(recipe, root, "generic", scene, id0, id1)
             self.assertEqual(cli, py, path)
             self.assertEqual(cli["label_options"]["abs_tol_m"],
