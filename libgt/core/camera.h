@@ -11,10 +11,15 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <optional>
 #include <string>
 
 namespace gt {
+
+// The largest image side (pixels) that the readers of images, depth maps and camera files
+// accept: a larger size in a file is refused before any buffer is allocated.
+inline constexpr int64_t kMaxImageSidePx = int64_t{1} << 16;
 
 struct Camera {
   int width = 0;   // pixels

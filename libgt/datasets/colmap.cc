@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <set>
 
+#include "libgt/core/camera.h"
 #include "libgt/core/error.h"
 #include "libgt/datasets/text_parsing.h"
 #include "libgt/io/file_read.h"
@@ -20,7 +21,6 @@ namespace gt::datasets {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int64_t kMaxSide = int64_t{1} << 16;  // as the depth and .sens readers
 constexpr size_t kMaxNameBytes = 4096;
 constexpr uint64_t kCameraHeaderBytes = 4 + 4 + 8 + 8;
 constexpr uint64_t kImageHeaderBytes = 4 + 7 * 8 + 4;
@@ -118,9 +118,10 @@ class Cursor {
 };
 
 int CheckedSide(int64_t v, const std::string& where, const char* field) {
-  if (v < 1 || v > kMaxSide) {
+  if (v < 1 || v > kMaxImageSidePx) {
     throw InputError(where, std::string(field) + ": " + std::to_string(v) +
-                                ", expected an image size in 1.." + std::to_string(kMaxSide));
+                                ", expected an image size in 1.." +
+                                std::to_string(kMaxImageSidePx));
   }
   return static_cast<int>(v);
 }
@@ -159,8 +160,10 @@ int64_t ParseInteger(const std::string& token, const std::string& where, const c
   return v;
 }
 
-// A uint64 size from a file as int64 (sizes above kMaxSide become kMaxSide + 1).
-int64_t Clamped(uint64_t v) { return static_cast<int64_t>(std::min<uint64_t>(v, kMaxSide + 1)); }
+// A uint64 size from a file as int64 (sizes above kMaxImageSidePx become kMaxImageSidePx + 1).
+int64_t Clamped(uint64_t v) {
+  return static_cast<int64_t>(std::min<uint64_t>(v, kMaxImageSidePx + 1));
+}
 
 bool IsCommentOrBlank(std::string_view line) {
   const size_t i = line.find_first_not_of(" \t\r");

@@ -28,12 +28,14 @@ constexpr uintmax_t kMinMetricDepthBytes = 100 * 1024;
 constexpr const char* kReasonOrdinal =
     "depth: under 100 KiB (an ordinal or mask map, not metric depth)";
 
-bool IsDir(const fs::path& p) {
+bool DirectoryExists(const fs::path& p) {
   std::error_code ec;
   return fs::is_directory(p, ec);
 }
 
-bool IsSceneFolder(const fs::path& folder) { return IsDir(folder / "dense0" / "depths"); }
+bool IsMegaDepthSceneFolder(const fs::path& folder) {
+  return DirectoryExists(folder / "dense0" / "depths");
+}
 
 // The MegaDepth download folder holding phoenix/ and Undistorted_SfM/ for scenes in
 // `v1_dir` (a folder ending in phoenix/S6/zl548/MegaDepth_v1), or "" when it is not there.
@@ -80,13 +82,13 @@ std::string ModelPlacesText(const fs::path& scene_dir, const std::string& scene)
 
 // The folder of scenes under root: root/phoenix/S6/zl548/MegaDepth_v1 when it exists,
 // else root itself.
-fs::path ScenesDir(const std::string& root) {
+fs::path MegaDepthScenesDir(const std::string& root) {
   const fs::path v1 = fs::path(root) / kV1Path;
-  return IsDir(v1) ? v1 : fs::path(root);
+  return DirectoryExists(v1) ? v1 : fs::path(root);
 }
 
 // The name without its extension (os.path.splitext: folders kept).
-std::string Stem(const std::string& name) {
+std::string StemKeepingFolders(const std::string& name) {
   const size_t slash = name.find_last_of('/');
   const size_t dot = name.find_last_of('.');
   if (dot == std::string::npos || (slash != std::string::npos && dot < slash) ||
@@ -100,7 +102,7 @@ std::string Stem(const std::string& name) {
 
 std::vector<std::string> MegaDepthReader::ListScenes(const std::string& root) const {
   RequireRoot(root);
-  if (IsSceneFolder(root)) {
+  if (IsMegaDepthSceneFolder(root)) {
     const std::string name = FolderName(root);
     if (FindModel(fs::path(root), name).model.empty()) {
       throw InputError(root,
@@ -110,11 +112,11 @@ std::vector<std::string> MegaDepthReader::ListScenes(const std::string& root) co
     }
     return {name};
   }
-  const fs::path dir = ScenesDir(root);
+  const fs::path dir = MegaDepthScenesDir(root);
   std::vector<std::string> out;
   std::string first_without_model;
   for (const auto& name : ListSubfolders(dir.string())) {
-    if (!IsSceneFolder(dir / name)) continue;
+    if (!IsMegaDepthSceneFolder(dir / name)) continue;
     if (FindModel(dir / name, name).model.empty()) {
       if (first_without_model.empty()) first_without_model = name;
       continue;
@@ -136,9 +138,9 @@ std::vector<std::string> MegaDepthReader::ListScenes(const std::string& root) co
 }
 
 Scene MegaDepthReader::ReadScene(const std::string& root, const std::string& scene_name) const {
-  const bool root_is_scene = IsSceneFolder(root);
-  const std::string folder = ResolveSceneFolder(root_is_scene ? root : ScenesDir(root).string(),
-                                                scene_name, root_is_scene);
+  const bool root_is_scene = IsMegaDepthSceneFolder(root);
+  const std::string folder = ResolveSceneFolder(
+      root_is_scene ? root : MegaDepthScenesDir(root).string(), scene_name, root_is_scene);
   // MegaDepth's scale is per scene and arbitrary (SfM): the range only drops absurd values.
   Scene scene = NewFolderScene(folder, scene_name, Format(), 1e-4, 1e6);
   const std::string name = FolderName(folder);
@@ -164,7 +166,7 @@ Scene MegaDepthReader::ReadScene(const std::string& root, const std::string& sce
   for (size_t i = 0; i < images.size(); ++i) {
     const ColmapImage& im = *images[i];
     Frame f;
-    f.id = Stem(im.name);
+    f.id = StemKeepingFolders(im.name);
     if (!ids.insert(f.id).second) {
       throw InputError(model.images_path, "two images share the name " + f.id +
                                               " without extension (their depth files would "

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "libgt/core/camera.h"
 #include "libgt/core/error.h"
 #include "libgt/io/file_read.h"
 
@@ -18,14 +19,13 @@ namespace gt::datasets {
 namespace {
 
 // Larger images are refused as implausible (as depth_io.cc does for depth maps).
-constexpr int64_t kMaxSide = int64_t{1} << 16;
 constexpr int64_t kMaxPixels = int64_t{1} << 27;
 constexpr uint64_t kMaxSensorNameBytes = 4096;
 
 // Sequential reads of the header fields, each checked against the file's size first.
-class Cursor {
+class SensCursor {
  public:
-  Cursor(const std::string& path, uint64_t file_size, const SensReadAt& read_at)
+  SensCursor(const std::string& path, uint64_t file_size, const SensReadAt& read_at)
       : path_(path), file_size_(file_size), read_at_(read_at) {}
 
   void Read(void* dst, uint64_t n, const char* field) {
@@ -65,9 +65,9 @@ class Cursor {
 };
 
 int CheckedSide(uint32_t v, const std::string& path, const char* field) {
-  if (v == 0 || v > kMaxSide) {
+  if (v == 0 || v > kMaxImageSidePx) {
     throw InputError(path, std::string(field) + ": " + std::to_string(v) +
-                               ", expected an image size in 1.." + std::to_string(kMaxSide));
+                               ", expected an image size in 1.." + std::to_string(kMaxImageSidePx));
   }
   return static_cast<int>(v);
 }
@@ -85,7 +85,7 @@ void CheckPixels(int w, int h, const std::string& path, const char* what) {
 SensIndex ParseSensIndex(const std::string& path, uint64_t file_size, const SensReadAt& read_at) {
   SensIndex index;
   index.path = path;
-  Cursor in(path, file_size, read_at);
+  SensCursor in(path, file_size, read_at);
   const auto version = in.Get<uint32_t>("version");
   if (version != kSensVersion) {
     throw InputError(path, "version: " + std::to_string(version) + ", expected " +

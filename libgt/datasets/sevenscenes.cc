@@ -14,8 +14,8 @@ namespace gt::datasets {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kWidth = 640;
-constexpr int kHeight = 480;
+constexpr int kSevenScenesWidthPx = 640;
+constexpr int kSevenScenesHeightPx = 480;
 constexpr int kInvalidRaw = 65535;
 
 bool IsSequence(const std::string& folder) {
@@ -54,7 +54,7 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
       break;
     }
   }
-  int width = kWidth, height = kHeight;
+  int width = kSevenScenesWidthPx, height = kSevenScenesHeightPx;
   for (const auto& p : poses) {
     const std::string d = (fs::path(folder) / ("frame-" + p.stem + ".depth.png")).string();
     if (io::FileExists(d)) {

@@ -19,8 +19,8 @@ namespace gt::datasets {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kWidth = 640;
-constexpr int kHeight = 480;
+constexpr int kTartanAirWidthPx = 640;
+constexpr int kTartanAirHeightPx = 480;
 constexpr double kFocal = 320.0;  // fx = fy (90 degree field of view)
 constexpr double kCx = 320.0;
 constexpr double kCy = 240.0;
@@ -136,8 +136,8 @@ Scene TartanAirReader::ReadScene(const std::string& root, const std::string& sce
 
   const Camera camera = [] {
     Camera c;
-    c.width = kWidth;
-    c.height = kHeight;
+    c.width = kTartanAirWidthPx;
+    c.height = kTartanAirHeightPx;
     c.fx = c.fy = kFocal;
     c.cx = kCx;
     c.cy = kCy;

@@ -18,8 +18,8 @@ namespace gt::datasets {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int kWidth = 640;
-constexpr int kHeight = 480;
+constexpr int kTumWidthPx = 640;
+constexpr int kTumHeightPx = 480;
 
 bool IsTumSequence(const std::string& folder) {
   return io::FileExists((fs::path(folder) / "depth.txt").string());
@@ -61,8 +61,8 @@ int Nearest(const std::vector<T>& sorted, double t, double max_dt) {
 
 Camera TumCamera(const std::string& sequence_name) {
   Camera c;
-  c.width = kWidth;
-  c.height = kHeight;
+  c.width = kTumWidthPx;
+  c.height = kTumHeightPx;
   const auto has = [&](const char* s) { return sequence_name.find(s) != std::string::npos; };
   if (has("freiburg2") || has("fr2")) {
     c.fx = 520.9, c.fy = 521.0, c.cx = 325.1, c.cy = 249.7;

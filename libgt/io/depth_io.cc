@@ -20,6 +20,7 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "libgt/core/camera.h"
 #include "libgt/core/error.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/file_read.h"
@@ -37,10 +38,9 @@ constexpr float kHugeDepthM = 1e9f;
 // Larger depth maps are rejected as implausible before any pixel buffer is allocated
 // (a 16384 x 8192 float map is 512 MiB); each side is also at most 65536.
 constexpr int64_t kMaxDepthPixels = int64_t{1} << 27;
-constexpr int64_t kMaxDepthSide = int64_t{1} << 16;
 
 bool PlausibleSize(int64_t width, int64_t height) {
-  return width > 0 && height > 0 && width <= kMaxDepthSide && height <= kMaxDepthSide &&
+  return width > 0 && height > 0 && width <= kMaxImageSidePx && height <= kMaxImageSidePx &&
          width * height <= kMaxDepthPixels;
 }
 

@@ -7,13 +7,14 @@
 #include <mutex>
 #include <vector>
 
+#include "libgt/core/camera.h"
 #include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
 
 namespace gt::io {
 namespace {
 
-constexpr hsize_t kMaxSide = hsize_t{1} << 16;
+constexpr hsize_t kMaxSide = kMaxImageSidePx;
 constexpr hsize_t kMaxPixels = hsize_t{1} << 27;
 
 // A thread-safe libhdf5 (Debian's is: H5_HAVE_THREADSAFE) serialises its calls itself;

@@ -6,15 +6,9 @@
 
 #include <cstdint>
 
-namespace gt::synth {
+#include "libgt/core/hash.h"
 
-// One SplitMix64 output step applied to x (also a good 64-bit hash / seed mixer).
-inline uint64_t Mix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
+namespace gt::synth {
 
 // Seed of a child stream (e.g. scene i of a dataset seed).
 inline uint64_t ChildSeed(uint64_t seed, uint64_t index) { return Mix64(Mix64(seed) ^ index); }

@@ -8,8 +8,6 @@
 namespace gt::synth {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 Material RandomMaterial(SplitMix64& rng, double lo, double hi, double min_scale_m,
                         double max_scale_m) {
   Material m;

@@ -17,6 +17,8 @@
 
 namespace gt::synth {
 
+inline constexpr double kPi = 3.14159265358979323846;
+
 enum class Pattern {
   kChecker,  // squares of side scale_m
   kStripes,  // stripes of width scale_m along the surface's first axis

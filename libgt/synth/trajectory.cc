@@ -8,9 +8,6 @@
 #include "libgt/core/error.h"
 
 namespace gt::synth {
-namespace {
-constexpr double kPi = 3.14159265358979323846;
-}
 
 bool TrajectoryOptions::Check(std::string* error) const {
   auto fail = [&](const std::string& m) {
