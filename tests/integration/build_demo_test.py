@@ -191,15 +191,8 @@ def file_bytes(out, pattern):
 
 def main():
     import yaml
-    recipe = os.path.join(common.SOURCE, "recipes", "demo.yaml")
     root = common.scratch("build_demo")
-    with open(recipe) as f:
-        doc = yaml.safe_load(f)
-    width, height = common.half_size_when_sanitized(doc)
-    if common.SANITIZER:  # the same recipe at half the size (common.py)
-        recipe = os.path.join(root, "demo-half.yaml")
-        with open(recipe, "w") as f:
-            yaml.safe_dump(doc, f)
+    recipe, width, height = common.demo_recipe(root)  # half size under a sanitizer
     out = os.path.join(root, "a")
     r = common.occgt("build", "--json", recipe, "--out", out)
     summary_stdout = json.loads(r.stdout)

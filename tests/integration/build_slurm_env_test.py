@@ -24,8 +24,8 @@ def slurm_env(**values):
 
 
 def main():
-    recipe = os.path.join(common.SOURCE, "recipes", "demo.yaml")
     root = common.scratch("build_slurm_env")
+    recipe, _, _ = common.demo_recipe(root)  # half size under a sanitizer
     ref = os.path.join(root, "ref")
     common.occgt("build", "--json", recipe, "--out", ref, env=slurm_env())
 

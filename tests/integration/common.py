@@ -27,6 +27,22 @@ def half_size_when_sanitized(doc):
     return tuple(doc["resolution"])
 
 
+def demo_recipe(folder):
+    """recipes/demo.yaml, or under a sanitizer a half-size copy of it written into folder
+    (half_size_when_sanitized); returns (recipe path, width, height)."""
+    import yaml
+    recipe = os.path.join(SOURCE, "recipes", "demo.yaml")
+    with open(recipe) as f:
+        doc = yaml.safe_load(f)
+    width, height = half_size_when_sanitized(doc)
+    if SANITIZER:
+        os.makedirs(folder, exist_ok=True)
+        recipe = os.path.join(folder, "demo-half.yaml")
+        with open(recipe, "w") as f:
+            yaml.safe_dump(doc, f)
+    return recipe, width, height
+
+
 def shared(rel):
     """Path under ../shared/data; fails loudly when the real samples are missing."""
     p = os.path.join(SHARED, rel)

@@ -77,7 +77,8 @@ def check_real_build():
     a re-merge reproduces index.json and pairs.jsonl byte for byte and keeps the build's
     summary.json, and the doc reader reads the samples with the documented dtypes."""
     out = common.scratch("shards_build_demo")
-    common.occgt("build", "--json", os.path.join(common.SOURCE, "recipes", "demo.yaml"), "--out", out)
+    recipe, _, _ = common.demo_recipe(common.scratch("shards_build_demo_recipe"))
+    common.occgt("build", "--json", recipe, "--out", out)
     schemas = os.path.join(common.SOURCE, "schemas")
     r = common.occgt("validate", "--schemas", schemas, out, check=False)
     check(r.returncode == 0, f"validate of a build output:\n{r.stdout}{r.stderr}")
