@@ -463,12 +463,18 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
        "page-break-inside:avoid}h2{page-break-after:avoid}figure{page-break-inside:avoid}}\n"
     << "</style>\n</head>\n<body data-images-decoded=\"pending\">\n";
   h << "<h1>Split report: " << HtmlEscape(name) << "</h1>\n<p class=\"muted\">"
-    << HtmlEscape(split.dir) << " &middot; " << split.pairs.size() << " pairs &middot; "
-    << "pair values are the " << AggregateName(options.aggregate)
-    << " of both directions; occlusion ratio = "
-    << (options.occlusion_metric == OcclusionMetric::kImage ? "OCCLUDED / (W&middot;H)"
-                                                            : "OCCLUDED / (VISIBLE + OCCLUDED)")
-    << "</p>\n";
+    << HtmlEscape(split.dir) << " &middot; ";
+  if (split.has_pairs) {
+    h << split.pairs.size() << " pairs &middot; "
+      << "pair values are the " << AggregateName(options.aggregate)
+      << " of both directions; occlusion ratio = "
+      << (options.occlusion_metric == OcclusionMetric::kImage ? "OCCLUDED / (W&middot;H)"
+                                                              : "OCCLUDED / (VISIBLE + OCCLUDED)");
+  } else {
+    h << "no pairs.jsonl";
+  }
+  if (split.tuples) h << " &middot; " << split.tuples->tuples.size() << " N-view tuples";
+  h << "</p>\n";
   const std::vector<std::string> warnings = SplitWarnings(split);
   if (!warnings.empty()) {
     h << "<div class=\"warn\" role=\"alert\"><strong>Warnings</strong><ul>\n";

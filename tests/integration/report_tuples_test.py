@@ -270,6 +270,8 @@ def main():
     check("No pairs.jsonl in this folder" in html and "overlap_hist.png" not in html,
           "tuples-only report shows pair plots")
     check('class="warn"' not in html, "tuples-only report shows a warning")
+    check(f"no pairs.jsonl &middot; {len(lines)} N-view tuples</p>" in html,
+          "tuples-only report's heading does not say what the folder holds")
     check_tuples(doc, html, lines, truth, "tuples only")
 
     # --- no shards: occlusion from tuples.jsonl only, no thumbnails (said why).
