@@ -22,37 +22,21 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-uint64_t SplitMix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-uint64_t Fnv1a64(const std::string& s) {
-  uint64_t h = 0xcbf29ce484222325ULL;
-  for (unsigned char c : s) {
-    h ^= c;
-    h *= 0x100000001b3ULL;
-  }
-  return h;
-}
-
-std::vector<json> ReadJsonLines(const std::string& path) {
-  std::vector<json> out;
+// The JSON objects of a .jsonl file (blank lines skipped), each with "<path>:<line>".
+std::vector<std::pair<std::string, json>> ReadJsonLines(const std::string& path) {
+  std::vector<std::pair<std::string, json>> out;
   const std::vector<std::string> lines = io::ReadLines(path);
   for (size_t n = 0; n < lines.size(); ++n) {
     if (lines[n].find_first_not_of(" \t\r") == std::string::npos) continue;
+    const std::string where = path + ":" + std::to_string(n + 1);
     json j;
     try {
       j = json::parse(lines[n]);
     } catch (const json::exception&) {
-      throw InputError(path + ":" + std::to_string(n + 1), "expected one JSON object per line");
+      throw InputError(where, "expected one JSON object per line");
     }
-    if (!j.is_object()) {
-      throw InputError(path + ":" + std::to_string(n + 1), "expected one JSON object per line");
-    }
-    out.push_back(std::move(j));
+    if (!j.is_object()) throw InputError(where, "expected one JSON object per line");
+    out.emplace_back(where, std::move(j));
   }
   return out;
 }
@@ -157,17 +141,7 @@ std::optional<TupleSet> LoadTupleSet(const std::string& dir) {
   if (!io::FileExists(path)) return std::nullopt;
   TupleSet set;
   set.dir = dir;
-  const std::vector<std::string> lines = io::ReadLines(path);
-  for (size_t n = 0; n < lines.size(); ++n) {
-    if (lines[n].find_first_not_of(" \t\r") == std::string::npos) continue;
-    const std::string where = path + ":" + std::to_string(n + 1);
-    json j;
-    try {
-      j = json::parse(lines[n]);
-    } catch (const json::exception&) {
-      throw InputError(where, "expected one JSON object per line");
-    }
-    if (!j.is_object()) throw InputError(where, "expected one JSON object per line");
+  for (const auto& [where, j] : ReadJsonLines(path)) {
     SplitTuple t;
     if (!j.contains("scene") || !j["scene"].is_string()) {
       throw InputError(where, "expected a string \"scene\"");
@@ -194,10 +168,7 @@ std::optional<TupleSet> LoadTupleSet(const std::string& dir) {
   const std::string views = (fs::path(dir) / "views" / "pairs.jsonl").string();
   if (io::FileExists(views)) {
     set.has_shards = true;
-    const std::vector<json> rows = ReadJsonLines(views);
-    for (size_t n = 0; n < rows.size(); ++n) {
-      const json& r = rows[n];
-      const std::string where = views + ":" + std::to_string(n + 1);
+    for (const auto& [where, r] : ReadJsonLines(views)) {
       if (!r.contains("tuple_index") || !r["tuple_index"].is_number_integer()) {
         throw InputError(where, "expected an integer \"tuple_index\"");
       }
