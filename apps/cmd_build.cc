@@ -21,6 +21,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/job_flags.h"
 #include "libgt/core/error.h"
 #include "libgt/core/human.h"
 #include "libgt/pipeline/build.h"
@@ -246,22 +247,14 @@ void AddBuildCommand(CLI::App& app) {
   cmd->add_flag("--json", args->json,
                 "Print the summary as JSON (the content of DIR/summary.json) instead of a short "
                 "human summary");
-  auto* task = cmd->add_option(
-      "--task", args->build.task,
-      "This task's index (0-based) when split in --tasks (default: from SLURM_ARRAY_TASK_ID)");
-  auto* tasks = cmd->add_option(
-      "--tasks", args->build.tasks,
-      "Number of tasks the run is split into (default: SLURM_ARRAY_TASK_COUNT, else 1)");
+  const TaskFlags task_flags = AddTaskFlags(cmd, &args->build.task, &args->build.tasks);
   cmd->add_option("--stage", args->stage, "select | write | all (default all)");
-  cmd->add_option("--depth-cache-mb", args->build.depth_cache_mb,
-                  "Budget of decoded depth maps held per scene (LRU, default 512)");
+  AddDepthCacheFlag(cmd, &args->build.depth_cache_mb);
   cmd->add_option("--depth-source", args->depth_source,
                   "sensor|mesh|fused: overrides the recipe's dataset.depth_source");
-  cmd->add_option(
-      "--root", args->root,
-      "Dataset root overriding the recipe's dataset.root (relative to the working folder)");
-  cmd->callback([args, task, tasks] {
-    args->task_given = task->count() > 0 || tasks->count() > 0;
+  AddRootFlag(cmd, &args->root);
+  cmd->callback([args, task_flags] {
+    args->task_given = task_flags.Given();
     Run(*args);
   });
 }

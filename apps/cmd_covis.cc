@@ -14,6 +14,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/job_flags.h"
 #include "libgt/core/error.h"
 #include "libgt/pipeline/covisibility.h"
 #include "libgt/pipeline/recipe.h"
@@ -81,19 +82,11 @@ void AddCovisCommand(CLI::App& app) {
                 "Also write MapAnything's pairwise_covisibility--FxF.npy per scene");
   cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)");
   cmd->add_flag("--json", args->json, "Print the summary as JSON");
-  auto* task = cmd->add_option(
-      "--task", args->options.task,
-      "This task's index (0-based) when split in --tasks (default: from SLURM_ARRAY_TASK_ID)");
-  auto* tasks = cmd->add_option(
-      "--tasks", args->options.tasks,
-      "Number of tasks the run is split into (default: SLURM_ARRAY_TASK_COUNT, else 1)");
-  cmd->add_option("--depth-cache-mb", args->options.depth_cache_mb,
-                  "Budget of decoded depth maps held per scene (LRU, default 512)");
-  cmd->add_option(
-      "--root", args->root,
-      "Dataset root overriding the recipe's dataset.root (relative to the working folder)");
-  cmd->callback([args, task, tasks] {
-    args->task_given = task->count() > 0 || tasks->count() > 0;
+  const TaskFlags task_flags = AddTaskFlags(cmd, &args->options.task, &args->options.tasks);
+  AddDepthCacheFlag(cmd, &args->options.depth_cache_mb);
+  AddRootFlag(cmd, &args->root);
+  cmd->callback([args, task_flags] {
+    args->task_given = task_flags.Given();
     Run(*args);
   });
 }

@@ -38,6 +38,7 @@ struct InspectSplitArgs {
   int bins = 20;
   std::vector<std::string> eval;
   int eval_gallery = 4;
+  int gallery_tuples = gt::report::SplitReportOptions().gallery_tuples;
 };
 
 void RunInspectPair(const InspectPairArgs& a) {
@@ -99,12 +100,14 @@ void RunInspectSplit(const InspectSplitArgs& a) {
   o.histogram_bins = a.bins;
   o.eval_paths = a.eval;
   o.eval_gallery_pairs = a.eval_gallery;
+  o.gallery_tuples = a.gallery_tuples;
   std::string error;
   if (!o.Check(&error)) {  // the defaults pass: a failure comes from a flag
     ThrowOptionsError(error, "occgt inspect split",
                       {{"histogram_bins", "--bins", true},
                        {"gallery_pairs", "--gallery", true},
-                       {"eval_gallery_pairs", "--eval-gallery", true}});
+                       {"eval_gallery_pairs", "--eval-gallery", true},
+                       {"gallery_tuples", "--gallery-tuples", true}});
   }
   const std::string out = a.out.empty() ? a.dir + "/inspect" : a.out;
   const auto written = gt::report::WriteSplitReport(a.dir, out, o);
@@ -154,8 +157,13 @@ void AddInspectCommand(CLI::App& app) {
 
   auto sa = std::make_shared<InspectSplitArgs>();
   auto* split = cmd->add_subcommand(
-      "split", "plots (gnuplot) and a self-contained report.html of an `occgt build` folder");
-  split->add_option("dir", sa->dir, "output folder of `occgt build` (pairs.jsonl, summary.json)")
+      "split",
+      "plots (gnuplot), a self-contained report.html and report.json of an `occgt build` "
+      "folder (and of the tuples of `occgt tuples` in it)");
+  split
+      ->add_option("dir", sa->dir,
+                   "output folder of `occgt build` (pairs.jsonl, summary.json) and/or of "
+                   "`occgt tuples` (tuples.jsonl, views/)")
       ->required();
   split->add_option("--out", sa->out, "report folder (default DIR/inspect)");
   split->add_option("--aggregate", sa->aggregate, "combine both directions: min, mean, max")
@@ -176,6 +184,11 @@ void AddInspectCommand(CLI::App& app) {
                     "eval.json of `occgt eval` on this split: adds the evaluation section "
                     "(repeat to compare several files' prediction sets)");
   split->add_option("--eval-gallery", sa->eval_gallery, "worst pairs shown per prediction set")
+      ->capture_default_str();
+  split
+      ->add_option("--gallery-tuples", sa->gallery_tuples,
+                   "N-view tuples shown with their views (when DIR has the tuples.jsonl of "
+                   "occgt tuples)")
       ->capture_default_str();
   split->callback([sa] { RunInspectSplit(*sa); });
 }

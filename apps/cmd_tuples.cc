@@ -12,6 +12,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/job_flags.h"
 #include "libgt/core/error.h"
 #include "libgt/pipeline/recipe.h"
 #include "libgt/pipeline/tuple_stage.h"
@@ -65,9 +66,7 @@ void AddTuplesCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--out", args->out_dir, "The folder of occgt covis (writes tuples.jsonl there)")
       ->required();
-  cmd->add_option(
-      "--root", args->root,
-      "Dataset root overriding the recipe's dataset.root (relative to the working folder)");
+  AddRootFlag(cmd, &args->root);
   cmd->add_flag("--shards", args->shards,
                 "Also write one N-view sample per tuple into DIR/views/ (docs/MULTIVIEW.md)");
   cmd->add_option("--threads", args->threads, "Worker threads of --shards (0 = all cores)");

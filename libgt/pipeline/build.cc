@@ -196,6 +196,23 @@ bool BuildOptions::Check(std::string* error) const {
   return true;
 }
 
+std::unique_ptr<io::FileLock> AcquireTaskLock(const std::string& out_dir,
+                                              const std::string& lock_file,
+                                              const std::string& command, int task, int tasks,
+                                              const std::string& advice) {
+  std::filesystem::create_directories(out_dir);
+  const std::string lock_path = out_dir + "/" + lock_file;  // byte K: task K
+  std::unique_ptr<io::FileLock> lock = io::FileLock::TryAcquire(lock_path, task);
+  if (!lock) {
+    throw InputError(out_dir, "another occgt " + command + " of task " + std::to_string(task) +
+                                  " of " + std::to_string(tasks) +
+                                  " is writing this folder now (it holds byte " +
+                                  std::to_string(task) + " of " + lock_path +
+                                  "); wait for it to finish, or " + advice);
+  }
+  return lock;
+}
+
 int64_t EstimatedSampleBytes(const Recipe& r) {
   const bool deflate = r.sample.compression == SampleCompression::kDeflate;
   const double sparse = deflate ? 0.06 : 1.0;  // labels, cells, occupancy: long runs
@@ -236,16 +253,8 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
   // files. Tasks of one array job hold different locks and run together.
   std::unique_ptr<io::FileLock> task_lock;
   if (!options.dry_run) {
-    const std::string lock_path = options.out_dir + "/.tasks.lock";  // byte K: task K
-    task_lock = io::FileLock::TryAcquire(lock_path, options.task);
-    if (!task_lock) {
-      throw InputError(options.out_dir,
-                       "another occgt build of task " + std::to_string(options.task) + " of " +
-                           std::to_string(options.tasks) +
-                           " is writing this folder now (it holds byte " +
-                           std::to_string(options.task) + " of " + lock_path +
-                           "); wait for it to finish, or build into another --out");
-    }
+    task_lock = AcquireTaskLock(options.out_dir, ".tasks.lock", "build", options.task,
+                                options.tasks, "build into another --out");
   }
   const Recipe recipe = ResolveDataset(recipe_in, options);
   datasets::ReaderOptions reader_options;

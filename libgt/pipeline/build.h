@@ -19,9 +19,11 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "libgt/io/folder_lock.h"
 #include "libgt/pipeline/recipe.h"
 
 namespace gt::pipeline {
@@ -63,5 +65,17 @@ nlohmann::json RunBuild(const Recipe& recipe, const BuildOptions& options,
 // (docs/PERFORMANCE.md "Sample compression"), rounded up: labels, cells and occupancy 0.06,
 // depth 0.2, matches 0.9.
 int64_t EstimatedSampleBytes(const Recipe& recipe);
+
+// One process per command, task and output folder: byte `task` of DIR/<lock_file> (an fcntl
+// record lock, io::FileLock), held until the returned object is destroyed or the process
+// ends. `occgt build` holds DIR/.tasks.lock, `occgt covis` DIR/.covis.lock, `occgt tuples`
+// DIR/.tuples.lock (task 0): they write different files and may run together; a second run of
+// one command and task into one DIR is refused with InputError(DIR, "another occgt <command>
+// of task K of N is writing this folder now (it holds byte K of <lock>); wait for it to
+// finish, or <advice>"). Creates DIR when missing.
+std::unique_ptr<io::FileLock> AcquireTaskLock(const std::string& out_dir,
+                                              const std::string& lock_file,
+                                              const std::string& command, int task, int tasks,
+                                              const std::string& advice);
 
 }  // namespace gt::pipeline

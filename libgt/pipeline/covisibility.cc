@@ -17,6 +17,7 @@
 #include "libgt/io/md5.h"
 #include "libgt/io/npy.h"
 #include "libgt/io/npz_members.h"
+#include "libgt/pipeline/build.h"
 #include "libgt/pipeline/select.h"
 #include "libgt/pipeline/synthetic.h"
 #include "libgt/truth/working_frame.h"
@@ -164,23 +165,39 @@ void WriteSceneCovisibility(const std::string& path, const SceneCovisibility& g,
   io::WriteNpz(path, m);
 }
 
+SceneLoop StartSceneLoop(const Recipe& recipe_in, const std::string& out_dir, bool generate) {
+  SceneLoop loop;
+  loop.recipe = recipe_in;
+  Recipe& recipe = loop.recipe;
+  if (recipe.dataset.is_synthetic) {  // as the build: generated once under DIR/data
+    if (recipe.dataset.root.empty()) recipe.dataset.root = out_dir + "/data";
+    if (generate) {
+      io::FolderLock lock(out_dir);
+      EnsureSyntheticDataset(recipe.dataset.root, recipe.dataset.synthetic);
+    }
+    recipe.dataset.is_synthetic = false;
+    recipe.dataset.format = DatasetFormat::kGeneric;
+  }
+  loop.digest = CovisibilityDigest(recipe_in);
+  loop.reader = datasets::MakeReader(recipe.dataset.format);
+  loop.scenes = ResolveScenes(recipe, *loop.reader, nullptr);
+  return loop;
+}
+
 nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOptions& options,
                                const std::function<void(int64_t, int64_t)>& progress) {
   std::string error;
   if (!options.Check(&error)) throw InputError("options", error);
+  // One run per task and folder (a second one would rename the first's temporary graphs).
+  const std::unique_ptr<io::FileLock> task_lock =
+      AcquireTaskLock(options.out_dir, ".covis.lock", "covis", options.task, options.tasks,
+                      "write into another --out");
   const auto t0 = std::chrono::steady_clock::now();
-  Recipe recipe = recipe_in;
-  if (recipe.dataset.is_synthetic) {  // as the build: generated once under DIR/data
-    if (recipe.dataset.root.empty()) recipe.dataset.root = options.out_dir + "/data";
-    io::FolderLock lock(options.out_dir);
-    EnsureSyntheticDataset(recipe.dataset.root, recipe.dataset.synthetic);
-    recipe.dataset.is_synthetic = false;
-    recipe.dataset.format = DatasetFormat::kGeneric;
-  }
-  const std::string digest = CovisibilityDigest(recipe_in);
-  const std::unique_ptr<datasets::DatasetReader> reader =
-      datasets::MakeReader(recipe.dataset.format);
-  const std::vector<std::string> scenes = ResolveScenes(recipe, *reader, nullptr);
+  const SceneLoop loop = StartSceneLoop(recipe_in, options.out_dir, /*generate=*/true);
+  const Recipe& recipe = loop.recipe;
+  const std::string& digest = loop.digest;
+  const datasets::DatasetReader* reader = loop.reader.get();
+  const std::vector<std::string>& scenes = loop.scenes;
   std::vector<std::string> mine;
   for (size_t s = 0; s < scenes.size(); ++s) {
     if (static_cast<int>(s % options.tasks) == options.task) mine.push_back(scenes[s]);

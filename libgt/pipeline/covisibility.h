@@ -19,16 +19,20 @@
 //       frame j, denominator the whole sampled grid, MapAnything's `denominator_mode: full`),
 //       C[i, i] = self, 0 for pruned pairs.
 // Tasks: task k of N takes the sorted scenes s with s % N == k (like the select stage), so
-// any task layout gives the same files; threads only inside a scene (ScorePairs), results
-// stored by pair index: the bytes never depend on the thread count.
+// any task layout gives the same files; a run holds byte k of DIR/.covis.lock
+// (AcquireTaskLock, build.h): a second run of task k into DIR is refused while it runs; threads
+// only inside a scene (ScorePairs), results stored by pair index: the bytes never depend on the
+// thread count.
 #pragma once
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "libgt/datasets/reader.h"
 #include "libgt/pairs/selection.h"
 #include "libgt/pipeline/recipe.h"
 
@@ -66,6 +70,18 @@ struct CovisibilityOptions {
 
   bool Check(std::string* error) const;
 };
+
+// What `occgt covis` and `occgt tuples` start from: the recipe with a synthetic dataset read
+// as `generic` from DIR/data (unless dataset.root is set), generated there first when
+// `generate` (once per folder, under DIR/.lock, as the build), the CovisibilityDigest of the
+// recipe as given, its reader and its scenes in order.
+struct SceneLoop {
+  Recipe recipe;
+  std::string digest;
+  std::unique_ptr<datasets::DatasetReader> reader;
+  std::vector<std::string> scenes;
+};
+SceneLoop StartSceneLoop(const Recipe& recipe, const std::string& out_dir, bool generate);
 
 // Path of a scene's graph under DIR.
 std::string CovisibilityPath(const std::string& out_dir, const std::string& scene);

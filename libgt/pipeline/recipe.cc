@@ -483,6 +483,16 @@ bool ShardOptions::Check(std::string* error) const {
   return true;
 }
 
+bool TupleTrackOptions::Check(std::string* error) const {
+  if (num_tracks < 0) {
+    return *error = "selection.tuples.num_tracks: expected an integer >= 0", false;
+  }
+  if (query_view < 0) {
+    return *error = "selection.tuples.query_view: expected an integer >= 0", false;
+  }
+  return true;
+}
+
 bool Recipe::Check(std::string* error) const {
   if (name.empty()) return *error = "name: expected a non-empty name", false;
   if (width < 8 || height < 8)
@@ -492,6 +502,16 @@ bool Recipe::Check(std::string* error) const {
                       occupancy.settings.max_range_m.has_value(), error) ||
       !shards.Check(error)) {
     return false;
+  }
+  if (tuples) {
+    if (!tuple_tracks.Check(error)) return false;
+    if (tuple_tracks.query_view >= tuples->min_views) {
+      return *error =
+                 "selection.tuples.query_view: expected a view index below selection.views' "
+                 "smallest N (" +
+                 std::to_string(tuples->min_views) + ")",
+             false;
+    }
   }
   if (width % patches.stride != 0 || height % patches.stride != 0) {
     return *error = "patches.stride: expected a divisor of both resolution W and H", false;
@@ -586,6 +606,14 @@ json Recipe::ToJson() const {
                                 {"quota_per_scene", tuples->quota}};
     if (tuples->balance_occlusion > 0) {  // only when set: digests of earlier recipes unchanged
       j["selection"]["tuples"]["balance_occlusion"] = tuples->balance_occlusion;
+    }
+    // The tracks likewise only when not the defaults (truth::ViewsTruthOptions's).
+    const TupleTrackOptions default_tracks;
+    if (tuple_tracks.num_tracks != default_tracks.num_tracks) {
+      j["selection"]["tuples"]["num_tracks"] = tuple_tracks.num_tracks;
+    }
+    if (tuple_tracks.query_view != default_tracks.query_view) {
+      j["selection"]["tuples"]["query_view"] = tuple_tracks.query_view;
     }
   }
   // The values the keys resolve to (defaults included); max_range_m only when set apart
@@ -764,6 +792,8 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
         Get(tj, "restarts", &t.restarts, file);
         Get(tj, "quota_per_scene", &t.quota, file);
         Get(tj, "balance_occlusion", &t.balance_occlusion, file);
+        Get(tj, "num_tracks", &r.tuple_tracks.num_tracks, file);
+        Get(tj, "query_view", &r.tuple_tracks.query_view, file);
       }
       std::string error;
       if (!t.Check(&error)) throw InputError(file, "selection." + error);

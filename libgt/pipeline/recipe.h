@@ -32,6 +32,7 @@
 #include "libgt/pipeline/sample.h"
 #include "libgt/render/frame_depth.h"
 #include "libgt/truth/pair_settings.h"
+#include "libgt/truth/views_truth.h"
 
 namespace gt::pipeline {
 
@@ -110,6 +111,16 @@ struct ShardOptions {
   bool Check(std::string* error) const;
 };
 
+// selection.tuples.num_tracks / query_view: the tracks of each N-view sample of `occgt tuples
+// --shards` (views_write.h), as truth::ViewsTruthOptions's fields of those names (the
+// defaults are that struct's).
+struct TupleTrackOptions {
+  int num_tracks = truth::ViewsTruthOptions().num_tracks;  // query pixels per sample, >= 0
+  int query_view = truth::ViewsTruthOptions().query_view;  // their view, < selection.views min
+
+  bool Check(std::string* error) const;  // num_tracks >= 0, query_view >= 0
+};
+
 struct Recipe {
   std::string file;      // the recipe path as given (for messages)
   std::string base_dir;  // folder relative paths are resolved against
@@ -132,6 +143,7 @@ struct Recipe {
   // selection.views (N or [min, max]) and selection.tuples: the N-view tuples of `occgt
   // tuples` (pairs/tuples.h); unset: the recipe has no tuples (and its digest is unchanged).
   std::optional<pairs::TupleOptions> tuples;
+  TupleTrackOptions tuple_tracks;  // with tuples only
 
   // Cross-field checks after the schema (ranges lo <= hi, stride divides the resolution,
   // near < far ...). On failure *error is "<field>: expected ...".

@@ -10,7 +10,9 @@
 //   {"scene", "frame_ids": [N ids, in the order the walk added them],
 //    "covisibility": N×N, [a][b] = the graph's visible overlap of frame a → frame b
 //                    (c_ij / c_ji; 0 for a pair the pruning dropped), [a][a] = self}
-// No threads: the file depends on the graphs, the options and the seed only.
+// No threads: the file depends on the graphs, the options and the seed only. A run holds
+// DIR/.tuples.lock (AcquireTaskLock, build.h): a second `occgt tuples` into DIR is refused
+// while it runs.
 #pragma once
 
 #include <nlohmann/json.hpp>

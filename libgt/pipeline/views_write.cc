@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <bitset>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -85,8 +86,8 @@ EncodedSample ComputeViewsSample(const ViewsScene& d, const TupleLine& line, int
   }
   truth::ViewsTruthOptions vo;
   vo.labels = options.truth.labels;
-  vo.num_tracks = kViewsSampleTracks;
-  vo.query_view = 0;
+  vo.num_tracks = recipe.tuple_tracks.num_tracks;
+  vo.query_view = recipe.tuple_tracks.query_view;
   vo.seed = recipe.seed + static_cast<uint64_t>(index);
   const truth::ViewsTruth t = truth::ComputeViewsTruth(views, vo);
 
@@ -203,16 +204,40 @@ void CheckCompleteShard(const std::string& dir, const Recipe& recipe, int64_t sh
 
 std::string ViewsShardDir(const std::string& out_dir) { return out_dir + "/views"; }
 
+int64_t EstimatedViewsSampleBytes(const Recipe& r) {
+  const bool deflate = r.sample.compression == SampleCompression::kDeflate;
+  const double sparse = deflate ? 0.06 : 1.0;
+  const double px = static_cast<double>(r.width) * r.height;
+  const double views = r.tuples ? r.tuples->max_views : 2;
+  const double tracks = r.tuples ? r.tuple_tracks.num_tracks : 0;
+  double per_view =
+      (deflate ? 0.2 : 1.0) * 4 * px + sparse * 9 * px + (deflate ? 0.9 : 1.0) * 13 * tracks;
+  if (r.sample.image == ImageFormat::kPng) per_view += 2 * px;
+  if (r.sample.image == ImageFormat::kJpg) per_view += px * 3 / 10;
+  return static_cast<int64_t>(std::ceil(4096 + 8 * tracks + views * per_view));
+}
+
+std::vector<int64_t> PlanViewsShards(const Recipe& recipe, int64_t total) {
+  int64_t per_shard = recipe.shards.samples_per_shard;
+  if (recipe.shards.target_mb > 0) {
+    per_shard = std::max<int64_t>(
+        1, static_cast<int64_t>(recipe.shards.target_mb * 1e6 /
+                                static_cast<double>(EstimatedViewsSampleBytes(recipe))));
+  }
+  std::vector<int64_t> sizes;
+  for (int64_t start = 0; start < total; start += per_shard) {
+    sizes.push_back(std::min(per_shard, total - start));
+  }
+  return sizes;
+}
+
 json WriteViewsShards(const Recipe& recipe, const datasets::DatasetReader& reader,
                       const std::string& out_dir, const std::vector<TupleLine>& lines) {
   BuildOptions options;
   options.out_dir = ViewsShardDir(out_dir);
   std::filesystem::create_directories(options.out_dir);
   const int64_t total = static_cast<int64_t>(lines.size());
-  std::vector<int64_t> sizes;
-  for (int64_t start = 0; start < total; start += recipe.shards.samples_per_shard) {
-    sizes.push_back(std::min<int64_t>(recipe.shards.samples_per_shard, total - start));
-  }
+  const std::vector<int64_t> sizes = PlanViewsShards(recipe, total);
   WritePlan(options, recipe.split, sizes);
   const size_t threads = std::max<size_t>(
       1, tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));

@@ -15,8 +15,11 @@
 //   queries.npy int32 [Q, 2]; track_xy.npy float32 [N, Q, 2]; track_depth.npy float32 [N, Q];
 //   track_state.npy uint8 [N, Q]
 // The ground truth is truth::ComputeViewsTruth of the frames with the recipe's label options
-// of the scene (RecipePairTruthOptions, as pair samples), query view 0, 512 tracks, seed
-// recipe.seed + k.
+// of the scene (RecipePairTruthOptions, as pair samples), the tracks of
+// selection.tuples.num_tracks / query_view (recipe.tuple_tracks; defaults those of
+// truth::ViewsTruthOptions), seed recipe.seed + k.
+// Shards: shards.samples_per_shard samples each, or with shards.target_mb > 0
+// max(1, floor(target_mb · 10⁶ / EstimatedViewsSampleBytes(recipe))) (as pair shards).
 //
 // Work: shards in order, each computed in chunks of samples in parallel (TBB) and added in
 // order, so the files are byte-identical for any thread count. A complete shard (part record
@@ -41,7 +44,15 @@ struct TupleLine {
   std::vector<float> covisibility;  // [N, N] row-major
 };
 
-inline constexpr int kViewsSampleTracks = 512;
+// Estimated bytes of one N-view sample of the recipe's largest N (selection.views max), so
+// that shards.target_mb bounds a shard: per view its image (PNG 2 bytes/pixel, JPG 0.3),
+// depth (4 bytes/pixel, ×0.2 deflated), visible_in + occluded_in (8) and valid (1) (×0.06
+// deflated, long runs), its tracks (13 bytes per track, ×0.9 deflated); plus 8 bytes per
+// track (queries) and 4096 (json). Zero tracks when selection.tuples is unset.
+int64_t EstimatedViewsSampleBytes(const Recipe& recipe);
+
+// Samples per N-view shard for `total` samples (the rule above), in order.
+std::vector<int64_t> PlanViewsShards(const Recipe& recipe, int64_t total);
 
 // The folder of the N-view shards under an `occgt tuples` output: DIR/views.
 std::string ViewsShardDir(const std::string& out_dir);

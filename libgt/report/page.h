@@ -2,6 +2,7 @@
 // embedded images, HTML and gnuplot text escaping, number formatting, one gnuplot run.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -13,6 +14,11 @@ struct NamedImage {
   std::string mime;   // "image/png" | "image/jpeg"
   std::string bytes;  // encoded image
 };
+
+// Seeded choices of the galleries (pictures' match subsets, the split report's pairs and
+// tuples): SplitMix64's output function (Steele, Lea, Flood 2014) and FNV-1a 64 of a string.
+uint64_t SplitMix64(uint64_t x);
+uint64_t Fnv1a64(std::string_view s);
 
 // RFC 4648 base64 (with padding).
 std::string Base64(std::string_view bytes);

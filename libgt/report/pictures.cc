@@ -9,19 +9,13 @@
 #include "libgt/core/error.h"
 #include "libgt/io/codec.h"
 #include "libgt/report/canvas.h"
+#include "libgt/report/page.h"
 
 namespace gt::report {
 namespace {
 
 const char* const kLabelNames[6] = {"NO_DEPTH", "OUT_OF_VIEW",  "VISIBLE",
                                     "OCCLUDED", "INCONSISTENT", "UNKNOWN"};
-
-uint64_t SplitMix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
 
 void CheckBgr(const cv::Mat& image, const std::string& what) {
   if (image.empty() || image.type() != CV_8UC3) {

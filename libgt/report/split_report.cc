@@ -23,22 +23,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-uint64_t SplitMix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-uint64_t Fnv1a64(std::string_view s) {
-  uint64_t h = 0xcbf29ce484222325ULL;
-  for (unsigned char c : s) {
-    h ^= c;
-    h *= 0x100000001b3ULL;
-  }
-  return h;
-}
-
 double NeedNumber(const json& j, const char* key, const std::string& where) {
   if (!j.is_object() || !j.contains(key) || !j.at(key).is_number()) {
     throw InputError(where, std::string("expected a number \"") + key + "\"");
@@ -103,6 +87,14 @@ bool SplitReportOptions::Check(std::string* error) const {
     *error = "eval_gallery_pairs: expected 0..50";
     return false;
   }
+  if (gallery_tuples < 0 || gallery_tuples > 50) {
+    *error = "gallery_tuples: expected 0..50";
+    return false;
+  }
+  if (tuple_thumb_width_px < 32 || tuple_thumb_width_px > 1024) {
+    *error = "tuple_thumb_width_px: expected 32..1024";
+    return false;
+  }
   if (gnuplot.empty()) {
     *error = "gnuplot: expected an executable name";
     return false;
@@ -121,10 +113,15 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
   SplitData split;
   split.dir = dir;
   const std::string pairs_path = (fs::path(dir) / "pairs.jsonl").string();
-  if (!gt::io::FileExists(pairs_path)) {
-    throw InputError(pairs_path, "missing: expected the pairs.jsonl of an `occgt build` folder");
+  split.tuples = LoadTupleSet(dir);
+  split.has_pairs = gt::io::FileExists(pairs_path);
+  if (!split.has_pairs && !split.tuples) {
+    throw InputError(pairs_path,
+                     "missing: expected the pairs.jsonl of an `occgt build` folder (or the "
+                     "tuples.jsonl of `occgt tuples`)");
   }
-  const std::vector<std::string> lines = gt::io::ReadLines(pairs_path);
+  const std::vector<std::string> lines =
+      split.has_pairs ? gt::io::ReadLines(pairs_path) : std::vector<std::string>();
   const char* occ_key = OcclusionMetricField(options.occlusion_metric);
   for (size_t n = 0; n < lines.size(); ++n) {
     if (lines[n].find_first_not_of(" \t") == std::string::npos) continue;
@@ -206,7 +203,9 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
 
 std::vector<std::string> SplitWarnings(const SplitData& split) {
   std::vector<std::string> w;
-  if (split.pairs.empty()) w.emplace_back("The split has no pairs (see the drops below).");
+  if (split.has_pairs && split.pairs.empty()) {
+    w.emplace_back("The split has no pairs (see the drops below).");
+  }
   if (split.recipe.is_object()) {
     const json sample = split.recipe.value("sample", json::object());
     if (sample.is_object() && sample.value("image", "") == "none") {
@@ -416,7 +415,7 @@ std::vector<size_t> PickGalleryPairs(const SplitData& split, const SplitReportOp
 std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& options,
                              const std::vector<NamedImage>& plots,
                              const std::vector<GalleryItem>& gallery,
-                             const std::string& eval_section) {
+                             const std::string& eval_section, const std::string& tuples_section) {
   const std::string name = split.summary.is_object() && split.summary.contains("split") &&
                                    split.summary["split"].is_string()
                                ? split.summary["split"].get<std::string>()
@@ -442,17 +441,24 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
     << "pre.recipe{background:#f7f7f7;border:1px solid #ddd;padding:8px;font-size:0.85em;"
        "overflow-x:auto}\n"
     << ".tables{display:flex;flex-wrap:wrap;gap:32px;align-items:flex-start}\n"
+    << ".views{display:flex;flex-wrap:wrap;gap:8px}.views figure{margin:0}\n"
     << "@media print{body{max-width:none;padding:0;font-size:10pt}"
        ".plots figure{flex:none;width:100%;max-width:100%}img{max-width:100%;"
        "page-break-inside:avoid}h2{page-break-after:avoid}figure{page-break-inside:avoid}}\n"
     << "</style>\n</head>\n<body data-images-decoded=\"pending\">\n";
   h << "<h1>Split report: " << HtmlEscape(name) << "</h1>\n<p class=\"muted\">"
-    << HtmlEscape(split.dir) << " &middot; " << split.pairs.size() << " pairs &middot; "
-    << "pair values are the " << AggregateName(options.aggregate)
-    << " of both directions; occlusion ratio = "
-    << (options.occlusion_metric == OcclusionMetric::kImage ? "OCCLUDED / (W&middot;H)"
-                                                            : "OCCLUDED / (VISIBLE + OCCLUDED)")
-    << "</p>\n";
+    << HtmlEscape(split.dir) << " &middot; ";
+  if (split.has_pairs) {
+    h << split.pairs.size() << " pairs &middot; "
+      << "pair values are the " << AggregateName(options.aggregate)
+      << " of both directions; occlusion ratio = "
+      << (options.occlusion_metric == OcclusionMetric::kImage ? "OCCLUDED / (W&middot;H)"
+                                                              : "OCCLUDED / (VISIBLE + OCCLUDED)");
+  } else {
+    h << "no pairs.jsonl";
+  }
+  if (split.tuples) h << " &middot; " << split.tuples->tuples.size() << " N-view tuples";
+  h << "</p>\n";
   const std::vector<std::string> warnings = SplitWarnings(split);
   if (!warnings.empty()) {
     h << "<div class=\"warn\" role=\"alert\"><strong>Warnings</strong><ul>\n";
@@ -484,20 +490,23 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
   const std::string grid =
       " (score grid, score_stride " + std::to_string(split.score_stride) + "; as summary.json)";
   const std::string overlap_score = "overlap" + grid, occlusion_score = "occlusion ratio" + grid;
-  h << "<table><tr><th>selected pairs (every pixel unless said)</th><th>min</th><th>median</th>"
-       "<th>mean</th><th>max</th></tr>\n";
-  for (const auto& [label, s] : {std::pair<const char*, Stats>{"overlap", so},
-                                 {"visible overlap (weaker direction)", sv},
-                                 {"occlusion ratio", sc},
-                                 {overlap_score.c_str(), sso},
-                                 {occlusion_score.c_str(), ssc},
-                                 {"INCONSISTENT share of valid-depth pixels (both directions)", si},
-                                 {"UNKNOWN share of valid-depth pixels (both directions)", su}}) {
-    h << "<tr><td>" << label << "</td><td class=\"n\">" << Num(s.min) << "</td><td class=\"n\">"
-      << Num(s.median) << "</td><td class=\"n\">" << Num(s.mean) << "</td><td class=\"n\">"
-      << Num(s.max) << "</td></tr>\n";
+  if (split.has_pairs) {
+    h << "<table><tr><th>selected pairs (every pixel unless said)</th><th>min</th><th>median</th>"
+         "<th>mean</th><th>max</th></tr>\n";
+    for (const auto& [label, s] :
+         {std::pair<const char*, Stats>{"overlap", so},
+          {"visible overlap (weaker direction)", sv},
+          {"occlusion ratio", sc},
+          {overlap_score.c_str(), sso},
+          {occlusion_score.c_str(), ssc},
+          {"INCONSISTENT share of valid-depth pixels (both directions)", si},
+          {"UNKNOWN share of valid-depth pixels (both directions)", su}}) {
+      h << "<tr><td>" << label << "</td><td class=\"n\">" << Num(s.min) << "</td><td class=\"n\">"
+        << Num(s.median) << "</td><td class=\"n\">" << Num(s.mean) << "</td><td class=\"n\">"
+        << Num(s.max) << "</td></tr>\n";
+    }
+    h << "</table>\n";
   }
-  h << "</table>\n";
   if (split.summary.is_object()) {
     h << "<table><tr><th>summary.json</th><th>value</th></tr>\n";
     // Byte counts also in decimal units: "79.2 MB (79234567)".
@@ -539,30 +548,36 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
   }
   h << "</div>\n";
 
-  h << "<h2>Plots</h2>\n<div class=\"plots\">\n";
+  if (split.has_pairs) h << "<h2>Plots</h2>\n<div class=\"plots\">\n";
   for (const auto& p : plots) {
     h << "<figure>" << ImgTag(p, p.name) << "<figcaption>" << HtmlEscape(p.name)
       << "</figcaption></figure>\n";
   }
-  h << "</div>\n";
+  if (split.has_pairs) h << "</div>\n";
   h << eval_section;
 
-  h << "<h2>Gallery</h2>\n<p class=\"muted\">" << gallery.size() << " pairs: ";
-  if (options.gallery_order == GalleryOrder::kRandom) {
-    h << "picked with seed " << options.seed;
-  } else {
-    h << "the most occluded (largest occlusion ratio first)";
-  }
-  h << ". Matches: vv green, vo yellow, ov red. Labels: NO_DEPTH near black, OUT_OF_VIEW blue, "
-       "VISIBLE green, OCCLUDED red, INCONSISTENT magenta, UNKNOWN orange.</p>\n";
-  for (const auto& g : gallery) {
-    h << "<div class=\"pair\"><h3>" << HtmlEscape(g.caption) << "</h3>\n";
-    for (const auto& im : g.images) {
-      h << "<figure>" << ImgTag(im, im.name) << "<figcaption>" << HtmlEscape(im.name)
-        << "</figcaption></figure>\n";
+  if (split.has_pairs) {
+    h << "<h2>Gallery</h2>\n<p class=\"muted\">" << gallery.size() << " pairs: ";
+    if (options.gallery_order == GalleryOrder::kRandom) {
+      h << "picked with seed " << options.seed;
+    } else {
+      h << "the most occluded (largest occlusion ratio first)";
     }
-    h << "</div>\n";
+    h << ". Matches: vv green, vo yellow, ov red. Labels: NO_DEPTH near black, OUT_OF_VIEW "
+         "blue, VISIBLE green, OCCLUDED red, INCONSISTENT magenta, UNKNOWN orange.</p>\n";
+    for (const auto& g : gallery) {
+      h << "<div class=\"pair\"><h3>" << HtmlEscape(g.caption) << "</h3>\n";
+      for (const auto& im : g.images) {
+        h << "<figure>" << ImgTag(im, im.name) << "<figcaption>" << HtmlEscape(im.name)
+          << "</figcaption></figure>\n";
+      }
+      h << "</div>\n";
+    }
+  } else {
+    h << "<p class=\"muted\">No pairs.jsonl in this folder: the tuples of occgt tuples "
+         "only.</p>\n";
   }
+  h << tuples_section;
   if (split.recipe.is_object()) {
     h << "<h2>Recipe</h2>\n<p class=\"muted\">recipe.json: the resolved recipe this split was "
          "built with (every default filled in).</p>\n<pre class=\"recipe\">"
@@ -577,6 +592,48 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
   return h.str();
 }
 
+json ReportJson(const SplitData& split, const SplitReportOptions& options,
+                const json& tuples_summary, const std::vector<size_t>& gallery_tuples) {
+  json out = {{"kind", "occgt-split-report"},
+              {"dir", split.dir},
+              {"seed", options.seed},
+              {"histogram_bins", options.histogram_bins},
+              {"pairs", nullptr},
+              {"tuples", nullptr}};
+  if (split.has_pairs) {
+    std::vector<double> ov, oc, vis;
+    for (const auto& p : split.pairs) {
+      ov.push_back(p.overlap);
+      oc.push_back(p.occlusion);
+      vis.push_back(p.visible_min);
+    }
+    auto stats = [](const std::vector<double>& v) {
+      const Stats s = Describe(v);
+      return json{{"min", s.min}, {"median", s.median}, {"mean", s.mean}, {"max", s.max}};
+    };
+    out["pairs"] = {{"count", static_cast<int64_t>(split.pairs.size())},
+                    {"aggregate", AggregateName(options.aggregate)},
+                    {"occlusion_metric", OcclusionMetricField(options.occlusion_metric)},
+                    {"overlap", stats(ov)},
+                    {"occlusion", stats(oc)},
+                    {"visible_overlap_min", stats(vis)}};
+  }
+  if (split.tuples) {
+    json t = tuples_summary;
+    t["has_shards"] = split.tuples->has_shards;
+    json gallery = json::array();
+    for (size_t k : gallery_tuples) {
+      const SplitTuple& tuple = split.tuples->tuples[k];
+      gallery.push_back({{"index", static_cast<int64_t>(k)},
+                         {"scene", tuple.scene},
+                         {"frame_ids", tuple.frame_ids}});
+    }
+    t["gallery"] = gallery;
+    out["tuples"] = t;
+  }
+  return out;
+}
+
 std::vector<std::string> WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
                                           const SplitReportOptions& options) {
   const SplitData split = LoadSplit(split_dir, options);
@@ -585,10 +642,14 @@ std::vector<std::string> WriteSplitReport(const std::string& split_dir, const st
   fs::create_directories(out_dir);
   const std::string scratch = (fs::path(out_dir) / ".plots.tmp").string();
   fs::remove_all(scratch);
-  std::vector<NamedImage> plots, eval_plots;
+  std::vector<NamedImage> plots, eval_plots, tuple_plots;
   try {
-    plots = MakeSplitPlots(split, options, scratch);
+    if (split.has_pairs) plots = MakeSplitPlots(split, options, scratch);
     if (!eval.sets.empty()) eval_plots = MakeEvalPlots(eval, options, scratch);
+    if (split.tuples) {
+      tuple_plots = MakeTuplePlots(*split.tuples, options.histogram_bins, options.gnuplot,
+                                   options.plot_width_px, options.plot_height_px, scratch);
+    }
   } catch (...) {
     fs::remove_all(scratch);
     throw;
@@ -634,8 +695,20 @@ std::vector<std::string> WriteSplitReport(const std::string& split_dir, const st
     gallery.push_back(std::move(item));
   }
 
+  json tuples_summary;
+  std::vector<size_t> gallery_tuples;
+  std::string tuples_section;
+  if (split.tuples) {
+    tuples_summary = SummarizeTuples(*split.tuples, options.histogram_bins);
+    gallery_tuples = PickGalleryTuples(*split.tuples, options.gallery_tuples, options.seed);
+    tuples_section = RenderTuplesSection(
+        *split.tuples, tuples_summary, tuple_plots,
+        MakeTupleGallery(*split.tuples, gallery_tuples, options.tuple_thumb_width_px),
+        options.seed);
+  }
+
   std::vector<std::string> written;
-  for (const std::vector<NamedImage>* group : {&plots, &eval_plots}) {
+  for (const std::vector<NamedImage>* group : {&plots, &eval_plots, &tuple_plots}) {
     for (const auto& p : *group) {
       const std::string path = (fs::path(out_dir) / p.name).string();
       gt::io::WriteFileAtomic(path, p.bytes);
@@ -643,9 +716,13 @@ std::vector<std::string> WriteSplitReport(const std::string& split_dir, const st
     }
   }
   const std::string html_path = (fs::path(out_dir) / "report.html").string();
-  gt::io::WriteFileAtomic(html_path,
-                          RenderHtmlReport(split, options, plots, gallery, eval_section));
+  gt::io::WriteFileAtomic(
+      html_path, RenderHtmlReport(split, options, plots, gallery, eval_section, tuples_section));
   written.push_back(html_path);
+  const std::string json_path = (fs::path(out_dir) / "report.json").string();
+  gt::io::WriteFileAtomic(
+      json_path, ReportJson(split, options, tuples_summary, gallery_tuples).dump(1) + "\n");
+  written.push_back(json_path);
   return written;
 }
 

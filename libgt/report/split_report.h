@@ -21,10 +21,17 @@
 // how many images decoded (used by the tests). Gallery: `gallery_pairs` pairs picked with
 // a seeded hash of their keys (same split and seed → same pairs), rendered from the shards
 // with pair_source.h / pictures.h.
+// Tuples (tuples_report.h): when DIR holds the tuples.jsonl of `occgt tuples`, a section with
+// their sizes, covisibility and occlusion and a gallery of `gallery_tuples` tuples; such a
+// folder needs no pairs.jsonl (a folder of `occgt covis` + `occgt tuples` only).
+// report.json: the numbers of the page (schemas/report.schema.json): the pairs' statistics
+// (null without pairs.jsonl) and the tuples' (SummarizeTuples and the gallery; null without
+// tuples.jsonl).
 #pragma once
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -33,6 +40,7 @@
 #include "libgt/geometry/aggregate.h"
 #include "libgt/report/page.h"
 #include "libgt/report/pair_source.h"
+#include "libgt/report/tuples_report.h"
 
 namespace gt::report {
 
@@ -57,6 +65,8 @@ struct SplitData {
   int score_stride = 0;          // of every line's score_metrics (0: no pairs)
   nlohmann::json summary;        // summary.json, null when absent
   nlohmann::json recipe;         // recipe.json (the resolved recipe), null when absent
+  bool has_pairs = true;         // false: no pairs.jsonl (a folder of tuples only)
+  std::optional<TupleSet> tuples;  // tuples.jsonl (+ views/pairs.jsonl), when present
 };
 
 // What a reader of the report must know before trusting the split, one sentence each: no
@@ -85,10 +95,14 @@ struct SplitReportOptions {
   // and the worst pairs shown per prediction set (0..50).
   std::vector<std::string> eval_paths;
   int eval_gallery_pairs = 4;
+  // The tuples section: tuples shown in its gallery (0..50) and the thumbnails' width.
+  int gallery_tuples = 4;
+  int tuple_thumb_width_px = 240;  // 32..1024
   bool Check(std::string* error) const;
 };
 
-// Reads DIR/pairs.jsonl (required) and DIR/summary.json (optional). Throws InputError
+// Reads DIR/pairs.jsonl (required unless DIR/tuples.jsonl exists), DIR/summary.json
+// (optional) and the tuples (LoadTupleSet). Throws InputError
 // naming "<file>:<line>" and the field on malformed content.
 SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options);
 
@@ -111,15 +125,22 @@ struct GalleryItem {
 };
 
 // The HTML page (deterministic for the same inputs); eval_section (RenderEvalSection) is
-// placed after the plots when not empty.
+// placed after the plots when not empty, tuples_section (RenderTuplesSection) after the
+// pairs' gallery.
 std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& options,
                              const std::vector<NamedImage>& plots,
                              const std::vector<GalleryItem>& gallery,
-                             const std::string& eval_section = "");
+                             const std::string& eval_section = "",
+                             const std::string& tuples_section = "");
 
-// Everything: plots as PNG files (with options.eval_paths, the eval plots too), report.html,
-// into out_dir (atomic writes). The eval files are checked before any work. Returns the
-// paths written.
+// report.json (the layout above).
+nlohmann::json ReportJson(const SplitData& split, const SplitReportOptions& options,
+                          const nlohmann::json& tuples_summary,
+                          const std::vector<size_t>& gallery_tuples);
+
+// Everything: plots as PNG files (with options.eval_paths, the eval plots too; with tuples,
+// theirs), report.html and report.json, into out_dir (atomic writes). The eval files are checked
+// before any work. Returns the paths written.
 std::vector<std::string> WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
                                           const SplitReportOptions& options);
 
