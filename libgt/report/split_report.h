@@ -33,6 +33,7 @@
 #include "libgt/geometry/aggregate.h"
 #include "libgt/report/page.h"
 #include "libgt/report/pair_source.h"
+#include "libgt/render/frame_depth.h"
 
 namespace gt::report {
 
@@ -105,6 +106,29 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
 // kRandom, most occluded first for kMostOccluded.
 std::vector<size_t> PickGalleryPairs(const SplitData& split, const SplitReportOptions& options);
 
+// Where the depth of a split came from, when its build rendered it (recipe.json
+// dataset.depth_source mesh or fused; docs/GROUND_TRUTH.md "Depth sources"): the
+// sensor-vs-mesh counts of every frame used by the split's pairs at the working resolution
+// (truth::CompareWorkingDepthWithMesh, the counts of `occgt scan --mesh`), summed per scene
+// and over the split. pipeline::ComputeSplitDepthShares fills it.
+struct SplitDepthShares {
+  render::DepthSourceMode source = render::DepthSourceMode::kFused;
+  render::FusedDepthOptions tolerance;
+  int width = 0, height = 0;  // working resolution of the counts
+  struct Scene {
+    std::string name;
+    int64_t frames = 0;  // distinct frames of the split's pairs in this scene
+    render::DepthAgreement counts;
+  };
+  std::vector<Scene> scenes;  // sorted by name
+  int64_t frames = 0;
+  render::DepthAgreement total;
+};
+
+// depth_sources.json (schemas/split_depth_sources.schema.json): {source, tolerance, resolution,
+// frames, total, scenes}, shares as truth::DepthSharesJson writes them.
+nlohmann::ordered_json SplitDepthSharesJson(const SplitDepthShares& shares);
+
 struct GalleryItem {
   std::string caption;             // key and metrics
   std::vector<NamedImage> images;  // matches, labels, occupancy (when present)
@@ -115,12 +139,14 @@ struct GalleryItem {
 std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& options,
                              const std::vector<NamedImage>& plots,
                              const std::vector<GalleryItem>& gallery,
-                             const std::string& eval_section = "");
+                             const std::string& eval_section = "",
+                             const SplitDepthShares* depth_shares = nullptr);
 
 // Everything: plots as PNG files (with options.eval_paths, the eval plots too), report.html,
-// into out_dir (atomic writes). The eval files are checked before any work. Returns the
-// paths written.
+// into out_dir (atomic writes), and with depth_shares depth_sources.json and a "Depth
+// sources" section. The eval files are checked before any work. Returns the paths written.
 std::vector<std::string> WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
-                                          const SplitReportOptions& options);
+                                          const SplitReportOptions& options,
+                                          const SplitDepthShares* depth_shares = nullptr);
 
 }  // namespace gt::report
