@@ -90,6 +90,8 @@ BuildDataset ReadBuildDataset(const std::string& dir, const std::string& root_ov
 
 std::optional<report::SplitDepthShares> ComputeSplitDepthShares(const std::string& dir,
                                                                 const std::string& root_override) {
+  // recipe.json is optional for a report (a split assembled by hand): no build, no source.
+  if (!io::FileExists((fs::path(dir) / "recipe.json").string())) return std::nullopt;
   const BuildDataset b = ReadBuildDataset(dir, root_override);
   if (b.depth.source == render::DepthSourceMode::kSensor) return std::nullopt;
   const report::SplitData split = report::LoadSplit(dir, report::SplitReportOptions());

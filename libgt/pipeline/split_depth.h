@@ -34,7 +34,7 @@ struct BuildDataset {
 BuildDataset ReadBuildDataset(const std::string& dir, const std::string& root_override = "");
 
 // The split's depth-source shares when its build's depth source is mesh or fused (nullopt
-// for sensor): every distinct frame of DIR/pairs.jsonl compared at the build's resolution
+// for sensor, or when DIR has no recipe.json): every distinct frame of DIR/pairs.jsonl compared at the build's resolution
 // with truth::CompareWorkingDepthWithMesh, frames in parallel (TBB), summed in a fixed order.
 // Throws InputError when the dataset or a mesh cannot be read (naming it; the root may be
 // given again with root_override).
