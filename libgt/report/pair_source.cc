@@ -475,7 +475,7 @@ PairData ComputePairFromScene(const std::string& root, DatasetFormat format,
                               const SceneDepthOptions& depth) {
   std::string error;
   if (!resolution.Check(&error)) throw InputError("--resolution", error);
-  if (!depth.depth.Check(&error)) throw InputError("--abs-tol-m/--rel-tol", error);
+  if (!depth.depth.Check(&error)) throw InputError("depth source", error);
   gt::datasets::ReaderOptions reader_options;
   if (format == DatasetFormat::kScanNetPP) {
     if (depth.device) {
