@@ -3,6 +3,7 @@
 //                      --frames A,B) --out DIR
 //   (--pair-dir: a folder of `occgt pair`, of `occgt occupancy`, or of both)
 //   occgt inspect split DIR [--out OUT] [--eval eval.json ...]
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -12,6 +13,8 @@
 #include "apps/commands.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
+#include "libgt/datasets/reader.h"
+#include "libgt/pipeline/split_depth.h"
 #include "libgt/report/pair_source.h"
 #include "libgt/report/split_report.h"
 #include "libgt/truth/working_frame.h"
@@ -25,6 +28,8 @@ struct InspectPairArgs {
   std::optional<std::string> preset;      // default: truth::LabelSettings's
   std::optional<std::string> resolution;  // WxH; default: truth::Resolution's
   bool no_occupancy = false;
+  std::string depth_source = "sensor", mesh;  // with --root: the labels' depth, the mesh
+  std::optional<std::string> device;          // with --root, scannetpp: dslr|iphone
   int max_lines = 200;
   uint64_t seed = 0;
   double alpha = 0.55;
@@ -39,6 +44,7 @@ struct InspectSplitArgs {
   std::vector<std::string> eval;
   int eval_gallery = 4;
   int gallery_tuples = gt::report::SplitReportOptions().gallery_tuples;
+  std::string root;  // the dataset root when recipe.json's no longer holds (depth sources)
 };
 
 void RunInspectPair(const InspectPairArgs& a) {
@@ -70,8 +76,17 @@ void RunInspectPair(const InspectPairArgs& a) {
     const gt::truth::Resolution r = a.resolution
                                         ? gt::truth::ParseResolution(*a.resolution, "--resolution")
                                         : gt::truth::Resolution();
-    pair = gt::report::ComputePairFromScene(a.root, gt::ParseDatasetFormat(a.format, "--format"),
-                                            a.scene, id0, id1, settings, r);
+    const gt::DatasetFormat format = gt::ParseDatasetFormat(a.format, "--format");
+    gt::report::SceneDepthOptions depth;
+    depth.depth.source = gt::render::ParseDepthSourceMode(a.depth_source, "--depth-source");
+    depth.mesh_path = a.mesh;
+    if (a.device) {
+      if (format != gt::DatasetFormat::kScanNetPP) {
+        throw gt::InputError("--device", "only for the scannetpp format");
+      }
+      depth.device = gt::datasets::ParseScanNetPPDevice(*a.device, "--device");
+    }
+    pair = gt::report::ComputePairFromScene(a.root, format, a.scene, id0, id1, settings, r, depth);
   }
   gt::report::PairPictureOptions po;
   po.matches.max_lines = a.max_lines;
@@ -86,6 +101,11 @@ void RunInspectPair(const InspectPairArgs& a) {
   } else {
     std::printf("inspect pair %s: %d x %d, occupancy only (no labels or matches)\n",
                 pair.name.c_str(), pair.width, pair.height);
+  }
+  if (!pair.depth_source.empty()) {
+    std::printf(
+        "  labels from depth source %s%s\n", pair.depth_source.c_str(),
+        pair.depth_sources.empty() ? "" : " (depth.png: sensor | rendered | fused | agreement)");
   }
   for (const auto& p : written) std::printf("  wrote %s\n", p.c_str());
 }
@@ -110,8 +130,20 @@ void RunInspectSplit(const InspectSplitArgs& a) {
                        {"gallery_tuples", "--gallery-tuples", true}});
   }
   const std::string out = a.out.empty() ? a.dir + "/inspect" : a.out;
-  const auto written = gt::report::WriteSplitReport(a.dir, out, o);
+  // A build with rendered depth (mesh or fused): the sensor-vs-mesh shares of its frames.
+  const std::optional<gt::report::SplitDepthShares> shares =
+      gt::pipeline::ComputeSplitDepthShares(a.dir, a.root);
+  const auto written = gt::report::WriteSplitReport(a.dir, out, o, shares ? &*shares : nullptr);
   std::printf("inspect split %s\n", a.dir.c_str());
+  if (shares) {
+    const double n = static_cast<double>(std::max<int64_t>(1, shares->total.Total()));
+    std::printf(
+        "  depth source %s, %lld frames vs mesh (within %g m + %g of depth): sensor only "
+        "%.4f, mesh only %.4f, agree %.4f, disagree %.4f\n",
+        gt::render::DepthSourceModeName(shares->source), static_cast<long long>(shares->frames),
+        shares->tolerance.abs_tol_m, shares->tolerance.rel_tol, shares->total.sensor_only / n,
+        shares->total.mesh_only / n, shares->total.agree / n, shares->total.disagree / n);
+  }
   for (const auto& p : written) std::printf("  wrote %s\n", p.c_str());
 }
 
@@ -143,6 +175,15 @@ void AddInspectCommand(CLI::App& app) {
                        Num(gt::truth::Resolution().width) + "x" +
                        Num(gt::truth::Resolution().height) + ")");
   pair->add_flag("--no-occupancy", pa->no_occupancy, "skip the occupancy fusion (with --root)");
+  pair->add_option("--depth-source", pa->depth_source,
+                   "with --root: the labels' depth, sensor|mesh|fused (docs/GROUND_TRUTH.md); a "
+                   "scene with a mesh also gets depth.png (sensor | rendered | fused)")
+      ->capture_default_str();
+  pair->add_option("--mesh", pa->mesh,
+                   "with --root: the scene's mesh (PLY in the poses' world frame; default the "
+                   "dataset's own)");
+  pair->add_option("--device", pa->device,
+                   "with --root, scannetpp: dslr or iphone (default: from the frame ids)");
   pair->add_option("--max-lines", pa->max_lines, "match lines drawn at most")
       ->capture_default_str();
   pair->add_option("--seed", pa->seed, "seed of the drawn subset of matches")
@@ -190,6 +231,9 @@ void AddInspectCommand(CLI::App& app) {
                    "N-view tuples shown with their views (when DIR has the tuples.jsonl of "
                    "occgt tuples)")
       ->capture_default_str();
+  split->add_option("--root", sa->root,
+                    "dataset root of a build with depth_source mesh or fused, when recipe.json's "
+                    "dataset.root does not hold from here (the depth-source shares re-read it)");
   split->callback([sa] { RunInspectSplit(*sa); });
 }
 

@@ -73,10 +73,14 @@ void RunOccupancy(const OccupancyArgs& args) {
   if (o.mode == occ::OccupancyMode::kTwoPoint && !args.save_octree.empty())
     throw gt::InputError("--save-octree", "needs --mode octomap");
   const PairDatasetArgs& d = args.data;
-  gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, "", setup.resolution};
+  gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, "", setup.resolution, "",
+                               setup.depth.source};
+  if (setup.format == gt::DatasetFormat::kScanNetPP) {
+    source.device = gt::datasets::ScanNetPPDeviceName(setup.device);
+  }
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 
-  const gt::Scene scene = ReadSetupScene(setup, d.scene, source.id0);
+  const gt::Scene scene = ReadSetupScene(setup, d.scene);
   source.scene = scene.name;
   // The scene's depth range: the validity range of the fusion.
   o = gt::truth::ResolvePairTruthOptions(setup.settings, DepthRangeFor(setup, scene));

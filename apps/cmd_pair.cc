@@ -57,10 +57,14 @@ void RunPair(const PairArgs& args) {
     ThrowOptionsError(error, "patch options", {{"stride", "--stride", args.stride.has_value()}});
   }
   if (args.score_stride < 1) throw gt::InputError("--score-stride", "expected >= 1");
-  gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, ls.preset, setup.resolution};
+  gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, ls.preset, setup.resolution,
+                               "", setup.depth.source};
+  if (setup.format == gt::DatasetFormat::kScanNetPP) {
+    source.device = gt::datasets::ScanNetPPDeviceName(setup.device);
+  }
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 
-  const gt::Scene scene = ReadSetupScene(setup, d.scene, source.id0);
+  const gt::Scene scene = ReadSetupScene(setup, d.scene);
   source.scene = scene.name;
   const gt::truth::PairTruthOptions o =
       gt::truth::ResolvePairTruthOptions(st, DepthRangeFor(setup, scene));

@@ -18,6 +18,7 @@
 #include "libgt/datasets/scan.h"
 #include "libgt/pipeline/recipe.h"
 #include "libgt/render/frame_depth.h"
+#include "libgt/truth/pair_files.h"
 #include "libgt/truth/working_frame.h"
 
 namespace occgt {
@@ -48,26 +49,16 @@ MeshAgreement CompareWithMesh(const gt::Scene& scene, const ScanArgs& args) {
   MeshAgreement out;
   out.mesh = scene.mesh_path;
   gt::render::FrameDepthOptions options;
-  options.source = gt::render::DepthSourceMode::kMesh;
   options.fused = args.tolerance;
   int k = 0;
   for (const gt::Frame& f : scene.frames) {
     if (!f.usable || k++ % args.mesh_stride != 0) continue;
-    gt::render::DepthAgreement a;
-    gt::truth::LoadWorkingDepth(scene, f, {f.depth_camera.width, f.depth_camera.height}, options, &a);
+    const gt::render::DepthAgreement a = gt::truth::CompareWorkingDepthWithMesh(
+        scene, f, {f.depth_camera.width, f.depth_camera.height}, options);
     out.total += a;
     out.frames.emplace_back(f.id, a);
   }
   return out;
-}
-
-nlohmann::ordered_json SharesJson(const gt::render::DepthAgreement& a) {
-  const double n = static_cast<double>(std::max<int64_t>(1, a.Total()));
-  return {{"pixels", a.Total()},
-          {"sensor_only", a.sensor_only / n},
-          {"mesh_only", a.mesh_only / n},
-          {"agree", a.agree / n},
-          {"disagree", a.disagree / n}};
 }
 
 nlohmann::ordered_json MeshAgreementJson(const MeshAgreement& m, const ScanArgs& args) {
@@ -76,11 +67,11 @@ nlohmann::ordered_json MeshAgreementJson(const MeshAgreement& m, const ScanArgs&
   j["tolerance"] = {{"abs_tol_m", args.tolerance.abs_tol_m}, {"rel_tol", args.tolerance.rel_tol}};
   j["frames"] = nlohmann::ordered_json::array();
   for (const auto& [id, a] : m.frames) {
-    nlohmann::ordered_json f = SharesJson(a);
+    nlohmann::ordered_json f = gt::truth::DepthSharesJson(a);
     f["id"] = id;
     j["frames"].push_back(f);
   }
-  j["total"] = SharesJson(m.total);
+  j["total"] = gt::truth::DepthSharesJson(m.total);
   return j;
 }
 

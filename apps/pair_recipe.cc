@@ -40,6 +40,32 @@ PairSetup StartPairSetup(const PairDatasetArgs& args) {
   } else {
     throw gt::InputError("--format", "required (or --recipe)");
   }
+  if (args.device && s.format != gt::DatasetFormat::kScanNetPP) {
+    throw gt::InputError("--device", "only for the scannetpp format");
+  }
+  if (s.format == gt::DatasetFormat::kScanNetPP) {
+    const auto [id0, id1] = gt::truth::ParseFramePair(args.frames);
+    std::string device_source;
+    if (args.device) {
+      s.device = gt::datasets::ParseScanNetPPDevice(*args.device, "--device");
+      device_source = "--device";
+      if (s.recipe && s.recipe->dataset.format == gt::DatasetFormat::kScanNetPP &&
+          s.recipe->dataset.device != s.device) {
+        throw gt::InputError("--device", std::string(*args.device) + " differs from " +
+                                             args.recipe + "'s dataset.device " +
+                                             gt::datasets::ScanNetPPDeviceName(s.recipe->dataset.device));
+      }
+    } else if (s.recipe && s.recipe->dataset.format == gt::DatasetFormat::kScanNetPP) {
+      s.device = s.recipe->dataset.device;
+      device_source = args.recipe + ": dataset.device";
+    } else {
+      s.device = gt::datasets::ScanNetPPDeviceOfFrameId(id0);
+      device_source = "the frame id '" + id0 + "'";
+    }
+    for (const std::string& id : {id0, id1}) {
+      gt::datasets::CheckScanNetPPFrameId(s.device, id, "--frames", device_source);
+    }
+  }
   return s;
 }
 
@@ -61,15 +87,17 @@ void AddPairDatasetFlags(CLI::App* cmd, PairDatasetArgs* d, const std::string& r
   cmd->add_option("--depth-source", d->depth_source,
                   "sensor|mesh|fused: depth files, rendered from the scene's mesh, or both "
                   "(default: the recipe's, else sensor)");
+  cmd->add_option("--device", d->device,
+                  "scannetpp: dslr or iphone (default: the recipe's dataset.device, else from "
+                  "the frame ids: frame_NNNNNN = iphone)");
   cmd->add_option("--mesh", d->mesh,
                   "the scene's mesh (PLY, in the poses' world frame; default: the recipe's "
                   "dataset.mesh_path, else the dataset's own)");
 }
 
-gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name,
-                         const std::string& frame_id) {
+gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name) {
   gt::datasets::ReaderOptions reader_options;
-  reader_options.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(frame_id);
+  reader_options.scannetpp_device = setup.device;
   gt::Scene scene =
       gt::datasets::MakeReader(setup.format, reader_options)->ReadScene(setup.root, scene_name);
   gt::pipeline::ApplyMeshPath(setup.mesh_path, &scene);

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "libgt/core/frame.h"
+#include "libgt/datasets/reader.h"
 #include "libgt/pipeline/recipe.h"
 #include "libgt/truth/pair_settings.h"
 #include "libgt/truth/working_frame.h"
@@ -25,6 +26,7 @@ struct PairDatasetArgs {
   std::optional<double> min_depth_m, max_depth_m;  // default the recipe's or the dataset's
   std::optional<std::string> depth_source;         // sensor|mesh|fused; default the recipe's
   std::string mesh;                                // the scene's mesh; default the recipe's
+  std::optional<std::string> device;  // scannetpp: dslr|iphone; default the recipe's
 };
 
 struct PairSetup {
@@ -35,13 +37,14 @@ struct PairSetup {
   gt::truth::PairSettings settings;     // the recipe's (or the defaults), then the depth flags
   gt::render::FrameDepthOptions depth;  // the recipe's depth source, then --depth-source
   std::string mesh_path;                // --mesh, else the recipe's dataset.mesh_path
+  // ScanNet++: --device, else the recipe's dataset.device, else from the frame ids
+  // (datasets::ScanNetPPDeviceOfFrameId); frame ids of the other device are refused.
+  gt::datasets::ScanNetPPDevice device = gt::datasets::ScanNetPPDevice::kDslr;
 };
 
 // The scene of the setup (its mesh path applied) and its frames at the working resolution
 // with the setup's depth source.
-// frame_id: one of the frames asked for (ScanNet++: frame_%06d ids are the iPhone's).
-gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name,
-                         const std::string& frame_id = "");
+gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name);
 gt::truth::WorkingFrame LoadSetupFrame(const PairSetup& setup, const gt::Scene& scene,
                                        const gt::Frame& frame);
 

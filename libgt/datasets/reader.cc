@@ -30,6 +30,16 @@ ScanNetPPDevice ScanNetPPDeviceOfFrameId(std::string_view frame_id) {
   return frame_id.rfind("frame_", 0) == 0 ? ScanNetPPDevice::kIphone : ScanNetPPDevice::kDslr;
 }
 
+void CheckScanNetPPFrameId(ScanNetPPDevice device, std::string_view frame_id,
+                           const std::string& field, const std::string& device_source) {
+  const ScanNetPPDevice shape = ScanNetPPDeviceOfFrameId(frame_id);
+  if (shape == device) return;
+  throw InputError(field, "'" + std::string(frame_id) + "' is " +
+                              (shape == ScanNetPPDevice::kIphone ? "an iPhone" : "a DSLR") +
+                              " frame id, but " + device_source + " says " +
+                              ScanNetPPDeviceName(device));
+}
+
 std::vector<std::string> KnownFormats() {
   std::vector<std::string> names;
   for (const DatasetFormat f : kAllDatasetFormats) names.emplace_back(DatasetFormatName(f));

@@ -22,8 +22,15 @@ const char* ScanNetPPDeviceName(ScanNetPPDevice device);  // "dslr", "iphone"
 ScanNetPPDevice ParseScanNetPPDevice(std::string_view name, const std::string& field);
 
 // The device whose frame ids look like `frame_id`: iPhone frames are frame_%06d, DSLR images
-// DSC%05d (for commands given frame ids without a device).
+// DSC%05d. The rule for commands given frame ids without a device, and for `occgt pair`
+// folders written before meta.json recorded the device; a build records it (recipe.json's
+// dataset.device) and commands re-reading a build use that.
 ScanNetPPDevice ScanNetPPDeviceOfFrameId(std::string_view frame_id);
+// Refuses a frame id of the other device's shape: InputError(field, "'frame_000010' is an
+// iPhone frame id, but <device_source> says dslr"). device_source names where the device
+// came from (a flag, "<dir>/recipe.json: dataset.device", ...).
+void CheckScanNetPPFrameId(ScanNetPPDevice device, std::string_view frame_id,
+                           const std::string& field, const std::string& device_source);
 
 struct ReaderOptions {
   double tum_max_dt_s = 0.02;     // TUM: max |t_depth - t_pose| and |t_depth - t_rgb| (seconds)

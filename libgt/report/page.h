@@ -7,6 +7,8 @@
 #include <string_view>
 #include <vector>
 
+#include "libgt/core/hash.h"
+
 namespace gt::report {
 
 struct NamedImage {
@@ -16,8 +18,7 @@ struct NamedImage {
 };
 
 // Seeded choices of the galleries (pictures' match subsets, the split report's pairs and
-// tuples): SplitMix64's output function (Steele, Lea, Flood 2014) and FNV-1a 64 of a string.
-uint64_t SplitMix64(uint64_t x);
+// tuples): gt::Mix64 (core/hash.h, SplitMix64's output function) and FNV-1a 64 of a string.
 uint64_t Fnv1a64(std::string_view s);
 
 // RFC 4648 base64 (with padding).

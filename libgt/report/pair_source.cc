@@ -1,5 +1,7 @@
 #include "libgt/report/pair_source.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <functional>
@@ -12,6 +14,8 @@
 #include "libgt/io/file_read.h"
 #include "libgt/io/image.h"
 #include "libgt/io/npy.h"
+#include "libgt/render/depth_picture.h"
+#include "libgt/report/canvas.h"
 #include "libgt/shards/tar_shard.h"
 #include "libgt/truth/pair_settings.h"
 #include "libgt/truth/pair_truth.h"
@@ -249,7 +253,22 @@ PairData LoadPairFromShard(const std::string& tar_path, const std::string& key) 
   const gt::shards::Sample sample = gt::shards::ReadShardSample(tar_path, key);
   std::map<std::string, std::string> fields;
   for (const auto& f : sample.fields) fields[f.name] = f.bytes;
-  return PairFromFields(fields, tar_path + ":" + key);
+  PairData pair = PairFromFields(fields, tar_path + ":" + key);
+  // The build's recipe.json beside its shards says where the depth came from.
+  const std::string recipe_path = (fs::path(tar_path).parent_path() / "recipe.json").string();
+  if (gt::io::FileExists(recipe_path)) {
+    try {
+      const nlohmann::json r = nlohmann::json::parse(gt::io::ReadFileBytes(recipe_path));
+      pair.depth_source = "sensor";
+      if (r.contains("dataset") && r["dataset"].is_object() &&
+          r["dataset"].contains("depth_source") && r["dataset"]["depth_source"].is_string()) {
+        pair.depth_source = r["dataset"]["depth_source"].get<std::string>();
+      }
+    } catch (const nlohmann::json::exception&) {
+      pair.depth_source.clear();  // not a build's recipe.json: unknown
+    }
+  }
+  return pair;
 }
 
 PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
@@ -352,8 +371,22 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
     const gt::DatasetFormat format =
         gt::ParseDatasetFormat(meta["format"].get<std::string>(), meta_path + ": format");
     gt::datasets::ReaderOptions reader_options;
-    reader_options.scannetpp_device =
-        gt::datasets::ScanNetPPDeviceOfFrameId(frame_id("frame0")->get<std::string>());
+    if (format == gt::DatasetFormat::kScanNetPP) {
+      // The device meta.json records; folders written before it did: from the frame ids.
+      const std::string id0 = frame_id("frame0")->get<std::string>();
+      if (meta.contains("device")) {
+        if (!meta["device"].is_string()) throw InputError(meta_path + ": device", "expected a string");
+        reader_options.scannetpp_device = gt::datasets::ParseScanNetPPDevice(
+            meta["device"].get<std::string>(), meta_path + ": device");
+        for (const char* key : {"frame0", "frame1"}) {
+          gt::datasets::CheckScanNetPPFrameId(reader_options.scannetpp_device,
+                                              frame_id(key)->get<std::string>(),
+                                              meta_path + ": " + key, meta_path + "'s device");
+        }
+      } else {
+        reader_options.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(id0);
+      }
+    }
     const auto reader = gt::datasets::MakeReader(format, reader_options);
     const gt::Scene scene = reader->ReadScene(dataset_root, meta["scene"].get<std::string>());
     for (int k = 0; k < 2; ++k) {
@@ -372,26 +405,99 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
   }
   if (!p0.empty()) img0 = BgrFromColor(gt::io::ReadColor(p0));
   if (!p1.empty()) img1 = BgrFromColor(gt::io::ReadColor(p1));
-  return PairFromFields(fields, dir, img0, img1);
+  PairData pair = PairFromFields(fields, dir, img0, img1);
+  if (pair.meta.is_object() && pair.meta.contains("tool")) {
+    // meta.json records a depth source other than the sensor's (absent: sensor).
+    pair.depth_source = pair.meta.value("depth_source", std::string("sensor"));
+  }
+  return pair;
+}
+
+cv::Mat DepthSourcesPicture(const Scene& scene, const std::vector<const Frame*>& frames,
+                            const truth::Resolution& resolution,
+                            const render::FrameDepthOptions& depth) {
+  struct Maps {
+    DepthImage sensor, mesh, fused;
+  };
+  std::vector<Maps> maps;
+  double top = 0;
+  render::FrameDepthOptions mesh_options = depth;
+  mesh_options.source = render::DepthSourceMode::kMesh;
+  for (const Frame* f : frames) {
+    Maps m;
+    m.sensor = f->depth.path.empty() ? DepthImage(resolution.width, resolution.height)
+                                     : truth::LoadWorkingDepth(*f, resolution);
+    m.mesh = truth::LoadWorkingDepth(scene, *f, resolution, mesh_options);
+    m.fused = render::FuseSensorAndMesh(m.sensor, m.mesh, scene.min_depth_m, scene.max_depth_m,
+                                        depth.fused);
+    for (const DepthImage* d : {&m.sensor, &m.mesh}) {
+      for (float v : d->values_m) {
+        if (IsValidDepth(v, scene.min_depth_m, scene.max_depth_m)) top = std::max<double>(top, v);
+      }
+    }
+    maps.push_back(std::move(m));
+  }
+  if (top <= 0) top = 1;
+  auto bgr = [](const cv::Mat& rgb) {
+    cv::Mat out;
+    cv::cvtColor(rgb, out, cv::COLOR_RGB2BGR);
+    return out;
+  };
+  std::vector<cv::Mat> rows;
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const Maps& m = maps[k];
+    const std::string& id = frames[k]->id;
+    cv::Mat row = TitleAbove(bgr(render::DepthRamp(m.sensor, top)), id + " sensor");
+    row = SideBySide(row, TitleAbove(bgr(render::DepthRamp(m.mesh, top)), id + " rendered"));
+    row = SideBySide(row, TitleAbove(bgr(render::DepthRamp(m.fused, top)), id + " fused"));
+    row = SideBySide(row, TitleAbove(bgr(render::AgreementPicture(m.sensor, m.mesh,
+                                                                  scene.min_depth_m,
+                                                                  scene.max_depth_m, depth.fused)),
+                                     id + " sensor vs mesh"));
+    rows.push_back(row);
+  }
+  char note[160];
+  std::snprintf(note, sizeof(note), "depth 0 to %.2f m (bright = near, black = none); agree within %g m + %g of depth",
+                top, depth.fused.abs_tol_m, depth.fused.rel_tol);
+  // The colours of render::AgreementPicture (R G B).
+  rows.push_back(LegendStrip({{{40, 200, 60}, "agree"},
+                              {{230, 40, 40}, "disagree (fused: none)"},
+                              {{50, 110, 240}, "mesh only"},
+                              {{230, 210, 40}, "sensor only"}},
+                             rows.front().cols, 4, note));
+  return StackVertical(rows);
 }
 
 PairData ComputePairFromScene(const std::string& root, DatasetFormat format,
                               const std::string& scene_name, const std::string& id0,
                               const std::string& id1, const truth::PairSettings& settings,
-                              const truth::Resolution& resolution) {
+                              const truth::Resolution& resolution,
+                              const SceneDepthOptions& depth) {
   std::string error;
   if (!resolution.Check(&error)) throw InputError("--resolution", error);
+  if (!depth.depth.Check(&error)) throw InputError("depth source", error);
   gt::datasets::ReaderOptions reader_options;
-  reader_options.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(id0);
-  const gt::Scene scene =
+  if (format == DatasetFormat::kScanNetPP) {
+    if (depth.device) {
+      reader_options.scannetpp_device = *depth.device;
+      for (const std::string& id : {id0, id1}) {
+        gt::datasets::CheckScanNetPPFrameId(*depth.device, id, "--frames", "--device");
+      }
+    } else {
+      reader_options.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(id0);
+    }
+  }
+  gt::Scene scene =
       gt::datasets::MakeReader(format, reader_options)->ReadScene(root, scene_name);
+  if (!depth.mesh_path.empty()) scene.mesh_path = depth.mesh_path;
   const gt::truth::PairTruthOptions o =
       gt::truth::ResolvePairTruthOptions(settings, gt::truth::DepthRangeOf(scene));
   if (!o.Check(&error)) throw InputError("pair options", error);
   const gt::Frame& f0 = scene.frames[gt::truth::FindFrame(scene, id0)];
   const gt::Frame& f1 = scene.frames[gt::truth::FindFrame(scene, id1)];
   const gt::truth::PairTruth truth = gt::truth::ComputePairTruth(
-      gt::truth::LoadWorkingFrame(f0, resolution), gt::truth::LoadWorkingFrame(f1, resolution), o);
+      gt::truth::LoadWorkingFrame(scene, f0, resolution, depth.depth),
+      gt::truth::LoadWorkingFrame(scene, f1, resolution, depth.depth), o);
   const gt::PairLabels& pl = truth.labels;
   PairData p;
   p.name = scene_name + " " + id0 + "," + id1;
@@ -413,6 +519,10 @@ PairData ComputePairFromScene(const std::string& root, DatasetFormat format,
     p.occ1 = truth.occupancy->cam1;
     p.has_occupancy = true;
   }
+  p.depth_source = render::DepthSourceModeName(depth.depth.source);
+  if (!scene.mesh_path.empty()) {
+    p.depth_sources = DepthSourcesPicture(scene, {&f0, &f1}, resolution, depth.depth);
+  }
   return p;
 }
 
@@ -433,6 +543,7 @@ PairPictures RenderPair(const PairData& pair, const PairPictureOptions& options)
         RenderLabels(pair.image0, pair.labels01, pair.image1, pair.labels10, options.labels);
   }
   if (pair.has_occupancy) out.occupancy = RenderOccupancy(pair.occ0, &pair.occ1, options.occupancy);
+  out.depth = pair.depth_sources;
   return out;
 }
 
@@ -448,6 +559,7 @@ std::vector<std::string> WritePairPictures(const PairPictures& pictures,
   write(pictures.matches, "matches.png");
   write(pictures.labels, "labels.png");
   write(pictures.occupancy, "occupancy.png");
+  write(pictures.depth, "depth.png");
   return written;
 }
 

@@ -24,14 +24,17 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
+#include "libgt/datasets/reader.h"
 #include "libgt/geometry/labels.h"
 #include "libgt/geometry/patches.h"
 #include "libgt/occupancy/frustum.h"
+#include "libgt/render/frame_depth.h"
 #include "libgt/report/pictures.h"
 #include "libgt/truth/pair_settings.h"
 #include "libgt/truth/working_frame.h"
@@ -51,6 +54,13 @@ struct PairData {
   bool has_occupancy = false;
   gt::occupancy::FrustumVolume occ0, occ1;
   nlohmann::json meta;  // the sample json / meta.json (null when computed here)
+  // The depth source of the labels ("sensor", "mesh", "fused"; docs/GROUND_TRUTH.md "Depth
+  // sources"): computed here, meta.json's "depth_source", a shard's recipe.json
+  // dataset.depth_source (absent: sensor); "" when unknown.
+  std::string depth_source;
+  // Computed in a scene with a mesh: each frame's depth at the working resolution, one row
+  // per frame, [sensor | rendered | fused | agreement classes] (BGR; DepthSourcesPicture).
+  cv::Mat depth_sources;
 };
 
 // Fields by name ("label01.npy" → bytes). `source` names the origin in error messages.
@@ -68,13 +78,33 @@ PairData LoadPairFromShard(const std::string& tar_path, const std::string& key);
 PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path = "",
                          const std::string& image1_path = "", const std::string& dataset_root = "");
 
+// Where ComputePairFromScene reads the frames' depth.
+struct SceneDepthOptions {
+  render::FrameDepthOptions depth;  // the labels' source (default sensor) and the tolerance
+  std::string mesh_path;            // replaces the scene's mesh ("" = the reader's)
+  // ScanNet++: the device whose frames are read; unset: from the frame ids
+  // (datasets::ScanNetPPDeviceOfFrameId).
+  std::optional<datasets::ScanNetPPDevice> device;
+};
+
 // Reads scene `scene` of `root` with the reader of `format`, and computes frames id0, id1 at
 // `resolution` with the options `settings` resolve to for that scene
-// (truth::ResolvePairTruthOptions with the scene's depth range).
+// (truth::ResolvePairTruthOptions with the scene's depth range), their depth from
+// depth.depth. When the scene has a mesh, PairData::depth_sources shows the frames' sensor,
+// rendered and fused depth whatever source the labels used.
 PairData ComputePairFromScene(const std::string& root, DatasetFormat format,
                               const std::string& scene_name, const std::string& id0,
                               const std::string& id1, const truth::PairSettings& settings,
-                              const truth::Resolution& resolution);
+                              const truth::Resolution& resolution,
+                              const SceneDepthOptions& depth = {});
+
+// One row per frame: [sensor | rendered | fused | agreement] at the working resolution, each
+// panel titled ("<id> sensor", ...), the ramps sharing one scale (0 m white-ish to the largest
+// depth shown dark grey, black = none), agreement in render/depth_picture.h's colours with a
+// legend. BGR CV_8UC3. The scene must have a mesh.
+cv::Mat DepthSourcesPicture(const Scene& scene, const std::vector<const Frame*>& frames,
+                            const truth::Resolution& resolution,
+                            const render::FrameDepthOptions& depth);
 
 struct PairPictureOptions {
   MatchPictureOptions matches;  // stride/anchor are taken from the PairData
@@ -87,10 +117,12 @@ struct PairPictures {
   cv::Mat matches;    // RenderMatches; empty when the pair has no labels
   cv::Mat labels;     // RenderLabels; empty when the pair has no labels
   cv::Mat occupancy;  // RenderOccupancy; empty when the pair has none
+  cv::Mat depth;      // PairData::depth_sources; empty when the pair has none
 };
 PairPictures RenderPair(const PairData& pair, const PairPictureOptions& options);
 
-// Writes matches.png, labels.png and (when present) occupancy.png into out_dir atomically;
+// Writes matches.png, labels.png and (when present) occupancy.png and depth.png into out_dir
+// atomically;
 // returns the paths written.
 std::vector<std::string> WritePairPictures(const PairPictures& pictures,
                                            const std::string& out_dir);

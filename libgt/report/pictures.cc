@@ -114,7 +114,7 @@ std::vector<size_t> SelectMatchSubset(const std::vector<uint8_t>& match_type, in
   // Smallest groups first, so that an unused share passes on to the larger ones.
   std::stable_sort(present.begin(), present.end(),
                    [&](int a, int b) { return by_type[a].size() < by_type[b].size(); });
-  const uint64_t seed_hash = SplitMix64(seed);
+  const uint64_t seed_hash = Mix64(seed);
   std::vector<size_t> chosen;
   size_t remaining = static_cast<size_t>(max_lines);
   for (size_t g = 0; g < present.size(); ++g) {
@@ -123,7 +123,7 @@ std::vector<size_t> SelectMatchSubset(const std::vector<uint8_t>& match_type, in
     const size_t take = std::min(group.size(), share);
     std::vector<std::pair<uint64_t, size_t>> keyed;
     keyed.reserve(group.size());
-    for (size_t idx : group) keyed.emplace_back(SplitMix64(seed_hash ^ idx), idx);
+    for (size_t idx : group) keyed.emplace_back(Mix64(seed_hash ^ idx), idx);
     std::partial_sort(keyed.begin(), keyed.begin() + static_cast<std::ptrdiff_t>(take),
                       keyed.end());
     for (size_t k = 0; k < take; ++k) chosen.push_back(keyed[k].second);

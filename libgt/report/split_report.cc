@@ -11,11 +11,12 @@
 
 #include "libgt/core/error.h"
 #include "libgt/core/human.h"
+#include "libgt/datasets/scan.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/file_read.h"
-#include "libgt/datasets/scan.h"
 #include "libgt/report/eval_report.h"
+#include "libgt/truth/pair_files.h"
 
 namespace gt::report {
 namespace {
@@ -392,12 +393,12 @@ std::vector<size_t> PickGalleryPairs(const SplitData& split, const SplitReportOp
   // Sort keys: (hash, index) for a seeded random choice; (-occlusion as ordered bits, index)
   // for the most occluded first.
   std::vector<std::pair<uint64_t, size_t>> keyed;
-  const uint64_t seed_hash = SplitMix64(options.seed);
+  const uint64_t seed_hash = Mix64(options.seed);
   for (size_t i = 0; i < split.pairs.size(); ++i) {
     const SplitPair& p = split.pairs[i];
     if (p.shard.empty() || p.key.empty()) continue;
     if (options.gallery_order == GalleryOrder::kRandom) {
-      keyed.emplace_back(SplitMix64(seed_hash ^ Fnv1a64(p.key)), i);
+      keyed.emplace_back(Mix64(seed_hash ^ Fnv1a64(p.key)), i);
     } else {
       // Occlusion ratios are in [0, 1]: larger ratio -> smaller key.
       const double occ = std::clamp(std::isfinite(p.occlusion) ? p.occlusion : 0.0, 0.0, 1.0);
@@ -412,10 +413,68 @@ std::vector<size_t> PickGalleryPairs(const SplitData& split, const SplitReportOp
   return out;
 }
 
+nlohmann::ordered_json SplitDepthSharesJson(const SplitDepthShares& shares) {
+  nlohmann::ordered_json j;
+  j["source"] = render::DepthSourceModeName(shares.source);
+  j["tolerance"] = {{"abs_tol_m", shares.tolerance.abs_tol_m},
+                    {"rel_tol", shares.tolerance.rel_tol}};
+  j["resolution"] = {shares.width, shares.height};
+  j["frames"] = shares.frames;
+  j["total"] = truth::DepthSharesJson(shares.total);
+  j["scenes"] = nlohmann::ordered_json::array();
+  for (const auto& s : shares.scenes) {
+    nlohmann::ordered_json e = truth::DepthSharesJson(s.counts);
+    e["name"] = s.name;
+    e["frames"] = s.frames;
+    j["scenes"].push_back(e);
+  }
+  return j;
+}
+
+namespace {
+
+// The "Depth sources" section: the split's shares and the largest scenes'.
+std::string DepthSharesSection(const SplitDepthShares& d) {
+  std::ostringstream h;
+  char line[512];
+  std::snprintf(line, sizeof(line),
+                "<h2>Depth sources</h2>\n<p class=\"muted\">Depth source <b>%s</b>: every pixel "
+                "of the %lld frames of this split's pairs at %dx%d, sensor against the mesh "
+                "rendered, agreeing within %g m + %g of the depth (depth_sources.json).</p>\n",
+                render::DepthSourceModeName(d.source), static_cast<long long>(d.frames), d.width,
+                d.height, d.tolerance.abs_tol_m, d.tolerance.rel_tol);
+  h << line;
+  h << "<table><tr><th>scene</th><th>frames</th><th>sensor only</th><th>mesh only</th>"
+       "<th>agree</th><th>disagree</th></tr>\n";
+  auto row = [&](const std::string& name, int64_t frames, const render::DepthAgreement& a) {
+    const double n = static_cast<double>(std::max<int64_t>(1, a.Total()));
+    std::snprintf(line, sizeof(line),
+                  "<td class=\"n\">%lld</td><td class=\"n\">%.4f</td><td class=\"n\">%.4f</td>"
+                  "<td class=\"n\">%.4f</td><td class=\"n\">%.4f</td></tr>\n",
+                  static_cast<long long>(frames), a.sensor_only / n, a.mesh_only / n, a.agree / n,
+                  a.disagree / n);
+    h << "<tr><td>" << HtmlEscape(name) << "</td>" << line;
+  };
+  row("all (split)", d.frames, d.total);
+  constexpr size_t kMaxScenes = 60;
+  for (size_t i = 0; i < d.scenes.size() && i < kMaxScenes; ++i) {
+    row(d.scenes[i].name, d.scenes[i].frames, d.scenes[i].counts);
+  }
+  h << "</table>\n";
+  if (d.scenes.size() > kMaxScenes) {
+    h << "<p class=\"muted\">" << d.scenes.size() - kMaxScenes
+      << " more scenes in depth_sources.json.</p>\n";
+  }
+  return h.str();
+}
+
+}  // namespace
+
 std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& options,
                              const std::vector<NamedImage>& plots,
                              const std::vector<GalleryItem>& gallery,
-                             const std::string& eval_section, const std::string& tuples_section) {
+                             const std::string& eval_section, const std::string& tuples_section,
+                             const SplitDepthShares* depth_shares) {
   const std::string name = split.summary.is_object() && split.summary.contains("split") &&
                                    split.summary["split"].is_string()
                                ? split.summary["split"].get<std::string>()
@@ -554,6 +613,7 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
       << "</figcaption></figure>\n";
   }
   if (split.has_pairs) h << "</div>\n";
+  if (depth_shares) h << DepthSharesSection(*depth_shares);
   h << eval_section;
 
   if (split.has_pairs) {
@@ -635,7 +695,8 @@ json ReportJson(const SplitData& split, const SplitReportOptions& options,
 }
 
 std::vector<std::string> WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
-                                          const SplitReportOptions& options) {
+                                          const SplitReportOptions& options,
+                                          const SplitDepthShares* depth_shares) {
   const SplitData split = LoadSplit(split_dir, options);
   EvalReportData eval;
   if (!options.eval_paths.empty()) eval = LoadEvalReport(options.eval_paths, split);
@@ -715,9 +776,14 @@ std::vector<std::string> WriteSplitReport(const std::string& split_dir, const st
       written.push_back(path);
     }
   }
+  if (depth_shares) {
+    const std::string path = (fs::path(out_dir) / "depth_sources.json").string();
+    gt::io::WriteFileAtomic(path, SplitDepthSharesJson(*depth_shares).dump(2) + "\n");
+    written.push_back(path);
+  }
   const std::string html_path = (fs::path(out_dir) / "report.html").string();
-  gt::io::WriteFileAtomic(
-      html_path, RenderHtmlReport(split, options, plots, gallery, eval_section, tuples_section));
+  gt::io::WriteFileAtomic(html_path, RenderHtmlReport(split, options, plots, gallery, eval_section,
+                                                      tuples_section, depth_shares));
   written.push_back(html_path);
   const std::string json_path = (fs::path(out_dir) / "report.json").string();
   gt::io::WriteFileAtomic(

@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "libgt/geometry/aggregate.h"
+#include "libgt/render/frame_depth.h"
 #include "libgt/report/page.h"
 #include "libgt/report/pair_source.h"
 #include "libgt/report/tuples_report.h"
@@ -61,11 +62,11 @@ struct SplitPair {
 
 struct SplitData {
   std::string dir;
-  std::vector<SplitPair> pairs;  // pairs.jsonl order
-  int score_stride = 0;          // of every line's score_metrics (0: no pairs)
-  nlohmann::json summary;        // summary.json, null when absent
-  nlohmann::json recipe;         // recipe.json (the resolved recipe), null when absent
-  bool has_pairs = true;         // false: no pairs.jsonl (a folder of tuples only)
+  std::vector<SplitPair> pairs;    // pairs.jsonl order
+  int score_stride = 0;            // of every line's score_metrics (0: no pairs)
+  nlohmann::json summary;          // summary.json, null when absent
+  nlohmann::json recipe;           // recipe.json (the resolved recipe), null when absent
+  bool has_pairs = true;           // false: no pairs.jsonl (a folder of tuples only)
   std::optional<TupleSet> tuples;  // tuples.jsonl (+ views/pairs.jsonl), when present
 };
 
@@ -119,6 +120,29 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
 // kRandom, most occluded first for kMostOccluded.
 std::vector<size_t> PickGalleryPairs(const SplitData& split, const SplitReportOptions& options);
 
+// Where the depth of a split came from, when its build rendered it (recipe.json
+// dataset.depth_source mesh or fused; docs/GROUND_TRUTH.md "Depth sources"): the
+// sensor-vs-mesh counts of every frame used by the split's pairs at the working resolution
+// (truth::CompareWorkingDepthWithMesh, the counts of `occgt scan --mesh`), summed per scene
+// and over the split. pipeline::ComputeSplitDepthShares fills it.
+struct SplitDepthShares {
+  render::DepthSourceMode source = render::DepthSourceMode::kFused;
+  render::FusedDepthOptions tolerance;
+  int width = 0, height = 0;  // working resolution of the counts
+  struct Scene {
+    std::string name;
+    int64_t frames = 0;  // distinct frames of the split's pairs in this scene
+    render::DepthAgreement counts;
+  };
+  std::vector<Scene> scenes;  // sorted by name
+  int64_t frames = 0;
+  render::DepthAgreement total;
+};
+
+// depth_sources.json (schemas/split_depth_sources.schema.json): {source, tolerance, resolution,
+// frames, total, scenes}, shares as truth::DepthSharesJson writes them.
+nlohmann::ordered_json SplitDepthSharesJson(const SplitDepthShares& shares);
+
 struct GalleryItem {
   std::string caption;             // key and metrics
   std::vector<NamedImage> images;  // matches, labels, occupancy (when present)
@@ -131,7 +155,8 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
                              const std::vector<NamedImage>& plots,
                              const std::vector<GalleryItem>& gallery,
                              const std::string& eval_section = "",
-                             const std::string& tuples_section = "");
+                             const std::string& tuples_section = "",
+                             const SplitDepthShares* depth_shares = nullptr);
 
 // report.json (the layout above).
 nlohmann::json ReportJson(const SplitData& split, const SplitReportOptions& options,
@@ -139,9 +164,11 @@ nlohmann::json ReportJson(const SplitData& split, const SplitReportOptions& opti
                           const std::vector<size_t>& gallery_tuples);
 
 // Everything: plots as PNG files (with options.eval_paths, the eval plots too; with tuples,
-// theirs), report.html and report.json, into out_dir (atomic writes). The eval files are checked
-// before any work. Returns the paths written.
+// theirs), report.html and report.json, into out_dir (atomic writes), and with depth_shares
+// depth_sources.json and a "Depth sources" section. The eval files are checked before any
+// work. Returns the paths written.
 std::vector<std::string> WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
-                                          const SplitReportOptions& options);
+                                          const SplitReportOptions& options,
+                                          const SplitDepthShares* depth_shares = nullptr);
 
 }  // namespace gt::report

@@ -213,13 +213,13 @@ json SummarizeTuples(const TupleSet& set, int bins) {
 
 std::vector<size_t> PickGalleryTuples(const TupleSet& set, int count, uint64_t seed) {
   std::vector<std::pair<uint64_t, size_t>> keyed;
-  const uint64_t seed_hash = SplitMix64(seed);
+  const uint64_t seed_hash = Mix64(seed);
   for (size_t k = 0; k < set.tuples.size(); ++k) {
     std::string id = set.tuples[k].scene + ":";
     for (size_t v = 0; v < set.tuples[k].frame_ids.size(); ++v) {
       id += (v ? "," : "") + set.tuples[k].frame_ids[v];
     }
-    keyed.emplace_back(SplitMix64(seed_hash ^ Fnv1a64(id)), k);
+    keyed.emplace_back(Mix64(seed_hash ^ Fnv1a64(id)), k);
   }
   const size_t take = std::min(keyed.size(), static_cast<size_t>(std::max(count, 0)));
   std::partial_sort(keyed.begin(), keyed.begin() + static_cast<std::ptrdiff_t>(take), keyed.end());

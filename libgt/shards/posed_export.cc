@@ -145,17 +145,23 @@ ViewOutput ExportView(const std::string& what, const Scene& scene, const Frame& 
   return out;
 }
 
+// The name of a view's files without extension: its frame number, or (by_id) its frame id.
+std::string ViewName(const Frame& f, bool by_id) {
+  return by_id ? f.id : std::to_string(f.number);
+}
+
 // Writes <scene_dir>/<image_sub>/<n>.jpg and <scene_dir>/<depth_sub>/<n>.png of every view
-// and removes the files of views no longer used.
+// (n = ViewName) and removes the files of views no longer used.
 void WriteViewFiles(const std::string& what, const SceneViews& s, const std::string& scene_dir,
                     const std::string& image_sub, const std::string& depth_sub, double units_per_m,
-                    const PosedExportOptions& options, PosedExportStats* stats) {
+                    const PosedExportOptions& options, PosedExportStats* stats,
+                    bool by_id = false) {
   constexpr size_t kChunk = 32;
   for (size_t begin = 0; begin < s.frames.size(); begin += kChunk) {
     const size_t end = std::min(s.frames.size(), begin + kChunk);
     std::vector<ViewOutput> outputs(end - begin);
     tbb::parallel_for(begin, end, [&](size_t i) {
-      const std::string n = std::to_string(s.frames[i]->number);
+      const std::string n = ViewName(*s.frames[i], by_id);
       outputs[i - begin] =
           ExportView(what, *s.scene, *s.frames[i], scene_dir + "/" + image_sub + "/" + n + ".jpg",
                      scene_dir + "/" + depth_sub + "/" + n + ".png", units_per_m, options);
@@ -172,8 +178,8 @@ void WriteViewFiles(const std::string& what, const SceneViews& s, const std::str
   }
   std::set<std::string> jpg, png;
   for (const Frame* f : s.frames) {
-    jpg.insert(std::to_string(f->number) + ".jpg");
-    png.insert(std::to_string(f->number) + ".png");
+    jpg.insert(ViewName(*f, by_id) + ".jpg");
+    png.insert(ViewName(*f, by_id) + ".png");
   }
   RemoveOthers(scene_dir + "/" + image_sub, jpg);
   RemoveOthers(scene_dir + "/" + depth_sub, png);
@@ -338,11 +344,15 @@ PosedExportStats ExportDust3r(const std::string& out_dir,
   for (size_t si = 0; si < views.size(); ++si) {
     const SceneViews& s = views[si];
     const std::string dir = out_dir + "/" + s.folder;
-    WriteViewFiles(what, s, dir, "images", "depth", kDust3rDepthUnits, options, &stats);
+    // ScanNet++: DUSt3R's preprocessed layout names a view by its image stem (DSC01234; the
+    // iPhone's frame_000010), the name selected_pairs.npz's `selection` lists; other datasets
+    // by frame number.
+    const bool by_id = s.scene->format == DatasetFormat::kScanNetPP;
+    WriteViewFiles(what, s, dir, "images", "depth", kDust3rDepthUnits, options, &stats, by_id);
     std::vector<std::string> scene_images, stems;
     std::vector<double> scene_k, scene_t, scene_pairs, selected_pairs, selected_overlaps;
     for (const Frame* f : s.frames) {
-      scene_images.push_back(std::to_string(f->number));
+      scene_images.push_back(ViewName(*f, by_id));
       stems.push_back(fs::path(f->color_path).stem().string());
       AppendMatrix(f->depth_camera.Resized(options.width, options.height).K(), &scene_k);
       AppendMatrix(f->world_from_cam.matrix(), &scene_t);

@@ -1,5 +1,6 @@
 #include "libgt/truth/pair_files.h"
 
+#include <algorithm>
 #include <cstdint>
 
 #include "gt/core/version.h"
@@ -31,6 +32,10 @@ ordered_json SourceJson(const char* tool, const PairSource& s) {
   j["frame0"] = {{"id", s.id0}, {"number", s.number0}};
   j["frame1"] = {{"id", s.id1}, {"number", s.number1}};
   j["resolution"] = {s.resolution.width, s.resolution.height};
+  if (!s.device.empty()) j["device"] = s.device;
+  if (s.depth_source != render::DepthSourceMode::kSensor) {
+    j["depth_source"] = render::DepthSourceModeName(s.depth_source);
+  }
   return j;
 }
 
@@ -56,6 +61,15 @@ DirectionMetrics MetricsFromJson(const nlohmann::json& j) {
   }
   FinishMetrics(&m);
   return m;
+}
+
+nlohmann::ordered_json DepthSharesJson(const render::DepthAgreement& a) {
+  const double n = static_cast<double>(std::max<int64_t>(1, a.Total()));
+  return {{"pixels", a.Total()},
+          {"sensor_only", a.sensor_only / n},
+          {"mesh_only", a.mesh_only / n},
+          {"agree", a.agree / n},
+          {"disagree", a.disagree / n}};
 }
 
 nlohmann::json MatrixJson(const Eigen::MatrixXd& m) {

@@ -57,6 +57,11 @@ nlohmann::ordered_json OccupancyOptionsJson(const PairTruthOptions& o);
 // "occupancy"."fusion_stats" and Python's "fusion_stats" use these names.
 nlohmann::ordered_json FusionStatsJson(const occupancy::FusionStats& s);
 
+// The shares of a sensor-vs-mesh comparison (render::DepthAgreement) as `occgt scan --mesh`
+// and the split report record them: {pixels, sensor_only, mesh_only, agree, disagree}, the
+// last four as fractions of pixels.
+nlohmann::ordered_json DepthSharesJson(const render::DepthAgreement& a);
+
 // Where a pair came from, for the records.
 struct PairSource {
   DatasetFormat format = DatasetFormat::kGeneric;
@@ -65,6 +70,12 @@ struct PairSource {
   int64_t number0 = 0, number1 = 0;  // the frames' numbers (Frame::number)
   std::string preset;                // label preset name the options started from
   Resolution resolution;             // working resolution
+  // ScanNet++: the camera whose frames were read ("dslr" or "iphone", recorded as "device"
+  // so that a command re-reading the folder opens the same frames); "" for other formats.
+  std::string device;
+  // The frames' depth source (render/frame_depth.h), recorded as "depth_source" when not the
+  // sensor's (files of sensor-depth runs unchanged).
+  render::DepthSourceMode depth_source = render::DepthSourceMode::kSensor;
 };
 
 // Writes the `occgt pair` folder. meta.json's "metrics" are the labels' own (every pixel of

@@ -65,6 +65,16 @@ DepthImage LoadWorkingDepth(const Scene& scene, const Frame& frame, const Resolu
   return render::LoadFrameDepth(scene, frame, WorkingCamera(frame, resolution), depth, agreement, &sensor);
 }
 
+render::DepthAgreement CompareWorkingDepthWithMesh(const Scene& scene, const Frame& frame,
+                                                   const Resolution& resolution,
+                                                   const render::FrameDepthOptions& depth) {
+  render::FrameDepthOptions mesh = depth;
+  mesh.source = render::DepthSourceMode::kMesh;
+  render::DepthAgreement agreement;
+  LoadWorkingDepth(scene, frame, resolution, mesh, &agreement);
+  return agreement;
+}
+
 WorkingFrame LoadWorkingFrame(const Scene& scene, const Frame& frame, const Resolution& resolution,
                               const render::FrameDepthOptions& depth) {
   WorkingFrame f;

@@ -55,6 +55,13 @@ DepthImage LoadWorkingDepth(const Scene& scene, const Frame& frame, const Resolu
                             render::DepthAgreement* agreement = nullptr);
 WorkingFrame LoadWorkingFrame(const Scene& scene, const Frame& frame, const Resolution& resolution,
                               const render::FrameDepthOptions& depth);
+// The sensor-vs-mesh comparison of one frame at the working resolution: the counts of
+// `occgt scan --mesh` and of the split report (docs/GROUND_TRUTH.md "Depth sources"). The
+// mesh is rendered whatever depth.source says; depth.fused is the tolerance, depth.near_m /
+// far_m the render's range. A frame without a depth file has no sensor pixel.
+render::DepthAgreement CompareWorkingDepthWithMesh(const Scene& scene, const Frame& frame,
+                                                   const Resolution& resolution,
+                                                   const render::FrameDepthOptions& depth);
 
 // Index into scene.frames of the frame with id `id`; throws InputError(field, ...) when
 // there is none or it is unusable (with the reader's reason).

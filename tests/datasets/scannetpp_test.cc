@@ -321,8 +321,11 @@ TEST_F(ScanNetPP, DslrDust3rExportWritesTheRenderedDepthInMillimetres) {
     const Frame* f = Find(scene, name.substr(0, name.size() - 4));
     const Camera cam = truth::WorkingCamera(*f, {options.width, options.height});
     const DepthImage exact = synth::RenderDepth(truth.scene, cam, f->world_from_cam);
-    const std::string png =
-        (out / folder / "depth" / (std::to_string(f->number) + ".png")).string();
+    // Named by the image stem (DUSt3R's ScanNet++ basenames, those of selected_pairs.npz).
+    EXPECT_EQ(f->id, name.substr(0, name.size() - 4));
+    EXPECT_TRUE(fs::is_regular_file(out / folder / "images" / (f->id + ".jpg"))) << f->id;
+    EXPECT_FALSE(fs::exists(out / folder / "depth" / (std::to_string(f->number) + ".png")));
+    const std::string png = (out / folder / "depth" / (f->id + ".png")).string();
     const cv::Mat got = io::DecodeImageBytes(io::ReadFileBytes(png), io::ChannelOrder::kRgb, png);
     ASSERT_EQ(got.type(), CV_16UC1) << png;
     ASSERT_EQ(got.cols, options.width);
@@ -427,6 +430,24 @@ TEST_F(ScanNetPP, BadInputIsOneClearError) {
   }
   // An unknown device.
   EXPECT_THROW(datasets::ParseScanNetPPDevice("kinect", "dataset.device"), InputError);
+  // A frame id of the other device's shape is refused, naming both.
+  datasets::CheckScanNetPPFrameId(datasets::ScanNetPPDevice::kDslr, "DSC00010", "--frames", "x");
+  datasets::CheckScanNetPPFrameId(datasets::ScanNetPPDevice::kIphone, "frame_000010", "--frames",
+                                  "x");
+  try {
+    datasets::CheckScanNetPPFrameId(datasets::ScanNetPPDevice::kDslr, "frame_000010", "--frames",
+                                    "r.yaml: dataset.device");
+    ADD_FAILURE() << "an iPhone id passed as a DSLR one";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("--frames"), std::string::npos) << what;
+    EXPECT_NE(what.find("'frame_000010' is an iPhone frame id, but r.yaml: dataset.device says dslr"),
+              std::string::npos)
+        << what;
+  }
+  EXPECT_THROW(datasets::CheckScanNetPPFrameId(datasets::ScanNetPPDevice::kIphone, "DSC00010",
+                                               "--frames", "x"),
+               InputError);
   fs::remove_all(copy);
 }
 

@@ -33,6 +33,10 @@ RUN_HERE = {
         "occgt inspect pair --pair-dir pairdir --root ../shared/data/tartanair/hospital_sample --out pics",
         "occgt inspect pair --root ../shared/data/tartanair/hospital_sample --format tartanair "
         "--scene hospital_sample --frames 000000,000020 --out pics",
+        "occgt inspect pair --root ../shared/data/sevenscenes --format sevenscenes --scene "
+        "rgbd-frames --frames 000150,000175 --mesh "
+        "../shared/data/meshes/sevenscenes-rgbd-frames-tsdf.ply --depth-source fused "
+        "--no-occupancy --out pics",
         "occgt inspect split out/demo",
         "occgt inspect split out/demo --out report --gallery 6 --seed 0 --aggregate mean "
         "--occlusion-metric image --bins 20",
@@ -231,6 +235,8 @@ def main():
         if "inspect pair" in text:
             made = sorted(os.listdir(os.path.join(ws, "pics")))
             assert "labels.png" in made or "occupancy.png" in made, (text, made)
+            if "--depth-source" in text:  # a scene with a mesh: the depth panels too
+                assert "depth.png" in made, (text, made)
     for text in RUN_HERE["docs/CLI.md"]:  # occgt render on the 7-Scenes sample
         run(ws, text, env)
         assert os.path.isfile(os.path.join(ws, "out", "render", "000175_depth.png")), text

@@ -23,6 +23,11 @@ DUSt3R / MASt3R, the ScanNetpp dataset class (dust3r/datasets/scannetpp.py):
   pairs[:, :2].astype(int) as the two global view indices;
 - a view's folder is ROOT/scenes[sceneids[v]]; its image images/<images[v]>.jpg; its depth
   depth/<images[v]>.png read with IMREAD_UNCHANGED, / 1000 (metres), non-finite -> 0;
+- for ScanNet++ the basenames images[v] are the DSLR image stems (DSC01234), the names its
+  preprocessing (datasets_preprocess/preprocess_scannetpp.py) takes from `selection` of
+  <scene>/selected_pairs.npz and writes as images/<stem>.jpg and scene_metadata.npz's images;
+  occgt's export of a ScanNet++ build must name its views so (the frame ids), other datasets'
+  views by frame number;
 - camera_pose = trajectories[v] is camera-to-world; camera_intrinsics = intrinsics[v] is
   used with pixel centres at integer coordinates (depthmap_to_camera_coordinates in
   dust3r/utils/geometry.py meshes u = arange(W) against cu);
@@ -257,12 +262,31 @@ def check_dust3r(label, build, samples, images):
             fail(f"{label}: all_metadata.npz {k} has dtype {raw[k].dtype}, want numpy str")
     if raw["pairs"].shape != (len(samples), 5) or raw["intrinsics"].shape[1:] != (3, 3):
         fail(f"{label}: all_metadata.npz pairs {raw['pairs'].shape}")
+    with open(os.path.join(build, "recipe.json")) as f:
+        by_stem = json.load(f)["dataset"]["format"] == "scannetpp"
+    # (scene, frame id) -> frame number, from occgt's own pair lines.
+    number_of = {}
+    for key, (line, *_rest) in samples.items():
+        for k in ("frame0", "frame1"):
+            number_of[(key[0], line[k]["id"])] = int(line[k]["number"])
+
+    def number(scene, basename):
+        if by_stem:  # ScanNet++: DUSt3R's basename is the image stem = occgt's frame id
+            if (scene, basename) not in number_of:
+                fail(f"{label}: dust3r view {scene}/{basename} is not a frame id of a pair "
+                     "(ScanNet++ views are named by their image stem)")
+            return number_of[(scene, basename)]
+        if not basename.isdigit():
+            fail(f"{label}: dust3r view {scene}/{basename}: expected the frame number")
+        return int(basename)
+
     seen = set()
     for i in range(len(reader)):
         v0, v1 = reader[i]
         if v0["scene"] != v1["scene"]:
             fail(f"{label}: dust3r pair {i} joins two scenes")
-        key = (scene_of[v0["scene"]], int(v0["basename"]), int(v1["basename"]))
+        scene = scene_of[v0["scene"]]
+        key = (scene, number(scene, v0["basename"]), number(scene, v1["basename"]))
         if key not in samples:
             fail(f"{label}: dust3r pair {key} is not in pairs.jsonl")
         seen.add(key)
@@ -305,6 +329,13 @@ def check_dust3r(label, build, samples, images):
         if sorted(os.listdir(os.path.join(root, str(folder), "images"))) != sorted(
                 f"{b}.jpg" for b in raw["images"][mine]):
             fail(f"{label} {folder}: images/ holds other files than the views")
+        if by_stem:
+            # DUSt3R's preprocessing names images/<stem>.jpg after selected_pairs' selection.
+            with np.load(os.path.join(root, str(folder), "selected_pairs.npz")) as sp:
+                if [str(x) for x in sp["selection"]] != [str(x) for x in raw["images"][mine]]:
+                    fail(f"{label} {folder}: selected_pairs.npz selection "
+                         f"{sp['selection'][:3]}... differs from the view names "
+                         f"{raw['images'][mine][:3]}...")
     validate_export_json(os.path.join(root, "export.json"), "dust3r", {k[0] for k in samples},
                          len(raw["images"]), len(samples))
 
