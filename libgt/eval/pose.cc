@@ -321,12 +321,10 @@ std::vector<EssentialEstimate> FindEssentialRansac(const std::vector<double>& p0
     std::array<double, 9> best{};
   };
   std::vector<State> states(settings.size());
-  int loop_iters = 0;
   for (size_t s = 0; s < settings.size(); ++s) {
     GT_ASSERT(settings[s].confidence > 0 && settings[s].confidence < 1);
     states[s].t2 = static_cast<float>(settings[s].threshold * settings[s].threshold);
     states[s].niters = std::max(settings[s].max_iters, 1);
-    loop_iters = std::max(loop_iters, states[s].niters);
   }
   cv::RNG rng(~uint64_t{0});
   const cv::Mat identity = cv::Mat::eye(3, 3, CV_64F);
