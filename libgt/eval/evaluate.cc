@@ -485,7 +485,7 @@ EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& s
       break;
     }
   }
-  // Stage 2: every (pair, set, estimator) pose in parallel, results by index.
+  // Stage 2: every (pair, set, estimator group) pose in parallel, results by index.
   const size_t nsets = sets.size(), nest = options.estimators.size();
   std::vector<const PairPrediction*> prediction(n * nsets, nullptr);
   for (size_t i = 0; i < n; ++i) {
@@ -507,20 +507,43 @@ EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& s
       }
     }
   }
-  // Each task seeds cv::theRNG() with PairRngSeed(key, estimator) (pose.h): the same
+  // Estimators in groups: every kRansac setting in one (EstimateRelativePoses shares one
+  // RANSAC run between them, with each one's own answer), each other setting alone.
+  std::vector<std::vector<size_t>> groups;
+  std::vector<size_t> ransac;
+  for (size_t e = 0; e < nest; ++e) {
+    if (options.estimators[e].method == PoseMethod::kRansac) {
+      ransac.push_back(e);
+    } else {
+      groups.push_back({e});
+    }
+  }
+  if (!ransac.empty()) groups.insert(groups.begin(), ransac);
+  const size_t ngroups = groups.size();
+  // Each estimator seeds cv::theRNG() with PairRngSeed(key, estimator) (pose.h): the same
   // numbers whichever thread runs it, and after whatever ran before.
-  tbb::parallel_for(size_t{0}, n * nsets * nest, size_t{1}, [&](size_t task) {
-    const size_t e = task % nest, k = (task / nest) % nsets, i = task / (nest * nsets);
+  tbb::parallel_for(size_t{0}, n * nsets * ngroups, size_t{1}, [&](size_t task) {
+    const size_t gi = task % ngroups, k = (task / ngroups) % nsets, i = task / (ngroups * nsets);
     const PairPrediction* p = prediction[i * nsets + k];
     if (p == nullptr) return;
     const PairGeometry& g = geometry[i];
-    const std::optional<PoseEstimate> pose = EstimateRelativePose(
-        p->kpts0, p->kpts1, g.K0, g.K1, options.estimators[e],
-        p->has_confidence ? &p->confidence : nullptr, PairRngSeed(split.keys[i], e));
+    std::vector<PoseEstimatorOptions> group_options;
+    std::vector<uint64_t> seeds;
+    for (const size_t e : groups[gi]) {
+      group_options.push_back(options.estimators[e]);
+      seeds.push_back(PairRngSeed(split.keys[i], e));
+    }
+    const std::vector<std::optional<PoseEstimate>> poses =
+        EstimateRelativePoses(p->kpts0, p->kpts1, g.K0, g.K1, group_options,
+                              p->has_confidence ? &p->confidence : nullptr, seeds);
     SetPairResult& r = result.pairs[i].sets[k];
-    if (pose) {
-      r.pose[e] = RelativePoseError(g.R, g.t, pose->cam1_from_cam0_R, pose->cam1_from_cam0_t);
-      r.inliers[e] = pose->inliers;
+    for (size_t j = 0; j < groups[gi].size(); ++j) {
+      const size_t e = groups[gi][j];
+      if (poses[j]) {
+        r.pose[e] =
+            RelativePoseError(g.R, g.t, poses[j]->cam1_from_cam0_R, poses[j]->cam1_from_cam0_t);
+        r.inliers[e] = poses[j]->inliers;
+      }
     }
   });
   return result;

@@ -10,7 +10,8 @@
 // depth0/depth1, matches, match_type members (per-type scores need labels and depth; a
 // split without them gets "match_quality": null with the reason).
 // Work: shards are read in parallel (TBB) and each sample is scored as it streams by; then
-// every (pair, prediction set, estimator) pose is estimated in parallel. Results are
+// every (pair, prediction set, estimator group) pose is estimated in parallel (the kRansac
+// settings of a pair share one RANSAC run, pose.h FindEssentialRansac). Results are
 // stored by index and summed in pair order: the output is the same at any thread count.
 #pragma once
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <numeric>
@@ -218,53 +219,75 @@ RecoveredPose RecoverPose(const Eigen::Matrix3d& E, const std::vector<double>& p
   return out;
 }
 
-std::optional<PoseEstimate> EstimateRelativePose(
-    const std::vector<float>& kpts0, const std::vector<float>& kpts1, const Eigen::Matrix3d& K0,
-    const Eigen::Matrix3d& K1, const PoseEstimatorOptions& options,
-    const std::vector<float>* confidence, uint64_t rng_seed) {
-  GT_ASSERT(kpts0.size() == kpts1.size() && kpts0.size() % 2 == 0);
-  const int n = static_cast<int>(kpts0.size() / 2);
-  if (n < options.min_matches) return std::nullopt;
-  const double focal = options.focal_mean == FocalMean::kLoftr
-                           ? (K0(0, 0) + K1(1, 1) + K0(0, 0) + K1(1, 1)) / 4.0
-                           : (K0(0, 0) + K0(1, 1) + K1(0, 0) + K1(1, 1)) / 4.0;
-  const double threshold = options.ransac_px / focal;
-  std::vector<double> p0 = Normalise(kpts0, K0);
-  std::vector<double> p1 = Normalise(kpts1, K1);
-  if (options.method == PoseMethod::kUsacProsac) {
-    // PROSAC draws from the front of the list first: best confidence first, ties in order.
-    GT_ASSERT(confidence != nullptr && confidence->size() == static_cast<size_t>(n));
-    std::vector<int> order(n);
-    std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(),
-                     [&](int a, int b) { return (*confidence)[a] > (*confidence)[b]; });
-    std::vector<double> q0(p0.size()), q1(p1.size());
-    for (int i = 0; i < n; ++i) {
-      for (int c = 0; c < 2; ++c) {
-        q0[2 * i + c] = p0[2 * order[i] + c];
-        q1[2 * i + c] = p1[2 * order[i] + c];
-      }
-    }
-    p0.swap(q0);
-    p1.swap(q1);
+namespace {
+
+// OpenCV's RANSACUpdateNumIters (calib3d, not exported): the iterations that reach
+// confidence p at outlier ratio ep with samples of model_points, capped at max_iters.
+int UpdateIterations(double p, double ep, int model_points, int max_iters) {
+  p = std::min(std::max(p, 0.0), 1.0);
+  ep = std::min(std::max(ep, 0.0), 1.0);
+  double num = std::max(1.0 - p, DBL_MIN);
+  double denom = 1.0 - std::pow(1.0 - ep, model_points);
+  if (denom < DBL_MIN) return 0;
+  num = std::log(num);
+  denom = std::log(denom);
+  return denom >= 0 || -num >= max_iters * (-denom) ? max_iters : cvRound(num / denom);
+}
+
+// The error OpenCV's essential-matrix callback gives match i under E (row-major):
+// (x1^T E x0)^2 / ((E x0)_0^2 + (E x0)_1^2 + (E^T x1)_0^2 + (E^T x1)_1^2) in double, stored
+// as float; the same operations in the same order (OpenCV's Matx products start from a
+// zero, which can change only the sign of an exact zero, and every such number is squared
+// before it counts). This file is compiled without FMA contraction (libgt/CMakeLists.txt).
+void EssentialErrors(const double* E, const double* p0, const double* p1, size_t n, float* err) {
+  for (size_t i = 0; i < n; ++i) {
+    const double x0 = p0[2 * i], y0 = p0[2 * i + 1], x1 = p1[2 * i], y1 = p1[2 * i + 1];
+    const double ex0 = E[0] * x0 + E[1] * y0 + E[2];
+    const double ex1 = E[3] * x0 + E[4] * y0 + E[5];
+    const double ex2 = E[6] * x0 + E[7] * y0 + E[8];
+    const double etx0 = E[0] * x1 + E[3] * y1 + E[6];
+    const double etx1 = E[1] * x1 + E[4] * y1 + E[7];
+    const double d = x1 * ex0 + y1 * ex1 + ex2;
+    err[i] = static_cast<float>(d * d / (ex0 * ex0 + ex1 * ex1 + etx0 * etx0 + etx1 * etx1));
   }
-  const cv::Mat identity = cv::Mat::eye(3, 3, CV_64F);
-  cv::Mat mask_cv;
-  cv::theRNG().state = rng_seed;
-  const cv::Mat E =
-      cv::findEssentialMat(cv::Mat(n, 2, CV_64F, p0.data()), cv::Mat(n, 2, CV_64F, p1.data()),
-                           identity, PoseMethodOpenCVFlag(options.method), options.confidence,
-                           threshold, options.max_iters, mask_cv);
-  if (E.empty() || E.cols != 3 || E.rows % 3 != 0) return std::nullopt;
-  GT_ASSERT(mask_cv.isContinuous() && mask_cv.total() == static_cast<size_t>(n));
-  // The same mask for every block: recoverPose narrows it in place (LoFTR's loop).
-  std::vector<uint8_t> mask(mask_cv.data, mask_cv.data + n);
+}
+
+EssentialEstimate FromOpenCV(const cv::Mat& E, const cv::Mat& mask, size_t n) {
+  EssentialEstimate out;
+  if (E.empty() || E.cols != 3 || E.rows % 3 != 0) return out;
+  GT_ASSERT(E.isContinuous() && E.type() == CV_64F);
+  out.E.assign(E.ptr<double>(), E.ptr<double>() + E.total());
+  GT_ASSERT(mask.isContinuous() && mask.total() == n);
+  out.mask.assign(mask.data, mask.data + n);
+  return out;
+}
+
+// cv::findEssentialMat(RANSAC) itself, on normalised points (K = I).
+EssentialEstimate FindEssentialOpenCV(const std::vector<double>& p0, const std::vector<double>& p1,
+                                      int method, double confidence, double threshold,
+                                      int max_iters) {
+  const int n = static_cast<int>(p0.size() / 2);
+  cv::Mat mask;
+  const cv::Mat E = cv::findEssentialMat(cv::Mat(n, 2, CV_64F, const_cast<double*>(p0.data())),
+                                         cv::Mat(n, 2, CV_64F, const_cast<double*>(p1.data())),
+                                         cv::Mat::eye(3, 3, CV_64F), method, confidence, threshold,
+                                         max_iters, mask);
+  return FromOpenCV(E, mask, static_cast<size_t>(n));
+}
+
+// R, t of the block of E with most recoverPose inliers, the mask narrowed from block to
+// block (LoFTR's loop); nullopt when no block has an inlier.
+std::optional<PoseEstimate> PoseFromEssential(const EssentialEstimate& e,
+                                              const std::vector<double>& p0,
+                                              const std::vector<double>& p1) {
+  if (e.E.empty()) return std::nullopt;
+  std::vector<uint8_t> mask = e.mask;
   std::optional<PoseEstimate> best;
   int best_inliers = 0;
-  for (int k = 0; k < E.rows / 3; ++k) {
+  for (size_t k = 0; k < e.E.size() / 9; ++k) {
     Eigen::Matrix3d block;
     for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) block(r, c) = E.at<double>(3 * k + r, c);
+      for (int c = 0; c < 3; ++c) block(r, c) = e.E[9 * k + 3 * r + c];
     }
     const RecoveredPose pose = RecoverPose(block, p0, p1, 1e9, &mask);
     if (pose.inliers > best_inliers) {
@@ -273,6 +296,162 @@ std::optional<PoseEstimate> EstimateRelativePose(
     }
   }
   return best;
+}
+
+}  // namespace
+
+std::vector<EssentialEstimate> FindEssentialRansac(const std::vector<double>& p0,
+                                                   const std::vector<double>& p1,
+                                                   const std::vector<RansacSetting>& settings) {
+  GT_ASSERT(p0.size() == p1.size() && p0.size() % 2 == 0);
+  const int count = static_cast<int>(p0.size() / 2);
+  constexpr int kModelPoints = 5;
+  std::vector<EssentialEstimate> out(settings.size());
+  if (count <= kModelPoints) {
+    // Too few to sample (OpenCV returns every five-point solution on exactly five).
+    for (size_t s = 0; s < settings.size(); ++s) {
+      out[s] = FindEssentialOpenCV(p0, p1, cv::RANSAC, settings[s].confidence,
+                                   settings[s].threshold, settings[s].max_iters);
+    }
+    return out;
+  }
+  struct State {
+    float t2 = 0;  // OpenCV's float threshold on the squared error
+    int niters = 0, max_good = 0;
+    std::array<double, 9> best{};
+  };
+  std::vector<State> states(settings.size());
+  for (size_t s = 0; s < settings.size(); ++s) {
+    GT_ASSERT(settings[s].confidence > 0 && settings[s].confidence < 1);
+    states[s].t2 = static_cast<float>(settings[s].threshold * settings[s].threshold);
+    states[s].niters = std::max(settings[s].max_iters, 1);
+  }
+  cv::RNG rng(~uint64_t{0});
+  const cv::Mat identity = cv::Mat::eye(3, 3, CV_64F);
+  std::vector<float> err(count);
+  std::vector<size_t> active;
+  double s0[2 * kModelPoints], s1[2 * kModelPoints];
+  for (int iter = 0;; ++iter) {
+    active.clear();
+    for (size_t s = 0; s < states.size(); ++s) {
+      if (iter < states[s].niters) active.push_back(s);
+    }
+    if (active.empty()) break;
+    // OpenCV's getSubset: five distinct indices, each redrawn while it repeats an earlier
+    // one (its callback accepts every sample, so the first attempt is the sample).
+    int idx[kModelPoints];
+    for (int i = 0; i < kModelPoints; ++i) {
+      for (;;) {
+        idx[i] = rng.uniform(0, count);
+        int j = 0;
+        while (j < i && idx[j] != idx[i]) ++j;
+        if (j == i) break;
+      }
+      for (int c = 0; c < 2; ++c) {
+        s0[2 * i + c] = p0[2 * idx[i] + c];
+        s1[2 * i + c] = p1[2 * idx[i] + c];
+      }
+    }
+    const cv::Mat models = cv::findEssentialMat(cv::Mat(kModelPoints, 2, CV_64F, s0),
+                                                cv::Mat(kModelPoints, 2, CV_64F, s1), identity,
+                                                cv::RANSAC, 0.99, 1.0, 1000, cv::noArray());
+    if (models.empty()) continue;
+    GT_ASSERT(models.cols == 3 && models.rows % 3 == 0 && models.isContinuous());
+    for (int m = 0; m < models.rows / 3; ++m) {
+      const double* E = models.ptr<double>(3 * m);
+      EssentialErrors(E, p0.data(), p1.data(), static_cast<size_t>(count), err.data());
+      for (const size_t s : active) {
+        State& st = states[s];
+        int good = 0;
+        for (int i = 0; i < count; ++i) good += err[i] <= st.t2;
+        if (good > std::max(st.max_good, kModelPoints - 1)) {
+          std::copy(E, E + 9, st.best.begin());
+          st.max_good = good;
+          st.niters =
+              UpdateIterations(settings[s].confidence, static_cast<double>(count - good) / count,
+                               kModelPoints, st.niters);
+        }
+      }
+    }
+  }
+  for (size_t s = 0; s < states.size(); ++s) {
+    if (states[s].max_good == 0) continue;
+    out[s].E.assign(states[s].best.begin(), states[s].best.end());
+    EssentialErrors(states[s].best.data(), p0.data(), p1.data(), static_cast<size_t>(count),
+                    err.data());
+    out[s].mask.resize(count);
+    for (int i = 0; i < count; ++i) out[s].mask[i] = err[i] <= states[s].t2;
+  }
+  return out;
+}
+
+std::vector<std::optional<PoseEstimate>> EstimateRelativePoses(
+    const std::vector<float>& kpts0, const std::vector<float>& kpts1, const Eigen::Matrix3d& K0,
+    const Eigen::Matrix3d& K1, const std::vector<PoseEstimatorOptions>& estimators,
+    const std::vector<float>* confidence, const std::vector<uint64_t>& rng_seeds) {
+  GT_ASSERT(kpts0.size() == kpts1.size() && kpts0.size() % 2 == 0);
+  GT_ASSERT(rng_seeds.size() == estimators.size());
+  const int n = static_cast<int>(kpts0.size() / 2);
+  std::vector<std::optional<PoseEstimate>> out(estimators.size());
+  const std::vector<double> p0 = Normalise(kpts0, K0);
+  const std::vector<double> p1 = Normalise(kpts1, K1);
+  std::vector<size_t> ransac;
+  std::vector<RansacSetting> ransac_settings;
+  for (size_t e = 0; e < estimators.size(); ++e) {
+    const PoseEstimatorOptions& options = estimators[e];
+    if (n < options.min_matches) continue;
+    const double focal = options.focal_mean == FocalMean::kLoftr
+                             ? (K0(0, 0) + K1(1, 1) + K0(0, 0) + K1(1, 1)) / 4.0
+                             : (K0(0, 0) + K0(1, 1) + K1(0, 0) + K1(1, 1)) / 4.0;
+    const double threshold = options.ransac_px / focal;
+    if (options.method == PoseMethod::kRansac) {
+      ransac.push_back(e);
+      ransac_settings.push_back({threshold, options.confidence, options.max_iters});
+      continue;
+    }
+    const std::vector<double>* q0 = &p0;
+    const std::vector<double>* q1 = &p1;
+    std::vector<double> sorted0, sorted1;
+    if (options.method == PoseMethod::kUsacProsac) {
+      // PROSAC draws from the front of the list first: best confidence first, ties in order.
+      GT_ASSERT(confidence != nullptr && confidence->size() == static_cast<size_t>(n));
+      std::vector<int> order(n);
+      std::iota(order.begin(), order.end(), 0);
+      std::stable_sort(order.begin(), order.end(),
+                       [&](int a, int b) { return (*confidence)[a] > (*confidence)[b]; });
+      sorted0.resize(p0.size());
+      sorted1.resize(p1.size());
+      for (int i = 0; i < n; ++i) {
+        for (int c = 0; c < 2; ++c) {
+          sorted0[2 * i + c] = p0[2 * order[i] + c];
+          sorted1[2 * i + c] = p1[2 * order[i] + c];
+        }
+      }
+      q0 = &sorted0;
+      q1 = &sorted1;
+    }
+    cv::theRNG().state = rng_seeds[e];
+    out[e] =
+        PoseFromEssential(FindEssentialOpenCV(*q0, *q1, PoseMethodOpenCVFlag(options.method),
+                                              options.confidence, threshold, options.max_iters),
+                          *q0, *q1);
+  }
+  if (!ransac.empty()) {
+    // OpenCV's RANSAC draws from its own generator only; theRNG() as for the others.
+    cv::theRNG().state = rng_seeds[ransac.front()];
+    const std::vector<EssentialEstimate> found = FindEssentialRansac(p0, p1, ransac_settings);
+    for (size_t k = 0; k < ransac.size(); ++k) {
+      out[ransac[k]] = PoseFromEssential(found[k], p0, p1);
+    }
+  }
+  return out;
+}
+
+std::optional<PoseEstimate> EstimateRelativePose(
+    const std::vector<float>& kpts0, const std::vector<float>& kpts1, const Eigen::Matrix3d& K0,
+    const Eigen::Matrix3d& K1, const PoseEstimatorOptions& options,
+    const std::vector<float>* confidence, uint64_t rng_seed) {
+  return EstimateRelativePoses(kpts0, kpts1, K0, K1, {options}, confidence, {rng_seed})[0];
 }
 
 PoseError RelativePoseError(const Eigen::Matrix3d& R_gt, const Eigen::Vector3d& t_gt,

@@ -86,6 +86,38 @@ std::optional<PoseEstimate> EstimateRelativePose(
     const Eigen::Matrix3d& K1, const PoseEstimatorOptions& options,
     const std::vector<float>* confidence = nullptr, uint64_t rng_seed = 1);
 
+// EstimateRelativePose for each of `estimators` on one pair (rng_seeds: one per estimator),
+// with the same answers; cheaper: the points are normalised once, and every kRansac
+// setting shares one run of FindEssentialRansac.
+std::vector<std::optional<PoseEstimate>> EstimateRelativePoses(
+    const std::vector<float>& kpts0, const std::vector<float>& kpts1, const Eigen::Matrix3d& K0,
+    const Eigen::Matrix3d& K1, const std::vector<PoseEstimatorOptions>& estimators,
+    const std::vector<float>* confidence, const std::vector<uint64_t>& rng_seeds);
+
+// cv::findEssentialMat(p0, p1, I, cv::RANSAC, confidence, threshold, max_iters, mask) of
+// OpenCV 4.6 on normalised points p0, p1 (row-major [N, 2]) for several settings at once,
+// with the same E and mask for each, bit for bit. OpenCV's RANSAC seeds a fresh
+// cv::RNG(~0) on every call, so every setting draws the same five-point samples in the
+// same order and differs only in which solutions it keeps and when it stops: here each
+// sample is drawn once, solved once (OpenCV's own five-point kernel: findEssentialMat on
+// exactly five points returns all its solutions), the error of each solution (OpenCV's
+// Sampson-like float error, the same operations in the same order) computed once, and
+// each setting counts its inliers, keeps its best and updates its own iteration count by
+// RANSACUpdateNumIters' rule, until every setting has stopped. N <= 5: findEssentialMat
+// per setting. Checked against cv::findEssentialMat in tests/eval/pose_test.cc.
+struct RansacSetting {
+  double threshold = 0;      // normalised units (pixels / focal)
+  double confidence = 0.99;  // in (0, 1)
+  int max_iters = 1000;
+};
+struct EssentialEstimate {
+  std::vector<double> E;      // row-major 3x3 blocks, 9 per block; empty: no E
+  std::vector<uint8_t> mask;  // [N] 0/1 inliers of the winning E (empty when no E)
+};
+std::vector<EssentialEstimate> FindEssentialRansac(const std::vector<double>& p0,
+                                                   const std::vector<double>& p1,
+                                                   const std::vector<RansacSetting>& settings);
+
 // cv::recoverPose(E, p0, p1, I, R, t, distance_thresh, mask) of OpenCV 4.6 on normalised
 // points p0, p1 (row-major [N, 2]), with the same result: E split by
 // cv::decomposeEssentialMat into R1, R2, t; each point triangulated by OpenCV's DLT (the

@@ -136,6 +136,23 @@ struct Columns {
   }
 };
 
+// Pass 2 of the row kernel: out[i] = depth[idx[i]]. Scalar on purpose: g++ vectorises such
+// a loop by emulating a gather (an extract, a load and an insert per lane, each lane waiting
+// on the index arithmetic), and the hardware gather (-mtune-ctrl=use_gather) was slower
+// still on this AMD EPYC; plain loads, with B's row prefetched a little ahead, are the
+// cheapest lookup found (docs/PERFORMANCE.md "N views").
+constexpr int kChunk = 256;
+__attribute__((noinline, optimize("no-tree-vectorize"))) void GatherDepths(
+    const float* __restrict depth, const int32_t* __restrict idx, int n, float* __restrict out) {
+  constexpr int kAhead = 32;  // pixels: two cache lines of B's row ahead
+  int i = 0;
+  for (; i + kAhead < n; ++i) {
+    __builtin_prefetch(depth + idx[i + kAhead]);
+    out[i] = depth[idx[i]];
+  }
+  for (; i < n; ++i) out[i] = depth[idx[i]];
+}
+
 // Labels the n sampled pixels u = 0, stride, 2·stride, … (cols) of row v of A, whose depths are
 // dep[0 .. n), and, by mode:
 //   kMaps    codes[i] = PixelLabel code (int32, so that the loop runs on 32-bit lanes only)
@@ -150,7 +167,7 @@ struct Columns {
 // are computed in double and rounded once; every threshold is converted to the float that
 // gives the same decision for float values (Kernel::*_f), so the only departures from the
 // double reference are rounding ties (docs/GROUND_TRUTH.md, "Arithmetic").
-// One branch-free loop that GCC vectorises (-fopt-info-vec): each decision of
+// Branch-free loops that GCC vectorises (-fopt-info-vec; the lookups apart): each decision of
 // GROUND_TRUTH.md §2 is a compare and a select; the target pixel is clamped into the image
 // (min/max, a NaN becomes 0) so that the read is always in bounds (its value is used only
 // when the point is inside, where the clamp changes nothing); one reciprocal per pixel.
@@ -202,42 +219,65 @@ inline __attribute__((always_inline)) void LabelRowBody(const Kernel& kn,
   const float* __restrict depth_b = kn.depth_b;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   int32_t c0 = 0, c1 = 0, c2 = 0, c3 = 0, c4 = 0;  // per-label counts (kCounts; 5 = the rest)
-  for (int i = 0; i < n; ++i) {
-    const float d = dep[i];
-    const float z = d * (col_z[i] + rz) + kz;
-    const float inv = 1.0f / (z + eps);
-    const float x = (d * (col_x[i] + rx) + kx) * inv;
-    const float y = (d * (col_y[i] + ry) + ky) * inv;
-    const bool valid = (d >= lo) & (d <= hi);
-    const bool projected = valid & (z > z_min);
-    const bool inside = projected & (x >= x_min) & (x < x_max) & (y >= y_min) & (y < y_max);
-    const float tx = std::min(tx_cap, std::max(0.0f, x + offset));
-    const float ty = std::min(ty_cap, std::max(0.0f, y + offset));
-    const int tu = static_cast<int>(tx), tv = static_cast<int>(ty);
-    const float db_raw = depth_b[tv * wb + tu];
-    const bool db_valid = (db_raw >= lo) & (db_raw <= hi);
-    const float db = db_valid ? db_raw : 0.0f;
-    const bool known = db_valid | missing_zero;
-    const float tol = std::max(abs_tol, std::max(rel_db * db, rel_z * z));
-    const float diff = z - db;
-    const int32_t decided = std::abs(diff) <= tol ? 2 : diff > tol ? 3 : 4;
-    const int32_t in_view = known ? decided : 5;
-    const int32_t with_depth = inside ? in_view : 1;
-    const int32_t label = valid ? with_depth : 0;
-    if constexpr (kMaps) {
-      codes[i] = label;
-      xy[2 * i] = projected ? x : nan;
-      xy[2 * i + 1] = projected ? y : nan;
-      if constexpr (kMode == RowMode::kPoints) zs[i] = projected ? z : nan;
-    } else if constexpr (kMode == RowMode::kBits) {
-      vis[i] |= static_cast<uint32_t>(label == 2) << bit;
-      occ[i] |= static_cast<uint32_t>(label == 3) << bit;
-    } else {
-      c0 += label == 0;
-      c1 += label == 1;
-      c2 += label == 2;
-      c3 += label == 3;
-      c4 += label == 4;
+  // In chunks of kChunk pixels, three passes over L1-resident scratch: (1) the projection
+  // and the target pixel's index, vectorised; (2) the depth lookups, scalar (GatherDepths);
+  // (3) the decisions, vectorised. The values are those of one fused loop (the same
+  // operations; floats stored and reloaded unchanged).
+  alignas(64) float zs_c[kChunk], xs_c[kChunk], ys_c[kChunk], db_c[kChunk];
+  alignas(64) int32_t idx_c[kChunk];
+  for (int start = 0; start < n; start += kChunk) {
+    const int m = std::min(kChunk, n - start);
+    const float* __restrict d_c = dep + start;
+    const float* __restrict cx_c = col_x + start;
+    const float* __restrict cy_c = col_y + start;
+    const float* __restrict cz_c = col_z + start;
+    for (int i = 0; i < m; ++i) {
+      const float d = d_c[i];
+      const float z = d * (cz_c[i] + rz) + kz;
+      const float inv = 1.0f / (z + eps);
+      const float x = (d * (cx_c[i] + rx) + kx) * inv;
+      const float y = (d * (cy_c[i] + ry) + ky) * inv;
+      const float tx = std::min(tx_cap, std::max(0.0f, x + offset));
+      const float ty = std::min(ty_cap, std::max(0.0f, y + offset));
+      const int tu = static_cast<int>(tx), tv = static_cast<int>(ty);
+      idx_c[i] = tv * wb + tu;
+      zs_c[i] = z;
+      xs_c[i] = x;
+      ys_c[i] = y;
+    }
+    GatherDepths(depth_b, idx_c, m, db_c);
+    for (int i = 0; i < m; ++i) {
+      const float d = d_c[i];
+      const float z = zs_c[i], x = xs_c[i], y = ys_c[i];
+      const bool valid = (d >= lo) & (d <= hi);
+      const bool projected = valid & (z > z_min);
+      const bool inside = projected & (x >= x_min) & (x < x_max) & (y >= y_min) & (y < y_max);
+      const float db_raw = db_c[i];
+      const bool db_valid = (db_raw >= lo) & (db_raw <= hi);
+      const float db = db_valid ? db_raw : 0.0f;
+      const bool known = db_valid | missing_zero;
+      const float tol = std::max(abs_tol, std::max(rel_db * db, rel_z * z));
+      const float diff = z - db;
+      const int32_t decided = std::abs(diff) <= tol ? 2 : diff > tol ? 3 : 4;
+      const int32_t in_view = known ? decided : 5;
+      const int32_t with_depth = inside ? in_view : 1;
+      const int32_t label = valid ? with_depth : 0;
+      const int o = start + i;
+      if constexpr (kMaps) {
+        codes[o] = label;
+        xy[2 * o] = projected ? x : nan;
+        xy[2 * o + 1] = projected ? y : nan;
+        if constexpr (kMode == RowMode::kPoints) zs[o] = projected ? z : nan;
+      } else if constexpr (kMode == RowMode::kBits) {
+        vis[o] |= static_cast<uint32_t>(label == 2) << bit;
+        occ[o] |= static_cast<uint32_t>(label == 3) << bit;
+      } else {
+        c0 += label == 0;
+        c1 += label == 1;
+        c2 += label == 2;
+        c3 += label == 3;
+        c4 += label == 4;
+      }
     }
   }
   if constexpr (kMode == RowMode::kCounts) {
@@ -499,12 +539,15 @@ void LabelDirectionBits(const DepthImage& depth_a, const Camera& cam_a,
     kernels.push_back(MakeKernel(cam_a, *t.cam_b, t.b_from_a, *t.depth_b, options));
     columns.emplace_back(kernels.back(), cam_a.width, 1);
   }
+  // Targets outer, rows inner: consecutive rows of A land on consecutive rows of B, so the
+  // depth lookups of one target run along B's memory, which the hardware prefetcher
+  // follows; with the targets inner the N interleaved streams defeated it (the lookups
+  // took twice as long). The bits are ORed, so the order does not change them.
   const size_t w = static_cast<size_t>(cam_a.width);
-  for (int v = row_begin; v < row_end; ++v) {
-    const float* dep = depth_a.values_m.data() + v * w;
-    for (size_t t = 0; t < targets.size(); ++t) {
-      LabelRowBits(kernels[t], columns[t], dep, cam_a.width, v, targets[t].bit,
-                   visible_bits + v * w, occluded_bits + v * w);
+  for (size_t t = 0; t < targets.size(); ++t) {
+    for (int v = row_begin; v < row_end; ++v) {
+      LabelRowBits(kernels[t], columns[t], depth_a.values_m.data() + v * w, cam_a.width, v,
+                   targets[t].bit, visible_bits + v * w, occluded_bits + v * w);
     }
   }
 }

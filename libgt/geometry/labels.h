@@ -158,8 +158,9 @@ DirectionLabels LabelDirection(const DepthImage& depth_a, const Camera& cam_a,
 // target. For each target t and each pixel p of rows [row_begin, row_end) of A, bit
 // targets[t].bit of visible_bits[p] (occluded_bits[p]) is set when p is kVisible
 // (kOccluded) in that target; other bits are left as they are. visible_bits and
-// occluded_bits point to A's whole [height, width] row-major array. Rows are labelled
-// outer, targets inner (a row's words stay in L1). Throws InputError as LabelDirection, and
+// occluded_bits point to A's whole [height, width] row-major array. Targets are labelled
+// outer, rows inner (each target's depth read along its memory). Throws InputError as
+// LabelDirection, and
 // ("bit"/"rows") for a bit outside 0..31 or a row range outside A.
 struct BitTarget {
   const DepthImage* depth_b = nullptr;  // [H_B, W_B] of cam_b's size

@@ -9,6 +9,7 @@
 //    recoverPose loop) for each estimator setting of --protocol gluefactory (0-3: usac_default
 //    at 0.5, 1.5, 2, 3 px; 4-7: ransac at the same) and LoFTR's (8), on the same pair in
 //    pixels (f = 500): what each setting costs against LoFTR's.
+//  - BM_FindEssentialMatSettings / BM_FindEssentialRansac, BM_EstimateGluefactory: below.
 // The ratio BM_CvRecoverPose / BM_RecoverPose is the speed-up docs/PERFORMANCE.md quotes.
 #include <benchmark/benchmark.h>
 
@@ -137,6 +138,63 @@ void BM_Estimate(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_Estimate)->DenseRange(0, 8)->Unit(benchmark::kMillisecond);
+
+// OpenCV's RANSAC against occgt's FindEssentialRansac (the same E and mask, checked by
+// tests/eval/pose_test.cc), for LoFTR's one setting (range 1) and for glue-factory's four
+// RANSAC thresholds (range 4: OpenCV called once per threshold; occgt shares the samples).
+std::vector<gt::eval::RansacSetting> SweepSettings(int64_t k) {
+  if (k == 1) return {{0.5 / 500, 0.99999, 1000}};
+  std::vector<gt::eval::RansacSetting> v;
+  for (const double px : {0.5, 1.5, 2.0, 3.0}) v.push_back({px / 500, 0.99999, 1000});
+  return v;
+}
+
+void BM_FindEssentialMatSettings(benchmark::State& state) {
+  PosePair s = GetPair();
+  const auto settings = SweepSettings(state.range(0));
+  for (auto _ : state) {
+    for (const auto& r : settings) {
+      cv::Mat mask;
+      cv::Mat E = cv::findEssentialMat(
+          cv::Mat(2000, 2, CV_64F, s.p0.data()), cv::Mat(2000, 2, CV_64F, s.p1.data()),
+          cv::Mat::eye(3, 3, CV_64F), cv::RANSAC, r.confidence, r.threshold, r.max_iters, mask);
+      benchmark::DoNotOptimize(E.data);
+    }
+  }
+}
+BENCHMARK(BM_FindEssentialMatSettings)->Arg(1)->Arg(4)->Unit(benchmark::kMillisecond);
+
+void BM_FindEssentialRansac(benchmark::State& state) {
+  const PosePair& s = GetPair();
+  const auto settings = SweepSettings(state.range(0));
+  for (auto _ : state) {
+    const auto found = gt::eval::FindEssentialRansac(s.p0, s.p1, settings);
+    benchmark::DoNotOptimize(found.data());
+  }
+}
+BENCHMARK(BM_FindEssentialRansac)->Arg(1)->Arg(4)->Unit(benchmark::kMillisecond);
+
+// All 8 settings of --protocol gluefactory in one EstimateRelativePoses call (as `occgt
+// eval` runs them); against the sum of BM_Estimate/0..7.
+void BM_EstimateGluefactory(benchmark::State& state) {
+  const PosePair& s = GetPair();
+  Eigen::Matrix3d K;
+  K << 500, 0, 320, 0, 500, 240, 0, 0, 1;
+  std::vector<float> k0(s.p0.size()), k1(s.p1.size());
+  for (size_t i = 0; i < s.p0.size(); i += 2) {
+    k0[i] = static_cast<float>(s.p0[i] * 500 + 320);
+    k0[i + 1] = static_cast<float>(s.p0[i + 1] * 500 + 240);
+    k1[i] = static_cast<float>(s.p1[i] * 500 + 320);
+    k1[i + 1] = static_cast<float>(s.p1[i + 1] * 500 + 240);
+  }
+  const auto settings = gt::eval::ExpandProtocol(gt::eval::ProtocolName::kGluefactory).estimators;
+  const std::vector<uint64_t> seeds(settings.size(), 1);
+  for (auto _ : state) {
+    const auto poses = gt::eval::EstimateRelativePoses(k0, k1, K, K, settings, nullptr, seeds);
+    benchmark::DoNotOptimize(poses.data());
+  }
+}
+BENCHMARK(BM_EstimateGluefactory)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

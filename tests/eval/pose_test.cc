@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <opencv2/calib3d.hpp>
 #include <random>
 #include <thread>
@@ -499,6 +500,137 @@ TEST(RecoverPose, SameAsOpenCVOnWrongEssentialMatrices) {
       MakeCorrespondences(&rng, 20, 0.2, 1, 5, 0, 0, Rot(5, {0, 1, 0}), {1, 0, 0});
   ExpectSameAsOpenCV(c, (cv::Mat_<double>(3, 3) << 0, -1, 0, 1, 0, 0, 0, 0, 0),
                      cv::Mat::zeros(20, 1, CV_8U), "empty mask");
+}
+
+// FindEssentialRansac against cv::findEssentialMat(RANSAC) itself, setting by setting:
+// equal E and mask, bit for bit, on point counts from 5 (OpenCV's every-solution case) to
+// 2000, noise from none to ~2 px, up to 90 % outliers (iteration caps reached), a threshold
+// so small that only each sample's own five points count, low confidences and tiny caps
+// (early stops at different iterations per setting, the multi-setting loop's hard part).
+// (No E at all needs a sample-free case: fewer than five points, EstimateRelativePose's
+// tests.)
+TEST(FindEssentialRansac, SameAsOpenCVForEverySetting) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> angle(0, 30), axis(-1, 1), unit(0, 1);
+  const std::vector<RansacSetting> settings = {
+      {0.5 / 500, 0.99999, 1000}, {1.5 / 500, 0.99999, 1000}, {2.0 / 500, 0.99999, 1000},
+      {3.0 / 500, 0.99999, 1000}, {1.0 / 500, 0.999, 1000},   {0.5 / 500, 0.5, 1000},
+      {2.0 / 500, 0.99999, 40},   {1e-7, 0.99999, 200},       {1.0 / 500, 0.9, 1},
+      {4.0 / 500, 0.99, 3}};
+  const int counts[] = {5, 6, 7, 9, 30, 300, 2000};
+  int with_e = 0, multi_block = 0;
+  for (int scene = 0; scene < 21; ++scene) {
+    const int points = counts[scene % 7];
+    const double outliers = scene % 4 == 3 ? 0.9 : 0.5 * unit(rng);
+    const Correspondences c = MakeCorrespondences(
+        &rng, points, std::pow(10.0, -2 + 2 * unit(rng)), 0.5, 20, 4e-3 * unit(rng), outliers,
+        Rot(angle(rng), {axis(rng), axis(rng), axis(rng)}), {axis(rng), axis(rng), axis(rng)});
+    const int n = static_cast<int>(c.p0.size() / 2);
+    const std::vector<EssentialEstimate> got = FindEssentialRansac(c.p0, c.p1, settings);
+    ASSERT_EQ(got.size(), settings.size());
+    for (size_t s = 0; s < settings.size(); ++s) {
+      SCOPED_TRACE("scene " + std::to_string(scene) + " (" + std::to_string(n) +
+                   " points), setting " + std::to_string(s));
+      cv::Mat mask;
+      const cv::Mat E = cv::findEssentialMat(
+          cv::Mat(n, 2, CV_64F, const_cast<double*>(c.p0.data())),
+          cv::Mat(n, 2, CV_64F, const_cast<double*>(c.p1.data())), cv::Mat::eye(3, 3, CV_64F),
+          cv::RANSAC, settings[s].confidence, settings[s].threshold, settings[s].max_iters, mask);
+      if (E.empty()) {
+        EXPECT_TRUE(got[s].E.empty());
+        continue;
+      }
+      ++with_e;
+      multi_block += E.rows > 3;
+      ASSERT_EQ(got[s].E.size(), E.total());
+      EXPECT_TRUE(std::equal(got[s].E.begin(), got[s].E.end(), E.ptr<double>()));
+      ASSERT_EQ(got[s].mask.size(), mask.total());
+      for (int i = 0; i < n; ++i) EXPECT_EQ(got[s].mask[i] != 0, mask.data[i] != 0) << i;
+    }
+  }
+  EXPECT_GT(with_e, 150);
+  EXPECT_GT(multi_block, 0);
+}
+
+// EstimateRelativePoses on a list of mixed estimators (gluefactory's 8, LoFTR's, LMEDS,
+// PROSAC) against OpenCV alone: cv::findEssentialMat per estimator and cv::recoverPose on
+// each block, the mask carried along (LoFTR's loop).
+TEST(EstimateRelativePoses, SameAsOpenCVPerEstimator) {
+  std::vector<PoseEstimatorOptions> estimators =
+      ExpandProtocol(ProtocolName::kGluefactory).estimators;
+  estimators.push_back(PoseEstimatorOptions{});
+  PoseEstimatorOptions o;
+  o.method = PoseMethod::kLmeds;
+  estimators.push_back(o);
+  o.method = PoseMethod::kUsacProsac;
+  estimators.push_back(o);
+  o = PoseEstimatorOptions{};
+  o.max_iters = 7;
+  o.ransac_px = 1.0;
+  estimators.push_back(o);
+  std::mt19937 rng(5);
+  int compared = 0;
+  for (int trial = 0; trial < 6; ++trial) {
+    const NoisyScene ns =
+        MakeNoisyScene(&rng, trial == 0 ? 5 : 300 + 200 * trial, 0.6, 0.2 * (trial % 3));
+    const Scene& s = ns.scene;
+    std::vector<uint64_t> seeds;
+    for (size_t e = 0; e < estimators.size(); ++e) seeds.push_back(PairRngSeed("t", e));
+    const auto got =
+        EstimateRelativePoses(s.kpts0, s.kpts1, s.K, s.K, estimators, &ns.confidence, seeds);
+    ASSERT_EQ(got.size(), estimators.size());
+    const int n = static_cast<int>(s.kpts0.size() / 2);
+    for (size_t e = 0; e < estimators.size(); ++e) {
+      SCOPED_TRACE("trial " + std::to_string(trial) + ", " + PoseEstimatorName(estimators[e]));
+      const PoseEstimatorOptions& est = estimators[e];
+      std::vector<int> order(n);
+      std::iota(order.begin(), order.end(), 0);
+      if (est.method == PoseMethod::kUsacProsac) {
+        std::stable_sort(order.begin(), order.end(),
+                         [&](int a, int b) { return ns.confidence[a] > ns.confidence[b]; });
+      }
+      cv::Mat p0(n, 2, CV_64F), p1(n, 2, CV_64F);
+      for (int i = 0; i < n; ++i) {
+        const int j = order[i];
+        p0.at<double>(i, 0) = (static_cast<double>(s.kpts0[2 * j]) - s.K(0, 2)) / s.K(0, 0);
+        p0.at<double>(i, 1) = (static_cast<double>(s.kpts0[2 * j + 1]) - s.K(1, 2)) / s.K(1, 1);
+        p1.at<double>(i, 0) = (static_cast<double>(s.kpts1[2 * j]) - s.K(0, 2)) / s.K(0, 0);
+        p1.at<double>(i, 1) = (static_cast<double>(s.kpts1[2 * j + 1]) - s.K(1, 2)) / s.K(1, 1);
+      }
+      // K0 = K1: both focal means are this one.
+      const double focal = (s.K(0, 0) + s.K(1, 1) + s.K(0, 0) + s.K(1, 1)) / 4.0;
+      cv::theRNG().state = seeds[e];
+      cv::Mat mask;
+      const cv::Mat E =
+          cv::findEssentialMat(p0, p1, cv::Mat::eye(3, 3, CV_64F), PoseMethodOpenCVFlag(est.method),
+                               est.confidence, est.ransac_px / focal, est.max_iters, mask);
+      int best = 0;
+      cv::Mat best_R, best_t;
+      for (int k = 0; !E.empty() && k < E.rows / 3; ++k) {
+        cv::Mat R, t;
+        const int inliers = cv::recoverPose(E.rowRange(3 * k, 3 * k + 3).clone(), p0, p1,
+                                            cv::Mat::eye(3, 3, CV_64F), R, t, 1e9, mask);
+        if (inliers > best) {
+          best = inliers;
+          best_R = R;
+          best_t = t;
+        }
+      }
+      if (best == 0) {
+        EXPECT_FALSE(got[e].has_value());
+        continue;
+      }
+      ASSERT_TRUE(got[e].has_value());
+      EXPECT_EQ(got[e]->inliers, best);
+      for (int r = 0; r < 3; ++r) {
+        for (int col = 0; col < 3; ++col)
+          EXPECT_EQ(got[e]->cam1_from_cam0_R(r, col), best_R.at<double>(r, col));
+        EXPECT_EQ(got[e]->cam1_from_cam0_t(r), best_t.at<double>(r, 0));
+      }
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 50);
 }
 
 TEST(SymmetricEpipolarDistances, ZeroOnExactMatchesKnownOffEpipolar) {
