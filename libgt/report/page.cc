@@ -30,6 +30,24 @@ std::string ShellQuote(const std::string& s) {
 
 }  // namespace
 
+std::vector<std::pair<std::string, nlohmann::json>> ReadJsonLines(const std::string& path) {
+  std::vector<std::pair<std::string, nlohmann::json>> out;
+  const std::vector<std::string> lines = io::ReadLines(path);
+  for (size_t n = 0; n < lines.size(); ++n) {
+    if (lines[n].find_first_not_of(" \t\r") == std::string::npos) continue;
+    const std::string where = path + ":" + std::to_string(n + 1);
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(lines[n]);
+    } catch (const nlohmann::json::exception&) {
+      throw InputError(where, "expected one JSON object per line");
+    }
+    if (!j.is_object()) throw InputError(where, "expected one JSON object per line");
+    out.emplace_back(where, std::move(j));
+  }
+  return out;
+}
+
 uint64_t Fnv1a64(std::string_view s) {
   uint64_t h = 0xcbf29ce484222325ULL;
   for (unsigned char c : s) {

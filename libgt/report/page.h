@@ -3,8 +3,10 @@
 #pragma once
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "libgt/core/hash.h"
@@ -20,6 +22,10 @@ struct NamedImage {
 // Seeded choices of the galleries (pictures' match subsets, the split report's pairs and
 // tuples): gt::Mix64 (core/hash.h, SplitMix64's output function) and FNV-1a 64 of a string.
 uint64_t Fnv1a64(std::string_view s);
+
+// The JSON objects of a .jsonl file (blank lines skipped), each with "<path>:<line>" for
+// errors; a line that is not one JSON object is an InputError naming it.
+std::vector<std::pair<std::string, nlohmann::json>> ReadJsonLines(const std::string& path);
 
 // RFC 4648 base64 (with padding).
 std::string Base64(std::string_view bytes);

@@ -121,19 +121,10 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
                      "missing: expected the pairs.jsonl of an `occgt build` folder (or the "
                      "tuples.jsonl of `occgt tuples`)");
   }
-  const std::vector<std::string> lines =
-      split.has_pairs ? gt::io::ReadLines(pairs_path) : std::vector<std::string>();
+  const std::vector<std::pair<std::string, json>> lines =
+      split.has_pairs ? ReadJsonLines(pairs_path) : std::vector<std::pair<std::string, json>>();
   const char* occ_key = OcclusionMetricField(options.occlusion_metric);
-  for (size_t n = 0; n < lines.size(); ++n) {
-    if (lines[n].find_first_not_of(" \t") == std::string::npos) continue;
-    const std::string where = pairs_path + ":" + std::to_string(n + 1);
-    json j;
-    try {
-      j = json::parse(lines[n]);
-    } catch (const json::exception&) {
-      throw InputError(where, "expected one JSON object per line");
-    }
-    if (!j.is_object()) throw InputError(where, "expected one JSON object per line");
+  for (const auto& [where, j] : lines) {
     SplitPair p;
     p.scene = NeedString(j, "scene", where);
     p.frame0 = NeedFrameId(j, "frame0", where);

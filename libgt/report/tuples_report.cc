@@ -22,25 +22,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// The JSON objects of a .jsonl file (blank lines skipped), each with "<path>:<line>".
-std::vector<std::pair<std::string, json>> ReadJsonLines(const std::string& path) {
-  std::vector<std::pair<std::string, json>> out;
-  const std::vector<std::string> lines = io::ReadLines(path);
-  for (size_t n = 0; n < lines.size(); ++n) {
-    if (lines[n].find_first_not_of(" \t\r") == std::string::npos) continue;
-    const std::string where = path + ":" + std::to_string(n + 1);
-    json j;
-    try {
-      j = json::parse(lines[n]);
-    } catch (const json::exception&) {
-      throw InputError(where, "expected one JSON object per line");
-    }
-    if (!j.is_object()) throw InputError(where, "expected one JSON object per line");
-    out.emplace_back(where, std::move(j));
-  }
-  return out;
-}
-
 std::vector<std::string> NeedIds(const json& j, const std::string& where) {
   if (!j.contains("frame_ids") || !j["frame_ids"].is_array() || j["frame_ids"].size() < 2) {
     throw InputError(where, "expected \"frame_ids\": an array of at least 2 frame ids");
