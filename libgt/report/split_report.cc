@@ -124,7 +124,9 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
   const std::vector<std::pair<std::string, json>> lines =
       split.has_pairs ? ReadJsonLines(pairs_path) : std::vector<std::pair<std::string, json>>();
   const char* occ_key = OcclusionMetricField(options.occlusion_metric);
-  for (const auto& [where, j] : lines) {
+  for (const auto& line : lines) {
+    const std::string& where = line.first;  // a named reference: lambdas below capture it
+    const json& j = line.second;
     SplitPair p;
     p.scene = NeedString(j, "scene", where);
     p.frame0 = NeedFrameId(j, "frame0", where);
