@@ -182,7 +182,7 @@ Scene ScanNetPPReader::ReadScene(const std::string& root, const std::string& sce
       throw InputError(model.cameras_path, "camera " + std::to_string(id) + ": model " + c.model +
                                                ", expected OPENCV_FISHEYE for the DSLR");
     }
-    cameras[id] = {lens, ScanNetPPUndistortedCamera(lens)};
+    cameras[id] = {lens, ScanNetPPUndistortedCamera(lens, model.cameras_path, id)};
   }
 
   // Every image the scene names: COLMAP's, the colour folder's and the train/test lists'.

@@ -13,13 +13,23 @@
 //    centerPrincipalPoint = true) (DUSt3R's rule for the iPhone's OPENCV camera).
 //  - kPinhole: the camera itself.
 // K is given to OpenCV in its own convention (lens.pinhole is already converted).
+// Distortion coefficients that pass LensCamera::Check can still be so extreme that OpenCV
+// finds no finite new focal length, throws, or returns a degenerate one (a pixel or less:
+// a corner of the new camera then looks along a ray outside the lens model's monotonic
+// range, MonotonicLimit). Each is an InputError naming the cameras file and the camera,
+// "camera <id> (<model>): no undistorted pinhole camera: ...", never a camera whose rays the
+// lens cannot have.
 #pragma once
+
+#include <cstdint>
+#include <string>
 
 #include "libgt/core/camera.h"
 #include "libgt/core/lens.h"
 
 namespace gt::datasets {
 
-Camera ScanNetPPUndistortedCamera(const LensCamera& lens);
+Camera ScanNetPPUndistortedCamera(const LensCamera& lens, const std::string& cameras_path,
+                                  int64_t camera_id);
 
 }  // namespace gt::datasets

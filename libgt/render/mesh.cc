@@ -418,6 +418,12 @@ TriangleMesh ParsePlyMesh(std::string_view bytes, const std::string& where) {
       }
     }
   }
+  // Nothing to render ("element face 0"): as the scene's mesh it would make every rendered
+  // pixel "no depth" without a word.
+  if (mesh.triangles.empty()) {
+    throw InputError(where, "no triangles (" + std::to_string(mesh.NumVertices()) +
+                                " vertices, no face): expected a triangle mesh");
+  }
   return mesh;
 }
 
@@ -435,7 +441,7 @@ std::string EncodePlyMesh(const TriangleMesh& mesh) {
   const size_t header = out.size();
   out.resize(header + mesh.vertices_m.size() * 4 + mesh.NumTriangles() * 13);
   char* p = out.data() + header;
-  std::memcpy(p, mesh.vertices_m.data(), mesh.vertices_m.size() * 4);
+  if (!mesh.vertices_m.empty()) std::memcpy(p, mesh.vertices_m.data(), mesh.vertices_m.size() * 4);
   p += mesh.vertices_m.size() * 4;
   for (size_t t = 0; t < mesh.NumTriangles(); ++t) {
     *p++ = 3;

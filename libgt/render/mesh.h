@@ -36,7 +36,7 @@ struct TriangleMesh {
 // The mesh of a PLY file (rules above). Throws InputError("<path>", "...") on any problem:
 // unreadable, not a PLY, unsupported format or property type, no x/y/z or no face list, a
 // count larger than the file's bytes allow, truncated data, an index out of range, a
-// non-finite coordinate.
+// non-finite coordinate, no triangle at all (no face element: a point cloud; or no face in it).
 TriangleMesh ReadPlyMesh(const std::string& path);
 
 // The same from the file's bytes in memory; `where` names them in errors.

@@ -93,7 +93,7 @@ TEST_F(ScanNetPP, DslrFramesCamerasAndPoses) {
   EXPECT_EQ(scene.mesh_path, (SceneDir() / "scans" / "mesh_aligned_0.05.ply").string());
   ASSERT_EQ(scene.frames.size(), static_cast<size_t>(o.frames + 2));
   const LensCamera lens = synth::ScanNetPPSynthDslrLens(o);
-  const Camera undistorted = datasets::ScanNetPPUndistortedCamera(lens);
+  const Camera undistorted = datasets::ScanNetPPUndistortedCamera(lens, "cameras.txt", 1);
   for (int i = 0; i < o.frames; ++i) {
     const std::string name = synth::ScanNetPPSynthDslrName(i);
     const Frame* f = Find(scene, name.substr(0, name.size() - 4));

@@ -33,7 +33,7 @@ LensCamera PhoneOpenCv() {
 
 TEST(ScanNetPPUndistortedCamera, FisheyeRule) {
   const LensCamera lens = DslrFisheye();
-  const Camera c = datasets::ScanNetPPUndistortedCamera(lens);
+  const Camera c = datasets::ScanNetPPUndistortedCamera(lens, "cameras.txt", 1);
   EXPECT_EQ(c.width, 876);
   EXPECT_EQ(c.height, 584);
   EXPECT_EQ(c.cx, 438.0);  // w/2 in OpenCV's convention
@@ -60,7 +60,7 @@ TEST(ScanNetPPUndistortedCamera, FisheyeRule) {
 }
 
 TEST(ScanNetPPUndistortedCamera, OpenCvRuleCentresThePrincipalPoint) {
-  const Camera c = datasets::ScanNetPPUndistortedCamera(PhoneOpenCv());
+  const Camera c = datasets::ScanNetPPUndistortedCamera(PhoneOpenCv(), "cameras.txt", 1);
   EXPECT_DOUBLE_EQ(c.cx, (480 - 1) / 2.0);
   EXPECT_DOUBLE_EQ(c.cy, (360 - 1) / 2.0);
   EXPECT_GT(c.fx, 0.0);
@@ -82,7 +82,7 @@ TEST(ScanNetPPUndistortedCamera, OpenCvRuleCentresThePrincipalPoint) {
 
 TEST(UndistortMaps, EqualOpenCvsMaps) {
   for (const LensCamera& lens : {DslrFisheye(), PhoneOpenCv()}) {
-    const Camera c = datasets::ScanNetPPUndistortedCamera(lens);
+    const Camera c = datasets::ScanNetPPUndistortedCamera(lens, "cameras.txt", 1);
     const cv::Matx33d K(lens.pinhole.fx, 0, lens.pinhole.cx, 0, lens.pinhole.fy, lens.pinhole.cy, 0,
                         0, 1);
     const cv::Matx33d new_k(c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1);
@@ -126,7 +126,7 @@ TEST(UndistortImage, ReproducesThePinholeView) {
         distorted(v, u) = RayColor(ab->x(), ab->y());
       }
     }
-    const Camera c = datasets::ScanNetPPUndistortedCamera(lens);
+    const Camera c = datasets::ScanNetPPUndistortedCamera(lens, "cameras.txt", 1);
     const cv::Mat3b out = io::UndistortImage(distorted, lens, c);
     ASSERT_EQ(out.cols, c.width);
     ASSERT_EQ(out.rows, c.height);
@@ -164,7 +164,7 @@ TEST(UndistortImage, ReproducesThePinholeView) {
 
 TEST(UndistortMask, AnonymisedPixelsGrowAndTheBorderIsValid) {
   const LensCamera lens = DslrFisheye();
-  const Camera c = datasets::ScanNetPPUndistortedCamera(lens);
+  const Camera c = datasets::ScanNetPPUndistortedCamera(lens, "cameras.txt", 1);
   cv::Mat1b mask(lens.pinhole.height, lens.pinhole.width, uint8_t(255));
   mask(cv::Rect(400, 250, 60, 40)).setTo(0);  // an anonymised box around the centre
   const cv::Mat1b out = io::UndistortMask(mask, lens, c);
@@ -224,6 +224,39 @@ TEST(ColmapLensCamera, ConvertsModelsAndRefusesBadOnes) {
   bad = cam;
   bad.params.pop_back();
   EXPECT_NE(message(bad).find("8 parameters, got 7"), std::string::npos) << message(bad);
+}
+
+// Fisheye lenses that pass LensCamera::Check (the principal point has a ray) but whose
+// strong negative k1 turns back inside the image: OpenCV's new K is then degenerate (for
+// the DSLR's K, fx 0.87 px whatever k1 <= -0.3; for another K, NaN). One InputError naming
+// the file and the camera, never such a camera; the real lens and a mild k1 still pass.
+TEST(ScanNetPPUndistortedCamera, DegenerateNewCameraIsAnInputError) {
+  for (const double k1 : {-0.3, -1.0}) {
+    for (const double fx : {395.6, 600.0}) {
+      LensCamera lens = DslrFisheye();
+      lens.pinhole.fx = lens.pinhole.fy = fx;
+      lens.coeffs = {k1, 0.0, 0.0, 0.0, 0.0};
+      std::string error;
+      ASSERT_TRUE(lens.Check(&error)) << error;
+      try {
+        const Camera c = datasets::ScanNetPPUndistortedCamera(lens, "x/cameras.txt", 7);
+        ADD_FAILURE() << "k1 " << k1 << ", fx " << fx << ": expected an InputError, got fx "
+                      << c.fx;
+      } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_EQ(e.where(), "x/cameras.txt");
+        EXPECT_NE(what.find("camera 7 (opencv_fisheye): no undistorted pinhole camera"),
+                  std::string::npos)
+            << what;
+      }
+    }
+  }
+  for (const double k1 : {-0.1, 0.3}) {
+    LensCamera lens = DslrFisheye();
+    lens.coeffs = {k1, 0.0, 0.0, 0.0, 0.0};
+    const Camera c = datasets::ScanNetPPUndistortedCamera(lens, "x/cameras.txt", 7);
+    EXPECT_GT(c.fx, 100.0) << k1;
+  }
 }
 
 }  // namespace

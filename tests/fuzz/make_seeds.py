@@ -214,6 +214,61 @@ def main():
     put("colmap", "images_txt", b"\x03# images\n1 1 0 0 0 0 0 0 1 a.jpg\n\n"
         b"2 0.7071 0 0 0.7071 1 2 3 2 b.jpg\n10.5 20.5 -1\n")
 
+    put("colmap", "cameras_txt_lenses", b"\x02# ScanNet++ DSLR and iPhone\n"
+        b"1 OPENCV_FISHEYE 876 584 395.6 395.4 437.6 292.3 -0.0297 -0.0049 0.0011 -0.0004\n"
+        b"2 OPENCV 480 360 361.3 361.2 240.3 180.0 0.05 -0.1 0.001 0.0005\n"
+        b"3 SIMPLE_RADIAL 64 48 50 32 24 0.01\n")
+
+    # --- PLY meshes (ply_fuzz): the real TSDF mesh's exact header (Open3D: double x y z,
+    # `list uchar uint`) cut to its first 64 vertices and the faces among them; ASCII with
+    # colours and a quad; big-endian float with normals, `list uchar int` and an extra element.
+    real = f"{shared}/meshes/sevenscenes-rgbd-frames-tsdf.ply"
+    with open(real, "rb") as f:
+        data = f.read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    header = data[:end].decode("ascii").splitlines()
+    nv = int(next(h for h in header if h.startswith("element vertex")).split()[2])
+    nf = int(next(h for h in header if h.startswith("element face")).split()[2])
+    verts = np.frombuffer(data, "<f8", nv * 3, end).reshape(nv, 3)
+    faces = np.frombuffer(data, np.dtype([("n", "u1"), ("i", "<u4", 3)]), nf, end + nv * 24)
+    keep = 64
+    small = faces[(faces["n"] == 3) & (faces["i"] < keep).all(axis=1)]
+    head = "\n".join(f"element vertex {keep}" if h.startswith("element vertex") else
+                     f"element face {len(small)}" if h.startswith("element face") else h
+                     for h in header) + "\n"
+    put("ply", "real_tsdf_head.ply", head.encode() + verts[:keep].tobytes() + small.tobytes())
+    put("ply", "ascii_quad.ply", b"ply\nformat ascii 1.0\ncomment quad and triangle\n"
+        b"element vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+        b"property uchar red\nproperty uchar green\nproperty uchar blue\n"
+        b"element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+        b"0 0 0 255 0 0\n1 0 0 0 255 0\n1 1 0 0 0 255\n0 1 0 9 9 9\n0.5 0.5 1 1 2 3\n"
+        b"4 0 1 2 3\n3 0 1 4\n")
+    be = (b"ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\n"
+          b"property float y\nproperty float z\nproperty float nx\nproperty float ny\n"
+          b"property float nz\nelement face 1\nproperty list uchar int vertex_indices\n"
+          b"property uchar flags\nelement material 1\nproperty int id\nend_header\n")
+    for v in [(0, 0, 2), (1, 0, 2), (0, 1, 2)]:
+        be += struct.pack(">6f", *v, 0, 0, -1)
+    be += struct.pack(">B3iB", 3, 0, 1, 2, 7) + struct.pack(">i", 5)
+    put("ply", "big_endian_normals.ply", be)
+
+    # --- iPhone depth.bin (iphone_depth_fuzz: byte 0 even = one record's payload, odd = a
+    # whole-file raw-deflate stream; byte 1 % 4 = the frame index there). Raw deflate of
+    # float32 metres (one record; two frames as a whole file) and a hand-built LZ4 block of
+    # uint16 mm (two literal bytes = 1000 mm, one match at offset 2, 16 final literals).
+    ramp = (np.arange(256 * 192, dtype=np.float32) % 5000) / 1000
+    def raw_deflate(b):
+        z = zlib.compressobj(6, zlib.DEFLATED, -15)
+        return z.compress(b) + z.flush()
+    put("iphone_depth", "record_deflate", b"\x00\x00" + raw_deflate(ramp.tobytes()))
+    put("iphone_depth", "file_deflate_frame1", b"\x01\x01" +
+        raw_deflate(ramp.tobytes() + (ramp[::-1] * 2).tobytes()))
+    match = 256 * 192 * 2 - 2 - 16
+    lz4 = (bytes([0x2F]) + b"\xe8\x03" + struct.pack("<H", 2) +
+           b"\xff" * ((match - 4 - 15) // 255) + bytes([(match - 4 - 15) % 255]) +
+           bytes([0xF0, 1]) + b"\xe8\x03" * 8)
+    put("iphone_depth", "record_lz4", b"\x00\x00" + lz4)
+
     # --- Pickles (pickle_fuzz): a LoFTR-style MegaDepth scene_info dict with NumPy object
     # arrays, numeric arrays and scalars, at protocols 2, 4 and 5, and the writer's own form.
     import pickle

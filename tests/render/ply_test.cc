@@ -174,6 +174,25 @@ TEST(Ply, WrongCountsAreRefused) {
   EXPECT_NE(ErrorOf(neg).find("vertex index -1"), std::string::npos);
 }
 
+// Found by fuzz_ply: a PLY whose face element has no face ("element face 0") was read as an
+// empty mesh, which renders "no depth" everywhere; and EncodePlyMesh of an empty mesh
+// passed a null pointer to memcpy (UBSan). Now: one error naming the file (as for a PLY
+// without a face element, a point cloud); the encoder writes an empty mesh's header alone.
+TEST(Ply, NoTriangleIsRefusedAndAnEmptyMeshEncodes) {
+  const std::string cloud =
+      "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+      "property float z\nend_header\n0 0 0\n1 0 0\n";
+  EXPECT_NE(ErrorOf(cloud).find("without a face element (a point cloud"), std::string::npos);
+  const std::string no_face =
+      "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n";
+  EXPECT_NE(ErrorOf(no_face).find("no triangles (0 vertices, no face)"), std::string::npos);
+  const std::string empty = EncodePlyMesh(TriangleMesh{});
+  EXPECT_NE(empty.find("element vertex 0\n"), std::string::npos);
+  EXPECT_EQ(empty.substr(empty.size() - 11), "end_header\n");
+  EXPECT_NE(ErrorOf(empty).find("no triangles"), std::string::npos);
+}
+
 TEST(Ply, BadPropertyTypesAreRefused) {
   const std::string good = BinaryPly(false, false);
   EXPECT_NE(ErrorOf(Replace(good, "property float x", "property uchar x")).find("float or double"),
