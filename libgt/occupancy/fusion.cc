@@ -438,7 +438,7 @@ const octomap::OcTree& OccupancyMap::Impl::Tree() {
 }
 
 OccupancyMap::OccupancyMap() : impl_(std::make_unique<Impl>()) {
-  impl_->voxels = std::make_unique<VoxelMap>(0.05, DefaultModel());
+  impl_->voxels = std::make_unique<VoxelMap>(FusionOptions().voxel_size_m, DefaultModel());
   impl_->voxels->Finalize();
 }
 OccupancyMap::OccupancyMap(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}

@@ -80,10 +80,15 @@ void AddCounts(const DropCounts& from, DropCounts* to);
 // on a miss (outside the lock; two threads may decode the same frame once each) and
 // evicts least recently used maps while the total exceeds max_bytes (at least one map
 // is always kept). A read error propagates as gt::InputError naming the file.
+// The default size of a DepthCache in MiB (also the --depth-cache-mb default of build and
+// covis: pipeline::BuildOptions, CovisibilityOptions).
+inline constexpr size_t kDefaultDepthCacheMb = 512;
+
 class DepthCache {
  public:
   // Maps from `depth.source` (render/frame_depth.h; the sensor's by default).
-  DepthCache(const Scene& scene, int width, int height, size_t max_bytes = size_t{512} << 20,
+  DepthCache(const Scene& scene, int width, int height,
+             size_t max_bytes = kDefaultDepthCacheMb << 20,
              render::FrameDepthOptions depth = {});
   std::shared_ptr<const DepthImage> Get(size_t frame_index);
   // Whether the frame's map is held now (a hint: another thread may add or drop it).

@@ -24,6 +24,7 @@
 #include <string>
 
 #include "libgt/io/folder_lock.h"
+#include "libgt/pairs/selection.h"
 #include "libgt/pipeline/recipe.h"
 
 namespace gt::pipeline {
@@ -38,7 +39,7 @@ struct BuildOptions {
   int tasks = 1;                // number of tasks the run is split into
   Stage stage = Stage::kAll;    // which stages run
   bool dry_run = false;         // select in memory, print the plan, write nothing
-  size_t depth_cache_mb = 512;  // per-scene LRU of decoded depth maps
+  size_t depth_cache_mb = pairs::kDefaultDepthCacheMb;  // per-scene LRU of decoded depth maps
 
   bool Check(std::string* error) const;
 };

@@ -66,7 +66,7 @@ struct CovisibilityOptions {
   std::string out_dir;          // DIR
   int task = 0, tasks = 1;      // this task of the split, 0 <= task < tasks
   bool dense = false;           // also write pairwise_covisibility--FxF.npy
-  size_t depth_cache_mb = 512;  // per-scene LRU of decoded depth maps
+  size_t depth_cache_mb = pairs::kDefaultDepthCacheMb;  // per-scene LRU of decoded depth maps
 
   bool Check(std::string* error) const;
 };

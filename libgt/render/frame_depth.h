@@ -41,8 +41,8 @@ struct FusedDepthOptions {
 struct FrameDepthOptions {
   DepthSourceMode source = DepthSourceMode::kSensor;
   FusedDepthOptions fused;
-  double near_m = 0.05;  // metres: the render's range (RenderOptions)
-  double far_m = 20.0;
+  double near_m = RenderOptions().near_m;  // metres: the render's range (RenderOptions)
+  double far_m = RenderOptions().far_m;
 
   bool Check(std::string* error) const;
 };

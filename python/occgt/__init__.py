@@ -39,15 +39,28 @@ __version__: str = _occgt.__version__
 #: them, none is written in Python.
 PAIR_DEFAULTS: Dict[str, Any] = dict(_occgt.PAIR_DEFAULTS)
 _D = PAIR_DEFAULTS
+#: The same for views_ground_truth's own keywords (num_tracks, query_view, seed), from
+#: truth::ViewsTruthOptions; render_depth's (model, near_m, far_m), from render::RenderOptions;
+#: loftr_supervision's (coarse_stride, compat), from truth::LoftrSupervisionOptions; the
+#: dataset keywords (device of open_dataset, depth_source of Scene.load, pair_from_scene and
+#: PairIndexDataset), from datasets::ReaderOptions and render::FrameDepthOptions.
+VIEWS_DEFAULTS: Dict[str, Any] = dict(_occgt.VIEWS_DEFAULTS)
+RENDER_DEFAULTS: Dict[str, Any] = dict(_occgt.RENDER_DEFAULTS)
+SUPERVISION_DEFAULTS: Dict[str, Any] = dict(_occgt.SUPERVISION_DEFAULTS)
+DATASET_DEFAULTS: Dict[str, Any] = dict(_occgt.DATASET_DEFAULTS)
 
 __all__ = [
     "__version__",
+    "DATASET_DEFAULTS",
     "FORMATS",
     "LABEL_NAMES",
     "MATCH_TYPE_NAMES",
     "PAIR_DEFAULTS",
     "PRESETS",
+    "RENDER_DEFAULTS",
+    "SUPERVISION_DEFAULTS",
     "TRACK_STATE_NAMES",
+    "VIEWS_DEFAULTS",
     "Dataset",
     "Frame",
     "FusionStats",
@@ -330,9 +343,9 @@ def views_ground_truth(
     *,
     preset: str = _D["preset"],
     queries: Optional[npt.ArrayLike] = None,
-    num_tracks: int = 512,
-    query_view: int = 0,
-    seed: int = 0,
+    num_tracks: int = VIEWS_DEFAULTS["num_tracks"],
+    query_view: int = VIEWS_DEFAULTS["query_view"],
+    seed: int = VIEWS_DEFAULTS["seed"],
     abs_tol_m: Optional[float] = None,
     rel_tol: Optional[float] = None,
     min_depth_m: Optional[float] = None,
@@ -387,7 +400,8 @@ def views_ground_truth(
     return result
 
 
-def dense_volume(occ: npt.ArrayLike, known: npt.ArrayLike, bins: int = 64) -> npt.NDArray[np.uint8]:
+def dense_volume(occ: npt.ArrayLike, known: npt.ArrayLike,
+                 bins: int = _D["bins"]) -> npt.NDArray[np.uint8]:
     """The dense occupancy volume of one camera (C++ ``occupancy::DenseVolume``).
 
     Args:
@@ -449,10 +463,10 @@ def render_depth(
     width: int,
     height: int,
     *,
-    model: str = "pinhole",
+    model: str = RENDER_DEFAULTS["model"],
     dist: Optional[npt.ArrayLike] = None,
-    near_m: float = 0.05,
-    far_m: float = 20.0,
+    near_m: float = RENDER_DEFAULTS["near_m"],
+    far_m: float = RENDER_DEFAULTS["far_m"],
 ) -> npt.NDArray[np.float32]:
     """Planar depth of a mesh seen by a camera (docs/GROUND_TRUTH.md "Depth sources").
 
@@ -483,7 +497,7 @@ def render_depth(
 
 
 def open_dataset(root: Union[str, "os.PathLike[str]"], format: str, *,
-                 device: str = "dslr") -> Dataset:
+                 device: str = DATASET_DEFAULTS["device"]) -> Dataset:
     """A dataset read by occgt's own readers (docs/DATASETS.md).
 
     Args:
@@ -503,7 +517,8 @@ def open_dataset(root: Union[str, "os.PathLike[str]"], format: str, *,
 
 def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"],
                     height: int = _D["height"], preset: str = _D["preset"], scope: str = "pair",
-                    depth_source: str = "sensor", **options: Any) -> PairGroundTruth:
+                    depth_source: str = DATASET_DEFAULTS["depth_source"],
+                    **options: Any) -> PairGroundTruth:
     """pair_ground_truth of frames id0, id1 of a scene at width x height, with the scene's
     depth range unless ``min_depth_m``/``max_depth_m`` are given (occ2net-compat: every finite
     depth > 0, as its release compares them): the arrays and metrics that

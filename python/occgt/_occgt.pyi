@@ -12,6 +12,10 @@ PRESETS: Tuple[str, ...]  # label presets
 FORMATS: Tuple[str, ...]  # dataset formats of open_dataset
 
 PAIR_DEFAULTS: Dict[str, Any]  # default of each pair_ground_truth argument, from the C++
+VIEWS_DEFAULTS: Dict[str, Any]  # views_ground_truth: num_tracks, query_view, seed
+RENDER_DEFAULTS: Dict[str, Any]  # render_depth: model, near_m, far_m
+SUPERVISION_DEFAULTS: Dict[str, Any]  # loftr_coarse_supervision: coarse_stride, compat
+DATASET_DEFAULTS: Dict[str, Any]  # Dataset: device; Scene.load: depth_source
 
 def pair_ground_truth(
     depth0: npt.ArrayLike,
@@ -42,7 +46,7 @@ def gunzip(gz: Any, what: str) -> bytearray: ...  # bytes-like gzip member in
 def npy_header(buf: Any, offset: int, size: int, what: str) -> Tuple[str, bool, Tuple[int, ...], int]: ...
 # [(key, start, length, {field: (offset from start, size)})] of a tar shard, in file order
 def shard_samples(path: str) -> List[Tuple[str, int, int, Dict[str, Tuple[int, int]]]]: ...
-def dense_volume(occ: npt.ArrayLike, known: npt.ArrayLike, bins: int = 64) -> npt.NDArray[np.uint8]: ...
+def dense_volume(occ: npt.ArrayLike, known: npt.ArrayLike, bins: int = ...) -> npt.NDArray[np.uint8]: ...
 
 WARP_STATUS_NAMES: Tuple[str, ...]  # index = uint8 code of status0/status1
 def loftr_coarse_supervision(
@@ -53,12 +57,12 @@ def loftr_coarse_supervision(
     T_0to1: npt.ArrayLike,
     T_1to0: Optional[npt.ArrayLike] = None,
     *,
-    coarse_stride: int = 8,
+    coarse_stride: int = ...,
     scale0: Tuple[float, float] = (1.0, 1.0),
     scale1: Tuple[float, float] = (1.0, 1.0),
     image_size0: Optional[Tuple[int, int]] = None,
     image_size1: Optional[Tuple[int, int]] = None,
-    compat: bool = False,
+    compat: bool = ...,
     mask0: Optional[npt.ArrayLike] = None,
     mask1: Optional[npt.ArrayLike] = None,
 ) -> Any:
@@ -171,7 +175,7 @@ class Scene:
 class Dataset:
     """A dataset root read by one of occgt's readers."""
 
-    def __init__(self, root: str, format: str, *, device: str = "dslr") -> None: ...
+    def __init__(self, root: str, format: str, *, device: str = ...) -> None: ...
     @property
     def root(self) -> str: ...
     @property

@@ -174,10 +174,24 @@ class PyDataset {
   std::shared_ptr<const gt::datasets::DatasetReader> reader_;
 };
 
+// The defaults of the keyword arguments below, from the C++ Options structs.
+std::string DefaultDepthSource() {
+  return gt::render::DepthSourceModeName(gt::render::FrameDepthOptions().source);
+}
+std::string DefaultDevice() {
+  return gt::datasets::ScanNetPPDeviceName(gt::datasets::ReaderOptions().scannetpp_device);
+}
+
 }  // namespace
 
 void BindIo(py::module_& m) {
   m.attr("FORMATS") = py::tuple(py::cast(gt::datasets::KnownFormats()));
+  {
+    py::dict d;  // occgt.DATASET_DEFAULTS
+    d["device"] = DefaultDevice();
+    d["depth_source"] = DefaultDepthSource();
+    m.attr("DATASET_DEFAULTS") = d;
+  }
 
   // A compressed shard member (sample.compression: deflate) inflated into a new bytearray
   // (occgt.torch.ShardDataset parses it in place): sized by io::GzipPlainSize, filled by
@@ -294,7 +308,7 @@ void BindIo(py::module_& m) {
           "the scene's mesh (PLY, in the frames' world frame) that depth_source 'mesh' and "
           "'fused' render; '' when none (the reader's: ScanNet's <scene>_vh_clean_2.ply)")
       .def("load", &PyScene::Load, "frame_id"_a, "width"_a = gt::truth::Resolution().width,
-           "height"_a = gt::truth::Resolution().height, py::kw_only(), "depth_source"_a = "sensor",
+           "height"_a = gt::truth::Resolution().height, py::kw_only(), "depth_source"_a = DefaultDepthSource(),
            "(depth float32 [height, width] planar metres (0 = invalid), K float64 [3, 3] at "
            "width x height, world_from_cam float64 [4, 4]) of a usable frame at the working "
            "resolution: depth resized with nearest neighbour, K rescaled with the pixel-area "
@@ -330,7 +344,7 @@ void BindIo(py::module_& m) {
 
   py::class_<PyDataset>(m, "Dataset", "A dataset root read by one of occgt's readers.")
       .def(py::init<std::string, std::string, std::string>(), "root"_a, "format"_a,
-           py::kw_only(), "device"_a = "dslr")
+           py::kw_only(), "device"_a = DefaultDevice())
       .def_property_readonly("root", &PyDataset::root, "dataset root folder")
       .def_property_readonly("format", &PyDataset::format, "reader format")
       .def("scenes", &PyDataset::Scenes, "scene names under the root, sorted")

@@ -109,9 +109,16 @@ void BindRender(py::module_& m) {
                " triangles)";
       });
   m.def("load_mesh", &LoadMesh, "path"_a);
+  const gt::render::RenderOptions render;
+  const std::string model = gt::LensModelName(gt::LensCamera().model);
+  py::dict defaults;  // occgt.RENDER_DEFAULTS: the signature's defaults, from the C++
+  defaults["model"] = model;
+  defaults["near_m"] = render.near_m;
+  defaults["far_m"] = render.far_m;
+  m.attr("RENDER_DEFAULTS") = defaults;
   m.def("render_depth", &RenderDepth, "mesh"_a, "K"_a, "world_from_cam"_a, "width"_a, "height"_a,
-        py::kw_only(), "model"_a = "pinhole", "dist"_a = py::none(), "near_m"_a = 0.05,
-        "far_m"_a = 20.0);
+        py::kw_only(), "model"_a = model, "dist"_a = py::none(), "near_m"_a = render.near_m,
+        "far_m"_a = render.far_m);
 }
 
 }  // namespace occgt_py

@@ -222,12 +222,21 @@ py::tuple DepthAtImageSize(py::handle depth, py::handle K, std::array<double, 2>
 }  // namespace
 
 void BindSupervision(py::module_& m) {
+  {
+    const gt::truth::LoftrSupervisionOptions options;
+    py::dict d;  // occgt.SUPERVISION_DEFAULTS: the signature's defaults, from the C++
+    d["coarse_stride"] = options.coarse_stride;
+    d["compat"] = options.compat;
+    m.attr("SUPERVISION_DEFAULTS") = d;
+  }
   m.attr("WARP_STATUS_NAMES") =
       py::make_tuple("in_grid", "no_depth", "behind", "out_of_grid", "padded");
   m.def("loftr_coarse_supervision", &LoftrCoarseSupervision, "depth0"_a, "depth1"_a, "K0"_a, "K1"_a,
-        "T_0to1"_a, "T_1to0"_a = py::none(), py::kw_only(), "coarse_stride"_a = 8,
+        "T_0to1"_a, "T_1to0"_a = py::none(), py::kw_only(),
+        "coarse_stride"_a = gt::truth::LoftrSupervisionOptions().coarse_stride,
         "scale0"_a = std::array<double, 2>{1.0, 1.0}, "scale1"_a = std::array<double, 2>{1.0, 1.0},
-        "image_size0"_a = py::none(), "image_size1"_a = py::none(), "compat"_a = false,
+        "image_size0"_a = py::none(), "image_size1"_a = py::none(),
+        "compat"_a = gt::truth::LoftrSupervisionOptions().compat,
         "mask0"_a = py::none(), "mask1"_a = py::none(),
         "LoFTR's coarse supervision of one pair (truth::ComputeLoftrSupervision); see "
         "occgt.torch.loftr_supervision and docs/PYTHON.md, \"Supervision\".");

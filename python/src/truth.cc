@@ -444,6 +444,14 @@ void BindTruth(py::module_& m) {
       "The options pair_ground_truth resolves from the same arguments (its 'options' entry), "
       "without computing anything; see occgt.pair_options.");
   m.attr("PAIR_DEFAULTS") = PairDefaults();
+  {
+    const gt::truth::ViewsTruthOptions views;
+    py::dict d;
+    d["num_tracks"] = views.num_tracks;
+    d["query_view"] = views.query_view;
+    d["seed"] = views.seed;
+    m.attr("VIEWS_DEFAULTS") = d;
+  }
   m.def(
       "views_ground_truth",
       [](py::handle depths, py::handle Ks, py::handle world_from_cams, const std::string& preset,
@@ -467,7 +475,8 @@ void BindTruth(py::module_& m) {
     m.attr("TRACK_STATE_NAMES") = names;
   }
 
-  m.def("dense_volume", &DenseVolume, "occ"_a, "known"_a, "bins"_a = 64,
+  m.def("dense_volume", &DenseVolume, "occ"_a, "known"_a,
+        "bins"_a = gt::occupancy::BinOptions().num_bins,
         "uint8 [bins, H/2, W/2] (0 free, 1 occupied, 255 unknown) of occupancy words "
         "(occupancy::DenseVolume); see occgt.dense_volume.");
 }

@@ -177,7 +177,8 @@ class PairIndexDataset:
                  preset: str = occgt.PAIR_DEFAULTS["preset"],
                  images: bool = True, occupancy: Optional[str] = None, scope: str = "pair",
                  scene_names: Optional[Union[str, Sequence[str]]] = None,
-                 npz_root: Optional[str] = None, depth_source: str = "sensor",
+                 npz_root: Optional[str] = None,
+                 depth_source: str = occgt.DATASET_DEFAULTS["depth_source"],
                  mesh_path: Optional[str] = None, **options: Any) -> None:
         if depth_source not in ("sensor", "mesh", "fused"):
             raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")

@@ -92,13 +92,13 @@ def loftr_supervision(
     batch: Mapping[str, Any],
     mode: Mode = "loftr",
     *,
-    coarse_stride: int = 8,
+    coarse_stride: int = _occgt.SUPERVISION_DEFAULTS["coarse_stride"],
     fine_stride: int = 2,
     fine_window: int = 5,
-    compat: bool = False,
+    compat: bool = _occgt.SUPERVISION_DEFAULTS["compat"],
     dense_conf_matrix: bool = True,
-    preset: str = "default",
-    anchor: str = "center",
+    preset: str = _occgt.PAIR_DEFAULTS["preset"],
+    anchor: str = _occgt.PAIR_DEFAULTS["anchor"],
     **label_options: Any,
 ) -> Dict[str, torch.Tensor]:
     """Coarse and fine supervision of a collated batch (docs/PYTHON.md, "Supervision").

@@ -85,8 +85,8 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     def __init__(self, tuples: Union[str, os.PathLike, Sequence[TupleLike]], root: str,
                  format: str, *, width: int = occgt.PAIR_DEFAULTS["width"],
                  height: int = occgt.PAIR_DEFAULTS["height"],
-                 preset: str = occgt.PAIR_DEFAULTS["preset"], num_tracks: int = 512,
-                 seed: int = 0, images: bool = True, views: str = "vggt",
+                 preset: str = occgt.PAIR_DEFAULTS["preset"], num_tracks: int = occgt.VIEWS_DEFAULTS["num_tracks"],
+                 seed: int = occgt.VIEWS_DEFAULTS["seed"], images: bool = True, views: str = "vggt",
                  **label_options: Any) -> None:
         if views not in ("vggt", "dust3r"):
             raise ValueError(f"views: expected 'vggt' or 'dust3r', got {views!r}")
