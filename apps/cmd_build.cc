@@ -204,13 +204,7 @@ void Run(const BuildArgs& args_in) {
     overrides.depth_source = gt::render::ParseDepthSourceMode(args.depth_source, "--depth-source");
   }
   const gt::pipeline::Recipe recipe = gt::pipeline::LoadRecipe(args.recipe, overrides);
-  if (args.threads < 0)
-    throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
-  std::unique_ptr<tbb::global_control> limit;
-  if (args.threads > 0) {
-    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                  args.threads);
-  }
+  const std::unique_ptr<tbb::global_control> limit = LimitThreads(args.threads);
   std::string error;
   if (!args.build.Check(&error)) {  // "--flag: expected ...": a usage error naming the flag
     const size_t colon = error.find(": ");
@@ -243,7 +237,7 @@ void AddBuildCommand(CLI::App& app) {
   cmd->add_option("--out", args->build.out_dir, "Output folder")->required();
   cmd->add_flag("--dry-run", args->build.dry_run,
                 "Select in memory, print the plan and statistics, write nothing");
-  cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)");
+  AddThreadsFlag(cmd, &args->threads, "Worker threads");
   cmd->add_flag("--json", args->json,
                 "Print the summary as JSON (the content of DIR/summary.json) instead of a short "
                 "human summary");

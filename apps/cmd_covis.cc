@@ -33,8 +33,7 @@ struct CovisArgs {
 void Run(const CovisArgs& args_in) {
   CovisArgs args = args_in;
   if (!args.task_given) TaskFromSlurm(&args.options.task, &args.options.tasks);
-  if (args.threads < 0)
-    throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
+  const std::unique_ptr<tbb::global_control> limit = LimitThreads(args.threads);
   std::string error;
   if (!args.options.Check(&error)) {  // "--flag: expected ...": a usage error naming the flag
     const size_t colon = error.find(": ");
@@ -43,11 +42,6 @@ void Run(const CovisArgs& args_in) {
   gt::pipeline::RecipeOverrides overrides;
   overrides.root = args.root;
   const gt::pipeline::Recipe recipe = gt::pipeline::LoadRecipe(args.recipe, overrides);
-  std::unique_ptr<tbb::global_control> limit;
-  if (args.threads > 0) {
-    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                  args.threads);
-  }
   const nlohmann::json s =
       gt::pipeline::RunCovisibility(recipe, args.options, [](int64_t done, int64_t total) {
         std::fprintf(stderr, "[covis] %lld/%lld scenes\n", static_cast<long long>(done),
@@ -80,7 +74,7 @@ void AddCovisCommand(CLI::App& app) {
   cmd->add_option("--out", args->options.out_dir, "Output folder")->required();
   cmd->add_flag("--dense", args->options.dense,
                 "Also write MapAnything's pairwise_covisibility--FxF.npy per scene");
-  cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)");
+  AddThreadsFlag(cmd, &args->threads, "Worker threads");
   cmd->add_flag("--json", args->json, "Print the summary as JSON");
   const TaskFlags task_flags = AddTaskFlags(cmd, &args->options.task, &args->options.tasks);
   AddDepthCacheFlag(cmd, &args->options.depth_cache_mb);

@@ -14,8 +14,12 @@
 #include <vector>
 
 #include "apps/commands.h"
+#include "apps/job_flags.h"
 #include "libgt/core/error.h"
 #include "libgt/eval/evaluate.h"
+#include "libgt/eval/pose.h"
+#include "libgt/eval/protocol.h"
+#include "libgt/geometry/aggregate.h"
 #include "libgt/io/atomic_file.h"
 
 namespace occgt {
@@ -42,15 +46,34 @@ std::vector<double> ParseList(const std::string& text, const std::string& flag) 
   return out;
 }
 
+// "5,10,20": a list flag's text form of its default.
+std::string JoinNumbers(const std::vector<double>& values) {
+  std::ostringstream out;
+  for (size_t i = 0; i < values.size(); ++i) out << (i ? "," : "") << values[i];
+  return out.str();
+}
+std::string JoinOcclusionNames(const std::vector<gt::eval::OcclusionDefinition>& values) {
+  std::string out;
+  for (const auto d : values)
+    out += (out.empty() ? "" : ",") + std::string(gt::eval::OcclusionDefinitionName(d));
+  return out;
+}
+
 struct Args {
   std::string split_dir, out;
   std::vector<std::string> predictions;
-  std::string ransac_px = "0.5", occlusion = "image,visible", occlusion_bins, overlap_bins,
-              auc = "5,10,20", aggregate = "mean", estimator = "ransac", focal_mean = "loftr",
-              protocol;
-  double ransac_conf = 0.99999;
-  int ransac_iters = 1000;
+  // Every flag's default is EvalOptions' own (LoFTR's protocol), here in the flag's form.
   gt::eval::EvalOptions options;
+  std::string protocol;
+  std::string estimator = gt::eval::PoseMethodName(options.estimators[0].method);
+  std::string ransac_px = JoinNumbers({options.estimators[0].ransac_px});
+  double ransac_conf = options.estimators[0].confidence;
+  int ransac_iters = options.estimators[0].max_iters;
+  std::string focal_mean = gt::eval::FocalMeanName(options.estimators[0].focal_mean);
+  std::string auc = JoinNumbers(options.auc_thresholds_deg);
+  std::string occlusion = JoinOcclusionNames(options.occlusion_definitions);
+  std::string occlusion_bins, overlap_bins;  // "" = EvalOptions' own
+  std::string aggregate = gt::AggregateName(options.aggregate);
   int threads = 0;
   // Estimator and failure flags given on the command line (they conflict with --protocol).
   std::vector<std::string> estimator_flags;
@@ -94,13 +117,17 @@ void SetEstimators(const Args& args, gt::eval::EvalOptions* options) {
     }
   }
   if (options->estimators.empty()) throw gt::InputError("--estimator", "expected a method");
-  // The defaults are LoFTR's protocol exactly; anything else is a custom one.
-  const bool loftr = options->estimators.size() == 1 &&
-                     options->estimators[0].method == gt::eval::PoseMethod::kRansac &&
-                     options->estimators[0].ransac_px == 0.5 &&
-                     options->estimators[0].confidence == 0.99999 &&
-                     options->estimators[0].max_iters == 1000 &&
-                     options->estimators[0].focal_mean == gt::eval::FocalMean::kLoftr;
+  // LoFTR's protocol exactly (the defaults) is recorded as such; anything else is a custom one.
+  const gt::eval::Protocol loftr_protocol =
+      gt::eval::ExpandProtocol(gt::eval::ProtocolName::kLoftr);
+  const auto same = [](const gt::eval::PoseEstimatorOptions& a,
+                       const gt::eval::PoseEstimatorOptions& b) {
+    return a.method == b.method && a.ransac_px == b.ransac_px && a.confidence == b.confidence &&
+           a.max_iters == b.max_iters && a.min_matches == b.min_matches &&
+           a.focal_mean == b.focal_mean;
+  };
+  const bool loftr = options->estimators.size() == 1 && loftr_protocol.estimators.size() == 1 &&
+                     same(options->estimators[0], loftr_protocol.estimators[0]);
   options->protocol = loftr ? gt::eval::ProtocolName::kLoftr : gt::eval::ProtocolName::kCustom;
 }
 
@@ -139,13 +166,7 @@ void Run(const Args& args) {
     const auto it = kFlags.find(field);
     throw gt::InputError(it == kFlags.end() ? "occgt eval" : it->second, error);
   }
-  if (args.threads < 0)
-    throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
-  std::unique_ptr<tbb::global_control> limit;
-  if (args.threads > 0) {
-    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                  args.threads);
-  }
+  const std::unique_ptr<tbb::global_control> limit = LimitThreads(args.threads);
   const gt::eval::SplitIndex split = gt::eval::LoadSplitIndex(args.split_dir);
   const std::set<std::string> keys(split.keys.begin(), split.keys.end());
   std::vector<gt::eval::PredictionSet> sets;
@@ -221,34 +242,45 @@ void AddEvalCommand(CLI::App& app) {
                   "A paper's settings: loftr (the default), superglue, gluefactory, eloftr, "
                   "eloftr-lo (docs/EVAL.md)");
   cmd->add_option("--estimator", args->estimator,
-                  "Methods, each at every --ransac-px: ransac (default), lmeds, usac_default, "
-                  "usac_accurate, usac_magsac, usac_prosac (needs confidence)");
+                  "Methods, each at every --ransac-px: ransac, lmeds, usac_default, "
+                  "usac_accurate, usac_magsac, usac_prosac (needs confidence)")
+      ->capture_default_str();
   cmd->add_option("--ransac-px", args->ransac_px,
                   "Thresholds in pixels, one estimator setting each (e.g. 0.5,1.0), or 'sweep' "
-                  "(glue-factory's 0.5,1.5,2,3 and the best by mean AUC)");
-  cmd->add_option("--ransac-conf", args->ransac_conf, "RANSAC confidence (default 0.99999)");
+                  "(glue-factory's " +
+                      JoinNumbers(gt::eval::GluefactorySweepPx()) + " and the best by mean AUC)")
+      ->capture_default_str();
+  cmd->add_option("--ransac-conf", args->ransac_conf, "RANSAC confidence")->capture_default_str();
   cmd->add_option("--ransac-iters", args->ransac_iters,
-                  "Iteration cap of the robust estimator (default 1000, OpenCV's)");
+                  "Iteration cap of the robust estimator (OpenCV's default)")
+      ->capture_default_str();
   cmd->add_option("--focal-mean", args->focal_mean,
-                  "Pixel threshold / mean focal: loftr (K0 fx, K1 fy; default) or all (fx, fy "
-                  "of both, glue-factory)");
-  cmd->add_option("--auc", args->auc, "AUC thresholds in degrees (default 5,10,20)");
+                  "Pixel threshold / mean focal: loftr (K0 fx, K1 fy) or all (fx, fy "
+                  "of both, glue-factory)")
+      ->capture_default_str();
+  cmd->add_option("--auc", args->auc, "AUC thresholds in degrees")->capture_default_str();
   cmd->add_option("--epipolar-threshold", args->options.epipolar_threshold,
-                  "Symmetric epipolar distance threshold (default 5e-4; MegaDepth 1e-4)");
+                  "Symmetric epipolar distance threshold (MegaDepth 1e-4)")
+      ->capture_default_str();
   cmd->add_option("--px", args->options.quality.px,
-                  "Per-type precision/recall: correct within this many pixels (default 8)");
+                  "Per-type precision/recall: correct within this many pixels")
+      ->capture_default_str();
   cmd->add_option("--occlusion", args->occlusion,
-                  "Occlusion-ratio definitions to stratify by: image,visible,valid");
+                  "Occlusion-ratio definitions to stratify by: image,visible,valid")
+      ->capture_default_str();
   cmd->add_option("--occlusion-bins", args->occlusion_bins, "Occlusion bin edges (comma list)");
   cmd->add_option("--overlap-bins", args->overlap_bins, "Visible-overlap bin edges (comma list)");
-  cmd->add_option("--aggregate", args->aggregate, "Both directions -> pair value: min|mean|max");
+  cmd->add_option("--aggregate", args->aggregate, "Both directions -> pair value: min|mean|max")
+      ->capture_default_str();
   cmd->add_option("--curve-step", args->options.curve_step,
-                  "Cumulative curve step over the occlusion ratio (default 0.05)");
+                  "Cumulative curve step over the occlusion ratio")
+      ->capture_default_str();
   cmd->add_option("--failure-error", args->options.failure_error_deg,
-                  "Error (deg) of a failed pair inside means (default 180)");
+                  "Error (deg) of a failed pair inside means")
+      ->capture_default_str();
   cmd->add_option("--min-confidence", args->options.min_confidence,
                   "Drop matches with confidence below this (needs 'confidence')");
-  cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)");
+  AddThreadsFlag(cmd, &args->threads, "Worker threads");
   cmd->callback([args, cmd] {
     args->estimator_flags.clear();
     for (const char* flag : {"--estimator", "--ransac-px", "--ransac-conf", "--ransac-iters",

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/job_flags.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/io/folder_lock.h"
@@ -41,9 +42,8 @@ void AddMergeCommand(CLI::App& app) {
   auto* verify = cmd->add_flag("--verify", args->options.verify,
                                "Also re-hash every shard and read every tar back (reads every "
                                "byte; default: trust the digests recorded while writing)");
-  cmd->add_option("--threads", args->threads,
-                  "Threads parsing part records and, with --verify, checking shards "
-                  "(0 = all cores)");
+  AddThreadsFlag(cmd, &args->threads,
+                 "Threads parsing part records and, with --verify, checking shards");
   // Deprecated: the checks they turned off are off by default now.
   cmd->add_flag("--no-md5", args->no_md5, "Deprecated, ignored: MD5s are not recomputed by default")
       ->excludes(verify);
@@ -53,9 +53,7 @@ void AddMergeCommand(CLI::App& app) {
     gt::shards::MergeOptions options = args->options;
     const bool schemas_given = !options.schemas_dir.empty();
     if (options.schemas_dir.empty()) options.schemas_dir = DefaultSchemasDir();
-    if (args->threads < 0) {
-      throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
-    }
+    const std::unique_ptr<tbb::global_control> limit = LimitThreads(args->threads);
     std::string error;
     if (!options.Check(&error)) {
       ThrowOptionsError(error, "occgt merge",
@@ -69,11 +67,6 @@ void AddMergeCommand(CLI::App& app) {
                      "digests and reads no tar); use --verify for the full check\n",
                      flag);
       }
-    }
-    std::unique_ptr<tbb::global_control> limit;
-    if (args->threads > 0) {
-      limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                    args->threads);
     }
     // The indices and summary.json are files a build task may write too: written under
     // the folder's lock, as the tasks do (io/folder_lock.h). A missing DIR is not created.

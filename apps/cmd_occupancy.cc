@@ -73,8 +73,8 @@ void RunOccupancy(const OccupancyArgs& args) {
   if (o.mode == occ::OccupancyMode::kTwoPoint && !args.save_octree.empty())
     throw gt::InputError("--save-octree", "needs --mode octomap");
   const PairDatasetArgs& d = args.data;
-  gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, "", setup.resolution, "",
-                               setup.depth.source};
+  gt::truth::PairSource source{setup.format, d.scene,           "", "", 0, 0, "", setup.resolution,
+                               "",           setup.depth.source};
   if (setup.format == gt::DatasetFormat::kScanNetPP) {
     source.device = gt::datasets::ScanNetPPDeviceName(setup.device);
   }

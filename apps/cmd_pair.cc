@@ -57,8 +57,8 @@ void RunPair(const PairArgs& args) {
     ThrowOptionsError(error, "patch options", {{"stride", "--stride", args.stride.has_value()}});
   }
   if (args.score_stride < 1) throw gt::InputError("--score-stride", "expected >= 1");
-  gt::truth::PairSource source{setup.format, d.scene, "", "", 0, 0, ls.preset, setup.resolution,
-                               "", setup.depth.source};
+  gt::truth::PairSource source{
+      setup.format, d.scene, "", "", 0, 0, ls.preset, setup.resolution, "", setup.depth.source};
   if (setup.format == gt::DatasetFormat::kScanNetPP) {
     source.device = gt::datasets::ScanNetPPDeviceName(setup.device);
   }

@@ -188,14 +188,17 @@ void AddRenderCommand(CLI::App& app) {
   cmd->add_option("--mesh", args->mesh,
                   "the scene's mesh (PLY, in the poses' world frame; default: the dataset's own)");
   cmd->add_option("--frames", args->frames, "frame ids ID,ID,... (default: every usable frame)");
-  cmd->add_option("--stride", args->stride,
-                  "without --frames: every n-th usable frame (default 1)");
+  cmd->add_option("--stride", args->stride, "without --frames: every n-th usable frame")
+      ->capture_default_str();
   cmd->add_option("--resolution", args->resolution, "WxH (default: the depth camera's size)");
-  cmd->add_option("--near-m", args->depth.near_m, "nearest depth rendered (m, default 0.05)");
-  cmd->add_option("--far-m", args->depth.far_m, "farthest depth rendered (m, default 20)");
+  cmd->add_option("--near-m", args->depth.near_m, "nearest depth rendered (m)")
+      ->capture_default_str();
+  cmd->add_option("--far-m", args->depth.far_m, "farthest depth rendered (m)")
+      ->capture_default_str();
   cmd->add_option("--abs-tol-m", args->depth.fused.abs_tol_m,
-                  "sensor and mesh agree within abs-tol-m + rel-tol * depth (default 0.2)");
-  cmd->add_option("--rel-tol", args->depth.fused.rel_tol, "(default 0.01)");
+                  "sensor and mesh agree within abs-tol-m + rel-tol * depth")
+      ->capture_default_str();
+  cmd->add_option("--rel-tol", args->depth.fused.rel_tol, "see --abs-tol-m")->capture_default_str();
   cmd->add_option("--out", args->out, "output folder")->required();
   cmd->callback([args] { RunRender(*args); });
 }

@@ -6,8 +6,8 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -231,11 +231,12 @@ void RunScan(const ScanArgs& args) {
     PrintSceneText(summaries[i]);
     if (const auto& m = agreements[i]) {
       const double n = static_cast<double>(std::max<int64_t>(1, m->total.Total()));
-      std::printf("  mesh %s, %zu frames vs sensor (within %.3g m + %.3g of depth): agree %.3f, "
-                  "disagree %.3f, mesh only %.3f, sensor only %.3f\n",
-                  m->mesh.c_str(), m->frames.size(), args.tolerance.abs_tol_m, args.tolerance.rel_tol,
-                  m->total.agree / n, m->total.disagree / n, m->total.mesh_only / n,
-                  m->total.sensor_only / n);
+      std::printf(
+          "  mesh %s, %zu frames vs sensor (within %.3g m + %.3g of depth): agree %.3f, "
+          "disagree %.3f, mesh only %.3f, sensor only %.3f\n",
+          m->mesh.c_str(), m->frames.size(), args.tolerance.abs_tol_m, args.tolerance.rel_tol,
+          m->total.agree / n, m->total.disagree / n, m->total.mesh_only / n,
+          m->total.sensor_only / n);
     }
   }
   std::cout << "total: " << summaries.size() << " scene(s), " << frames << " frames, " << usable

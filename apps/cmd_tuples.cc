@@ -27,13 +27,7 @@ struct TuplesArgs {
 };
 
 void Run(const TuplesArgs& args) {
-  if (args.threads < 0)
-    throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
-  std::unique_ptr<tbb::global_control> limit;
-  if (args.threads > 0) {
-    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                  args.threads);
-  }
+  const std::unique_ptr<tbb::global_control> limit = LimitThreads(args.threads);
   gt::pipeline::RecipeOverrides overrides;
   overrides.root = args.root;
   const gt::pipeline::Recipe recipe = gt::pipeline::LoadRecipe(args.recipe, overrides);
@@ -69,7 +63,7 @@ void AddTuplesCommand(CLI::App& app) {
   AddRootFlag(cmd, &args->root);
   cmd->add_flag("--shards", args->shards,
                 "Also write one N-view sample per tuple into DIR/views/ (docs/MULTIVIEW.md)");
-  cmd->add_option("--threads", args->threads, "Worker threads of --shards (0 = all cores)");
+  AddThreadsFlag(cmd, &args->threads, "Worker threads of --shards");
   cmd->add_flag("--json", args->json, "Print the summary as JSON");
   cmd->callback([args] { Run(*args); });
 }

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/job_flags.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/shards/split.h"
@@ -30,22 +31,15 @@ void AddValidateCommand(CLI::App& app) {
   cmd->add_option("--schemas", args->options.schemas_dir,
                   "Folder with index/sample/pairs_line schemas "
                   "(default: $OCCGT_SCHEMAS or the source tree's schemas/, when found)");
-  cmd->add_option("--threads", args->threads, "Threads checking shards (0 = all cores)");
+  AddThreadsFlag(cmd, &args->threads, "Threads checking shards");
   cmd->callback([args] {
     gt::shards::ValidateOptions options = args->options;
     const bool schemas_given = !options.schemas_dir.empty();
     if (options.schemas_dir.empty()) options.schemas_dir = DefaultSchemasDir();
-    if (args->threads < 0) {
-      throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
-    }
+    const std::unique_ptr<tbb::global_control> limit = LimitThreads(args->threads);
     std::string error;
     if (!options.Check(&error)) {
       ThrowOptionsError(error, "occgt validate", {{"schemas_dir", "--schemas", schemas_given}});
-    }
-    std::unique_ptr<tbb::global_control> limit;
-    if (args->threads > 0) {
-      limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                    args->threads);
     }
     const std::vector<std::string> problems = gt::shards::ValidateSplit(args->dir, options);
     for (const std::string& p : problems) std::printf("%s\n", p.c_str());

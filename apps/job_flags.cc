@@ -1,5 +1,7 @@
 #include "apps/job_flags.h"
 
+#include "libgt/core/error.h"
+
 namespace occgt {
 
 void AddRootFlag(CLI::App* cmd, std::string* root) {
@@ -23,6 +25,17 @@ void AddDepthCacheFlag(CLI::App* cmd, size_t* depth_cache_mb) {
   cmd->add_option("--depth-cache-mb", *depth_cache_mb,
                   "Budget of decoded depth maps held per scene (LRU, default " +
                       std::to_string(*depth_cache_mb) + ")");
+}
+
+void AddThreadsFlag(CLI::App* cmd, int* threads, const std::string& what) {
+  cmd->add_option("--threads", *threads, what + " (0 = all cores)");
+}
+
+std::unique_ptr<tbb::global_control> LimitThreads(int threads) {
+  if (threads < 0) throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
+  if (threads == 0) return nullptr;
+  return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                               threads);
 }
 
 }  // namespace occgt

@@ -1,10 +1,15 @@
 // Flags shared by the dataset jobs `occgt build`, `occgt covis` and `occgt tuples`: the
 // dataset root override, the task of a split (--task/--tasks, else a Slurm array's) and the
-// per-scene depth cache budget. Help texts take their defaults from the options structs.
+// per-scene depth cache budget; and --threads of every command with worker threads (build,
+// covis, tuples, eval, merge, validate). Help texts take their defaults from the options
+// structs.
 #pragma once
+
+#include <tbb/global_control.h>
 
 #include <CLI/CLI.hpp>
 #include <cstddef>
+#include <memory>
 #include <string>
 
 namespace occgt {
@@ -24,5 +29,11 @@ TaskFlags AddTaskFlags(CLI::App* cmd, int* task, int* tasks);
 // --depth-cache-mb into *depth_cache_mb, whose value when the flag is added is the default
 // shown in the help text.
 void AddDepthCacheFlag(CLI::App* cmd, size_t* depth_cache_mb);
+
+// --threads into *threads: `what` runs on that many threads, 0 = all cores (the default).
+void AddThreadsFlag(CLI::App* cmd, int* threads, const std::string& what);
+// The TBB limit --threads asks for, held while the command runs: nullptr for 0 (all cores);
+// InputError("--threads", ...) below 0.
+std::unique_ptr<tbb::global_control> LimitThreads(int threads);
 
 }  // namespace occgt

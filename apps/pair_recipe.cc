@@ -51,9 +51,10 @@ PairSetup StartPairSetup(const PairDatasetArgs& args) {
       device_source = "--device";
       if (s.recipe && s.recipe->dataset.format == gt::DatasetFormat::kScanNetPP &&
           s.recipe->dataset.device != s.device) {
-        throw gt::InputError("--device", std::string(*args.device) + " differs from " +
-                                             args.recipe + "'s dataset.device " +
-                                             gt::datasets::ScanNetPPDeviceName(s.recipe->dataset.device));
+        throw gt::InputError("--device",
+                             std::string(*args.device) + " differs from " + args.recipe +
+                                 "'s dataset.device " +
+                                 gt::datasets::ScanNetPPDeviceName(s.recipe->dataset.device));
       }
     } else if (s.recipe && s.recipe->dataset.format == gt::DatasetFormat::kScanNetPP) {
       s.device = s.recipe->dataset.device;

@@ -26,7 +26,7 @@ struct PairDatasetArgs {
   std::optional<double> min_depth_m, max_depth_m;  // default the recipe's or the dataset's
   std::optional<std::string> depth_source;         // sensor|mesh|fused; default the recipe's
   std::string mesh;                                // the scene's mesh; default the recipe's
-  std::optional<std::string> device;  // scannetpp: dslr|iphone; default the recipe's
+  std::optional<std::string> device;               // scannetpp: dslr|iphone; default the recipe's
 };
 
 struct PairSetup {
