@@ -24,9 +24,9 @@
 #include "libgt/io/image.h"
 #include "libgt/io/npy.h"
 #include "libgt/occupancy/fusion.h"
+#include "libgt/render/frame_depth.h"
 #include "libgt/truth/pair_settings.h"
 #include "libgt/truth/pair_truth.h"
-#include "libgt/render/frame_depth.h"
 #include "libgt/truth/working_frame.h"
 #include "python/src/convert.h"
 #include "python/src/scope_map.h"
@@ -308,7 +308,8 @@ void BindIo(py::module_& m) {
           "the scene's mesh (PLY, in the frames' world frame) that depth_source 'mesh' and "
           "'fused' render; '' when none (the reader's: ScanNet's <scene>_vh_clean_2.ply)")
       .def("load", &PyScene::Load, "frame_id"_a, "width"_a = gt::truth::Resolution().width,
-           "height"_a = gt::truth::Resolution().height, py::kw_only(), "depth_source"_a = DefaultDepthSource(),
+           "height"_a = gt::truth::Resolution().height, py::kw_only(),
+           "depth_source"_a = DefaultDepthSource(),
            "(depth float32 [height, width] planar metres (0 = invalid), K float64 [3, 3] at "
            "width x height, world_from_cam float64 [4, 4]) of a usable frame at the working "
            "resolution: depth resized with nearest neighbour, K rescaled with the pixel-area "
@@ -343,8 +344,8 @@ void BindIo(py::module_& m) {
       });
 
   py::class_<PyDataset>(m, "Dataset", "A dataset root read by one of occgt's readers.")
-      .def(py::init<std::string, std::string, std::string>(), "root"_a, "format"_a,
-           py::kw_only(), "device"_a = DefaultDevice())
+      .def(py::init<std::string, std::string, std::string>(), "root"_a, "format"_a, py::kw_only(),
+           "device"_a = DefaultDevice())
       .def_property_readonly("root", &PyDataset::root, "dataset root folder")
       .def_property_readonly("format", &PyDataset::format, "reader format")
       .def("scenes", &PyDataset::Scenes, "scene names under the root, sorted")

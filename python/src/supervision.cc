@@ -203,8 +203,8 @@ py::tuple DepthAtImageSize(py::handle depth, py::handle K, std::array<double, 2>
                             std::to_string(cover_h) + " depth pixels; the depth map has " +
                             std::to_string(full->width) + " x " + std::to_string(full->height));
   }
-  const gt::Camera camera = CameraFromArray(K, static_cast<int>(cover_w),
-                                            static_cast<int>(cover_h), "K");
+  const gt::Camera camera =
+      CameraFromArray(K, static_cast<int>(cover_w), static_cast<int>(cover_h), "K");
   gt::DepthImage resized;
   {
     py::gil_scoped_release release;
@@ -236,8 +236,8 @@ void BindSupervision(py::module_& m) {
         "coarse_stride"_a = gt::truth::LoftrSupervisionOptions().coarse_stride,
         "scale0"_a = std::array<double, 2>{1.0, 1.0}, "scale1"_a = std::array<double, 2>{1.0, 1.0},
         "image_size0"_a = py::none(), "image_size1"_a = py::none(),
-        "compat"_a = gt::truth::LoftrSupervisionOptions().compat,
-        "mask0"_a = py::none(), "mask1"_a = py::none(),
+        "compat"_a = gt::truth::LoftrSupervisionOptions().compat, "mask0"_a = py::none(),
+        "mask1"_a = py::none(),
         "LoFTR's coarse supervision of one pair (truth::ComputeLoftrSupervision); see "
         "occgt.torch.loftr_supervision and docs/PYTHON.md, \"Supervision\".");
   m.def("depth_at_image_size", &DepthAtImageSize, "depth"_a, "K"_a, "scale"_a, "width"_a,

@@ -274,8 +274,8 @@ py::dict ViewsGroundTruth(py::handle depths, py::handle Ks, py::handle world_fro
                                       std::to_string(p.size()));
   }
   if (query_view < 0 || static_cast<size_t>(query_view) >= n) {
-    ThrowValue("query_view", "expected 0.." + std::to_string(n - 1) + ", got " +
-                                 std::to_string(query_view));
+    ThrowValue("query_view",
+               "expected 0.." + std::to_string(n - 1) + ", got " + std::to_string(query_view));
   }
   std::vector<gt::truth::WorkingFrame> views(n);
   for (size_t i = 0; i < n; ++i) {
