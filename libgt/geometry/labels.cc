@@ -144,7 +144,7 @@ struct Columns {
 constexpr int kChunk = 256;
 __attribute__((noinline, optimize("no-tree-vectorize"))) void GatherDepths(
     const float* __restrict depth, const int32_t* __restrict idx, int n, float* __restrict out) {
-  constexpr int kAhead = 32;  // pixels: two cache lines of B's row ahead
+  constexpr int kAhead = 128;  // pixels: eight cache lines of B's row ahead
   int i = 0;
   for (; i + kAhead < n; ++i) {
     __builtin_prefetch(depth + idx[i + kAhead]);

@@ -71,8 +71,8 @@ NpyArray ReadNpy(const std::string& path);
 // Encode an array as .npy bytes (see rules above).
 std::string EncodeNpy(const std::string& descr, const std::vector<int64_t>& shape, const void* data,
                       size_t nbytes);
-template <typename T>
-std::string EncodeNpy(const std::vector<int64_t>& shape, const std::vector<T>& values) {
+template <typename T, typename A = std::allocator<T>>
+std::string EncodeNpy(const std::vector<int64_t>& shape, const std::vector<T, A>& values) {
   return EncodeNpy(NpyDescr<T>(), shape, values.data(), values.size() * sizeof(T));
 }
 // Atomic write (atomic_file.h WriteFileAtomic) of EncodeNpy.

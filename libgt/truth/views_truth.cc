@@ -38,27 +38,37 @@ std::string ViewField(size_t i, const char* what) {
   return "views[" + std::to_string(i) + "]." + what;
 }
 
-// valid[p] = IsValidDepth(depth[p]), seen[p] = popcount(vis[p] & others), and hist[k] += the
-// valid pixels with seen = k (k < bins), for p < count. The first loop is branch-free so that g++
-// vectorises it: IsValidDepth's four tests without short-circuits (a float widened to
-// double exactly, the same comparisons), the popcount by the bit-parallel sum (no POPCNT
-// in the baseline x86-64, where __builtin_popcount is a libgcc call). The histogram is
-// summed in four interleaved partial counts (one count bumped pixel after pixel is a chain
-// through memory).
-void PixelStats(const float* __restrict depth, const uint32_t* __restrict vis, uint32_t others,
-                const LabelOptions& lo, size_t count, uint8_t* __restrict valid,
-                uint8_t* __restrict seen, int bins, int64_t* __restrict hist) {
+// The first writes of rows [0, count) of one view, before the other views' bits are ORed
+// in: valid[p] = IsValidDepth(depth[p]), the diagonal vis[p] = valid[p] << self (a view sees
+// its own valid pixels) and occ[p] = 0. Branch-free, so that g++ vectorises it: IsValidDepth's
+// four tests without short-circuits (a float widened to double exactly, the same
+// comparisons).
+void StartRows(const float* __restrict depth, const LabelOptions& lo, size_t count, int self,
+               uint8_t* __restrict valid, uint32_t* __restrict vis, uint32_t* __restrict occ) {
   const double min_m = lo.min_depth_m, max_m = lo.max_depth_m;
   for (size_t p = 0; p < count; ++p) {
     const float d = depth[p];
     const double dd = d;
     const bool ok = (std::fabs(d) <= std::numeric_limits<float>::max()) & (d > 0.0f) &
                     (dd >= min_m) & (dd <= max_m);
+    valid[p] = ok ? 1 : 0;
+    vis[p] = static_cast<uint32_t>(ok) << self;
+    occ[p] = 0;
+  }
+}
+
+// seen[p] = popcount(vis[p] & others) and hist[k] += the valid pixels with seen = k (k < bins),
+// for p < count. The popcount by the bit-parallel sum (no POPCNT in the baseline x86-64, where
+// __builtin_popcount is a libgcc call), so that the loop vectorises. The histogram is summed
+// in four interleaved partial counts (one count bumped pixel after pixel is a chain through
+// memory).
+void SeenStats(const uint32_t* __restrict vis, uint32_t others, const uint8_t* __restrict valid,
+               size_t count, uint8_t* __restrict seen, int bins, int64_t* __restrict hist) {
+  for (size_t p = 0; p < count; ++p) {
     uint32_t x = vis[p] & others;
     x = x - ((x >> 1) & 0x55555555u);
     x = (x & 0x33333333u) + ((x >> 2) & 0x33333333u);
     x = (x + (x >> 4)) & 0x0F0F0F0Fu;
-    valid[p] = ok ? 1 : 0;
     seen[p] = static_cast<uint8_t>((x * 0x01010101u) >> 24);
   }
   int64_t partial[4][kMaxViews + 1] = {};
@@ -198,16 +208,19 @@ ViewsTruth ComputeViewsTruth(const std::vector<WorkingFrame>& views,
   out.height = views[0].depth->height;
   const size_t hw = static_cast<size_t>(out.width) * out.height;
   const size_t total = hw * n;
-  out.visible_in.assign(total, 0u);
-  out.occluded_in.assign(total, 0u);
+  // Every element is written by the tasks below (StartRows, SeenStats): no zero fill.
+  out.visible_in.resize(total);
+  out.occluded_in.resize(total);
   out.valid.resize(total);
   out.seen_by.resize(total);
   out.seen_by_histogram.assign(static_cast<size_t>(n) * n, 0);
 
-  // Targets of each source view: every view, itself included (bit j = view j).
+  // Targets of each source view i: every other view (bit j = view j); the diagonal bit i is
+  // the view's own depth mask (StartRows), not labelled.
   std::vector<std::vector<BitTarget>> targets(n);
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) {
+      if (j == i) continue;
       BitTarget t;
       t.depth_b = views[j].depth.get();
       t.cam_b = &views[j].camera;
@@ -217,8 +230,9 @@ ViewsTruth ComputeViewsTruth(const std::vector<WorkingFrame>& views,
     }
   }
   const int blocks = (out.height + kRowsPerTask - 1) / kRowsPerTask;
-  // Per task: its rows' bits, then their statistics (while the words are in cache); the
-  // histogram of a task is summed after the loop in task order (integers: exact anyway).
+  // Per task: its rows' first writes (valid, the diagonal), the other views' bits, then the
+  // rows' statistics (while the words are in cache); the histogram of a task is summed after
+  // the loop in task order (integers: exact anyway).
   std::vector<int64_t> block_hist(static_cast<size_t>(n) * blocks * n, 0);
   const LabelOptions& lo = options.labels;
   tbb::parallel_for(tbb::blocked_range<int>(0, n * blocks), [&](const tbb::blocked_range<int>& r) {
@@ -229,12 +243,13 @@ ViewsTruth ComputeViewsTruth(const std::vector<WorkingFrame>& views,
       const WorkingFrame& f = views[i];
       uint32_t* vis = out.visible_in.data() + hw * i;
       uint32_t* occ = out.occluded_in.data() + hw * i;
-      LabelDirectionBits(*f.depth, f.camera, targets[i], lo, row_begin, row_end, vis, occ);
+      uint8_t* valid = out.valid.data() + hw * i;
       const size_t p0 = static_cast<size_t>(row_begin) * out.width;
       const size_t p1 = static_cast<size_t>(row_end) * out.width;
-      PixelStats(f.depth->values_m.data() + p0, vis + p0, ~(1u << i), lo, p1 - p0,
-                 out.valid.data() + hw * i + p0, out.seen_by.data() + hw * i + p0, n,
-                 block_hist.data() + static_cast<size_t>(task) * n);
+      StartRows(f.depth->values_m.data() + p0, lo, p1 - p0, i, valid + p0, vis + p0, occ + p0);
+      LabelDirectionBits(*f.depth, f.camera, targets[i], lo, row_begin, row_end, vis, occ);
+      SeenStats(vis + p0, ~(1u << i), valid + p0, p1 - p0, out.seen_by.data() + hw * i + p0, n,
+                block_hist.data() + static_cast<size_t>(task) * n);
     }
   });
   for (int task = 0; task < n * blocks; ++task) {
@@ -266,6 +281,20 @@ ViewsTruth ComputeViewsTruth(const std::vector<WorkingFrame>& views,
   out.track_depth.resize(static_cast<size_t>(n) * nq);
   out.track_state.resize(static_cast<size_t>(n) * nq);
   tbb::parallel_for(0, n, [&](int j) {
+    if (j == q) {  // the query view itself, as the diagonal: each valid query at its own pixel
+      const float nan = std::numeric_limits<float>::quiet_NaN();
+      for (size_t k = 0; k < nq; ++k) {
+        const int u = out.queries[2 * k], v = out.queries[2 * k + 1];
+        const float d = fq.depth->at(u, v);
+        const bool ok = IsValidDepth(d, lo.min_depth_m, lo.max_depth_m);
+        out.track_xy[2 * (nq * j + k)] = ok ? static_cast<float>(u) : nan;
+        out.track_xy[2 * (nq * j + k) + 1] = ok ? static_cast<float>(v) : nan;
+        out.track_depth[nq * j + k] = ok ? d : nan;
+        out.track_state[nq * j + k] =
+            static_cast<uint8_t>(ok ? TrackState::kVisible : TrackState::kNoDepth);
+      }
+      return;
+    }
     const WorkingFrame& fj = views[j];
     const PointLabels pts =
         LabelPoints(*fq.depth, fq.camera, *fj.depth, fj.camera,

@@ -1,9 +1,14 @@
 // The dense ground truth of N posed depth views (docs/MULTIVIEW.md): for every pixel of every
 // view, whether it is VISIBLE / OCCLUDED in each of the N views, and tracks of query pixels
-// through all of them. Built from the pair labels only: bit j of pixel p of view i is the
-// pair label of p for the direction i → j (geometry/labels.h LabelDirection with
+// through all of them. Built from the pair labels only: for j != i, bit j of pixel p of view i
+// is the pair label of p for the direction i → j (geometry/labels.h LabelDirection with
 // b_from_a = RelativePose(world_from_cam_i, world_from_cam_j), the same kernel, so the bits
-// equal `occgt pair`'s label01 of that pair bit for bit, the diagonal i → i included).
+// equal `occgt pair`'s label01 of that pair bit for bit). The diagonal (bit i of view i) is
+// not labelled: it is the view's own depth mask, VISIBLE exactly where `valid` (a view sees
+// its own pixels); the pair labeller's answer for a view against itself agrees under the
+// default preset, but under the truncating, strict-bounds presets (occ2net, loftr,
+// occ2net-compat) its projection of the identity rounds to the neighbouring pixel or off
+// the border (docs/MULTIVIEW.md).
 //
 // Layouts (row-major, N views of one size H × W, N <= 32):
 //   visible_in, occluded_in  uint32 [N, H, W]  bit j of [i, v, u]: pixel (u, v) of view i is
@@ -22,13 +27,15 @@
 //   track_depth  float32 [N, Q]    depth of the point in view j's camera (planar z, metres, as
 //                                  the kernel computes it); NaN where not projected
 //   track_state  uint8 [N, Q]      TrackState of the point in view j (from label q → j)
+// In view q itself (the diagonal), a valid query is VISIBLE at its own pixel (u, v) with its
+// own depth; a query without valid depth is NO_DEPTH there too, with NaN position and depth.
 // Sampling: the valid pixels of view q in raster order, num_tracks of them drawn without
 // replacement by a partial Fisher–Yates shuffle driven by std::mt19937_64(seed) (raw outputs,
 // rejection for an unbiased index: portable), then sorted in raster order; all of them when
 // there are no more than num_tracks.
 //
 // Work: one task per (view, block of rows) on TBB, each writing only its own rows, so the
-// result is the same whatever the number of threads.
+// result is the same whatever the number of threads. The N (N − 1) directions are labelled.
 #pragma once
 
 #include <cstdint>
@@ -36,6 +43,7 @@
 #include <string>
 #include <vector>
 
+#include "libgt/core/default_init_allocator.h"
 #include "libgt/geometry/labels.h"
 #include "libgt/truth/working_frame.h"
 
@@ -67,9 +75,10 @@ struct ViewsTruthOptions {
 
 struct ViewsTruth {
   int num_views = 0, width = 0, height = 0;
-  std::vector<uint32_t> visible_in, occluded_in;  // [N, H, W]
-  std::vector<uint8_t> valid, seen_by;            // [N, H, W]
-  std::vector<int64_t> seen_by_histogram;         // [N, N]
+  // [N, H, W]; default-initialised storage (ComputeViewsTruth writes every element once)
+  std::vector<uint32_t, DefaultInitAllocator<uint32_t>> visible_in, occluded_in;
+  std::vector<uint8_t, DefaultInitAllocator<uint8_t>> valid, seen_by;
+  std::vector<int64_t> seen_by_histogram;  // [N, N]
   int query_view = 0;
   std::vector<int32_t> queries;      // [Q, 2] (u, v)
   std::vector<float> track_xy;       // [N, Q, 2]

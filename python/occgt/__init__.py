@@ -359,9 +359,10 @@ def views_ground_truth(
     dataset_max_depth_m: Optional[float] = None,
 ) -> ViewsGroundTruth:
     """The dense ground truth of N posed depth views (C++ ``truth::ComputeViewsTruth``,
-    docs/MULTIVIEW.md), from the pair labels: bit j of ``visible_in[i]`` is pixel-for-pixel
-    ``pair_ground_truth(depths[i], depths[j], ...)["label01"] == VISIBLE`` (the same options),
-    the diagonal j == i included; the same for ``occluded_in`` and OCCLUDED.
+    docs/MULTIVIEW.md), from the pair labels: for j != i, bit j of ``visible_in[i]`` is
+    pixel-for-pixel ``pair_ground_truth(depths[i], depths[j], ...)["label01"] == VISIBLE``
+    (the same options); the same for ``occluded_in`` and OCCLUDED. The diagonal bit i of
+    ``visible_in[i]`` is ``valid[i]`` (a view sees its own valid pixels), never OCCLUDED.
 
     Args:
         depths: N depth maps of one size [H, W] (a list, or one array [N, H, W]), float32 or

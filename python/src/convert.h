@@ -64,14 +64,14 @@ std::vector<uint64_t> WordsFromArray(py::handle obj, const std::string& argument
                                      std::vector<py::ssize_t>* shape);
 
 // The vector as an array of the given shape, owning it through a capsule (no copy).
-template <typename T>
-py::array_t<T> ToArray(std::vector<T>&& values, const std::vector<py::ssize_t>& shape) {
+template <typename T, typename A>
+py::array_t<T> ToArray(std::vector<T, A>&& values, const std::vector<py::ssize_t>& shape) {
   size_t n = 1;
   for (py::ssize_t s : shape) n *= static_cast<size_t>(s);
   if (n != values.size()) throw std::logic_error("occgt: array size does not match its shape");
-  auto owned = std::make_unique<std::vector<T>>(std::move(values));
+  auto owned = std::make_unique<std::vector<T, A>>(std::move(values));
   T* data = owned->data();
-  py::capsule base(owned.get(), [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  py::capsule base(owned.get(), [](void* p) { delete static_cast<std::vector<T, A>*>(p); });
   owned.release();  // the capsule owns it now
   return py::array_t<T>(shape, data, base);
 }

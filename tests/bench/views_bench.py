@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """N-view ground truth from Python: occgt.views_ground_truth of 8 views of the real 7-Scenes
-sample at 640x480 (all 56 directions i != j plus the 8 diagonal ones, 512 tracks), against the
-28 occgt.pair_ground_truth calls that label the same 56 directions (docs/PERFORMANCE.md,
+sample at 640x480 (all 56 directions i != j, the diagonal from the depth masks, 512 tracks),
+against the 28 occgt.pair_ground_truth calls that label the same 56 directions (docs/PERFORMANCE.md,
 section "N-view ground truth").
 
     taskset -c 0 env PYTHONPATH=build/python /usr/bin/python3 tests/bench/views_bench.py \\

@@ -1,10 +1,12 @@
-"""occgt.views_ground_truth (docs/MULTIVIEW.md): for every ordered pair (i, j), the diagonal
-included, bit j of visible_in[i] / occluded_in[i] equals pair_ground_truth's label01 of
-(i, j) == VISIBLE / OCCLUDED bit for bit, on the real 7-Scenes and TartanAir samples (read by
-occgt's readers, required) and on a synthetic room of `occgt synth`, for several presets;
-tracks: states equal label01 at the query pixels, positions equal a float64 projection done
-here (to float rounding), sampling is seeded; statistics; list or stacked input; bad inputs
-raise ValueError naming the argument."""
+"""occgt.views_ground_truth (docs/MULTIVIEW.md): for every ordered pair i != j, bit j of
+visible_in[i] / occluded_in[i] equals pair_ground_truth's label01 of (i, j) == VISIBLE /
+OCCLUDED bit for bit, and the diagonal bit i of view i is the view's depth mask `valid`
+(never OCCLUDED), on the real 7-Scenes and TartanAir samples (read by occgt's readers,
+required) and on a synthetic room of `occgt synth`, for several presets; tracks: states equal
+label01 at the query pixels in the other views and VISIBLE at the query pixel itself in the
+query view, positions equal a float64 projection done here (to float rounding), sampling is
+seeded; statistics; list or stacked input; bad inputs raise ValueError naming the
+argument."""
 from __future__ import annotations
 
 import unittest
@@ -41,7 +43,13 @@ def check_against_pairs(case: unittest.TestCase, frames: Frames, range_: Tuple[f
     case.assertEqual(t["occluded_in"].dtype, np.uint32)
     counts = {"visible": 0, "occluded": 0}
     for i in range(n):
+        # The diagonal: the view's own depth mask, never occluded.
+        np.testing.assert_array_equal((t["visible_in"][i] >> i) & 1, t["valid"][i],
+                                      err_msg=f"{i}->{i}")
+        case.assertFalse(np.any((t["occluded_in"][i] >> i) & 1))
         for j in range(n):
+            if j == i:
+                continue
             p = occgt.pair_ground_truth(depths[i], depths[j], Ks[i], Ks[j], poses[i], poses[j],
                                         dataset_depth_range=range_, **options)
             label = p["label01"]
@@ -49,9 +57,8 @@ def check_against_pairs(case: unittest.TestCase, frames: Frames, range_: Tuple[f
             occ = ((t["occluded_in"][i] >> j) & 1).astype(bool)
             np.testing.assert_array_equal(vis, label == occgt.VISIBLE, err_msg=f"{i}->{j}")
             np.testing.assert_array_equal(occ, label == occgt.OCCLUDED, err_msg=f"{i}->{j}")
-            if i != j:
-                counts["visible"] += int(vis.sum())
-                counts["occluded"] += int(occ.sum())
+            counts["visible"] += int(vis.sum())
+            counts["occluded"] += int(occ.sum())
             # Tracks of the query view: the state is label01 at the query pixel.
             if i == t["query_view"]:
                 u, v = t["queries"][:, 0], t["queries"][:, 1]
@@ -59,6 +66,14 @@ def check_against_pairs(case: unittest.TestCase, frames: Frames, range_: Tuple[f
                     {"UNKNOWN": "NO_DEPTH"}.get(occgt.LABEL_NAMES[c], occgt.LABEL_NAMES[c]))
                     for c in label[v, u]], dtype=np.uint8)
                 np.testing.assert_array_equal(t["track_state"][j], expected)
+    # In the query view itself, a valid query is VISIBLE at its own pixel with its own depth.
+    q, u, v = t["query_view"], t["queries"][:, 0], t["queries"][:, 1]
+    ok = t["valid"][q][v, u] == 1
+    np.testing.assert_array_equal(
+        t["track_state"][q], np.where(ok, occgt.TRACK_VISIBLE, occgt.TRACK_NO_DEPTH))
+    np.testing.assert_array_equal(t["track_xy"][q][ok], t["queries"][ok].astype(np.float32))
+    np.testing.assert_array_equal(t["track_depth"][q][ok], depths[q][v, u][ok])
+    case.assertTrue(np.all(np.isnan(t["track_xy"][q][~ok])))
     case.assertTrue(np.all(t["visible_in"] >> n == 0))
     return counts
 
@@ -135,8 +150,8 @@ class Synthetic(unittest.TestCase):
             np.testing.assert_allclose(t["track_xy"][j][ok], xy[ok], atol=2e-3, rtol=1e-4)
             np.testing.assert_allclose(t["track_depth"][j][ok], z[ok], atol=1e-5, rtol=1e-5)
             self.assertTrue(np.all(np.isnan(t["track_xy"][j][~ok])))
-        # Identity: in its own view a track is where it started, visible.
-        np.testing.assert_allclose(t["track_xy"][2], q, atol=1e-3)
+        # In its own view a track is exactly where it started, visible.
+        np.testing.assert_array_equal(t["track_xy"][2], q.astype(np.float32))
         self.assertTrue(np.all(t["track_state"][2] == occgt.TRACK_VISIBLE))
         # Seeded: the same seed the same queries, another seed others.
         again = occgt.views_ground_truth(depths, Ks, poses, num_tracks=200, query_view=2,

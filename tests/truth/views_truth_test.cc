@@ -1,7 +1,9 @@
 // libgt/truth/views_truth: the N-view bitmasks equal the pair labels (LabelDirection, called
-// directly here) for every ordered pair, the diagonal included, bit for bit; tracks equal the
-// pair warps at the query pixels; statistics against a count done here; the same result with
-// 1 and 2 threads; the sampling rule; bad inputs named.
+// directly here) for every ordered pair i != j, bit for bit, and the diagonal is the view's
+// depth mask (equal to the pair labeller's self-answer under the default preset); tracks equal
+// the pair warps at the query pixels, and the query pixels themselves in the query view;
+// statistics against a count done here; the same result with 1 and 2 threads; the sampling
+// rule; bad inputs named.
 #include "libgt/truth/views_truth.h"
 
 #include <gtest/gtest.h>
@@ -11,6 +13,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -71,14 +74,22 @@ bool SameFloat(float a, float b) {  // bit for bit (NaN == NaN of the same bits)
   return std::memcmp(&a, &b, sizeof a) == 0;
 }
 
-// Every ordered pair (i, j), i == j included, against LabelDirection; returns the number of
-// VISIBLE and OCCLUDED bits seen (the scene must have both for the test to mean anything).
+// Every ordered pair i != j against LabelDirection, the diagonal against the depth mask;
+// returns the number of VISIBLE and OCCLUDED bits seen off the diagonal (the scene must have
+// both for the test to mean anything).
 void ExpectBitsEqualPairLabels(const std::vector<WorkingFrame>& views, const ViewsTruth& t,
                                const LabelOptions& lo, int64_t* visible, int64_t* occluded) {
   const int n = static_cast<int>(views.size());
   const size_t hw = static_cast<size_t>(t.width) * t.height;
   for (int i = 0; i < n; ++i) {
+    int64_t diagonal_mismatches = 0;
+    for (size_t p = 0; p < hw; ++p) {
+      diagonal_mismatches += ((t.visible_in[hw * i + p] >> i) & 1u) != t.valid[hw * i + p];
+      diagonal_mismatches += (t.occluded_in[hw * i + p] >> i) & 1u;
+    }
+    EXPECT_EQ(diagonal_mismatches, 0) << "view " << i << " against itself";
     for (int j = 0; j < n; ++j) {
+      if (j == i) continue;
       const DirectionLabels l =
           LabelDirection(*views[i].depth, views[i].camera, *views[j].depth, views[j].camera,
                          RelativePose(views[i].world_from_cam, views[j].world_from_cam), lo);
@@ -89,10 +100,8 @@ void ExpectBitsEqualPairLabels(const std::vector<WorkingFrame>& views, const Vie
         const PixelLabel label = static_cast<PixelLabel>(l.labels[p]);
         mismatches += vis != (label == PixelLabel::kVisible);
         mismatches += occ != (label == PixelLabel::kOccluded);
-        if (i != j) {
-          *visible += vis;
-          *occluded += occ;
-        }
+        *visible += vis;
+        *occluded += occ;
       }
       EXPECT_EQ(mismatches, 0) << "views " << i << " -> " << j;
     }
@@ -135,10 +144,17 @@ TEST(ComputeViewsTruth, TracksEqualThePairWarpsAtTheQueryPixels) {
     for (size_t k = 0; k < nq; ++k) {
       const int u = t.queries[2 * k], v = t.queries[2 * k + 1];
       const size_t p = static_cast<size_t>(v) * 80 + u;
-      EXPECT_TRUE(SameFloat(t.track_xy[2 * (nq * j + k)], l.warped_xy[2 * p])) << j << " " << k;
-      EXPECT_TRUE(SameFloat(t.track_xy[2 * (nq * j + k) + 1], l.warped_xy[2 * p + 1]));
       const uint8_t state = t.track_state[nq * j + k];
-      EXPECT_EQ(state, static_cast<uint8_t>(TrackStateOf(l.at(u, v)))) << j << " " << k;
+      if (j == q) {  // the query pixel itself, visible (the queries are valid pixels)
+        EXPECT_EQ(t.track_xy[2 * (nq * j + k)], static_cast<float>(u));
+        EXPECT_EQ(t.track_xy[2 * (nq * j + k) + 1], static_cast<float>(v));
+        EXPECT_EQ(t.track_depth[nq * j + k], views[q].depth->at(u, v));
+        EXPECT_EQ(state, static_cast<uint8_t>(TrackState::kVisible));
+      } else {
+        EXPECT_TRUE(SameFloat(t.track_xy[2 * (nq * j + k)], l.warped_xy[2 * p])) << j << " " << k;
+        EXPECT_TRUE(SameFloat(t.track_xy[2 * (nq * j + k) + 1], l.warped_xy[2 * p + 1]));
+        EXPECT_EQ(state, static_cast<uint8_t>(TrackStateOf(l.at(u, v)))) << j << " " << k;
+      }
       states.insert(state);
       // The depth there: z of the point in camera j, to float rounding (double here).
       const float d = views[q].depth->at(u, v);
@@ -165,6 +181,48 @@ TEST(ComputeViewsTruth, TracksEqualThePairWarpsAtTheQueryPixels) {
   const ViewsTruth g = ComputeViewsTruth(views, o, given);
   EXPECT_EQ(g.queries, given);
   EXPECT_EQ(g.num_queries(), 3u);
+  // A given query without valid depth is NO_DEPTH in its own view too, with NaN position.
+  std::vector<WorkingFrame> holed = views;
+  auto depth = std::make_shared<DepthImage>(*views[q].depth);
+  depth->values_m[30 * 80 + 40] = 0.0f;
+  holed[q].depth = depth;
+  const ViewsTruth h = ComputeViewsTruth(holed, o, given);
+  for (int j = 0; j < 8; ++j) {
+    EXPECT_EQ(h.track_state[3 * j + 2], static_cast<uint8_t>(TrackState::kNoDepth)) << j;
+    EXPECT_TRUE(std::isnan(h.track_xy[2 * (3 * j + 2)])) << j;
+    EXPECT_TRUE(std::isnan(h.track_depth[3 * j + 2])) << j;
+  }
+}
+
+// The diagonal is the depth mask by definition; the pair labeller's answer for a view against
+// itself (the identity pose, as RelativePose computes it) agrees with it under the default
+// preset (pixel-area bounds, nearest lookup), pixel for pixel. Under occ2net-compat it does
+// not: its projection epsilon pulls every pixel a little towards the principal point, and the
+// truncating lookup then reads the neighbouring pixel (docs/MULTIVIEW.md).
+TEST(ComputeViewsTruth, DiagonalIsTheDepthMaskAsThePairLabellerSaysUnderTheDefaultPreset) {
+  const std::vector<WorkingFrame> views = Views({0, 5, 11});
+  for (const char* preset : {"default", "occ2net-compat"}) {
+    SCOPED_TRACE(preset);
+    const ViewsTruthOptions o = Options(preset);
+    const ViewsTruth t = ComputeViewsTruth(views, o);
+    const size_t hw = 80 * 60;
+    int64_t differ = 0;
+    for (int i = 0; i < 3; ++i) {
+      const DirectionLabels self =
+          LabelDirection(*views[i].depth, views[i].camera, *views[i].depth, views[i].camera,
+                         RelativePose(views[i].world_from_cam, views[i].world_from_cam), o.labels);
+      for (size_t p = 0; p < hw; ++p) {
+        ASSERT_EQ((t.visible_in[hw * i + p] >> i) & 1u, t.valid[hw * i + p]);
+        differ += (self.labels[p] == static_cast<uint8_t>(PixelLabel::kVisible)) !=
+                  (t.valid[hw * i + p] == 1);
+      }
+    }
+    if (std::string(preset) == "default") {
+      EXPECT_EQ(differ, 0);
+    } else {
+      EXPECT_GT(differ, 0);  // the reason the diagonal is not the self-pair's labels
+    }
+  }
 }
 
 TEST(ComputeViewsTruth, StatisticsCountTheOtherViewsThatSeeAPixel) {
