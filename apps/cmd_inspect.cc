@@ -1,7 +1,8 @@
 // occgt inspect pair | split: pictures of one pair and a report of a split (libgt/report).
-//   occgt inspect pair (--shard X.tar --key K | --pair-dir D | --root R --format F --scene S
-//                      --frames A,B) --out DIR
-//   (--pair-dir: a folder of `occgt pair`, of `occgt occupancy`, or of both)
+//   occgt inspect pair (--shard X.tar --key K | --pair-dir D | [--recipe R.yaml] --root R
+//                      --format F --scene S --frames A,B [pair flags]) --out DIR
+//   (--pair-dir: a folder of `occgt pair`, of `occgt occupancy`, or of both; a computed pair
+//   takes its settings as `occgt pair` does, apps/pair_recipe.h)
 //   occgt inspect split DIR [--out OUT] [--eval eval.json ...]
 #include <algorithm>
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "apps/commands.h"
+#include "apps/pair_recipe.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
@@ -23,13 +25,13 @@ namespace occgt {
 namespace {
 
 struct InspectPairArgs {
-  std::string shard, key, pair_dir, root, format, scene, frames, out;
+  std::string shard, key, pair_dir;
+  // The pair computed from a scene, as `occgt pair` reads it (--recipe, --root, --format,
+  // --scene, --frames, the depth flags); also --out, and --root for --pair-dir's colour.
+  PairDatasetArgs data;
   std::string image0, image1;
-  std::optional<std::string> preset;      // default: truth::LabelSettings's
-  std::optional<std::string> resolution;  // WxH; default: truth::Resolution's
+  std::optional<std::string> preset;  // default: the recipe's, else truth::LabelSettings's
   bool no_occupancy = false;
-  std::string depth_source = "sensor", mesh;  // with --root: the labels' depth, the mesh
-  std::optional<std::string> device;          // with --root, scannetpp: dslr|iphone
   int max_lines = 200;
   uint64_t seed = 0;
   double alpha = 0.55;
@@ -48,9 +50,10 @@ struct InspectSplitArgs {
 };
 
 void RunInspectPair(const InspectPairArgs& a) {
+  const PairDatasetArgs& d = a.data;
   // --root alone with --pair-dir only says where the colour images are.
-  const bool scene_source =
-      !a.scene.empty() || !a.frames.empty() || (!a.root.empty() && a.pair_dir.empty());
+  const bool scene_source = !d.scene.empty() || !d.frames.empty() || !d.recipe.empty() ||
+                            (!d.root.empty() && a.pair_dir.empty());
   const int sources = (!a.shard.empty() || !a.key.empty()) + !a.pair_dir.empty() + scene_source;
   if (sources != 1) {
     throw gt::InputError("--shard/--pair-dir/--root",
@@ -64,36 +67,38 @@ void RunInspectPair(const InspectPairArgs& a) {
     }
     pair = gt::report::LoadPairFromShard(a.shard, a.key);
   } else if (!a.pair_dir.empty()) {
-    pair = gt::report::LoadPairFromDir(a.pair_dir, a.image0, a.image1, a.root);
+    pair = gt::report::LoadPairFromDir(a.pair_dir, a.image0, a.image1, d.root);
   } else {
-    if (a.root.empty() || a.format.empty() || a.scene.empty() || a.frames.empty()) {
-      throw gt::InputError("--root/--format/--scene/--frames", "expected all four");
+    if (d.scene.empty() || d.frames.empty()) {
+      throw gt::InputError("--scene/--frames", "expected both with --root or --recipe");
     }
-    const auto [id0, id1] = gt::truth::ParseFramePair(a.frames);
-    gt::truth::PairSettings settings;
-    if (a.preset) settings.labels.preset = *a.preset;
-    settings.occupancy.enabled = !a.no_occupancy;
-    const gt::truth::Resolution r = a.resolution
-                                        ? gt::truth::ParseResolution(*a.resolution, "--resolution")
-                                        : gt::truth::Resolution();
-    const gt::DatasetFormat format = gt::ParseDatasetFormat(a.format, "--format");
-    gt::report::SceneDepthOptions depth;
-    depth.depth.source = gt::render::ParseDepthSourceMode(a.depth_source, "--depth-source");
-    depth.mesh_path = a.mesh;
-    if (a.device) {
-      if (format != gt::DatasetFormat::kScanNetPP) {
-        throw gt::InputError("--device", "only for the scannetpp format");
-      }
-      depth.device = gt::datasets::ParseScanNetPPDevice(*a.device, "--device");
+    // The settings as `occgt pair` takes them (the recipe's, or the defaults, then the
+    // flags), with the occupancy on unless the recipe or --no-occupancy turns it off.
+    PairSetup setup = StartPairSetup(d);
+    gt::truth::PairSettings& st = setup.settings;
+    if (a.preset) {
+      gt::LabelPreset(*a.preset);  // a bad name fails before any file is read
+      st.labels.preset = *a.preset;
     }
-    pair = gt::report::ComputePairFromScene(a.root, format, a.scene, id0, id1, settings, r, depth);
+    if (a.no_occupancy) st.occupancy.enabled = false;
+    const gt::Scene scene = ReadSetupScene(setup, d.scene);
+    const gt::truth::PairTruthOptions o =
+        gt::truth::ResolvePairTruthOptions(st, DepthRangeFor(setup, scene));
+    std::string error;
+    if (!o.Check(&error)) {
+      ThrowOptionsError(error, "pair options",
+                        {{"min_depth_m", "--min-depth-m", d.min_depth_m.has_value()},
+                         {"max_depth_m", "--max-depth-m", d.max_depth_m.has_value()}});
+    }
+    const auto [id0, id1] = gt::truth::ParseFramePair(d.frames);
+    pair = gt::report::ComputePairFromScene(scene, id0, id1, o, setup.resolution, setup.depth);
   }
   gt::report::PairPictureOptions po;
   po.matches.max_lines = a.max_lines;
   po.matches.seed = a.seed;
   po.labels.alpha = a.alpha;
   po.occupancy.slice_row = a.slice_row;
-  const auto written = gt::report::WritePairPictures(gt::report::RenderPair(pair, po), a.out);
+  const auto written = gt::report::WritePairPictures(gt::report::RenderPair(pair, po), d.out);
   if (pair.has_labels) {
     std::printf("inspect pair %s: %d x %d, %zu matches%s%s\n", pair.name.c_str(), pair.width,
                 pair.height, pair.matches.size(), pair.has_images ? "" : " (no colour images)",
@@ -164,26 +169,17 @@ void AddInspectCommand(CLI::App& app) {
                    "output folder of `occgt pair` and/or `occgt occupancy`");
   pair->add_option("--image0", pa->image0, "colour image of frame 0 (with --pair-dir)");
   pair->add_option("--image1", pa->image1, "colour image of frame 1 (with --pair-dir)");
-  pair->add_option("--root", pa->root,
-                   "dataset root: compute the pair here, or (with --pair-dir) find its colour");
-  pair->add_option("--format", pa->format, "dataset format: scannet, tartanair, ...");
-  pair->add_option("--scene", pa->scene, "scene name");
-  pair->add_option("--frames", pa->frames, "two frame ids: A,B");
-  pair->add_option("--preset", pa->preset, "label preset (with --root; default: default)");
-  pair->add_option("--resolution", pa->resolution,
-                   "working resolution WxH (with --root; default " +
-                       Num(gt::truth::Resolution().width) + "x" +
-                       Num(gt::truth::Resolution().height) + ")");
-  pair->add_flag("--no-occupancy", pa->no_occupancy, "skip the occupancy fusion (with --root)");
-  pair->add_option("--depth-source", pa->depth_source,
-                   "with --root: the labels' depth, sensor|mesh|fused (docs/GROUND_TRUTH.md); a "
-                   "scene with a mesh also gets depth.png (sensor | rendered | fused)")
-      ->capture_default_str();
-  pair->add_option("--mesh", pa->mesh,
-                   "with --root: the scene's mesh (PLY in the poses' world frame; default the "
-                   "dataset's own)");
-  pair->add_option("--device", pa->device,
-                   "with --root, scannetpp: dslr or iphone (default: from the frame ids)");
+  AddPairDatasetFlags(pair, &pa->data,
+                      "the pair's resolution, depth range, labels and occupancy (when the pair "
+                      "is computed here)",
+                      PairFlags::kOneOfSources);
+  pair->get_option("--root")->description(
+      "dataset root: compute the pair here (with --scene, --frames), or, with --pair-dir, "
+      "where its colour images are (default: the recipe's)");
+  pair->get_option("--out")->description("folder for the PNG files");
+  pair->add_option("--preset", pa->preset,
+                   "label preset (computed pair; default: the recipe's, else default)");
+  pair->add_flag("--no-occupancy", pa->no_occupancy, "skip the occupancy fusion (computed pair)");
   pair->add_option("--max-lines", pa->max_lines, "match lines drawn at most")
       ->capture_default_str();
   pair->add_option("--seed", pa->seed, "seed of the drawn subset of matches")
@@ -193,7 +189,6 @@ void AddInspectCommand(CLI::App& app) {
   pair->add_option("--slice-row", pa->slice_row,
                    "half-grid row of the occupancy slice (-1: middle)")
       ->capture_default_str();
-  pair->add_option("--out", pa->out, "folder for the PNG files")->required();
   pair->callback([pa] { RunInspectPair(*pa); });
 
   auto sa = std::make_shared<InspectSplitArgs>();

@@ -70,15 +70,17 @@ PairSetup StartPairSetup(const PairDatasetArgs& args) {
   return s;
 }
 
-void AddPairDatasetFlags(CLI::App* cmd, PairDatasetArgs* d, const std::string& recipe_gives) {
+void AddPairDatasetFlags(CLI::App* cmd, PairDatasetArgs* d, const std::string& recipe_gives,
+                         PairFlags use) {
   const gt::truth::Resolution res;  // the default of the help text
+  const bool only = use == PairFlags::kOnlySource;
   cmd->add_option("--recipe", d->recipe,
                   "build recipe: " + recipe_gives +
                       " (flags override); also its dataset root and format unless given");
   cmd->add_option("--root", d->root, "dataset root (default: the recipe's)");
   cmd->add_option("--format", d->format, "dataset format (scannet, tartanair, ...)");
-  cmd->add_option("--scene", d->scene, "scene name (see occgt scan)")->required();
-  cmd->add_option("--frames", d->frames, "two frame ids: ID0,ID1")->required();
+  cmd->add_option("--scene", d->scene, "scene name (see occgt scan)")->required(only);
+  cmd->add_option("--frames", d->frames, "two frame ids: ID0,ID1")->required(only);
   cmd->add_option("--out", d->out, "output folder")->required();
   cmd->add_option("--resolution", d->resolution,
                   "working resolution WxH (default " + std::to_string(res.width) + "x" +

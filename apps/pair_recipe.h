@@ -48,9 +48,15 @@ gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name);
 gt::truth::WorkingFrame LoadSetupFrame(const PairSetup& setup, const gt::Scene& scene,
                                        const gt::Frame& frame);
 
+// Whether the pair is the command's only input (`occgt pair`, `occgt occupancy`: --scene,
+// --frames and --out required) or one of several sources (`occgt inspect pair`, which also
+// reads a shard sample or a pair folder: only --out required, the rest checked when used).
+enum class PairFlags { kOnlySource, kOneOfSources };
+
 // Adds the flags of PairDatasetArgs to a subcommand; `recipe_gives` says what the recipe
 // contributes (help text).
-void AddPairDatasetFlags(CLI::App* cmd, PairDatasetArgs* args, const std::string& recipe_gives);
+void AddPairDatasetFlags(CLI::App* cmd, PairDatasetArgs* args, const std::string& recipe_gives,
+                         PairFlags use = PairFlags::kOnlySource);
 
 // Loads the recipe (when given) and resolves root, format, resolution and settings; throws
 // InputError naming the recipe file or the flag.

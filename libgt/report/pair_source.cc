@@ -375,7 +375,8 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
       // The device meta.json records; folders written before it did: from the frame ids.
       const std::string id0 = frame_id("frame0")->get<std::string>();
       if (meta.contains("device")) {
-        if (!meta["device"].is_string()) throw InputError(meta_path + ": device", "expected a string");
+        if (!meta["device"].is_string())
+          throw InputError(meta_path + ": device", "expected a string");
         reader_options.scannetpp_device = gt::datasets::ParseScanNetPPDevice(
             meta["device"].get<std::string>(), meta_path + ": device");
         for (const char* key : {"frame0", "frame1"}) {
@@ -450,14 +451,15 @@ cv::Mat DepthSourcesPicture(const Scene& scene, const std::vector<const Frame*>&
     cv::Mat row = TitleAbove(bgr(render::DepthRamp(m.sensor, top)), id + " sensor");
     row = SideBySide(row, TitleAbove(bgr(render::DepthRamp(m.mesh, top)), id + " rendered"));
     row = SideBySide(row, TitleAbove(bgr(render::DepthRamp(m.fused, top)), id + " fused"));
-    row = SideBySide(row, TitleAbove(bgr(render::AgreementPicture(m.sensor, m.mesh,
-                                                                  scene.min_depth_m,
-                                                                  scene.max_depth_m, depth.fused)),
-                                     id + " sensor vs mesh"));
+    row =
+        SideBySide(row, TitleAbove(bgr(render::AgreementPicture(m.sensor, m.mesh, scene.min_depth_m,
+                                                                scene.max_depth_m, depth.fused)),
+                                   id + " sensor vs mesh"));
     rows.push_back(row);
   }
   char note[160];
-  std::snprintf(note, sizeof(note), "depth 0 to %.2f m (bright = near, black = none); agree within %g m + %g of depth",
+  std::snprintf(note, sizeof(note),
+                "depth 0 to %.2f m (bright = near, black = none); agree within %g m + %g of depth",
                 top, depth.fused.abs_tol_m, depth.fused.rel_tol);
   // The colours of render::AgreementPicture (R G B).
   rows.push_back(LegendStrip({{{40, 200, 60}, "agree"},
@@ -468,39 +470,21 @@ cv::Mat DepthSourcesPicture(const Scene& scene, const std::vector<const Frame*>&
   return StackVertical(rows);
 }
 
-PairData ComputePairFromScene(const std::string& root, DatasetFormat format,
-                              const std::string& scene_name, const std::string& id0,
-                              const std::string& id1, const truth::PairSettings& settings,
-                              const truth::Resolution& resolution,
-                              const SceneDepthOptions& depth) {
+PairData ComputePairFromScene(const Scene& scene, const std::string& id0, const std::string& id1,
+                              const truth::PairTruthOptions& o, const truth::Resolution& resolution,
+                              const render::FrameDepthOptions& depth) {
   std::string error;
   if (!resolution.Check(&error)) throw InputError("--resolution", error);
-  if (!depth.depth.Check(&error)) throw InputError("depth source", error);
-  gt::datasets::ReaderOptions reader_options;
-  if (format == DatasetFormat::kScanNetPP) {
-    if (depth.device) {
-      reader_options.scannetpp_device = *depth.device;
-      for (const std::string& id : {id0, id1}) {
-        gt::datasets::CheckScanNetPPFrameId(*depth.device, id, "--frames", "--device");
-      }
-    } else {
-      reader_options.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(id0);
-    }
-  }
-  gt::Scene scene =
-      gt::datasets::MakeReader(format, reader_options)->ReadScene(root, scene_name);
-  if (!depth.mesh_path.empty()) scene.mesh_path = depth.mesh_path;
-  const gt::truth::PairTruthOptions o =
-      gt::truth::ResolvePairTruthOptions(settings, gt::truth::DepthRangeOf(scene));
+  if (!depth.Check(&error)) throw InputError("depth source", error);
   if (!o.Check(&error)) throw InputError("pair options", error);
   const gt::Frame& f0 = scene.frames[gt::truth::FindFrame(scene, id0)];
   const gt::Frame& f1 = scene.frames[gt::truth::FindFrame(scene, id1)];
-  const gt::truth::PairTruth truth = gt::truth::ComputePairTruth(
-      gt::truth::LoadWorkingFrame(scene, f0, resolution, depth.depth),
-      gt::truth::LoadWorkingFrame(scene, f1, resolution, depth.depth), o);
+  const gt::truth::PairTruth truth =
+      gt::truth::ComputePairTruth(gt::truth::LoadWorkingFrame(scene, f0, resolution, depth),
+                                  gt::truth::LoadWorkingFrame(scene, f1, resolution, depth), o);
   const gt::PairLabels& pl = truth.labels;
   PairData p;
-  p.name = scene_name + " " + id0 + "," + id1;
+  p.name = scene.name + " " + id0 + "," + id1;
   p.width = resolution.width;
   p.height = resolution.height;
   p.labels01 = {pl.l01.width, pl.l01.height, pl.l01.labels};
@@ -519,9 +503,9 @@ PairData ComputePairFromScene(const std::string& root, DatasetFormat format,
     p.occ1 = truth.occupancy->cam1;
     p.has_occupancy = true;
   }
-  p.depth_source = render::DepthSourceModeName(depth.depth.source);
+  p.depth_source = render::DepthSourceModeName(depth.source);
   if (!scene.mesh_path.empty()) {
-    p.depth_sources = DepthSourcesPicture(scene, {&f0, &f1}, resolution, depth.depth);
+    p.depth_sources = DepthSourcesPicture(scene, {&f0, &f1}, resolution, depth);
   }
   return p;
 }

@@ -24,9 +24,9 @@
 #pragma once
 
 #include <map>
-#include <optional>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -78,25 +78,15 @@ PairData LoadPairFromShard(const std::string& tar_path, const std::string& key);
 PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path = "",
                          const std::string& image1_path = "", const std::string& dataset_root = "");
 
-// Where ComputePairFromScene reads the frames' depth.
-struct SceneDepthOptions {
-  render::FrameDepthOptions depth;  // the labels' source (default sensor) and the tolerance
-  std::string mesh_path;            // replaces the scene's mesh ("" = the reader's)
-  // ScanNet++: the device whose frames are read; unset: from the frame ids
-  // (datasets::ScanNetPPDeviceOfFrameId).
-  std::optional<datasets::ScanNetPPDevice> device;
-};
-
-// Reads scene `scene` of `root` with the reader of `format`, and computes frames id0, id1 at
-// `resolution` with the options `settings` resolve to for that scene
-// (truth::ResolvePairTruthOptions with the scene's depth range), their depth from
-// depth.depth. When the scene has a mesh, PairData::depth_sources shows the frames' sensor,
-// rendered and fused depth whatever source the labels used.
-PairData ComputePairFromScene(const std::string& root, DatasetFormat format,
-                              const std::string& scene_name, const std::string& id0,
-                              const std::string& id1, const truth::PairSettings& settings,
-                              const truth::Resolution& resolution,
-                              const SceneDepthOptions& depth = {});
+// Frames id0, id1 of `scene` (read by the caller, its mesh path applied) labelled at
+// `resolution` with the resolved options `o` (truth::ResolvePairTruthOptions), their depth
+// from `depth` (the labels' source and the fusion tolerance). When the scene has a mesh,
+// PairData::depth_sources shows the frames' sensor, rendered and fused depth whatever source
+// the labels used. `occgt inspect pair` reads the scene and resolves the options as
+// `occgt pair` does (apps/pair_recipe.h), so both label a pair alike.
+PairData ComputePairFromScene(const Scene& scene, const std::string& id0, const std::string& id1,
+                              const truth::PairTruthOptions& o, const truth::Resolution& resolution,
+                              const render::FrameDepthOptions& depth);
 
 // One row per frame: [sensor | rendered | fused | agreement] at the working resolution, each
 // panel titled ("<id> sensor", ...), the ramps sharing one scale (0 m white-ish to the largest

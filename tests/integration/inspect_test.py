@@ -310,6 +310,36 @@ def main():
     check(r.returncode == 1 and "edges_m" in r.stderr and len(r.stderr.strip().splitlines()) == 1,
           f"occupancy folder without occupancy.json: exit {r.returncode}, {r.stderr!r}")
 
+    # --- a computed pair takes a recipe's settings as `occgt pair --recipe` does: the recipe's
+    # labels (here the occ2net preset and a 6 m depth limit) give the same label panel as the
+    # `occgt pair` folder of that recipe, and another panel than the defaults.
+    recipe = os.path.join(tmp, "inspect_recipe.yaml")
+    with open(recipe, "w") as f:
+        f.write("name: inspect-recipe\nsplit: inspect-recipe\nresolution: [320, 240]\n"
+                f"dataset: {{format: tartanair, root: {root}, max_depth_m: 6}}\n"
+                "labels: {preset: occ2net}\noccupancy: {enabled: false}\n")
+    frames = ["--scene", "hospital_sample", "--frames", "000000,000020"]
+    recipe_pair = os.path.join(tmp, "recipe_pair")
+    common.occgt("pair", "--recipe", recipe, *frames, "--out", recipe_pair)
+    from_dir = os.path.join(tmp, "recipe_pair_pictures")
+    common.occgt("inspect", "pair", "--pair-dir", recipe_pair, "--root", root, "--out", from_dir)
+    computed = os.path.join(tmp, "recipe_computed")
+    r = common.occgt("inspect", "pair", "--recipe", recipe, *frames, "--out", computed)
+    check(sorted(os.listdir(computed)) == ["labels.png", "matches.png"],
+          f"recipe without occupancy: {sorted(os.listdir(computed))}")
+    recipe_labels = png(os.path.join(computed, "labels.png"))
+    check(recipe_labels.shape[1] < 2 * 640, f"the recipe's 320x240: {recipe_labels.shape}")
+    check(np.array_equal(recipe_labels, png(os.path.join(from_dir, "labels.png"))),
+          "inspect pair --recipe: labels.png differs from `occgt pair --recipe`'s folder")
+    defaults = os.path.join(tmp, "recipe_defaults")
+    common.occgt("inspect", "pair", "--root", root, "--format", "tartanair", "--resolution",
+                 "320x240", "--no-occupancy", *frames, "--out", defaults)
+    check(not np.array_equal(recipe_labels, png(os.path.join(defaults, "labels.png"))),
+          "inspect pair --recipe: the recipe's labels changed nothing")
+    r = common.occgt("inspect", "pair", "--recipe", recipe, "--out", computed, check=False)
+    check(r.returncode == 2 and "--scene/--frames" in r.stderr,
+          f"--recipe without frames: exit {r.returncode}, {r.stderr!r}")
+
     # --- split written by the test: no pairs at all, and a malformed line.
     empty = os.path.join(tmp, "empty_split")
     os.makedirs(empty)
