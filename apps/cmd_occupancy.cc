@@ -155,13 +155,18 @@ void AddOccupancyCommand(CLI::App& app) {
       "last bin edge, planar depth, and the ray range (default " + Num(def.bins.far_m) + ")");
   cmd->add_option("--bins", args->bins,
                   "number of depth bins, 1..64 (default " + Num(def.bins.num_bins) + ")");
-  cmd->add_option("--spacing", args->spacing, "linear|log|inverse (default linear)");
-  cmd->add_option("--traversal", args->traversal, "exact|center (default exact)");
-  cmd->add_option("--scope", args->scope, "pair|window:N|scene:S (default pair)");
-  cmd->add_option("--mode", args->mode, "octomap|two_point (default octomap)");
+  cmd->add_option("--spacing", args->spacing,
+                  "linear|log|inverse (default " + occ::BinSpacingName(def.bins.spacing) + ")");
+  cmd->add_option("--traversal", args->traversal,
+                  "exact|center (default " + occ::TraversalName(def.bins.traversal) + ")");
+  cmd->add_option("--scope", args->scope,
+                  "pair|window:N|scene:S (default " + occ::FusionScopeName(def.fusion) + ")");
+  cmd->add_option("--mode", args->mode,
+                  "octomap|two_point (default " + occ::OccupancyModeName(def.mode) + ")");
   cmd->add_flag("--dense", args->dense, "also write occupancy0/1.npy, uint8 [bins, H/2, W/2]");
   cmd->add_flag("--downsample", args->downsample,
-                "one centroid per voxel before insertion (default off)");
+                std::string("one centroid per voxel before insertion (default ") +
+                    (def.fusion.downsample ? "on" : "off") + ")");
   cmd->add_flag("--no-downsample", args->no_downsample,
                 "insert every point (the default; kept for old command lines)");
   cmd->add_flag("--remove-outliers", args->remove_outliers, "statistical outlier removal");

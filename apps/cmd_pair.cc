@@ -109,8 +109,9 @@ void AddPairCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("pair", "label one pair of frames and write its ground truth");
   PairDatasetArgs& d = args->data;
   AddPairDatasetFlags(cmd, &d, "its resolution, depth range, labels and patches");
-  cmd->add_option("--preset", args->preset,
-                  "label preset: default, occ2net, occ2net-compat, loftr, superglue, megadepth");
+  std::string presets;
+  for (const std::string& name : gt::PresetNames()) presets += (presets.empty() ? "" : ", ") + name;
+  cmd->add_option("--preset", args->preset, "label preset: " + presets);
   const gt::PatchOptions patches;  // the defaults of the help text
   cmd->add_option("--abs-tol-m", args->abs_tol_m, "absolute depth tolerance (m)");
   cmd->add_option("--rel-tol", args->rel_tol, "relative depth tolerance (fraction)");
