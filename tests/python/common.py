@@ -3,14 +3,17 @@ the environment: PYTHONPATH = build/python, the occgt binary, ../shared/data, a 
 folder). Run with Debian's /usr/bin/python3."""
 from __future__ import annotations
 
+import gzip
 import io
 import json
 import os
 import shutil
 import subprocess
 import sys
+import tarfile
 from typing import Any, Dict, List, Mapping, Optional, Sequence
 
+import cv2
 import numpy as np
 
 BINARY: str = os.environ.get("OCCGT_BINARY", "")
@@ -109,3 +112,31 @@ def pair_cli(root: str, fmt: str, scene: str, frames: str, out: str,
              extra: Optional[Sequence[Any]] = None) -> None:
     occgt("pair", "--root", root, "--format", fmt, "--scene", scene, "--frames", frames, "--out",
           out, *(extra or []))
+
+
+def read_shard_samples(folder: str, images: bool = True) -> List[Dict[str, Any]]:
+    """Every sample of the shards listed in folder/index.json, in order, its members decoded:
+    ".gz" inflated, ".npy" loaded, ".json" parsed under "json", images (when `images`)
+    decoded to RGB under their name without extension, other members skipped."""
+    with open(os.path.join(folder, "index.json")) as f:
+        index = json.load(f)
+    samples: List[Dict[str, Any]] = []
+    for shard in index["shardlist"]:
+        current: Dict[str, Any] = {}
+        with tarfile.open(os.path.join(folder, shard["url"])) as tar:
+            for m in tar.getmembers():
+                key, field = m.name.split(".", 1)
+                data = tar.extractfile(m).read()  # type: ignore[union-attr]
+                if field.endswith(".gz"):
+                    field, data = field[:-3], gzip.decompress(data)
+                if current.get("__key__") != key:
+                    current = {"__key__": key}
+                    samples.append(current)
+                if field.endswith(".npy"):
+                    current[field[:-4]] = np.load(io.BytesIO(data))
+                elif field == "json":
+                    current["json"] = json.loads(data)
+                elif images:
+                    bgr = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+                    current[field.split(".")[0]] = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+    return samples

@@ -8,17 +8,13 @@ shards and a removed shard is rewritten with the same bytes."""
 from __future__ import annotations
 
 import glob
-import gzip
-import io
 import json
 import os
 import shutil
 import subprocess
-import tarfile
 import unittest
-from typing import Any, Dict, List
+from typing import Dict
 
-import cv2
 import jsonschema
 import numpy as np
 
@@ -59,34 +55,6 @@ def read_tree(root: str) -> Dict[str, bytes]:
     return out
 
 
-def read_samples(folder: str) -> List[Dict[str, Any]]:
-    """Every sample of the shards of index.json, members decoded (".gz" inflated, ".npy"
-    loaded, ".json" parsed, images decoded to RGB)."""
-    with open(os.path.join(folder, "index.json")) as f:
-        index = json.load(f)
-    samples: List[Dict[str, Any]] = []
-    for shard in index["shardlist"]:
-        current: Dict[str, Any] = {}
-        with tarfile.open(os.path.join(folder, shard["url"])) as tar:
-            for m in tar.getmembers():
-                key, field = m.name.split(".", 1)
-                data = tar.extractfile(m).read()  # type: ignore[union-attr]
-                if field.endswith(".gz"):
-                    field, data = field[:-3], gzip.decompress(data)
-                if current.get("__key__") != key:
-                    current = {"__key__": key}
-                    samples.append(current)
-                if field.endswith(".npy"):
-                    current[field[:-4]] = np.load(io.BytesIO(data))
-                elif field == "json":
-                    current["json"] = json.loads(data)
-                else:
-                    bgr = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
-                    current[field.split(".")[0]] = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
-        assert sum(1 for s in samples) >= shard["nsamples"]
-    return samples
-
-
 class ViewsShards(unittest.TestCase):
     @classmethod
     def setUpClass(cls) -> None:
@@ -109,7 +77,7 @@ class ViewsShards(unittest.TestCase):
             cls.lines = [json.loads(x) for x in f]
 
     def test_one_sample_per_tuple_in_order(self) -> None:
-        samples = read_samples(self.views)
+        samples = common.read_shard_samples(self.views)
         self.assertGreaterEqual(len(self.lines), 5)  # spans several shards of 3
         self.assertEqual(len(samples), len(self.lines))
         self.assertEqual(self.summary["shards"]["samples"], len(self.lines))
@@ -137,7 +105,7 @@ class ViewsShards(unittest.TestCase):
     def test_bits_equal_views_ground_truth(self) -> None:
         ds = occgt.open_dataset(self.data, "generic")
         checked = 0
-        for s in read_samples(self.views):
+        for s in common.read_shard_samples(self.views):
             meta = s["json"]
             scene = ds.scene(meta["scene"])
             n = meta["num_views"]
@@ -178,7 +146,7 @@ class ViewsShards(unittest.TestCase):
             self.assertAlmostEqual(c["occluded_fraction"], occ / max(vis + occ, 1))
             checked += 1
         self.assertGreaterEqual(checked, 5)
-        self.assertGreater(sum(s["json"]["counts"]["occluded"] for s in read_samples(self.views)), 0)
+        self.assertGreater(sum(s["json"]["counts"]["occluded"] for s in common.read_shard_samples(self.views)), 0)
 
     def test_thread_count_and_resume(self) -> None:
         one = read_tree(self.views)
@@ -222,7 +190,7 @@ class ShippedRecipe(unittest.TestCase):
             self.assertEqual(r.returncode, 0, r.stderr)
         ds = occgt.open_dataset(os.path.join(common.SHARED, "tartanair", "hospital_sample"),
                                 "tartanair")
-        samples = read_samples(os.path.join(out, "views"))
+        samples = common.read_shard_samples(os.path.join(out, "views"))
         with open(os.path.join(out, "tuples.jsonl")) as f:
             self.assertEqual(len(samples), sum(1 for _ in f))
         with open(os.path.join(common.SOURCE, "schemas", "views_sample.schema.json")) as f:

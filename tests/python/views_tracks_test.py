@@ -13,17 +13,14 @@ shards.target_mb):
   with one line naming the key."""
 from __future__ import annotations
 
-import gzip
 import inspect
-import io
 import json
 import math
 import os
 import shutil
 import subprocess
-import tarfile
 import unittest
-from typing import Any, Dict, List
+from typing import Any, Dict
 
 import numpy as np
 
@@ -53,28 +50,6 @@ sample: {image: png, depth: true, labels: true, occupancy: false}
 
 def recipe_text(tracks: str = "", target: str = "") -> str:
     return RECIPE.replace("%TRACKS%", tracks).replace("%TARGET%", target)
-
-
-def read_samples(folder: str) -> List[Dict[str, Any]]:
-    with open(os.path.join(folder, "index.json")) as f:
-        index = json.load(f)
-    samples: List[Dict[str, Any]] = []
-    for shard in index["shardlist"]:
-        with tarfile.open(os.path.join(folder, shard["url"])) as tar:
-            current: Dict[str, Any] = {}
-            for m in tar.getmembers():
-                key, field = m.name.split(".", 1)
-                data = tar.extractfile(m).read()  # type: ignore[union-attr]
-                if field.endswith(".gz"):
-                    field, data = field[:-3], gzip.decompress(data)
-                if current.get("__key__") != key:
-                    current = {"__key__": key}
-                    samples.append(current)
-                if field.endswith(".npy"):
-                    current[field[:-4]] = np.load(io.BytesIO(data))
-                elif field == "json":
-                    current["json"] = json.loads(data)
-    return samples
 
 
 def estimated_sample_bytes(width: int, height: int, max_views: int, tracks: int) -> int:
@@ -111,7 +86,7 @@ class ViewsTracks(unittest.TestCase):
 
     def check_tracks(self, out: str, num_tracks: int, query_view: int) -> int:
         ds = occgt.open_dataset(self.data, "generic")
-        samples = read_samples(os.path.join(out, "views"))
+        samples = common.read_shard_samples(os.path.join(out, "views"), images=False)
         self.assertGreaterEqual(len(samples), 4)
         for s in samples:
             meta = s["json"]
@@ -148,7 +123,7 @@ class ViewsTracks(unittest.TestCase):
         explicit = self.tuples("explicit", self.write("explicit.yaml", recipe_text(
             tracks=", num_tracks: %d, query_view: %d" % (params["num_tracks"].default,
                                                         params["query_view"].default))))
-        digests = [{s["json"]["options_digest"] for s in read_samples(os.path.join(o, "views"))}
+        digests = [{s["json"]["options_digest"] for s in common.read_shard_samples(os.path.join(o, "views"), images=False)}
                    for o in (summary["out"], explicit["out"])]
         self.assertEqual(len(digests[0]), 1)
         self.assertEqual(digests[0], digests[1])
@@ -164,7 +139,7 @@ class ViewsTracks(unittest.TestCase):
         target = per * estimated_sample_bytes(96, 72, 5, 512) / 1e6 + 1e-7
         mid = self.tuples("mid", self.write("mid.yaml", recipe_text(target=f", target_mb: {target!r}")))
         self.assertEqual(mid["shards"]["shards"], math.ceil(n / per))
-        samples = read_samples(os.path.join(mid["out"], "views"))
+        samples = common.read_shard_samples(os.path.join(mid["out"], "views"), images=False)
         self.assertEqual(len(samples), n)
         with open(os.path.join(mid["out"], "views", "index.json")) as f:
             sizes = [s["nsamples"] for s in json.load(f)["shardlist"]]
