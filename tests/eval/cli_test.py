@@ -7,7 +7,6 @@ the same at 1 and 2 threads and valid against schemas/eval.schema.json; each bad
 prediction file fails with one clear line and writes nothing; missing pairs are failures."""
 import json
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -24,16 +23,6 @@ def run_eval(split, out, *args, check=True):
     return common.occgt("eval", split, "--out", out, *args, check=check)
 
 
-def load(path):
-    with open(path) as f:
-        return json.load(f)
-
-
-def check_schema(doc):
-    import jsonschema
-    with open(os.path.join(common.SOURCE, "schemas", "eval.schema.json")) as f:
-        schema = json.load(f)
-    jsonschema.validate(doc, schema, cls=jsonschema.Draft202012Validator)
 
 
 def main():
@@ -64,8 +53,8 @@ def main():
     gt_path = save("gt", truth)
     out = os.path.join(work, "gt.json")
     r = run_eval(split, out, "--predictions", gt_path, "--ransac-px", "0.5,1.0")
-    doc = load(out)
-    check_schema(doc)
+    doc = predictions.load_json(out)
+    predictions.check_eval_schema(doc, common.SOURCE)
     assert "AUC" in r.stdout and "per-type" in r.stdout, r.stdout
     assert [e["ransac_px"] for e in doc["options"]["estimators"]] == [0.5, 1.0]
     overall = doc["sets"][0]["overall"]
@@ -112,7 +101,7 @@ def main():
     moved_path = save("moved", moved)
     out = os.path.join(work, "moved.json")
     run_eval(split, out, "--predictions", moved_path)
-    got_types = load(out)["sets"][0]["overall"]["types"]
+    got_types = predictions.load_json(out)["sets"][0]["overall"]["types"]
     vv = got_types["vv"]
     expected = 100.0 * expect[0][0] / expect[0][1]
     for ty, name in ((0, "vv"), (1, "vo")):
@@ -121,7 +110,7 @@ def main():
         assert abs(x["predicted"] - expect[ty][1]) <= 0.005 * expect[ty][1], (name, x, expect)
         assert abs(x["precision_percent"] - 100.0 * expect[ty][0] / expect[ty][1]) < 0.5, (x, expect)
     run_eval(split, out, "--predictions", moved_path, "--px", "2")
-    vv2 = load(out)["sets"][0]["overall"]["types"]["vv"]
+    vv2 = predictions.load_json(out)["sets"][0]["overall"]["types"]["vv"]
     assert vv2["correct"] <= 0.005 * vv2["predicted"], vv2  # 3 px > 2 px: all wrong
 
     # 3. A known rotation: image 1's points moved by the homography of a camera rotation of
@@ -142,7 +131,7 @@ def main():
     out = os.path.join(work, "rotated.json")
     r = run_eval(split, out, "--predictions", rot_path)
     assert "have no prediction" in r.stderr, r.stderr  # every other pair is missing
-    doc = load(out)
+    doc = predictions.load_json(out)
     pair = next(p for p in doc["pairs"] if p["key"] == key)
     pose = pair["sets"][0]["pose"][0]
     assert abs(pose["rotation_deg"] - 3.0) < 0.05 and pose["translation_deg"] < 0.05, pose
@@ -155,8 +144,8 @@ def main():
     sc_path = save("scaled", scaled, {"resolution": np.array([2 * W, 2 * H], np.int32)})
     out = os.path.join(work, "scaled.json")
     run_eval(split, out, "--predictions", sc_path)
-    a = load(os.path.join(work, "gt.json"))["sets"][0]["overall"]
-    b = load(out)["sets"][0]["overall"]
+    a = predictions.load_json(os.path.join(work, "gt.json"))["sets"][0]["overall"]
+    b = predictions.load_json(out)["sets"][0]["overall"]
     assert b["types"]["vv"]["precision_percent"] == 100.0
     assert np.allclose(a["pose"][0]["auc_percent"], b["pose"][0]["auc_percent"], atol=0.5)
 
@@ -175,7 +164,7 @@ def main():
             outs.append(f.read())
     assert outs[0] == outs[1], "eval.json differs between --threads 1 and 2"
     doc = json.loads(outs[0])
-    check_schema(doc)
+    predictions.check_eval_schema(doc, common.SOURCE)
     assert [s["name"] for s in doc["sets"]] == ["gt", "gt_folder", "moved"]
     assert doc["sets"][0]["overall"] == doc["sets"][1]["overall"]
 
@@ -195,7 +184,7 @@ def main():
     by_name = save("gt_loftr", {loftr_name[k]: v for k, v in truth.items()})
     out = os.path.join(work, "gt_loftr.json")
     run_eval(split, out, "--predictions", "gt=" + by_name, "--ransac-px", "0.5,1.0")
-    a, b = load(os.path.join(work, "gt.json")), load(out)
+    a, b = predictions.load_json(os.path.join(work, "gt.json")), predictions.load_json(out)
     assert a["sets"][0]["overall"] == b["sets"][0]["overall"]
     assert [p["sets"][0]["pose"][0] for p in a["pairs"]] == \
         [p["sets"][0]["pose"][0] for p in b["pairs"]]

@@ -1,4 +1,5 @@
-"""Predictions with known answers made from a built split's shards (for the eval tests)."""
+"""Predictions with known answers made from a built split's shards, and the eval tests' JSON
+helpers."""
 import gzip
 import io
 import json
@@ -53,3 +54,16 @@ def truth_matches(sample: Dict[str, object]) -> Tuple[np.ndarray, np.ndarray, np
     k0 = np.where(ov, xy, anchor(matches[:, 0]))
     k1 = np.where(ov, anchor(matches[:, 1]), xy)
     return k0.astype(np.float32), k1.astype(np.float32), typ
+
+
+def load_json(path: str) -> object:
+    with open(path) as f:
+        return json.load(f)
+
+
+def check_eval_schema(doc: object, source_dir: str) -> None:
+    """Validates an eval.json document against schemas/eval.schema.json."""
+    import jsonschema
+    with open(os.path.join(source_dir, "schemas", "eval.schema.json")) as f:
+        schema = json.load(f)
+    jsonschema.validate(doc, schema, cls=jsonschema.Draft202012Validator)

@@ -21,16 +21,6 @@ import reference  # noqa: E402
 SWEEP = [0.5, 1.5, 2.0, 3.0]
 
 
-def load(path):
-    with open(path) as f:
-        return json.load(f)
-
-
-def check_schema(doc):
-    import jsonschema
-    with open(os.path.join(common.SOURCE, "schemas", "eval.schema.json")) as f:
-        schema = json.load(f)
-    jsonschema.validate(doc, schema, cls=jsonschema.Draft202012Validator)
 
 
 def main():
@@ -90,8 +80,8 @@ def main():
     with open(os.path.join(work, "default.json"), "rb") as a, \
             open(os.path.join(work, "loftr.json"), "rb") as b:
         assert a.read() == b.read(), "--protocol loftr differs from the defaults"
-    doc = load(os.path.join(work, "loftr.json"))
-    check_schema(doc)
+    doc = predictions.load_json(os.path.join(work, "loftr.json"))
+    predictions.check_eval_schema(doc, common.SOURCE)
     keys = [p["key"] for p in doc["pairs"]]
     o = doc["options"]
     assert o["protocol"]["name"] == "loftr" and o["selection"] == "every", o["protocol"]
@@ -104,8 +94,8 @@ def main():
     out = os.path.join(work, "all.json")
     run(out, "--estimator", "ransac,lmeds,usac_default,usac_accurate,usac_magsac,usac_prosac",
         "--ransac-px", "1", "--focal-mean", "all", "--ransac-iters", "2000")
-    doc = load(out)
-    check_schema(doc)
+    doc = predictions.load_json(out)
+    predictions.check_eval_schema(doc, common.SOURCE)
     est = doc["options"]["estimators"]
     assert [e["estimator"] for e in est] == ["ransac", "lmeds", "usac_default", "usac_accurate",
                                              "usac_magsac", "usac_prosac"]
@@ -119,8 +109,8 @@ def main():
     #    glue-factory's rule, said to be optimistic.
     out = os.path.join(work, "sweep.json")
     r = run(out, "--ransac-px", "sweep")
-    doc = load(out)
-    check_schema(doc)
+    doc = predictions.load_json(out)
+    predictions.check_eval_schema(doc, common.SOURCE)
     assert [e["ransac_px"] for e in doc["options"]["estimators"]] == SWEEP
     sel = doc["sets"][0]["selection"]
     pose = doc["sets"][0]["overall"]["pose"]
@@ -143,7 +133,7 @@ def main():
     assert "protocol: gluefactory" in r.stdout and "optimistic" in r.stdout, r.stdout
     assert "keypoints at: keypoints in pixels of the resized images" in r.stdout, r.stdout
     doc = json.loads(outs[0])
-    check_schema(doc)
+    predictions.check_eval_schema(doc, common.SOURCE)
     est = doc["options"]["estimators"]
     assert [(e["estimator"], e["ransac_px"], e["confidence"], e["max_iters"], e["focal_mean"])
             for e in est] == [("usac_default", px, 0.9999, 100000, "all") for px in SWEEP] + \
@@ -162,13 +152,13 @@ def main():
     # 5. superglue and the EfficientLoFTR protocols.
     out = os.path.join(work, "sg.json")
     run(out, "--protocol", "superglue")
-    doc = load(out)
+    doc = predictions.load_json(out)
     assert [e["name"] for e in doc["options"]["estimators"]] == ["opencv-ransac 1 px conf 0.99999"]
     same(ref_errors(doc["options"]["estimators"][0]), got_errors(doc, 0), "superglue")
     out = os.path.join(work, "lo.json")
     run(out, "--protocol", "eloftr-lo")
-    doc = load(out)
-    check_schema(doc)
+    doc = predictions.load_json(out)
+    predictions.check_eval_schema(doc, common.SOURCE)
     assert doc["options"]["failure_error_deg"] == 90
     assert [(e["estimator"], e["ransac_px"]) for e in doc["options"]["estimators"]] == \
         [("usac_default", 2.0)]
