@@ -21,7 +21,6 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "..", "integration"))
 import common  # noqa: E402
-from cli_test import check_schema, load  # noqa: E402
 import inspect_test  # noqa: E402  (chromium_check, png, not_blank)
 import predictions  # noqa: E402
 
@@ -90,8 +89,8 @@ def main():
                  "--predictions", os.path.join(preds, "noisy.npz"), "--min-confidence", "0.3")
     common.occgt("eval", split, "--out", b_json,
                  "--predictions", "gt=" + os.path.join(preds, "shifted.npz"))
-    a, b = load(a_json), load(b_json)
-    check_schema(a)
+    a, b = predictions.load_json(a_json), predictions.load_json(b_json)
+    predictions.check_eval_schema(a, common.SOURCE)
     assert a["options"]["min_confidence"] == 0.3 and b["options"]["min_confidence"] == 0
     out = os.path.join(work, "report")
     r = common.occgt("inspect", "split", split, "--eval", a_json, "--eval", b_json, "--out", out)
@@ -176,7 +175,7 @@ def main():
     rel = os.path.join(work, "rel")
     os.makedirs(rel, exist_ok=True)
     shutil.copy(os.path.join(preds, "gt.npz"), os.path.join(rel, "mine.npz"))
-    doc = load(a_json)
+    doc = predictions.load_json(a_json)
     doc["sets"][0]["path"] = "mine.npz"
     with open(os.path.join(rel, "e.json"), "w") as f:
         json.dump(doc, f)
@@ -192,8 +191,8 @@ def main():
     sw_json = os.path.join(work, "sweep.json")
     common.occgt("eval", split, "--out", sw_json, "--predictions", os.path.join(preds, "noisy.npz"),
                  "--estimator", "ransac,usac_magsac", "--ransac-px", "sweep")
-    sw = load(sw_json)
-    check_schema(sw)
+    sw = predictions.load_json(sw_json)
+    predictions.check_eval_schema(sw, common.SOURCE)
     out5 = os.path.join(work, "report5")
     r = common.occgt("inspect", "split", split, "--eval", sw_json, "--out", out5)
     dis = os.path.join(out5, "eval_estimator_disagreement.png")
@@ -230,15 +229,15 @@ def main():
         assert len(lines) == 1 and path in lines[0] and expect in lines[0], (name, r.stderr)
         assert not os.path.exists(os.path.join(dest, "report.html")), name
 
-    other = load(a_json)
+    other = predictions.load_json(a_json)
     other["pairs"] = other["pairs"][1:]
     bad("fewer.json", other, "pairs")
     bad("text.json", "{not json", "not valid JSON")
-    bad("summary.json", load(os.path.join(split, "summary.json")), "kind/version")
-    wrong = load(a_json)
+    bad("summary.json", predictions.load_json(os.path.join(split, "summary.json")), "kind/version")
+    wrong = predictions.load_json(a_json)
     del wrong["sets"][0]["overall"]
     bad("noset.json", wrong, "sets")
-    c = load(b_json)
+    c = predictions.load_json(b_json)
     c["options"]["auc_thresholds_deg"] = [1, 2, 3]
     bad("auc.json", c, "differ", extra=("--eval", a_json))
     r = common.occgt("inspect", "split", split, "--eval", os.path.join(work, "absent.json"),
