@@ -283,10 +283,12 @@ ViewsTruth ComputeViewsTruth(const std::vector<WorkingFrame>& views,
   tbb::parallel_for(0, n, [&](int j) {
     if (j == q) {  // the query view itself, as the diagonal: each valid query at its own pixel
       const float nan = std::numeric_limits<float>::quiet_NaN();
+      const uint8_t* valid_q = out.valid.data() + hw * q;
       for (size_t k = 0; k < nq; ++k) {
         const int u = out.queries[2 * k], v = out.queries[2 * k + 1];
-        const float d = fq.depth->at(u, v);
-        const bool ok = IsValidDepth(d, lo.min_depth_m, lo.max_depth_m);
+        const size_t p = static_cast<size_t>(v) * out.width + u;
+        const bool ok = valid_q[p] == 1;
+        const float d = fq.depth->values_m[p];
         out.track_xy[2 * (nq * j + k)] = ok ? static_cast<float>(u) : nan;
         out.track_xy[2 * (nq * j + k) + 1] = ok ? static_cast<float>(v) : nan;
         out.track_depth[nq * j + k] = ok ? d : nan;
