@@ -81,15 +81,10 @@ void RunInspectPair(const InspectPairArgs& a) {
       st.labels.preset = *a.preset;
     }
     if (a.no_occupancy) st.occupancy.enabled = false;
+    ResolveSettings(setup, d, PairOutputs::kAll, "pair options");
     const gt::Scene scene = ReadSetupScene(setup, d.scene);
     const gt::truth::PairTruthOptions o =
-        gt::truth::ResolvePairTruthOptions(st, DepthRangeFor(setup, scene));
-    std::string error;
-    if (!o.Check(&error)) {
-      ThrowOptionsError(error, "pair options",
-                        {{"min_depth_m", "--min-depth-m", d.min_depth_m.has_value()},
-                         {"max_depth_m", "--max-depth-m", d.max_depth_m.has_value()}});
-    }
+        ResolveForScene(setup, d, scene, PairOutputs::kAll, "pair options");
     const auto [id0, id1] = gt::truth::ParseFramePair(d.frames);
     pair = gt::report::ComputePairFromScene(scene, id0, id1, o, setup.resolution, setup.depth);
   }

@@ -58,10 +58,7 @@ void RunOccupancy(const OccupancyArgs& args) {
     os.window = scope.window;
     os.scene_stride = scope.scene_stride;
   }
-  gt::truth::PairTruthOptions o = gt::truth::ResolvePairTruthOptions(setup.settings);
-  o.labels_and_matches = false;
-  std::string error;
-  const std::initializer_list<FieldFlag> occupancy_flags = {
+  const std::vector<FieldFlag> occupancy_flags = {
       {"voxel_size_m", "--voxel-m", args.voxel_m.has_value()},
       {"max_range_m", "--max-range-m", args.max_range_m.has_value()},
       {"window", "--scope", args.scope.has_value()},
@@ -69,7 +66,9 @@ void RunOccupancy(const OccupancyArgs& args) {
       {"num_bins", "--bins", args.bins.has_value()},
       {"near_m", "--near-m", args.near_m.has_value()},
       {"far_m", "--far-m", args.far_m.has_value() || args.near_m.has_value()}};
-  if (!o.Check(&error)) ThrowOptionsError(error, "occupancy options", occupancy_flags);
+  gt::truth::PairTruthOptions o =
+      ResolveSettings(setup, args.data, PairOutputs::kOccupancyOnly, "occupancy options",
+                      occupancy_flags);
   if (o.mode == occ::OccupancyMode::kTwoPoint && !args.save_octree.empty())
     throw gt::InputError("--save-octree", "needs --mode octomap");
   const PairDatasetArgs& d = args.data;
@@ -83,13 +82,8 @@ void RunOccupancy(const OccupancyArgs& args) {
   const gt::Scene scene = ReadSetupScene(setup, d.scene);
   source.scene = scene.name;
   // The scene's depth range: the validity range of the fusion.
-  o = gt::truth::ResolvePairTruthOptions(setup.settings, DepthRangeFor(setup, scene));
-  o.labels_and_matches = false;
-  if (!o.Check(&error)) {
-    ThrowOptionsError(error, "occupancy options",
-                      {{"min_depth_m", "--min-depth-m", d.min_depth_m.has_value()},
-                       {"max_depth_m", "--max-depth-m", d.max_depth_m.has_value()}});
-  }
+  o = ResolveForScene(setup, d, scene, PairOutputs::kOccupancyOnly, "occupancy options",
+                      occupancy_flags);
   const occ::FusionOptions& fo = o.fusion;
   const size_t i0 = gt::truth::FindFrame(scene, source.id0);
   const size_t i1 = gt::truth::FindFrame(scene, source.id1);

@@ -52,10 +52,11 @@ void RunPair(const PairArgs& args) {
   if (args.anchor) st.patches.anchor = gt::ParseAnchor(*args.anchor);
   if (args.mutual) st.patches.mutual = true;
   if (args.no_mutual) st.patches.mutual = false;
-  std::string error;
-  if (!st.patches.Check(&error)) {
-    ThrowOptionsError(error, "patch options", {{"stride", "--stride", args.stride.has_value()}});
-  }
+  const std::vector<FieldFlag> pair_flags = {
+      {"stride", "--stride", args.stride.has_value()},
+      {"abs_tol_m", "--abs-tol-m", args.abs_tol_m.has_value()},
+      {"rel_tol", "--rel-tol", args.rel_tol.has_value()}};
+  ResolveSettings(setup, d, PairOutputs::kAll, "pair options", pair_flags);
   if (args.score_stride < 1) throw gt::InputError("--score-stride", "expected >= 1");
   gt::truth::PairSource source{
       setup.format, d.scene, "", "", 0, 0, ls.preset, setup.resolution, "", setup.depth.source};
@@ -67,14 +68,7 @@ void RunPair(const PairArgs& args) {
   const gt::Scene scene = ReadSetupScene(setup, d.scene);
   source.scene = scene.name;
   const gt::truth::PairTruthOptions o =
-      gt::truth::ResolvePairTruthOptions(st, DepthRangeFor(setup, scene));
-  if (!o.Check(&error)) {
-    ThrowOptionsError(error, "pair options",
-                      {{"min_depth_m", "--min-depth-m", d.min_depth_m.has_value()},
-                       {"max_depth_m", "--max-depth-m", d.max_depth_m.has_value()},
-                       {"abs_tol_m", "--abs-tol-m", args.abs_tol_m.has_value()},
-                       {"rel_tol", "--rel-tol", args.rel_tol.has_value()}});
-  }
+      ResolveForScene(setup, d, scene, PairOutputs::kAll, "pair options", pair_flags);
   const gt::Frame& f0 = scene.frames[gt::truth::FindFrame(scene, source.id0)];
   const gt::Frame& f1 = scene.frames[gt::truth::FindFrame(scene, source.id1)];
   source.number0 = f0.number;

@@ -117,4 +117,35 @@ gt::truth::DatasetDepthRange DepthRangeFor(const PairSetup& setup, const gt::Sce
                       : gt::truth::DepthRangeOf(scene);
 }
 
+namespace {
+
+gt::truth::PairTruthOptions Checked(gt::truth::PairTruthOptions o, const PairDatasetArgs& args,
+                                    PairOutputs outputs, const std::string& what,
+                                    std::vector<FieldFlag> flags) {
+  o.labels_and_matches = outputs == PairOutputs::kAll;
+  std::string error;
+  if (!o.Check(&error)) {
+    flags.push_back({"min_depth_m", "--min-depth-m", args.min_depth_m.has_value()});
+    flags.push_back({"max_depth_m", "--max-depth-m", args.max_depth_m.has_value()});
+    ThrowOptionsError(error, what, flags);
+  }
+  return o;
+}
+
+}  // namespace
+
+gt::truth::PairTruthOptions ResolveSettings(const PairSetup& setup, const PairDatasetArgs& args,
+                                            PairOutputs outputs, const std::string& what,
+                                            const std::vector<FieldFlag>& flags) {
+  return Checked(gt::truth::ResolvePairTruthOptions(setup.settings), args, outputs, what, flags);
+}
+
+gt::truth::PairTruthOptions ResolveForScene(const PairSetup& setup, const PairDatasetArgs& args,
+                                            const gt::Scene& scene, PairOutputs outputs,
+                                            const std::string& what,
+                                            const std::vector<FieldFlag>& flags) {
+  return Checked(gt::truth::ResolvePairTruthOptions(setup.settings, DepthRangeFor(setup, scene)),
+                 args, outputs, what, flags);
+}
+
 }  // namespace occgt

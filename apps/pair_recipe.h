@@ -9,11 +9,14 @@
 #include <CLI/CLI.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "libgt/core/frame.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/pipeline/recipe.h"
+#include "apps/usage.h"
 #include "libgt/truth/pair_settings.h"
+#include "libgt/truth/pair_truth.h"
 #include "libgt/truth/working_frame.h"
 
 namespace occgt {
@@ -64,5 +67,24 @@ PairSetup StartPairSetup(const PairDatasetArgs& args);
 
 // The depth range of `scene` under the setup (the recipe's dataset.min/max_depth_m apply).
 gt::truth::DatasetDepthRange DepthRangeFor(const PairSetup& setup, const gt::Scene& scene);
+
+// What a command computes of a pair: labels, metrics and matches (and the occupancy when the
+// settings enable it), or the occupancy volumes only (`occgt occupancy`, whose patch settings
+// are not used and so not checked).
+enum class PairOutputs { kAll, kOccupancyOnly };
+
+// The settings of the setup resolved (truth::ResolvePairTruthOptions) and checked: a field
+// set by --min-depth-m, --max-depth-m or one of the command's `flags` is a usage error
+// naming that flag, any other an error under `what` (ThrowOptionsError).
+// ResolveSettings: without a scene (the preset's depth range), so that bad flags fail before
+// any file is read; ResolveForScene: with the depth range of `scene` (DepthRangeFor), the
+// options the command runs with.
+gt::truth::PairTruthOptions ResolveSettings(const PairSetup& setup, const PairDatasetArgs& args,
+                                            PairOutputs outputs, const std::string& what,
+                                            const std::vector<FieldFlag>& flags = {});
+gt::truth::PairTruthOptions ResolveForScene(const PairSetup& setup, const PairDatasetArgs& args,
+                                            const gt::Scene& scene, PairOutputs outputs,
+                                            const std::string& what,
+                                            const std::vector<FieldFlag>& flags = {});
 
 }  // namespace occgt

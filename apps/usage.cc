@@ -61,7 +61,7 @@ std::string Num(double value) {
 }
 
 void ThrowOptionsError(const std::string& error, const std::string& what,
-                       std::initializer_list<FieldFlag> fields) {
+                       const std::vector<FieldFlag>& fields) {
   // PairTruthOptions::Check names the section first ("labels: max_depth_m ...").
   std::string body = error;
   for (const std::string section : {"labels: ", "patches: ", "occupancy: "}) {
@@ -77,7 +77,7 @@ void ThrowOptionsError(const std::string& error, const std::string& what,
   throw gt::InputError(what, error);
 }
 
-void RethrowNamingFlag(const gt::InputError& error, std::initializer_list<FieldFlag> fields) {
+void RethrowNamingFlag(const gt::InputError& error, const std::vector<FieldFlag>& fields) {
   for (const FieldFlag& f : fields) {
     if (f.given && error.where() == f.field) {
       const std::string prefix = error.where() + ": ";

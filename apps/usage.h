@@ -5,7 +5,6 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-#include <initializer_list>
 #include <optional>
 #include <string>
 #include <vector>
@@ -41,13 +40,13 @@ struct FieldFlag {
 std::string Num(double value);
 
 [[noreturn]] void ThrowOptionsError(const std::string& error, const std::string& what,
-                                    std::initializer_list<FieldFlag> fields);
+                                    const std::vector<FieldFlag>& fields);
 
 // An InputError of the work whose where() is an option's name (e.g. "voxel_m" of
 // occupancy::CheckKeyRange, which needs the frames to tell): rethrown under the flag of the
 // matching `fields` entry (its `field` is that name) when the flag was given (a usage
 // error, exit 2), else as it is.
 [[noreturn]] void RethrowNamingFlag(const gt::InputError& error,
-                                    std::initializer_list<FieldFlag> fields);
+                                    const std::vector<FieldFlag>& fields);
 
 }  // namespace occgt
