@@ -66,9 +66,8 @@ void RunOccupancy(const OccupancyArgs& args) {
       {"num_bins", "--bins", args.bins.has_value()},
       {"near_m", "--near-m", args.near_m.has_value()},
       {"far_m", "--far-m", args.far_m.has_value() || args.near_m.has_value()}};
-  gt::truth::PairTruthOptions o =
-      ResolveSettings(setup, args.data, PairOutputs::kOccupancyOnly, "occupancy options",
-                      occupancy_flags);
+  gt::truth::PairTruthOptions o = ResolveSettings(setup, args.data, PairOutputs::kOccupancyOnly,
+                                                  "occupancy options", occupancy_flags);
   if (o.mode == occ::OccupancyMode::kTwoPoint && !args.save_octree.empty())
     throw gt::InputError("--save-octree", "needs --mode octomap");
   const PairDatasetArgs& d = args.data;

@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "apps/usage.h"
 #include "libgt/core/frame.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/pipeline/recipe.h"
-#include "apps/usage.h"
 #include "libgt/truth/pair_settings.h"
 #include "libgt/truth/pair_truth.h"
 #include "libgt/truth/working_frame.h"
