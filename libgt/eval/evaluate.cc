@@ -560,6 +560,33 @@ double Median(std::vector<double> v) {
   return v.size() % 2 ? v[m] : (v[m - 1] + v[m]) / 2.0;
 }
 
+// The pose errors of estimator e over `pairs` (a non-finite error is a failure) and their
+// summary as every table of eval.json gives it: the mean with each failure counted as
+// failure_error_deg, the median (null when undefined) and the number of failures.
+struct PoseErrors {
+  std::vector<double> errors;
+  json mean, median;
+  int64_t failures = 0;
+};
+PoseErrors SummarisePoseErrors(const EvalResult& r, size_t set, size_t e,
+                               const std::vector<size_t>& pairs) {
+  PoseErrors out;
+  double sum = 0;
+  for (const size_t i : pairs) {
+    const double err = r.pairs[i].sets[set].pose[e].max_deg;
+    out.errors.push_back(err);
+    if (std::isfinite(err)) {
+      sum += err;
+    } else {
+      ++out.failures;
+      sum += r.options.failure_error_deg;
+    }
+  }
+  out.mean = pairs.empty() ? json(nullptr) : json(sum / pairs.size());
+  out.median = Number(Median(out.errors));
+  return out;
+}
+
 const char* const kTypeNames[] = {"vv", "vo", "ov"};
 const char* const kLabelNames[] = {"NO_DEPTH", "OUT_OF_VIEW",  "VISIBLE",
                                    "OCCLUDED", "INCONSISTENT", "UNKNOWN"};
@@ -571,26 +598,14 @@ json Stats(const EvalResult& r, size_t set, const std::vector<size_t>& pairs) {
   out["pairs"] = pairs.size();
   json pose = json::array();
   for (size_t e = 0; e < o.estimators.size(); ++e) {
-    std::vector<double> errors;
-    double sum = 0;
-    int64_t failures = 0;
-    for (const size_t i : pairs) {
-      const double err = r.pairs[i].sets[set].pose[e].max_deg;
-      errors.push_back(err);
-      if (std::isfinite(err)) {
-        sum += err;
-      } else {
-        ++failures;
-        sum += o.failure_error_deg;
-      }
-    }
+    const PoseErrors pe = SummarisePoseErrors(r, set, e, pairs);
     json p;
     json auc = json::array();
-    for (const double a : PoseAuc(errors, o.auc_thresholds_deg)) auc.push_back(a * 100.0);
+    for (const double a : PoseAuc(pe.errors, o.auc_thresholds_deg)) auc.push_back(a * 100.0);
     p["auc_percent"] = auc;
-    p["failures"] = failures;
-    p["mean_error_deg"] = pairs.empty() ? json(nullptr) : json(sum / pairs.size());
-    p["median_error_deg"] = Number(Median(errors));
+    p["failures"] = pe.failures;
+    p["mean_error_deg"] = pe.mean;
+    p["median_error_deg"] = pe.median;
     pose.push_back(p);
   }
   out["pose"] = pose;
@@ -682,18 +697,10 @@ json Cumulative(const EvalResult& r, size_t set, size_t def) {
     pt["pairs"] = in.size();
     json mean = json::array(), median = json::array(), failures = json::array();
     for (size_t e = 0; e < o.estimators.size(); ++e) {
-      std::vector<double> errs;
-      double sum = 0;
-      int64_t fail = 0;
-      for (const size_t i : in) {
-        const double err = r.pairs[i].sets[set].pose[e].max_deg;
-        errs.push_back(err);
-        sum += std::isfinite(err) ? err : o.failure_error_deg;
-        fail += std::isfinite(err) ? 0 : 1;
-      }
-      mean.push_back(in.empty() ? json(nullptr) : json(sum / in.size()));
-      median.push_back(Number(Median(errs)));
-      failures.push_back(fail);
+      const PoseErrors pe = SummarisePoseErrors(r, set, e, in);
+      mean.push_back(pe.mean);
+      median.push_back(pe.median);
+      failures.push_back(pe.failures);
     }
     pt["mean_error_deg"] = mean;
     pt["median_error_deg"] = median;
