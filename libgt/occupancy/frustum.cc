@@ -89,6 +89,20 @@ int BinOfDepth(const std::vector<double>& edges_m, double z_m) {
 
 namespace {
 
+// A volume on the half grid of `camera_full_res` with the bins of `options` (checked by
+// BinEdges), every word 0 (nothing known).
+FrustumVolume EmptyVolume(const Camera& camera_full_res, const BinOptions& options) {
+  const Camera cam = camera_full_res.HalfGrid();
+  FrustumVolume vol;
+  vol.width = cam.width;
+  vol.height = cam.height;
+  vol.edges_m = BinEdges(options);
+  const size_t n = static_cast<size_t>(vol.width) * vol.height;
+  vol.occ.assign(n, 0);
+  vol.known.assign(n, 0);
+  return vol;
+}
+
 // Number of set bits in words[0, n). Without -mpopcnt, __builtin_popcountll is a call into
 // libgcc per word; the POPCNT instruction is used where the CPU has it (same result).
 __attribute__((target("popcnt"))) int64_t SetBitsPopcnt(const uint64_t* words, size_t n) {
@@ -557,16 +571,9 @@ void SplatExact(const MapView& view, const Camera& cam, const Eigen::Matrix3d& R
 
 FrustumVolume ProjectToFrustum(const OccupancyMap& map, const Camera& camera_full_res,
                                const Rigid3d& world_from_cam, const BinOptions& options) {
-  std::string why;
-  GT_ASSERT_MSG(options.Check(&why), why);
   const Camera cam = camera_full_res.HalfGrid();
-  FrustumVolume vol;
-  vol.width = cam.width;
-  vol.height = cam.height;
-  vol.edges_m = BinEdges(options);
-  const size_t n = static_cast<size_t>(vol.width) * vol.height;
-  vol.occ.assign(n, 0);
-  vol.known.assign(n, 0);
+  FrustumVolume vol = EmptyVolume(camera_full_res, options);
+  const size_t n = vol.occ.size();
   Eigen::Vector3i map_lo, map_hi;
   if (n == 0 || !map.KnownIndexBounds(&map_lo, &map_hi)) return vol;
 
@@ -680,17 +687,10 @@ FrustumVolume ProjectToFrustum(const OccupancyMap& map, const Camera& camera_ful
 
 FrustumVolume TwoPointVolume(const FusionInput& self, const FusionInput& other,
                              const BinOptions& options) {
-  std::string why;
-  GT_ASSERT_MSG(options.Check(&why), why);
   GT_ASSERT(self.depth != nullptr && other.depth != nullptr);
   const Camera cam = self.camera.HalfGrid();
-  FrustumVolume vol;
-  vol.width = cam.width;
-  vol.height = cam.height;
-  vol.edges_m = BinEdges(options);
-  const size_t n = static_cast<size_t>(vol.width) * vol.height;
-  vol.occ.assign(n, 0);
-  vol.known.assign(n, 0);
+  FrustumVolume vol = EmptyVolume(self.camera, options);
+  const size_t n = vol.occ.size();
   std::vector<uint8_t> hit(n, 0);
   // Own depth at full-resolution pixel (2u, 2v).
   const DepthImage& ds = *self.depth;
