@@ -139,8 +139,10 @@ struct Columns {
 // Pass 2 of the row kernel: out[i] = depth[idx[i]]. Scalar on purpose: g++ vectorises such
 // a loop by emulating a gather (an extract, a load and an insert per lane, each lane waiting
 // on the index arithmetic), and the hardware gather (-mtune-ctrl=use_gather) was slower
-// still on this AMD EPYC; plain loads, with B's row prefetched a little ahead, are the
-// cheapest lookup found (docs/PERFORMANCE.md "N views").
+// still on this AMD EPYC, as were AVX-512 windows (16 lanes served by two loads of 32
+// consecutive floats of B and a two-register permute, which covered 94 % of the used
+// lanes: 1.2x the time of this loop); plain loads, with B's row prefetched a little ahead,
+// are the cheapest lookup found (docs/PERFORMANCE.md "N views").
 constexpr int kChunk = 256;
 __attribute__((noinline, optimize("no-tree-vectorize"))) void GatherDepths(
     const float* __restrict depth, const int32_t* __restrict idx, int n, float* __restrict out) {
