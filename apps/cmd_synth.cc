@@ -7,8 +7,10 @@
 #include <memory>
 #include <regex>
 #include <string>
+#include <vector>
 
 #include "apps/commands.h"
+#include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/synth/dataset.h"
 #include "libgt/synth/scannetpp_layout.h"
@@ -24,6 +26,14 @@ struct SynthArgs {
   gt::synth::SynthOptions options;
 };
 
+// The fields of SynthOptions::Check and ScanNetPPSynthOptions::Check that a flag sets: a
+// value out of their range is a usage error naming the flag (exit 2). Nothing but the flags
+// and the valid defaults sets them, so each counts as given.
+const std::vector<FieldFlag> kSynthFlags = {{"scenes", "--scenes", true},
+                                            {"frames", "--frames", true},
+                                            {"resolution", "--resolution", true},
+                                            {"DSLR size", "--resolution", true}};
+
 // --layout scannetpp: the fixture of libgt/synth/scannetpp_layout.h (DSLR at --resolution).
 void RunScanNetPPSynth(const SynthArgs& args) {
   gt::synth::ScanNetPPSynthOptions o;
@@ -33,7 +43,7 @@ void RunScanNetPPSynth(const SynthArgs& args) {
   o.dslr_height = args.options.height;
   o.seed = args.options.seed;
   std::string error;
-  if (!o.Check(&error)) throw gt::InputError("occgt synth --layout scannetpp", error);
+  if (!o.Check(&error)) ThrowOptionsError(error, "occgt synth --layout scannetpp", kSynthFlags);
   const auto start = std::chrono::steady_clock::now();
   const gt::synth::ScanNetPPSynthSummary summary = gt::synth::WriteScanNetPPSynth(args.out, o);
   const double seconds =
@@ -58,21 +68,12 @@ void RunSynth(SynthArgs& args) {
   if (args.layout != "generic" && args.layout != "scannetpp") {
     throw gt::InputError("--layout", "expected generic or scannetpp, got '" + args.layout + "'");
   }
-  // Each flag's range first, so that the usage error names the flag (exit 2).
-  const gt::synth::SynthOptions& o = args.options;
-  if (o.scenes < 1 || o.scenes > 1000) throw gt::InputError("--scenes", "expected 1..1000");
-  if (o.frames_per_scene < 1 || o.frames_per_scene > 100000) {
-    throw gt::InputError("--frames", "expected 1..100000 frames per scene");
-  }
-  if (o.width < 16 || o.height < 16 || o.width > 8192 || o.height > 8192) {
-    throw gt::InputError("--resolution", "expected 16..8192 pixels per side");
-  }
   if (args.layout == "scannetpp") {
     RunScanNetPPSynth(args);
     return;
   }
   std::string error;
-  if (!args.options.Check(&error)) throw gt::InputError("occgt synth", error);
+  if (!args.options.Check(&error)) ThrowOptionsError(error, "occgt synth", kSynthFlags);
 
   const auto start = std::chrono::steady_clock::now();
   const gt::synth::SynthSummary summary = gt::synth::WriteSyntheticDataset(args.out, args.options);
