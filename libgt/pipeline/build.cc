@@ -257,10 +257,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
                                 options.tasks, "build into another --out");
   }
   const Recipe recipe = ResolveDataset(recipe_in, options);
-  datasets::ReaderOptions reader_options;
-  reader_options.scannetpp_device = recipe.dataset.device;
-  const std::unique_ptr<datasets::DatasetReader> reader =
-      datasets::MakeReader(recipe.dataset.format, reader_options);
+  const std::unique_ptr<datasets::DatasetReader> reader = MakeRecipeReader(recipe);
   const std::vector<std::string> scenes = ResolveScenes(recipe, *reader, nullptr);
   summary["scenes"] = static_cast<int64_t>(scenes.size());
 

@@ -179,7 +179,7 @@ SceneLoop StartSceneLoop(const Recipe& recipe_in, const std::string& out_dir, bo
     recipe.dataset.format = DatasetFormat::kGeneric;
   }
   loop.digest = CovisibilityDigest(recipe_in);
-  loop.reader = datasets::MakeReader(recipe.dataset.format);
+  loop.reader = MakeRecipeReader(recipe);
   loop.scenes = ResolveScenes(recipe, *loop.reader, nullptr);
   return loop;
 }
@@ -215,8 +215,9 @@ nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOption
       }
       ++skipped;
     } else {
-      const Scene scene = reader->ReadScene(recipe.dataset.root, name);
-      pairs::DepthCache cache(scene, recipe.width, recipe.height, options.depth_cache_mb << 20);
+      const Scene scene = ReadRecipeScene(recipe, *reader, name);
+      pairs::DepthCache cache(scene, recipe.width, recipe.height, options.depth_cache_mb << 20,
+                              RecipeFrameDepthOptions(recipe));
       const SceneCovisibility g = ComputeSceneCovisibility(recipe, scene, &cache);
       if (options.dense) {
         const int64_t f = static_cast<int64_t>(g.frame_ids.size());

@@ -944,6 +944,12 @@ void ApplyMeshPath(const std::string& mesh_path, Scene* scene) {
   scene->mesh_path = path;
 }
 
+std::unique_ptr<datasets::DatasetReader> MakeRecipeReader(const Recipe& recipe) {
+  datasets::ReaderOptions reader_options;
+  reader_options.scannetpp_device = recipe.dataset.device;
+  return datasets::MakeReader(recipe.dataset.format, reader_options);
+}
+
 Scene ReadRecipeScene(const Recipe& recipe, const datasets::DatasetReader& reader,
                       const std::string& name) {
   Scene scene = reader.ReadScene(recipe.dataset.root, name);

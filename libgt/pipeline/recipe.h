@@ -16,6 +16,7 @@
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -168,6 +169,8 @@ SampleOptions RecipeSampleOptions(const Recipe& recipe);
 // The recipe's depth source as the frame-depth options of every scene (render range: the
 // defaults of render::FrameDepthOptions).
 render::FrameDepthOptions RecipeFrameDepthOptions(const Recipe& recipe);
+// The reader of the recipe's dataset: its format, with dataset.device for ScanNet++.
+std::unique_ptr<datasets::DatasetReader> MakeRecipeReader(const Recipe& recipe);
 // A scene read by `reader` with dataset.mesh_path applied (Scene::mesh_path, "{scene}"
 // replaced by its name).
 Scene ReadRecipeScene(const Recipe& recipe, const datasets::DatasetReader& reader,

@@ -43,10 +43,12 @@ std::shared_ptr<ViewsScene> LoadViewsScene(const Recipe& recipe,
                                            const datasets::DatasetReader& reader,
                                            const std::string& name) {
   auto d = std::make_shared<ViewsScene>();
-  d->scene = reader.ReadScene(recipe.dataset.root, name);
+  d->scene = ReadRecipeScene(recipe, reader, name);
   d->options = RecipeSampleOptions(recipe);
   d->options.truth = RecipePairTruthOptions(recipe, d->scene);
-  d->depths = std::make_unique<pairs::DepthCache>(d->scene, recipe.width, recipe.height);
+  d->depths = std::make_unique<pairs::DepthCache>(d->scene, recipe.width, recipe.height,
+                                                  pairs::kDefaultDepthCacheMb << 20,
+                                                  RecipeFrameDepthOptions(recipe));
   d->images = std::make_unique<ImageCache>(
       128, [s = d.get()](size_t i) { return EncodeFrameImage(s->scene.frames[i], s->options); });
   for (size_t i = 0; i < d->scene.frames.size(); ++i) d->index_of_id[d->scene.frames[i].id] = i;

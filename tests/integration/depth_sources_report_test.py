@@ -14,7 +14,9 @@ depth panels of `inspect pair`, and the ScanNet++ device a build records.
    device its recipe.json records (`occgt pair --recipe` reproduces the shard's labels byte
    for byte, `inspect split` re-opens its frames, an `occgt pair` folder's meta.json records
    the device and `inspect pair --pair-dir --root` uses it); a device that contradicts the
-   recorded one is refused with one error line.
+   recorded one is refused with one error line. `occgt covis` and `occgt tuples --shards` of
+   the same recipe read the frames as the build does: every N-view sample's depth of a frame
+   the build also wrote is the build's, byte for byte.
 """
 import gzip
 import io
@@ -180,6 +182,30 @@ def one_line_error(r, code, *words):
         assert w in lines[0], (w, lines[0])
 
 
+def check_views_depth(recipe, build, out):
+    """`occgt covis` and `occgt tuples --shards` read the frames as the build does (the
+    recipe's device and depth source): each N-view sample's depth<i>.npy is the build's
+    depth of that frame, byte for byte."""
+    common.occgt("covis", recipe, "--out", out)
+    common.occgt("tuples", recipe, "--out", out, "--shards")
+    build_depth = {}
+    for line in pairs_lines(build):
+        for k in (0, 1):
+            build_depth[(line["scene"], line[f"frame{k}"]["id"])] = shard_member(
+                build, line["key"], f"depth{k}.npy")
+    views = os.path.join(out, "views")
+    compared = 0
+    for line in pairs_lines(views):
+        for i, frame_id in enumerate(line["frame_ids"]):
+            want = build_depth.get((line["scene"], frame_id))
+            if want is not None:
+                got = shard_member(views, line["key"], f"depth{i}.npy")
+                assert got == want, (line["key"], frame_id)
+                compared += 1
+    assert compared > 0, "no frame of a tuple is in the build"
+    print(f"views {os.path.basename(out)}: {compared} view depths equal the build's")
+
+
 def check_scannetpp_device(tmp):
     root = os.path.join(tmp, "spp")
     common.occgt("synth", "--layout", "scannetpp", "--out", root, "--scenes", "1", "--frames",
@@ -202,12 +228,15 @@ selection:
   score_stride: 4
   overlap: [0.05, 1.0]
   quota_per_scene: 3
+  views: [2, 3]
+  tuples: {{edge_threshold: 0.05, quota_per_scene: 3}}
 occupancy:
   enabled: false
 sample: {{image: png, depth: true, labels: true, occupancy: false}}
 """)
         build = os.path.join(tmp, "out_" + device)
         common.occgt("build", recipe, "--out", build)
+        check_views_depth(recipe, build, os.path.join(tmp, "views_" + device))
         with open(os.path.join(build, "recipe.json")) as f:
             assert json.load(f)["dataset"]["device"] == device
         line = pairs_lines(build)[0]
