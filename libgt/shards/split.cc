@@ -14,6 +14,7 @@
 #include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <string_view>
 #include <unordered_map>
@@ -124,6 +125,45 @@ std::string FirstLines(const std::vector<std::string>& problems) {
   return out;
 }
 
+// The schemas of a split's sample json members and pairs.jsonl lines, for both kinds of
+// split: pair samples (`occgt build`: sample.schema.json, pairs_line.schema.json) and N-view
+// samples (`occgt tuples --shards`: views_sample.schema.json, views_line.schema.json). Each
+// document is checked against the schema of its own kind: a sample json whose "kind" is
+// "occgt-views-sample", or a line with "frame_ids", is an N-view one. Default-constructed,
+// or for a schema file the folder lacks: no check.
+class SplitSchemas {
+ public:
+  SplitSchemas() = default;
+  explicit SplitSchemas(const std::string& dir)
+      : pair_sample_(LoadSchema(dir, kPairSample)),
+        views_sample_(LoadSchema(dir, kViewsSample)),
+        pair_line_(LoadSchema(dir, kPairLine)),
+        views_line_(LoadSchema(dir, kViewsLine)) {}
+  // "" or "<schema file>: <its first problems>".
+  std::string CheckSample(const json& doc) const {
+    const bool views = doc.is_object() && doc.contains("kind") && doc["kind"] == "occgt-views-sample";
+    return views ? Check(views_sample_.get(), kViewsSample, doc)
+                 : Check(pair_sample_.get(), kPairSample, doc);
+  }
+  std::string CheckLine(const json& line) const {
+    const bool views = line.is_object() && line.contains("frame_ids");
+    return views ? Check(views_line_.get(), kViewsLine, line)
+                 : Check(pair_line_.get(), kPairLine, line);
+  }
+
+ private:
+  static constexpr const char* kPairSample = "sample.schema.json";
+  static constexpr const char* kViewsSample = "views_sample.schema.json";
+  static constexpr const char* kPairLine = "pairs_line.schema.json";
+  static constexpr const char* kViewsLine = "views_line.schema.json";
+  static std::string Check(const SchemaChecker* schema, const char* name, const json& doc) {
+    if (schema == nullptr) return "";
+    const std::vector<std::string> p = schema->Check(doc);
+    return p.empty() ? "" : std::string(name) + ": " + FirstLines(p);
+  }
+  std::unique_ptr<SchemaChecker> pair_sample_, views_sample_, pair_line_, views_line_;
+};
+
 std::string SceneOfLine(const json& line, const std::string& key) {
   if (line.is_object() && line.contains("scene") && line["scene"].is_string()) {
     return line["scene"].get<std::string>();
@@ -136,7 +176,7 @@ std::string SceneOfLine(const json& line, const std::string& key) {
 // validates sample JSON with `sample_schema` (may be null) and parses every .npy header.
 // Returns problems, each "<member>: <problem>"; `keys_out` gets the keys in order.
 std::vector<std::string> CheckTarContents(const std::string& tar_path,
-                                          const SchemaChecker* sample_schema,
+                                          const SplitSchemas& schemas,
                                           std::vector<std::string>* keys_out) {
   std::vector<std::string> problems;
   std::vector<std::string> keys;
@@ -186,9 +226,9 @@ std::vector<std::string> CheckTarContents(const std::string& tar_path,
       json doc = json::parse(data, nullptr, false);
       if (doc.is_discarded()) {
         problems.push_back(name + ": not valid JSON");
-      } else if (field == "json" && sample_schema != nullptr) {
-        const auto p = sample_schema->Check(doc);
-        if (!p.empty()) problems.push_back(name + ": sample.schema.json: " + FirstLines(p));
+      } else if (field == "json") {
+        const std::string p = schemas.CheckSample(doc);
+        if (!p.empty()) problems.push_back(name + ": " + p);
       }
     } else if (ext == "pyd" || ext == "pth" || ext == "pickle") {
       problems.push_back(name + ": pickle fields are not allowed");
@@ -477,7 +517,7 @@ namespace {
 // the record, then the tar read back (member names, .npy headers, sample JSON) and its
 // keys against the record's. Returns "" or the shard's problem (one line).
 std::string VerifyShard(const std::string& shard, const PartRecord& r,
-                        const std::string& record_path, const SchemaChecker* sample_schema) {
+                        const std::string& record_path, const SplitSchemas& schemas) {
   try {
     const std::string md5 = io::Md5HexOfFile(shard);
     if (md5 != r.info.md5sum) return "md5 " + md5 + " differs from the recorded " + r.info.md5sum;
@@ -487,7 +527,7 @@ std::string VerifyShard(const std::string& shard, const PartRecord& r,
   std::vector<std::string> keys;
   std::vector<std::string> problems;
   try {
-    problems = CheckTarContents(shard, sample_schema, &keys);
+    problems = CheckTarContents(shard, schemas, &keys);
   } catch (const InputError& e) {
     return std::string("unreadable: ") + e.what();
   }
@@ -497,7 +537,7 @@ std::string VerifyShard(const std::string& shard, const PartRecord& r,
 }
 
 // One shard of the plan as the trusted merge reads it: its part record (parsed, its pair
-// lines naming their keys and shard, against `line_schema` when given), the stat of its
+// lines naming their keys and shard, against their schema in `schemas`), the stat of its
 // tar, the plan's sample count. `error` holds the shard's first problem (an InputError
 // naming the shard); needs no other shard, so shards load in parallel.
 struct LoadedShard {
@@ -507,7 +547,7 @@ struct LoadedShard {
 };
 
 LoadedShard LoadShard(const std::string& dir, const std::string& split, int64_t idx,
-                      int64_t planned_nsamples, const SchemaChecker* line_schema) {
+                      int64_t planned_nsamples, const SplitSchemas& schemas) {
   LoadedShard out;
   try {
     const std::string shard = ShardPath(dir, split, idx);
@@ -536,12 +576,8 @@ LoadedShard LoadShard(const std::string& dir, const std::string& split, int64_t 
       if (std::string e = CheckSampleKey(r.keys[i]); !e.empty()) {
         throw InputError(shard, "bad part record: keys[" + std::to_string(i) + "]: " + e);
       }
-      if (line_schema != nullptr) {
-        const auto p = line_schema->Check(json::parse(r.pair_lines[i]));
-        if (!p.empty()) {
-          throw InputError(record_path, "pairs[" + std::to_string(i) +
-                                            "]: pairs_line.schema.json: " + FirstLines(p));
-        }
+      if (const std::string p = schemas.CheckLine(json::parse(r.pair_lines[i])); !p.empty()) {
+        throw InputError(record_path, "pairs[" + std::to_string(i) + "]: " + p);
       }
     }
   } catch (const InputError&) {
@@ -612,9 +648,9 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
     result.split = splits[0];
   }
   const SplitPlan plan = ReadPlan(dir, result.split);
-  // Pair lines against their schema only with `verify`: a per-line cost of its own.
-  const auto line_schema =
-      options.verify ? LoadSchema(options.schemas_dir, "pairs_line.schema.json") : nullptr;
+  // Lines and samples against their schemas only with `verify`: a per-line cost of its own.
+  const SplitSchemas schemas =
+      options.verify ? SplitSchemas(options.schemas_dir) : SplitSchemas();
   const size_t nshards = plan.shard_nsamples.size();
   StreamedFile pairs_jsonl((fs::path(dir) / "pairs.jsonl").string());
   std::unordered_map<std::string, int64_t> shard_of_key;
@@ -625,7 +661,7 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
     std::vector<LoadedShard> chunk(end - begin);
     tbb::parallel_for(begin, end, size_t{1}, [&](size_t s) {
       chunk[s - begin] = LoadShard(dir, result.split, static_cast<int64_t>(s),
-                                   plan.shard_nsamples[s], line_schema.get());
+                                   plan.shard_nsamples[s], schemas);
     });
     for (LoadedShard& loaded : chunk) {
       if (loaded.error) std::rethrow_exception(loaded.error);
@@ -657,12 +693,11 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
   result.nshards = static_cast<int64_t>(result.parts.size());
   // 2. Opt-in full check of every byte, shards in parallel; the first problem in shard order.
   if (options.verify) {
-    const auto sample_schema = LoadSchema(options.schemas_dir, "sample.schema.json");
     std::vector<std::string> problem(result.parts.size());
     tbb::parallel_for(size_t{0}, result.parts.size(), size_t{1}, [&](size_t s) {
       const PartRecord& r = result.parts[s];
       problem[s] = VerifyShard(r.info.path, r, PartRecordPath(dir, r.split, r.shard_index),
-                               sample_schema.get());
+                               schemas);
     });
     for (size_t s = 0; s < problem.size(); ++s) {
       if (!problem[s].empty()) throw InputError(result.parts[s].info.path, problem[s]);
@@ -716,7 +751,7 @@ struct ShardProblems {
 // Checks shardlist[i] (`e`) against its file: size, MD5, contents (CheckTarContents) and
 // sample count. Reads the whole shard twice (MD5, then libarchive); never throws.
 ShardProblems CheckListedShard(const std::string& dir, const std::string& index_path, size_t i,
-                               const json& e, const SchemaChecker* sample_schema) {
+                               const json& e, const SplitSchemas& schemas) {
   ShardProblems out;
   auto problem = [&](const std::string& where, const std::string& what) {
     out.problems.push_back(where + ": " + what);
@@ -754,7 +789,7 @@ ShardProblems CheckListedShard(const std::string& dir, const std::string& index_
     return out;
   }
   try {
-    for (const std::string& p : CheckTarContents(shard, sample_schema, &out.keys)) {
+    for (const std::string& p : CheckTarContents(shard, schemas, &out.keys)) {
       problem(shard, p);
     }
   } catch (const InputError& err) {
@@ -790,12 +825,12 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
   }
   const std::string index_path = (fs::path(dir) / "index.json").string();
   json index;
-  std::unique_ptr<SchemaChecker> index_schema, sample_schema, line_schema;
+  std::unique_ptr<SchemaChecker> index_schema;
+  std::optional<SplitSchemas> schemas;
   try {
     index = ParseJsonFile(index_path);
     index_schema = LoadSchema(options.schemas_dir, "index.schema.json");
-    sample_schema = LoadSchema(options.schemas_dir, "sample.schema.json");
-    line_schema = LoadSchema(options.schemas_dir, "pairs_line.schema.json");
+    schemas.emplace(options.schemas_dir);
   } catch (const InputError& e) {
     problems.push_back(e.what());
     return problems;
@@ -815,7 +850,7 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
   const json& shardlist = index["shardlist"];
   std::vector<ShardProblems> checked(shardlist.size());
   tbb::parallel_for(size_t{0}, shardlist.size(), size_t{1}, [&](size_t i) {
-    checked[i] = CheckListedShard(dir, index_path, i, shardlist[i], sample_schema.get());
+    checked[i] = CheckListedShard(dir, index_path, i, shardlist[i], *schemas);
   });
   // Then in shard order, the same whatever the thread count: key -> shard url, for the
   // repeat and the pairs.jsonl checks.
@@ -868,10 +903,7 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
       problem(where, "not a JSON object");
       continue;
     }
-    if (line_schema) {
-      const auto p = line_schema->Check(line);
-      if (!p.empty()) problem(where, "pairs_line.schema.json: " + FirstLines(p));
-    }
+    if (const std::string p = schemas->CheckLine(line); !p.empty()) problem(where, p);
     if (!line.contains("key") || !line["key"].is_string() || !line.contains("shard") ||
         !line["shard"].is_string()) {
       problem(where, "fields \"key\" and \"shard\": expected strings");

@@ -3,8 +3,9 @@
 occgt's readers load them (depth, K, world_from_cam, colour) and ground truth bit for bit equal
 to occgt.views_ground_truth of those frames with the recipe's label options and the stated
 track seed; its JSON follows schemas/views_sample.schema.json and names the tuple of
-tuples.jsonl; the files are byte-identical with 1 and 2 threads; a re-run skips complete
-shards and a removed shard is rewritten with the same bytes."""
+tuples.jsonl; `occgt validate` and `occgt merge --verify` check the split against the N-view
+schemas; the files are byte-identical with 1 and 2 threads; a re-run skips complete shards and
+a removed shard is rewritten with the same bytes."""
 from __future__ import annotations
 
 import glob
@@ -101,6 +102,29 @@ class ViewsShards(unittest.TestCase):
             np.testing.assert_array_equal(np.float32(meta["covisibility"]),
                                           np.float32(line["covisibility"]))
             self.assertEqual(meta["num_views"], len(line["frame_ids"]))
+
+    def test_validate_and_merge_verify(self) -> None:
+        """`occgt validate` and `occgt merge --verify` check an N-view split against the
+        N-view schemas (views_sample, views_line): valid as written; a line that lacks a
+        required key is reported with its line number and schema."""
+        with open(os.path.join(common.SOURCE, "schemas", "views_line.schema.json")) as f:
+            line_schema = json.load(f)
+        with open(os.path.join(self.views, "pairs.jsonl")) as f:
+            rows = [json.loads(x) for x in f]
+        for row in rows:
+            jsonschema.validate(row, line_schema)
+        self.assertIn("valid", common.occgt("validate", self.views).stdout)
+        copy = os.path.join(self.dir, "views_copy")
+        shutil.rmtree(copy, ignore_errors=True)
+        shutil.copytree(self.views, copy)
+        self.assertIn("(verified)", common.occgt("merge", copy, "--verify").stdout)
+        del rows[1]["tuple_index"]
+        with open(os.path.join(copy, "pairs.jsonl"), "w") as f:
+            f.writelines(json.dumps(r) + "\n" for r in rows)
+        r = subprocess.run([common.BINARY, "validate", copy], capture_output=True, text=True)
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertIn("pairs.jsonl:2: views_line.schema.json: <root>: Missing required property "
+                      "'tuple_index'", r.stdout)
 
     def test_bits_equal_views_ground_truth(self) -> None:
         ds = occgt.open_dataset(self.data, "generic")
