@@ -15,7 +15,7 @@ PAIR_DEFAULTS: Dict[str, Any]  # default of each pair_ground_truth argument, fro
 VIEWS_DEFAULTS: Dict[str, Any]  # views_ground_truth: num_tracks, query_view, seed
 RENDER_DEFAULTS: Dict[str, Any]  # render_depth: model, near_m, far_m
 SUPERVISION_DEFAULTS: Dict[str, Any]  # loftr_coarse_supervision: coarse_stride, compat
-DATASET_DEFAULTS: Dict[str, Any]  # Dataset: device; Scene.load: depth_source
+DATASET_DEFAULTS: Dict[str, Any]  # Dataset: device; Scene.load: depth_source; fused_depth
 
 def pair_ground_truth(
     depth0: npt.ArrayLike,

@@ -190,6 +190,11 @@ void BindIo(py::module_& m) {
     py::dict d;  // occgt.DATASET_DEFAULTS
     d["device"] = DefaultDevice();
     d["depth_source"] = DefaultDepthSource();
+    const gt::render::FusedDepthOptions fused;  // a recipe's dataset.fused_depth
+    py::dict f;
+    f["abs_tol_m"] = fused.abs_tol_m;
+    f["rel_tol"] = fused.rel_tol;
+    d["fused_depth"] = f;
     m.attr("DATASET_DEFAULTS") = d;
   }
 

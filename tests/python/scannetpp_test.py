@@ -1,7 +1,11 @@
 """open_dataset(root, "scannetpp", device=...) on occgt's ScanNet++-layout fixture (occgt synth
 --layout scannetpp): the iPhone frames load as undistorted pinhole frames (depth at the
 working size with K of the undistorted camera, anonymised pixels without depth, colour
-undistorted), the DSLR frames list with their cameras, and a bad device is a ValueError."""
+undistorted), the DSLR frames list with their cameras, and a bad device is a ValueError.
+Splits of each device (DSLR depth rendered from the mesh, iPhone depth fused with it) read back
+from Python as the build wrote them: PairIndexDataset.from_split takes the recipe's device,
+depth source and mesh, TupleIndexDataset takes them as arguments, and their depth and labels
+equal the pair and N-view shards'."""
 from __future__ import annotations
 
 import os
@@ -9,11 +13,34 @@ import sys
 import unittest
 
 import numpy as np
+import torch
 
 sys.path.insert(0, os.path.dirname(__file__))
 import common  # noqa: E402
 
 import occgt  # noqa: E402
+from occgt.torch import PairIndexDataset, TupleIndexDataset  # noqa: E402
+
+RECIPE = """name: spp-{device}
+split: spp
+resolution: [96, 72]
+dataset:
+  format: scannetpp
+  root: {root}
+  device: {device}
+  depth_source: {depth_source}
+  min_valid_depth_fraction: 0.3
+selection:
+  max_frame_gap: 4
+  pruning: {{max_distance_m: 3.0, max_view_angle_deg: 90, frustum: true}}
+  score_stride: 4
+  overlap: [0.05, 1.0]
+  quota_per_scene: 3
+  views: [2, 3]
+  tuples: {{edge_threshold: 0.05, quota_per_scene: 2}}
+occupancy: {{enabled: false}}
+sample: {{image: none, depth: true, labels: true, occupancy: false}}
+"""
 
 
 class ScanNetPP(unittest.TestCase):
@@ -54,6 +81,42 @@ class ScanNetPP(unittest.TestCase):
         self.assertEqual(float(frame.K[0, 2]), 80.0)
         with self.assertRaises(ValueError):
             occgt.open_dataset(self.root, "scannetpp", device="kinect")
+
+
+    def test_splits_read_back_with_the_recipes_device_and_depth(self) -> None:
+        for device, depth_source in (("dslr", "mesh"), ("iphone", "fused")):
+            with self.subTest(device=device):
+                out = os.path.join(self.root, "..", "scannetpp_" + device)
+                recipe = out + ".yaml"
+                with open(recipe, "w") as f:
+                    f.write(RECIPE.format(device=device, root=self.root,
+                                          depth_source=depth_source))
+                common.occgt("build", recipe, "--out", out)
+                common.occgt("covis", recipe, "--out", out)
+                common.occgt("tuples", recipe, "--out", out, "--shards")
+                shards = common.read_shard_samples(out, images=False)
+                pairs = PairIndexDataset.from_split(out)
+                self.assertEqual((pairs.device, pairs.depth_source), (device, depth_source))
+                self.assertIsInstance(pairs, torch.utils.data.Dataset)
+                self.assertEqual(len(pairs), len(shards))
+                self.assertGreater(len(shards), 0)
+                for i, s in enumerate(shards):
+                    item = pairs[i]
+                    for k in ("depth0", "depth1"):
+                        np.testing.assert_array_equal(item[k].numpy(), s[k])
+                    np.testing.assert_array_equal(item["label01"].numpy(), s["label01"])
+                views = common.read_shard_samples(os.path.join(out, "views"), images=False)
+                tuples = TupleIndexDataset(os.path.join(out, "tuples.jsonl"), self.root,
+                                           "scannetpp", width=96, height=72, images=False,
+                                           device=device, depth_source=depth_source)
+                self.assertEqual(len(tuples), len(views))
+                self.assertGreater(len(views), 0)
+                for i, s in enumerate(views):
+                    item = tuples[i]
+                    for v in range(len(item["frame_ids"])):
+                        np.testing.assert_array_equal(item["depths"][v].numpy(), s[f"depth{v}"])
+                    np.testing.assert_array_equal(item["visible_in"].numpy().view(np.uint32),
+                                                  s["visible_in"])
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
 """occgt.torch: torch Datasets, a collate function and LoFTR / Occ²Net supervision over occgt.
 
 Pure Python over the C++ module (``occgt._occgt``); torch is Debian's ``python3-torch``.
-Docs: docs/PYTHON.md, "Training with torch".
+Docs: docs/PYTHON.md, "ShardDataset", "PairIndexDataset" and "Supervision"; docs/MULTIVIEW.md
+for TupleIndexDataset.
 
 A sample (a dict) has the same keys whichever dataset yields it:
 

@@ -2,7 +2,8 @@
 
 No shard is needed: each ``__getitem__`` reads the pair's two frames with occgt's readers (at
 the working resolution) and computes occgt's ground truth with ``occgt.pair_ground_truth``
-(the C++ library, GIL released), in the DataLoader worker. docs/PYTHON.md, "Training with torch".
+(the C++ library, GIL released), in the DataLoader worker. docs/PYTHON.md, "PairIndexDataset:
+ground truth on the fly".
 """
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import cv2
 import numpy as np
+import torch
 
 import occgt
 
@@ -20,6 +22,8 @@ from ._convert import to_tensor
 
 #: LoFTR's dataset_name for occgt's reader formats (its evaluation picks thresholds by it).
 _DATASET_NAMES = {"scannet": "ScanNet", "megadepth": "MegaDepth"}
+#: The tolerances of depth_source "fused" that Scene.load uses (render::FusedDepthOptions).
+FUSED_DEPTH_DEFAULTS: Dict[str, float] = dict(occgt.DATASET_DEFAULTS["fused_depth"])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -143,7 +147,7 @@ def read_pair_index(pairs: Union[str, os.PathLike],
     raise ValueError(f"{path}: unknown pair index type (expected .jsonl, .npz or .txt)")
 
 
-class PairIndexDataset:
+class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     """A map-style torch Dataset: item i = pair i of ``pairs`` with occgt's ground truth,
     computed on the fly from the dataset on disk (no shards).
 
@@ -164,6 +168,10 @@ class PairIndexDataset:
             (fused for each item) or ``"scene:S"`` (fused once per scene and process, then
             shared by the scene's pairs, as ``occgt build`` does).
         scene_names, npz_root: see ``read_pair_index``.
+        depth_source, mesh_path: the frames' depth (``Scene.load``): ``"sensor"``, or
+            ``"mesh"``/``"fused"`` with the scene's mesh (``mesh_path``, ``{scene}`` = the
+            scene's name; None: the reader's); pair scope only.
+        device: ScanNet++'s camera, ``"dslr"`` or ``"iphone"`` (``occgt.open_dataset``).
 
     Items are dicts with the keys of the sample contract (``occgt.torch``): LoFTR's keys
     (``T_0to1`` = cam1_from_cam0 computed from the two poses) and occgt's ground truth, plus
@@ -179,7 +187,8 @@ class PairIndexDataset:
                  scene_names: Optional[Union[str, Sequence[str]]] = None,
                  npz_root: Optional[str] = None,
                  depth_source: str = occgt.DATASET_DEFAULTS["depth_source"],
-                 mesh_path: Optional[str] = None, **options: Any) -> None:
+                 mesh_path: Optional[str] = None,
+                 device: str = occgt.DATASET_DEFAULTS["device"], **options: Any) -> None:
         if depth_source not in ("sensor", "mesh", "fused"):
             raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")
         if depth_source != "sensor" and occupancy is not None and scope != "pair":
@@ -190,7 +199,7 @@ class PairIndexDataset:
             raise ValueError(f"occupancy: expected None, 'words' or 'dense', got {occupancy!r}")
         self.pairs: List[PairRef] = (read_pair_index(pairs, scene_names, npz_root)
                                      if isinstance(pairs, (str, os.PathLike)) else list(pairs))
-        self.root, self.format = root, format
+        self.root, self.format, self.device = root, format, device
         self.width, self.height = int(width), int(height)
         self.preset, self.images, self.occupancy = preset, bool(images), occupancy
         if not (scope == "pair" or scope.startswith("window:") or scope.startswith("scene:")):
@@ -203,7 +212,8 @@ class PairIndexDataset:
         self._dataset: Optional[occgt.Dataset] = None
         self._pid = -1
         self._scenes: Dict[str, Tuple[occgt.Scene, Dict[int, str]]] = {}
-        occgt.open_dataset(root, format)  # fail here, not in a worker, on a bad root/format
+        # Fail here, not in a worker, on a bad root, format or device.
+        occgt.open_dataset(root, format, device=device)
 
     @classmethod
     def from_split(cls, split_dir: str, *, root: Optional[str] = None,
@@ -211,7 +221,9 @@ class PairIndexDataset:
                    **overrides: Any) -> "PairIndexDataset":
         """The pairs of a built split (its ``pairs.jsonl``, else its ``selection/``) with the
         options of its recipe (``recipe.json``: resolution, label preset and overrides, depth
-        range, patches, occupancy), so that item i has the arrays of the split's sample i.
+        range, patches, occupancy; the dataset's ScanNet++ device, depth source and mesh
+        path), so that item i has the arrays of the split's sample i. A recipe whose
+        ``dataset.fused_depth`` tolerances are not ``Scene.load``'s raises ValueError.
 
         ``root`` replaces the recipe's dataset root (a synthetic recipe reads
         ``split_dir/data``). ``images`` defaults to the recipe's (``sample.image`` not
@@ -233,6 +245,15 @@ class PairIndexDataset:
             root = dataset["root"] or os.path.join(split_dir, "data")
         if fmt == "synthetic":
             fmt = "generic"  # the build generated it as generic manifests
+        # How the build read the frames: the ScanNet++ camera, the depth source and its mesh.
+        depth: Dict[str, Any] = {
+            "depth_source": dataset.get("depth_source", occgt.DATASET_DEFAULTS["depth_source"]),
+            "mesh_path": dataset.get("mesh_path"),
+            "device": dataset.get("device", occgt.DATASET_DEFAULTS["device"])}
+        fused = dataset.get("fused_depth", FUSED_DEPTH_DEFAULTS)
+        if fused != FUSED_DEPTH_DEFAULTS:
+            raise ValueError(f"{path}: dataset.fused_depth: expected Scene.load's tolerances "
+                             f"{FUSED_DEPTH_DEFAULTS}, got {fused}")
         # The recipe's keys under pair_ground_truth's names, as they are: the C++ resolves them
         # (truth::ResolvePairTruthOptions), as for the build.
         options: Dict[str, Any] = {
@@ -255,14 +276,15 @@ class PairIndexDataset:
         options.update(overrides)
         return cls(split_dir, root, fmt, width=width, height=height, preset=labels["preset"],
                    images=sample["image"] != "none" if images is None else images,
-                   occupancy=occupancy, **options)
+                   occupancy=occupancy, **{**depth, **options})
 
     def __len__(self) -> int:
         return len(self.pairs)
 
     def _scene(self, name: str) -> Tuple[occgt.Scene, Dict[int, str]]:
         if self._pid != os.getpid():  # a forked worker opens its own readers
-            self._dataset, self._scenes = occgt.open_dataset(self.root, self.format), {}
+            self._dataset = occgt.open_dataset(self.root, self.format, device=self.device)
+            self._scenes = {}
             self._pid, self._scene_map = os.getpid(), None
         if name not in self._scenes:
             assert self._dataset is not None

@@ -57,6 +57,10 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     Args:
         tuples: a tuples.jsonl path, or a list of ``TupleRef`` / ``(scene, [frame ids])``.
         root, format: the dataset (``occgt.open_dataset``).
+        device: ScanNet++'s camera, ``"dslr"`` or ``"iphone"`` (``occgt.open_dataset``).
+        depth_source, mesh_path: the depth of every view (``Scene.load``): ``"sensor"``, or
+            ``"mesh"``/``"fused"`` with the scene's mesh (``mesh_path``, ``{scene}`` = the
+            scene's name, as a recipe's ``dataset.mesh_path``; None: the reader's).
         width, height: the working resolution of every view.
         preset, **label_options: the label options of ``occgt.views_ground_truth`` (the
             scene's depth range is passed as ``dataset_depth_range``).
@@ -87,7 +91,9 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                  height: int = occgt.PAIR_DEFAULTS["height"],
                  preset: str = occgt.PAIR_DEFAULTS["preset"], num_tracks: int = occgt.VIEWS_DEFAULTS["num_tracks"],
                  seed: int = occgt.VIEWS_DEFAULTS["seed"], images: bool = True, views: str = "vggt",
-                 **label_options: Any) -> None:
+                 device: str = occgt.DATASET_DEFAULTS["device"],
+                 depth_source: str = occgt.DATASET_DEFAULTS["depth_source"],
+                 mesh_path: Optional[str] = None, **label_options: Any) -> None:
         if views not in ("vggt", "dust3r"):
             raise ValueError(f"views: expected 'vggt' or 'dust3r', got {views!r}")
         if isinstance(tuples, (str, os.PathLike)):
@@ -99,7 +105,10 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             if not 1 <= len(t.frame_ids) <= 32:
                 raise ValueError(f"tuples[{k}]: expected 1..32 frame ids, got "
                                  f"{len(t.frame_ids)}")
-        self.root, self.format = root, format
+        if depth_source not in ("sensor", "mesh", "fused"):
+            raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")
+        self.root, self.format, self.device = root, format, device
+        self.depth_source, self.mesh_path = depth_source, mesh_path
         self.width, self.height = int(width), int(height)
         self.preset, self.num_tracks, self.seed = preset, int(num_tracks), int(seed)
         self.images, self.views = bool(images), views
@@ -107,18 +116,22 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         self._dataset: Optional[occgt.Dataset] = None
         self._pid = -1
         self._scenes: Dict[str, occgt.Scene] = {}
-        occgt.open_dataset(root, format)  # fail here, not in a worker, on a bad root/format
+        # Fail here, not in a worker, on a bad root, format or device.
+        occgt.open_dataset(root, format, device=device)
 
     def __len__(self) -> int:
         return len(self.tuples)
 
     def _scene(self, name: str) -> occgt.Scene:
         if self._pid != os.getpid():  # a forked worker opens its own readers
-            self._dataset, self._scenes, self._pid = occgt.open_dataset(self.root, self.format), \
-                {}, os.getpid()
+            self._dataset = occgt.open_dataset(self.root, self.format, device=self.device)
+            self._scenes, self._pid = {}, os.getpid()
         if name not in self._scenes:
             assert self._dataset is not None
-            self._scenes[name] = self._dataset.scene(name)
+            scene = self._dataset.scene(name)
+            if self.mesh_path is not None:  # "{scene}" = the scene's name, as in a recipe
+                scene.mesh_path = self.mesh_path.replace("{scene}", name)
+            self._scenes[name] = scene
         return self._scenes[name]
 
     def __getitem__(self, index: int) -> Any:
@@ -127,7 +140,8 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         index %= len(self.tuples)
         ref = self.tuples[index]
         scene = self._scene(ref.scene)
-        loaded = [scene.load(i, self.width, self.height) for i in ref.frame_ids]
+        loaded = [scene.load(i, self.width, self.height, depth_source=self.depth_source)
+                  for i in ref.frame_ids]
         depths = np.stack([d for d, _, _ in loaded])
         Ks = np.stack([K for _, K, _ in loaded])
         poses = np.stack([T for _, _, T in loaded])
