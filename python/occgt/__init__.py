@@ -519,6 +519,7 @@ def open_dataset(root: Union[str, "os.PathLike[str]"], format: str, *,
 def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"],
                     height: int = _D["height"], preset: str = _D["preset"], scope: str = "pair",
                     depth_source: str = DATASET_DEFAULTS["depth_source"],
+                    fused_depth: Optional[Dict[str, float]] = None,
                     **options: Any) -> PairGroundTruth:
     """pair_ground_truth of frames id0, id1 of a scene at width x height, with the scene's
     depth range unless ``min_depth_m``/``max_depth_m`` are given (occ2net-compat: every finite
@@ -532,13 +533,17 @@ def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"
     keyword arguments of pair_ground_truth. ``depth_source``: "sensor" (the depth files),
     "mesh" or "fused" (``Scene.mesh_path`` rendered, or fused with the files;
     docs/GROUND_TRUTH.md "Depth sources"), as ``occgt pair --depth-source``; with another
-    scope than "pair" only "sensor" (the scope's frames are fused from their depth files).
+    scope than "pair" only "sensor" (the scope's frames are fused from their depth files);
+    ``fused_depth``: the tolerances of "fused" (``Scene.load``; a recipe's
+    ``dataset.fused_depth``).
     """
     if depth_source != "sensor" and scope != "pair" and options.get("occupancy"):
         raise ValueError("depth_source: a scope other than 'pair' fuses sensor depth; use "
                          f"scope='pair' with depth_source {depth_source!r}")
-    depth0, K0, world_from_cam0 = scene.load(id0, width, height, depth_source=depth_source)
-    depth1, K1, world_from_cam1 = scene.load(id1, width, height, depth_source=depth_source)
+    depth0, K0, world_from_cam0 = scene.load(id0, width, height, depth_source=depth_source,
+                                             fused_depth=fused_depth)
+    depth1, K1, world_from_cam1 = scene.load(id1, width, height, depth_source=depth_source,
+                                             fused_depth=fused_depth)
     options.setdefault("dataset_depth_range", (scene.min_depth_m, scene.max_depth_m))
     if scope != "pair" and options.get("occupancy") and "scope_map" not in options:
         options["scope_map"] = fuse_scope(scene, id0, id1, width, height, scope, preset, options)

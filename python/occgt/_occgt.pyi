@@ -147,7 +147,8 @@ class Scene:
     @mesh_path.setter
     def mesh_path(self, path: str) -> None: ...
     def load(
-        self, frame_id: str, width: int = ..., height: int = ..., *, depth_source: str = ...
+        self, frame_id: str, width: int = ..., height: int = ..., *, depth_source: str = ...,
+        fused_depth: Optional[Dict[str, float]] = ...
     ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """(depth float32 [height, width] planar metres, 0 = invalid; K float64 [3, 3] at
         width x height; world_from_cam float64 [4, 4]) of a usable frame: depth resized with

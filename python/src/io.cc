@@ -38,6 +38,32 @@ using namespace pybind11::literals;
 
 namespace {
 
+// A recipe's dataset.fused_depth block from Python: None (render::FusedDepthOptions'
+// defaults, occgt.DATASET_DEFAULTS["fused_depth"]) or a dict with abs_tol_m and/or rel_tol.
+gt::render::FusedDepthOptions FusedDepthFrom(const py::object& value) {
+  gt::render::FusedDepthOptions fused;
+  if (value.is_none()) return fused;
+  if (!py::isinstance<py::dict>(value)) {
+    throw py::type_error("fused_depth: expected None or a dict {abs_tol_m, rel_tol}, got " +
+                         std::string(py::str(py::type::of(value).attr("__name__"))));
+  }
+  for (const auto& [k, v] : value.cast<py::dict>()) {
+    const std::string key = py::str(k);
+    double* field = key == "abs_tol_m" ? &fused.abs_tol_m : key == "rel_tol" ? &fused.rel_tol : nullptr;
+    if (field == nullptr) {
+      ThrowValue("fused_depth", "unknown key '" + key + "' (expected abs_tol_m, rel_tol)");
+    }
+    if (!py::isinstance<py::float_>(v) && !py::isinstance<py::int_>(v)) {
+      throw py::type_error("fused_depth: " + key + ": expected a number, got " +
+                           std::string(py::str(py::type::of(v).attr("__name__"))));
+    }
+    *field = v.cast<double>();
+  }
+  std::string error;
+  if (!fused.Check(&error)) ThrowValue("fused_depth", error);
+  return fused;
+}
+
 class PyScene {
  public:
   explicit PyScene(gt::Scene scene) : scene_(std::make_shared<const gt::Scene>(std::move(scene))) {}
@@ -52,7 +78,7 @@ class PyScene {
   }
 
   py::tuple Load(const std::string& frame_id, int width, int height,
-                 const std::string& depth_source) const {
+                 const std::string& depth_source, const py::object& fused_depth) const {
     const gt::truth::Resolution resolution{width, height};
     std::string error;
     if (!resolution.Check(&error)) ThrowValue("width, height", error);
@@ -60,6 +86,7 @@ class PyScene {
     depth_options.source = Named("depth_source", [&] {
       return gt::render::ParseDepthSourceMode(depth_source, "depth_source");
     });
+    depth_options.fused = FusedDepthFrom(fused_depth);
     gt::DepthImage depth;
     gt::Camera camera;
     gt::Rigid3d world_from_cam;
@@ -314,12 +341,14 @@ void BindIo(py::module_& m) {
           "'fused' render; '' when none (the reader's: ScanNet's <scene>_vh_clean_2.ply)")
       .def("load", &PyScene::Load, "frame_id"_a, "width"_a = gt::truth::Resolution().width,
            "height"_a = gt::truth::Resolution().height, py::kw_only(),
-           "depth_source"_a = DefaultDepthSource(),
+           "depth_source"_a = DefaultDepthSource(), "fused_depth"_a = py::none(),
            "(depth float32 [height, width] planar metres (0 = invalid), K float64 [3, 3] at "
            "width x height, world_from_cam float64 [4, 4]) of a usable frame at the working "
            "resolution: depth resized with nearest neighbour, K rescaled with the pixel-area "
            "rule (truth::LoadWorkingFrame); depth_source 'mesh' renders mesh_path at that size, "
-           "'fused' combines both (docs/GROUND_TRUTH.md 'Depth sources'). ValueError for an "
+           "'fused' combines both (docs/GROUND_TRUTH.md 'Depth sources') with the tolerances "
+           "fused_depth {abs_tol_m, rel_tol} (None: DATASET_DEFAULTS['fused_depth'], a recipe's "
+           "dataset.fused_depth). ValueError for an "
            "unknown or unusable frame_id, an unreadable depth file or mesh, or a scene without "
            "a mesh.")
       .def("fuse", &PyScene::Fuse, "id0"_a, "id1"_a, "width"_a = gt::truth::Resolution().width,

@@ -8,6 +8,7 @@ depth source and mesh, TupleIndexDataset takes them as arguments, and their dept
 equal the pair and N-view shards'."""
 from __future__ import annotations
 
+import json
 import os
 import sys
 import unittest
@@ -29,7 +30,7 @@ dataset:
   root: {root}
   device: {device}
   depth_source: {depth_source}
-  min_valid_depth_fraction: 0.3
+{fused}  min_valid_depth_fraction: 0.3
 selection:
   max_frame_gap: 4
   pruning: {{max_distance_m: 3.0, max_view_angle_deg: 90, frustum: true}}
@@ -83,14 +84,29 @@ class ScanNetPP(unittest.TestCase):
             occgt.open_dataset(self.root, "scannetpp", device="kinect")
 
 
+    def test_bad_fused_depth(self) -> None:
+        scene = occgt.open_dataset(self.root, "scannetpp", device="iphone").scene("synthpp_000")
+        frame_id = [f.id for f in scene.frames if f.usable][0]
+        for bad, error, words in (({"tol": 1.0}, ValueError, "fused_depth: unknown key 'tol'"),
+                                  ({"abs_tol_m": -1.0}, ValueError, "fused_depth: "),
+                                  ({"rel_tol": "x"}, TypeError, "rel_tol: expected a number"),
+                                  (3, TypeError, "fused_depth: expected None or a dict")):
+            with self.assertRaises(error) as c:
+                scene.load(frame_id, 96, 72, depth_source="fused", fused_depth=bad)
+            self.assertIn(words, str(c.exception))
+
     def test_splits_read_back_with_the_recipes_device_and_depth(self) -> None:
+        # iPhone depth fused with the mesh at a 1 cm tolerance, below the resampled depth's
+        # error in places (not the default): the datasets must take it from the recipe.
+        fused = {"abs_tol_m": 0.01, "rel_tol": 0.0}
         for device, depth_source in (("dslr", "mesh"), ("iphone", "fused")):
             with self.subTest(device=device):
-                out = os.path.join(self.root, "..", "scannetpp_" + device)
-                recipe = out + ".yaml"
+                out = common.scratch("scannetpp_" + device)
+                recipe = os.path.join(out, "recipe.yaml")
                 with open(recipe, "w") as f:
-                    f.write(RECIPE.format(device=device, root=self.root,
-                                          depth_source=depth_source))
+                    f.write(RECIPE.format(
+                        device=device, root=self.root, depth_source=depth_source,
+                        fused=f"  fused_depth: {json.dumps(fused)}\n" if device == "iphone" else ""))
                 common.occgt("build", recipe, "--out", out)
                 common.occgt("covis", recipe, "--out", out)
                 common.occgt("tuples", recipe, "--out", out, "--shards")
@@ -105,10 +121,17 @@ class ScanNetPP(unittest.TestCase):
                     for k in ("depth0", "depth1"):
                         np.testing.assert_array_equal(item[k].numpy(), s[k])
                     np.testing.assert_array_equal(item["label01"].numpy(), s["label01"])
+                    if device == "iphone":  # the default tolerances give other depth
+                        scene = occgt.open_dataset(self.root, "scannetpp", device=device).scene(
+                            item["scene_id"])
+                        default = scene.load(item["pair_names"][0].split("/")[1], 96, 72,
+                                             depth_source="fused")[0]
+                        self.assertFalse(np.array_equal(default, s["depth0"]))
                 views = common.read_shard_samples(os.path.join(out, "views"), images=False)
                 tuples = TupleIndexDataset(os.path.join(out, "tuples.jsonl"), self.root,
                                            "scannetpp", width=96, height=72, images=False,
-                                           device=device, depth_source=depth_source)
+                                           device=device, depth_source=depth_source,
+                                           fused_depth=fused if device == "iphone" else None)
                 self.assertEqual(len(tuples), len(views))
                 self.assertGreater(len(views), 0)
                 for i, s in enumerate(views):

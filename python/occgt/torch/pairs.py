@@ -22,8 +22,6 @@ from ._convert import to_tensor
 
 #: LoFTR's dataset_name for occgt's reader formats (its evaluation picks thresholds by it).
 _DATASET_NAMES = {"scannet": "ScanNet", "megadepth": "MegaDepth"}
-#: The tolerances of depth_source "fused" that Scene.load uses (render::FusedDepthOptions).
-FUSED_DEPTH_DEFAULTS: Dict[str, float] = dict(occgt.DATASET_DEFAULTS["fused_depth"])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -168,9 +166,10 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             (fused for each item) or ``"scene:S"`` (fused once per scene and process, then
             shared by the scene's pairs, as ``occgt build`` does).
         scene_names, npz_root: see ``read_pair_index``.
-        depth_source, mesh_path: the frames' depth (``Scene.load``): ``"sensor"``, or
-            ``"mesh"``/``"fused"`` with the scene's mesh (``mesh_path``, ``{scene}`` = the
-            scene's name; None: the reader's); pair scope only.
+        depth_source, mesh_path, fused_depth: the frames' depth (``Scene.load``):
+            ``"sensor"``, or ``"mesh"``/``"fused"`` with the scene's mesh (``mesh_path``,
+            ``{scene}`` = the scene's name; None: the reader's) and, for ``"fused"``, the
+            tolerances ``fused_depth`` (None: the defaults); pair scope only.
         device: ScanNet++'s camera, ``"dslr"`` or ``"iphone"`` (``occgt.open_dataset``).
 
     Items are dicts with the keys of the sample contract (``occgt.torch``): LoFTR's keys
@@ -188,13 +187,14 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                  npz_root: Optional[str] = None,
                  depth_source: str = occgt.DATASET_DEFAULTS["depth_source"],
                  mesh_path: Optional[str] = None,
+                 fused_depth: Optional[Dict[str, float]] = None,
                  device: str = occgt.DATASET_DEFAULTS["device"], **options: Any) -> None:
         if depth_source not in ("sensor", "mesh", "fused"):
             raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")
         if depth_source != "sensor" and occupancy is not None and scope != "pair":
             raise ValueError("depth_source: a scope other than 'pair' fuses sensor depth; "
                              "use scope='pair' with depth_source " + repr(depth_source))
-        self.depth_source, self.mesh_path = depth_source, mesh_path
+        self.depth_source, self.mesh_path, self.fused_depth = depth_source, mesh_path, fused_depth
         if occupancy not in (None, "words", "dense"):
             raise ValueError(f"occupancy: expected None, 'words' or 'dense', got {occupancy!r}")
         self.pairs: List[PairRef] = (read_pair_index(pairs, scene_names, npz_root)
@@ -221,9 +221,8 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                    **overrides: Any) -> "PairIndexDataset":
         """The pairs of a built split (its ``pairs.jsonl``, else its ``selection/``) with the
         options of its recipe (``recipe.json``: resolution, label preset and overrides, depth
-        range, patches, occupancy; the dataset's ScanNet++ device, depth source and mesh
-        path), so that item i has the arrays of the split's sample i. A recipe whose
-        ``dataset.fused_depth`` tolerances are not ``Scene.load``'s raises ValueError.
+        range, patches, occupancy; the dataset's ScanNet++ device, depth source, mesh path
+        and fused-depth tolerances), so that item i has the arrays of the split's sample i.
 
         ``root`` replaces the recipe's dataset root (a synthetic recipe reads
         ``split_dir/data``). ``images`` defaults to the recipe's (``sample.image`` not
@@ -249,11 +248,8 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         depth: Dict[str, Any] = {
             "depth_source": dataset.get("depth_source", occgt.DATASET_DEFAULTS["depth_source"]),
             "mesh_path": dataset.get("mesh_path"),
+            "fused_depth": dataset.get("fused_depth"),
             "device": dataset.get("device", occgt.DATASET_DEFAULTS["device"])}
-        fused = dataset.get("fused_depth", FUSED_DEPTH_DEFAULTS)
-        if fused != FUSED_DEPTH_DEFAULTS:
-            raise ValueError(f"{path}: dataset.fused_depth: expected Scene.load's tolerances "
-                             f"{FUSED_DEPTH_DEFAULTS}, got {fused}")
         # The recipe's keys under pair_ground_truth's names, as they are: the C++ resolves them
         # (truth::ResolvePairTruthOptions), as for the build.
         options: Dict[str, Any] = {
@@ -338,9 +334,11 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         scene, _ = self._scene(ref.scene)
         id0, id1 = self.frame_ids(index)
         depth0, K0, world_from_cam0 = scene.load(id0, self.width, self.height,
-                                                 depth_source=self.depth_source)
+                                                 depth_source=self.depth_source,
+                                                 fused_depth=self.fused_depth)
         depth1, K1, world_from_cam1 = scene.load(id1, self.width, self.height,
-                                                 depth_source=self.depth_source)
+                                                 depth_source=self.depth_source,
+                                                 fused_depth=self.fused_depth)
         options = self._options_for(scene)
         if self.occupancy is not None and self.scope != "pair":
             options["scope_map"] = self._fused(scene, id0, id1, options)

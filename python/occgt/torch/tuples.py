@@ -58,9 +58,11 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         tuples: a tuples.jsonl path, or a list of ``TupleRef`` / ``(scene, [frame ids])``.
         root, format: the dataset (``occgt.open_dataset``).
         device: ScanNet++'s camera, ``"dslr"`` or ``"iphone"`` (``occgt.open_dataset``).
-        depth_source, mesh_path: the depth of every view (``Scene.load``): ``"sensor"``, or
-            ``"mesh"``/``"fused"`` with the scene's mesh (``mesh_path``, ``{scene}`` = the
-            scene's name, as a recipe's ``dataset.mesh_path``; None: the reader's).
+        depth_source, mesh_path, fused_depth: the depth of every view (``Scene.load``):
+            ``"sensor"``, or ``"mesh"``/``"fused"`` with the scene's mesh (``mesh_path``,
+            ``{scene}`` = the scene's name, as a recipe's ``dataset.mesh_path``; None: the
+            reader's) and, for ``"fused"``, the tolerances ``fused_depth`` (a recipe's
+            ``dataset.fused_depth``; None: the defaults).
         width, height: the working resolution of every view.
         preset, **label_options: the label options of ``occgt.views_ground_truth`` (the
             scene's depth range is passed as ``dataset_depth_range``).
@@ -93,7 +95,8 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                  seed: int = occgt.VIEWS_DEFAULTS["seed"], images: bool = True, views: str = "vggt",
                  device: str = occgt.DATASET_DEFAULTS["device"],
                  depth_source: str = occgt.DATASET_DEFAULTS["depth_source"],
-                 mesh_path: Optional[str] = None, **label_options: Any) -> None:
+                 mesh_path: Optional[str] = None,
+                 fused_depth: Optional[Dict[str, float]] = None, **label_options: Any) -> None:
         if views not in ("vggt", "dust3r"):
             raise ValueError(f"views: expected 'vggt' or 'dust3r', got {views!r}")
         if isinstance(tuples, (str, os.PathLike)):
@@ -108,7 +111,7 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         if depth_source not in ("sensor", "mesh", "fused"):
             raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")
         self.root, self.format, self.device = root, format, device
-        self.depth_source, self.mesh_path = depth_source, mesh_path
+        self.depth_source, self.mesh_path, self.fused_depth = depth_source, mesh_path, fused_depth
         self.width, self.height = int(width), int(height)
         self.preset, self.num_tracks, self.seed = preset, int(num_tracks), int(seed)
         self.images, self.views = bool(images), views
@@ -140,8 +143,8 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         index %= len(self.tuples)
         ref = self.tuples[index]
         scene = self._scene(ref.scene)
-        loaded = [scene.load(i, self.width, self.height, depth_source=self.depth_source)
-                  for i in ref.frame_ids]
+        loaded = [scene.load(i, self.width, self.height, depth_source=self.depth_source,
+                             fused_depth=self.fused_depth) for i in ref.frame_ids]
         depths = np.stack([d for d, _, _ in loaded])
         Ks = np.stack([K for _, K, _ in loaded])
         poses = np.stack([T for _, _, T in loaded])
