@@ -8,7 +8,10 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <string>
+#include <string_view>
 #include <type_traits>
+#include <utility>
 #include <valijson/adapters/nlohmann_json_adapter.hpp>
 #include <valijson/schema.hpp>
 #include <valijson/schema_parser.hpp>
@@ -231,7 +234,8 @@ T CheckedInteger(const json& v, const std::string& field, const std::string& fil
   const auto fail = [&]() -> T {
     throw InputError(file, field + ": expected an integer in [" +
                                std::to_string(std::numeric_limits<T>::min()) + ", " +
-                               std::to_string(std::numeric_limits<T>::max()) + "]");
+                               std::to_string(std::numeric_limits<T>::max()) + "], got " +
+                               v.dump());
   };
   if (v.is_number_unsigned()) {
     const uint64_t u = v.get<uint64_t>();
@@ -258,20 +262,24 @@ T CheckedInteger(const json& v, const std::string& field, const std::string& fil
   return fail();
 }
 
+// The key of `field` ("dataset.frame_stride") in its section's object `o`, if present.
 template <typename T>
-void Get(const json& o, const char* key, T* out, const std::string& file) {
+void Get(const json& o, std::string_view field, T* out, const std::string& file) {
+  const std::string key(field.substr(field.rfind('.') + 1));  // npos + 1 = 0: no section
   if (!o.contains(key) || o[key].is_null()) return;
   if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
-    *out = CheckedInteger<T>(o[key], key, file);
+    *out = CheckedInteger<T>(o[key], std::string(field), file);
   } else {
     *out = o[key].get<T>();
   }
 }
 template <typename T>
-void GetOpt(const json& o, const char* key, std::optional<T>* out, const std::string& file) {
+void GetOpt(const json& o, std::string_view field, std::optional<T>* out,
+            const std::string& file) {
+  const std::string key(field.substr(field.rfind('.') + 1));
   if (!o.contains(key) || o[key].is_null()) return;
   T value{};
-  Get(o, key, &value, file);
+  Get(o, field, &value, file);
   *out = value;
 }
 
@@ -444,6 +452,12 @@ bool DatasetOptions::Check(std::string* error) const {
   if (!(min_valid_depth_fraction >= 0 && min_valid_depth_fraction <= 1)) {
     return fail("dataset.min_valid_depth_fraction: expected a number in [0, 1]");
   }
+  if (min_depth_m && !(*min_depth_m >= 0 && std::isfinite(*min_depth_m))) {
+    return fail("dataset.min_depth_m: expected a finite number >= 0 (metres)");
+  }
+  if (max_depth_m && !(*max_depth_m > 0)) {
+    return fail("dataset.max_depth_m: expected a number > 0 (metres)");
+  }
   if (min_depth_m && max_depth_m && !(*min_depth_m < *max_depth_m)) {
     return fail("dataset.max_depth_m: expected a number > dataset.min_depth_m");
   }
@@ -479,7 +493,9 @@ bool CheckOccupancy(const truth::PairTruthOptions& t, bool max_range_given, std:
 bool ShardOptions::Check(std::string* error) const {
   if (samples_per_shard < 1)
     return *error = "shards.samples_per_shard: expected an integer >= 1", false;
-  if (!(target_mb >= 0)) return *error = "shards.target_mb: expected a number >= 0", false;
+  if (!(target_mb >= 0) || !std::isfinite(target_mb)) {
+    return *error = "shards.target_mb: expected a finite number >= 0", false;
+  }
   return true;
 }
 
@@ -497,11 +513,28 @@ bool Recipe::Check(std::string* error) const {
   if (name.empty()) return *error = "name: expected a non-empty name", false;
   if (width < 8 || height < 8)
     return *error = "resolution: expected [W, H] with 8 <= W, H <= 8192", false;
+  const truth::PairTruthOptions resolved = truth::ResolvePairTruthOptions(RecipePairSettings(*this));
   if (!dataset.Check(error) || !selection.Check(error) ||
-      !CheckOccupancy(truth::ResolvePairTruthOptions(RecipePairSettings(*this)),
-                      occupancy.settings.max_range_m.has_value(), error) ||
+      !CheckOccupancy(resolved, occupancy.settings.max_range_m.has_value(), error) ||
       !shards.Check(error)) {
     return false;
+  }
+  // The labels: the preset with labels.overrides (the scene's depth range comes with the
+  // scene), so that a bad override fails here, naming its key, before anything is written.
+  if (std::string why; !resolved.labels.Check(&why)) {
+    // Named after the override the message mentions first ("max_depth_m must be >
+    // min_depth_m (2000)" after min_depth_m: 2000).
+    const std::pair<const char*, bool> keys[] = {{"abs_tol_m", labels.abs_tol_m.has_value()},
+                                                 {"rel_tol", labels.rel_tol.has_value()},
+                                                 {"min_depth_m", labels.min_depth_m.has_value()},
+                                                 {"max_depth_m", labels.max_depth_m.has_value()}};
+    const char* named = nullptr;
+    size_t first = std::string::npos;
+    for (const auto& [key, set] : keys) {
+      if (const size_t at = why.find(key); set && at < first) first = at, named = key;
+    }
+    return *error = (named ? std::string("labels.overrides.") + named : "labels") + ": " + why,
+           false;
   }
   if (tuples) {
     if (!tuple_tracks.Check(error)) return false;
@@ -641,6 +674,15 @@ json Recipe::ToJson() const {
                  {"compression", SampleCompressionName(sample.compression)}};
   j["shards"] = {{"samples_per_shard", shards.samples_per_shard}, {"target_mb", shards.target_mb}};
   j["loftr_export"] = LoftrExportKindName(loftr_export);
+  // The exports' other keys only when asked for, so that recipes without them keep their
+  // digest: a re-run into the same --out that adds an export is refused as another recipe
+  // instead of finding every shard complete and writing no export.
+  if (loftr_export != LoftrExportKind::kNone) {
+    if (loftr_tree) j["loftr_tree"] = true;
+    if (loftr_score == LoftrScore::kCovisible) j["loftr_score"] = "covisible";
+  }
+  if (gluefactory_export) j["gluefactory_export"] = true;
+  if (dust3r_export) j["dust3r_export"] = true;
   return j;
 }
 
@@ -649,6 +691,7 @@ std::string Recipe::Digest() const {
   json j = ToJson();
   j["dataset"].erase("root");
   j["dataset"].erase("split_file");
+  j["dataset"].erase("mesh_path");
   j["selection"]["import_pairs"].erase("path");
   return io::Md5Hex(j.dump());
 }
@@ -677,21 +720,25 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   }
   if (d.contains("root"))
     r.dataset.root = ResolvePath(d["root"].get<std::string>(), file + ": dataset.root", base_dir);
-  Get(d, "scenes", &r.dataset.scenes, file);
+  Get(d, "dataset.scenes", &r.dataset.scenes, file);
   // An empty value (e.g. an unset ${VAR:-}) means no split file: every scene.
   if (d.contains("split_file") &&
       !ExpandEnv(d["split_file"].get<std::string>(), file + ": dataset.split_file").empty()) {
     r.dataset.split_file =
         ResolvePath(d["split_file"].get<std::string>(), file + ": dataset.split_file", base_dir);
   }
-  Get(d, "frame_stride", &r.dataset.frame_stride, file);
+  Get(d, "dataset.frame_stride", &r.dataset.frame_stride, file);
   if (d.contains("device")) {
+    if (r.dataset.is_synthetic || r.dataset.format != DatasetFormat::kScanNetPP) {
+      throw InputError(file, "dataset.device: expected only with format scannetpp (ScanNet++'s "
+                             "camera), not " + format);
+    }
     r.dataset.device =
         datasets::ParseScanNetPPDevice(d["device"].get<std::string>(), file + ": dataset.device");
   }
-  Get(d, "min_valid_depth_fraction", &r.dataset.min_valid_depth_fraction, file);
-  GetOpt(d, "min_depth_m", &r.dataset.min_depth_m, file);
-  GetOpt(d, "max_depth_m", &r.dataset.max_depth_m, file);
+  Get(d, "dataset.min_valid_depth_fraction", &r.dataset.min_valid_depth_fraction, file);
+  GetOpt(d, "dataset.min_depth_m", &r.dataset.min_depth_m, file);
+  GetOpt(d, "dataset.max_depth_m", &r.dataset.max_depth_m, file);
   if (d.contains("depth_source")) {
     r.dataset.depth_source =
         render::ParseDepthSourceMode(d["depth_source"].get<std::string>(), file + ": dataset.depth_source");
@@ -700,16 +747,19 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     r.dataset.mesh_path = ResolvePath(d["mesh_path"].get<std::string>(), file + ": dataset.mesh_path", base_dir);
   }
   if (d.contains("fused_depth")) {
-    Get(d["fused_depth"], "abs_tol_m", &r.dataset.fused_depth.abs_tol_m, file);
-    Get(d["fused_depth"], "rel_tol", &r.dataset.fused_depth.rel_tol, file);
+    Get(d["fused_depth"], "dataset.fused_depth.abs_tol_m", &r.dataset.fused_depth.abs_tol_m, file);
+    Get(d["fused_depth"], "dataset.fused_depth.rel_tol", &r.dataset.fused_depth.rel_tol, file);
   }
   if (d.contains("synthetic")) {
+    if (!r.dataset.is_synthetic) {
+      throw InputError(file, "dataset.synthetic: expected only with format synthetic, not " + format);
+    }
     const json& s = d["synthetic"];
-    Get(s, "scenes", &r.dataset.synthetic.scenes, file);
-    Get(s, "frames", &r.dataset.synthetic.frames, file);
-    Get(s, "width", &r.dataset.synthetic.width, file);
-    Get(s, "height", &r.dataset.synthetic.height, file);
-    Get(s, "seed", &r.dataset.synthetic.seed, file);
+    Get(s, "dataset.synthetic.scenes", &r.dataset.synthetic.scenes, file);
+    Get(s, "dataset.synthetic.frames", &r.dataset.synthetic.frames, file);
+    Get(s, "dataset.synthetic.width", &r.dataset.synthetic.width, file);
+    Get(s, "dataset.synthetic.height", &r.dataset.synthetic.height, file);
+    Get(s, "dataset.synthetic.seed", &r.dataset.synthetic.seed, file);
   }
   if (!overrides.root.empty()) {
     r.dataset.root = fs::absolute(overrides.root).lexically_normal().string();
@@ -717,31 +767,31 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   if (overrides.depth_source) r.dataset.depth_source = *overrides.depth_source;
   if (j.contains("labels")) {
     const json& l = j["labels"];
-    Get(l, "preset", &r.labels.preset, file);
+    Get(l, "labels.preset", &r.labels.preset, file);
     if (l.contains("overrides")) {
       const json& o = l["overrides"];
-      GetOpt(o, "abs_tol_m", &r.labels.abs_tol_m, file);
-      GetOpt(o, "rel_tol", &r.labels.rel_tol, file);
-      GetOpt(o, "min_depth_m", &r.labels.min_depth_m, file);
-      GetOpt(o, "max_depth_m", &r.labels.max_depth_m, file);
+      GetOpt(o, "labels.overrides.abs_tol_m", &r.labels.abs_tol_m, file);
+      GetOpt(o, "labels.overrides.rel_tol", &r.labels.rel_tol, file);
+      GetOpt(o, "labels.overrides.min_depth_m", &r.labels.min_depth_m, file);
+      GetOpt(o, "labels.overrides.max_depth_m", &r.labels.max_depth_m, file);
     }
   }
   if (j.contains("patches")) {
     const json& p = j["patches"];
-    Get(p, "stride", &r.patches.stride, file);
+    Get(p, "patches.stride", &r.patches.stride, file);
     if (p.contains("anchor")) r.patches.anchor = ParseAnchor(p["anchor"].get<std::string>());
-    Get(p, "mutual", &r.patches.mutual, file);
+    Get(p, "patches.mutual", &r.patches.mutual, file);
   }
   if (j.contains("selection")) {
     const json& s = j["selection"];
     pairs::SelectionOptions& o = r.selection;
-    Get(s, "max_frame_gap", &o.max_frame_gap, file);
+    Get(s, "selection.max_frame_gap", &o.max_frame_gap, file);
     if (s.contains("pruning")) {
-      Get(s["pruning"], "max_distance_m", &o.pruning.max_distance_m, file);
-      Get(s["pruning"], "max_view_angle_deg", &o.pruning.max_view_angle_deg, file);
-      Get(s["pruning"], "frustum", &o.pruning.frustum, file);
+      Get(s["pruning"], "selection.pruning.max_distance_m", &o.pruning.max_distance_m, file);
+      Get(s["pruning"], "selection.pruning.max_view_angle_deg", &o.pruning.max_view_angle_deg, file);
+      Get(s["pruning"], "selection.pruning.frustum", &o.pruning.frustum, file);
     }
-    Get(s, "score_stride", &o.score_stride, file);
+    Get(s, "selection.score_stride", &o.score_stride, file);
     if (s.contains("overlap")) {
       o.overlap_lo = s["overlap"][0].get<double>();
       o.overlap_hi = s["overlap"][1].get<double>();
@@ -766,8 +816,8 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
       o.aggregate =
           ParseAggregate(s["aggregate"].get<std::string>(), file + ": selection.aggregate");
     }
-    Get(s, "quota_per_scene", &o.quota_per_scene, file);
-    Get(s, "balance_bins", &o.balance_bins, file);
+    Get(s, "selection.quota_per_scene", &o.quota_per_scene, file);
+    Get(s, "selection.balance_bins", &o.balance_bins, file);
     if (s.contains("views") || s.contains("tuples")) {
       if (!s.contains("views")) {
         throw InputError(file, "selection.tuples: expected selection.views (N or [min, max]) "
@@ -783,24 +833,27 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
       }
       if (s.contains("tuples")) {
         const json& tj = s["tuples"];
-        Get(tj, "edge_threshold", &t.edge_threshold, file);
+        Get(tj, "selection.tuples.edge_threshold", &t.edge_threshold, file);
         if (tj.contains("pair_covisibility")) {
           t.pair_lo = tj["pair_covisibility"][0].get<double>();
           t.pair_hi = tj["pair_covisibility"][1].get<double>();
         }
-        Get(tj, "min_spread", &t.min_spread_score, file);
-        Get(tj, "restarts", &t.restarts, file);
-        Get(tj, "quota_per_scene", &t.quota, file);
-        Get(tj, "balance_occlusion", &t.balance_occlusion, file);
-        Get(tj, "num_tracks", &r.tuple_tracks.num_tracks, file);
-        Get(tj, "query_view", &r.tuple_tracks.query_view, file);
+        Get(tj, "selection.tuples.min_spread", &t.min_spread_score, file);
+        Get(tj, "selection.tuples.restarts", &t.restarts, file);
+        Get(tj, "selection.tuples.quota_per_scene", &t.quota, file);
+        Get(tj, "selection.tuples.balance_occlusion", &t.balance_occlusion, file);
+        Get(tj, "selection.tuples.num_tracks", &r.tuple_tracks.num_tracks, file);
+        Get(tj, "selection.tuples.query_view", &r.tuple_tracks.query_view, file);
       }
       std::string error;
-      if (!t.Check(&error)) throw InputError(file, "selection." + error);
+      if (!t.Check(&error)) {  // "views: ..." is selection.views, the rest selection.tuples.*
+        throw InputError(file, (error.rfind("views:", 0) == 0 ? "selection." : "selection.tuples.") +
+                                   error);
+      }
       r.tuples = t;
     }
     if (s.contains("import_pairs")) {
-      Get(s["import_pairs"], "format", &o.import_pairs.format, file);
+      Get(s["import_pairs"], "selection.import_pairs.format", &o.import_pairs.format, file);
       o.import_pairs.path = ResolvePath(s["import_pairs"]["path"].get<std::string>(),
                                         file + ": selection.import_pairs.path", base_dir);
     }
@@ -808,20 +861,20 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   if (j.contains("occupancy")) {
     const json& o = j["occupancy"];
     truth::OccupancySettings& os = r.occupancy.settings;
-    Get(o, "enabled", &os.enabled, file);
-    GetOpt(o, "voxel_m", &os.voxel_m, file);
-    GetOpt(o, "max_range_m", &os.max_range_m, file);
-    GetOpt(o, "bins", &os.bins, file);
-    GetOpt(o, "near_m", &os.near_m, file);
-    GetOpt(o, "far_m", &os.far_m, file);
+    Get(o, "occupancy.enabled", &os.enabled, file);
+    GetOpt(o, "occupancy.voxel_m", &os.voxel_m, file);
+    GetOpt(o, "occupancy.max_range_m", &os.max_range_m, file);
+    GetOpt(o, "occupancy.bins", &os.bins, file);
+    GetOpt(o, "occupancy.near_m", &os.near_m, file);
+    GetOpt(o, "occupancy.far_m", &os.far_m, file);
     if (o.contains("spacing"))
       os.spacing = occupancy::ParseBinSpacing(o["spacing"].get<std::string>());
     if (o.contains("traversal")) {
       os.traversal = occupancy::ParseTraversal(o["traversal"].get<std::string>());
     }
     if (o.contains("scope")) os.scope = ParseScope(o["scope"].get<std::string>(), file);
-    GetOpt(o, "window", &os.window, file);
-    GetOpt(o, "scene_stride", &os.scene_stride, file);
+    GetOpt(o, "occupancy.window", &os.window, file);
+    GetOpt(o, "occupancy.scene_stride", &os.scene_stride, file);
     if (o.contains("mode")) os.mode = occupancy::ParseOccupancyMode(o["mode"].get<std::string>());
     if (o.contains("encoding")) {
       r.occupancy.encoding =
@@ -832,24 +885,28 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     const json& s = j["sample"];
     if (s.contains("image"))
       r.sample.image = ParseImageFormat(s["image"].get<std::string>(), file + ": sample.image");
-    Get(s, "depth", &r.sample.depth, file);
-    Get(s, "labels", &r.sample.labels, file);
-    Get(s, "occupancy", &r.sample.occupancy, file);
+    Get(s, "sample.depth", &r.sample.depth, file);
+    Get(s, "sample.labels", &r.sample.labels, file);
+    Get(s, "sample.occupancy", &r.sample.occupancy, file);
     if (s.contains("compression")) {
       r.sample.compression = ParseSampleCompression(s["compression"].get<std::string>(),
                                                     file + ": sample.compression");
     }
   }
   if (j.contains("shards")) {
-    Get(j["shards"], "samples_per_shard", &r.shards.samples_per_shard, file);
-    Get(j["shards"], "target_mb", &r.shards.target_mb, file);
+    Get(j["shards"], "shards.samples_per_shard", &r.shards.samples_per_shard, file);
+    Get(j["shards"], "shards.target_mb", &r.shards.target_mb, file);
   }
   if (j.contains("loftr_export")) {
     const std::string kind = j["loftr_export"]["kind"].get<std::string>();
     r.loftr_export = kind == "test"        ? LoftrExportKind::kTest
                      : kind == "megadepth" ? LoftrExportKind::kMegaDepth
                                            : LoftrExportKind::kTrain;
-    Get(j["loftr_export"], "tree", &r.loftr_tree, file);
+    Get(j["loftr_export"], "loftr_export.tree", &r.loftr_tree, file);
+    if (j["loftr_export"].contains("score") && r.loftr_export == LoftrExportKind::kTest) {
+      throw InputError(file, "loftr_export.score: expected only with kind train or megadepth "
+                             "(LoFTR's test index has no score)");
+    }
     if (j["loftr_export"].value("score", "overlap") == "covisible") {
       r.loftr_score = LoftrScore::kCovisible;
     }

@@ -81,7 +81,7 @@ occupancy: {enabled: false, voxel_m: 0.1, bins: 32, near_m: 0.5, far_m: 20, spac
             traversal: center, scope: scene, mode: two_point, encoding: both}
 sample: {image: jpg, depth: true, labels: false, occupancy: false}
 shards: {samples_per_shard: 10, target_mb: 0}
-loftr_export: {kind: test, score: covisible}
+loftr_export: {kind: train, score: covisible}
 gluefactory_export: true
 dust3r_export: true
 )";
@@ -115,7 +115,7 @@ dust3r_export: true
   EXPECT_EQ(r.sample.image, ImageFormat::kJpg);
   EXPECT_TRUE(r.sample.depth);
   EXPECT_EQ(r.shards.samples_per_shard, 10);
-  EXPECT_EQ(r.loftr_export, LoftrExportKind::kTest);
+  EXPECT_EQ(r.loftr_export, LoftrExportKind::kTrain);
   EXPECT_EQ(r.loftr_score, LoftrScore::kCovisible);
   EXPECT_TRUE(r.gluefactory_export);
   EXPECT_TRUE(r.dust3r_export);
@@ -178,6 +178,53 @@ TEST(Recipe, SemanticChecksNameTheField) {
   EXPECT_EQ(ErrorOf(std::string(kMinimal) + "occupancy: {near_m: 5, far_m: 2}\n")
                 .find("recipes/x.yaml: occupancy.far_m:"),
             0u);
+}
+
+TEST(Recipe, RangesThatWouldFailLaterNameTheirKeyAtLoad) {
+  // Each used to load and fail at the first scene (after --out was claimed), under the
+  // resolved option's name ("labels: max_depth_m ...") or not at all (target_mb: inf).
+  const std::string m(kMinimal);
+  EXPECT_EQ(ErrorOf("name: a\ndataset: {format: synthetic, max_depth_m: 0}\n"),
+            "recipes/x.yaml: dataset.max_depth_m: expected a number > 0 (metres)");
+  EXPECT_EQ(ErrorOf(m + "labels: {overrides: {max_depth_m: 0}}\n"),
+            "recipes/x.yaml: labels.overrides.max_depth_m: expected a number > 0 (metres)");
+  EXPECT_EQ(ErrorOf(m + "labels: {overrides: {min_depth_m: 2000}}\n"),
+            "recipes/x.yaml: labels.overrides.min_depth_m: max_depth_m must be > min_depth_m "
+            "(2000), got 1000");
+  EXPECT_EQ(ErrorOf(m + "labels: {overrides: {abs_tol_m: .inf}}\n"),
+            "recipes/x.yaml: labels.overrides.abs_tol_m: abs_tol_m must be finite and >= 0, "
+            "got inf");
+  EXPECT_EQ(ErrorOf(m + "shards: {target_mb: .inf}\n"),
+            "recipes/x.yaml: shards.target_mb: expected a finite number >= 0");
+  EXPECT_EQ(ErrorOf(m + "selection: {quota_per_scene: 3000000000}\n"),
+            "recipes/x.yaml: selection.quota_per_scene: expected an integer in [-2147483648, "
+            "2147483647], got 3000000000");
+  // TupleOptions::Check's fields under selection.tuples, selection.views under selection.
+  EXPECT_EQ(ErrorOf(m + "selection: {views: 3, tuples: {pair_covisibility: [0.8, 0.2]}}\n"),
+            "recipes/x.yaml: selection.tuples.pair_covisibility: expected [lo, hi] with 0 <= "
+            "lo <= hi <= 1");
+  EXPECT_EQ(ErrorOf(m + "selection: {views: [5, 3]}\n").rfind("recipes/x.yaml: selection.views:", 0),
+            0u);
+}
+
+TEST(Recipe, KeysThatWouldBeIgnoredAreRefused) {
+  EXPECT_EQ(ErrorOf(std::string(kMinimal) + "  device: iphone\n"),
+            "recipes/x.yaml: dataset.device: expected only with format scannetpp (ScanNet++'s "
+            "camera), not sevenscenes");
+  EXPECT_EQ(ErrorOf(std::string(kMinimal) + "  synthetic: {scenes: 3}\n"),
+            "recipes/x.yaml: dataset.synthetic: expected only with format synthetic, not "
+            "sevenscenes");
+  EXPECT_EQ(ErrorOf(std::string(kMinimal) + "loftr_export: {kind: test, score: covisible}\n"),
+            "recipes/x.yaml: loftr_export.score: expected only with kind train or megadepth "
+            "(LoFTR's test index has no score)");
+  EXPECT_EQ(ParseRecipe("name: a\ndataset: {format: scannetpp, root: r, device: iphone}\n",
+                        "x.yaml", "/b")
+                .dataset.device,
+            datasets::ScanNetPPDevice::kIphone);
+  EXPECT_EQ(ParseRecipe(std::string(kMinimal) + "sample: {depth: true}\nloftr_export: {kind: test}\n",
+                        "x.yaml", "/b")
+                .loftr_export,
+            LoftrExportKind::kTest);
 }
 
 TEST(Recipe, MissingDatasetAndFormat) {
@@ -360,7 +407,8 @@ TEST(Recipe, FuzzFoundAliasExpansionIsBounded) {
 TEST(Recipe, FuzzFoundIntegersMustFitTheirField) {
   // get<int>() truncated 4294967297 to 1, which then passed every check.
   EXPECT_EQ(ErrorOf("name: a\ndataset: {format: synthetic, frame_stride: 4294967297}\n"),
-            "recipes/x.yaml: frame_stride: expected an integer in [-2147483648, 2147483647]");
+            "recipes/x.yaml: dataset.frame_stride: expected an integer in [-2147483648, "
+            "2147483647], got 4294967297");
   EXPECT_EQ(ErrorOf("name: a\ndataset: {format: synthetic}\nshards: {samples_per_shard: 3e9}\n")
                 .rfind("recipes/x.yaml: ", 0),
             0u);
