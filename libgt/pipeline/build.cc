@@ -64,7 +64,8 @@ Recipe ResolveDataset(const Recipe& in, const BuildOptions& options) {
     io::FolderLock lock(options.out_dir);
     EnsureSyntheticDataset(recipe.dataset.root, recipe.dataset.synthetic);
   }
-  recipe.dataset.is_synthetic = false;
+  // Read as generic manifests; is_synthetic stays, so that the digest the samples and
+  // selections record is recipe.json's (the recipe as written, its root aside).
   recipe.dataset.format = DatasetFormat::kGeneric;
   return recipe;
 }

@@ -72,6 +72,7 @@ std::string CovisibilityDigest(const Recipe& recipe) {
   j["dataset"].erase("root");
   j["dataset"].erase("split_file");
   j["dataset"].erase("scenes");
+  j["dataset"].erase("mesh_path");  // a path, as root (Recipe::Digest)
   return io::Md5Hex(j.dump());
 }
 
@@ -175,8 +176,7 @@ SceneLoop StartSceneLoop(const Recipe& recipe_in, const std::string& out_dir, bo
       io::FolderLock lock(out_dir);
       EnsureSyntheticDataset(recipe.dataset.root, recipe.dataset.synthetic);
     }
-    recipe.dataset.is_synthetic = false;
-    recipe.dataset.format = DatasetFormat::kGeneric;
+    recipe.dataset.format = DatasetFormat::kGeneric;  // is_synthetic stays (the digest)
   }
   loop.digest = CovisibilityDigest(recipe_in);
   loop.reader = MakeRecipeReader(recipe);

@@ -164,6 +164,14 @@ def read_split(out, split, width, height, stride=8):
         summary = json.load(f)
     validate(summary, "summary.schema.json")
     assert summary["samples"] == len(keys) and summary["complete"]
+    # recipe.json: the resolved recipe with the demo's exports and its digest, which every
+    # sample json carries.
+    with open(os.path.join(out, "recipe.json")) as f:
+        resolved = json.load(f)
+    validate(resolved, "recipe_json.schema.json")
+    assert resolved["loftr_export"] == "test" and resolved["loftr_tree"] is True, resolved
+    assert resolved["gluefactory_export"] is True and resolved["dust3r_export"] is True, resolved
+    assert {m["options_digest"] for m in metas} == {resolved["options_digest"]}
     c = summary["counts"]
     drops = summary["drops"]
     # Drop counts add up stage by stage.
