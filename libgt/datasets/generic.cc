@@ -299,6 +299,12 @@ Scene ParseGenericManifest(std::string_view text, const std::string& manifest,
       } else if (cw > 0) {
         f.color_camera = f.depth_camera.Resized(cw, ch);
       }
+      // A colour file that does not exist: the frame has no colour, as in the folder readers
+      // (ScanNet, 7-Scenes, TartanAir); `occgt scan` counts the usable frames without colour.
+      if (!io::FileExists(f.color_path)) {
+        f.color_path.clear();
+        f.color_camera = Camera();
+      }
     }
 
     if (options.check_depth_files && !io::FileExists(f.depth.path)) {

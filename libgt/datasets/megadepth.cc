@@ -27,6 +27,8 @@ constexpr const char* kV1Path = "phoenix/S6/zl548/MegaDepth_v1";
 constexpr uintmax_t kMinMetricDepthBytes = 100 * 1024;
 constexpr const char* kReasonOrdinal =
     "depth: under 100 KiB (an ordinal or mask map, not metric depth)";
+// Every frame of a scene listed beside others that have a model, but without one itself.
+constexpr const char* kReasonNoModel = "pose: no COLMAP model of the scene";
 
 bool DirectoryExists(const fs::path& p) {
   std::error_code ec;
@@ -80,6 +82,19 @@ std::string ModelPlacesText(const fs::path& scene_dir, const std::string& scene)
   return s;
 }
 
+// The depth files of a scene, dense0/depths/*.h5, by name (AppleDouble "._*" ignored).
+std::vector<std::string> DepthFileNames(const fs::path& scene_dir) {
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(scene_dir / "dense0" / "depths", ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("._", 0) == 0 || entry.path().extension() != ".h5") continue;
+    out.push_back(name);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 // The folder of scenes under root: root/phoenix/S6/zl548/MegaDepth_v1 when it exists,
 // else root itself.
 fs::path MegaDepthScenesDir(const std::string& root) {
@@ -113,17 +128,22 @@ std::vector<std::string> MegaDepthReader::ListScenes(const std::string& root) co
     return {name};
   }
   const fs::path dir = MegaDepthScenesDir(root);
+  // A scene without a model beside scenes with one is listed too (when it has depth files):
+  // ReadScene gives its frames unusable (kReasonNoModel), so `occgt scan` counts them.
   std::vector<std::string> out;
   std::string first_without_model;
+  size_t with_model = 0;
   for (const auto& name : ListSubfolders(dir.string())) {
     if (!IsMegaDepthSceneFolder(dir / name)) continue;
     if (FindModel(dir / name, name).model.empty()) {
       if (first_without_model.empty()) first_without_model = name;
+      if (!DepthFileNames(dir / name).empty()) out.push_back(name);
       continue;
     }
     out.push_back(name);
+    ++with_model;
   }
-  if (out.empty()) {
+  if (with_model == 0) {
     if (!first_without_model.empty()) {
       throw InputError(root, "no MegaDepth scene with a COLMAP sparse model (scene " +
                                  first_without_model + " has dense0/depths/ but none in " +
@@ -146,10 +166,30 @@ Scene MegaDepthReader::ReadScene(const std::string& root, const std::string& sce
   const std::string name = FolderName(folder);
   const ModelPlace place = FindModel(fs::path(folder), name);
   if (place.model.empty()) {
-    throw InputError(folder,
-                     "no COLMAP sparse model of the scene (expected cameras + images "
-                     ".bin or .txt in " +
-                         ModelPlacesText(fs::path(folder), name) + ")");
+    if (root_is_scene) {
+      throw InputError(folder,
+                       "no COLMAP sparse model of the scene (expected cameras + images "
+                       ".bin or .txt in " +
+                           ModelPlacesText(fs::path(folder), name) + ")");
+    }
+    // One scene among others: its depth files are frames without pose or K, counted.
+    const std::vector<std::string> depth_files = DepthFileNames(fs::path(folder));
+    if (depth_files.empty()) {
+      throw InputError((fs::path(folder) / "dense0" / "depths").string(),
+                       "empty scene: no .h5 depth files and no COLMAP sparse model");
+    }
+    const std::string detail = ModelPlacesText(fs::path(folder), name) +
+                               ": no COLMAP sparse model (expected cameras + images, .bin or .txt)";
+    for (size_t i = 0; i < depth_files.size(); ++i) {
+      Frame f;
+      f.id = fs::path(depth_files[i]).stem().string();
+      f.number = static_cast<int64_t>(i);
+      f.depth.path = (fs::path(folder) / "dense0" / "depths" / depth_files[i]).string();
+      f.depth.format = DepthFormat::kHdf5;
+      MarkUnusable(&f, kReasonNoModel, detail);  // no K: the depth camera stays 0x0
+      scene.frames.push_back(std::move(f));
+    }
+    return scene;
   }
   const ColmapModel model = ReadColmapModel(place.model.string());
   if (model.images.empty()) throw InputError(model.images_path, "empty model: no images");

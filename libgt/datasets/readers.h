@@ -63,6 +63,24 @@ class TumReader : public DatasetReader {
   ReaderOptions options_;
 };
 
+// TUM's K by sequence folder name (docs/DATASETS.md "TUM RGB-D"): fr2 when the name holds
+// "freiburg2" or "fr2", else fr3 for "freiburg3"/"fr3", else fr1 (named only when the name
+// holds "freiburg1" or "fr1"; otherwise fr1's K is assumed), at 640x480.
+struct TumIntrinsics {
+  Camera camera;
+  std::string sequence;  // "fr1", "fr2", "fr3"
+  bool named = false;    // the folder name says which sequence
+};
+TumIntrinsics TumIntrinsicsOf(const std::string& sequence_name);
+// What `occgt scan` says of a TUM scene beside the counts (SummarizeScene's warnings), one
+// line each: fr1's K assumed for a folder name that names no sequence; a missing rgb.txt.
+std::vector<std::string> TumSceneWarnings(const Scene& scene);
+
+// The file the colour K of a ScanNet scene comes from, for messages: the Python export's
+// intrinsic/intrinsic_color.txt, the C++ export's _info.txt or the .sens; "" when the colour
+// K is the depth K rescaled.
+std::string ScanNetColorIntrinsicsSource(const Scene& scene);
+
 // MegaDepth v1: dense0/depths/*.h5 with a COLMAP sparse model of the undistorted images
 // (megadepth.cc).
 class MegaDepthReader : public DatasetReader {

@@ -1,7 +1,10 @@
 #include "libgt/datasets/scan.h"
 
+#include <sstream>
+
 #include "libgt/core/depth.h"
 #include "libgt/core/error.h"
+#include "libgt/datasets/readers.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/depth_io.h"
 #include "libgt/io/file_read.h"
@@ -52,6 +55,39 @@ std::vector<std::string> DatasetCaveats(DatasetFormat format) {
 }
 
 namespace {
+// The pixel area is [-0.5, w - 0.5] x [-0.5, h - 0.5] (core/camera.h: pixel centres at integers).
+bool PrincipalPointInImage(const Camera& c) {
+  return c.cx >= -0.5 && c.cx <= c.width - 0.5 && c.cy >= -0.5 && c.cy <= c.height - 0.5;
+}
+
+// A colour K whose principal point lies outside its image: intrinsics of another image size
+// (ScanNet's intrinsic_color.txt of the 1296x968 original beside colour resized to 640x480).
+// One line naming the K's file when the reader knows it, the sizes and the frames; "" when
+// every frame with colour is consistent.
+std::string ColorPrincipalPointWarning(const Scene& scene) {
+  size_t with_color = 0, outside = 0;
+  const Frame* first = nullptr;
+  for (const Frame& f : scene.frames) {
+    if (f.color_path.empty() || f.color_camera.width <= 0 || f.color_camera.height <= 0) continue;
+    ++with_color;
+    if (PrincipalPointInImage(f.color_camera)) continue;
+    if (first == nullptr) first = &f;
+    ++outside;
+  }
+  if (first == nullptr) return "";
+  const std::string source =
+      scene.format == DatasetFormat::kScanNet ? ScanNetColorIntrinsicsSource(scene) : "";
+  const Camera& c = first->color_camera;
+  std::ostringstream s;
+  s << (source.empty() ? "colour K" : source) << ": principal point (" << c.cx << ", " << c.cy
+    << ") lies outside the " << c.width << "x" << c.height << " colour image (" << outside << " of "
+    << with_color << " frames with colour; first: frame " << first->id << "): expected a K for "
+    << c.width << "x" << c.height
+    << " images (intrinsics of the original size beside resized images?); colour pixels will "
+       "not line up with depth";
+  return s.str();
+}
+
 // "" when the mask has a valid (255) pixel, kReasonMaskCoversImage when none, else the error.
 std::string MaskProblem(const std::string& path) {
   try {
@@ -81,6 +117,13 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
   s.max_depth_m = scene.max_depth_m;
   if (!scene.frames.empty()) s.depth_camera = scene.frames.front().depth_camera;
   s.warnings = DatasetCaveats(scene.format);
+  if (scene.format == DatasetFormat::kTum) {
+    for (std::string& w : TumSceneWarnings(scene)) s.warnings.push_back(std::move(w));
+  }
+  if (std::string w = ColorPrincipalPointWarning(scene); !w.empty()) {
+    s.warnings.push_back(std::move(w));
+  }
+  const Frame* first_without_color = nullptr;
   bool have_color_camera = false;
   s.depth_checked = options.check_depth;
   double fraction_sum = 0.0;
@@ -121,6 +164,7 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
       }
     }
     ++s.usable;
+    if (f.color_path.empty() && first_without_color == nullptr) first_without_color = &f;
     if (!f.color_path.empty()) {
       ++s.usable_with_color;
       if (!have_color_camera) {
@@ -137,10 +181,10 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
         "no usable frame has a colour image: a build that stores images "
         "stops (set sample.image: none)");
   } else if (s.usable_with_color < s.usable) {
-    s.warnings.emplace_back(std::to_string(s.usable - s.usable_with_color) + " of " +
-                            std::to_string(s.usable) +
-                            " usable frames have no colour image: a build that stores images "
-                            "skips them (drop scan.no_color)");
+    s.warnings.emplace_back(
+        std::to_string(s.usable - s.usable_with_color) + " of " + std::to_string(s.usable) +
+        " usable frames have no colour image (first: frame " + first_without_color->id +
+        "): a build that stores images skips them (drop scan.no_color)");
   }
   return s;
 }

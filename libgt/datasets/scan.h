@@ -55,7 +55,9 @@ struct SceneSummary {
   size_t usable_with_color = 0;
   Camera color_camera;
   bool uniform_color_camera = true;
-  // Known caveats of the dataset (DatasetCaveats) and of this scene (no colour at all).
+  // Known caveats of the dataset (DatasetCaveats) and of this scene: what its reader
+  // assumed (TUM's K by folder name), a missing colour list (TUM's rgb.txt), a colour K
+  // whose principal point lies outside its image, frames without colour.
   std::vector<std::string> warnings;
   // check_depth only:
   bool depth_checked = false;

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <set>
 
 #include "libgt/core/error.h"
 #include "libgt/datasets/readers.h"
@@ -168,6 +169,22 @@ std::string ScanNetMeshPath(const std::string& folder) {
 }
 }  // namespace
 
+std::string ScanNetColorIntrinsicsSource(const Scene& scene) {
+  const std::string& folder = scene.path;
+  if (IsPythonExport(folder)) {
+    const std::string p = (fs::path(folder) / "intrinsic" / "intrinsic_color.txt").string();
+    return io::FileExists(p) ? p : "";
+  }
+  if (IsCppExport(folder)) {
+    const std::string p = (fs::path(folder) / kCppInfoFile).string();
+    return ReadCppInfo(p).Find("m_calibrationColorIntrinsic") != nullptr
+               ? p + " m_calibrationColorIntrinsic"
+               : "";
+  }
+  if (IsSensScene(folder)) return SensPath(folder) + " colour intrinsic";
+  return "";
+}
+
 Scene ScanNetReader::ReadScene(const std::string& root, const std::string& scene_name) const {
   const std::string folder = ResolveSceneFolder(root, scene_name, IsScanNetScene(root));
   Scene scene = ReadSceneFolder(folder, scene_name);
@@ -186,6 +203,15 @@ Scene ScanNetReader::ReadSceneFolder(const std::string& folder, const std::strin
 
   const std::vector<NumberedFile> poses = ListNumberedFiles(pose_dir, "", ".txt");
   if (poses.empty()) throw InputError(pose_dir, "empty scene: no <n>.txt pose files");
+  // Frames: every number with a pose, depth or colour file; one without its pose file is
+  // kept, unusable (kReasonPoseMissing), so that it is counted, never silently dropped.
+  const std::string depth_dir = (fs::path(folder) / "depth").string();
+  const std::string color_dir = (fs::path(folder) / "color").string();
+  const std::vector<NumberedFile> frames = MergeNumberedFiles(
+      {poses, ListNumberedFiles(depth_dir, "", ".png"), ListNumberedFiles(color_dir, "", ".jpg"),
+       ListNumberedFiles(color_dir, "", ".png")});
+  std::set<int64_t> with_pose;
+  for (const auto& p : poses) with_pose.insert(p.number);
 
   const std::string intrinsic_dir = (fs::path(folder) / "intrinsic").string();
   const Eigen::Matrix3d K_depth =
@@ -193,7 +219,7 @@ Scene ScanNetReader::ReadSceneFolder(const std::string& folder, const std::strin
 
   // Sizes from the first depth / colour file present.
   int depth_w = kDefaultDepthWidth, depth_h = kDefaultDepthHeight;
-  for (const auto& p : poses) {
+  for (const auto& p : frames) {
     const std::string d = (fs::path(folder) / "depth" / (p.stem + ".png")).string();
     if (io::FileExists(d)) {
       const io::ImageSize s = io::ReadImageSize(d);
@@ -204,7 +230,7 @@ Scene ScanNetReader::ReadSceneFolder(const std::string& folder, const std::strin
   }
   const Camera depth_camera = Camera::FromK(K_depth, depth_w, depth_h);
   Camera color_camera;
-  for (const auto& p : poses) {
+  for (const auto& p : frames) {
     const std::string c = ColorPath(folder, p.stem);
     if (c.empty()) continue;
     const io::ImageSize s = io::ReadImageSize(c);
@@ -215,7 +241,7 @@ Scene ScanNetReader::ReadSceneFolder(const std::string& folder, const std::strin
     break;
   }
 
-  for (const auto& p : poses) {
+  for (const auto& p : frames) {
     Frame f;
     f.id = p.stem;
     f.number = p.number;
@@ -225,7 +251,11 @@ Scene ScanNetReader::ReadSceneFolder(const std::string& folder, const std::strin
     f.depth_camera = depth_camera;
     f.color_path = ColorPath(folder, p.stem);
     if (!f.color_path.empty()) f.color_camera = color_camera;
-    SetPoseFromText(p.path, &f);  // lost tracking (-inf) marks the frame unusable
+    if (with_pose.count(p.number) != 0) {
+      SetPoseFromText(p.path, &f);  // lost tracking (-inf) marks the frame unusable
+    } else {
+      MarkUnusable(&f, kReasonPoseMissing, (fs::path(pose_dir) / (p.stem + ".txt")).string());
+    }
     if (options_.check_depth_files && !io::FileExists(f.depth.path)) {
       MarkUnusable(&f, kReasonDepthMissing);
     }
@@ -250,7 +280,16 @@ Scene ScanNetReader::ReadCppExport(const std::string& folder, const std::string&
                                  info.Size("m_colorHeight"));
   }
 
-  for (const auto& p : ListNumberedFiles(folder, "frame-", ".pose.txt")) {
+  // Frames: every number with a pose, depth or colour file; one without its pose file is
+  // kept, unusable (kReasonPoseMissing).
+  const std::vector<NumberedFile> poses = ListNumberedFiles(folder, "frame-", ".pose.txt");
+  std::set<int64_t> with_pose;
+  for (const auto& p : poses) with_pose.insert(p.number);
+  std::vector<std::vector<NumberedFile>> lists = {poses};
+  for (const char* suffix : {".depth.pgm", ".depth.png", ".color.jpg", ".color.png"}) {
+    lists.push_back(ListNumberedFiles(folder, "frame-", suffix));
+  }
+  for (const auto& p : MergeNumberedFiles(lists)) {
     const std::string base = (fs::path(folder) / ("frame-" + p.stem)).string();
     Frame f;
     f.id = p.stem;
@@ -269,7 +308,11 @@ Scene ScanNetReader::ReadCppExport(const std::string& folder, const std::string&
         f.color_camera = depth_camera.Resized(s.width, s.height);
       }
     }
-    SetPoseFromText(p.path, &f);  // lost tracking (-inf) marks the frame unusable
+    if (with_pose.count(p.number) != 0) {
+      SetPoseFromText(p.path, &f);  // lost tracking (-inf) marks the frame unusable
+    } else {
+      MarkUnusable(&f, kReasonPoseMissing, base + ".pose.txt");
+    }
     if (options_.check_depth_files && !io::FileExists(f.depth.path)) {
       MarkUnusable(&f, kReasonDepthMissing);
     }

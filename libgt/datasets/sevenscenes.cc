@@ -3,6 +3,7 @@
 // 640x480 unless camera-intrinsics.txt (3x3) sits in the sequence folder or its parent.
 // Colour and depth are not registered: the colour camera gets the same K (documented).
 #include <filesystem>
+#include <set>
 
 #include "libgt/core/error.h"
 #include "libgt/datasets/readers.h"
@@ -43,6 +44,15 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
 
   const auto poses = ListNumberedFiles(folder, "frame-", ".pose.txt");
   if (poses.empty()) throw InputError(folder, "empty scene: no frame-NNNNNN.pose.txt files");
+  // Frames: every number with a pose, depth or colour file; one without its pose file is
+  // kept, unusable (kReasonPoseMissing), so that it is counted, never silently dropped.
+  std::set<int64_t> with_pose;
+  for (const auto& p : poses) with_pose.insert(p.number);
+  std::vector<std::vector<NumberedFile>> lists = {poses};
+  for (const char* suffix : {".depth.png", ".color.png", ".color.jpg"}) {
+    lists.push_back(ListNumberedFiles(folder, "frame-", suffix));
+  }
+  const std::vector<NumberedFile> frames = MergeNumberedFiles(lists);
 
   Eigen::Matrix3d K;
   K << 585, 0, 320, 0, 585, 240, 0, 0, 1;
@@ -55,7 +65,7 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
     }
   }
   int width = kSevenScenesWidthPx, height = kSevenScenesHeightPx;
-  for (const auto& p : poses) {
+  for (const auto& p : frames) {
     const std::string d = (fs::path(folder) / ("frame-" + p.stem + ".depth.png")).string();
     if (io::FileExists(d)) {
       const io::ImageSize s = io::ReadImageSize(d);
@@ -66,7 +76,7 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
   }
   const Camera camera = Camera::FromK(K, width, height);
 
-  for (const auto& p : poses) {
+  for (const auto& p : frames) {
     const std::string base = (fs::path(folder) / ("frame-" + p.stem)).string();
     Frame f;
     f.id = p.stem;
@@ -84,7 +94,11 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
         break;
       }
     }
-    SetPoseFromText(p.path, &f);
+    if (with_pose.count(p.number) != 0) {
+      SetPoseFromText(p.path, &f);
+    } else {
+      MarkUnusable(&f, kReasonPoseMissing, base + ".pose.txt");
+    }
     if (options_.check_depth_files && !io::FileExists(f.depth.path)) {
       MarkUnusable(&f, kReasonDepthMissing);
     }

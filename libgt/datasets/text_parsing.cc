@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "libgt/core/error.h"
@@ -337,6 +338,17 @@ std::vector<NumberedFile> ListNumberedFiles(const std::string& folder, const std
                                    " both give frame number " + std::to_string(out[i].number));
     }
   }
+  return out;
+}
+
+std::vector<NumberedFile> MergeNumberedFiles(const std::vector<std::vector<NumberedFile>>& lists) {
+  std::map<int64_t, NumberedFile> by_number;
+  for (const auto& list : lists) {
+    for (const NumberedFile& f : list) by_number.emplace(f.number, f);  // the first list wins
+  }
+  std::vector<NumberedFile> out;
+  out.reserve(by_number.size());
+  for (auto& [number, f] : by_number) out.push_back(std::move(f));
   return out;
 }
 

@@ -43,6 +43,9 @@ struct Unusable {
 
 // Stable reasons for unusable frames (counted by `occgt scan`).
 inline constexpr const char* kReasonDepthMissing = "depth: missing file";
+// A frame whose depth or colour file exists but whose pose file does not (ScanNet's exports,
+// 7-Scenes: one pose file per frame); the detail is the pose file's path.
+inline constexpr const char* kReasonPoseMissing = "pose: missing file";
 // The pose reasons: "pose: " + the category of a PoseDefect (core/pose.h), without the
 // measured value (that goes to the detail), e.g. "pose: non-finite pose entries (lost
 // tracking)" (a 4x4 matrix), "pose: non-finite pose entries" (translation + quaternion),
@@ -159,6 +162,11 @@ struct NumberedFile {
 // AppleDouble "._*" files ignored. Missing folder: empty result.
 std::vector<NumberedFile> ListNumberedFiles(const std::string& folder, const std::string& prefix,
                                             const std::string& suffix);
+
+// The frames of several listings of one scene (pose, depth, colour files): one entry per
+// frame number, sorted by number; a number in several lists takes the entry of the first
+// list holding it (its stem is the frame id).
+std::vector<NumberedFile> MergeNumberedFiles(const std::vector<std::vector<NumberedFile>>& lists);
 
 // Immediate subfolders of `folder`, sorted by name, hidden and "._*" entries ignored.
 std::vector<std::string> ListSubfolders(const std::string& folder);

@@ -59,21 +59,6 @@ int Nearest(const std::vector<T>& sorted, double t, double max_dt) {
   return best;
 }
 
-Camera TumCamera(const std::string& sequence_name) {
-  Camera c;
-  c.width = kTumWidthPx;
-  c.height = kTumHeightPx;
-  const auto has = [&](const char* s) { return sequence_name.find(s) != std::string::npos; };
-  if (has("freiburg2") || has("fr2")) {
-    c.fx = 520.9, c.fy = 521.0, c.cx = 325.1, c.cy = 249.7;
-  } else if (has("freiburg3") || has("fr3")) {
-    c.fx = 535.4, c.fy = 539.2, c.cx = 320.1, c.cy = 247.6;
-  } else {  // freiburg1, and the documented default
-    c.fx = 517.3, c.fy = 516.5, c.cx = 318.6, c.cy = 255.3;
-  }
-  return c;
-}
-
 std::string Stem(const std::string& path) {
   const std::string name = fs::path(path).filename().string();
   const size_t dot = name.rfind('.');
@@ -81,6 +66,50 @@ std::string Stem(const std::string& path) {
 }
 
 }  // namespace
+
+TumIntrinsics TumIntrinsicsOf(const std::string& sequence_name) {
+  TumIntrinsics out;
+  Camera& c = out.camera;
+  c.width = kTumWidthPx;
+  c.height = kTumHeightPx;
+  const auto has = [&](const char* s) { return sequence_name.find(s) != std::string::npos; };
+  if (has("freiburg2") || has("fr2")) {
+    c.fx = 520.9, c.fy = 521.0, c.cx = 325.1, c.cy = 249.7;
+    out.sequence = "fr2";
+    out.named = true;
+  } else if (has("freiburg3") || has("fr3")) {
+    c.fx = 535.4, c.fy = 539.2, c.cx = 320.1, c.cy = 247.6;
+    out.sequence = "fr3";
+    out.named = true;
+  } else {  // freiburg1, and the documented default
+    c.fx = 517.3, c.fy = 516.5, c.cx = 318.6, c.cy = 255.3;
+    out.sequence = "fr1";
+    out.named = has("freiburg1") || has("fr1");
+  }
+  return out;
+}
+
+std::vector<std::string> TumSceneWarnings(const Scene& scene) {
+  std::vector<std::string> out;
+  const std::string folder_name = FolderName(scene.path);
+  const TumIntrinsics k = TumIntrinsicsOf(folder_name);
+  if (!k.named) {
+    std::ostringstream s;
+    s << "TUM intrinsics assumed: " << k.sequence << " (fx " << k.camera.fx << ", fy "
+      << k.camera.fy << ", cx " << k.camera.cx << ", cy " << k.camera.cy
+      << "), as the folder name '" << folder_name
+      << "' names no freiburg1/2/3 (fr1/fr2/fr3); name the folder after its TUM sequence "
+         "(rgbd_dataset_freiburg3_...) to get its K";
+    out.push_back(s.str());
+  }
+  const std::string rgb_list = (fs::path(scene.path) / "rgb.txt").string();
+  if (!io::FileExists(rgb_list)) {
+    out.push_back(rgb_list +
+                  ": missing (expected 'timestamp filename' lines of the colour images): no "
+                  "frame has colour");
+  }
+  return out;
+}
 
 std::vector<std::string> TumReader::ListScenes(const std::string& root) const {
   RequireRoot(root);
@@ -106,7 +135,7 @@ Scene TumReader::ReadScene(const std::string& root, const std::string& scene_nam
                                           : std::vector<FramePath>{};
   const std::string gt_path = (fs::path(folder) / "groundtruth.txt").string();
   const std::vector<TimedPose> poses = ParseTimedPoses(io::ReadFileBytes(gt_path), gt_path);
-  const Camera camera = TumCamera(FolderName(folder));
+  const Camera camera = TumIntrinsicsOf(FolderName(folder)).camera;
 
   std::ostringstream no_gt;
   no_gt << "pose: no groundtruth within " << options_.tum_max_dt_s << "s";
@@ -119,8 +148,10 @@ Scene TumReader::ReadScene(const std::string& root, const std::string& scene_nam
     f.depth.format = DepthFormat::kPng16;
     f.depth.scale_m_per_unit = 1.0 / 5000.0;
     f.depth_camera = camera;
+    // Colour: the nearest rgb.txt entry; an entry whose image does not exist gives no
+    // colour, as in the folder readers (`occgt scan` counts the usable frames without).
     const int rgb = Nearest(rgbs, depths[i].t, options_.tum_max_dt_s);
-    if (rgb >= 0) {
+    if (rgb >= 0 && io::FileExists(rgbs[static_cast<size_t>(rgb)].path)) {
       f.color_path = rgbs[static_cast<size_t>(rgb)].path;
       f.color_camera = camera;
     }

@@ -8,6 +8,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
+#include "libgt/datasets/scan.h"
 #include "libgt/io/atomic_file.h"
 #include "tests/support/test_support.h"
 
@@ -64,7 +65,12 @@ std::string WriteManifest(const std::string& dir, const json& j,
 
 TEST(Generic, ReadsFramesWithDefaults) {
   const std::string dir = test::ScratchDir("gen_ok");
-  WriteManifest(dir, ValidManifest());
+  json manifest = ValidManifest();
+  manifest["frames"][2]["color"]["path"] = dir + "/abs/c.jpg";  // an absolute path
+  WriteManifest(dir, manifest);
+  // The colour files exist (their sizes come from the manifest; the bytes are not read).
+  WriteFileAtomic(dir + "/color/f0.png", "x");
+  WriteFileAtomic(dir + "/abs/c.jpg", "x");
   ReaderOptions options;
   options.exr_channel = "Depth.Z";
   options.check_depth_files = false;
@@ -95,12 +101,41 @@ TEST(Generic, ReadsFramesWithDefaults) {
   EXPECT_EQ(s.frames[1].depth.invalid_value, 65535);
   EXPECT_EQ(s.frames[1].world_from_cam.translation().x(), 0.25);
   EXPECT_EQ(s.frames[2].depth.exr_channel, "Depth.Z");  // the reader option
-  EXPECT_EQ(s.frames[2].color_path, "/abs/c.jpg");
+  EXPECT_EQ(s.frames[2].color_path, dir + "/abs/c.jpg");
   EXPECT_EQ(s.frames[2].color_camera.fx, 300.0);
   // With the default check_depth_files, the missing depth files make frames unusable.
   const Scene checked = MakeReader(gt::DatasetFormat::kGeneric)->ReadScene(dir + "/scene.json", "");
   EXPECT_EQ(checked.NumUsable(), 0u);
   EXPECT_EQ(checked.frames[0].unusable_reason, "depth: missing file");
+}
+
+// A colour path whose file does not exist gives a frame without colour, as the folder
+// readers (ScanNet, 7-Scenes, TartanAir) do for a missing colour file: still usable, no
+// colour_path, and `occgt scan` counts it among the usable frames without colour (naming
+// the first). Before, it was kept and counted "with colour".
+TEST(Generic, MissingColourFileMeansNoColour) {
+  const std::string dir = test::ScratchDir("gen_no_color");
+  json manifest = ValidManifest();
+  manifest["frames"][2]["color"]["path"] = "color/f2.jpg";  // not written
+  WriteManifest(dir, manifest);
+  WriteFileAtomic(dir + "/color/f0.png", "x");
+  ReaderOptions options;
+  options.check_depth_files = false;
+  const Scene s = MakeReader(gt::DatasetFormat::kGeneric, options)->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), 3u);
+  EXPECT_EQ(s.frames[0].color_path, dir + "/color/f0.png");
+  const Frame& f2 = s.frames[2];
+  EXPECT_TRUE(f2.usable);
+  EXPECT_TRUE(f2.color_path.empty());
+  EXPECT_EQ(f2.color_camera.width, 0);
+  const SceneSummary sum = SummarizeScene(s, ScanOptions());
+  EXPECT_EQ(sum.usable, 3u);
+  EXPECT_EQ(sum.usable_with_color, 1u);
+  bool said = false;
+  for (const std::string& w : sum.warnings) {
+    said = said || w.rfind("2 of 3 usable frames have no colour image (first: frame f1)", 0) == 0;
+  }
+  EXPECT_TRUE(said) << ::testing::PrintToString(sum.warnings);
 }
 
 TEST(Generic, RootLayouts) {

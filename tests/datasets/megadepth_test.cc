@@ -84,8 +84,11 @@ std::string Download() {
     WritePlane(v1 / "0002/dense0/depths/x.h5", 192, 144, false);
     WritePlane(v1 / "0002/dense0/depths/y.h5", 192, 144, false);
     WriteJpeg(und / "images/x.jpg", 192, 144);
-    // Scene 0003: depth without any model (not listed).
+    // Scene 0003: depth without any model (listed, its frames unusable).
     WritePlane(v1 / "0003/dense0/depths/z.h5", 192, 144, false);
+    WritePlane(v1 / "0003/dense0/depths/w.h5", 192, 144, false);
+    // Scene 0004: an empty depths/ folder and no model (no data: not listed).
+    fs::create_directories(v1 / "0004/dense0/depths");
     return root.string();
   }();
   return base;
@@ -102,12 +105,12 @@ std::string TinyRecipe(const std::string& split, const std::string& root, const 
          "sample: {image: none, depth: true, labels: true, occupancy: false}\n" + extra;
 }
 
-TEST(MegaDepth, ListsScenesWithAModelFromEveryRootShape) {
+TEST(MegaDepth, ListsScenesFromEveryRootShape) {
   const auto reader = MakeReader(gt::DatasetFormat::kMegaDepth);
-  const std::vector<std::string> both{"0001", "0002"};
-  EXPECT_EQ(reader->ListScenes(Download()), both);
+  const std::vector<std::string> all{"0001", "0002", "0003"};
+  EXPECT_EQ(reader->ListScenes(Download()), all);
   const std::string v1 = Download() + "/phoenix/S6/zl548/MegaDepth_v1";
-  EXPECT_EQ(reader->ListScenes(v1), both);
+  EXPECT_EQ(reader->ListScenes(v1), all);
   EXPECT_EQ(reader->ListScenes(v1 + "/0002"), std::vector<std::string>{"0002"});
   try {
     reader->ListScenes(v1 + "/0003");
@@ -159,6 +162,29 @@ TEST(MegaDepth, FramesPosesKAndReasons) {
   EXPECT_TRUE(s2.frames[1].world_from_cam.translation().isApprox(Eigen::Vector3d(0, 0, 1)));
 }
 
+// A scene without a COLMAP model beside scenes with one is listed, never silently left
+// out: its depth files are frames, unusable with the reason `occgt scan` counts and a
+// detail naming the places looked at. Before, it was not listed and nothing said so.
+TEST(MegaDepth, SceneWithoutAModelIsCountedNotDropped) {
+  const std::string v1 = Download() + "/phoenix/S6/zl548/MegaDepth_v1";
+  const Scene s = MakeReader(gt::DatasetFormat::kMegaDepth)->ReadScene(Download(), "0003");
+  ASSERT_EQ(s.frames.size(), 2u);
+  EXPECT_EQ(s.frames[0].id, "w");
+  EXPECT_EQ(s.frames[1].id, "z");
+  EXPECT_EQ(s.frames[1].depth.path, v1 + "/0003/dense0/depths/z.h5");
+  for (const Frame& f : s.frames) {
+    EXPECT_FALSE(f.usable);
+    EXPECT_EQ(f.unusable_reason, "pose: no COLMAP model of the scene");
+    EXPECT_EQ(f.unusable_detail, v1 + "/0003/dense0/sparse or " + Download() +
+                                     "/Undistorted_SfM/0003/sparse: no COLMAP sparse model "
+                                     "(expected cameras + images, .bin or .txt)");
+  }
+  const auto r = test::RunOccgt("scan '" + Download() + "' --format megadepth --json");
+  ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
+  const json j = json::parse(r.stdout_text);
+  EXPECT_EQ(j["totals"]["unusable_reasons"]["pose: no COLMAP model of the scene"], 2);
+}
+
 json Meta(const std::string& frames, const std::string& extra) {
   const std::string out =
       test::ScratchDir("megadepth_pair_" + frames.substr(0, 1) + frames.substr(2, 1));
@@ -207,7 +233,8 @@ TEST(MegaDepth, ScanListsUsableCountsAndReasons) {
   const auto r = test::RunOccgt("scan '" + Download() + "' --format megadepth --json");
   ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
   const json j = json::parse(r.stdout_text);
-  ASSERT_EQ(j["scenes"].size(), 2u);
+  ASSERT_EQ(j["scenes"].size(), 3u);  // 0003 without a model: its 2 frames unusable
+  EXPECT_EQ(j["scenes"][2]["unusable"], 2);
   const json& s = j["scenes"][0];
   EXPECT_EQ(s["name"], "0001");
   EXPECT_EQ(s["frames"], 6);
@@ -328,7 +355,8 @@ TEST(MegaDepth, WritesLoftrsMegaDepthIndex) {
                      "/recipes/megadepth-train.yaml' --out '" + dir + "/shipped'");
   ASSERT_EQ(shipped.exit_code, 0) << shipped.stderr_text << shipped.stdout_text;
   EXPECT_TRUE(fs::exists(dir + "/shipped/loftr/train_list.txt"));
-  EXPECT_NE(shipped.stdout_text.find("in 2 scenes"), std::string::npos) << shipped.stdout_text;
+  // 0003 (no model) is a scene of the root: 0 pairs, its 2 frames counted in scan.unusable.
+  EXPECT_NE(shipped.stdout_text.find("in 3 scenes"), std::string::npos) << shipped.stdout_text;
   // Another dataset format is refused.
   WriteText(dir + "/bad.yaml",
             "name: x\nsplit: x\ndataset: {format: synthetic}\n"

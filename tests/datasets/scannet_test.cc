@@ -10,6 +10,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
+#include "libgt/datasets/scan.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/depth_io.h"
 #include "tests/support/test_support.h"
@@ -278,6 +279,94 @@ TEST(ScanNet, CppExporterBadInfo) {
                   "m_depthWidth = 32\nm_depthHeight = 24\nm_depthShift = nan\n"
                   "m_calibrationDepthIntrinsic = 30 0 15.5 0 0 30 11.5 0 0 0 1 0\n");
   ExpectErrorWhere(dir, dir + "/_info.txt:3", "m_depthShift");
+}
+
+// A frame with depth and colour but no pose file is listed, unusable ("pose: missing
+// file", the detail naming the pose file expected), and `occgt scan` counts it; in both
+// exported layouts. Before, frames were listed from the pose files only: it vanished.
+TEST(ScanNet, FrameWithoutPoseFileIsCountedUnusable) {
+  const std::string dir = test::ScratchDir("sn_no_pose");
+  const std::string pose = "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  WriteFileAtomic(dir + "/intrinsic/intrinsic_depth.txt", "50 0 31.5\n0 50 23.5\n0 0 1\n");
+  fs::create_directories(dir + "/depth");
+  fs::create_directories(dir + "/color");
+  for (const char* n : {"0", "1", "2"}) {
+    if (std::string(n) != "1") WriteFileAtomic(dir + "/pose/" + n + ".txt", pose);
+    ASSERT_TRUE(
+        cv::imwrite(dir + "/depth/" + n + ".png", cv::Mat(48, 64, CV_16UC1, cv::Scalar(9))));
+    ASSERT_TRUE(cv::imwrite(dir + "/color/" + n + ".jpg", cv::Mat(48, 64, CV_8UC3, cv::Scalar(9))));
+  }
+  ASSERT_TRUE(cv::imwrite(dir + "/depth/3.png", cv::Mat(48, 64, CV_16UC1, cv::Scalar(9))));
+  const Scene s = MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), 4u);
+  EXPECT_TRUE(s.frames[0].usable);
+  EXPECT_TRUE(s.frames[2].usable);
+  for (int i : {1, 3}) {
+    const Frame& f = s.frames[i];
+    EXPECT_EQ(f.id, std::to_string(i));
+    EXPECT_EQ(f.number, i);
+    EXPECT_FALSE(f.usable);
+    EXPECT_EQ(f.unusable_reason, "pose: missing file");
+    EXPECT_EQ(f.unusable_detail, dir + "/pose/" + std::to_string(i) + ".txt");
+    EXPECT_EQ(f.depth.path, dir + "/depth/" + std::to_string(i) + ".png");
+  }
+  EXPECT_EQ(s.frames[1].color_path, dir + "/color/1.jpg");
+  const SceneSummary sum = SummarizeScene(s, ScanOptions());
+  EXPECT_EQ(sum.usable, 2u);
+  EXPECT_EQ(sum.unusable_reasons.at("pose: missing file"), 2u);
+
+  // The C++ exporter's layout: frame-000003 has depth and colour but no .pose.txt.
+  const std::string cpp = test::ScratchDir("sn_cpp_no_pose");
+  WriteCppExport(cpp, kCppInfo);
+  ASSERT_TRUE(
+      cv::imwrite(cpp + "/frame-000003.depth.pgm", cv::Mat(24, 32, CV_16UC1, cv::Scalar(9))));
+  ASSERT_TRUE(
+      cv::imwrite(cpp + "/frame-000003.color.jpg", cv::Mat(48, 64, CV_8UC3, cv::Scalar(9))));
+  const Scene c = MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(cpp, "");
+  ASSERT_EQ(c.frames.size(), 4u);
+  EXPECT_EQ(c.frames[3].id, "000003");
+  EXPECT_EQ(c.frames[3].unusable_reason, "pose: missing file");
+  EXPECT_EQ(c.frames[3].unusable_detail, cpp + "/frame-000003.pose.txt");
+  EXPECT_EQ(c.frames[3].color_path, cpp + "/frame-000003.color.jpg");
+}
+
+// An export whose colour was resized to 64x48 beside the intrinsic_color.txt of the
+// 1296x968 original: the colour K's principal point (647.5, 483.5) lies outside the image,
+// which `occgt scan` says in one line naming the file and both sizes. Consistent data (the
+// 1296x968 image of DepthSizeFromPngAndColourIntrinsicsFile's K) gets no such warning.
+TEST(ScanNet, ColourKOutsideTheColourImageIsReported) {
+  const std::string dir = test::ScratchDir("sn_color_k");
+  WriteFileAtomic(dir + "/intrinsic/intrinsic_depth.txt", "50 0 31.5\n0 50 23.5\n0 0 1\n");
+  const std::string color_k = dir + "/intrinsic/intrinsic_color.txt";
+  WriteFileAtomic(color_k, "1100 0 647.5 0\n0 1100 483.5 0\n0 0 1 0\n0 0 0 1\n");
+  WriteFileAtomic(dir + "/pose/0.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  fs::create_directories(dir + "/depth");
+  fs::create_directories(dir + "/color");
+  ASSERT_TRUE(cv::imwrite(dir + "/depth/0.png", cv::Mat(48, 64, CV_16UC1, cv::Scalar(9))));
+  ASSERT_TRUE(cv::imwrite(dir + "/color/0.jpg", cv::Mat(48, 64, CV_8UC3, cv::Scalar(9))));
+  const auto reader = MakeReader(gt::DatasetFormat::kScanNet);
+  const Scene s = reader->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), 1u);
+  EXPECT_EQ(s.frames[0].color_camera.cx, 647.5);  // unchanged: reported, not corrected
+  const auto warning_about = [](const SceneSummary& sum, const std::string& text) {
+    for (const std::string& w : sum.warnings) {
+      if (w.find(text) != std::string::npos) return w;
+    }
+    return std::string();
+  };
+  const std::string w = warning_about(SummarizeScene(s, ScanOptions()), "principal point");
+  EXPECT_EQ(w.rfind(color_k + ": principal point (647.5, 483.5) lies outside the 64x48 colour "
+                              "image (1 of 1 frames with colour; first: frame 0): expected a K "
+                              "for 64x48 images",
+                    0),
+            0u)
+      << w;
+  EXPECT_EQ(w.find('\n'), std::string::npos);
+  // The same K at the original size is consistent.
+  ASSERT_TRUE(cv::imwrite(dir + "/color/0.jpg", cv::Mat(968, 1296, CV_8UC3, cv::Scalar(9))));
+  EXPECT_EQ(
+      warning_about(SummarizeScene(reader->ReadScene(dir, ""), ScanOptions()), "principal point"),
+      "");
 }
 
 }  // namespace

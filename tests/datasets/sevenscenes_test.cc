@@ -8,6 +8,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
+#include "libgt/datasets/scan.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/depth_io.h"
 #include "libgt/io/file_read.h"
@@ -152,6 +153,35 @@ TEST(SevenScenes, MissingDepthIsUnusableNotFatal) {
   EXPECT_FALSE(s.frames[0].usable);
   EXPECT_EQ(s.frames[0].unusable_reason, "depth: missing file");
   EXPECT_EQ(s.frames[0].depth_camera.fx, 585.0);  // default K without camera-intrinsics.txt
+}
+
+// A frame with depth and colour but no .pose.txt is listed, unusable ("pose: missing
+// file", the detail naming the pose file expected), and counted by `occgt scan`; before,
+// frames were listed from the pose files only and it vanished.
+TEST(SevenScenes, FrameWithoutPoseFileIsCountedUnusable) {
+  const std::string dir = test::ScratchDir("7s_no_pose") + "/seq-01";
+  for (const char* id : {"000000", "000001", "000002"}) {
+    const std::string base = dir + "/frame-" + id;
+    if (std::string(id) != "000001") {
+      WriteFileAtomic(base + ".pose.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+    }
+    ASSERT_TRUE(cv::imwrite(base + ".depth.png", cv::Mat(480, 640, CV_16UC1, cv::Scalar(900))));
+    ASSERT_TRUE(cv::imwrite(base + ".color.png", cv::Mat(480, 640, CV_8UC3, cv::Scalar(9))));
+  }
+  const Scene s = MakeReader(gt::DatasetFormat::kSevenScenes)->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), 3u);
+  EXPECT_TRUE(s.frames[0].usable);
+  EXPECT_TRUE(s.frames[2].usable);
+  const Frame& f = s.frames[1];
+  EXPECT_EQ(f.id, "000001");
+  EXPECT_FALSE(f.usable);
+  EXPECT_EQ(f.unusable_reason, "pose: missing file");
+  EXPECT_EQ(f.unusable_detail, dir + "/frame-000001.pose.txt");
+  EXPECT_EQ(f.color_path, dir + "/frame-000001.color.png");
+  const SceneSummary sum = SummarizeScene(s, ScanOptions());
+  EXPECT_EQ(sum.frames, 3u);
+  EXPECT_EQ(sum.usable, 2u);
+  EXPECT_EQ(sum.unusable_reasons.at("pose: missing file"), 1u);
 }
 
 // Releases ship colour as frame-NNNNNN.color.png or .color.jpg: both are read; a frame

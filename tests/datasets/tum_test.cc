@@ -8,6 +8,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
+#include "libgt/datasets/scan.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/depth_io.h"
 #include "tests/support/test_support.h"
@@ -42,6 +43,10 @@ std::string MakeSequence(const std::string& name) {
   depth.at<uint16_t>(11, 20) = 12345;
   for (const char* t : {"10.000000", "10.100000", "10.500000"}) {
     EXPECT_TRUE(cv::imwrite(dir + "/depth/" + t + ".png", depth));
+  }
+  std::filesystem::create_directories(dir + "/rgb");
+  for (const char* t : {"10.005", "10.130", "10.490"}) {
+    EXPECT_TRUE(cv::imwrite(dir + "/rgb/" + t + ".png", cv::Mat(480, 640, CV_8UC3, cv::Scalar(9))));
   }
   return dir;
 }
@@ -108,6 +113,61 @@ TEST(Tum, DefaultIntrinsicsAreFreiburg1) {
   const Scene s = MakeReader(gt::DatasetFormat::kTum)->ReadScene(root, "");
   EXPECT_EQ(s.frames[0].depth_camera.fx, 517.3);
   EXPECT_EQ(s.frames[0].depth_camera.cy, 255.3);
+}
+
+// The warnings of `occgt scan` for a TUM scene that contain `text`.
+std::vector<std::string> ScanWarnings(const Scene& scene, const std::string& text) {
+  std::vector<std::string> out;
+  for (const std::string& w : SummarizeScene(scene, ScanOptions()).warnings) {
+    if (w.find(text) != std::string::npos) out.push_back(w);
+  }
+  return out;
+}
+
+// A folder name naming no freiburg sequence gets fr1's K: `occgt scan` says it was assumed,
+// which K and why, in one line; a named sequence gets no such warning.
+TEST(Tum, ScanSaysWhenTheKIsAssumed) {
+  const auto reader = MakeReader(gt::DatasetFormat::kTum);
+  const std::vector<std::string> assumed =
+      ScanWarnings(reader->ReadScene(MakeSequence("my_sequence"), ""), "TUM intrinsics");
+  ASSERT_EQ(assumed.size(), 1u);
+  EXPECT_EQ(assumed[0],
+            "TUM intrinsics assumed: fr1 (fx 517.3, fy 516.5, cx 318.6, cy 255.3), as the folder "
+            "name 'my_sequence' names no freiburg1/2/3 (fr1/fr2/fr3); name the folder after its "
+            "TUM sequence (rgbd_dataset_freiburg3_...) to get its K");
+  for (const char* named : {"rgbd_dataset_freiburg1_desk", "rgbd_dataset_freiburg2_xyz", "fr3_x"}) {
+    EXPECT_TRUE(ScanWarnings(reader->ReadScene(MakeSequence(named), ""), "TUM intrinsics").empty())
+        << named;
+  }
+}
+
+// An rgb.txt entry whose image does not exist gives no colour (as the folder readers do for
+// a missing colour file), and `occgt scan` counts the frame among those without colour; a
+// missing rgb.txt is named by a scan warning. Before, the entry's path was kept (counted
+// "with colour") and a missing rgb.txt was silent.
+TEST(Tum, MissingColourImageOrListMeansNoColourAndScanSaysSo) {
+  const std::string root = MakeSequence("rgbd_dataset_freiburg1_rgb");
+  std::filesystem::remove(root + "/rgb/10.005.png");
+  const auto reader = MakeReader(gt::DatasetFormat::kTum);
+  const Scene s = reader->ReadScene(root, "");
+  ASSERT_EQ(s.frames.size(), 4u);
+  EXPECT_TRUE(s.frames[0].usable);
+  EXPECT_TRUE(s.frames[0].color_path.empty());
+  EXPECT_EQ(s.frames[0].color_camera.width, 0);
+  EXPECT_EQ(s.frames[3].color_path, root + "/rgb/10.490.png");
+  const SceneSummary sum = SummarizeScene(s, ScanOptions());
+  EXPECT_EQ(sum.usable, 2u);  // frames 0 and 1
+  EXPECT_EQ(sum.usable_with_color, 0u);
+  EXPECT_TRUE(ScanWarnings(s, "rgb.txt").empty());
+
+  std::filesystem::remove(root + "/rgb.txt");
+  const Scene no_list = reader->ReadScene(root, "");
+  for (const Frame& f : no_list.frames) EXPECT_TRUE(f.color_path.empty()) << f.id;
+  const std::vector<std::string> said = ScanWarnings(no_list, "rgb.txt");
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_EQ(said[0], root +
+                         "/rgb.txt: missing (expected 'timestamp filename' lines of the colour "
+                         "images): no frame has colour");
 }
 
 // A non-finite groundtruth value makes its frame unusable, naming the file and the line as
