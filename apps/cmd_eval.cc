@@ -6,7 +6,6 @@
 #include <tbb/global_control.h>
 
 #include <cstdio>
-#include <map>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -15,6 +14,7 @@
 
 #include "apps/commands.h"
 #include "apps/job_flags.h"
+#include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/eval/evaluate.h"
 #include "libgt/eval/pose.h"
@@ -77,6 +77,9 @@ struct Args {
   int threads = 0;
   // Estimator and failure flags given on the command line (they conflict with --protocol).
   std::vector<std::string> estimator_flags;
+  // Every flag given on the command line: a bad option value is a usage error (exit 2)
+  // naming its flag only when that flag was given (apps/usage.h ThrowOptionsError).
+  std::set<std::string> given;
 };
 
 // The estimator settings: a named protocol's, or --estimator x --ransac-px (each method
@@ -117,7 +120,8 @@ void SetEstimators(const Args& args, gt::eval::EvalOptions* options) {
     }
   }
   if (options->estimators.empty()) throw gt::InputError("--estimator", "expected a method");
-  // LoFTR's protocol exactly (the defaults) is recorded as such; anything else is a custom one.
+  // LoFTR's protocol exactly (the defaults: its estimator and its failure error) is recorded
+  // as such; any other estimator setting or --failure-error makes it a custom one.
   const gt::eval::Protocol loftr_protocol =
       gt::eval::ExpandProtocol(gt::eval::ProtocolName::kLoftr);
   const auto same = [](const gt::eval::PoseEstimatorOptions& a,
@@ -127,7 +131,9 @@ void SetEstimators(const Args& args, gt::eval::EvalOptions* options) {
            a.focal_mean == b.focal_mean;
   };
   const bool loftr = options->estimators.size() == 1 && loftr_protocol.estimators.size() == 1 &&
-                     same(options->estimators[0], loftr_protocol.estimators[0]);
+                     same(options->estimators[0], loftr_protocol.estimators[0]) &&
+                     options->selection == loftr_protocol.selection &&
+                     options->failure_error_deg == loftr_protocol.failure_error_deg;
   options->protocol = loftr ? gt::eval::ProtocolName::kLoftr : gt::eval::ProtocolName::kCustom;
 }
 
@@ -149,28 +155,28 @@ void Run(const Args& args) {
   options.aggregate = gt::ParseAggregate(args.aggregate, "--aggregate");
   std::string error;
   if (!options.Check(&error)) {
-    // The option's field name -> the flag that set it.
-    static const std::map<std::string, std::string> kFlags = {
-        {"ransac_px", "--ransac-px"},
-        {"confidence", "--ransac-conf"},
-        {"max_iters", "--ransac-iters"},
-        {"auc_thresholds_deg", "--auc"},
-        {"epipolar_threshold", "--epipolar-threshold"},
-        {"px", "--px"},
-        {"occlusion_bins", "--occlusion-bins"},
-        {"overlap_bins", "--overlap-bins"},
-        {"curve_step", "--curve-step"},
-        {"failure_error_deg", "--failure-error"},
-        {"occlusion_definitions", "--occlusion"}};
-    const std::string field = error.substr(0, error.find(':'));
-    const auto it = kFlags.find(field);
-    throw gt::InputError(it == kFlags.end() ? "occgt eval" : it->second, error);
+    // The option's field name -> the flag that set it: a usage error naming that flag when
+    // it was given (exit 2), else bad input of the command (exit 1).
+    const auto flag = [&args](const char* field, const char* name) {
+      return FieldFlag{field, name, args.given.count(name) > 0};
+    };
+    ThrowOptionsError(error, "occgt eval",
+                      {flag("estimators", "--estimator"), flag("ransac_px", "--ransac-px"),
+                       flag("confidence", "--ransac-conf"), flag("max_iters", "--ransac-iters"),
+                       flag("auc_thresholds_deg", "--auc"),
+                       flag("epipolar_threshold", "--epipolar-threshold"), flag("px", "--px"),
+                       flag("occlusion_definitions", "--occlusion"),
+                       flag("occlusion_bins", "--occlusion-bins"),
+                       flag("overlap_bins", "--overlap-bins"), flag("curve_step", "--curve-step"),
+                       flag("failure_error_deg", "--failure-error"),
+                       flag("min_confidence", "--min-confidence")});
   }
   const std::unique_ptr<tbb::global_control> limit = LimitThreads(args.threads);
   const gt::eval::SplitIndex split = gt::eval::LoadSplitIndex(args.split_dir);
   const std::set<std::string> keys(split.keys.begin(), split.keys.end());
   std::vector<gt::eval::PredictionSet> sets;
   std::vector<std::string> problems;
+  std::vector<std::string> problem_paths;  // per problem: the predictions path it came from
   std::set<std::string> names;
   for (const std::string& arg : args.predictions) {
     // NAME=PATH names the set; else its file or folder name without ".npz".
@@ -195,9 +201,18 @@ void Run(const Args& args) {
     sets.push_back(gt::eval::ReadPredictions(name, path, keys, split.width, split.height, &problems,
                                              split.loftr_names));
     gt::eval::FilterByConfidence(options.min_confidence, &sets.back(), &problems);
+    problem_paths.resize(problems.size(), path);
+  }
+  if (problems.size() == 1) {
+    // The one line "<file>[:<member>]: <problem>" (docs/EVAL.md) as it is: split after the
+    // file's path at the first ": " into where and what.
+    const std::string& line = problems[0];
+    const std::string& file = problem_paths[0];
+    const size_t sep = line.find(": ", line.rfind(file, 0) == 0 ? file.size() : 0);
+    if (sep == std::string::npos) throw gt::InputError(file, line);
+    throw gt::InputError(line.substr(0, sep), line.substr(sep + 2));
   }
   if (!problems.empty()) {
-    if (problems.size() == 1) throw gt::InputError("predictions", problems[0]);
     for (const std::string& p : problems) std::fprintf(stderr, "occgt: error: %s\n", p.c_str());
     throw gt::InputError("predictions", std::to_string(problems.size()) +
                                             " problems (listed above); nothing written");
@@ -231,9 +246,8 @@ void AddEvalCommand(CLI::App& app) {
   cmd->add_option("split_dir", args->split_dir, "Split folder (index.json, pairs.jsonl, shards)")
       ->required();
   cmd->add_option("--predictions", args->predictions,
-                  "[NAME=]PATH: a .npz keyed by sample key (or LoFTR pair name), or a folder of "
-                  "<key>.npz; repeat "
-                  "to compare sets")
+                  "[NAME=]PATH: a .npz, or a folder of <key>.npz, keyed by sample key (or "
+                  "LoFTR pair name); repeat to compare sets")
       ->required()
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
@@ -282,6 +296,11 @@ void AddEvalCommand(CLI::App& app) {
                   "Drop matches with confidence below this (needs 'confidence')");
   AddThreadsFlag(cmd, &args->threads, "Worker threads");
   cmd->callback([args, cmd] {
+    args->given.clear();
+    for (const CLI::Option* o : cmd->get_options()) {
+      if (o->count() == 0) continue;
+      for (const std::string& name : o->get_lnames()) args->given.insert("--" + name);
+    }
     args->estimator_flags.clear();
     for (const char* flag : {"--estimator", "--ransac-px", "--ransac-conf", "--ransac-iters",
                              "--focal-mean", "--failure-error"}) {

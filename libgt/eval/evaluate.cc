@@ -90,6 +90,16 @@ bool EvalOptions::Check(std::string* error) const {
     *error = "occlusion_definitions: expected at least one of image, visible, valid";
     return false;
   }
+  for (size_t i = 0; i < occlusion_definitions.size(); ++i) {
+    for (size_t j = 0; j < i; ++j) {
+      if (occlusion_definitions[i] == occlusion_definitions[j]) {
+        *error = std::string("occlusion_definitions: expected each of image, visible, valid at "
+                             "most once, got ") +
+                 OcclusionDefinitionName(occlusion_definitions[i]) + " twice";
+        return false;
+      }
+    }
+  }
   if (!CheckEdges(occlusion_bins, "occlusion_bins", error)) return false;
   if (!CheckEdges(overlap_bins, "overlap_bins", error)) return false;
   if (!(curve_step > 0 && curve_step <= 1)) {

@@ -8,7 +8,8 @@
 // Split input: DIR/index.json (shards), DIR/pairs.jsonl (keys), DIR/recipe.json
 // ("resolution"), and per sample its json (K0, K1, T_0to1, metrics), label01/label10,
 // depth0/depth1, matches, match_type members (per-type scores need labels and depth; a
-// split without them gets "match_quality": null with the reason).
+// split without them gets "match_quality": {"available": false, "reason": ...} and null
+// per-type figures).
 // Work: shards are read in parallel (TBB) and each sample is scored as it streams by; then
 // every (pair, prediction set, estimator group) pose is estimated in parallel (the kRansac
 // settings of a pair share one RANSAC run, pose.h FindEssentialRansac). Results are

@@ -64,8 +64,9 @@ struct PoseEstimatorOptions {
   FocalMean focal_mean = FocalMean::kLoftr;
   bool Check(std::string* error) const;
 };
-// "<method> <px> px conf <c>" (+ " iters N" unless 1000, + " focal all" for kAll): the
-// label of an estimator in eval.json, the summary and the report.
+// "opencv-<method> <px> px conf <c>" (+ " iters N" unless 1000, + " focal all" for kAll),
+// e.g. "opencv-ransac 0.5 px conf 0.99999": the label of an estimator in eval.json, the
+// summary and the report.
 std::string PoseEstimatorName(const PoseEstimatorOptions& e);
 // The seed occgt gives cv::theRNG() before estimating pair `key` with estimator number
 // `estimator` (see above): FNV-1a 64 of the key's bytes, then of the estimator number's
@@ -149,7 +150,9 @@ inline constexpr double kInfiniteError = std::numeric_limits<double>::infinity()
 
 // Error of an estimate against the ground truth cam1_from_cam0 = (R_gt, t_gt). When
 // |t_gt| = 0 (a pure rotation: no direction to compare) the translation error is 0 and
-// only the rotation is scored, as LoFTR's ignore_gt_t_thr does; a zero t gives 90.
+// only the rotation is scored: occgt's rule, not LoFTR's (its relative_pose_error is called
+// with ignore_gt_t_thr 0.0, so its |t_gt| < thr test never fires and 0/0 gives a NaN
+// error; protocol.cc records this difference); a zero t gives 90.
 PoseError RelativePoseError(const Eigen::Matrix3d& R_gt, const Eigen::Vector3d& t_gt,
                             const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
 PoseError NoPoseError();  // all three +inf

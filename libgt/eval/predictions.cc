@@ -168,6 +168,50 @@ bool ReadPair(const std::string& where, const Members& members, const int64_t de
   return ok;
 }
 
+// The files under `root`/`rel` (paths relative to root, '/'-separated), descending into
+// subfolders and symlinks to folders; `ancestors`: the canonical paths of the folders above,
+// so that a symlink back to one of them (a loop) is a problem line instead of endless
+// recursion. Anything else (a file, a symlink to one, a dangling symlink) is listed: the
+// caller reads or rejects each, so nothing is skipped silently.
+void ListFolder(const std::string& root, const std::string& rel,
+                std::vector<std::string> ancestors, std::vector<std::string>* files,
+                std::vector<std::string>* problems) {
+  namespace fs = std::filesystem;
+  const fs::path dir = rel.empty() ? fs::path(root) : fs::path(root) / rel;
+  std::error_code ec;
+  const fs::path canonical = fs::canonical(dir, ec);
+  if (ec) {
+    problems->push_back(dir.string() + ": cannot resolve the folder: " + ec.message());
+    return;
+  }
+  for (const std::string& a : ancestors) {
+    if (a == canonical.string()) {
+      problems->push_back(dir.string() + ": leads back to the folder " + a +
+                          " above it (a symlink loop); expected <key>.npz files and folders");
+      return;
+    }
+  }
+  ancestors.push_back(canonical.string());
+  std::vector<std::string> names;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    names.push_back(it->path().filename().string());
+  }
+  if (ec) {
+    problems->push_back(dir.string() + ": cannot list the folder: " + ec.message());
+    return;
+  }
+  std::sort(names.begin(), names.end());
+  for (const std::string& name : names) {
+    const std::string child = rel.empty() ? name : rel + "/" + name;
+    std::error_code child_ec;
+    if (fs::is_directory(fs::path(root) / child, child_ec)) {  // follows symlinks
+      ListFolder(root, child, ancestors, files, problems);
+    } else {
+      files->push_back(child);
+    }
+  }
+}
+
 }  // namespace
 
 std::string LoftrPairName(const std::string& folder, int64_t number0, int64_t number1) {
@@ -242,11 +286,7 @@ PredictionSet ReadPredictions(const std::string& name, const std::string& path,
   if (fs::is_directory(path, ec)) {
     set.layout = "folder";
     std::vector<std::string> files;
-    for (fs::recursive_directory_iterator it(path, ec), end; !ec && it != end; it.increment(ec)) {
-      if (it->is_directory(ec)) continue;
-      files.push_back(fs::relative(it->path(), path, ec).generic_string());
-    }
-    if (ec) problems->push_back(path + ": cannot list the folder: " + ec.message());
+    ListFolder(path, "", {}, &files, problems);
     std::sort(files.begin(), files.end());
     for (const std::string& rel : files) {
       const std::string file = (fs::path(path) / rel).string();

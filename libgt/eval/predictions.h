@@ -1,12 +1,15 @@
 // A matcher's predictions on a split, read from NumPy files (docs/EVAL.md "Predictions").
 //
-// Two layouts, both keyed by occgt's sample key "<scene>/<frame0>_<frame1>" (or, in the
-// one-.npz layout, by LoFTR's pair name: below):
+// Two layouts, both keyed by occgt's sample key "<scene>/<frame0>_<frame1>" (or by LoFTR's
+// pair name: below):
 //  - one .npz for the whole split, members "<key>/kpts0", "<key>/kpts1", optional
 //    "<key>/confidence" and "<key>/resolution", and an optional top-level "resolution"
 //    (np.savez(path, **{key + "/kpts0": ..., ...}));
 //  - a folder of one .npz per pair, DIR/<key>.npz (DIR/<scene>/<frame0>_<frame1>.npz),
-//    members "kpts0", "kpts1", optional "confidence" and "resolution".
+//    members "kpts0", "kpts1", optional "confidence" and "resolution"; a file's path under
+//    DIR without ".npz" is its key or LoFTR pair name (each '/' a subfolder). Subfolders and
+//    symlinks to folders are followed; a symlink back to a folder above it (a loop) is a
+//    problem, and every other file must be such a .npz: nothing is skipped.
 // kpts0, kpts1: float32 (float64 accepted) [N, 2] pixels (x, y), pixel centres at integer
 // coordinates, at `resolution` = [W, H] (integer dtype; [2, 2] gives image 0's and image
 // 1's rows) or, without one, at the split's working resolution. Every point must lie in

@@ -76,7 +76,11 @@ Protocol ExpandProtocol(ProtocolName name) {
           "keypoints in pixels of the images the matcher saw, K scaled to them (LoFTR's "
           "ScanNet test: 640x480)";
       p.failure_rule = kFailureInf;
-      p.differences = "none (eval/cli checks every pair against a cv2 reference of the loop)";
+      p.differences =
+          "a ground truth without translation (|t_gt| = 0): occgt scores the rotation only, "
+          "while LoFTR's relative_pose_error (ignore_gt_t_thr 0.0, so its pure-rotation test "
+          "never fires) divides by |t_gt| = 0 and gets a NaN translation and pose error; "
+          "otherwise none (eval/cli checks every pair against a cv2 reference of the loop)";
       p.sources = "zju3dv/LoFTR:src/utils/metrics.py (estimate_pose, error_auc)";
       break;
     case ProtocolName::kSuperglue:

@@ -167,6 +167,35 @@ def main():
     predictions.check_eval_schema(doc, common.SOURCE)
     assert [s["name"] for s in doc["sets"]] == ["gt", "gt_folder", "moved"]
     assert doc["sets"][0]["overall"] == doc["sets"][1]["overall"]
+    gt_folder = folder
+
+    # 5a. A folder whose scene subfolders are symlinks to folders is read through them (not
+    #     skipped); a symlink back to a folder above is one line naming it, nothing written.
+    linked = os.path.join(work, "linked_folder")
+    os.makedirs(linked)
+    for scene in sorted(os.listdir(gt_folder)):
+        os.symlink(os.path.join(gt_folder, scene), os.path.join(linked, scene))
+    out = os.path.join(work, "linked.json")
+    r = run_eval(split, out, "--predictions", "gt=" + linked, "--ransac-px", "0.5,1.0")
+    assert "have no prediction" not in r.stderr, r.stderr
+    doc = predictions.load_json(out)
+    assert doc["sets"][0]["pairs_missing"] == 0 and doc["sets"][0]["layout"] == "folder"
+    assert doc["sets"][0]["overall"] == \
+        predictions.load_json(os.path.join(work, "gt.json"))["sets"][0]["overall"]
+    looped = os.path.join(work, "looped_folder")
+    os.makedirs(os.path.join(looped, "sub"))
+    first_key = next(iter(truth))
+    os.makedirs(os.path.join(looped, os.path.dirname(first_key)))
+    np.savez(os.path.join(looped, first_key + ".npz"), kpts0=truth[first_key][0],
+             kpts1=truth[first_key][1])
+    os.symlink("..", os.path.join(looped, "sub", "up"))
+    o = os.path.join(work, "looped.json")
+    r = run_eval(split, o, "--predictions", looped, check=False)
+    lines = [x for x in r.stderr.splitlines() if x]
+    assert r.returncode == 1 and len(lines) == 1, (r.returncode, r.stderr)
+    assert lines[0].startswith("occgt: error: " + os.path.join(looped, "sub", "up") + ": ") and \
+        "symlink loop" in lines[0], lines
+    assert not os.path.exists(o)
 
     # 5b. Keyed by LoFTR pair names ('#'.join(pair_names) of LoFTR's test loop): the
     #     scene's LoFTR folder (the name itself for ScanNet names, else scene%04d_00 of its
@@ -188,6 +217,16 @@ def main():
     assert a["sets"][0]["overall"] == b["sets"][0]["overall"]
     assert [p["sets"][0]["pose"][0] for p in a["pairs"]] == \
         [p["sets"][0]["pose"][0] for p in b["pairs"]]
+    # The folder layout takes LoFTR pair names too: DIR/<name>.npz, each '/' a subfolder.
+    loftr_folder = os.path.join(work, "gt_loftr_folder")
+    for key, (k0, k1) in truth.items():
+        path = os.path.join(loftr_folder, loftr_name[key] + ".npz")
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        np.savez(path, kpts0=k0, kpts1=k1)
+    out = os.path.join(work, "gt_loftr_folder.json")
+    run_eval(split, out, "--predictions", "gt=" + loftr_folder, "--ransac-px", "0.5,1.0")
+    c = predictions.load_json(out)
+    assert c["sets"][0]["pairs_missing"] == 0 and a["sets"][0]["overall"] == c["sets"][0]["overall"]
 
     # 6. Bad prediction files: one line, exit 1, nothing written.
     first = next(iter(truth))
@@ -217,18 +256,26 @@ def main():
         lines = [x for x in r.stderr.splitlines() if x]
         assert r.returncode == 1 and len(lines) == 1, (name, r.returncode, r.stderr)
         assert lines[0].startswith("occgt: error: ") and re.search(pattern, lines[0]), (name, lines)
-        assert path in lines[0], (name, lines)
+        # The documented form "<file>[:<member>]: <problem>", the file first.
+        assert lines[0].startswith("occgt: error: " + path + ":"), (name, lines)
         assert not os.path.exists(o) and not os.path.exists(o + ".tmp"), name
     notnpz = os.path.join(work, "bad_notnpz.npz")
     with open(notnpz, "w") as f:
         f.write("not a zip")
     r = run_eval(split, os.path.join(work, "x.json"), "--predictions", notnpz, check=False)
-    assert r.returncode == 1 and len(r.stderr.splitlines()) == 1 and notnpz in r.stderr, r.stderr
-    # Usage errors: exit 2.
-    for args in (["--ransac-px", "abc"], ["--occlusion", "paper"], ["--px", "-1"]):
+    assert r.returncode == 1 and len(r.stderr.splitlines()) == 1, r.stderr
+    assert r.stderr.startswith("occgt: error: " + notnpz + ": "), r.stderr
+    # Usage errors: one line naming the flag, exit 2 (every option field a flag sets).
+    for args in (["--ransac-px", "abc"], ["--occlusion", "paper"], ["--px", "-1"],
+                 ["--min-confidence", "-1"], ["--min-confidence", "nan"],
+                 ["--occlusion", "image,image"], ["--failure-error", "200"],
+                 ["--curve-step", "0"], ["--auc", "10,5"], ["--epipolar-threshold", "0"],
+                 ["--occlusion-bins", "0.5,0.1"], ["--overlap-bins", "0"],
+                 ["--ransac-conf", "1"], ["--ransac-iters", "0"], ["--ransac-px", "0"]):
         r = run_eval(split, os.path.join(work, "x.json"), "--predictions", gt_path, *args,
                      check=False)
         assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, (args, r.returncode, r.stderr)
+        assert r.stderr.startswith("occgt: error: " + args[0] + ": "), (args, r.stderr)
     print(f"eval cli: {len(truth)} pairs, AUC@5 of the ground truth {got_auc[0]:.2f}, "
           f"moved vv precision {vv['precision_percent']:.2f} (expected {expected:.2f})")
 

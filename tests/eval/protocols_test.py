@@ -89,6 +89,19 @@ def main():
     assert [(e["estimator"], e["ransac_px"], e["confidence"], e["max_iters"], e["focal_mean"])
             for e in o["estimators"]] == [("ransac", 0.5, 0.99999, 1000, "loftr")]
     same(ref_errors(o["estimators"][0]), got_errors(doc, 0), "loftr")
+    # The one difference from LoFTR's code is recorded: a zero ground-truth translation.
+    assert "|t_gt| = 0" in o["protocol"]["differences"] and \
+        "ignore_gt_t_thr" in o["protocol"]["differences"], o["protocol"]
+    # --failure-error other than LoFTR's 180 makes the protocol custom (docs/EVAL.md); 180
+    # itself is LoFTR's protocol, the same bytes as the defaults.
+    out = os.path.join(work, "fail90.json")
+    run(out, "--failure-error", "90")
+    o90 = predictions.load_json(out)["options"]
+    assert o90["protocol"]["name"] == "custom" and o90["protocol"]["differences"] is None and \
+        o90["failure_error_deg"] == 90, o90["protocol"]
+    run(out, "--failure-error", "180")
+    with open(os.path.join(work, "default.json"), "rb") as a, open(out, "rb") as b:
+        assert a.read() == b.read(), "--failure-error 180 differs from the defaults"
 
     # 2. Every estimator at once (several per call): each equals the cv2 loop.
     out = os.path.join(work, "all.json")
