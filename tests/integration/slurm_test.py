@@ -125,7 +125,8 @@ def main():
         # A failing select array (dataset root missing): write and merge must be cancelled.
         bad_recipe = os.path.join(root, "bad.yaml")
         with open(os.path.join(common.SOURCE, "recipes", "demo.yaml")) as f:
-            text = f.read().replace("format: synthetic", "format: sevenscenes\n  root: /nonexistent")
+            text = re.sub(r"\n  synthetic: [^\n]*", "", f.read()).replace(
+                "format: synthetic", "format: sevenscenes\n  root: /nonexistent")
         with open(bad_recipe, "w") as f:
             f.write(text)
         bad_out = os.path.join(root, "bad", "slurm")
