@@ -87,6 +87,18 @@ def check_real_build():
     common.occgt("merge", "--schemas", schemas, out)
     for f, data in before.items():
         check(open(os.path.join(out, f), "rb").read() == data, f"merge changed {f}")
+    # A split without summary.json (assembled from task outputs): merge writes its own,
+    # which follows summary.schema.json too (its merge branch).
+    bare = os.path.join(common.scratch("shards_build_demo_bare"), "split")
+    shutil.copytree(out, bare)
+    for f in ("summary.json", "index.json", "pairs.jsonl"):
+        os.remove(os.path.join(bare, f))
+    common.occgt("merge", "--schemas", schemas, bare)
+    with open(os.path.join(bare, "summary.json")) as f:
+        merged = json.load(f)
+    with open(os.path.join(schemas, "summary.schema.json")) as f:
+        jsonschema.validate(merged, json.load(f), cls=jsonschema.Draft202012Validator)
+    check(merged["kind"] == "occgt-merge-summary" and merged["nsamples"] == 24, str(merged))
     ns = doc_reader()
     n = 0
     for s in ns["iter_split"](out):
