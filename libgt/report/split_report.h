@@ -84,7 +84,7 @@ const char* GalleryOrderName(GalleryOrder order);
 struct SplitReportOptions {
   Aggregate aggregate = Aggregate::kMean;
   OcclusionMetric occlusion_metric = OcclusionMetric::kImage;
-  int histogram_bins = 20;  // bins over [0, 1], 1..200
+  int histogram_bins = 20;  // bins over the data's range (multiples of 0.05), 1..200
   int gallery_pairs = 6;    // pairs rendered in the gallery, 0..100
   uint64_t seed = 0;        // gallery choice (kRandom)
   GalleryOrder gallery_order = GalleryOrder::kRandom;
