@@ -88,7 +88,10 @@ Protocol ExpandProtocol(ProtocolName name) {
       p.resolution_rule =
           "threshold in pixels of the resized images (SuperGlue's ScanNet test: 640x480)";
       p.failure_rule = kFailureInf;
-      p.differences = "none in the pose step";
+      p.differences =
+          "a ground truth without translation (|t_gt| = 0): occgt scores the rotation only, "
+          "while SuperGlue's compute_pose_error (angle_error_vec divides by |t_gt| = 0) gets "
+          "a NaN translation error; otherwise none in the pose step";
       p.sources =
           "magicleap/SuperGluePretrainedNetwork:match_pairs.py (thresh = 1.), "
           "models/utils.py (estimate_pose)";
