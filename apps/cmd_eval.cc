@@ -160,16 +160,15 @@ void Run(const Args& args) {
     const auto flag = [&args](const char* field, const char* name) {
       return FieldFlag{field, name, args.given.count(name) > 0};
     };
-    ThrowOptionsError(error, "occgt eval",
-                      {flag("estimators", "--estimator"), flag("ransac_px", "--ransac-px"),
-                       flag("confidence", "--ransac-conf"), flag("max_iters", "--ransac-iters"),
-                       flag("auc_thresholds_deg", "--auc"),
-                       flag("epipolar_threshold", "--epipolar-threshold"), flag("px", "--px"),
-                       flag("occlusion_definitions", "--occlusion"),
-                       flag("occlusion_bins", "--occlusion-bins"),
-                       flag("overlap_bins", "--overlap-bins"), flag("curve_step", "--curve-step"),
-                       flag("failure_error_deg", "--failure-error"),
-                       flag("min_confidence", "--min-confidence")});
+    ThrowOptionsError(
+        error, "occgt eval",
+        {flag("estimators", "--estimator"), flag("ransac_px", "--ransac-px"),
+         flag("confidence", "--ransac-conf"), flag("max_iters", "--ransac-iters"),
+         flag("auc_thresholds_deg", "--auc"), flag("epipolar_threshold", "--epipolar-threshold"),
+         flag("px", "--px"), flag("occlusion_definitions", "--occlusion"),
+         flag("occlusion_bins", "--occlusion-bins"), flag("overlap_bins", "--overlap-bins"),
+         flag("curve_step", "--curve-step"), flag("failure_error_deg", "--failure-error"),
+         flag("min_confidence", "--min-confidence")});
   }
   const std::unique_ptr<tbb::global_control> limit = LimitThreads(args.threads);
   const gt::eval::SplitIndex split = gt::eval::LoadSplitIndex(args.split_dir);

@@ -210,7 +210,10 @@ void AddInspectCommand(CLI::App& app) {
       ->add_option("--gallery-order", sa->gallery_order,
                    "random (seeded) or most-occluded (largest occlusion ratio first)")
       ->capture_default_str();
-  split->add_option("--bins", sa->bins, "histogram bins over the data's range (widened to multiples of 0.05)")->capture_default_str();
+  split
+      ->add_option("--bins", sa->bins,
+                   "histogram bins over the data's range (widened to multiples of 0.05)")
+      ->capture_default_str();
   split->add_option("--eval", sa->eval,
                     "eval.json of `occgt eval` on this split: adds the evaluation section "
                     "(repeat to compare several files' prediction sets)");

@@ -93,8 +93,9 @@ bool EvalOptions::Check(std::string* error) const {
   for (size_t i = 0; i < occlusion_definitions.size(); ++i) {
     for (size_t j = 0; j < i; ++j) {
       if (occlusion_definitions[i] == occlusion_definitions[j]) {
-        *error = std::string("occlusion_definitions: expected each of image, visible, valid at "
-                             "most once, got ") +
+        *error = std::string(
+                     "occlusion_definitions: expected each of image, visible, valid at "
+                     "most once, got ") +
                  OcclusionDefinitionName(occlusion_definitions[i]) + " twice";
         return false;
       }

@@ -173,9 +173,8 @@ bool ReadPair(const std::string& where, const Members& members, const int64_t de
 // so that a symlink back to one of them (a loop) is a problem line instead of endless
 // recursion. Anything else (a file, a symlink to one, a dangling symlink) is listed: the
 // caller reads or rejects each, so nothing is skipped silently.
-void ListFolder(const std::string& root, const std::string& rel,
-                std::vector<std::string> ancestors, std::vector<std::string>* files,
-                std::vector<std::string>* problems) {
+void ListFolder(const std::string& root, const std::string& rel, std::vector<std::string> ancestors,
+                std::vector<std::string>* files, std::vector<std::string>* problems) {
   namespace fs = std::filesystem;
   const fs::path dir = rel.empty() ? fs::path(root) : fs::path(root) / rel;
   std::error_code ec;

@@ -145,7 +145,8 @@ std::vector<CandidatePair> GenerateCandidates(const std::vector<size_t>& kept, i
 // Angle between the optical axes (camera z) of two poses, degrees in [0, 180].
 double ViewAngleDeg(const Rigid3d& world_from_a, const Rigid3d& world_from_b);
 // True when some of a few points of A's frustum (a 5 × 5 grid over the image at 0.5×, 1×
-// and 2× depth_m) lies in front of B and inside B's pixel area. Symmetric use: the pruning tests both directions.
+// and 2× depth_m) lies in front of B and inside B's pixel area. Symmetric use: the pruning tests
+// both directions.
 bool FrustumsIntersect(const Camera& cam_a, const Rigid3d& world_from_a, double depth_m_a,
                        const Camera& cam_b, const Rigid3d& world_from_b);
 

@@ -232,10 +232,9 @@ const json& SchemaJson() {
 template <typename T>
 T CheckedInteger(const json& v, const std::string& field, const std::string& file) {
   const auto fail = [&]() -> T {
-    throw InputError(file, field + ": expected an integer in [" +
-                               std::to_string(std::numeric_limits<T>::min()) + ", " +
-                               std::to_string(std::numeric_limits<T>::max()) + "], got " +
-                               v.dump());
+    throw InputError(
+        file, field + ": expected an integer in [" + std::to_string(std::numeric_limits<T>::min()) +
+                  ", " + std::to_string(std::numeric_limits<T>::max()) + "], got " + v.dump());
   };
   if (v.is_number_unsigned()) {
     const uint64_t u = v.get<uint64_t>();
@@ -274,8 +273,7 @@ void Get(const json& o, std::string_view field, T* out, const std::string& file)
   }
 }
 template <typename T>
-void GetOpt(const json& o, std::string_view field, std::optional<T>* out,
-            const std::string& file) {
+void GetOpt(const json& o, std::string_view field, std::optional<T>* out, const std::string& file) {
   const std::string key(field.substr(field.rfind('.') + 1));
   if (!o.contains(key) || o[key].is_null()) return;
   T value{};
@@ -513,7 +511,8 @@ bool Recipe::Check(std::string* error) const {
   if (name.empty()) return *error = "name: expected a non-empty name", false;
   if (width < 8 || height < 8)
     return *error = "resolution: expected [W, H] with 8 <= W, H <= 8192", false;
-  const truth::PairTruthOptions resolved = truth::ResolvePairTruthOptions(RecipePairSettings(*this));
+  const truth::PairTruthOptions resolved =
+      truth::ResolvePairTruthOptions(RecipePairSettings(*this));
   if (!dataset.Check(error) || !selection.Check(error) ||
       !CheckOccupancy(resolved, occupancy.settings.max_range_m.has_value(), error) ||
       !shards.Check(error)) {
@@ -730,8 +729,10 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   Get(d, "dataset.frame_stride", &r.dataset.frame_stride, file);
   if (d.contains("device")) {
     if (r.dataset.is_synthetic || r.dataset.format != DatasetFormat::kScanNetPP) {
-      throw InputError(file, "dataset.device: expected only with format scannetpp (ScanNet++'s "
-                             "camera), not " + format);
+      throw InputError(file,
+                       "dataset.device: expected only with format scannetpp (ScanNet++'s "
+                       "camera), not " +
+                           format);
     }
     r.dataset.device =
         datasets::ParseScanNetPPDevice(d["device"].get<std::string>(), file + ": dataset.device");
@@ -752,7 +753,8 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   }
   if (d.contains("synthetic")) {
     if (!r.dataset.is_synthetic) {
-      throw InputError(file, "dataset.synthetic: expected only with format synthetic, not " + format);
+      throw InputError(file,
+                       "dataset.synthetic: expected only with format synthetic, not " + format);
     }
     const json& s = d["synthetic"];
     Get(s, "dataset.synthetic.scenes", &r.dataset.synthetic.scenes, file);
@@ -788,7 +790,8 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     Get(s, "selection.max_frame_gap", &o.max_frame_gap, file);
     if (s.contains("pruning")) {
       Get(s["pruning"], "selection.pruning.max_distance_m", &o.pruning.max_distance_m, file);
-      Get(s["pruning"], "selection.pruning.max_view_angle_deg", &o.pruning.max_view_angle_deg, file);
+      Get(s["pruning"], "selection.pruning.max_view_angle_deg", &o.pruning.max_view_angle_deg,
+          file);
       Get(s["pruning"], "selection.pruning.frustum", &o.pruning.frustum, file);
     }
     Get(s, "selection.score_stride", &o.score_stride, file);
@@ -847,8 +850,8 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
       }
       std::string error;
       if (!t.Check(&error)) {  // "views: ..." is selection.views, the rest selection.tuples.*
-        throw InputError(file, (error.rfind("views:", 0) == 0 ? "selection." : "selection.tuples.") +
-                                   error);
+        throw InputError(
+            file, (error.rfind("views:", 0) == 0 ? "selection." : "selection.tuples.") + error);
       }
       r.tuples = t;
     }
@@ -904,8 +907,9 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
                                            : LoftrExportKind::kTrain;
     Get(j["loftr_export"], "loftr_export.tree", &r.loftr_tree, file);
     if (j["loftr_export"].contains("score") && r.loftr_export == LoftrExportKind::kTest) {
-      throw InputError(file, "loftr_export.score: expected only with kind train or megadepth "
-                             "(LoFTR's test index has no score)");
+      throw InputError(file,
+                       "loftr_export.score: expected only with kind train or megadepth "
+                       "(LoFTR's test index has no score)");
     }
     if (j["loftr_export"].value("score", "overlap") == "covisible") {
       r.loftr_score = LoftrScore::kCovisible;

@@ -141,7 +141,8 @@ class SplitSchemas {
         views_line_(LoadSchema(dir, kViewsLine)) {}
   // "" or "<schema file>: <its first problems>".
   std::string CheckSample(const json& doc) const {
-    const bool views = doc.is_object() && doc.contains("kind") && doc["kind"] == "occgt-views-sample";
+    const bool views =
+        doc.is_object() && doc.contains("kind") && doc["kind"] == "occgt-views-sample";
     return views ? Check(views_sample_.get(), kViewsSample, doc)
                  : Check(pair_sample_.get(), kPairSample, doc);
   }
@@ -175,8 +176,7 @@ std::string SceneOfLine(const json& line, const std::string& key) {
 // Checks that a tar holds exactly `expected_keys` (when given) with valid member names;
 // validates sample JSON with `sample_schema` (may be null) and parses every .npy header.
 // Returns problems, each "<member>: <problem>"; `keys_out` gets the keys in order.
-std::vector<std::string> CheckTarContents(const std::string& tar_path,
-                                          const SplitSchemas& schemas,
+std::vector<std::string> CheckTarContents(const std::string& tar_path, const SplitSchemas& schemas,
                                           std::vector<std::string>* keys_out) {
   std::vector<std::string> problems;
   std::vector<std::string> keys;
@@ -649,8 +649,7 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
   }
   const SplitPlan plan = ReadPlan(dir, result.split);
   // Lines and samples against their schemas only with `verify`: a per-line cost of its own.
-  const SplitSchemas schemas =
-      options.verify ? SplitSchemas(options.schemas_dir) : SplitSchemas();
+  const SplitSchemas schemas = options.verify ? SplitSchemas(options.schemas_dir) : SplitSchemas();
   const size_t nshards = plan.shard_nsamples.size();
   StreamedFile pairs_jsonl((fs::path(dir) / "pairs.jsonl").string());
   std::unordered_map<std::string, int64_t> shard_of_key;
@@ -660,8 +659,8 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
     const size_t end = std::min(nshards, begin + kMergeChunkShards);
     std::vector<LoadedShard> chunk(end - begin);
     tbb::parallel_for(begin, end, size_t{1}, [&](size_t s) {
-      chunk[s - begin] = LoadShard(dir, result.split, static_cast<int64_t>(s),
-                                   plan.shard_nsamples[s], schemas);
+      chunk[s - begin] =
+          LoadShard(dir, result.split, static_cast<int64_t>(s), plan.shard_nsamples[s], schemas);
     });
     for (LoadedShard& loaded : chunk) {
       if (loaded.error) std::rethrow_exception(loaded.error);
@@ -696,8 +695,8 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
     std::vector<std::string> problem(result.parts.size());
     tbb::parallel_for(size_t{0}, result.parts.size(), size_t{1}, [&](size_t s) {
       const PartRecord& r = result.parts[s];
-      problem[s] = VerifyShard(r.info.path, r, PartRecordPath(dir, r.split, r.shard_index),
-                               schemas);
+      problem[s] =
+          VerifyShard(r.info.path, r, PartRecordPath(dir, r.split, r.shard_index), schemas);
     });
     for (size_t s = 0; s < problem.size(); ++s) {
       if (!problem[s].empty()) throw InputError(result.parts[s].info.path, problem[s]);

@@ -49,7 +49,9 @@ gt::render::FusedDepthOptions FusedDepthFrom(const py::object& value) {
   }
   for (const auto& [k, v] : value.cast<py::dict>()) {
     const std::string key = py::str(k);
-    double* field = key == "abs_tol_m" ? &fused.abs_tol_m : key == "rel_tol" ? &fused.rel_tol : nullptr;
+    double* field = key == "abs_tol_m" ? &fused.abs_tol_m
+                    : key == "rel_tol" ? &fused.rel_tol
+                                       : nullptr;
     if (field == nullptr) {
       ThrowValue("fused_depth", "unknown key '" + key + "' (expected abs_tol_m, rel_tol)");
     }

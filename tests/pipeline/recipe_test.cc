@@ -203,8 +203,8 @@ TEST(Recipe, RangesThatWouldFailLaterNameTheirKeyAtLoad) {
   EXPECT_EQ(ErrorOf(m + "selection: {views: 3, tuples: {pair_covisibility: [0.8, 0.2]}}\n"),
             "recipes/x.yaml: selection.tuples.pair_covisibility: expected [lo, hi] with 0 <= "
             "lo <= hi <= 1");
-  EXPECT_EQ(ErrorOf(m + "selection: {views: [5, 3]}\n").rfind("recipes/x.yaml: selection.views:", 0),
-            0u);
+  EXPECT_EQ(
+      ErrorOf(m + "selection: {views: [5, 3]}\n").rfind("recipes/x.yaml: selection.views:", 0), 0u);
 }
 
 TEST(Recipe, KeysThatWouldBeIgnoredAreRefused) {
@@ -221,10 +221,11 @@ TEST(Recipe, KeysThatWouldBeIgnoredAreRefused) {
                         "x.yaml", "/b")
                 .dataset.device,
             datasets::ScanNetPPDevice::kIphone);
-  EXPECT_EQ(ParseRecipe(std::string(kMinimal) + "sample: {depth: true}\nloftr_export: {kind: test}\n",
-                        "x.yaml", "/b")
-                .loftr_export,
-            LoftrExportKind::kTest);
+  EXPECT_EQ(
+      ParseRecipe(std::string(kMinimal) + "sample: {depth: true}\nloftr_export: {kind: test}\n",
+                  "x.yaml", "/b")
+          .loftr_export,
+      LoftrExportKind::kTest);
 }
 
 TEST(Recipe, MissingDatasetAndFormat) {
