@@ -661,6 +661,9 @@ json ReportJson(const SplitData& split, const SplitReportOptions& options,
       vis.push_back(p.visible_min);
     }
     auto stats = [](const std::vector<double>& v) {
+      if (v.empty()) {  // no pair, no statistic (as the tuples' distributions at count 0)
+        return json{{"min", nullptr}, {"median", nullptr}, {"mean", nullptr}, {"max", nullptr}};
+      }
       const Stats s = Describe(v);
       return json{{"min", s.min}, {"median", s.median}, {"mean", s.mean}, {"max", s.max}};
     };

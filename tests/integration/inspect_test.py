@@ -21,6 +21,7 @@ import subprocess
 import sys
 import tarfile
 
+import jsonschema
 import numpy as np
 from PIL import Image
 
@@ -349,6 +350,14 @@ def main():
     common.occgt("inspect", "split", empty)
     for name in ["overlap_hist.png", "occlusion_cumulative.png", "pairs_per_scene.png"]:
         not_blank(png(os.path.join(empty, "inspect", name)), "empty split " + name)
+    # report.json: no pair, no statistic (null, not 0), and it follows its schema.
+    with open(os.path.join(empty, "inspect", "report.json")) as f:
+        report = json.load(f)
+    with open(os.path.join(common.SOURCE, "schemas", "report.schema.json")) as f:
+        jsonschema.validate(report, json.load(f), cls=jsonschema.Draft202012Validator)
+    check(report["pairs"]["count"] == 0 and
+          set(report["pairs"]["overlap"].values()) == {None},
+          f"empty split: {report['pairs']}")
     with open(os.path.join(empty, "pairs.jsonl"), "w") as f:
         f.write(json.dumps({"scene": "a", "frame0": "1", "frame1": "2",
                             "metrics": {"01": {"overlap": 0.5}, "10": {}}}) + "\n")
