@@ -14,7 +14,8 @@ import torch
 
 import common
 import occgt
-from occgt.torch import TupleIndexDataset, TupleRef, collate_tuples, read_tuples
+from occgt.torch import (TRACK_STATE_PADDED, TupleIndexDataset, TupleRef, collate_tuples,
+                         read_tuples)
 
 
 class TupleDataset(unittest.TestCase):
@@ -92,6 +93,9 @@ class TupleDataset(unittest.TestCase):
         self.assertEqual(batch["view_mask"].tolist(), [[True] * 3 + [False] * 2, [True] * 5])
         self.assertEqual(tuple(batch["tracks"].shape), (2, 5, 40, 2))
         self.assertFalse(bool(batch["track_vis_mask"][0, 3:].any()))
+        # Padded views' track states are TRACK_STATE_PADDED, not 0 (TRACK_VISIBLE).
+        self.assertTrue(bool((batch["track_state"][0, 3:] == TRACK_STATE_PADDED).all()))
+        self.assertTrue(torch.equal(batch["track_state"][0, :3], ds[0]["track_state"]))
         self.assertTrue(torch.equal(batch["visible_in"][0, :3], ds[0]["visible_in"]))
         self.assertEqual(batch["scene_id"], [self.scene_name] * 2)
         loader = torch.utils.data.DataLoader(ds, batch_size=2, collate_fn=collate_tuples)

@@ -34,9 +34,10 @@ from .collate import VARIABLE_KEYS, Collate, collate
 from .pairs import PairIndexDataset, PairRef, read_pair_index
 from .shards import ShardDataset
 from .supervision import loftr_supervision
-from .tuples import TupleIndexDataset, TupleRef, collate_tuples, read_tuples
+from .tuples import TRACK_STATE_PADDED, TupleIndexDataset, TupleRef, collate_tuples, read_tuples
 
 __all__ = [
+    "TRACK_STATE_PADDED",
     "VARIABLE_KEYS",
     "Collate",
     "PairIndexDataset",

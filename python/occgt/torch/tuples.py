@@ -50,6 +50,10 @@ def read_tuples(path: Union[str, os.PathLike]) -> List[TupleRef]:
 
 TupleLike = Union[TupleRef, Tuple[str, Sequence[str]]]
 
+#: ``track_state`` of the views and tracks that ``collate_tuples`` pads (0 would read as
+#: ``occgt.TRACK_VISIBLE``); not one of ``occgt.TRACK_STATE_NAMES``.
+TRACK_STATE_PADDED = 255
+
 
 class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     """N-view samples of a tuple index, ground truth computed on the fly.
@@ -198,8 +202,9 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
 def collate_tuples(batch: Sequence[Dict[str, Any]]) -> Dict[str, Any]:
     """Batches "vggt" items of different sizes: tensors whose first axis is the view axis S
     (and, for tracks, the track axis P) are zero-padded to the largest in the batch and
-    stacked; ``view_mask`` bool [B, S_max] marks real views and ``track_vis_mask`` stays False
-    on padded tracks; other values become lists."""
+    stacked; ``view_mask`` bool [B, S_max] marks real views, ``track_vis_mask`` stays False
+    and ``track_state`` is ``TRACK_STATE_PADDED`` on the padding; other values become
+    lists."""
     if not batch:
         raise ValueError("batch: expected at least one item")
     s_max = max(int(b["depths"].shape[0]) for b in batch)
@@ -216,7 +221,8 @@ def collate_tuples(batch: Sequence[Dict[str, Any]]) -> Dict[str, Any]:
             shape[0] = s_max
             if key in ("tracks", "track_vis_mask", "track_state"):
                 shape[1] = p_max
-            z = torch.zeros(shape, dtype=t.dtype)
+            z = (torch.full(shape, TRACK_STATE_PADDED, dtype=t.dtype) if key == "track_state"
+                 else torch.zeros(shape, dtype=t.dtype))
             z[tuple(slice(0, n) for n in t.shape)] = t
             padded.append(z)
         out[key] = torch.stack(padded)
