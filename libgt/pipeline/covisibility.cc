@@ -122,6 +122,80 @@ SceneCovisibility ComputeSceneCovisibility(const Recipe& r, const Scene& scene,
   return out;
 }
 
+namespace {
+
+template <typename T>
+std::vector<T> Member(const std::map<std::string, std::string>& m, const std::string& key,
+                      const std::string& path) {
+  auto it = m.find(key);
+  if (it == m.end()) throw InputError(path, "expected a member '" + key + "'");
+  const io::NpyArray a = io::ParseNpy(it->second, path + ":" + key + ".npy");
+  const T* p = a.As<T>(path + ":" + key);
+  return std::vector<T>(p, p + a.NumElements());
+}
+
+// '<U<n>' [F] (UTF-32LE); every code unit must be a byte (the ids occgt writes).
+std::vector<std::string> Strings(const std::map<std::string, std::string>& m,
+                                 const std::string& key, const std::string& path) {
+  auto it = m.find(key);
+  if (it == m.end()) throw InputError(path, "expected a member '" + key + "'");
+  const std::string where = path + ":" + key + ".npy";
+  const io::NpyHeader h = io::ParseNpyHeader(it->second, where);
+  if (h.descr.size() < 3 || h.descr.compare(0, 2, "<U") != 0 || h.shape.size() != 1) {
+    throw InputError(where, "expected a 1-D '<U' string array, got " + h.descr);
+  }
+  const size_t n = std::stoul(h.descr.substr(2));
+  const size_t count = static_cast<size_t>(h.shape[0]);
+  if (it->second.size() < h.data_offset + count * n * 4) throw InputError(where, "truncated");
+  std::vector<std::string> out(count);
+  const auto* data = reinterpret_cast<const unsigned char*>(it->second.data() + h.data_offset);
+  for (size_t k = 0; k < count; ++k) {
+    for (size_t c = 0; c < n; ++c) {
+      const unsigned char* u = data + (k * n + c) * 4;
+      const uint32_t code = u[0] | (u[1] << 8) | (u[2] << 16) | (static_cast<uint32_t>(u[3]) << 24);
+      if (code == 0) break;
+      if (code > 255) throw InputError(where, "expected byte strings (frame ids)");
+      out[k].push_back(static_cast<char>(code));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+SceneCovisibility ReadSceneCovisibility(const std::string& path, const std::string& digest) {
+  if (!io::FileExists(path)) {
+    throw InputError(path, "missing: run `occgt covis` with this recipe and --out first");
+  }
+  const std::map<std::string, std::string> m = io::ReadNpzBytes(path);
+  const std::vector<uint8_t> d = Member<uint8_t>(m, "options_digest", path);
+  if (std::string(d.begin(), d.end()) != digest) {
+    throw InputError(path, "written under other covisibility options (digest " +
+                               std::string(d.begin(), d.end()) + ", this recipe's " + digest +
+                               "); re-run occgt covis into another --out");
+  }
+  SceneCovisibility g;
+  g.frame_ids = Strings(m, "frame_ids", path);
+  g.i = Member<int32_t>(m, "i", path);
+  g.j = Member<int32_t>(m, "j", path);
+  g.c_ij = Member<float>(m, "c_ij", path);
+  g.c_ji = Member<float>(m, "c_ji", path);
+  g.o_ij = Member<float>(m, "o_ij", path);
+  g.o_ji = Member<float>(m, "o_ji", path);
+  g.self = Member<float>(m, "self", path);
+  if (const std::vector<int32_t> stride = Member<int32_t>(m, "score_stride", path);
+      stride.size() == 1) {
+    g.score_stride = stride[0];
+  }
+  const size_t p = g.i.size();
+  const auto f = static_cast<int32_t>(g.frame_ids.size());
+  bool ok = g.j.size() == p && g.c_ij.size() == p && g.c_ji.size() == p && g.o_ij.size() == p &&
+            g.o_ji.size() == p && g.self.size() == g.frame_ids.size();
+  for (size_t k = 0; ok && k < p; ++k) ok = g.i[k] >= 0 && g.i[k] < g.j[k] && g.j[k] < f;
+  if (!ok) throw InputError(path, "expected i < j < F and arrays of matching sizes");
+  return g;
+}
+
 std::vector<float> DenseCovisibility(const SceneCovisibility& g) {
   const size_t f = g.frame_ids.size();
   std::vector<float> c(f * f, 0.0f);
@@ -204,6 +278,18 @@ nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOption
   }
   int64_t written = 0, skipped = 0, scored = 0, candidates = 0, done = 0;
   pairs::DropCounts drops;
+  // --dense: the F×F matrix of a scene's graph, DIR/covisibility/<scene>/...--FxF.npy.
+  const auto dense_path = [&](const std::string& name, const SceneCovisibility& g) {
+    const std::string f = std::to_string(g.frame_ids.size());
+    return fs::path(options.out_dir) / "covisibility" / SceneFileName(name) /
+           ("pairwise_covisibility--" + f + "x" + f + ".npy");
+  };
+  const auto write_dense = [&](const std::string& name, const SceneCovisibility& g) {
+    const fs::path path = dense_path(name, g);
+    fs::create_directories(path.parent_path());
+    const auto f = static_cast<int64_t>(g.frame_ids.size());
+    io::WriteNpy<float>(path.string(), {f, f}, DenseCovisibility(g));
+  };
   for (const std::string& name : mine) {
     const std::string path = CovisibilityPath(options.out_dir, name);
     if (io::FileExists(path)) {
@@ -214,19 +300,18 @@ nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOption
                                    "); remove it or write into another --out");
       }
       ++skipped;
+      // A complete scene gets its dense matrix when asked for and missing (a first run
+      // without --dense): from the stored graph, not scored again.
+      if (options.dense) {
+        const SceneCovisibility g = ReadSceneCovisibility(path, digest);
+        if (!fs::exists(dense_path(name, g))) write_dense(name, g);
+      }
     } else {
       const Scene scene = ReadRecipeScene(recipe, *reader, name);
       pairs::DepthCache cache(scene, recipe.width, recipe.height, options.depth_cache_mb << 20,
                               RecipeFrameDepthOptions(recipe));
       const SceneCovisibility g = ComputeSceneCovisibility(recipe, scene, &cache);
-      if (options.dense) {
-        const int64_t f = static_cast<int64_t>(g.frame_ids.size());
-        const std::string dir = options.out_dir + "/covisibility/" + SceneFileName(name);
-        fs::create_directories(dir);
-        io::WriteNpy<float>(
-            dir + "/pairwise_covisibility--" + std::to_string(f) + "x" + std::to_string(f) + ".npy",
-            {f, f}, DenseCovisibility(g));
-      }
+      if (options.dense) write_dense(name, g);
       WriteSceneCovisibility(path, g, digest);  // last: completes the scene
       ++written;
       scored += static_cast<int64_t>(g.i.size());

@@ -59,6 +59,11 @@ SceneCovisibility ComputeSceneCovisibility(const Recipe& recipe, const Scene& sc
 // labels, selection.pruning and selection.score_stride. A graph of another digest is refused.
 std::string CovisibilityDigest(const Recipe& recipe);
 
+// A scene's graph as `occgt covis` wrote it (the members above; candidates and drops are not
+// stored); an InputError naming the file when it is missing, of another options digest, or
+// malformed.
+SceneCovisibility ReadSceneCovisibility(const std::string& path, const std::string& digest);
+
 // The dense F×F matrix of a graph (the layout above).
 std::vector<float> DenseCovisibility(const SceneCovisibility& graph);
 

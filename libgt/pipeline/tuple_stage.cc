@@ -21,82 +21,6 @@ namespace {
 
 using nlohmann::json;
 
-struct LoadedGraph {
-  std::vector<std::string> frame_ids;
-  pairs::CovisibilityPairs pairs;
-  std::vector<float> self;
-};
-
-template <typename T>
-std::vector<T> Member(const std::map<std::string, std::string>& m, const std::string& key,
-                      const std::string& path) {
-  auto it = m.find(key);
-  if (it == m.end()) throw InputError(path, "expected a member '" + key + "'");
-  const io::NpyArray a = io::ParseNpy(it->second, path + ":" + key + ".npy");
-  const T* p = a.As<T>(path + ":" + key);
-  return std::vector<T>(p, p + a.NumElements());
-}
-
-// '<U<n>' [F] (UTF-32LE); every code unit must be a byte (the ids occgt writes).
-std::vector<std::string> Strings(const std::map<std::string, std::string>& m,
-                                 const std::string& key, const std::string& path) {
-  auto it = m.find(key);
-  if (it == m.end()) throw InputError(path, "expected a member '" + key + "'");
-  const std::string where = path + ":" + key + ".npy";
-  const io::NpyHeader h = io::ParseNpyHeader(it->second, where);
-  if (h.descr.size() < 3 || h.descr.compare(0, 2, "<U") != 0 || h.shape.size() != 1) {
-    throw InputError(where, "expected a 1-D '<U' string array, got " + h.descr);
-  }
-  const size_t n = std::stoul(h.descr.substr(2));
-  const size_t count = static_cast<size_t>(h.shape[0]);
-  if (it->second.size() < h.data_offset + count * n * 4) throw InputError(where, "truncated");
-  std::vector<std::string> out(count);
-  const auto* data = reinterpret_cast<const unsigned char*>(it->second.data() + h.data_offset);
-  for (size_t k = 0; k < count; ++k) {
-    for (size_t c = 0; c < n; ++c) {
-      const unsigned char* u = data + (k * n + c) * 4;
-      const uint32_t code = u[0] | (u[1] << 8) | (u[2] << 16) | (static_cast<uint32_t>(u[3]) << 24);
-      if (code == 0) break;
-      if (code > 255) throw InputError(where, "expected byte strings (frame ids)");
-      out[k].push_back(static_cast<char>(code));
-    }
-  }
-  return out;
-}
-
-LoadedGraph LoadGraph(const std::string& path, const std::string& digest) {
-  if (!io::FileExists(path)) {
-    throw InputError(path, "missing: run `occgt covis` with this recipe and --out first");
-  }
-  const std::map<std::string, std::string> m = io::ReadNpzBytes(path);
-  const std::vector<uint8_t> d = Member<uint8_t>(m, "options_digest", path);
-  if (std::string(d.begin(), d.end()) != digest) {
-    throw InputError(path, "written under other covisibility options (digest " +
-                               std::string(d.begin(), d.end()) + ", this recipe's " + digest +
-                               "); re-run occgt covis into another --out");
-  }
-  LoadedGraph g;
-  g.frame_ids = Strings(m, "frame_ids", path);
-  g.pairs.num_frames = static_cast<int>(g.frame_ids.size());
-  g.pairs.i = Member<int32_t>(m, "i", path);
-  g.pairs.j = Member<int32_t>(m, "j", path);
-  g.pairs.c_ij = Member<float>(m, "c_ij", path);
-  g.pairs.c_ji = Member<float>(m, "c_ji", path);
-  g.self = Member<float>(m, "self", path);
-  g.pairs.o_ij = Member<float>(m, "o_ij", path);
-  g.pairs.o_ji = Member<float>(m, "o_ji", path);
-  g.pairs.self = g.self;
-  const size_t p = g.pairs.i.size();
-  bool ok = g.pairs.j.size() == p && g.pairs.c_ij.size() == p && g.pairs.c_ji.size() == p &&
-            g.pairs.o_ij.size() == p && g.pairs.o_ji.size() == p &&
-            g.self.size() == g.frame_ids.size();
-  for (size_t k = 0; ok && k < p; ++k) {
-    ok = g.pairs.i[k] >= 0 && g.pairs.i[k] < g.pairs.j[k] && g.pairs.j[k] < g.pairs.num_frames;
-  }
-  if (!ok) throw InputError(path, "expected i < j < F and arrays of matching sizes");
-  return g;
-}
-
 }  // namespace
 
 json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_shards) {
@@ -118,20 +42,13 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
   int64_t total = 0;
   std::vector<TupleLine> rows;
   for (const std::string& scene : scenes) {
-    const LoadedGraph g = LoadGraph(CovisibilityPath(out_dir, scene), digest);
-    const std::vector<float> dense = [&] {
-      SceneCovisibility s;
-      s.frame_ids = g.frame_ids;
-      s.i = g.pairs.i;
-      s.j = g.pairs.j;
-      s.c_ij = g.pairs.c_ij;
-      s.c_ji = g.pairs.c_ji;
-      s.self = g.self;
-      return DenseCovisibility(s);
-    }();
+    const SceneCovisibility g = ReadSceneCovisibility(CovisibilityPath(out_dir, scene), digest);
+    const std::vector<float> dense = DenseCovisibility(g);
     const size_t f = g.frame_ids.size();
+    const pairs::CovisibilityPairs graph{static_cast<int>(f), g.i,    g.j,   g.c_ij,
+                                         g.c_ji,              g.o_ij, g.o_ji, g.self};
     const std::vector<pairs::Tuple> tuples =
-        pairs::SampleTuples(g.pairs, *recipe.tuples, pairs::SceneSeed(recipe.seed, scene), &drops);
+        pairs::SampleTuples(graph, *recipe.tuples, pairs::SceneSeed(recipe.seed, scene), &drops);
     for (const pairs::Tuple& t : tuples) {
       json ids = json::array(), cov = json::array();
       TupleLine tl;

@@ -2,8 +2,8 @@
 docs/MULTIVIEW.md): the covisibility graph of
 each scene equals the pair scorer's values (the select stage of `occgt build` with every
 candidate kept: no frame gap, no filters, no quota), the same bytes with 1 and 2 threads and
-with the scenes split over 2 tasks, the dense matrix is the sparse graph laid out (MapAnything's
-orientation), a re-run skips finished scenes, and a graph of other options is refused; the
+with the scenes split over 2 tasks (and with --dense run on a folder written without it), the
+dense matrix is the sparse graph laid out (MapAnything's orientation), a re-run skips finished scenes, and a graph of other options is refused; the
 tuples satisfy every constraint, carry the graph's values, are seeded and identical over
 graphs of any thread count or task split."""
 from __future__ import annotations
@@ -126,10 +126,17 @@ class Covis(unittest.TestCase):
         for k in range(2):
             common.occgt("covis", self.recipe, "--out", split, "--threads", 2, "--dense",
                          "--task", k, "--tasks", 2, "--root", self.data)
+        # A first run without --dense, then --dense on the complete folder: the matrices are
+        # written from the stored graphs, the same bytes.
+        later = os.path.join(self.dir, "later")
+        common.occgt("covis", self.recipe, "--out", later, "--root", self.data)
+        self.assertFalse(any(k.endswith(".npy") for k in read_dir(later)))
+        common.occgt("covis", self.recipe, "--out", later, "--dense", "--root", self.data)
         one = read_dir(self.out1)
         self.assertGreater(len(one), 5)
         self.assertEqual(one, read_dir(out2))
         self.assertEqual(one, read_dir(split))
+        self.assertEqual(one, read_dir(later))
 
     def test_another_recipe_is_refused_and_bad_flags_exit_2(self) -> None:
         other = os.path.join(self.dir, "other.yaml")
