@@ -71,6 +71,9 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
       ++total;
     }
   }
+  // N-view shards of other tuples in DIR/views would no longer match tuples.jsonl: refused
+  // before it is replaced.
+  CheckViewsShards(recipe, out_dir, rows);
   io::WriteFileAtomic(out_dir + "/tuples.jsonl", lines);
   json summary = {{"scenes", static_cast<int64_t>(scenes.size())},
                   {"tuples", total},

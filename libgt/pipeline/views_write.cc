@@ -206,6 +206,23 @@ void CheckCompleteShard(const std::string& dir, const Recipe& recipe, int64_t sh
 
 std::string ViewsShardDir(const std::string& out_dir) { return out_dir + "/views"; }
 
+void CheckViewsShards(const Recipe& recipe, const std::string& out_dir,
+                      const std::vector<TupleLine>& lines) {
+  const std::string dir = ViewsShardDir(out_dir);
+  const std::string plan = shards::PlanPath(dir, recipe.split);
+  if (!io::FileExists(plan)) return;  // no N-view shards yet
+  const std::vector<int64_t> sizes = PlanViewsShards(recipe, static_cast<int64_t>(lines.size()));
+  if (shards::ReadPlan(dir, recipe.split).shard_nsamples != sizes) {
+    throw InputError(plan, "holds the N-view shard plan of other tuples than this run's; use a "
+                           "fresh --out (or remove " + dir + ")");
+  }
+  for (int64_t s = 0, start = 0; s < static_cast<int64_t>(sizes.size()); start += sizes[s], ++s) {
+    if (shards::IsShardComplete(dir, recipe.split, s)) {
+      CheckCompleteShard(dir, recipe, s, start, lines);
+    }
+  }
+}
+
 int64_t EstimatedViewsSampleBytes(const Recipe& r) {
   const bool deflate = r.sample.compression == SampleCompression::kDeflate;
   const double sparse = deflate ? 0.06 : 1.0;

@@ -57,6 +57,12 @@ std::vector<int64_t> PlanViewsShards(const Recipe& recipe, int64_t total);
 // The folder of the N-view shards under an `occgt tuples` output: DIR/views.
 std::string ViewsShardDir(const std::string& out_dir);
 
+// Refuses (InputError naming the file) N-view shards already in ViewsShardDir(out_dir) that
+// hold other tuples or options than `lines` under `recipe`: `occgt tuples` calls it before it
+// replaces tuples.jsonl, so that the two never go out of step. Nothing there: no check.
+void CheckViewsShards(const Recipe& recipe, const std::string& out_dir,
+                      const std::vector<TupleLine>& lines);
+
 // Writes the N-view shards of `lines` (recipe.split) into ViewsShardDir(out_dir) and publishes
 // index.json / pairs.jsonl there. `recipe` reads the frames (its dataset root resolved).
 // Returns {"dir", "shards", "shards_written", "shards_skipped", "samples"}.

@@ -103,6 +103,22 @@ class ViewsShards(unittest.TestCase):
                                           np.float32(line["covisibility"]))
             self.assertEqual(meta["num_views"], len(line["frame_ids"]))
 
+    def test_other_tuples_are_refused_before_tuples_jsonl_changes(self) -> None:
+        """A re-run whose tuples differ (another seed) into a folder with N-view shards is
+        refused, with or without --shards, and leaves tuples.jsonl as it was."""
+        other = os.path.join(self.dir, "other_seed.yaml")
+        with open(other, "w") as f:
+            f.write(RECIPE.replace("seed: 5\n", "seed: 6\n", 1))
+        path = os.path.join(self.out1, "tuples.jsonl")
+        before = common.read_bytes(path)
+        for extra in (["--shards"], []):
+            r = subprocess.run([common.BINARY, "tuples", other, "--out", self.out1, "--root",
+                                self.data, *extra], capture_output=True, text=True)
+            self.assertEqual(r.returncode, 1, r.stderr)
+            self.assertIn("written for other tuples or options", r.stderr)
+            self.assertEqual(len(r.stderr.strip().splitlines()), 1, r.stderr)
+            self.assertEqual(common.read_bytes(path), before)
+
     def test_validate_and_merge_verify(self) -> None:
         """`occgt validate` and `occgt merge --verify` check an N-view split against the
         N-view schemas (views_sample, views_line): valid as written; a line that lacks a
