@@ -45,8 +45,8 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
     const SceneCovisibility g = ReadSceneCovisibility(CovisibilityPath(out_dir, scene), digest);
     const std::vector<float> dense = DenseCovisibility(g);
     const size_t f = g.frame_ids.size();
-    const pairs::CovisibilityPairs graph{static_cast<int>(f), g.i,    g.j,   g.c_ij,
-                                         g.c_ji,              g.o_ij, g.o_ji, g.self};
+    const pairs::CovisibilityPairs graph{
+        static_cast<int>(f), g.i, g.j, g.c_ij, g.c_ji, g.o_ij, g.o_ji, g.self};
     const std::vector<pairs::Tuple> tuples =
         pairs::SampleTuples(graph, *recipe.tuples, pairs::SceneSeed(recipe.seed, scene), &drops);
     for (const pairs::Tuple& t : tuples) {

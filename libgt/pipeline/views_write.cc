@@ -213,8 +213,10 @@ void CheckViewsShards(const Recipe& recipe, const std::string& out_dir,
   if (!io::FileExists(plan)) return;  // no N-view shards yet
   const std::vector<int64_t> sizes = PlanViewsShards(recipe, static_cast<int64_t>(lines.size()));
   if (shards::ReadPlan(dir, recipe.split).shard_nsamples != sizes) {
-    throw InputError(plan, "holds the N-view shard plan of other tuples than this run's; use a "
-                           "fresh --out (or remove " + dir + ")");
+    throw InputError(plan,
+                     "holds the N-view shard plan of other tuples than this run's; use a "
+                     "fresh --out (or remove " +
+                         dir + ")");
   }
   for (int64_t s = 0, start = 0; s < static_cast<int64_t>(sizes.size()); start += sizes[s], ++s) {
     if (shards::IsShardComplete(dir, recipe.split, s)) {
