@@ -192,6 +192,28 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
   };
   split.summary = optional_object("summary.json", "expected a JSON object");
   split.recipe = optional_object("recipe.json", "expected a JSON object (the resolved recipe)");
+  split.drops = json::object();
+  if (split.summary.is_object() && split.summary.contains("drops")) {
+    split.drops = split.summary["drops"];
+  } else if (fs::is_directory(fs::path(dir) / "selection")) {
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(fs::path(dir) / "selection")) {
+      if (e.path().extension() == ".json") files.push_back(e.path());
+    }
+    std::sort(files.begin(), files.end());
+    for (const fs::path& f : files) {
+      const json sel = json::parse(gt::io::ReadFileBytes(f.string()), nullptr, false);
+      if (!sel.is_object() || !sel.contains("drops") || !sel["drops"].is_object()) {
+        throw InputError(f.string(), "expected a scene's selection record with \"drops\"");
+      }
+      for (auto it = sel["drops"].begin(); it != sel["drops"].end(); ++it) {
+        if (!it.value().is_number_integer()) {
+          throw InputError(f.string(), "drops." + it.key() + ": expected an integer");
+        }
+        split.drops[it.key()] = split.drops.value(it.key(), int64_t{0}) + it.value().get<int64_t>();
+      }
+    }
+  }
   return split;
 }
 
@@ -217,7 +239,7 @@ std::vector<std::string> SplitWarnings(const SplitData& split) {
     }
   }
   if (split.summary.is_object()) {
-    const json drops = split.summary.value("drops", json::object());
+    const json& drops = split.drops;
     if (drops.is_object()) {
       for (const char* reason : {"scan.no_color", "import.no_color"}) {
         if (drops.contains(reason) && drops[reason].is_number() &&
@@ -584,8 +606,10 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
       }
     }
     h << "</table>\n";
-    h << "<table><tr><th>dropped, by reason</th><th>pairs or frames</th></tr>\n";
-    const json drops = split.summary.value("drops", json::object());
+    h << "<table><tr><th>dropped, by reason"
+      << (split.summary.contains("drops") ? "" : " (summed over selection/*.json)")
+      << "</th><th>pairs or frames</th></tr>\n";
+    const json& drops = split.drops;
     if (!drops.is_object() || drops.empty()) {
       h << "<tr><td colspan=\"2\" class=\"muted\">none recorded</td></tr>\n";
     } else {

@@ -65,6 +65,9 @@ struct SplitData {
   std::vector<SplitPair> pairs;    // pairs.jsonl order
   int score_stride = 0;            // of every line's score_metrics (0: no pairs)
   nlohmann::json summary;          // summary.json, null when absent
+  // Drops by reason: summary.json's, else (the summary `occgt merge` writes has none) summed
+  // over selection/<scene>.json; an empty object when neither has them.
+  nlohmann::json drops;
   nlohmann::json recipe;           // recipe.json (the resolved recipe), null when absent
   bool has_pairs = true;           // false: no pairs.jsonl (a folder of tuples only)
   std::optional<TupleSet> tuples;  // tuples.jsonl (+ views/pairs.jsonl), when present

@@ -99,6 +99,16 @@ def check_real_build():
     with open(os.path.join(schemas, "summary.schema.json")) as f:
         jsonschema.validate(merged, json.load(f), cls=jsonschema.Draft202012Validator)
     check(merged["kind"] == "occgt-merge-summary" and merged["nsamples"] == 24, str(merged))
+    # Its report still lists the build's drops: summed over selection/*.json.
+    common.occgt("inspect", "split", bare, "--gallery", 0)
+    with open(os.path.join(bare, "inspect", "report.html")) as f:
+        html = f.read()
+    with open(os.path.join(out, "summary.json")) as f:
+        drops = json.load(f)["drops"]
+    check(bool(drops), "the demo build drops pairs")
+    for reason, n in drops.items():
+        check(f'<tr><td>{reason}</td><td class="n">{n}</td></tr>' in html,
+              f"merged split's report: drop {reason} {n} missing")
     ns = doc_reader()
     n = 0
     for s in ns["iter_split"](out):
