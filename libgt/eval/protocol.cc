@@ -126,7 +126,9 @@ Protocol ExpandProtocol(ProtocolName name) {
       p.differences =
           "EfficientLoFTR's reproduce scripts run RANSAC 5 times (--ransac_times 5) on "
           "randomly shuffled matches and pool the 5 errors per pair into the AUC; occgt runs "
-          "it once on the matches in their given order";
+          "it once on the matches in their given order; a ground truth without translation "
+          "(|t_gt| = 0): occgt scores the rotation only, EfficientLoFTR's relative_pose_error "
+          "(LoFTR's, ignore_gt_t_thr 0.0) gets NaN";
       p.sources =
           "zju3dv/EfficientLoFTR:src/utils/metrics.py (estimate_pose, compute_pose_errors), "
           "src/config/default.py, scripts/reproduce_test/indoor_full_auc.sh";
@@ -140,7 +142,9 @@ Protocol ExpandProtocol(ProtocolName name) {
           "PoseLib's LO-RANSAC is replaced by OpenCV USAC_DEFAULT with PoseLib's defaults "
           "(success_prob 0.9999, 100000 iterations), no final refinement; the 2 px threshold "
           "is the setting of the figure quoted in occgt issue 35 (the config default is "
-          "RANSAC_PIXEL_THR 0.5); no 5-fold shuffled repetition";
+          "RANSAC_PIXEL_THR 0.5); no 5-fold shuffled repetition; a ground truth without "
+          "translation (|t_gt| = 0): occgt scores the rotation only, EfficientLoFTR's "
+          "relative_pose_error gets NaN";
       p.sources =
           "zju3dv/EfficientLoFTR:src/utils/metrics.py (estimate_lo_pose, "
           "compute_pose_errors)";
