@@ -98,6 +98,7 @@ TEST(SplitWarnings, SaysWhatMustBeKnown) {
   EXPECT_TRUE(SplitWarnings(split).empty());
   split.recipe["dataset"]["format"] = "sevenscenes";
   split.summary = {{"drops", {{"scan.no_color", 4}, {"filter.overlap", 9}}}};
+  split.drops = split.summary["drops"];  // as LoadSplit takes them from summary.json
   const auto w = SplitWarnings(split);
   ASSERT_EQ(w.size(), 2u);
   EXPECT_NE(w[0].find("unregistered"), std::string::npos);
