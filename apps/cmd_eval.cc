@@ -1,7 +1,8 @@
 // occgt eval SPLIT_DIR --predictions P [--predictions Q ...] --out eval.json: scores a
 // matcher's predictions against the split's ground truth (docs/EVAL.md): relative pose AUC
 // (LoFTR's protocol by default; other estimators, threshold sweeps and named protocols), epipolar
-// precision, per-type precision and recall, all stratified by occlusion ratio and visible overlap.
+// precision, per-type precision and recall, all stratified by occlusion ratio and
+// consistent_overlap.
 // Prints a one-screen summary; writes eval.json (schemas/eval.schema.json) atomically.
 #include <tbb/global_control.h>
 
@@ -72,7 +73,7 @@ struct Args {
   std::string focal_mean = gt::eval::FocalMeanName(options.estimators[0].focal_mean);
   std::string auc = JoinNumbers(options.auc_thresholds_deg);
   std::string occlusion = JoinOcclusionNames(options.occlusion_definitions);
-  std::string occlusion_bins, overlap_bins;  // "" = EvalOptions' own
+  std::string occlusion_bins, consistent_overlap_bins;  // "" = EvalOptions' own
   std::string aggregate = gt::AggregateName(options.aggregate);
   int threads = 0;
   // Estimator and failure flags given on the command line (they conflict with --protocol).
@@ -144,8 +145,12 @@ void Run(const Args& args) {
   if (!args.occlusion_bins.empty()) {
     options.occlusion_bins = ParseList(args.occlusion_bins, "--occlusion-bins");
   }
-  if (!args.overlap_bins.empty()) {
-    options.overlap_bins = ParseList(args.overlap_bins, "--overlap-bins");
+  // --overlap-bins: the earlier spelling of --consistent-overlap-bins, named as given.
+  const char* const consistent_overlap_flag =
+      args.given.count("--overlap-bins") ? "--overlap-bins" : "--consistent-overlap-bins";
+  if (!args.consistent_overlap_bins.empty()) {
+    options.consistent_overlap_bins =
+        ParseList(args.consistent_overlap_bins, consistent_overlap_flag);
   }
   options.occlusion_definitions.clear();
   std::stringstream defs(args.occlusion);
@@ -166,7 +171,8 @@ void Run(const Args& args) {
          flag("confidence", "--ransac-conf"), flag("max_iters", "--ransac-iters"),
          flag("auc_thresholds_deg", "--auc"), flag("epipolar_threshold", "--epipolar-threshold"),
          flag("px", "--px"), flag("occlusion_definitions", "--occlusion"),
-         flag("occlusion_bins", "--occlusion-bins"), flag("overlap_bins", "--overlap-bins"),
+         flag("occlusion_bins", "--occlusion-bins"),
+         flag("consistent_overlap_bins", consistent_overlap_flag),
          flag("curve_step", "--curve-step"), flag("failure_error_deg", "--failure-error"),
          flag("min_confidence", "--min-confidence")});
   }
@@ -282,7 +288,12 @@ void AddEvalCommand(CLI::App& app) {
                   "Occlusion-ratio definitions to stratify by: image,visible,valid")
       ->capture_default_str();
   cmd->add_option("--occlusion-bins", args->occlusion_bins, "Occlusion bin edges (comma list)");
-  cmd->add_option("--overlap-bins", args->overlap_bins, "Visible-overlap bin edges (comma list)");
+  CLI::Option* const consistent_overlap_bins =
+      cmd->add_option("--consistent-overlap-bins", args->consistent_overlap_bins,
+                      "consistent_overlap (VISIBLE / sampled) bin edges (comma list)");
+  cmd->add_option("--overlap-bins", args->consistent_overlap_bins,
+                  "The earlier spelling of --consistent-overlap-bins")
+      ->excludes(consistent_overlap_bins);
   cmd->add_option("--aggregate", args->aggregate, "Both directions -> pair value: min|mean|max")
       ->capture_default_str();
   cmd->add_option("--curve-step", args->options.curve_step,

@@ -59,7 +59,7 @@ void RunOccupancy(const OccupancyArgs& args) {
     os.scene_stride = scope.scene_stride;
   }
   const std::vector<FieldFlag> occupancy_flags = {
-      {"voxel_size_m", "--voxel-m", args.voxel_m.has_value()},
+      {"voxel_m", "--voxel-m", args.voxel_m.has_value()},
       {"max_range_m", "--max-range-m", args.max_range_m.has_value()},
       {"window", "--scope", args.scope.has_value()},
       {"scene", "--scope", args.scope.has_value()},
@@ -138,7 +138,7 @@ void AddOccupancyCommand(CLI::App& app) {
   PairDatasetArgs& d = args->data;
   AddPairDatasetFlags(cmd, &d, "its resolution, depth range and occupancy options");
   cmd->add_option("--voxel-m", args->voxel_m,
-                  "OctoMap resolution in metres (default " + Num(def.fusion.voxel_size_m) + ")");
+                  "OctoMap resolution in metres (default " + Num(def.fusion.voxel_m) + ")");
   cmd->add_option("--max-range-m", args->max_range_m,
                   "ray truncation in metres, <= 0 unlimited (default: the last bin edge)");
   cmd->add_option("--near-m", args->near_m,
@@ -156,7 +156,7 @@ void AddOccupancyCommand(CLI::App& app) {
                   "pair|window:N|scene:S (default " + occ::FusionScopeName(def.fusion) + ")");
   cmd->add_option("--mode", args->mode,
                   "octomap|two_point (default " + occ::OccupancyModeName(def.mode) + ")");
-  cmd->add_flag("--dense", args->dense, "also write occupancy0/1.npy, uint8 [bins, H/2, W/2]");
+  cmd->add_flag("--dense", args->dense, "also write occ0/1_dense.npy, uint8 [bins, H/2, W/2]");
   cmd->add_flag("--downsample", args->downsample,
                 std::string("one centroid per voxel before insertion (default ") +
                     (def.fusion.downsample ? "on" : "off") + ")");

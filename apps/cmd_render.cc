@@ -24,6 +24,7 @@
 #include "libgt/pipeline/recipe.h"
 #include "libgt/render/depth_picture.h"
 #include "libgt/render/frame_depth.h"
+#include "libgt/truth/pair_files.h"
 #include "libgt/truth/working_frame.h"
 
 namespace occgt {
@@ -36,22 +37,6 @@ struct RenderArgs {
   std::optional<std::string> resolution;
   gt::render::FrameDepthOptions depth;
 };
-
-nlohmann::ordered_json AgreementJson(const gt::render::DepthAgreement& a) {
-  const double n = static_cast<double>(std::max<int64_t>(1, a.Total()));
-  nlohmann::ordered_json j;
-  j["pixels"] = a.Total();
-  j["sensor_only"] = a.sensor_only;
-  j["mesh_only"] = a.mesh_only;
-  j["agree"] = a.agree;
-  j["disagree"] = a.disagree;
-  j["neither"] = a.neither;
-  j["shares"] = {{"sensor_only", a.sensor_only / n},
-                 {"mesh_only", a.mesh_only / n},
-                 {"agree", a.agree / n},
-                 {"disagree", a.disagree / n}};
-  return j;
-}
 
 std::vector<std::string> SplitComma(const std::string& text) {
   std::vector<std::string> out;
@@ -139,7 +124,7 @@ void RunRender(const RenderArgs& args) {
           *sensor, mesh, scene.min_depth_m, scene.max_depth_m, args.depth.fused);
       total += a;
       any_sensor = true;
-      fj["sensor"] = AgreementJson(a);
+      fj["sensor"] = gt::truth::DepthAgreementJson(a);
     } else {
       fj["sensor"] = nullptr;
     }
@@ -158,7 +143,8 @@ void RunRender(const RenderArgs& args) {
         gt::io::EncodePngBytes(picture, gt::io::ChannelOrder::kRgb, 6, base + "_picture.png"));
     report["frames"].push_back(fj);
   }
-  report["total"] = any_sensor ? AgreementJson(total) : nlohmann::ordered_json(nullptr);
+  report["total"] =
+      any_sensor ? gt::truth::DepthAgreementJson(total) : nlohmann::ordered_json(nullptr);
   gt::io::WriteFileAtomic(args.out + "/render.json", report.dump(2) + "\n");
   std::printf("render %s: %zu frames of %s (%zu triangles)", scene.name.c_str(), frames.size(),
               scene.mesh_path.c_str(), renderer->NumTriangles());

@@ -67,11 +67,11 @@ nlohmann::ordered_json MeshAgreementJson(const MeshAgreement& m, const ScanArgs&
   j["tolerance"] = {{"abs_tol_m", args.tolerance.abs_tol_m}, {"rel_tol", args.tolerance.rel_tol}};
   j["frames"] = nlohmann::ordered_json::array();
   for (const auto& [id, a] : m.frames) {
-    nlohmann::ordered_json f = gt::truth::DepthSharesJson(a);
+    nlohmann::ordered_json f = gt::truth::DepthAgreementJson(a);
     f["id"] = id;
     j["frames"].push_back(f);
   }
-  j["total"] = gt::truth::DepthSharesJson(m.total);
+  j["total"] = gt::truth::DepthAgreementJson(m.total);
   return j;
 }
 
@@ -101,20 +101,13 @@ nlohmann::ordered_json SceneJson(const gt::datasets::SceneSummary& s) {
   j["unusable_reasons"] = ReasonsJson(s.unusable_reasons);
   j["unusable_examples"] = ExamplesJson(s.unusable_examples);
   j["depth_size"] = {s.depth_camera.width, s.depth_camera.height};
-  j["K"] = {{"fx", s.depth_camera.fx},
-            {"fy", s.depth_camera.fy},
-            {"cx", s.depth_camera.cx},
-            {"cy", s.depth_camera.cy}};
+  j["K"] = gt::truth::MatrixJson(s.depth_camera.K());
   j["uniform_depth_camera"] = s.uniform_depth_camera;
   j["depth_range_m"] = {s.min_depth_m, s.max_depth_m};
   if (s.usable_with_color > 0) {
     j["color"] = {{"usable_with_color", s.usable_with_color},
                   {"size", {s.color_camera.width, s.color_camera.height}},
-                  {"K",
-                   {{"fx", s.color_camera.fx},
-                    {"fy", s.color_camera.fy},
-                    {"cx", s.color_camera.cx},
-                    {"cy", s.color_camera.cy}}},
+                  {"K", gt::truth::MatrixJson(s.color_camera.K())},
                   {"uniform_color_camera", s.uniform_color_camera}};
   } else {
     j["color"] = {{"usable_with_color", 0},
@@ -208,7 +201,7 @@ void RunScan(const ScanArgs& args) {
   if (args.json) {
     nlohmann::ordered_json j;
     j["tool"] = "occgt scan";
-    j["version"] = 1;
+    j["version"] = 2;  // 2: K as a 3x3 matrix, mesh_depth records with counts (occgt 0.2)
     j["format"] = args.format;
     j["root"] = args.root;
     j["check_depth"] = args.scan.check_depth;

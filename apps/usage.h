@@ -32,7 +32,7 @@ std::string DescribeParseError(const CLI::App& app, const std::vector<std::strin
 // field leading the message was set by a flag given on the command line (`given`), else bad
 // input under `what` (exit 1: the value came from a recipe, a dataset or a default).
 struct FieldFlag {
-  const char* field;  // the Options field, e.g. "voxel_size_m"
+  const char* field;  // the Options field, e.g. "voxel_m"
   const char* flag;   // its flag, e.g. "--voxel-m"
   bool given;         // the flag is on the command line
 };

@@ -102,7 +102,7 @@ bool EvalOptions::Check(std::string* error) const {
     }
   }
   if (!CheckEdges(occlusion_bins, "occlusion_bins", error)) return false;
-  if (!CheckEdges(overlap_bins, "overlap_bins", error)) return false;
+  if (!CheckEdges(consistent_overlap_bins, "consistent_overlap_bins", error)) return false;
   if (!(curve_step > 0 && curve_step <= 1)) {
     *error = "curve_step: expected a number in (0, 1]";
     return false;
@@ -324,8 +324,9 @@ std::string ProcessSample(const std::string& tar, const SampleData& s, const Spl
       info->occlusion.push_back(
           Combine(DirectionOcclusion(m01, d), DirectionOcclusion(m10, d), options.aggregate));
     }
-    info->visible_overlap = Combine(m01.at("consistent_overlap").get<double>(),
-                                    m10.at("consistent_overlap").get<double>(), options.aggregate);
+    info->consistent_overlap =
+        Combine(m01.at("consistent_overlap").get<double>(),
+                m10.at("consistent_overlap").get<double>(), options.aggregate);
     info->overlap = Combine(m01.at("overlap").get<double>(), m10.at("overlap").get<double>(),
                             options.aggregate);
   } catch (const json::exception& e) {
@@ -767,7 +768,7 @@ std::string EvalJson(const EvalResult& r) {
   const EvalOptions& o = r.options;
   json doc;
   doc["kind"] = "occgt-eval";
-  doc["version"] = 1;
+  doc["version"] = kEvalJsonVersion;
   doc["split"] = {{"dir", r.split.dir},
                   {"name", r.split.name},
                   {"pairs", r.pairs.size()},
@@ -812,7 +813,7 @@ std::string EvalJson(const EvalResult& r) {
                     {"px", o.quality.px},
                     {"occlusion_definitions", defs},
                     {"occlusion_bins", o.occlusion_bins},
-                    {"overlap_bins", o.overlap_bins},
+                    {"consistent_overlap_bins", o.consistent_overlap_bins},
                     {"aggregate", AggregateName(o.aggregate)},
                     {"curve_step", o.curve_step},
                     {"failure_error_deg", o.failure_error_deg},
@@ -852,8 +853,8 @@ std::string EvalJson(const EvalResult& r) {
     }
     s["by_occlusion"] = by_occ;
     s["cumulative"] = cumulative;
-    s["by_visible_overlap"] =
-        Binned(r, k, o.overlap_bins, [](const PairInfo& p) { return p.visible_overlap; });
+    s["by_consistent_overlap"] = Binned(r, k, o.consistent_overlap_bins,
+                                        [](const PairInfo& p) { return p.consistent_overlap; });
     if (o.selection == Selection::kBestOfSweep) {
       const SweepSelection sel = SelectBestOfSweep(r, k);
       json groups = json::array();
@@ -889,7 +890,7 @@ std::string EvalJson(const EvalResult& r) {
       occ[OcclusionDefinitionName(o.occlusion_definitions[d])] = p.occlusion[d];
     }
     j["occlusion"] = occ;
-    j["visible_overlap"] = p.visible_overlap;
+    j["consistent_overlap"] = p.consistent_overlap;
     j["overlap"] = p.overlap;
     json per_set = json::array();
     for (const SetPairResult& s : p.sets) {
@@ -925,6 +926,32 @@ std::string EvalJson(const EvalResult& r) {
   }
   doc["pairs"] = pairs;
   return doc.dump(1) + "\n";
+}
+
+bool UpgradeEvalJson(json* doc) {
+  if (!doc->is_object()) return false;
+  const auto version = doc->find("version");
+  if (version == doc->end() || !version->is_number_integer()) return false;
+  if (version->get<int64_t>() == kEvalJsonVersion) return true;
+  if (version->get<int64_t>() != 1) return false;
+  // Version 1 -> 2: the pair metric consistent_overlap under its own name.
+  const auto rename = [](json& object, const char* from, const char* to) {
+    if (!object.is_object() || !object.contains(from) || object.contains(to)) return;
+    object[to] = std::move(object[from]);
+    object.erase(from);
+  };
+  const auto each = [](json* doc, const char* array, const auto& f) {
+    const auto it = doc->find(array);
+    if (it == doc->end() || !it->is_array()) return;
+    for (json& x : *it) f(x);
+  };
+  if (doc->contains("options")) {
+    rename((*doc)["options"], "overlap_bins", "consistent_overlap_bins");
+  }
+  each(doc, "sets", [&](json& s) { rename(s, "by_visible_overlap", "by_consistent_overlap"); });
+  each(doc, "pairs", [&](json& p) { rename(p, "visible_overlap", "consistent_overlap"); });
+  (*doc)["version"] = kEvalJsonVersion;
+  return true;
 }
 
 std::string EvalSummary(const EvalResult& r) {

@@ -3,7 +3,7 @@
 //  - relative pose by each estimator setting (pose.h), AUC at the thresholds;
 //  - epipolar precision (symmetric epipolar distance < threshold, normalised points);
 //  - per-type precision and recall against the shards' labels and depth (match_quality.h);
-//  - all of it per occlusion-ratio bin (each definition asked for), per visible-overlap bin,
+//  - all of it per occlusion-ratio bin (each definition asked for), per consistent_overlap bin,
 //    and the cumulative curve over the occlusion ratio (mean/median pose error, pairs).
 // Split input: DIR/index.json (shards), DIR/pairs.jsonl (keys), DIR/recipe.json
 // ("resolution"), and per sample its json (K0, K1, T_0to1, metrics), label01/label10,
@@ -57,7 +57,7 @@ struct EvalOptions {
   std::vector<OcclusionDefinition> occlusion_definitions{OcclusionDefinition::kImage,
                                                          OcclusionDefinition::kVisible};
   std::vector<double> occlusion_bins{0, 0.05, 0.1, 0.15, 0.2, 0.3, 1.0};  // edges, increasing
-  std::vector<double> overlap_bins{0, 0.2, 0.4, 0.6, 0.8, 1.0};           // visible overlap edges
+  std::vector<double> consistent_overlap_bins{0, 0.2, 0.4, 0.6, 0.8, 1.0};  // consistent_overlap
   Aggregate aggregate = Aggregate::kMean;  // both directions of a metric -> the pair's value
   double curve_step = 0.05;                // cumulative curve sampled at step, 2*step, ... (ratio)
   double failure_error_deg = 180;          // a failed pair's error inside means (medians use +inf)
@@ -93,7 +93,7 @@ struct SetPairResult {
 struct PairInfo {
   std::string key, scene;
   std::vector<double> occlusion;    // one per EvalOptions::occlusion_definitions
-  double visible_overlap = 0;       // consistent_overlap, aggregated
+  double consistent_overlap = 0;    // consistent_overlap, aggregated
   double overlap = 0;               // overlap, aggregated
   std::vector<SetPairResult> sets;  // one per prediction set
 };
@@ -139,8 +139,18 @@ SweepSelection SelectBestOfSweep(const EvalResult& result, size_t set);
 EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& sets,
                     const EvalOptions& options);
 
-// eval.json (schemas/eval.schema.json): sorted keys, deterministic.
+// eval.json (schemas/eval.schema.json): sorted keys, deterministic; "version" is
+// kEvalJsonVersion.
+constexpr int kEvalJsonVersion = 2;
 std::string EvalJson(const EvalResult& result);
+// An eval.json document read by a tool (the report) brought to the current version, in
+// place: version 1 named the pair metric consistent_overlap (VISIBLE / sampled pixels)
+// otherwise: "options.overlap_bins" (now consistent_overlap_bins), "sets[].by_visible_overlap"
+// (by_consistent_overlap) and "pairs[].visible_overlap" (consistent_overlap); those keys are
+// renamed and "version" set to kEvalJsonVersion. A current document is left as it is.
+// Returns false, the document untouched, when it is not an object or its "version" is
+// neither (missing keys are left to the reader, which names them).
+bool UpgradeEvalJson(nlohmann::json* doc);
 // The one-screen summary printed by `occgt eval`.
 std::string EvalSummary(const EvalResult& result);
 

@@ -51,7 +51,7 @@ struct OccupancyMap::Impl {
   std::unique_ptr<octomap::OcTree> tree;
   std::once_flag voxels_once, tree_once;
 
-  double resolution_m() const { return voxels ? voxels->voxel_size_m() : tree->getResolution(); }
+  double resolution_m() const { return voxels ? voxels->voxel_m() : tree->getResolution(); }
   const VoxelMap& Voxels();
   const octomap::OcTree& Tree();
 };
@@ -151,7 +151,7 @@ std::string Significant3Up(double v) {
 
 }  // namespace
 
-double KeyRangeHalfExtentM(double voxel_size_m) { return kReachVoxels * voxel_size_m; }
+double KeyRangeHalfExtentM(double voxel_m) { return kReachVoxels * voxel_m; }
 
 double FusionReachM(const FusionInput& frame, const FusionOptions& options) {
   if (options.max_range_m > 0) return options.max_range_m;
@@ -183,10 +183,10 @@ void CheckKeyRange(const FusionInput& frame, const FusionOptions& options,
   const Eigen::Vector3d c = frame.world_from_cam.translation();
   const double reach_m = FusionReachM(frame, options);
   const double needed = NeededHalfExtentM(c, reach_m);
-  const double held = KeyRangeHalfExtentM(options.voxel_size_m);
+  const double held = KeyRangeHalfExtentM(options.voxel_m);
   if (held >= needed) return;  // false for NaN
   std::ostringstream m;
-  m << Significant3(options.voxel_size_m) << " m holds +-" << Significant3(held)
+  m << Significant3(options.voxel_m) << " m holds +-" << Significant3(held)
     << " m around the world origin (OctoMap's 16-bit keys); " << frame_name << "'s camera at ("
     << Significant3(c.x()) << ", " << Significant3(c.y()) << ", " << Significant3(c.z())
     << ") with ";
@@ -213,8 +213,7 @@ bool FusionOptions::Check(std::string* error) const {
     if (error) *error = m;
     return false;
   };
-  if (!(voxel_size_m > 0.0) || !std::isfinite(voxel_size_m))
-    return fail("voxel_size_m must be > 0");
+  if (!(voxel_m > 0.0) || !std::isfinite(voxel_m)) return fail("voxel_m must be > 0");
   if (!std::isfinite(max_range_m)) return fail("max_range_m must be finite (<= 0: unlimited)");
   if (outlier_k < 1) return fail("outlier_k must be >= 1");
   if (!(outlier_stddev > 0.0) || !std::isfinite(outlier_stddev))
@@ -383,7 +382,7 @@ const LogOddsModel& DefaultModel() {
 // the same tree OctoMap's own insertion builds, since a fully pruned tree depends only on its
 // leaves' values.
 std::unique_ptr<octomap::OcTree> ToOctree(const VoxelMap& voxels) {
-  auto tree = std::make_unique<octomap::OcTree>(voxels.voxel_size_m());
+  auto tree = std::make_unique<octomap::OcTree>(voxels.voxel_m());
   for (int32_t b = 0; b < voxels.num_blocks(); ++b) {
     const auto& c = voxels.block_coord(b);
     const float* l = voxels.log_odds(b);
@@ -438,7 +437,7 @@ const octomap::OcTree& OccupancyMap::Impl::Tree() {
 }
 
 OccupancyMap::OccupancyMap() : impl_(std::make_unique<Impl>()) {
-  impl_->voxels = std::make_unique<VoxelMap>(FusionOptions().voxel_size_m, DefaultModel());
+  impl_->voxels = std::make_unique<VoxelMap>(FusionOptions().voxel_m, DefaultModel());
   impl_->voxels->Finalize();
 }
 OccupancyMap::OccupancyMap(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -477,7 +476,7 @@ VoxelBlock OccupancyMap::ExtractBlock(const Eigen::Vector3i& min_index_in,
                                       const Eigen::Vector3i& max_index_in) const {
   const VoxelMap& vm = impl_->Voxels();
   VoxelBlock block;
-  block.voxel_size_m = vm.voxel_size_m();
+  block.voxel_m = vm.voxel_m();
   const Eigen::Vector3i lo = min_index_in.cwiseMax(Eigen::Vector3i::Constant(-kKeyOffset));
   const Eigen::Vector3i hi = max_index_in.cwiseMin(Eigen::Vector3i::Constant(kKeyOffset - 1));
   if ((hi.array() < lo.array()).any()) return block;
@@ -524,9 +523,9 @@ OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionO
   const bool octomap_engine = options.engine == FusionEngine::kOctomap;
   impl->octomap_engine = octomap_engine;
   if (octomap_engine) {
-    impl->tree = std::make_unique<octomap::OcTree>(options.voxel_size_m);
+    impl->tree = std::make_unique<octomap::OcTree>(options.voxel_m);
   } else {
-    impl->voxels = std::make_unique<VoxelMap>(options.voxel_size_m, DefaultModel());
+    impl->voxels = std::make_unique<VoxelMap>(options.voxel_m, DefaultModel());
   }
   // Every frame is checked before any fusion work (a voxel size too small for the range is
   // refused at once, not after fusing the frames before it).
@@ -543,7 +542,7 @@ OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionO
       throw InputError(where, "depth buffer size does not match width * height");
     CheckKeyRange(in, options, where);
   }
-  const double inv_res = 1.0 / options.voxel_size_m;
+  const double inv_res = 1.0 / options.voxel_m;
   const double max_range = options.max_range_m > 0 ? options.max_range_m : -1.0;
   FusionStats& st = impl->stats;
   for (const FusionInput& in : frames) {
@@ -568,7 +567,7 @@ OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionO
     st.out_of_key_range += static_cast<int64_t>(before - points.size());
     if (options.downsample) {
       bool fallback = false;
-      points = DownsampleVoxelCentroids(points, options.voxel_size_m, &fallback);
+      points = DownsampleVoxelCentroids(points, options.voxel_m, &fallback);
       st.downsample_fallbacks += fallback ? 1 : 0;
     }
     st.after_downsample += static_cast<int64_t>(points.size());

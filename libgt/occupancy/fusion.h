@@ -18,7 +18,7 @@
 // NumLeafNodes). FusionEngine::kOctomap runs OctoMap's own insertPointCloud instead (the
 // reference of the tests and the benchmark's naive baseline).
 //
-// Key range: OctoMap keys are 16-bit per axis, so the map spans 2^16 * voxel_size_m per
+// Key range: OctoMap keys are 16-bit per axis, so the map spans 2^16 * voxel_m per
 // axis centred on the world origin (3276.8 m at 5 cm). Before any fusion work, every frame
 // must fit in it (CheckKeyRange): its camera centre plus and minus its reach (FusionReachM:
 // max_range_m, else its longest valid ray) on every axis, or InputError("voxel_m", ...)
@@ -60,7 +60,7 @@ enum class FusionEngine {
 inline constexpr double kDefaultFarM = 10.0;
 
 struct FusionOptions {
-  double voxel_size_m = 0.05;  // OctoMap resolution (metres), > 0
+  double voxel_m = 0.05;              // OctoMap resolution (metres), > 0
   double max_range_m = kDefaultFarM;  // ray truncation (metres); <= 0 means unlimited
   bool downsample = false;     // one centroid per voxel (pcl::VoxelGrid, overflow-guarded);
                                // off: with `discretize` every voxel gets one ray anyway
@@ -114,7 +114,7 @@ struct FusionStats {
 // around the world origin. OctoMap's checked keys are the voxel indices [-2^15, 2^15); one
 // voxel is kept as a margin on each side, so that float points and rays rounded at the
 // border never leave it.
-double KeyRangeHalfExtentM(double voxel_size_m);
+double KeyRangeHalfExtentM(double voxel_m);
 
 // How far from its camera centre the fusion of `frame` can mark voxels (metres, as a
 // distance; so on every axis too): max_range_m when > 0 (rays are truncated there), else
@@ -130,7 +130,7 @@ double FusionReachM(const FusionInput& frame, const FusionOptions& options);
 double MinVoxelSizeM(const Eigen::Vector3d& camera_centre, double reach_m);
 
 // The check FuseOccupancy runs on every frame before any fusion work: throws
-// InputError("voxel_m", ...) unless KeyRangeHalfExtentM(options.voxel_size_m) holds the
+// InputError("voxel_m", ...) unless KeyRangeHalfExtentM(options.voxel_m) holds the
 // frame's camera centre plus and minus FusionReachM on every axis (a camera centre outside
 // the key range fails it too). The one-line message gives the range held, the frame
 // (`frame_name`, e.g. "frame 1"), its camera centre and reach, the range needed and the
@@ -140,11 +140,11 @@ void CheckKeyRange(const FusionInput& frame, const FusionOptions& options,
                    const std::string& frame_name);
 
 // Dense copy of a box of the map's finest-resolution voxel states. Voxel index
-// i = floor(x / voxel_size_m) per world axis (voxel i covers [i, i + 1) * voxel_size_m; the
+// i = floor(x / voxel_m) per world axis (voxel i covers [i, i + 1) * voxel_m; the
 // OctoMap key is i + 2^15). state is row-major [size.z, size.y, size.x] (x fastest).
 struct VoxelBlock {
   static constexpr int8_t kUnknown = -1, kFree = 0, kOccupied = 1;
-  double voxel_size_m = 0.0;
+  double voxel_m = 0.0;
   Eigen::Vector3i min_index = Eigen::Vector3i::Zero();  // index of element (0, 0, 0)
   Eigen::Vector3i size = Eigen::Vector3i::Zero();       // voxels along x, y, z
   std::vector<int8_t> state;

@@ -45,9 +45,9 @@ inline void UpdateLogOdds(float* l, float update, const LogOddsModel& m) {
 
 }  // namespace
 
-VoxelMap::VoxelMap(double voxel_size_m, const LogOddsModel& model)
-    : res_(voxel_size_m), inv_res_(1.0 / voxel_size_m), model_(model) {
-  GT_ASSERT(voxel_size_m > 0.0);
+VoxelMap::VoxelMap(double voxel_m, const LogOddsModel& model)
+    : res_(voxel_m), inv_res_(1.0 / voxel_m), model_(model) {
+  GT_ASSERT(voxel_m > 0.0);
 }
 
 uint64_t VoxelMap::Pack(int bx, int by, int bz) {

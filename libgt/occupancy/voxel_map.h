@@ -2,7 +2,7 @@
 //
 // VoxelMap holds, at the finest resolution only, the float log-odds of every voxel that an
 // insertion touched, in dense blocks of 8x8x8 voxels found through a hash of block
-// coordinates. Voxel index i = floor(x / voxel_size_m) per world axis (OctoMap key
+// coordinates. Voxel index i = floor(x / voxel_m) per world axis (OctoMap key
 // i + 2^15); block coordinate = i >> 3 (floor). A voxel is unknown until first updated.
 //
 // InsertScan reproduces the per-scan update of OctoMap's
@@ -66,9 +66,9 @@ class VoxelMap {
   // Uniform blocks are skipped whole by the frustum traversal.
   enum class Kind : uint8_t { kMixed, kAllFree, kAllOccupied };
 
-  VoxelMap(double voxel_size_m, const LogOddsModel& model);
+  VoxelMap(double voxel_m, const LogOddsModel& model);
 
-  double voxel_size_m() const { return res_; }
+  double voxel_m() const { return res_; }
   const LogOddsModel& model() const { return model_; }
 
   // One scan (world frame, float as OctoMap's Pointcloud); max_range_m < 0: unlimited.

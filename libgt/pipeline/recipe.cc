@@ -472,7 +472,7 @@ namespace {
 // The occupancy keys, checked on the options they resolve to (defaults included).
 bool CheckOccupancy(const truth::PairTruthOptions& t, bool max_range_given, std::string* error) {
   const occupancy::BinOptions& b = t.bins;
-  if (!(t.fusion.voxel_size_m > 0) || !std::isfinite(t.fusion.voxel_size_m))
+  if (!(t.fusion.voxel_m > 0) || !std::isfinite(t.fusion.voxel_m))
     return *error = "occupancy.voxel_m: expected a number > 0 (metres)", false;
   if (b.num_bins < 1 || b.num_bins > 64)
     return *error = "occupancy.bins: expected an integer in [1, 64]", false;
@@ -654,7 +654,7 @@ json Recipe::ToJson() const {
   settings.occupancy.enabled = occupancy.enabled();
   const truth::PairTruthOptions t = truth::ResolvePairTruthOptions(settings);
   j["occupancy"] = {{"enabled", occupancy.enabled()},
-                    {"voxel_m", t.fusion.voxel_size_m},
+                    {"voxel_m", t.fusion.voxel_m},
                     {"bins", t.bins.num_bins},
                     {"near_m", t.bins.near_m},
                     {"far_m", t.bins.far_m},

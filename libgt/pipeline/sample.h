@@ -5,7 +5,7 @@
 //   json            sample metadata (scene, frame ids, K0/K1 at W×H, world_from_cam0/1 4×4,
 //                   T_0to1 = cam1_from_cam0 4×4, metrics of both directions at stride 1 and
 //                   at score_stride, label counts, match counts, options digest, occupancy
-//                   bin edges)
+//                   bin edges "occupancy"."bins"."edges_m" beside "occupancy_options")
 //   label01.npy     uint8 [H, W]  PixelLabel codes of image 0 towards 1 (label10: 1 → 0)
 //   matches.npy     int32 [M, 2]  (cell in image 0, cell in image 1)
 //   match_type.npy  uint8 [M]     0 vv, 1 vo, 2 ov

@@ -106,6 +106,7 @@ EncodedSample ComputeViewsSample(const ViewsScene& d, const TupleLine& line, int
   for (size_t f : frames) with_images = with_images && !d.scene.frames[f].color_path.empty();
   std::vector<double> K, world_from_cam;
   json frames_json = json::array(), K_json = json::array(), pose_json = json::array();
+  json color_K_json = json::array();
   for (size_t a = 0; a < n; ++a) {
     const Frame& f = d.scene.frames[frames[a]];
     if (with_images)
@@ -122,6 +123,7 @@ EncodedSample ComputeViewsSample(const ViewsScene& d, const TupleLine& line, int
     frames_json.push_back({{"id", f.id}, {"number", f.number}});
     K_json.push_back(truth::MatrixJson(k));
     pose_json.push_back(truth::MatrixJson(T));
+    if (with_images) color_K_json.push_back(truth::MatrixJson(f.color_camera.Resized(W, H).K()));
   }
   add("intrinsics.npy", io::EncodeNpy<double>({N, 3, 3}, K));
   add("world_from_cam.npy", io::EncodeNpy<double>({N, 4, 4}, world_from_cam));
@@ -144,34 +146,36 @@ EncodedSample ComputeViewsSample(const ViewsScene& d, const TupleLine& line, int
       occluded += static_cast<int64_t>(std::bitset<32>(t.occluded_in[p] & others).count());
     }
   }
-  const double occluded_fraction =
+  // OCCLUDED / (VISIBLE + OCCLUDED): the pair metric occlusion_ratio_visible over the tuple.
+  const double occlusion_ratio_visible =
       visible + occluded > 0 ? static_cast<double>(occluded) / (visible + occluded) : 0.0;
-  const json meta = {{"kind", "occgt-views-sample"},
-                     {"key", sample.key},
-                     {"scene", line.scene},
-                     {"tuple_index", index},
-                     {"num_views", N},
-                     {"frames", frames_json},
-                     {"resolution", {W, H}},
-                     {"K", K_json},
-                     {"world_from_cam", pose_json},
-                     {"covisibility", Rows(line.covisibility, n)},
-                     {"label_options", truth::LabelOptionsJson(options.truth.labels)},
-                     {"tracks",
-                      {{"num_tracks", vo.num_tracks},
-                       {"query_view", vo.query_view},
-                       {"seed", vo.seed},
-                       {"count", Q}}},
-                     {"counts",
-                      {{"valid", valid},
-                       {"visible", visible},
-                       {"occluded", occluded},
-                       {"occluded_fraction", occluded_fraction}}},
-                     {"image", with_images ? json(ImageFormatName(options.image)) : json(nullptr)},
-                     {"compression", SampleCompressionName(options.compression)},
-                     {"options_digest", options.digest},
-                     {"recipe", options.recipe_name},
-                     {"split", options.split}};
+  const json meta = {
+      {"kind", "occgt-views-sample"},
+      {"key", sample.key},
+      {"scene", line.scene},
+      {"tuple_index", index},
+      {"num_views", N},
+      {"frames", frames_json},
+      {"resolution", {W, H}},
+      {"K", K_json},
+      {"world_from_cam", pose_json},
+      {"covisibility", Rows(line.covisibility, n)},
+      {"label_options", truth::LabelOptionsJson(options.truth.labels)},
+      {"tracks",
+       {{"num_tracks", vo.num_tracks},
+        {"query_view", vo.query_view},
+        {"seed", vo.seed},
+        {"count", Q}}},
+      {"metrics",
+       {{"counts", {{"VISIBLE", visible}, {"OCCLUDED", occluded}}},
+        {"valid", valid},
+        {"occlusion_ratio_visible", occlusion_ratio_visible}}},
+      {"image", with_images ? json{{"format", ImageFormatName(options.image)}, {"K", color_K_json}}
+                            : json(nullptr)},
+      {"compression", SampleCompressionName(options.compression)},
+      {"options_digest", options.digest},
+      {"recipe", options.recipe_name},
+      {"split", options.split}};
   sample.fields[0].bytes = meta.dump(1) + "\n";
   json ids = json::array();
   for (const std::string& id : line.frame_ids) ids.push_back(id);
@@ -179,7 +183,7 @@ EncodedSample ComputeViewsSample(const ViewsScene& d, const TupleLine& line, int
                        {"tuple_index", index},
                        {"frame_ids", ids},
                        {"options_digest", options.digest},
-                       {"occluded_fraction", occluded_fraction}}
+                       {"occlusion_ratio_visible", occlusion_ratio_visible}}
                       .dump();
   return out;
 }

@@ -6,7 +6,9 @@
 // tuples.jsonl; W×H = working resolution, N views, Q tracks; ".npy" members are gzipped to
 // ".npy.gz" under sample.compression: deflate, as pair samples):
 //   json               schemas/views_sample.schema.json (scene, frames, K, world_from_cam,
-//                      covisibility, label options, track options, bit counts, digest)
+//                      covisibility, label options, track options, metrics {counts
+//                      {VISIBLE, OCCLUDED bits}, valid, occlusion_ratio_visible}, image
+//                      {format, colour K per view} or null, digest)
 //   image<i>.png       colour of view i at W×H, bilinear (sample.image; absent with none)
 //   depth<i>.npy       float32 [H, W] metres, 0 = invalid (the labels' depth map)
 //   intrinsics.npy     float64 [N, 3, 3] K at W×H

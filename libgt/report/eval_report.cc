@@ -63,11 +63,12 @@ EvalReportData LoadEvalReport(const std::vector<std::string>& eval_paths, const 
     }
     std::string field = "kind";
     try {
+      // Version 1 is read with its old key names (eval::UpgradeEvalJson).
       if (!doc.is_object() || doc.value("kind", "") != "occgt-eval" ||
-          doc.value("version", 0) != 1) {
+          !gt::eval::UpgradeEvalJson(&doc)) {
         throw InputError(path,
                          "kind/version: expected an eval.json of `occgt eval` (\"kind\": "
-                         "\"occgt-eval\", \"version\": 1)");
+                         "\"occgt-eval\", \"version\": 1 or 2)");
       }
       field = "pairs";
       const json& pairs = doc.at("pairs");
@@ -83,18 +84,18 @@ EvalReportData LoadEvalReport(const std::vector<std::string>& eval_paths, const 
       const json& o = doc.at("options");
       const std::vector<double> thresholds = Doubles(o.at("auc_thresholds_deg"));
       const std::vector<double> occ_bins = Doubles(o.at("occlusion_bins"));
-      const std::vector<double> ov_bins = Doubles(o.at("overlap_bins"));
+      const std::vector<double> ov_bins = Doubles(o.at("consistent_overlap_bins"));
       const std::string def = o.at("occlusion_definitions").at(0).get<std::string>();
       if (f == 0) {
         data.auc_thresholds_deg = thresholds;
         data.occlusion_bins = occ_bins;
-        data.overlap_bins = ov_bins;
+        data.consistent_overlap_bins = ov_bins;
         data.occlusion_definition = def;
         for (const json& e : o.at("estimators")) {
           data.estimator_names.push_back(e.at("name").get<std::string>());
         }
       } else if (thresholds != data.auc_thresholds_deg || occ_bins != data.occlusion_bins ||
-                 ov_bins != data.overlap_bins || def != data.occlusion_definition) {
+                 ov_bins != data.consistent_overlap_bins || def != data.occlusion_definition) {
         throw InputError(path,
                          "options: AUC thresholds, bins or first occlusion definition "
                          "differ from " +
@@ -144,7 +145,7 @@ EvalReportData LoadEvalReport(const std::vector<std::string>& eval_paths, const 
         }
         for (const auto& [bins, edges] : {std::pair<const json*, const std::vector<double>*>{
                                               &v.set.at("by_occlusion").at(def), &occ_bins},
-                                          {&v.set.at("by_visible_overlap"), &ov_bins}}) {
+                                          {&v.set.at("by_consistent_overlap"), &ov_bins}}) {
           if (bins->size() + 1 != edges->size()) {
             throw json::other_error::create(501, "one entry per bin", bins);
           }
@@ -230,7 +231,7 @@ std::vector<NamedImage> MakeEvalPlots(const EvalReportData& data, const SplitRep
     write("cum" + std::to_string(k) + ".dat", cum.empty() ? "NaN NaN NaN\n" : cum);
     for (const auto& [file, bins] :
          {std::pair<std::string, const json*>{"occ", &s.at("by_occlusion").at(def)},
-          {"ovl", &s.at("by_visible_overlap")}}) {
+          {"ovl", &s.at("by_consistent_overlap")}}) {
       std::string text;
       for (size_t b = 0; b < bins->size(); ++b) {
         const json& bin = (*bins)[b];
@@ -289,8 +290,8 @@ std::vector<NamedImage> MakeEvalPlots(const EvalReportData& data, const SplitRep
   gp << "set output 'eval_auc_by_overlap.png'\nset title "
      << GnuplotString(auc_name + " per visible-overlap bin")
      << "\nset xlabel 'visible overlap (consistent_overlap)'\nset xrange [-0.5:"
-     << Num(data.overlap_bins.size() - 1.5, 8) << "]\n"
-     << xtics(data.overlap_bins, data.sets[0].set.at("by_visible_overlap"))
+     << Num(data.consistent_overlap_bins.size() - 1.5, 8) << "]\n"
+     << xtics(data.consistent_overlap_bins, data.sets[0].set.at("by_consistent_overlap"))
      << plot_sets("ovl", "1:2") << "\n";
   // Per-pair disagreement of two estimators (DisagreementEstimators) over the occlusion
   // ratio: error(B) - error(A), a failure counted as 180 degrees, clipped to +-30.

@@ -2,9 +2,10 @@
 // docs/EVAL.md "The report"): one or more eval.json files of `occgt eval` on that split
 // (schemas/eval.schema.json), their prediction sets side by side.
 //
-// Checks: every file is an eval.json ("kind": "occgt-eval", version 1) of this split (the
-// same sample keys in the same order as DIR/pairs.jsonl), and all files agree on the AUC
-// thresholds, the occlusion and visible-overlap bins and the first occlusion definition
+// Checks: every file is an eval.json ("kind": "occgt-eval", version 2, or 1 read with its
+// old key names, eval::UpgradeEvalJson) of this split (the same sample keys in the same
+// order as DIR/pairs.jsonl), and all files agree on the AUC thresholds, the occlusion and
+// consistent_overlap bins and the first occlusion definition
 // (else the columns would not compare); set names repeated across files are shown as
 // "<file stem>:<name>". Any other problem is an InputError naming the file and field.
 //
@@ -61,7 +62,7 @@ struct EvalReportData {
   std::vector<double> auc_thresholds_deg;
   std::vector<std::string> estimator_names;  // of the first file
   std::string occlusion_definition;          // the first of the first file
-  std::vector<double> occlusion_bins, overlap_bins;
+  std::vector<double> occlusion_bins, consistent_overlap_bins;
 };
 
 // Reads and checks the eval.json files against the split (see above).

@@ -283,7 +283,8 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
     const std::string path = (fs::path(dir) / name).string();
     if (gt::io::FileExists(path)) fields[name] = gt::io::ReadFileBytes(path);
   }
-  // `occgt occupancy` files: its dense volumes under the shard's names, and occupancy.json
+  // `occgt occupancy` files: its dense volumes (occ0/1_dense.npy, read above; a folder
+  // written before they took the shard's names has occupancy0/1.npy), and occupancy.json
   // (the bin edges) as meta.json's "occupancy" entry, or as the metadata of a folder without
   // meta.json.
   for (int cam = 0; cam < 2; ++cam) {

@@ -11,15 +11,17 @@
 //  - an `occgt pair` and/or `occgt occupancy` output folder: the same arrays as files,
 //    "meta.json" instead of the sample json (its "occupancy" entry: the folder's
 //    occupancy.json, whose "bins.edges_m" are the bin edges), dense volumes as
-//    occupancy0/1.npy, colour images as image0.png/image1.png in the folder or through the
+//    occ0_dense.npy/occ1_dense.npy (occupancy0/1.npy in folders written before they took
+//    the shard's names), colour images as image0.png/image1.png in the folder or through the
 //    "color_path" entries of meta.json (or given explicitly). A folder of `occgt occupancy`
 //    alone has no labels or matches: only its occupancy is rendered;
 //  - a scene and two frame ids: computed here with libgt/geometry (labels, matches) and,
 //    when asked, libgt/occupancy (pair fusion, 64 bins).
 // Metadata lookups: the patch stride is W / (columns of cells0); the anchor rule is the
 // first "anchor" string found in the json ("center" when absent); occupancy bin edges are
-// the first numeric array of D + 1 entries under a key "edges_m" or "bin_edges_m" (or
-// one ending in "edges_m", e.g. "occupancy_edges_m"). A missing or malformed array is an
+// the first numeric array of D + 1 entries under a key "edges_m" (occupancy.json's
+// "bins"."edges_m", a sample's "occupancy"."bins"."edges_m") or one ending in "edges_m"
+// (a sample written before: "occupancy"."bin_edges_m"). A missing or malformed array is an
 // InputError naming the source and the field.
 #pragma once
 

@@ -435,10 +435,10 @@ nlohmann::ordered_json SplitDepthSharesJson(const SplitDepthShares& shares) {
                     {"rel_tol", shares.tolerance.rel_tol}};
   j["resolution"] = {shares.width, shares.height};
   j["frames"] = shares.frames;
-  j["total"] = truth::DepthSharesJson(shares.total);
+  j["total"] = truth::DepthAgreementJson(shares.total);
   j["scenes"] = nlohmann::ordered_json::array();
   for (const auto& s : shares.scenes) {
-    nlohmann::ordered_json e = truth::DepthSharesJson(s.counts);
+    nlohmann::ordered_json e = truth::DepthAgreementJson(s.counts);
     e["name"] = s.name;
     e["frames"] = s.frames;
     j["scenes"].push_back(e);
@@ -696,7 +696,7 @@ json ReportJson(const SplitData& split, const SplitReportOptions& options,
                     {"occlusion_metric", OcclusionMetricField(options.occlusion_metric)},
                     {"overlap", stats(ov)},
                     {"occlusion", stats(oc)},
-                    {"visible_overlap_min", stats(vis)}};
+                    {"consistent_overlap_min", stats(vis)}};
   }
   if (split.tuples) {
     json t = tuples_summary;

@@ -143,7 +143,7 @@ struct SplitDepthShares {
 };
 
 // depth_sources.json (schemas/split_depth_sources.schema.json): {source, tolerance, resolution,
-// frames, total, scenes}, shares as truth::DepthSharesJson writes them.
+// frames, total, scenes}, counts and shares as truth::DepthAgreementJson writes them.
 nlohmann::ordered_json SplitDepthSharesJson(const SplitDepthShares& shares);
 
 struct GalleryItem {

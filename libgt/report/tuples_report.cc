@@ -163,8 +163,14 @@ std::optional<TupleSet> LoadTupleSet(const std::string& dir) {
                                     path +
                                     " (shards of other tuples: re-run occgt tuples --shards)");
       }
-      t.ground_truth = OptionalFraction(r, "occluded_fraction", where);
-      if (!t.ground_truth) throw InputError(where, "expected a number \"occluded_fraction\"");
+      // "occluded_fraction": the same number in N-view shards written before occgt 0.2.
+      const char* key = r.contains("occlusion_ratio_visible") || !r.contains("occluded_fraction")
+                            ? "occlusion_ratio_visible"
+                            : "occluded_fraction";
+      t.ground_truth = OptionalFraction(r, key, where);
+      if (!t.ground_truth) {
+        throw InputError(where, std::string("expected a number \"") + key + "\"");
+      }
       t.shard = r.value("shard", "");
       t.key = r.value("key", "");
     }
@@ -380,7 +386,8 @@ std::string RenderTuplesSection(const TupleSet& set, const json& s,
     << (set.has_shards ? "; their N-view shards in views/" : "; no N-view shards (views/)")
     << ". Covisibility: every entry [a][b], a &ne; b, of the tuples' matrices (visible overlap of "
        "view a in view b). Occlusion per tuple: ground truth = OCCLUDED / (VISIBLE + OCCLUDED) "
-       "over the ordered pairs of views (views/pairs.jsonl occluded_fraction); graph estimate = "
+       "over the ordered pairs of views (views/pairs.jsonl occlusion_ratio_visible); graph "
+       "estimate = "
        "tuples.jsonl occlusion (selection.tuples.balance_occlusion).</p>\n";
   h << "<div class=\"tables\">\n<table><tr><th>views N</th><th>tuples</th></tr>\n";
   std::map<int, int64_t> sizes;  // in increasing N (the JSON keys sort as text)

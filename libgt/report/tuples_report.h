@@ -8,14 +8,15 @@
 //                           selection.tuples.balance_occlusion (the graph's estimate)
 //   DIR/views/pairs.jsonl   optional, with `occgt tuples --shards`: one line per sample,
 //                           "tuple_index" (the line of tuples.jsonl, 0-based), "frame_ids",
-//                           "occluded_fraction" (the N-view ground truth: OCCLUDED bits over
-//                           VISIBLE + OCCLUDED bits of the ordered pairs i != j), "shard", "key"
+//                           "occlusion_ratio_visible" (the N-view ground truth: OCCLUDED bits
+//                           over VISIBLE + OCCLUDED bits of the ordered pairs i != j; named
+//                           "occluded_fraction" before 0.2, still read), "shard", "key"
 // Values:
 //   sizes                   tuples per N
 //   covisibility            every off-diagonal entry [a][b], a != b, of every tuple: the
 //                           visible overlap of view a in view b (directed; N·(N−1) per tuple)
 //   occlusion               per tuple, from each source present: "ground_truth"
-//                           (views/pairs.jsonl occluded_fraction) and "graph_estimate"
+//                           (views/pairs.jsonl occlusion_ratio_visible) and "graph_estimate"
 //                           (tuples.jsonl occlusion)
 // Histograms: `bins` equal bins over [0, 1]; value v falls in bin min(floor(v · bins), bins − 1).
 // Gallery: the `count` tuples with the smallest SplitMix64(SplitMix64(seed) ^ FNV-1a-64(id))
@@ -41,7 +42,7 @@ struct SplitTuple {
   std::vector<double> covisibility;      // [N, N] row-major
   std::optional<double> graph_estimate;  // tuples.jsonl "occlusion"
   // From views/pairs.jsonl (N-view shards), when present.
-  std::optional<double> ground_truth;  // occluded_fraction
+  std::optional<double> ground_truth;  // occlusion_ratio_visible
   std::string shard, key;              // shard file relative to DIR/views, sample key
 };
 

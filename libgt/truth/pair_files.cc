@@ -63,13 +63,19 @@ DirectionMetrics MetricsFromJson(const nlohmann::json& j) {
   return m;
 }
 
-nlohmann::ordered_json DepthSharesJson(const render::DepthAgreement& a) {
+nlohmann::ordered_json DepthAgreementJson(const render::DepthAgreement& a) {
   const double n = static_cast<double>(std::max<int64_t>(1, a.Total()));
   return {{"pixels", a.Total()},
-          {"sensor_only", a.sensor_only / n},
-          {"mesh_only", a.mesh_only / n},
-          {"agree", a.agree / n},
-          {"disagree", a.disagree / n}};
+          {"sensor_only", a.sensor_only},
+          {"mesh_only", a.mesh_only},
+          {"agree", a.agree},
+          {"disagree", a.disagree},
+          {"neither", a.neither},
+          {"shares",
+           {{"sensor_only", a.sensor_only / n},
+            {"mesh_only", a.mesh_only / n},
+            {"agree", a.agree / n},
+            {"disagree", a.disagree / n}}}};
 }
 
 nlohmann::json MatrixJson(const Eigen::MatrixXd& m) {
@@ -111,7 +117,7 @@ nlohmann::ordered_json OccupancyOptionsJson(const PairTruthOptions& o) {
             {"traversal", occupancy::TraversalName(bo.traversal)}}},
           {"fusion",
            {{"scope", occupancy::FusionScopeName(fo)},
-            {"voxel_size_m", fo.voxel_size_m},
+            {"voxel_m", fo.voxel_m},
             {"max_range_m", fo.max_range_m},
             {"downsample", fo.downsample},
             {"remove_outliers", fo.remove_outliers}}}};
@@ -180,10 +186,11 @@ void WriteOccupancyFolder(const std::string& dir, const PairSource& source,
   ordered_json files = {"occ0.npy", "known0.npy", "occ1.npy", "known1.npy"};
   if (dense) {
     const int64_t d = options.bins.num_bins;
-    io::WriteNpy<uint8_t>(dir + "/occupancy0.npy", {d, gh, gw}, DenseVolume(volumes.cam0));
-    io::WriteNpy<uint8_t>(dir + "/occupancy1.npy", {d, gh, gw}, DenseVolume(volumes.cam1));
-    files.push_back("occupancy0.npy");
-    files.push_back("occupancy1.npy");
+    // The shard's member names (folders written before: occupancy0.npy, occupancy1.npy).
+    io::WriteNpy<uint8_t>(dir + "/occ0_dense.npy", {d, gh, gw}, DenseVolume(volumes.cam0));
+    io::WriteNpy<uint8_t>(dir + "/occ1_dense.npy", {d, gh, gw}, DenseVolume(volumes.cam1));
+    files.push_back("occ0_dense.npy");
+    files.push_back("occ1_dense.npy");
   }
   const occupancy::BinOptions& bo = options.bins;
   const occupancy::FusionOptions& fo = options.fusion;
@@ -207,7 +214,7 @@ void WriteOccupancyFolder(const std::string& dir, const PairSource& source,
     }
   }
   j["fusion"] = {{"scope", occupancy::FusionScopeName(fo)},
-                 {"voxel_size_m", fo.voxel_size_m},
+                 {"voxel_m", fo.voxel_m},
                  {"max_range_m", fo.max_range_m},
                  {"downsample", fo.downsample},
                  {"remove_outliers", fo.remove_outliers},

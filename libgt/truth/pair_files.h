@@ -6,8 +6,10 @@
 // match_type.npy (uint8 [M]), match_xy.npy (float32 [M, 2]), cells0.npy, cells1.npy (uint8
 // [H/s, W/s]) and meta.json (schemas/pair_meta.schema.json).
 // `occgt occupancy` folder: occ0.npy, known0.npy, occ1.npy, known1.npy (uint64 [H/2, W/2]),
-// with `dense` also occupancy0.npy, occupancy1.npy (uint8 [D, H/2, W/2]: 0 free, 1 occupied,
-// 255 unknown) and occupancy.json (schemas/occupancy.schema.json).
+// with `dense` also occ0_dense.npy, occ1_dense.npy (uint8 [D, H/2, W/2]: 0 free, 1 occupied,
+// 255 unknown; a shard's member names, occupancy0/1.npy before) and occupancy.json
+// (schemas/occupancy.schema.json; the bin edges "bins"."edges_m", as a sample's
+// "occupancy"."bins"."edges_m").
 // Every file is published atomically (io/atomic_file.h).
 #pragma once
 
@@ -48,7 +50,7 @@ nlohmann::json MatrixJson(const Eigen::MatrixXd& m);
 nlohmann::ordered_json LabelOptionsJson(const LabelOptions& lo);
 nlohmann::ordered_json PatchOptionsJson(const PatchOptions& po);
 // The occupancy options ("occupancy_options"): {mode, bins: {num_bins, near_m, far_m,
-// spacing, traversal}, fusion: {scope, voxel_size_m, max_range_m, downsample,
+// spacing, traversal}, fusion: {scope, voxel_m, max_range_m, downsample,
 // remove_outliers}}; occupancy.json's "mode", "bins" and "fusion" use the same names.
 nlohmann::ordered_json OccupancyOptionsJson(const PairTruthOptions& o);
 // What happened to the points of a fusion (occupancy::FusionStats, summed over its frames):
@@ -57,10 +59,11 @@ nlohmann::ordered_json OccupancyOptionsJson(const PairTruthOptions& o);
 // "occupancy"."fusion_stats" and Python's "fusion_stats" use these names.
 nlohmann::ordered_json FusionStatsJson(const occupancy::FusionStats& s);
 
-// The shares of a sensor-vs-mesh comparison (render::DepthAgreement) as `occgt scan --mesh`
-// and the split report record them: {pixels, sensor_only, mesh_only, agree, disagree}, the
-// last four as fractions of pixels.
-nlohmann::ordered_json DepthSharesJson(const render::DepthAgreement& a);
+// A sensor-vs-mesh comparison (render::DepthAgreement) as render.json, `occgt scan --mesh` and
+// the split report's depth_sources.json record it: {pixels, sensor_only, mesh_only, agree,
+// disagree, neither} pixel counts (pixels = their sum) and "shares" {sensor_only, mesh_only,
+// agree, disagree}, those counts as fractions of pixels.
+nlohmann::ordered_json DepthAgreementJson(const render::DepthAgreement& a);
 
 // Where a pair came from, for the records.
 struct PairSource {

@@ -48,7 +48,7 @@ PairTruthOptions ResolvePairTruthOptions(const PairSettings& settings,
   Set(os.spacing, &bo.spacing);
   Set(os.traversal, &bo.traversal);
   occupancy::FusionOptions& fo = o.fusion;
-  Set(os.voxel_m, &fo.voxel_size_m);
+  Set(os.voxel_m, &fo.voxel_m);
   fo.max_range_m = os.max_range_m.value_or(bo.far_m);
   Set(os.scope, &fo.scope);
   Set(os.window, &fo.window);

@@ -49,7 +49,7 @@ struct LabelSettings {
 // the Python occupancy arguments. Unset: the Options structs' defaults.
 struct OccupancySettings {
   bool enabled = true;                  // compute the two volumes
-  std::optional<double> voxel_m;        // FusionOptions::voxel_size_m
+  std::optional<double> voxel_m;        // FusionOptions::voxel_m
   std::optional<double> max_range_m;    // FusionOptions::max_range_m; unset: the bins' far_m
   std::optional<int> bins;              // BinOptions::num_bins
   std::optional<double> near_m, far_m;  // BinOptions

@@ -164,7 +164,7 @@ class PyScene {
     }
     out.scene = scene_->name;
     out.scope = gt::occupancy::FusionScopeName(o.fusion);
-    out.voxel_m = o.fusion.voxel_size_m;
+    out.voxel_m = o.fusion.voxel_m;
     out.max_range_m = o.fusion.max_range_m;
     out.min_depth_m = o.labels.min_depth_m;
     out.max_depth_m = o.labels.max_depth_m;

@@ -182,10 +182,10 @@ py::dict PairGroundTruth(py::handle depth0, py::handle depth1, py::handle K0, py
       problem << "given without occupancy=True";
     else if (options.mode != gt::occupancy::OccupancyMode::kOctomap)
       problem << "used by occupancy_mode 'octomap' only";
-    else if (scope->voxel_m != options.fusion.voxel_size_m ||
+    else if (scope->voxel_m != options.fusion.voxel_m ||
              scope->max_range_m != options.fusion.max_range_m)
       problem << "fused with voxel_m " << scope->voxel_m << ", max_range_m " << scope->max_range_m
-              << "; expected the same here, got voxel_m " << options.fusion.voxel_size_m
+              << "; expected the same here, got voxel_m " << options.fusion.voxel_m
               << ", max_range_m " << options.fusion.max_range_m;
     if (!problem.str().empty()) ThrowValue("scope_map", problem.str());
   }
@@ -372,7 +372,7 @@ py::dict PairDefaults() {
   d["stride"] = o.patches.stride;
   d["anchor"] = gt::AnchorName(o.patches.anchor);
   d["mutual"] = o.patches.mutual;
-  d["voxel_m"] = o.fusion.voxel_size_m;
+  d["voxel_m"] = o.fusion.voxel_m;
   d["near_m"] = o.bins.near_m;
   d["far_m"] = o.bins.far_m;
   d["bins"] = o.bins.num_bins;

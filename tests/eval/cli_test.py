@@ -2,7 +2,9 @@
 shards score AUC near 100 and per-type precision/recall 100; matches moved by known pixel
 errors give the expected precision; a known extra rotation gives the expected pose error;
 every per-pair pose error and the AUCs equal the reference written from GROUND_TRUTH.md §7
-(tests/eval/reference.py, cv2); rescaled predictions give the same scores; the output is
+(tests/eval/reference.py, cv2); the pair metrics are the samples' under their own names
+(consistent_overlap, overlap, occlusion_ratio(_visible)) and binned as documented, with
+--overlap-bins the same as --consistent-overlap-bins; rescaled predictions give the same scores; the output is
 the same at 1 and 2 threads and valid against schemas/eval.schema.json; each bad
 prediction file fails with one clear line and writes nothing; missing pairs are failures."""
 import json
@@ -81,6 +83,25 @@ def main():
         got_auc = overall["pose"][e]["auc_percent"]
         assert np.allclose(ref_auc, got_auc, atol=1e-6), (ref_auc, got_auc)
         assert got_auc[0] > 90, got_auc  # "near 100" (OpenCV's RANSAC misses one demo pair)
+    # The pair metrics under their own names (version 2): each the mean (--aggregate's
+    # default) of the sample's two directions; by_consistent_overlap bins pairs[].consistent_overlap.
+    assert doc["version"] == 2 and doc["options"]["aggregate"] == "mean", doc["options"]
+    for p in doc["pairs"]:
+        m = metas[p["key"]]["metrics"]
+        mean = lambda name: (m["01"][name] + m["10"][name]) / 2  # noqa: E731
+        assert abs(p["consistent_overlap"] - mean("consistent_overlap")) < 1e-12, p["key"]
+        assert abs(p["overlap"] - mean("overlap")) < 1e-12, p["key"]
+        assert abs(p["occlusion"]["image"] - mean("occlusion_ratio")) < 1e-12, p["key"]
+        assert abs(p["occlusion"]["visible"] - mean("occlusion_ratio_visible")) < 1e-12, p["key"]
+    edges = doc["options"]["consistent_overlap_bins"]
+    assert edges == [0, 0.2, 0.4, 0.6, 0.8, 1], edges
+    bins = doc["sets"][0]["by_consistent_overlap"]
+    assert [(b["lo"], b["hi"]) for b in bins] == list(zip(edges, edges[1:])), bins
+    for i, b in enumerate(bins):
+        last = i + 1 == len(bins)
+        n = sum(1 for p in doc["pairs"] if b["lo"] <= p["consistent_overlap"] and
+                (p["consistent_overlap"] < b["hi"] or (last and p["consistent_overlap"] == b["hi"])))
+        assert b["pairs"] == n, (b["lo"], b["hi"], b["pairs"], n)
 
     # 2. Known pixel errors on the vv and vo matches (ov left out: a moved ov match lands
     #    on another pixel of image 0, whose own label decides its class): even matches moved
@@ -228,6 +249,19 @@ def main():
     c = predictions.load_json(out)
     assert c["sets"][0]["pairs_missing"] == 0 and a["sets"][0]["overall"] == c["sets"][0]["overall"]
 
+    # 5c. --consistent-overlap-bins, and --overlap-bins (its earlier spelling): the same bytes.
+    outs = []
+    for flag in ("--consistent-overlap-bins", "--overlap-bins"):
+        o = os.path.join(work, "bins" + flag.replace("-", "_") + ".json")
+        run_eval(split, o, "--predictions", gt_path, flag, "0,0.5,1")
+        with open(o, "rb") as f:
+            outs.append(f.read())
+    assert outs[0] == outs[1], "--overlap-bins and --consistent-overlap-bins differ"
+    d = json.loads(outs[0])
+    assert d["options"]["consistent_overlap_bins"] == [0, 0.5, 1]
+    assert len(d["sets"][0]["by_consistent_overlap"]) == 2
+    assert sum(b["pairs"] for b in d["sets"][0]["by_consistent_overlap"]) == len(truth)
+
     # 6. Bad prediction files: one line, exit 1, nothing written.
     first = next(iter(truth))
     k0, k1 = truth[first]
@@ -271,11 +305,18 @@ def main():
                  ["--occlusion", "image,image"], ["--failure-error", "200"],
                  ["--curve-step", "0"], ["--auc", "10,5"], ["--epipolar-threshold", "0"],
                  ["--occlusion-bins", "0.5,0.1"], ["--overlap-bins", "0"],
+                 ["--consistent-overlap-bins", "0"], ["--consistent-overlap-bins", "0.5,x"],
+                 ["--overlap-bins", "0.5,x"],
                  ["--ransac-conf", "1"], ["--ransac-iters", "0"], ["--ransac-px", "0"]):
         r = run_eval(split, os.path.join(work, "x.json"), "--predictions", gt_path, *args,
                      check=False)
         assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, (args, r.returncode, r.stderr)
         assert r.stderr.startswith("occgt: error: " + args[0] + ": "), (args, r.stderr)
+    # Both spellings of the consistent_overlap bins at once: a usage error naming both.
+    r = run_eval(split, os.path.join(work, "x.json"), "--predictions", gt_path, "--overlap-bins",
+                 "0,1", "--consistent-overlap-bins", "0,1", check=False)
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, (r.returncode, r.stderr)
+    assert "--overlap-bins" in r.stderr and "--consistent-overlap-bins" in r.stderr, r.stderr
     print(f"eval cli: {len(truth)} pairs, AUC@5 of the ground truth {got_auc[0]:.2f}, "
           f"moved vv precision {vv['precision_percent']:.2f} (expected {expected:.2f})")
 

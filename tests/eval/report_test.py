@@ -4,7 +4,8 @@ docs/EVAL.md "The report"), end to end on the demo split: two eval files, three 
 read with --min-confidence, matches shifted by 12 px). The page's tables equal eval.json; each set's
 gallery shows the worst pairs in the documented order, and the per-class counts re-scored
 for the pictures equal eval.json's; the page opens in headless Chromium with every image
-decoded; the output is deterministic; bad eval files fail with one line and exit 1 (a bad
+decoded; the output is deterministic; an eval.json of version 1 (the old names of
+consistent_overlap) gives the same page; bad eval files fail with one line and exit 1 (a bad
 --eval-gallery: 2); a
 predictions file that is gone is said on the page, not fatal."""
 import html
@@ -160,6 +161,30 @@ def main():
     with open(os.path.join(out2, "report.html"), encoding="utf-8") as f:
         assert f.read() == page, "report.html differs between two runs"
 
+    # eval.json of version 1 (the pair metric consistent_overlap then named
+    # options.overlap_bins, sets[].by_visible_overlap, pairs[].visible_overlap) still reads:
+    # the same page but for the files' folder.
+    v1 = os.path.join(work, "v1")
+    os.makedirs(v1, exist_ok=True)
+    for src in (a_json, b_json):
+        old = predictions.load_json(src)
+        assert old["version"] == 2, old["version"]
+        old["version"] = 1
+        old["options"]["overlap_bins"] = old["options"].pop("consistent_overlap_bins")
+        for s in old["sets"]:
+            s["by_visible_overlap"] = s.pop("by_consistent_overlap")
+        for p in old["pairs"]:
+            p["visible_overlap"] = p.pop("consistent_overlap")
+        with open(os.path.join(v1, os.path.basename(src)), "w") as f:
+            json.dump(old, f, indent=1, sort_keys=True)
+    out_v1 = os.path.join(work, "report_v1")
+    common.occgt("inspect", "split", split, "--eval", os.path.join(v1, "a.json"), "--eval",
+                 os.path.join(v1, "b.json"), "--out", out_v1)
+    with open(os.path.join(out_v1, "report.html"), encoding="utf-8") as f:
+        page_v1 = f.read()
+    assert v1 + "/a.json" in page_v1, "the version-1 files are not named"
+    assert page_v1.replace(v1 + "/", work + "/") == page, "a version-1 eval.json reads otherwise"
+
     # Predictions gone: the page says so, the rest is written.
     moved = os.path.join(work, "moved")
     os.makedirs(moved, exist_ok=True)
@@ -234,6 +259,13 @@ def main():
     bad("fewer.json", other, "pairs")
     bad("text.json", "{not json", "not valid JSON")
     bad("summary.json", predictions.load_json(os.path.join(split, "summary.json")), "kind/version")
+    future = predictions.load_json(a_json)
+    future["version"] = 3
+    bad("future.json", future, "kind/version")
+    old_missing = predictions.load_json(a_json)  # version 1 without its overlap_bins
+    old_missing["version"] = 1
+    del old_missing["options"]["consistent_overlap_bins"]
+    bad("old_missing.json", old_missing, "options")
     wrong = predictions.load_json(a_json)
     del wrong["sets"][0]["overall"]
     bad("noset.json", wrong, "sets")

@@ -119,7 +119,7 @@ def check_sample(key, fields, width, height, stride=8):
         counts = meta["occupancy"][f"counts{c}"]
         bits = np.unpackbits(occ.view(np.uint8)).sum()
         assert int(bits) == counts["occupied"]
-    assert len(meta["occupancy"]["bin_edges_m"]) == 65
+    assert len(meta["occupancy"]["bins"]["edges_m"]) == 65
     for c in ("0", "1"):
         d = npy(fields[f"depth{c}.npy"])
         assert d.dtype == np.float32 and d.shape == (height, width)

@@ -32,7 +32,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 import common  # noqa: E402
 
-CLASSES = ("sensor_only", "mesh_only", "agree", "disagree")
+CLASSES = ("sensor_only", "mesh_only", "agree", "disagree", "neither")
 
 
 def schema(name):
@@ -45,10 +45,15 @@ def pairs_lines(build):
         return [json.loads(line) for line in f if line.strip()]
 
 
-def counts_of(shares):
-    """Pixel counts back from a shares record (shares are counts / pixels)."""
-    return {c: int(round(shares[c] * shares["pixels"])) for c in CLASSES} | {
-        "pixels": shares["pixels"]}
+def counts_of(record):
+    """The pixel counts of an agreement record (truth::DepthAgreementJson, as render.json's
+    sensor), checked against its pixels and its shares."""
+    counts = {c: record[c] for c in CLASSES}
+    assert all(isinstance(v, int) for v in counts.values()), record
+    assert sum(counts.values()) == record["pixels"], record
+    for c in CLASSES[:4]:
+        assert abs(record["shares"][c] - counts[c] / max(record["pixels"], 1)) < 1e-12, record
+    return counts | {"pixels": record["pixels"]}
 
 
 def check_split_report(root, mesh, tmp):
@@ -110,7 +115,7 @@ sample: {{image: png, depth: true, labels: true, occupancy: false}}
     # The sample has holes the mesh fills and, at 5 cm, some disagreement.
     assert want["mesh_only"] > 0 and want["agree"] > 0.5 * want["pixels"], want
     print("split report: fused shares of", len(frames), "frames equal scan's:",
-          {c: round(doc["total"][c], 4) for c in CLASSES})
+          {c: round(doc["total"]["shares"][c], 4) for c in CLASSES[:4]})
 
     # A root that does not hold is one error line naming it.
     r = common.occgt("inspect", "split", build, "--out", os.path.join(tmp, "report2"),
@@ -262,7 +267,7 @@ sample: {{image: png, depth: true, labels: true, occupancy: false}}
                                      for k in ("frame0", "frame1")}), doc
         if device == "dslr":  # no depth sensor: every pixel is the mesh's or none
             assert doc["total"]["sensor_only"] == 0 and doc["total"]["agree"] == 0, doc
-            assert doc["total"]["mesh_only"] > 0.5, doc
+            assert doc["total"]["shares"]["mesh_only"] > 0.5, doc
         else:  # the fixture's iPhone depth is the scene's own: mostly agreeing
             assert doc["total"]["agree"] > 0.5, doc
         # The pair folder read back under the root with meta.json's device.

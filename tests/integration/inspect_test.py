@@ -74,6 +74,16 @@ def read_sample(tar_path, key):
     return fields
 
 
+def old_style_sample_json(meta):
+    """A sample json as occgt wrote it before its occupancy keys took occupancy.json's names:
+    "occupancy"."bin_edges_m" and "voxel_m", "occupancy_options"."fusion"."voxel_size_m"."""
+    occ, fusion = meta["occupancy"], meta["occupancy_options"]["fusion"]
+    occ["bin_edges_m"] = occ.pop("bins")["edges_m"]
+    occ["voxel_m"] = fusion["voxel_m"]
+    fusion["voxel_size_m"] = fusion.pop("voxel_m")
+    return meta
+
+
 def chromium_check(html, tmp):
     chromium = shutil.which("chromium") or shutil.which("chromium-browser")
     if chromium is None:
@@ -139,6 +149,18 @@ def main():
         check(abs(lo - weaker[0]) < 1e-3 and abs(hi - weaker[-1]) < 1e-3,
               f"visible overlap range {lo}..{hi}, expected {weaker[0]}..{weaker[-1]}")
         check(abs(mean - sum(weaker) / len(weaker)) < 1e-3, f"visible overlap mean {mean}")
+    # report.json names it as the pair metrics do: consistent_overlap_min, full precision.
+    with open(os.path.join(build, "pairs.jsonl")) as f:
+        weaker = sorted(min(p["metrics"]["01"]["consistent_overlap"],
+                            p["metrics"]["10"]["consistent_overlap"]) for p in map(json.loads, f))
+    with open(os.path.join(report, "report.json")) as f:
+        pairs_json = json.load(f)["pairs"]
+    vmin = pairs_json.get("consistent_overlap_min") or {}
+    check("visible_overlap_min" not in pairs_json, "report.json still has visible_overlap_min")
+    check(vmin.get("min") is not None and abs(vmin["min"] - weaker[0]) < 1e-12 and
+          abs(vmin["max"] - weaker[-1]) < 1e-12 and
+          abs(vmin["mean"] - sum(weaker) / len(weaker)) < 1e-9,
+          f"report.json consistent_overlap_min {vmin}, expected {weaker[0]}..{weaker[-1]}")
     # INCONSISTENT / UNKNOWN shares of valid-depth pixels (MegaDepth's caveat points here):
     # a copy of pairs.jsonl where one pair has known counts.
     shares = os.path.join(tmp, "shares")
@@ -246,6 +268,31 @@ def main():
     check(err <= 1.0, f"labels.png differs from the documented blend by {err}")
     occ = png(os.path.join(out, "occupancy.png"))
     not_blank(occ, "occupancy.png")
+    # The same sample as written before its json took occupancy.json's names (bin edges as
+    # "occupancy"."bin_edges_m", "voxel_size_m"): the same occupancy picture.
+    old_tar = os.path.join(tmp, "old_keys", os.path.basename(line["shard"]))
+    os.makedirs(os.path.dirname(old_tar), exist_ok=True)
+    with tarfile.open(os.path.join(build, line["shard"])) as src, \
+            tarfile.open(old_tar, "w", format=tarfile.USTAR_FORMAT) as dst:
+        rewritten = 0
+        for m in src.getmembers():
+            data = src.extractfile(m).read()
+            if m.name in (line["key"] + ".json", line["key"] + ".json.gz"):
+                gz = m.name.endswith(".gz")
+                meta = json.loads(gzip.decompress(data) if gz else data)
+                check(meta["occupancy"]["bins"]["edges_m"] and "bin_edges_m" not in
+                      meta["occupancy"], f"sample json occupancy keys: {list(meta['occupancy'])}")
+                data = json.dumps(old_style_sample_json(meta)).encode()
+                data = gzip.compress(data) if gz else data
+                m.size = len(data)
+                rewritten += 1
+            dst.addfile(m, io.BytesIO(data))
+        check(rewritten == 1, f"old-style shard: {rewritten} json members rewritten")
+    out_old = os.path.join(tmp, "pair_shard_old_keys")
+    common.occgt("inspect", "pair", "--shard", old_tar, "--key", line["key"], "--out", out_old)
+    check(open(os.path.join(out_old, "occupancy.png"), "rb").read() ==
+          open(os.path.join(out, "occupancy.png"), "rb").read(),
+          "old-style sample json: occupancy.png differs from the current sample's")
 
     # --- pair computed from the real TartanAir sample.
     root = common.shared("tartanair/hospital_sample")
@@ -306,6 +353,21 @@ def main():
     common.occgt("inspect", "pair", "--pair-dir", occ_dir, "--out", out)
     check(open(os.path.join(out, "occupancy.png"), "rb").read() == reference,
           "dense-only occupancy folder: occupancy.png differs from the computed pair's")
+    # A folder written before the dense volumes took the shard's names (occupancy0/1.npy) and
+    # occupancy.json its voxel_m: read alike.
+    meta = json.load(open(os.path.join(occ_dir, "occupancy.json")))
+    check(meta["files"][-2:] == ["occ0_dense.npy", "occ1_dense.npy"] and
+          "voxel_m" in meta["fusion"], f"occupancy.json names: {meta['files']}, {meta['fusion']}")
+    for c in "01":
+        os.rename(os.path.join(occ_dir, f"occ{c}_dense.npy"),
+                  os.path.join(occ_dir, f"occupancy{c}.npy"))
+    meta["fusion"]["voxel_size_m"] = meta["fusion"].pop("voxel_m")
+    meta["files"][-2:] = ["occupancy0.npy", "occupancy1.npy"]
+    json.dump(meta, open(os.path.join(occ_dir, "occupancy.json"), "w"))
+    out = os.path.join(tmp, "occ_old_names_dir_pictures")
+    common.occgt("inspect", "pair", "--pair-dir", occ_dir, "--out", out)
+    check(open(os.path.join(out, "occupancy.png"), "rb").read() == reference,
+          "old-style dense occupancy folder: occupancy.png differs from the computed pair's")
     os.remove(os.path.join(occ_dir, "occupancy.json"))
     r = common.occgt("inspect", "pair", "--pair-dir", occ_dir, "--out", out, check=False)
     check(r.returncode == 1 and "edges_m" in r.stderr and len(r.stderr.strip().splitlines()) == 1,

@@ -39,7 +39,7 @@ def main():
     for cam in "01":
         occ = np.load(os.path.join(out, f"occ{cam}.npy"))
         known = np.load(os.path.join(out, f"known{cam}.npy"))
-        dense = np.load(os.path.join(out, f"occupancy{cam}.npy"))
+        dense = np.load(os.path.join(out, f"occ{cam}_dense.npy"))
         assert occ.dtype == np.dtype("<u8") and occ.shape == (h, w), (occ.dtype, occ.shape)
         assert known.dtype == np.dtype("<u8") and known.shape == (h, w)
         assert dense.dtype == np.uint8 and dense.shape == (d, h, w), (dense.dtype, dense.shape)
@@ -64,8 +64,8 @@ def main():
     out2 = common.scratch("occupancy_tartanair_again")
     common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
                  "--frames", "000000,000020", "--out", out2, "--dense")
-    for name in ["occ0.npy", "known0.npy", "occ1.npy", "known1.npy", "occupancy0.npy",
-                 "occupancy1.npy"]:
+    for name in ["occ0.npy", "known0.npy", "occ1.npy", "known1.npy", "occ0_dense.npy",
+                 "occ1_dense.npy"]:
         assert open(os.path.join(out, name), "rb").read() == \
             open(os.path.join(out2, name), "rb").read(), name
 

@@ -22,8 +22,8 @@ import common  # noqa: E402
 PAIR_MEMBERS = ["label01.npy", "label10.npy", "matches.npy", "match_type.npy", "match_xy.npy",
                 "cells0.npy", "cells1.npy"]
 OCC_MEMBERS = {"occ0.npy": "occ0.npy", "known0.npy": "known0.npy", "occ1.npy": "occ1.npy",
-               "known1.npy": "known1.npy", "occ0_dense.npy": "occupancy0.npy",
-               "occ1_dense.npy": "occupancy1.npy"}
+               "known1.npy": "known1.npy", "occ0_dense.npy": "occ0_dense.npy",
+               "occ1_dense.npy": "occ1_dense.npy"}
 
 SYNTH_RECIPE = """name: pair-recipe
 split: pair-recipe
@@ -105,6 +105,25 @@ def check_pairs(name, recipe, build, extra=()):
                     fail(f"{tag}: occgt occupancy --recipe {file} differs from the shard's {member}")
         if compared < 4:
             fail(f"{tag}: the shard has {compared} occupancy members")
+        # One vocabulary: the sample json names the bin edges and the voxel size as
+        # occupancy.json does, each once ("occupancy"."bins"."edges_m", and the options'
+        # "fusion"."voxel_m").
+        sample = json.loads(members["json"])
+        with open(os.path.join(occ_dir, "occupancy.json")) as f:
+            occ_meta = json.load(f)
+        if sample["occupancy"]["bins"] != {"edges_m": occ_meta["bins"]["edges_m"]}:
+            fail(f"{tag}: the sample's occupancy.bins {sample['occupancy']['bins']} are not "
+                 f"occupancy.json's bins.edges_m {occ_meta['bins']['edges_m']}")
+        options = sample["occupancy_options"]
+        if options["fusion"]["voxel_m"] != occ_meta["fusion"]["voxel_m"] or \
+                "voxel_m" in sample["occupancy"]:
+            fail(f"{tag}: voxel_m: sample {sample['occupancy']}, {options['fusion']}; "
+                 f"occupancy.json {occ_meta['fusion']}")
+        if {k: v for k, v in occ_meta["bins"].items() if k != "edges_m"} != options["bins"]:
+            fail(f"{tag}: occupancy.json's bins {occ_meta['bins']} against the sample's "
+                 f"occupancy_options.bins {options['bins']}")
+        if occ_meta["files"][-2:] != ["occ0_dense.npy", "occ1_dense.npy"]:
+            fail(f"{tag}: occupancy.json's files {occ_meta['files']}")
         print(f"{tag}: {len(PAIR_MEMBERS)} + {compared} arrays equal to the shard's")
     return lines[0]
 
@@ -200,7 +219,7 @@ def main():
                           "--far-m", "12", "--bins", "16")
     if (meta["bins"]["far_m"], meta["fusion"]["max_range_m"]) != (12, 12):
         fail(f"--far-m 12 over the recipe: bins {meta['bins']}, fusion {meta['fusion']}")
-    if meta["bins"]["num_bins"] != 16 or meta["fusion"]["voxel_size_m"] != 0.1:
+    if meta["bins"]["num_bins"] != 16 or meta["fusion"]["voxel_m"] != 0.1:
         fail(f"--bins 16 over the recipe: bins {meta['bins']}, fusion {meta['fusion']}")
     if meta["fusion"]["max_depth_m"] != 100 or meta["resolution"] != [640, 480]:
         fail(f"the recipe's max_depth_m / resolution not kept: {meta}")
@@ -222,7 +241,7 @@ def main():
     if (meta["bins"]["far_m"], meta["fusion"]["max_range_m"]) != (20, 5):
         fail(f"--max-range-m 5: bins {meta['bins']}, fusion {meta['fusion']}")
     meta = occupancy_json(*plain)
-    if (meta["bins"]["far_m"], meta["fusion"]["max_range_m"], meta["fusion"]["voxel_size_m"],
+    if (meta["bins"]["far_m"], meta["fusion"]["max_range_m"], meta["fusion"]["voxel_m"],
             meta["bins"]["num_bins"]) != (10, 10, 0.05, 64):
         fail(f"defaults (a recipe without occupancy keys): {meta['bins']}, {meta['fusion']}")
     out = common.scratch("pair_recipe/pair_override")

@@ -110,7 +110,13 @@ def test_scan_mesh():
     jsonschema.validate(doc, schema("scan.schema.json"))
     m = doc["scenes"][0]["mesh_depth"]
     assert m["mesh"] == MESH and len(m["frames"]) == 5
-    assert m["total"]["agree"] > 0.75 and m["total"]["mesh_only"] > 0, m["total"]
+    assert m["total"]["shares"]["agree"] > 0.75 and m["total"]["mesh_only"] > 0, m["total"]
+    # The same record as render.json's sensor: counts summing to pixels, shares beside them.
+    for rec in m["frames"] + [m["total"]]:
+        classes = ("sensor_only", "mesh_only", "agree", "disagree", "neither")
+        assert sum(rec[c] for c in classes) == rec["pixels"], rec
+        assert all(abs(rec["shares"][c] - rec[c] / rec["pixels"]) < 1e-12 for c in classes[:4]), rec
+    assert m["total"]["pixels"] == sum(f["pixels"] for f in m["frames"]), m
     plain = json.loads(common.occgt("scan", ROOT, "--format", "sevenscenes", "--json").stdout)
     assert "mesh_depth" not in plain["scenes"][0]
     text = common.occgt("scan", ROOT, "--format", "sevenscenes", "--mesh", MESH, "--mesh-stride", "25").stdout

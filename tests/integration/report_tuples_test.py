@@ -274,6 +274,22 @@ def main():
           "tuples-only report's heading does not say what the folder holds")
     check_tuples(doc, html, lines, truth, "tuples only")
 
+    # --- N-view shards written before occgt 0.2 name the ground truth occluded_fraction:
+    # read as the same number.
+    old = os.path.join(tmp, "old_names")
+    shutil.copytree(only, old)
+    shutil.rmtree(os.path.join(old, "r"))
+    with open(os.path.join(old, "views", "pairs.jsonl")) as f:
+        rows = [json.loads(x) for x in f]
+    for row in rows:
+        row["occluded_fraction"] = row.pop("occlusion_ratio_visible")
+    with open(os.path.join(old, "views", "pairs.jsonl"), "w") as f:
+        f.writelines(json.dumps(x) + "\n" for x in rows)
+    common.occgt("inspect", "split", old, "--out", os.path.join(old, "r"), "--bins", BINS,
+                 "--seed", SEED, "--gallery-tuples", GALLERY)
+    doc, html = read_report(os.path.join(old, "r"))
+    check_tuples(doc, html, lines, truth, "pre-0.2 names")
+
     # --- no shards: occlusion from tuples.jsonl only, no thumbnails (said why).
     bare = os.path.join(tmp, "bare")
     os.makedirs(bare)

@@ -39,9 +39,9 @@ assert doc["totals"] == {"scenes": 1, "frames": 24, "usable": 24, "unusable": 0,
                          "usable_with_color": 24, "unusable_reasons": {}}, doc["totals"]
 s = doc["scenes"][0]
 assert s["color"] == {"usable_with_color": 24, "size": [640, 480],
-                      "K": {"fx": 320, "fy": 320, "cx": 320, "cy": 240}, "uniform_color_camera": True}
+                      "K": [[320, 0, 320], [0, 320, 240], [0, 0, 1]], "uniform_color_camera": True}
 assert s["warnings"] == [], s["warnings"]
-assert s["depth_size"] == [640, 480] and s["K"] == {"fx": 320, "fy": 320, "cx": 320, "cy": 240}
+assert s["depth_size"] == [640, 480] and s["K"] == [[320, 0, 320], [0, 320, 240], [0, 0, 1]]
 assert s["depth_check"]["files_read"] == 24 and s["depth_check"]["files_bad"] == 0
 assert 0.5 < s["depth_check"]["mean_valid_fraction"] <= 1.0
 
@@ -50,7 +50,7 @@ for root in ("sevenscenes/rgbd-frames", "sevenscenes"):
     doc = scan(common.shared(root), "sevenscenes")
     assert doc["totals"]["usable"] == 50 and doc["totals"]["frames"] == 50, doc["totals"]
     assert doc["scenes"][0]["name"] == "rgbd-frames"
-    assert doc["scenes"][0]["K"] == {"fx": 585, "fy": 585, "cx": 320, "cy": 240}
+    assert doc["scenes"][0]["K"] == [[585, 0, 320], [0, 585, 240], [0, 0, 1]]
     assert doc["scenes"][0]["color"]["usable_with_color"] == 50
     # The dataset caveat: depth and colour are not registered.
     assert len(doc["scenes"][0]["warnings"]) == 1, doc["scenes"][0]["warnings"]
@@ -63,7 +63,7 @@ doc = scan(common.shared("scannet_posed_color/scene_sample"), "scannet")
 assert doc["totals"] == {"scenes": 1, "frames": 4, "usable": 0, "unusable": 4, "usable_with_color": 0,
                          "unusable_reasons": {"depth: missing file": 4}}, doc["totals"]
 k = doc["scenes"][0]["K"]
-assert abs(k["fx"] - 577.590698) < 1e-9 and abs(k["cy"] - 242.683609) < 1e-9
+assert abs(k[0][0] - 577.590698) < 1e-9 and abs(k[1][2] - 242.683609) < 1e-9
 
 # Colour coverage: a 7-Scenes copy where every other frame lacks its colour file (both
 # colour extensions the releases use are accepted: half the rest are .color.jpg).

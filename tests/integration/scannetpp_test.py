@@ -111,7 +111,7 @@ def main():
                                      "pose: image not in the COLMAP model": 1}, s
     assert s["usable"] == FRAMES - 1, s
     # The undistorted pinhole camera: principal point (w/2, h/2) in OpenCV's convention.
-    assert s["K"]["cx"] == 80.0 and s["K"]["cy"] == 60.0, s["K"]
+    assert s["K"][0][2] == 80.0 and s["K"][1][2] == 60.0, s["K"]
     iphone = scan(root, "iphone", validator)
     s = iphone["scenes"][0]
     assert s["unusable_reasons"] == {"pose: image not in the COLMAP model": 1}, s

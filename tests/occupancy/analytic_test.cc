@@ -227,7 +227,7 @@ class RoomAndBox : public ::testing::Test {
     views_.push_back(Render({0.0, 0.0, 0.0}, {0.0, 0.1, 3.0}, kWidth, kHeight));
     views_.push_back(Render({1.6, -0.4, 0.5}, {-0.3, 0.2, 3.5}, kWidth, kHeight));
     for (const auto& v : views_) inputs_.push_back({&v.depth, v.cam, v.world_from_cam, 0.1, 20.0});
-    fusion_.voxel_size_m = kVoxel;
+    fusion_.voxel_m = kVoxel;
     fusion_.max_range_m = 10.0;
     bins_.near_m = 0.1;
     bins_.far_m = 10.0;

@@ -75,7 +75,7 @@ TEST(Options, ChecksRejectBadValues) {
   EXPECT_FALSE(b.Check(&why));
   FusionOptions f;
   EXPECT_TRUE(f.Check(&why));
-  f.voxel_size_m = 0;
+  f.voxel_m = 0;
   EXPECT_FALSE(f.Check(&why));
   f = FusionOptions();
   f.scope = FusionScope::kWindow;

@@ -126,7 +126,7 @@ TEST(Equivalence, RandomScenesDiscretized) {
     std::vector<FusionInput> frames;
     for (int f = 0; f < 3; ++f) frames.push_back({&depths[f], cam, poses[f], 0.1, 100.0});
     FusionOptions o;
-    o.voxel_size_m = trial % 2 == 0 ? 0.05 : 0.03;
+    o.voxel_m = trial % 2 == 0 ? 0.05 : 0.03;
     o.max_range_m = 5.0;  // the far depths (12-42 m) are truncated
     ExpectSameMaps(frames, o, "random discretized " + std::to_string(trial));
   }

@@ -144,7 +144,7 @@ TEST(KeyRange, VoxelTooSmallForTheRangeIsRefusedWithTheSmallestThatWorks) {
   DepthImage depth(20, 16, 3.0f);
   const FusionInput in{&depth, cam, Rigid3d::Identity(), 0.1, 20.0};
   FusionOptions opt;
-  opt.voxel_size_m = 1e-6;
+  opt.voxel_m = 1e-6;
   opt.max_range_m = 10;
   const std::string e = KeyRangeError(in, opt);
   EXPECT_EQ(e,
@@ -157,14 +157,14 @@ TEST(KeyRange, VoxelTooSmallForTheRangeIsRefusedWithTheSmallestThatWorks) {
   const double smallest = MinVoxelSizeM(Eigen::Vector3d::Zero(), 10.0);
   EXPECT_NEAR(smallest, 10.0 / 32766, 1e-18);
   EXPECT_GE(KeyRangeHalfExtentM(smallest), 10.0);
-  opt.voxel_size_m = smallest;
+  opt.voxel_m = smallest;
   EXPECT_EQ(KeyRangeError(in, opt), "");
-  opt.voxel_size_m = std::nextafter(smallest, 0.0);
+  opt.voxel_m = std::nextafter(smallest, 0.0);
   EXPECT_NE(KeyRangeError(in, opt), "");
   // The suggested (rounded up) size works, and fuses a wall without dropping a point (a
   // small, near one: rays of 0.3 mm voxels are long).
-  opt.voxel_size_m = SuggestedVoxel(e);
-  EXPECT_EQ(opt.voxel_size_m, 0.000306);
+  opt.voxel_m = SuggestedVoxel(e);
+  EXPECT_EQ(opt.voxel_m, 0.000306);
   DepthImage near_wall(4, 4, 0.3f);
   const OccupancyMap map =
       FuseOccupancy({{&near_wall, SmallCamera(4, 4), Rigid3d::Identity(), 0.1, 20.0}}, opt);
@@ -188,17 +188,17 @@ TEST(KeyRange, CameraFarFromTheOriginNeedsItsOffsetToo) {
       << e;
   const double smallest = MinVoxelSizeM(centre, 10.0);
   EXPECT_NEAR(smallest, 2010.0 / 32766, 1e-15);
-  opt.voxel_size_m = smallest;
+  opt.voxel_m = smallest;
   EXPECT_EQ(KeyRangeError(in, opt), "");
-  opt.voxel_size_m = std::nextafter(smallest, 0.0);
+  opt.voxel_m = std::nextafter(smallest, 0.0);
   EXPECT_NE(KeyRangeError(in, opt), "");
-  opt.voxel_size_m = SuggestedVoxel(e);
+  opt.voxel_m = SuggestedVoxel(e);
   const OccupancyMap map = FuseOccupancy({in}, opt);
   EXPECT_EQ(map.stats().out_of_key_range, 0);
   EXPECT_EQ(map.StateAt(centre + Eigen::Vector3d(0.075, 0.075, 3.0)), 1);  // pixel (10, 8)
   EXPECT_EQ(map.StateAt(centre + Eigen::Vector3d(0.0375, 0.0375, 1.5)), 0);
   // Every frame is checked before any is fused: a good frame first does not hide a bad one.
-  opt.voxel_size_m = 0.05;
+  opt.voxel_m = 0.05;
   const FusionInput near{&depth, cam, Rigid3d::Identity(), 0.1, 20.0};
   try {
     FuseOccupancy({near, in}, opt);
@@ -234,10 +234,10 @@ TEST(KeyRange, UnlimitedRangeUsesTheLongestValidRay) {
                    "max_range_m > 0"),
             std::string::npos)
       << e;
-  opt.voxel_size_m = SuggestedVoxel(e);
+  opt.voxel_m = SuggestedVoxel(e);
   EXPECT_EQ(KeyRangeError(in, opt), "");
   opt.max_range_m = 10;  // a range: its own reach
-  opt.voxel_size_m = 0.05;
+  opt.voxel_m = 0.05;
   EXPECT_EQ(FusionReachM(in, opt), 10.0);
   EXPECT_EQ(KeyRangeError(in, opt), "");
   // No voxel size holds an unbounded reach.

@@ -291,7 +291,7 @@ TEST(ExactTraversal, SameAsReferenceOnRandomScenes) {
     for (int f = 0; f < 3; ++f)
       frames.push_back({&depths[f], cam, RandomPose(&rng, trial < 3 ? 0.3 : 1.5), 0.1, 100.0});
     FusionOptions o;
-    o.voxel_size_m = trial % 3 == 0 ? 0.05 : (trial % 3 == 1 ? 0.03 : 0.1);
+    o.voxel_m = trial % 3 == 0 ? 0.05 : (trial % 3 == 1 ? 0.03 : 0.1);
     o.max_range_m = trial == 5 ? 0 : 6.0;
     const OccupancyMap map = FuseOccupancy(frames, o);
     const std::string name = "random " + std::to_string(trial);

@@ -85,7 +85,7 @@ def occupancy_options_of(occupancy_json: Dict[str, Any]) -> Dict[str, Any]:
     """The options part of an `occgt occupancy` folder's occupancy.json."""
     bins = {k: v for k, v in occupancy_json["bins"].items() if k != "edges_m"}
     fusion = {k: v for k, v in occupancy_json["fusion"].items()
-              if k in ("scope", "voxel_size_m", "max_range_m", "downsample", "remove_outliers")}
+              if k in ("scope", "voxel_m", "max_range_m", "downsample", "remove_outliers")}
     return {"mode": occupancy_json["mode"], "bins": bins, "fusion": fusion}
 
 

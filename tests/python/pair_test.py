@@ -218,7 +218,7 @@ class Synthetic(unittest.TestCase):
                 for cam in "01":
                     dense = occgt.dense_volume(r["occ" + cam], r["known" + cam], bins)
                     self.assertEqual(common.npy_bytes(dense),
-                                     common.read_bytes(os.path.join(out, f"occupancy{cam}.npy")))
+                                     common.read_bytes(os.path.join(out, f"occ{cam}_dense.npy")))
                 self.assertEqual(r["occ0"].dtype, np.uint64)
                 self.assertEqual(r["occ0"].shape, (120, 160))
                 self.assertTrue(np.all(r["occ0"] & ~r["known0"] == 0))

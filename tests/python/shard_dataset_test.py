@@ -102,6 +102,17 @@ def dense_reference(occ: np.ndarray, known: np.ndarray, bins: int) -> np.ndarray
     return np.where(is_known == 1, occupied, 255).astype(np.uint8)
 
 
+def old_style_json(meta: Dict[str, Any]) -> Dict[str, Any]:
+    """A sample json as occgt wrote it before the occupancy keys took occupancy.json's names:
+    the bin edges as "occupancy"."bin_edges_m", the voxel size also as "occupancy"."voxel_m"
+    and as "occupancy_options"."fusion"."voxel_size_m"."""
+    occ, options = meta["occupancy"], meta["occupancy_options"]
+    occ["bin_edges_m"] = occ.pop("bins")["edges_m"]
+    occ["voxel_m"] = options["fusion"]["voxel_m"]
+    options["fusion"]["voxel_size_m"] = options["fusion"].pop("voxel_m")
+    return meta
+
+
 def copy_split(src: str, name: str) -> str:
     dst = common.scratch(name)
     for f in os.listdir(src):
@@ -333,7 +344,7 @@ class ShardDatasetTest(unittest.TestCase):
     def test_dense_occupancy(self) -> None:
         # Words only in the split: unpacked by occgt.dense_volume (C++).
         ds = ShardDataset(self.full, occupancy="dense")
-        bins = len(self.plain[0]["json"]["occupancy"]["bin_edges_m"]) - 1
+        bins = len(self.plain[0]["json"]["occupancy"]["bins"]["edges_m"]) - 1
         self.assertEqual(bins, 32)
         for i in (0, len(ds) - 1):
             s, p = ds[i], self.plain[i]
@@ -360,6 +371,36 @@ class ShardDatasetTest(unittest.TestCase):
                     s["occupancy" + c].numpy(),
                     occgt.dense_volume(w["occ" + c].numpy().view(np.uint64),
                                        w["known" + c].numpy().view(np.uint64), bins)))
+
+    def test_samples_written_before_the_occupancy_renames(self) -> None:
+        """A split whose sample jsons have the old occupancy keys (bin_edges_m, voxel_size_m)
+        reads as the split itself (dense volumes need the number of bins)."""
+        old = copy_split(self.full, "sd_old_keys")
+        with open(os.path.join(old, "index.json")) as f:
+            index = json.load(f)
+        for shard in index["shardlist"]:
+            tar = os.path.join(old, shard["url"])
+            with tarfile.open(tar) as src:
+                members = [(m, src.extractfile(m).read()) for m in src.getmembers()]
+            with tarfile.open(tar, "w", format=tarfile.USTAR_FORMAT) as dst:
+                for m, data in members:
+                    if m.name.endswith(".json"):
+                        meta = json.loads(data)
+                        self.assertNotIn("bin_edges_m", meta["occupancy"])
+                        self.assertNotIn("voxel_m", meta["occupancy"])
+                        data = json.dumps(old_style_json(meta)).encode()
+                        m.size = len(data)
+                    dst.addfile(m, io.BytesIO(data))
+            shard["filesize"] = os.path.getsize(tar)
+        with open(os.path.join(old, "index.json"), "w") as f:
+            json.dump(index, f)
+        self.assertEqual(self.plain[0]["json"]["occupancy_options"]["fusion"]["voxel_m"], 0.1)
+        for occupancy in ("dense", "words"):
+            new_ds = ShardDataset(self.full, occupancy=occupancy)
+            old_ds = ShardDataset(old, occupancy=occupancy)
+            self.assertEqual(len(old_ds), len(new_ds))
+            for i in range(len(new_ds)):
+                self.assert_same(old_ds[i], new_ds[i], f"old-style sample {i}, {occupancy}")
 
     def test_npy_members(self) -> None:
         """The in-place .npy parser: numpy.save's headers (the matched form), any other valid

@@ -150,7 +150,7 @@ class Balance(unittest.TestCase):
         candidates are positively rank-correlated."""
         views = os.path.join(self.pool_out, "views")
         with open(os.path.join(views, "pairs.jsonl")) as f:
-            exact = [json.loads(x)["occluded_fraction"] for x in f]
+            exact = [json.loads(x)["occlusion_ratio_visible"] for x in f]
         graphs = {os.path.basename(p)[:-4]: dict(np.load(p))
                   for p in glob.glob(os.path.join(self.out, "covisibility", "*.npz"))}
         est = [estimate(graphs[t["scene"]], list(graphs[t["scene"]]["frame_ids"]), t["frame_ids"])

@@ -180,13 +180,17 @@ class ViewsShards(unittest.TestCase):
                     if i != j:
                         vis += int(((s["visible_in"][i] >> j) & 1).sum())
                         occ += int(((s["occluded_in"][i] >> j) & 1).sum())
-            c = meta["counts"]
-            self.assertEqual((c["visible"], c["occluded"], c["valid"]),
+            m = meta["metrics"]
+            self.assertEqual((m["counts"]["VISIBLE"], m["counts"]["OCCLUDED"], m["valid"]),
                              (vis, occ, int(s["valid"].sum())))
-            self.assertAlmostEqual(c["occluded_fraction"], occ / max(vis + occ, 1))
+            self.assertAlmostEqual(m["occlusion_ratio_visible"], occ / max(vis + occ, 1))
+            # The colour camera of this dataset is its depth camera (no colour K in the
+            # manifests): image.K equals K; test_colour_camera_K covers another colour K.
+            self.assertEqual(meta["image"]["format"], "png")
+            np.testing.assert_allclose(np.array(meta["image"]["K"]), s["intrinsics"], rtol=1e-12)
             checked += 1
         self.assertGreaterEqual(checked, 5)
-        self.assertGreater(sum(s["json"]["counts"]["occluded"] for s in common.read_shard_samples(self.views)), 0)
+        self.assertGreater(sum(s["json"]["metrics"]["counts"]["OCCLUDED"] for s in common.read_shard_samples(self.views)), 0)
 
     def test_thread_count_and_resume(self) -> None:
         one = read_tree(self.views)
@@ -213,6 +217,45 @@ class ViewsShards(unittest.TestCase):
         self.assertEqual(r.returncode, 1, r.stderr)
         self.assertIn("written for other tuples or options", r.stderr)
         self.assertEqual(read_tree(self.views), one)
+
+    def test_colour_camera_K(self) -> None:
+        """A colour camera other than the depth camera (a manifest's `color.K`): the json's
+        image.K holds each view's colour K at W x H, K and intrinsics.npy stay the depth K
+        (docs/FORMATS.md "N-view shards"), as a pair sample's image.K0/K1 and K0/K1."""
+        data = os.path.join(self.dir, "colour_data")
+        shutil.rmtree(data, ignore_errors=True)
+        shutil.copytree(self.data, data)
+        colour_K: Dict[str, list] = {}
+        for manifest in glob.glob(os.path.join(data, "*", "scene.json")):
+            with open(manifest) as f:
+                m = json.load(f)
+            for k, frame in enumerate(m["frames"]):
+                K = np.array(frame["K"])
+                K[0, 0] *= 1.0 + 0.01 * k  # fx, cx differ from the depth camera's, per frame
+                K[0, 2] += 1.5
+                frame["color"]["K"] = K.tolist()
+                colour_K[m["scene"] + "/" + frame["id"]] = K.tolist()
+            with open(manifest, "w") as f:
+                json.dump(m, f)
+        recipe = os.path.join(self.dir, "generic.yaml")
+        with open(recipe, "w") as f:
+            f.write(RECIPE.replace(
+                "  format: synthetic\n  synthetic: {scenes: 2, frames: 10, width: 96, height: 72, "
+                "seed: 4}\n", f"  format: generic\n  root: {data}\n"))
+        out = os.path.join(self.dir, "colour_out")
+        shutil.rmtree(out, ignore_errors=True)
+        common.occgt("covis", recipe, "--out", out)
+        common.occgt("tuples", recipe, "--out", out, "--shards")
+        checked = 0
+        for s in common.read_shard_samples(os.path.join(out, "views")):
+            meta = s["json"]
+            want = [colour_K[meta["scene"] + "/" + f["id"]] for f in meta["frames"]]
+            # The colour images are 96 x 72 = W x H: the colour K is taken as it is.
+            np.testing.assert_allclose(np.array(meta["image"]["K"]), np.array(want), rtol=1e-12)
+            np.testing.assert_allclose(np.array(meta["K"]), s["intrinsics"], rtol=1e-12)
+            self.assertFalse(np.allclose(s["intrinsics"], np.array(want)))
+            checked += 1
+        self.assertGreater(checked, 0)
 
 
 class ShippedRecipe(unittest.TestCase):
@@ -251,7 +294,7 @@ class ShippedRecipe(unittest.TestCase):
             for name in ["visible_in", "occluded_in", "valid", "queries", "track_state",
                          "track_xy", "track_depth"]:
                 np.testing.assert_array_equal(s[name], truth[name], err_msg=name)  # type: ignore
-            self.assertGreater(meta["counts"]["occluded"], 0)
+            self.assertGreater(meta["metrics"]["counts"]["OCCLUDED"], 0)
 
 
 if __name__ == "__main__":

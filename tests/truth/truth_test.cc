@@ -138,7 +138,7 @@ TEST(ComputePairTruth, EqualsTheFunctionsItComposes) {
   o.labels = LabelPreset("default");
   o.labels.min_depth_m = scene.min_depth_m;
   o.labels.max_depth_m = scene.max_depth_m;
-  o.fusion.voxel_size_m = 0.1;
+  o.fusion.voxel_m = 0.1;
   const PairTruth t = ComputePairTruth(a, b, o);
   const PairLabels l = LabelPair(*a.depth, a.camera, a.world_from_cam, *b.depth, b.camera,
                                  b.world_from_cam, o.labels, o.patches);
@@ -179,7 +179,7 @@ TEST(ComputePairTruth, ReportsFusionStatsAndRefusesAVoxelTooSmall) {
   PairTruthOptions o;
   o.labels.min_depth_m = scene.min_depth_m;
   o.labels.max_depth_m = scene.max_depth_m;
-  o.fusion.voxel_size_m = 0.1;
+  o.fusion.voxel_m = 0.1;
   int64_t invalid = 0;
   for (const WorkingFrame* f : std::initializer_list<const WorkingFrame*>{&a, &b}) {
     for (float z : f->depth->values_m)
@@ -209,7 +209,7 @@ TEST(ComputePairTruth, ReportsFusionStatsAndRefusesAVoxelTooSmall) {
   EXPECT_FALSE(ComputePairTruth(a, b, o).occupancy->fusion_stats.has_value());
 
   o.mode = occupancy::OccupancyMode::kOctomap;
-  o.fusion.voxel_size_m = 1e-6;  // +-0.0328 m around the origin; the range is 10 m
+  o.fusion.voxel_m = 1e-6;  // +-0.0328 m around the origin; the range is 10 m
   try {
     ComputePairTruth(a, b, o);
     ADD_FAILURE() << "voxel 1e-6 accepted";
@@ -233,7 +233,7 @@ TEST(FuseScope, SkipsUnreadableScopeFramesAndFailsOnThePairs) {
   PairTruthOptions o;
   o.labels.min_depth_m = scene.min_depth_m;
   o.labels.max_depth_m = scene.max_depth_m;
-  o.fusion.voxel_size_m = 0.1;
+  o.fusion.voxel_m = 0.1;
   o.fusion.scope = occupancy::FusionScope::kWindow;
   o.fusion.window = 1;
   const FrameLoader load = [&](size_t i) {

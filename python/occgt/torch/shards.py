@@ -70,6 +70,14 @@ def _has(members: Dict[str, Tuple[int, int]], field: str) -> bool:
     return field in members or field + ".gz" in members
 
 
+def _bin_edges(occupancy: Dict[str, Any]) -> List[float]:
+    """The bin edges of a sample json's "occupancy" object: ``bins.edges_m`` (occupancy.json's
+    name), or ``bin_edges_m`` in samples written before; KeyError when neither is there."""
+    if "bins" in occupancy:
+        return list(occupancy["bins"]["edges_m"])
+    return list(occupancy["bin_edges_m"])
+
+
 def _npy(buf: bytearray, offset: int, size: int, where: str) -> np.ndarray:
     """The array of a ``.npy`` member at buf[offset:offset + size], sharing buf's memory.
 
@@ -297,12 +305,12 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             scene = str(meta["scene"])
             names = (f"{scene}/{meta['frame0']['id']}", f"{scene}/{meta['frame1']['id']}")
             metrics01, metrics10 = meta["metrics"]["01"], meta["metrics"]["10"]
-            bins = (len(meta["occupancy"]["bin_edges_m"]) - 1 if self.occupancy == "dense"
+            bins = (len(_bin_edges(meta["occupancy"])) - 1 if self.occupancy == "dense"
                     else 0)
         except (KeyError, TypeError, ValueError) as e:
             raise ValueError(f"{where}.json: expected the sample fields of "
                              f"schemas/sample.schema.json (T_0to1 4x4, K0/K1 3x3, resolution, "
-                             f"scene, frame0/frame1 id, metrics 01/10, occupancy bin_edges_m "
+                             f"scene, frame0/frame1 id, metrics 01/10, occupancy bins.edges_m "
                              f"for occupancy='dense'): {type(e).__name__}: {e}") from None
         out: Dict[str, Any] = {}
         if self.images or self.color:
