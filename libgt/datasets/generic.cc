@@ -285,15 +285,24 @@ Scene ParseGenericManifest(std::string_view text, const std::string& manifest,
                  "width and height go together");
       }
       int cw = 0, ch = 0;
+      std::string unreadable;  // a colour file whose header cannot be read: its error
       if (cj.contains("width")) {
         cw = static_cast<int>(val.Integer(cj["width"], cp + ".width", 1, 1 << 16));
         ch = static_cast<int>(val.Integer(cj["height"], cp + ".height", 1, 1 << 16));
       } else if (io::FileExists(f.color_path)) {
-        const io::ImageSize s = io::ReadImageSize(f.color_path);
-        cw = s.width;
-        ch = s.height;
+        try {
+          const io::ImageSize s = io::ReadImageSize(f.color_path);
+          cw = s.width;
+          ch = s.height;
+        } catch (const InputError& e) {
+          unreadable = e.what();
+        }
       }
-      if (cj.contains("K")) {
+      if (!unreadable.empty()) {
+        // One damaged image is this frame's problem, not the scene's: unusable, counted.
+        MarkUnusable(&f, kReasonColorUnreadable, unreadable);
+        f.color_path.clear();
+      } else if (cj.contains("K")) {
         if (cw == 0) val.Fail(cp + ".width", "required with color.K when the image is missing");
         f.color_camera = val.CameraOf(cj["K"], cp + ".K", cw, ch);
       } else if (cw > 0) {
@@ -308,7 +317,7 @@ Scene ParseGenericManifest(std::string_view text, const std::string& manifest,
     }
 
     if (options.check_depth_files && !io::FileExists(f.depth.path)) {
-      MarkUnusable(&f, kReasonDepthMissing);
+      MarkUnusable(&f, kReasonDepthMissing, f.depth.path);  // any path: not named by the id
     }
     scene.frames.push_back(std::move(f));
   }

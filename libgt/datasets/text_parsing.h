@@ -43,6 +43,9 @@ struct Unusable {
 
 // Stable reasons for unusable frames (counted by `occgt scan`).
 inline constexpr const char* kReasonDepthMissing = "depth: missing file";
+// generic: a colour file that exists but whose image header cannot be read (the detail is
+// the read error, naming the file).
+inline constexpr const char* kReasonColorUnreadable = "colour: unreadable image";
 // A frame whose depth or colour file exists but whose pose file does not (ScanNet's exports,
 // 7-Scenes: one pose file per frame); the detail is the pose file's path.
 inline constexpr const char* kReasonPoseMissing = "pose: missing file";

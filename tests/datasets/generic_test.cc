@@ -138,6 +138,31 @@ TEST(Generic, MissingColourFileMeansNoColour) {
   EXPECT_TRUE(said) << ::testing::PrintToString(sum.warnings);
 }
 
+// A colour file that exists but whose header cannot be read (no width/height in the
+// manifest, so the reader reads it): that frame is unusable with the read error naming the
+// file, counted; the scene and its other frames still read (before, the whole scene failed).
+// A missing depth file's detail is the manifest's path (a frame id does not name it).
+TEST(Generic, DamagedColourHeaderIsTheFramesProblem) {
+  const std::string dir = test::ScratchDir("gen_bad_color");
+  json manifest = ValidManifest();
+  manifest["frames"][1]["color"] = {{"path", "color/f1.png"}};
+  WriteManifest(dir, manifest);
+  WriteFileAtomic(dir + "/color/f1.png", std::string("\x89PNG\r\n\x1a\n", 8) + "cut");
+  const Scene s = MakeReader(gt::DatasetFormat::kGeneric)->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), 3u);
+  const Frame& f1 = s.frames[1];
+  EXPECT_FALSE(f1.usable);
+  EXPECT_EQ(f1.unusable_reason, "colour: unreadable image");
+  EXPECT_NE(f1.unusable_detail.find(dir + "/color/f1.png"), std::string::npos)
+      << f1.unusable_detail;
+  EXPECT_TRUE(f1.color_path.empty());
+  // The other frames: their depth files are missing here, said with the path.
+  EXPECT_EQ(s.frames[0].unusable_reason, "depth: missing file");
+  EXPECT_EQ(s.frames[0].unusable_detail, s.frames[0].depth.path);
+  const SceneSummary sum = SummarizeScene(s, ScanOptions());
+  EXPECT_EQ(sum.unusable_reasons.at("colour: unreadable image"), 1u);
+}
+
 TEST(Generic, RootLayouts) {
   const std::string root = test::ScratchDir("gen_roots");
   json a = ValidManifest();
