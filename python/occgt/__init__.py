@@ -513,7 +513,12 @@ def open_dataset(root: Union[str, "os.PathLike[str]"], format: str, *,
         world_from_cam; ``.load(frame_id, width=640, height=480)`` -> (depth float32 [H, W] metres,
         K float64 [3, 3] at W x H, world_from_cam float64 [4, 4])).
     """
-    return Dataset(os.fspath(root), format, device=device)
+    try:
+        path = os.fspath(root)
+    except TypeError:
+        raise TypeError(f"root: expected a path (str or os.PathLike), got "
+                        f"{type(root).__name__}") from None
+    return Dataset(path, format, device=device)
 
 
 def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"],
@@ -537,6 +542,9 @@ def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"
     ``fused_depth``: the tolerances of "fused" (``Scene.load``; a recipe's
     ``dataset.fused_depth``).
     """
+    if scope != "pair" and not options.get("occupancy"):
+        raise ValueError(f"scope: {scope!r} is the frames fused for occupancy, which is off; "
+                         f"pass occupancy=True")
     if depth_source != "sensor" and scope != "pair" and options.get("occupancy"):
         raise ValueError("depth_source: a scope other than 'pair' fuses sensor depth; use "
                          f"scope='pair' with depth_source {depth_source!r}")

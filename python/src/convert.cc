@@ -3,6 +3,7 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "libgt/truth/working_frame.h"
@@ -15,13 +16,68 @@ void ThrowValue(const std::string& argument, const std::string& problem) {
   throw py::value_error(argument + ": " + problem);
 }
 
+std::string TypeName(py::handle value) { return py::str(py::type::of(value).attr("__name__")); }
+
+namespace {
+
+// value as a Python int (operator.index), or TypeError naming the argument.
+py::int_ IndexArg(py::handle value, const std::string& argument) {
+  if (PyBool_Check(value.ptr()) || PyFloat_Check(value.ptr()) || !PyIndex_Check(value.ptr())) {
+    throw py::type_error(argument + ": expected an int, got " + TypeName(value));
+  }
+  PyObject* i = PyNumber_Index(value.ptr());
+  if (i == nullptr) throw py::error_already_set();
+  return py::reinterpret_steal<py::int_>(i);
+}
+
+}  // namespace
+
+template <>
+int Arg<int>(py::handle value, const std::string& argument) {
+  const py::int_ i = IndexArg(value, argument);
+  int overflow = 0;
+  const long long v = PyLong_AsLongLongAndOverflow(i.ptr(), &overflow);
+  if (overflow != 0 || v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max()) {
+    ThrowValue(argument, "expected an int in " + std::to_string(std::numeric_limits<int>::min()) +
+                             ".." + std::to_string(std::numeric_limits<int>::max()) + ", got " +
+                             std::string(py::repr(i)));
+  }
+  return static_cast<int>(v);
+}
+
+template <>
+uint64_t Arg<uint64_t>(py::handle value, const std::string& argument) {
+  const py::int_ i = IndexArg(value, argument);
+  const unsigned long long v = PyLong_AsUnsignedLongLong(i.ptr());
+  if (PyErr_Occurred()) {  // negative or >= 2^64
+    PyErr_Clear();
+    ThrowValue(argument, "expected an int in 0.." +
+                             std::to_string(std::numeric_limits<uint64_t>::max()) + ", got " +
+                             std::string(py::repr(i)));
+  }
+  return static_cast<uint64_t>(v);
+}
+
+template <>
+std::string Arg<std::string>(py::handle value, const std::string& argument) {
+  if (!PyUnicode_Check(value.ptr())) {
+    throw py::type_error(argument + ": expected a str, got " + TypeName(value));
+  }
+  return value.cast<std::string>();
+}
+
 py::array AsArray(py::handle obj, const std::string& argument) {
   if (py::isinstance<py::array>(obj)) return py::reinterpret_borrow<py::array>(obj);
   try {
     return py::module_::import("numpy").attr("asarray")(obj);
   } catch (py::error_already_set& e) {
-    ThrowValue(argument, std::string("expected a NumPy array, got ") +
-                             std::string(py::str(py::type::of(obj).attr("__name__"))));
+    // numpy's reason, e.g. torch's "Can't call numpy() on Tensor that requires grad. Use
+    // tensor.detach().numpy() instead." or a ragged list's "inhomogeneous shape".
+    std::string why = py::str(e.value());
+    ThrowValue(argument,
+               "expected a NumPy array or array-like (a CPU torch tensor without "
+               "grad, nested lists of numbers), got " +
+                   TypeName(obj) + " (numpy.asarray: " + why + ")");
   }
 }
 
@@ -107,6 +163,13 @@ std::shared_ptr<const gt::DepthImage> DepthFromArray(py::handle obj, const std::
 gt::Camera CameraFromArray(py::handle obj, int width, int height, const std::string& argument) {
   const char* expected = "[[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (pixels)";
   const Eigen::MatrixXd K = RealMatrix(obj, 3, 3, argument, expected);
+  if (!K.allFinite()) {  // before the layout test, which NaN entries would fail misleadingly
+    std::ostringstream got;
+    got << "K must be finite, got [[" << K(0, 0) << ", " << K(0, 1) << ", " << K(0, 2) << "], ["
+        << K(1, 0) << ", " << K(1, 1) << ", " << K(1, 2) << "], [" << K(2, 0) << ", " << K(2, 1)
+        << ", " << K(2, 2) << "]]";
+    ThrowValue(argument, got.str());
+  }
   if (K(0, 1) != 0 || K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0 || K(2, 2) != 1) {
     std::ostringstream got;
     got << "expected " << expected << " (no skew, last row 0 0 1), got [[" << K(0, 0) << ", "

@@ -40,7 +40,23 @@ auto Named(const std::string& argument, F&& f) -> decltype(f()) {
   }
 }
 
-// An array-like as a NumPy array (numpy.asarray), or ValueError naming the argument.
+// A scalar argument of Python type int, str (or a uint64 seed) as its C++ type: a value of
+// another Python type is TypeError("<argument>: expected an int, got float"; bool is not an
+// int here), an int outside the C++ type's range ValueError("<argument>: expected an int in
+// A..B, got N"). Any object with __index__ (numpy integers) is an int.
+template <typename T>
+T Arg(py::handle value, const std::string& argument);
+template <>
+int Arg<int>(py::handle value, const std::string& argument);
+template <>
+uint64_t Arg<uint64_t>(py::handle value, const std::string& argument);
+template <>
+std::string Arg<std::string>(py::handle value, const std::string& argument);
+// The name of value's Python type ("str", "Tensor") for messages.
+std::string TypeName(py::handle value);
+
+// An array-like as a NumPy array (numpy.asarray), or ValueError naming the argument and why
+// numpy refused it (a torch tensor that requires grad or lives on a GPU, a ragged list).
 py::array AsArray(py::handle obj, const std::string& argument);
 // "(480, 640)" / "float64" for messages.
 std::string ShapeText(const py::array& a);

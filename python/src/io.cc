@@ -79,9 +79,11 @@ class PyScene {
     scene_ = std::move(copy);
   }
 
-  py::tuple Load(const std::string& frame_id, int width, int height,
-                 const std::string& depth_source, const py::object& fused_depth) const {
-    const gt::truth::Resolution resolution{width, height};
+  py::tuple Load(py::handle frame_id_arg, py::handle width, py::handle height,
+                 py::handle depth_source_arg, const py::object& fused_depth) const {
+    const std::string frame_id = Arg<std::string>(frame_id_arg, "frame_id");
+    const std::string depth_source = Arg<std::string>(depth_source_arg, "depth_source");
+    const gt::truth::Resolution resolution{Arg<int>(width, "width"), Arg<int>(height, "height")};
     std::string error;
     if (!resolution.Check(&error)) ThrowValue("width, height", error);
     gt::render::FrameDepthOptions depth_options;
@@ -95,9 +97,9 @@ class PyScene {
     {
       py::gil_scoped_release no_gil;
       const gt::Frame& frame = scene_->frames[gt::truth::FindFrame(*scene_, frame_id, "frame_id")];
-      depth = Named("depth_source", [&] {
-        return gt::truth::LoadWorkingDepth(*scene_, frame, resolution, depth_options);
-      });
+      // Its InputError names the file (an unreadable depth file or mesh) or the scene (no
+      // mesh): passed on as it is, a ValueError "<file>: <problem>".
+      depth = gt::truth::LoadWorkingDepth(*scene_, frame, resolution, depth_options);
       camera = gt::truth::WorkingCamera(frame, resolution);
       world_from_cam = frame.world_from_cam;
     }
@@ -106,7 +108,10 @@ class PyScene {
                           MatrixToArray(world_from_cam.matrix()));
   }
 
-  py::array_t<uint8_t> LoadColor(const std::string& frame_id, int width, int height) const {
+  py::array_t<uint8_t> LoadColor(py::handle frame_id_arg, py::handle width_arg,
+                                 py::handle height_arg) const {
+    const std::string frame_id = Arg<std::string>(frame_id_arg, "frame_id");
+    const int width = Arg<int>(width_arg, "width"), height = Arg<int>(height_arg, "height");
     const gt::truth::Resolution resolution{width, height};
     std::string error;
     if (!resolution.Check(&error)) ThrowValue("width, height", error);
@@ -124,12 +129,17 @@ class PyScene {
     return ToArray(std::move(image.rgb), {h, w, 3});
   }
 
-  PyScopeMap Fuse(const std::string& id0, const std::string& id1, int width, int height,
-                  const std::string& scope, std::optional<double> voxel_m,
+  PyScopeMap Fuse(py::handle id0_arg, py::handle id1_arg, py::handle width_arg,
+                  py::handle height_arg, py::handle scope_arg, std::optional<double> voxel_m,
                   std::optional<double> max_range_m, std::optional<double> far_m,
                   std::optional<double> min_depth_m, std::optional<double> max_depth_m,
-                  const std::string& preset, std::optional<double> dataset_min_depth_m,
+                  py::handle preset_arg, std::optional<double> dataset_min_depth_m,
                   std::optional<double> dataset_max_depth_m) const {
+    const std::string id0 = Arg<std::string>(id0_arg, "id0");
+    const std::string id1 = Arg<std::string>(id1_arg, "id1");
+    const std::string scope = Arg<std::string>(scope_arg, "scope");
+    const std::string preset = Arg<std::string>(preset_arg, "preset");
+    const int width = Arg<int>(width_arg, "width"), height = Arg<int>(height_arg, "height");
     const gt::truth::Resolution resolution{width, height};
     std::string error;
     if (!resolution.Check(&error)) ThrowValue("width, height", error);
@@ -179,12 +189,16 @@ class PyScene {
 
 class PyDataset {
  public:
-  PyDataset(std::string root, std::string format, const std::string& device)
-      : root_(std::move(root)), format_(std::move(format)), reader_(Named("format", [&] {
-          gt::datasets::ReaderOptions options;
-          options.scannetpp_device = gt::datasets::ParseScanNetPPDevice(device, "device");
-          return gt::datasets::MakeReader(gt::ParseDatasetFormat(format_, "format"), options);
-        })) {}
+  PyDataset(py::handle root, py::handle format, py::handle device)
+      : root_(Arg<std::string>(root, "root")), format_(Arg<std::string>(format, "format")) {
+    gt::datasets::ReaderOptions options;
+    const std::string device_name = Arg<std::string>(device, "device");
+    options.scannetpp_device =
+        Named("device", [&] { return gt::datasets::ParseScanNetPPDevice(device_name, "device"); });
+    reader_ = Named("format", [&] {
+      return gt::datasets::MakeReader(gt::ParseDatasetFormat(format_, "format"), options);
+    });
+  }
 
   const std::string& root() const { return root_; }
   const std::string& format() const { return format_; }
@@ -193,7 +207,8 @@ class PyDataset {
     py::gil_scoped_release no_gil;
     return reader_->ListScenes(root_);
   }
-  PyScene Scene(const std::string& name) const {
+  PyScene Scene(py::handle name_arg) const {
+    const std::string name = Arg<std::string>(name_arg, "name");
     py::gil_scoped_release no_gil;
     return PyScene(reader_->ReadScene(root_, name));
   }
@@ -380,7 +395,7 @@ void BindIo(py::module_& m) {
       });
 
   py::class_<PyDataset>(m, "Dataset", "A dataset root read by one of occgt's readers.")
-      .def(py::init<std::string, std::string, std::string>(), "root"_a, "format"_a, py::kw_only(),
+      .def(py::init<py::handle, py::handle, py::handle>(), "root"_a, "format"_a, py::kw_only(),
            "device"_a = DefaultDevice())
       .def_property_readonly("root", &PyDataset::root, "dataset root folder")
       .def_property_readonly("format", &PyDataset::format, "reader format")

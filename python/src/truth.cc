@@ -7,6 +7,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -59,6 +60,9 @@ std::optional<T> Take(py::dict* kwargs, const char* name) {
   const py::object value = (*kwargs)[name];
   PyDict_DelItemString(kwargs->ptr(), name);
   if (value.is_none()) return std::nullopt;
+  if constexpr (std::is_same_v<T, int> || std::is_same_v<T, std::string>) {
+    return Arg<T>(value, name);  // an int out of range is a ValueError, not "got int"
+  }
   try {
     return value.cast<T>();
   } catch (const py::cast_error&) {
@@ -235,9 +239,11 @@ std::vector<py::object> Items(py::handle obj, const std::string& argument, int i
   }
   const py::array a = AsArray(obj, argument);
   if (a.ndim() != item_ndim + 1) {
+    // numpy.asarray of a generator, dict or None is a 0-d object array: name the type.
+    const std::string got =
+        a.ndim() == 0 && a.dtype().kind() == 'O' ? TypeName(obj) : "shape " + ShapeText(a);
     ThrowValue(argument, "expected a list of arrays or one array of " +
-                             std::to_string(item_ndim + 1) + " dimensions, got shape " +
-                             ShapeText(a));
+                             std::to_string(item_ndim + 1) + " dimensions, got " + got);
   }
   for (py::ssize_t i = 0; i < a.shape(0); ++i) items.push_back(a[py::int_(i)]);
   return items;
@@ -301,7 +307,11 @@ py::dict ViewsGroundTruth(py::handle depths, py::handle Ks, py::handle world_fro
       ThrowValue("queries", "expected an integer array [Q, 2] of (u, v) pixels, got " +
                                 DtypeText(q) + " " + ShapeText(q));
     }
-    const py::array_t<int64_t, py::array::c_style | py::array::forcecast> q64(q);
+    // uint64 values above 2^63 - 1 clipped to it (still outside the image), not wrapped
+    // to negative ones; the message shows the value given.
+    const bool u64 = q.dtype().kind() == 'u' && q.itemsize() == 8;
+    const py::array_t<int64_t, py::array::c_style | py::array::forcecast> q64(
+        u64 ? py::array(q.attr("clip")(0, std::numeric_limits<int64_t>::max())) : q);
     query_uv.emplace(static_cast<size_t>(q64.size()));
     const int64_t* src = q64.data();
     for (py::ssize_t i = 0; i < q64.size(); ++i) {
@@ -310,7 +320,8 @@ py::dict ViewsGroundTruth(py::handle depths, py::handle Ks, py::handle world_fro
         ThrowValue("queries", "expected pixels (u, v) inside the " +
                                   std::to_string(views[0].depth->width) + "x" +
                                   std::to_string(views[0].depth->height) + " image, got " +
-                                  std::to_string(src[i]) + " at row " + std::to_string(i / 2));
+                                  std::string(py::str(q[py::make_tuple(i / 2, i % 2)])) +
+                                  " at row " + std::to_string(i / 2));
       }
       (*query_uv)[static_cast<size_t>(i)] = static_cast<int32_t>(src[i]);
     }
@@ -337,7 +348,8 @@ py::dict ViewsGroundTruth(py::handle depths, py::handle Ks, py::handle world_fro
   return out;
 }
 
-py::array_t<uint8_t> DenseVolume(py::handle occ, py::handle known, int bins) {
+py::array_t<uint8_t> DenseVolume(py::handle occ, py::handle known, py::handle bins_arg) {
+  const int bins = Arg<int>(bins_arg, "bins");
   gt::occupancy::FrustumVolume v;
   std::vector<py::ssize_t> shape_occ, shape_known;
   v.occ = WordsFromArray(occ, "occ", &shape_occ);
@@ -426,10 +438,10 @@ void BindTruth(py::module_& m) {
   m.def(
       "pair_ground_truth",
       [](py::handle depth0, py::handle depth1, py::handle K0, py::handle K1,
-         py::handle world_from_cam0, py::handle world_from_cam1, const std::string& preset,
+         py::handle world_from_cam0, py::handle world_from_cam1, py::handle preset,
          const py::kwargs& kwargs) {
         return PairGroundTruth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1,
-                               ArgumentsFromKwargs(preset, kwargs));
+                               ArgumentsFromKwargs(Arg<std::string>(preset, "preset"), kwargs));
       },
       "depth0"_a, "depth1"_a, "K0"_a, "K1"_a, "world_from_cam0"_a, "world_from_cam1"_a,
       "preset"_a = gt::truth::LabelSettings().preset,
@@ -437,8 +449,9 @@ void BindTruth(py::module_& m) {
       "A keyword argument that is None keeps the C++ default (PAIR_DEFAULTS).");
   m.def(
       "pair_options",
-      [](const std::string& preset, const py::kwargs& kwargs) {
-        return OptionsDict(MakeOptions(ArgumentsFromKwargs(preset, kwargs)));
+      [](py::handle preset, const py::kwargs& kwargs) {
+        return OptionsDict(
+            MakeOptions(ArgumentsFromKwargs(Arg<std::string>(preset, "preset"), kwargs)));
       },
       "preset"_a = gt::truth::LabelSettings().preset,
       "The options pair_ground_truth resolves from the same arguments (its 'options' entry), "
@@ -454,11 +467,13 @@ void BindTruth(py::module_& m) {
   }
   m.def(
       "views_ground_truth",
-      [](py::handle depths, py::handle Ks, py::handle world_from_cams, const std::string& preset,
-         py::handle queries, int num_tracks, int query_view, uint64_t seed,
+      [](py::handle depths, py::handle Ks, py::handle world_from_cams, py::handle preset,
+         py::handle queries, py::handle num_tracks, py::handle query_view, py::handle seed,
          const py::kwargs& kwargs) {
-        return ViewsGroundTruth(depths, Ks, world_from_cams, preset, queries, num_tracks,
-                                query_view, seed, kwargs);
+        return ViewsGroundTruth(depths, Ks, world_from_cams, Arg<std::string>(preset, "preset"),
+                                queries, Arg<int>(num_tracks, "num_tracks"),
+                                Arg<int>(query_view, "query_view"), Arg<uint64_t>(seed, "seed"),
+                                kwargs);
       },
       "depths"_a, "Ks"_a, "world_from_cams"_a, py::kw_only(),
       "preset"_a = gt::truth::LabelSettings().preset, "queries"_a = py::none(),

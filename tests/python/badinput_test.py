@@ -256,6 +256,111 @@ class BadInput(unittest.TestCase):
                                     r"is not orthonormal .*; .*scene\.json: frames\[1\]"):
             scene.load(bad.id)
 
+    def test_python_types_name_the_argument(self) -> None:
+        """A wrong Python type is a TypeError naming the argument (not pybind11's list of
+        signatures with the arrays' repr); an int beyond the C++ type a ValueError naming it;
+        bool is not an int."""
+        args = good()
+        for kwargs, error, pattern in [
+                ({"preset": None}, TypeError, r"^preset: expected a str, got NoneType$"),
+                ({"stride": 2**31}, ValueError,
+                 r"^stride: expected an int in -2147483648\.\.2147483647, got 2147483648$"),
+                ({"stride": True}, TypeError, r"^stride: expected an int, got bool$"),
+                ({"stride": 8.0}, TypeError, r"^stride: expected an int, got float$"),
+                ({"anchor": 1}, TypeError, r"^anchor: expected a str, got int$")]:
+            with self.subTest(kwargs=kwargs), self.assertRaisesRegex(error, pattern):
+                occgt.pair_ground_truth(**args, **kwargs)
+        with self.assertRaisesRegex(TypeError, r"^preset: expected a str, got int$"):
+            occgt.pair_options(3)  # type: ignore[arg-type]
+        self.assertEqual(occgt.pair_options(stride=np.int64(4))["patch_options"]["stride"], 4)
+        views = ([args["depth0"]] * 2, [args["K0"]] * 2, [args["world_from_cam0"]] * 2)
+        for kwargs, error, pattern in [
+                ({"seed": -1}, ValueError,
+                 r"^seed: expected an int in 0\.\.18446744073709551615, got -1$"),
+                ({"seed": 1.5}, TypeError, r"^seed: expected an int, got float$"),
+                ({"num_tracks": 2**40}, ValueError, r"^num_tracks: expected an int in "),
+                ({"query_view": "0"}, TypeError, r"^query_view: expected an int, got str$"),
+                ({"preset": None}, TypeError, r"^preset: expected a str, got NoneType$")]:
+            with self.subTest(kwargs=kwargs), self.assertRaisesRegex(error, pattern):
+                occgt.views_ground_truth(*views, **kwargs)
+        self.assertEqual(occgt.views_ground_truth(*views, num_tracks=np.int32(3),
+                                                  seed=np.uint64(2**63))["queries"].shape, (3, 2))
+        root = common.synth_dataset("badinput_types", frames=2, resolution="64x48")
+        with self.assertRaisesRegex(TypeError, r"^root: expected a path \(str or os.PathLike\), "
+                                    r"got NoneType$"):
+            occgt.open_dataset(None, "generic")  # type: ignore[arg-type]
+        with self.assertRaisesRegex(ValueError, r"^device: unknown device 'phone'"):
+            occgt.open_dataset(root, "scannetpp", device="phone")
+        dataset = occgt.open_dataset(root, "generic")
+        with self.assertRaisesRegex(TypeError, r"^name: expected a str, got NoneType$"):
+            dataset.scene(None)  # type: ignore[arg-type]
+        scene = dataset.scene(dataset.scenes()[0])
+        frame = scene.frames[0].id
+        for call, error, pattern in [
+                (lambda: scene.load(0), TypeError, r"^frame_id: expected a str, got int$"),
+                (lambda: scene.load(frame, 64.0, 48), TypeError, r"^width: expected an int, got float$"),
+                (lambda: scene.load(frame, 64, "48"), TypeError, r"^height: expected an int, got str$"),
+                (lambda: scene.load(frame, 2**31, 48), ValueError, r"^width: expected an int in "),
+                (lambda: scene.load_color(None), TypeError, r"^frame_id: expected a str"),
+                (lambda: scene.load_color(frame, 64, 1.5), TypeError, r"^height: expected an int"),
+                (lambda: scene.fuse(frame, 1), TypeError, r"^id1: expected a str, got int$"),
+                (lambda: scene.fuse(frame, frame, scope=None), TypeError, r"^scope: expected a str")]:
+            with self.subTest(pattern=pattern), self.assertRaisesRegex(error, pattern):
+                call()
+        depth, _, _ = scene.load(frame, np.int64(64), np.int32(48))
+        self.assertEqual(depth.shape, (48, 64))
+
+    def test_torch_tensors_and_array_likes(self) -> None:
+        """CPU tensors are inputs; one numpy cannot read says why (numpy's reason)."""
+        import torch
+
+        args = good()
+        want = occgt.pair_ground_truth(**args)["label01"]
+        got = occgt.pair_ground_truth(**{**args, "depth0": torch.from_numpy(args["depth0"]),
+                                         "K0": torch.from_numpy(args["K0"])})["label01"]
+        self.assertTrue(np.array_equal(got, want))
+        grad = torch.from_numpy(args["depth0"]).requires_grad_()
+        with self.assertRaisesRegex(ValueError, r"^depth0: expected a NumPy array or array-like .*"
+                                    r"got Tensor \(numpy.asarray: .*requires grad"):
+            occgt.pair_ground_truth(**{**args, "depth0": grad})
+        with self.assertRaisesRegex(ValueError, r"^K1: .*got list \(numpy.asarray: .*inhomogeneous"):
+            occgt.pair_ground_truth(**{**args, "K1": [[50.0, 0, 31.5], [0, 50.0]]})
+        # Non-finite K: said as such, not as a skewed K.
+        with self.assertRaisesRegex(ValueError, r"^K1: K must be finite, got \[\[nan, nan"):
+            occgt.pair_ground_truth(**{**args, "K1": args["K1"] * np.nan})
+        # views_ground_truth: a generator or None names its type, not "shape ()"; a uint64
+        # query beyond int64 is shown as given, not wrapped.
+        d, K, T = args["depth0"], args["K0"], args["world_from_cam0"]
+        with self.assertRaisesRegex(ValueError, r"^depths: expected a list of arrays or one "
+                                    r"array of 3 dimensions, got generator$"):
+            occgt.views_ground_truth((x for x in [d, d]), [K, K], [T, T])
+        with self.assertRaisesRegex(ValueError, r"^Ks: .*got NoneType$"):
+            occgt.views_ground_truth([d], None, [T])  # type: ignore[arg-type]
+        with self.assertRaisesRegex(ValueError, r"^queries: expected pixels \(u, v\) inside the "
+                                    r"64x48 image, got 9223372036854775813 at row 0$"):
+            occgt.views_ground_truth([d, d], [K, K], [T, T],
+                                     queries=np.array([[2**63 + 5, 0]], np.uint64))
+
+    def test_scene_load_names_the_unreadable_file(self) -> None:
+        """An unreadable depth file or mesh: the ValueError names the file (it said
+        "depth_source: ..." without it)."""
+        root = common.synth_dataset("badinput_files", frames=3, resolution="64x48")
+        scene = occgt.open_dataset(root, "generic").scene("synth_000")
+        frame = scene.frames[1]
+        with open(frame.depth_path, "wb") as f:
+            f.write(b"garbage")
+        with self.assertRaisesRegex(ValueError, "^" + re.escape(frame.depth_path) +
+                                    r": not a \.npy file"):
+            scene.load(frame.id, 64, 48)
+        os.remove(frame.depth_path)
+        with self.assertRaisesRegex(ValueError, "^" + re.escape(frame.depth_path) +
+                                    r": cannot open file"):
+            scene.load(frame.id, 64, 48)
+        missing = os.path.join(root, "no-mesh.ply")
+        scene.mesh_path = missing
+        with self.assertRaisesRegex(ValueError, "^" + re.escape(missing) + r": cannot open file"):
+            scene.load(scene.frames[0].id, 64, 48, depth_source="mesh")
+
     def test_dense_volume(self) -> None:
         words = np.zeros((4, 5), np.uint64)
         with self.assertRaisesRegex(ValueError, r"^occ: expected dtype uint64"):

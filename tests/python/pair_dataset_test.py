@@ -17,6 +17,8 @@ import gzip
 import io
 import json
 import os
+import pickle
+import re
 import sys
 import tarfile
 import unittest
@@ -245,6 +247,63 @@ class Indices(unittest.TestCase):
             self.assertIn(message, str(e.exception))
             self.assertIn(os.path.basename(path), str(e.exception))
 
+    def test_index_fields_are_typed(self) -> None:
+        """pairs.jsonl fields of the wrong type (an int id, a null scene, a str number), bytes
+        that are not UTF-8, a non-numeric score and negative numbers of a LoFTR npz: ValueError
+        naming the file and the line or row (they passed, and failed later in pybind11 with
+        its list of signatures, or with numpy's message without the file; a scene -1 became
+        'scene-001_00')."""
+        out = common.scratch("pair_dataset_typed")
+        good = {"scene": "s", "frame0": {"id": "1", "number": 1}, "frame1": {"id": "2", "number": 2}}
+        for change, message in [({"frame0": {"id": 1, "number": 1}}, "frame0.id: expected str, got 1"),
+                                ({"scene": None}, "scene: expected str, got None"),
+                                ({"frame1": {"id": "2", "number": "2"}},
+                                 "frame1.number: expected int, got '2'"),
+                                ({"frame1": {"id": "2", "number": True}},
+                                 "frame1.number: expected int, got True")]:
+            path = os.path.join(out, "typed.jsonl")
+            with open(path, "w") as f:
+                f.write(json.dumps(good) + "\n" + json.dumps({**good, **change}) + "\n")
+            with self.subTest(change=change), self.assertRaisesRegex(
+                    ValueError, "^" + path + ":2: expected a pair line .*" + re.escape(message)):
+                read_pair_index(path)
+        with open(path, "wb") as f:
+            f.write(b'{"scene": "\xff"}\n')
+        with self.assertRaisesRegex(ValueError, "^" + path + ":1: .*UnicodeDecodeError"):
+            read_pair_index(path)
+        path = os.path.join(out, "score.npz")
+        np.savez(path, name=np.zeros((1, 4), np.int64), score=np.array(["high"]))
+        with self.assertRaisesRegex(ValueError, "^" + path + r":score: expected shape \[1\] "
+                                    r"\(numbers\), got <U4 \[1\]"):
+            read_pair_index(path)
+        path = os.path.join(out, "negative.npz")
+        np.savez(path, name=np.array([[0, 0, 3, 4], [-1, 0, 3, 4]]))
+        with self.assertRaisesRegex(ValueError, "^" + path + r":name\[1\]: expected scene, "
+                                    r"sub-scene and frame numbers >= 0, got \[-1, 0, 3, 4\]"):
+            read_pair_index(path)
+
+    def test_refs_root_index_and_pickle(self) -> None:
+        """A list of tuples instead of PairRef, a missing root (the readers open it lazily:
+        it failed in the first worker) and a float index name the argument; a dataset used in
+        this process pickles (spawned DataLoader workers; a scene scope's map and the
+        readers raised "cannot pickle") and gives the same items."""
+        split = built_split("demo")
+        data = os.path.join(split, "data")
+        with self.assertRaisesRegex(TypeError, r"^pairs\[0\]: expected an occgt.torch.PairRef, "
+                                    r"got tuple$"):
+            PairIndexDataset([("synth_000", "000000", "000001")], data, "generic")  # type: ignore
+        with self.assertRaisesRegex(ValueError, r"^root: /no/such/root: no such dataset"):
+            PairIndexDataset(split, "/no/such/root", "generic")
+        ds = PairIndexDataset(split, data, "generic", width=80, height=60, occupancy="words",
+                              scope="scene:4")
+        with self.assertRaisesRegex(TypeError, r"^index: expected an int, got float$"):
+            ds[1.0]  # type: ignore[index]
+        first = ds[np.int64(1)]
+        again = pickle.loads(pickle.dumps(ds))[1]
+        for key, value in first.items():
+            if isinstance(value, torch.Tensor):
+                self.assertTrue(torch.equal(value, again[key]), key)
+
     def test_bad_options_and_frames(self) -> None:
         split = built_split("demo")
         data = os.path.join(split, "data")
@@ -254,6 +313,14 @@ class Indices(unittest.TestCase):
             PairIndexDataset(split, data, "generic", occupancy=True)  # type: ignore[arg-type]
         with self.assertRaisesRegex(ValueError, "format"):
             PairIndexDataset(split, data, "no-such-format")
+        # A scope without occupancy was ignored: nothing asked for is dropped silently.
+        with self.assertRaisesRegex(ValueError, r"^scope: 'window:2' is the frames fused for "
+                                    r"occupancy, which is off \(occupancy=None\)"):
+            PairIndexDataset(split, data, "generic", scope="window:2")
+        scene = occgt.open_dataset(data, "generic").scene("synth_000")
+        with self.assertRaisesRegex(ValueError, r"^scope: 'scene:2' is the frames fused for "
+                                    r"occupancy, which is off; pass occupancy=True$"):
+            occgt.pair_from_scene(scene, "000000", "000001", width=80, height=60, scope="scene:2")
         ds = PairIndexDataset([PairRef("synth_000", None, None, 0, 999)], data, "generic",
                               width=320, height=240)
         with self.assertRaisesRegex(ValueError, "scene synth_000 has no frame number 999"):

@@ -19,7 +19,7 @@ import shutil
 import sys
 import tarfile
 import unittest
-from typing import Any, Dict, List
+from typing import Any, Callable, Dict, List
 
 import cv2
 import numpy as np
@@ -119,6 +119,26 @@ def copy_split(src: str, name: str) -> str:
         if f.endswith((".tar", ".json", ".jsonl")):
             shutil.copy(os.path.join(src, f), dst)
     return dst
+
+
+def rewrite_shard(split: str, url: str, edit: Callable[[tarfile.TarInfo, bytes], bytes]) -> None:
+    """Rewrites shard `url` of a copied split with tarfile, each member's bytes through edit,
+    and updates index.json's filesize."""
+    tar = os.path.join(split, url)
+    with tarfile.open(tar) as src:
+        members = [(m, src.extractfile(m).read()) for m in src.getmembers()]  # type: ignore
+    with tarfile.open(tar, "w", format=tarfile.USTAR_FORMAT) as dst:
+        for m, data in members:
+            data = edit(m, data)
+            m.size = len(data)
+            dst.addfile(m, io.BytesIO(data))
+    with open(os.path.join(split, "index.json")) as f:
+        index = json.load(f)
+    for shard in index["shardlist"]:
+        if shard["url"] == url:
+            shard["filesize"] = os.path.getsize(tar)
+    with open(os.path.join(split, "index.json"), "w") as f:
+        json.dump(index, f)
 
 
 class ShardDatasetTest(unittest.TestCase):
@@ -504,6 +524,98 @@ class ShardDatasetTest(unittest.TestCase):
                 f"{tar}: {member.name}: member of {member.size} bytes at byte "
                 f"{member.offset_data} runs past the end of the file")):
             ShardDataset(cut)
+
+    def test_members_are_checked_against_the_contract(self) -> None:
+        """A sample whose .npy members or json do not hold what the contract says (a member of
+        another dtype or shape, a T_0to1 that is singular or not finite) raises ValueError
+        naming the member when read; before, they were returned as they were (a float64
+        label map, a match_type of another length than matches) or raised numpy's
+        LinAlgError without a file name."""
+        url = "sd-full-000000.tar"
+        first = self.plain[0]["__key__"]
+        singular = json.dumps({**self.plain[0]["json"], "T_0to1": np.zeros((4, 4)).tolist()})
+        nan_T = json.dumps({**self.plain[0]["json"],
+                            "T_0to1": np.full((4, 4), np.nan).tolist()})
+        cases = [
+            ("label01.npy", common.npy_bytes(self.plain[0]["label01.npy"].astype(np.float64)),
+             r"label01\.npy: expected uint8 \[120, 160\] \(sample resolution 160x120\), got "
+             r"float64 \[120, 160\]"),
+            ("depth0.npy", common.npy_bytes(np.zeros((12, 16), np.float32)),
+             r"depth0\.npy: expected float32 \[120, 160\] .*got float32 \[12, 16\]"),
+            ("match_type.npy", common.npy_bytes(np.zeros(1, np.uint8)),
+             r"match_type\.npy: expected uint8 \[%d\] .*got uint8 \[1\]"
+             % len(self.plain[0]["matches.npy"])),
+            ("matches.npy", common.npy_bytes(self.plain[0]["matches.npy"].astype(np.float32)),
+             r"matches\.npy: expected int32 \[\*, 2\] .*got float32"),
+            ("occ0.npy", common.npy_bytes(self.plain[0]["occ0.npy"].view(np.int64)),
+             r"occ0\.npy: expected uint64 \[60, 80\] .*got int64 \[60, 80\]"),
+            ("json", singular.encode(), r"json: expected the sample fields .*T_0to1 is not a "
+                                        r"rigid transform"),
+            ("json", nan_T.encode(), r"json: expected the sample fields .*T_0to1 has "
+                                     r"non-finite entries"),
+        ]
+        for field, data, pattern in cases:
+            split = copy_split(self.full, "sd_contract")
+            rewrite_shard(split, url, lambda m, d: data if m.name == f"{first}.{field}" else d)
+            ds = ShardDataset(split)
+            with self.subTest(field=field, pattern=pattern):
+                with self.assertRaisesRegex(ValueError, "^" + re.escape(
+                        f"{os.path.join(split, url)}: {first}.") + pattern):
+                    ds[0]
+                self.assertEqual(ds[1]["pair_id"], 1)  # the other samples read
+        # A pairs.jsonl line that is not JSON: ValueError naming the line (was json's
+        # JSONDecodeError without the file).
+        split = copy_split(self.full, "sd_contract")
+        with open(os.path.join(split, "pairs.jsonl"), "r+b") as f:
+            lines = f.read().split(b"\n")
+            lines[1] = b"{\xff" + lines[1][2:]
+            f.seek(0)
+            f.write(b"\n".join(lines))
+        ds = ShardDataset(split)
+        self.assertEqual(ds.pair(0), self.lines[0])
+        with self.assertRaisesRegex(ValueError, "^" + re.escape(os.path.join(split, "pairs.jsonl")) +
+                                    r": line 2: expected a JSON object with key"):
+            ds.pair(1)
+        ds = ShardDataset(self.full)
+        with self.assertRaisesRegex(TypeError, r"^sample index: expected an int, got float$"):
+            ds[1.5]  # type: ignore[index]
+        self.assertEqual(ds[np.int64(2)]["pair_id"], 2)
+        self.assertEqual(ds[torch.tensor(3)]["pair_id"], 3)  # type: ignore[index]
+
+    def test_dense_only_compressed_split(self) -> None:
+        """occupancy encoding: dense with sample.compression: deflate (the default) stores
+        only occ0_dense.npy.gz: occupancy="dense" reads it (it looked for occ0_dense.npy,
+        fell back to the words the split does not have, and raised KeyError 'occ0.npy.gz')."""
+        z = build("sd_dense_gz", compression="deflate", encoding="dense", image="none",
+                  depth="false")
+        ds = ShardDataset(z, occupancy="dense", images=False, depth=False)
+        both = ShardDataset(self.dense, occupancy="dense", images=False, depth=False)
+        self.assertEqual([ds.key(i) for i in range(len(ds))],
+                         [both.key(i) for i in range(len(both))])
+        for i in range(len(ds)):
+            for c in "01":
+                self.assertTrue(torch.equal(ds[i]["occupancy" + c], both[i]["occupancy" + c]))
+        with self.assertRaisesRegex(ValueError, r"has no occ0\.npy member \(asked for by "
+                                    r"occupancy='words'\)"):
+            ShardDataset(z, images=False, depth=False)
+
+    def test_views_split_is_named(self) -> None:
+        """An N-view split (occgt tuples --shards) is refused as such, not as a pair sample
+        without matches.npy."""
+        folder = common.scratch("sd_views")
+        tar = os.path.join(folder, "v-000000.tar")
+        with tarfile.open(tar, "w", format=tarfile.USTAR_FORMAT) as tf:
+            for name, data in [("s/tuple_000000.json", b"{}"),
+                               ("s/tuple_000000.visible_in.npy.gz", b"x")]:
+                info = tarfile.TarInfo(name)
+                info.size = len(data)
+                tf.addfile(info, io.BytesIO(data))
+        with open(os.path.join(folder, "index.json"), "w") as f:
+            json.dump({"shardlist": [{"url": "v-000000.tar", "nsamples": 1,
+                                      "filesize": os.path.getsize(tar)}]}, f)
+        with self.assertRaisesRegex(ValueError, re.escape(tar) + r": sample s/tuple_000000 is "
+                                    r"an N-view sample \(occgt tuples --shards"):
+            ShardDataset(folder)
 
     def test_bad_folders(self) -> None:
         empty = common.scratch("sd_no_index")

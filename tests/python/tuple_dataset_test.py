@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import pickle
 import unittest
 
 import numpy as np
@@ -119,6 +120,87 @@ class TupleDataset(unittest.TestCase):
             self.dataset(views="mast3r")
         with self.assertRaisesRegex(ValueError, r"tuples\[0\]: expected 1..32 frame ids"):
             TupleIndexDataset([(self.scene_name, [])], self.root, "generic")
+
+    def test_tuple_lines_are_typed(self) -> None:
+        """scene a non-empty str, frame_ids a list of str: a str is not split into one frame
+        per character, numbers are not made ids, null is not the scene 'None'; bytes that are
+        not UTF-8 name the line."""
+        folder = common.scratch("tuple_dataset_typed")
+        scene = self.scene_name
+        for line, message in [
+                ({"scene": scene, "frame_ids": self.ids[1]}, "frame_ids: expected a list of str, got str"),
+                ({"scene": scene, "frame_ids": [1, 2]}, "frame_ids: expected a list of str, got 1"),
+                ({"scene": scene, "frame_ids": {"a": 1}}, "frame_ids: expected a list of str, got dict"),
+                ({"scene": None, "frame_ids": self.ids[:2]}, "scene: expected a non-empty str, got None"),
+                ({"scene": scene, "frame_ids": [self.ids[:2]]}, "frame_ids: expected a list of str")]:
+            path = os.path.join(folder, "tuples.jsonl")
+            with open(path, "w") as f:
+                f.write(json.dumps({"scene": scene, "frame_ids": self.ids[:2]}) + "\n")
+                f.write(json.dumps(line) + "\n")
+            with self.subTest(line=line), self.assertRaisesRegex(
+                    ValueError, "^" + path + ":2: expected a tuple line .*" + message):
+                read_tuples(path)
+        with open(path, "wb") as f:
+            f.write(b'{"scene": "\xff", "frame_ids": []}\n')
+        with self.assertRaisesRegex(ValueError, "^" + path + ":1: .*UnicodeDecodeError"):
+            read_tuples(path)
+        with self.assertRaisesRegex(ValueError, r"^tuples\[1\]: expected a TupleRef or \(scene, "
+                                    r"\[frame ids\]\) \(ValueError: frame_ids: expected a list of "
+                                    r"str, got str\)"):
+            TupleIndexDataset([(scene, self.ids[:2]), (scene, self.ids[2])], self.root, "generic")
+        ds = TupleIndexDataset([(scene, np.array(self.ids[:2]))], self.root, "generic")
+        self.assertEqual(ds.tuples[0], TupleRef(scene, tuple(self.ids[:2])))
+
+    def test_root_and_index(self) -> None:
+        """A missing root fails at construction (the readers open it lazily, so it failed in
+        the first worker); an index that is not an int is a TypeError naming it."""
+        with self.assertRaisesRegex(ValueError, r"^root: /no/such/root: no such dataset"):
+            TupleIndexDataset(self.tuples, "/no/such/root", "generic")
+        ds = self.dataset()
+        with self.assertRaisesRegex(TypeError, r"^index: expected an int, got float$"):
+            ds[0.5]  # type: ignore[index]
+
+    def test_pickle_after_use(self) -> None:
+        """A dataset used in this process pickles (spawned DataLoader workers; it raised
+        "cannot pickle 'occgt._occgt.Dataset' object") and gives the same items."""
+        ds = self.dataset()
+        first = ds[np.int64(0)]
+        again = pickle.loads(pickle.dumps(ds))[0]
+        for key, value in first.items():
+            if isinstance(value, torch.Tensor):
+                self.assertTrue(torch.equal(value, again[key]), key)
+
+    def test_dataloader_two_workers(self) -> None:
+        """Forked workers give the items of direct reads (the track seed is seed + index,
+        whichever worker computes it)."""
+        ds = self.dataset()
+        loader = torch.utils.data.DataLoader(ds, batch_size=1, num_workers=2,
+                                             collate_fn=collate_tuples)
+        for index, batch in enumerate(loader):
+            want = collate_tuples([ds[index]])
+            for key, value in want.items():
+                if isinstance(value, torch.Tensor):
+                    self.assertTrue(torch.equal(batch[key], value), f"{index}: {key}")
+
+    def test_collate_refuses_what_it_would_drop(self) -> None:
+        """Items with and without images, of another view size, DUSt3R lists or pair
+        samples: ValueError naming the item (the images of the second item were dropped
+        when the first had none; the others raised KeyError, TypeError, RuntimeError)."""
+        with_images = self.dataset()[0]
+        without = self.dataset(images=False)[1]
+        small = TupleIndexDataset(self.tuples, self.root, "generic", width=48, height=36,
+                                  num_tracks=40, seed=3)[0]
+        for batch, pattern in [
+                ([without, with_images], r"^batch\[1\]: expected the keys of batch\[0\]"),
+                ([with_images, without], r"^batch\[1\]: expected the keys of batch\[0\]"),
+                ([with_images, small], r"^batch\[1\]: views of \(36, 48\) \(H, W\), expected "
+                                       r"batch\[0\]'s \(72, 96\)"),
+                ([self.dataset(views="dust3r")[0]], r"^batch\[0\]: expected a 'vggt' item .*got "
+                                                     r"list \(views='dust3r'"),
+                ([{"depth0": torch.zeros(2, 2)}], r"^batch\[0\]: expected a 'vggt' item .*got a "
+                                                  r"dict of \['depth0'\]")]:
+            with self.subTest(pattern=pattern), self.assertRaisesRegex(ValueError, pattern):
+                collate_tuples(batch)  # type: ignore[arg-type]
 
 
 if __name__ == "__main__":

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import operator
 import os
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
@@ -69,8 +70,13 @@ def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> List[PairRef]:
     if name.ndim != 2 or name.shape[1] != 4 or name.dtype.kind not in "iu":
         raise ValueError(f"{path}:name: expected integers of shape [N, 4] (scene, sub-scene, "
                          f"frame0, frame1), got {name.dtype} {list(name.shape)}")
-    if score is not None and score.shape != (name.shape[0],):
-        raise ValueError(f"{path}:score: expected shape [{name.shape[0]}], got {list(score.shape)}")
+    if score is not None and (score.shape != (name.shape[0],) or score.dtype.kind not in "fiu"):
+        raise ValueError(f"{path}:score: expected shape [{name.shape[0]}] (numbers), got "
+                         f"{score.dtype} {list(score.shape)}")
+    if name.size and int(name.min()) < 0:
+        r = int(np.argwhere(name < 0)[0][0])
+        raise ValueError(f"{path}:name[{r}]: expected scene, sub-scene and frame numbers >= 0, "
+                         f"got {name[r].tolist()}")
     if scene_names is None:
         names_file = _scene_names_file(path)
         scene_names = _read_lines(names_file) if names_file else None
@@ -91,18 +97,24 @@ def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> List[PairRef]:
 def _read_jsonl(path: str) -> List[PairRef]:
     """occgt's pairs.jsonl or selection/<scene>.jsonl lines (schemas/pairs_line.schema.json)."""
     refs = []
-    with open(path) as f:
-        for number, line in enumerate(f, 1):
-            if not line.strip():
-                continue
+    with open(path, "rb") as f:
+        for number, raw in enumerate(f, 1):
             try:
+                line = raw.decode("utf-8")
+                if not line.strip():
+                    continue
                 p = json.loads(line)
                 f0, f1 = p["frame0"], p["frame1"]  # frame records {id, number}
-                refs.append(PairRef(p["scene"], f0["id"], f1["id"], int(f0["number"]),
-                                    int(f1["number"])))
+                for what, value, kind in (("scene", p["scene"], str), ("frame0.id", f0["id"], str),
+                                          ("frame1.id", f1["id"], str),
+                                          ("frame0.number", f0["number"], int),
+                                          ("frame1.number", f1["number"], int)):
+                    if not isinstance(value, kind) or isinstance(value, bool):
+                        raise TypeError(f"{what}: expected {kind.__name__}, got {value!r}")
+                refs.append(PairRef(p["scene"], f0["id"], f1["id"], f0["number"], f1["number"]))
             except (ValueError, KeyError, TypeError) as e:
                 raise ValueError(f"{path}:{number}: expected a pair line with scene, frame0, "
-                                 f"frame1 as {{id, number}} ({e})") from None
+                                 f"frame1 as {{id, number}} ({type(e).__name__}: {e})") from None
     return refs
 
 
@@ -197,8 +209,15 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         self.depth_source, self.mesh_path, self.fused_depth = depth_source, mesh_path, fused_depth
         if occupancy not in (None, "words", "dense"):
             raise ValueError(f"occupancy: expected None, 'words' or 'dense', got {occupancy!r}")
+        if occupancy is None and scope != "pair":
+            raise ValueError(f"scope: {scope!r} is the frames fused for occupancy, which is off "
+                             f"(occupancy=None); pass occupancy='words' or 'dense'")
         self.pairs: List[PairRef] = (read_pair_index(pairs, scene_names, npz_root)
                                      if isinstance(pairs, (str, os.PathLike)) else list(pairs))
+        for k, ref in enumerate(self.pairs):
+            if not isinstance(ref, PairRef):
+                raise TypeError(f"pairs[{k}]: expected an occgt.torch.PairRef, got "
+                                f"{type(ref).__name__}")
         self.root, self.format, self.device = root, format, device
         self.width, self.height = int(width), int(height)
         self.preset, self.images, self.occupancy = preset, bool(images), occupancy
@@ -212,8 +231,11 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         self._dataset: Optional[occgt.Dataset] = None
         self._pid = -1
         self._scenes: Dict[str, Tuple[occgt.Scene, Dict[int, str]]] = {}
-        # Fail here, not in a worker, on a bad root, format or device.
+        # Fail here, not in a worker, on a bad root, format or device (the readers open the
+        # root lazily: test it here).
         occgt.open_dataset(root, format, device=device)
+        if not os.path.exists(root):
+            raise ValueError(f"root: {root}: no such dataset folder or file")
 
     @classmethod
     def from_split(cls, split_dir: str, *, root: Optional[str] = None,
@@ -274,6 +296,13 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                    images=sample["image"] != "none" if images is None else images,
                    occupancy=occupancy, **{**depth, **options})
 
+    def __getstate__(self) -> Dict[str, Any]:
+        """The readers and maps of this process stay here (a spawned DataLoader worker or a
+        pickle opens its own; the C++ objects cannot be pickled)."""
+        state = self.__dict__.copy()
+        state.update(_dataset=None, _scenes={}, _scene_map=None, _pid=-1)
+        return state
+
     def __len__(self) -> int:
         return len(self.pairs)
 
@@ -327,6 +356,10 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                                   **self._options_for(scene))
 
     def __getitem__(self, index: int) -> Dict[str, Any]:
+        try:
+            index = operator.index(index)  # an int, a numpy or 0-d torch integer; not 1.5
+        except TypeError:
+            raise TypeError(f"index: expected an int, got {type(index).__name__}") from None
         if not -len(self.pairs) <= index < len(self.pairs):
             raise IndexError(f"index {index} out of range for {len(self.pairs)} pairs")
         index %= len(self.pairs)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import math
+import operator
 import os
 from typing import Any, Dict, List, Optional, Tuple, Union
 
@@ -76,6 +77,16 @@ def _bin_edges(occupancy: Dict[str, Any]) -> List[float]:
     if "bins" in occupancy:
         return list(occupancy["bins"]["edges_m"])
     return list(occupancy["bin_edges_m"])
+
+
+def _grid(meta: Dict[str, Any]) -> Tuple[Optional[int], Optional[int]]:
+    """(H/2, W/2) of the occupancy rays: the json's occupancy.grid [W/2, H/2]; any when
+    the sample has none."""
+    try:
+        w, h = meta["occupancy"]["grid"]
+        return int(h), int(w)
+    except (KeyError, TypeError, ValueError):
+        return None, None
 
 
 def _npy(buf: bytearray, offset: int, size: int, where: str) -> np.ndarray:
@@ -178,6 +189,10 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             self._paths.append(path)
         for i, sample in enumerate(self._samples):
             missing = self._missing(sample.members)
+            if missing and _has(sample.members, "visible_in.npy"):
+                raise ValueError(f"{self._paths[sample.shard]}: sample {self._keys[i]} is an "
+                                 f"N-view sample (occgt tuples --shards, docs/MULTIVIEW.md); "
+                                 f"ShardDataset reads the pair samples of occgt build")
             if missing:
                 raise ValueError(f"{self._paths[sample.shard]}: sample {self._keys[i]} has no "
                                  f"{' or '.join(missing)} member (asked for by "
@@ -223,7 +238,10 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
 
     def _index(self, i: int) -> int:
         n = len(self._samples)
-        j = int(i)
+        try:
+            j = operator.index(i)  # an int, a numpy or 0-d torch integer; not 1.5 or "1"
+        except TypeError:
+            raise TypeError(f"sample index: expected an int, got {type(i).__name__}") from None
         if j < 0:
             j += n
         if not 0 <= j < n:
@@ -240,7 +258,7 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         if self._pairs is None:
             path = os.path.join(self.split_dir, "pairs.jsonl")
             try:
-                with open(path) as f:
+                with open(path, encoding="utf-8", errors="replace") as f:  # bad line: below
                     lines = f.read().splitlines()
             except FileNotFoundError:
                 raise ValueError(f"{path}: missing (expected one line per sample)") from None
@@ -248,10 +266,13 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                 raise ValueError(f"{path}: {len(lines)} lines, expected {len(self._samples)} "
                                  f"(one per sample of index.json's shards)")
             self._pairs = lines
-        line = json.loads(self._pairs[j])
+        try:
+            line = json.loads(self._pairs[j])
+        except ValueError:  # not JSON (or not UTF-8)
+            line = None
         if not isinstance(line, dict) or line.get("key") != self._keys[j]:
             raise ValueError(f"{os.path.join(self.split_dir, 'pairs.jsonl')}: line {j + 1}: "
-                             f"expected key {self._keys[j]!r}")
+                             f"expected a JSON object with key {self._keys[j]!r}")
         return line
 
     def _fd(self, shard: int) -> int:
@@ -301,6 +322,13 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             T_0to1 = np.asarray(meta["T_0to1"], dtype=np.float64).reshape(4, 4)
             K0 = np.asarray(meta["K0"], dtype=np.float32).reshape(3, 3)
             K1 = np.asarray(meta["K1"], dtype=np.float32).reshape(3, 3)
+            matrices: Dict[str, np.ndarray] = {"T_0to1": T_0to1, "K0": K0, "K1": K1}
+            for name, m in matrices.items():
+                if not np.isfinite(m).all():
+                    raise ValueError(f"{name} has non-finite entries")
+            if not np.array_equal(T_0to1[3], [0, 0, 0, 1]) or abs(
+                    np.linalg.det(T_0to1[:3, :3]) - 1) > 0.1:
+                raise ValueError("T_0to1 is not a rigid transform [[R, t], [0, 0, 0, 1]]")
             W, H = (int(n) for n in meta["resolution"])
             scene = str(meta["scene"])
             names = (f"{scene}/{meta['frame0']['id']}", f"{scene}/{meta['frame1']['id']}")
@@ -312,6 +340,21 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                              f"schemas/sample.schema.json (T_0to1 4x4, K0/K1 3x3, resolution, "
                              f"scene, frame0/frame1 id, metrics 01/10, occupancy bins.edges_m "
                              f"for occupancy='dense'): {type(e).__name__}: {e}") from None
+        grid = _grid(meta)
+
+        def member(field: str, dtype: str, shape: Tuple[Optional[int], ...]) -> np.ndarray:
+            """npy(field), checked against the contract (schemas/sample.schema.json, the
+            arrays of libgt/pipeline/sample.cc): dtype (either byte order) and shape (None:
+            any length)."""
+            a = npy(field)
+            if (a.dtype.str[1:] != dtype or a.ndim != len(shape) or
+                    any(n is not None and n != m for n, m in zip(shape, a.shape))):
+                want = ", ".join("*" if n is None else str(n) for n in shape)
+                name = field if field in members else field + ".gz"
+                raise ValueError(f"{where}.{name}: expected {np.dtype(dtype)} [{want}] (sample "
+                                 f"resolution {W}x{H}), got {a.dtype} {list(a.shape)}")
+            return a
+
         out: Dict[str, Any] = {}
         if self.images or self.color:
             for c in "01":
@@ -326,8 +369,8 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                     out["color" + c] = to_tensor(np.ascontiguousarray(
                         bgr[:, :, ::-1].transpose(2, 0, 1)))
         if self.depth:
-            out["depth0"] = to_tensor(npy("depth0.npy"))
-            out["depth1"] = to_tensor(npy("depth1.npy"))
+            out["depth0"] = to_tensor(member("depth0.npy", "f4", (H, W)))
+            out["depth1"] = to_tensor(member("depth1.npy", "f4", (H, W)))
         out["K0"] = to_tensor(K0)
         out["K1"] = to_tensor(K1)
         out["T_0to1"] = to_tensor(T_0to1.astype(np.float32))
@@ -337,22 +380,27 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         out["pair_id"] = j
         out["pair_names"] = names
         if self.labels:
-            for name in ("label01", "label10", "cells0", "cells1"):
-                out[name] = to_tensor(npy(name + ".npy"))
-        out["matches"] = to_tensor(npy("matches.npy").astype(np.int64))
-        out["match_type"] = to_tensor(npy("match_type.npy").astype(np.int64))
-        out["match_xy"] = to_tensor(npy("match_xy.npy"))
+            for name in ("label01", "label10"):
+                out[name] = to_tensor(member(name + ".npy", "u1", (H, W)))
+            for name in ("cells0", "cells1"):
+                out[name] = to_tensor(member(name + ".npy", "u1", (None, None)))
+        matches = member("matches.npy", "i4", (None, 2))
+        rows = matches.shape[0]
+        out["matches"] = to_tensor(matches.astype(np.int64))
+        out["match_type"] = to_tensor(member("match_type.npy", "u1", (rows,)).astype(np.int64))
+        out["match_xy"] = to_tensor(member("match_xy.npy", "f4", (rows, 2)))
         if self.occupancy == "words":
             for name in ("occ0", "known0", "occ1", "known1"):
-                out[name] = to_tensor(npy(name + ".npy"))
+                out[name] = to_tensor(member(name + ".npy", "u8", grid))
         elif self.occupancy == "dense":
             for c in "01":
-                if f"occ{c}_dense.npy" in members:
-                    volume = npy(f"occ{c}_dense.npy")
+                if _has(members, f"occ{c}_dense.npy"):
+                    volume = member(f"occ{c}_dense.npy", "u1", (bins,) + grid)
                 else:
                     from .. import dense_volume  # the C++ unpacking
 
-                    volume = dense_volume(npy(f"occ{c}.npy"), npy(f"known{c}.npy"), bins)
+                    volume = dense_volume(member(f"occ{c}.npy", "u8", grid),
+                                          member(f"known{c}.npy", "u8", grid), bins)
                 out["occupancy" + c] = to_tensor(volume)
         out["metrics01"] = metrics01
         out["metrics10"] = metrics10

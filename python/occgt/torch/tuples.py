@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import operator
 import os
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
@@ -30,21 +31,36 @@ class TupleRef:
     frame_ids: Tuple[str, ...]
 
 
+def _tuple_ref(scene: Any, frame_ids: Any) -> TupleRef:
+    """A TupleRef of a scene name and a list of frame ids, all str (a str is not a list of
+    ids: "000001" would be six frames); ValueError saying what is wrong."""
+    if not isinstance(scene, str) or not scene:
+        raise ValueError(f"scene: expected a non-empty str, got {scene!r}")
+    if isinstance(frame_ids, (str, bytes, dict)) or not hasattr(frame_ids, "__iter__"):
+        raise ValueError(f"frame_ids: expected a list of str, got {type(frame_ids).__name__}")
+    ids = tuple(frame_ids)
+    bad = [i for i in ids if not isinstance(i, str)]
+    if bad:
+        raise ValueError(f"frame_ids: expected a list of str, got {bad[0]!r}")
+    return TupleRef(str(scene), tuple(str(i) for i in ids))
+
+
 def read_tuples(path: Union[str, os.PathLike]) -> List[TupleRef]:
     """The tuples of an ``occgt tuples`` tuples.jsonl (schemas/tuples_line.schema.json), in
-    order; ValueError naming the line of a bad one."""
+    order; ValueError naming the line of a bad one (scene a str, frame_ids a list of str)."""
     refs = []
     p = os.fspath(path)
-    with open(p) as f:
-        for number, line in enumerate(f, 1):
-            if not line.strip():
-                continue
+    with open(p, "rb") as f:
+        for number, raw in enumerate(f, 1):
             try:
+                line = raw.decode("utf-8")
+                if not line.strip():
+                    continue
                 t = json.loads(line)
-                refs.append(TupleRef(str(t["scene"]), tuple(str(i) for i in t["frame_ids"])))
+                refs.append(_tuple_ref(t["scene"], t["frame_ids"]))
             except (ValueError, KeyError, TypeError) as e:
                 raise ValueError(f"{p}:{number}: expected a tuple line with scene and frame_ids "
-                                 f"({e})") from None
+                                 f"({type(e).__name__}: {e})") from None
     return refs
 
 
@@ -106,8 +122,14 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         if isinstance(tuples, (str, os.PathLike)):
             self.tuples = read_tuples(tuples)
         else:
-            self.tuples = [t if isinstance(t, TupleRef) else TupleRef(str(t[0]), tuple(t[1]))
-                           for t in tuples]
+            self.tuples = []
+            for k, t in enumerate(tuples):
+                try:
+                    scene, ids = (t.scene, t.frame_ids) if isinstance(t, TupleRef) else t
+                    self.tuples.append(_tuple_ref(scene, ids))
+                except (TypeError, ValueError) as e:
+                    raise ValueError(f"tuples[{k}]: expected a TupleRef or (scene, [frame ids]) "
+                                     f"({type(e).__name__}: {e})") from None
         for k, t in enumerate(self.tuples):
             if not 1 <= len(t.frame_ids) <= 32:
                 raise ValueError(f"tuples[{k}]: expected 1..32 frame ids, got "
@@ -123,8 +145,18 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         self._dataset: Optional[occgt.Dataset] = None
         self._pid = -1
         self._scenes: Dict[str, occgt.Scene] = {}
-        # Fail here, not in a worker, on a bad root, format or device.
+        # Fail here, not in a worker, on a bad root, format or device (the readers open the
+        # root lazily: test it here).
         occgt.open_dataset(root, format, device=device)
+        if not os.path.exists(root):
+            raise ValueError(f"root: {root}: no such dataset folder or file")
+
+    def __getstate__(self) -> Dict[str, Any]:
+        """The readers and maps of this process stay here (a spawned DataLoader worker or a
+        pickle opens its own; the C++ objects cannot be pickled)."""
+        state = self.__dict__.copy()
+        state.update(_dataset=None, _scenes={}, _pid=-1)
+        return state
 
     def __len__(self) -> int:
         return len(self.tuples)
@@ -142,6 +174,10 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         return self._scenes[name]
 
     def __getitem__(self, index: int) -> Any:
+        try:
+            index = operator.index(index)  # an int, a numpy or 0-d torch integer; not 1.5
+        except TypeError:
+            raise TypeError(f"index: expected an int, got {type(index).__name__}") from None
         if not -len(self.tuples) <= index < len(self.tuples):
             raise IndexError(f"index {index} out of range for {len(self.tuples)} tuples")
         index %= len(self.tuples)
@@ -204,9 +240,25 @@ def collate_tuples(batch: Sequence[Dict[str, Any]]) -> Dict[str, Any]:
     (and, for tracks, the track axis P) are zero-padded to the largest in the batch and
     stacked; ``view_mask`` bool [B, S_max] marks real views, ``track_vis_mask`` stays False
     and ``track_state`` is ``TRACK_STATE_PADDED`` on the padding; other values become
-    lists."""
+    lists. Every item must have the keys and the view size (H, W) of the first (ValueError
+    naming the item otherwise: nothing is dropped)."""
     if not batch:
         raise ValueError("batch: expected at least one item")
+    keys = list(batch[0]) if isinstance(batch[0], dict) else []
+    for n, item in enumerate(batch):
+        if not isinstance(item, dict) or "depths" not in item or "tracks" not in item:
+            raise ValueError(f"batch[{n}]: expected a 'vggt' item of TupleIndexDataset (a dict "
+                             f"with depths, tracks, ...), got "
+                             + (f"a dict of {sorted(item)}" if isinstance(item, dict)
+                                else type(item).__name__)
+                             + (" (views='dust3r' items are lists: batch them as DUSt3R does)"
+                                if isinstance(item, list) else ""))
+        if list(item) != keys:  # e.g. images=True and images=False items: nothing dropped
+            raise ValueError(f"batch[{n}]: expected the keys of batch[0] {keys}, got "
+                             f"{list(item)}")
+        if item["depths"].shape[1:] != batch[0]["depths"].shape[1:]:
+            raise ValueError(f"batch[{n}]: views of {tuple(item['depths'].shape[1:])} (H, W), "
+                             f"expected batch[0]'s {tuple(batch[0]['depths'].shape[1:])}")
     s_max = max(int(b["depths"].shape[0]) for b in batch)
     p_max = max(int(b["tracks"].shape[1]) for b in batch)
     out: Dict[str, Any] = {}
