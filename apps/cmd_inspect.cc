@@ -60,6 +60,23 @@ void RunInspectPair(const InspectPairArgs& a) {
                          "expected exactly one source: --shard/--key, --pair-dir, or "
                          "--root/--format/--scene/--frames");
   }
+  if (a.image0.empty() != a.image1.empty()) {  // one colour image alone would be ignored
+    throw gt::InputError(a.image0.empty() ? "--image0" : "--image1",
+                         "expected both --image0 and --image1 (the colour of both frames)");
+  }
+  // The picture flags are checked before any pair is read or computed (the defaults pass:
+  // a failure comes from a flag).
+  gt::report::PairPictureOptions po;
+  po.matches.max_lines = a.max_lines;
+  po.matches.seed = a.seed;
+  po.labels.alpha = a.alpha;
+  po.occupancy.slice_row = a.slice_row;
+  if (std::string error; !po.Check(&error)) {
+    ThrowOptionsError(error, "inspect options",
+                      {{"max_lines", "--max-lines", true},
+                       {"alpha", "--alpha", true},
+                       {"slice_row", "--slice-row", true}});
+  }
   gt::report::PairData pair;
   if (!a.shard.empty() || !a.key.empty()) {
     if (a.shard.empty() || a.key.empty()) {
@@ -88,11 +105,6 @@ void RunInspectPair(const InspectPairArgs& a) {
     const auto [id0, id1] = gt::truth::ParseFramePair(d.frames);
     pair = gt::report::ComputePairFromScene(scene, id0, id1, o, setup.resolution, setup.depth);
   }
-  gt::report::PairPictureOptions po;
-  po.matches.max_lines = a.max_lines;
-  po.matches.seed = a.seed;
-  po.labels.alpha = a.alpha;
-  po.occupancy.slice_row = a.slice_row;
   const auto written = gt::report::WritePairPictures(gt::report::RenderPair(pair, po), d.out);
   if (pair.has_labels) {
     std::printf("inspect pair %s: %d x %d, %zu matches%s%s\n", pair.name.c_str(), pair.width,
@@ -177,7 +189,7 @@ void AddInspectCommand(CLI::App& app) {
   pair->add_flag("--no-occupancy", pa->no_occupancy, "skip the occupancy fusion (computed pair)");
   pair->add_option("--max-lines", pa->max_lines, "match lines drawn at most")
       ->capture_default_str();
-  pair->add_option("--seed", pa->seed, "seed of the drawn subset of matches")
+  NonNegative(pair->add_option("--seed", pa->seed, "seed of the drawn subset of matches"))
       ->capture_default_str();
   pair->add_option("--alpha", pa->alpha, "weight of label colours over the images")
       ->capture_default_str();
@@ -205,7 +217,8 @@ void AddInspectCommand(CLI::App& app) {
       ->capture_default_str();
   split->add_option("--gallery", sa->gallery, "pairs shown with their pictures")
       ->capture_default_str();
-  split->add_option("--seed", sa->seed, "seed of the gallery choice")->capture_default_str();
+  NonNegative(split->add_option("--seed", sa->seed, "seed of the gallery choice"))
+      ->capture_default_str();
   split
       ->add_option("--gallery-order", sa->gallery_order,
                    "random (seeded) or most-occluded (largest occlusion ratio first)")

@@ -61,6 +61,8 @@ void RunOccupancy(const OccupancyArgs& args) {
   const std::vector<FieldFlag> occupancy_flags = {
       {"voxel_m", "--voxel-m", args.voxel_m.has_value()},
       {"max_range_m", "--max-range-m", args.max_range_m.has_value()},
+      // --far-m is also the ray range when --max-range-m is not given (--far-m inf).
+      {"max_range_m", "--far-m", args.far_m.has_value() && !args.max_range_m.has_value()},
       {"window", "--scope", args.scope.has_value()},
       {"scene", "--scope", args.scope.has_value()},
       {"num_bins", "--bins", args.bins.has_value()},
@@ -102,9 +104,11 @@ void RunOccupancy(const OccupancyArgs& args) {
   } catch (const gt::InputError& e) {
     RethrowNamingFlag(e, {{"voxel_m", "--voxel-m", args.voxel_m.has_value()}});
   }
+  // The map first: a --save-octree that cannot be written fails before the folder is
+  // published.
+  if (scope && !args.save_octree.empty()) scope->map.SaveBinary(args.save_octree);
   gt::truth::WriteOccupancyFolder(d.out, source, o, *truth.occupancy, scope ? &*scope : nullptr,
                                   args.dense);
-  if (scope && !args.save_octree.empty()) scope->map.SaveBinary(args.save_octree);
 
   const auto c = occ::CountBins(truth.occupancy->cam0);
   const double total = static_cast<double>(c.occupied + c.free + c.unknown);

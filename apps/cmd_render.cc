@@ -5,6 +5,7 @@
 // <id>_triangles.npy (int32, -1 = none), <id>_picture.png (sensor | rendered | agreement when
 // the frame has sensor depth), and render.json (schemas/render.schema.json) with the
 // sensor-vs-mesh counts of every frame and in total. docs/CLI.md "render".
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -33,6 +34,7 @@ namespace {
 struct RenderArgs {
   std::string root, format, scene, mesh, frames, out;
   std::string device = "dslr";  // scannetpp
+  bool device_given = false;    // --device on the command line (scannetpp only)
   int stride = 1;
   std::optional<std::string> resolution;
   gt::render::FrameDepthOptions depth;
@@ -59,6 +61,9 @@ void RunRender(const RenderArgs& args) {
   if (args.resolution) resolution = gt::truth::ParseResolution(*args.resolution, "--resolution");
   gt::datasets::ReaderOptions reader_options;
   reader_options.scannetpp_device = gt::datasets::ParseScanNetPPDevice(args.device, "--device");
+  if (args.device_given && format != gt::DatasetFormat::kScanNetPP) {
+    throw gt::InputError("--device", "only for the scannetpp format");
+  }
   gt::Scene scene =
       gt::datasets::MakeReader(format, reader_options)->ReadScene(args.root, args.scene);
   gt::pipeline::ApplyMeshPath(args.mesh, &scene);
@@ -67,8 +72,13 @@ void RunRender(const RenderArgs& args) {
   }
   std::vector<size_t> frames;
   if (!args.frames.empty()) {
-    for (const std::string& id : SplitComma(args.frames))
-      frames.push_back(gt::truth::FindFrame(scene, id));
+    for (const std::string& id : SplitComma(args.frames)) {
+      const size_t i = gt::truth::FindFrame(scene, id);
+      if (std::find(frames.begin(), frames.end(), i) != frames.end()) {
+        throw gt::InputError("--frames", "frame " + id + " is listed twice");
+      }
+      frames.push_back(i);
+    }
   } else {
     int k = 0;
     for (size_t i = 0; i < scene.frames.size(); ++i) {
@@ -169,7 +179,8 @@ void AddRenderCommand(CLI::App& app) {
   cmd->add_option("--root", args->root, "dataset root")->required();
   cmd->add_option("--format", args->format, "dataset format (scannet, sevenscenes, ...)")
       ->required();
-  cmd->add_option("--device", args->device, "scannetpp: dslr or iphone")->capture_default_str();
+  CLI::Option* device =
+      cmd->add_option("--device", args->device, "scannetpp: dslr or iphone")->capture_default_str();
   cmd->add_option("--scene", args->scene, "scene name (see occgt scan)")->required();
   cmd->add_option("--mesh", args->mesh,
                   "the scene's mesh (PLY, in the poses' world frame; default: the dataset's own)");
@@ -186,7 +197,10 @@ void AddRenderCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--rel-tol", args->depth.fused.rel_tol, "see --abs-tol-m")->capture_default_str();
   cmd->add_option("--out", args->out, "output folder")->required();
-  cmd->callback([args] { RunRender(*args); });
+  cmd->callback([args, device] {
+    args->device_given = device->count() > 0;
+    RunRender(*args);
+  });
 }
 
 }  // namespace occgt

@@ -29,6 +29,7 @@ struct ScanArgs {
   std::string format;
   std::string scene;
   std::string device = "dslr";
+  bool device_given = false;  // --device on the command line (scannetpp only)
   bool json = false;
   gt::datasets::ReaderOptions reader;
   gt::datasets::ScanOptions scan;
@@ -171,6 +172,9 @@ void RunScan(const ScanArgs& args) {
   const gt::DatasetFormat format = gt::ParseDatasetFormat(args.format, "--format");
   gt::datasets::ReaderOptions reader_options = args.reader;
   reader_options.scannetpp_device = gt::datasets::ParseScanNetPPDevice(args.device, "--device");
+  if (args.device_given && format != gt::DatasetFormat::kScanNetPP) {
+    throw gt::InputError("--device", "only for the scannetpp format");
+  }
   const auto reader = gt::datasets::MakeReader(format, reader_options);
   std::vector<std::string> names;
   if (!args.scene.empty()) {
@@ -253,7 +257,8 @@ void AddScanCommand(CLI::App& app) {
   cmd->add_option("--tum-max-dt", args->reader.tum_max_dt_s,
                   "TUM: max time difference for pose/colour association (s)")
       ->capture_default_str();
-  cmd->add_option("--device", args->device, "ScanNet++: dslr or iphone")->capture_default_str();
+  CLI::Option* device =
+      cmd->add_option("--device", args->device, "ScanNet++: dslr or iphone")->capture_default_str();
   cmd->add_option("--exr-channel", args->reader.exr_channel,
                   "Generic: default EXR depth channel (name or suffix)");
   cmd->add_option("--mesh", args->mesh,
@@ -264,7 +269,10 @@ void AddScanCommand(CLI::App& app) {
   cmd->add_option("--abs-tol-m", args->tolerance.abs_tol_m,
                   "With a mesh: sensor and mesh agree within abs-tol-m + rel-tol * depth (0.2)");
   cmd->add_option("--rel-tol", args->tolerance.rel_tol, "With a mesh: see --abs-tol-m (0.01)");
-  cmd->callback([args] { RunScan(*args); });
+  cmd->callback([args, device] {
+    args->device_given = device->count() > 0;
+    RunScan(*args);
+  });
 }
 
 }  // namespace occgt

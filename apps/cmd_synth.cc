@@ -97,7 +97,7 @@ void AddSynthCommand(CLI::App& app) {
   cmd->add_option("--frames", args->options.frames_per_scene, "Frames per room")
       ->capture_default_str();
   cmd->add_option("--resolution", args->resolution, "Image size WxH")->capture_default_str();
-  cmd->add_option("--seed", args->options.seed, "Random seed")->capture_default_str();
+  NonNegative(cmd->add_option("--seed", args->options.seed, "Random seed"))->capture_default_str();
   cmd->add_flag("--no-holes", args->no_holes, "Do not punch invalid-depth holes");
   cmd->add_option("--layout", args->layout,
                   "generic (occgt's manifest) or scannetpp (ScanNet++'s folders, distorted "

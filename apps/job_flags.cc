@@ -1,5 +1,6 @@
 #include "apps/job_flags.h"
 
+#include "apps/usage.h"
 #include "libgt/core/error.h"
 
 namespace occgt {
@@ -22,9 +23,9 @@ TaskFlags AddTaskFlags(CLI::App* cmd, int* task, int* tasks) {
 }
 
 void AddDepthCacheFlag(CLI::App* cmd, size_t* depth_cache_mb) {
-  cmd->add_option("--depth-cache-mb", *depth_cache_mb,
-                  "Budget of decoded depth maps held per scene (LRU, default " +
-                      std::to_string(*depth_cache_mb) + ")");
+  NonNegative(cmd->add_option("--depth-cache-mb", *depth_cache_mb,
+                              "Budget of decoded depth maps held per scene (LRU, default " +
+                                  std::to_string(*depth_cache_mb) + ")"));
 }
 
 void AddThreadsFlag(CLI::App* cmd, int* threads, const std::string& what) {

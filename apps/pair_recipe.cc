@@ -119,15 +119,26 @@ gt::truth::DatasetDepthRange DepthRangeFor(const PairSetup& setup, const gt::Sce
 
 namespace {
 
-gt::truth::PairTruthOptions Checked(gt::truth::PairTruthOptions o, const PairDatasetArgs& args,
-                                    PairOutputs outputs, const std::string& what,
-                                    std::vector<FieldFlag> flags) {
+gt::truth::PairTruthOptions Checked(gt::truth::PairTruthOptions o, const PairSetup& setup,
+                                    const PairDatasetArgs& args, PairOutputs outputs,
+                                    const std::string& what, std::vector<FieldFlag> flags) {
   o.labels_and_matches = outputs == PairOutputs::kAll;
   std::string error;
   if (!o.Check(&error)) {
     flags.push_back({"min_depth_m", "--min-depth-m", args.min_depth_m.has_value()});
     flags.push_back({"max_depth_m", "--max-depth-m", args.max_depth_m.has_value()});
     ThrowOptionsError(error, what, flags);
+  }
+  // One patch cell must fit the working resolution (else the labels fail after the frames
+  // are read): named by --stride when given, else by --resolution.
+  const int stride = o.patches.stride;
+  const gt::truth::Resolution& r = setup.resolution;
+  if (o.labels_and_matches && (r.width < stride || r.height < stride)) {
+    flags.push_back({"stride", "--resolution", args.resolution.has_value()});
+    ThrowOptionsError("stride " + std::to_string(stride) + " is larger than the " +
+                          std::to_string(r.width) + "x" + std::to_string(r.height) +
+                          " working resolution (one patch cell must fit)",
+                      what, flags);
   }
   return o;
 }
@@ -137,7 +148,8 @@ gt::truth::PairTruthOptions Checked(gt::truth::PairTruthOptions o, const PairDat
 gt::truth::PairTruthOptions ResolveSettings(const PairSetup& setup, const PairDatasetArgs& args,
                                             PairOutputs outputs, const std::string& what,
                                             const std::vector<FieldFlag>& flags) {
-  return Checked(gt::truth::ResolvePairTruthOptions(setup.settings), args, outputs, what, flags);
+  return Checked(gt::truth::ResolvePairTruthOptions(setup.settings), setup, args, outputs, what,
+                 flags);
 }
 
 gt::truth::PairTruthOptions ResolveForScene(const PairSetup& setup, const PairDatasetArgs& args,
@@ -145,7 +157,7 @@ gt::truth::PairTruthOptions ResolveForScene(const PairSetup& setup, const PairDa
                                             const std::string& what,
                                             const std::vector<FieldFlag>& flags) {
   return Checked(gt::truth::ResolvePairTruthOptions(setup.settings, DepthRangeFor(setup, scene)),
-                 args, outputs, what, flags);
+                 setup, args, outputs, what, flags);
 }
 
 }  // namespace occgt

@@ -1,6 +1,7 @@
 #include "apps/usage.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <iostream>
 
@@ -53,6 +54,18 @@ std::vector<std::string> FlagNames(const CLI::App* sub) {
 }
 
 }  // namespace
+
+CLI::Option* NonNegative(CLI::Option* option) {
+  return option->check(CLI::Validator(
+      [](std::string& value) {
+        const size_t first = value.find_first_not_of(" \t");
+        if (first != std::string::npos && value[first] == '-') {
+          return "expected an integer >= 0, got '" + value + "'";
+        }
+        return std::string();
+      },
+      "", "non-negative"));
+}
 
 std::string Num(double value) {
   char text[32];
@@ -122,7 +135,11 @@ std::string DescribeParseError(const CLI::App& app, const std::vector<std::strin
   const CLI::App* sub = &app;
   std::string path = "occgt";
   for (const std::string& a : args) {
-    if (!a.empty() && a[0] == '-') {
+    // A negative number is a flag's value (`--seed -1`), not a flag: no flag name starts
+    // with a digit.
+    const bool number =
+        a.size() > 1 && (std::isdigit(static_cast<unsigned char>(a[1])) != 0 || a[1] == '.');
+    if (!a.empty() && a[0] == '-' && !number) {
       const std::string flag = a.substr(0, a.find('='));
       const std::vector<std::string> known = FlagNames(sub);
       if (flag != "--help" && flag != "-h" &&

@@ -36,6 +36,11 @@ struct FieldFlag {
   const char* flag;   // its flag, e.g. "--voxel-m"
   bool given;         // the flag is on the command line
 };
+// An unsigned flag (a seed, a size in MB) refuses a negative value, which CLI11 would wrap
+// around to a huge one (`--seed -1` = 2^64 - 1): a usage error "<flag>: expected an integer
+// >= 0, got '-1'". Returns the option.
+CLI::Option* NonNegative(CLI::Option* option);
+
 // A default value as help text shows it ("0.05", "10", "64").
 std::string Num(double value);
 

@@ -9,11 +9,13 @@
 // of occgt (the start-up row of docs/PERFORMANCE.md, "Threads and tasks"). Only
 // libpcl_common is linked.
 #define PCL_NO_PRECOMPILE
+#include <fcntl.h>
 #include <octomap/OcTree.h>
 #include <pcl/filters/statistical_outlier_removal.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -511,8 +513,30 @@ VoxelBlock OccupancyMap::ExtractBlock(const Eigen::Vector3i& min_index_in,
 
 void OccupancyMap::SaveBinary(const std::string& path) const {
   std::ostringstream out;
-  if (!impl_->Tree().writeBinaryConst(out))
-    throw InputError(path, "OctoMap could not encode the map");
+  {
+    // Debian's liboctomap is built with its debug output on: writeBinaryConst fprintf's
+    // " done." to stderr, a stray line among a command's errors. stderr goes to /dev/null
+    // while the map is encoded (in memory; nothing else of the process prints meanwhile).
+    struct QuietStderr {
+      int saved = -1;
+      QuietStderr() {
+        std::fflush(stderr);
+        const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+        if (null < 0) return;
+        saved = ::dup(STDERR_FILENO);
+        if (saved >= 0) ::dup2(null, STDERR_FILENO);
+        ::close(null);
+      }
+      ~QuietStderr() {
+        std::fflush(stderr);
+        if (saved < 0) return;
+        ::dup2(saved, STDERR_FILENO);
+        ::close(saved);
+      }
+    } quiet;
+    if (!impl_->Tree().writeBinaryConst(out))
+      throw InputError(path, "OctoMap could not encode the map");
+  }
   gt::io::WriteFileAtomic(path, out.str());
 }
 

@@ -193,7 +193,7 @@ bool BuildOptions::Check(std::string* error) const {
   if (out_dir.empty()) return *error = "--out: expected an output folder", false;
   if (tasks < 1) return *error = "--tasks: expected an integer >= 1", false;
   if (task < 0 || task >= tasks) return *error = "--task: expected 0 <= task < tasks", false;
-  if (depth_cache_mb < 1) return *error = "depth cache: expected >= 1 MB", false;
+  if (depth_cache_mb < 1) return *error = "--depth-cache-mb: expected >= 1", false;
   return true;
 }
 
@@ -201,7 +201,9 @@ std::unique_ptr<io::FileLock> AcquireTaskLock(const std::string& out_dir,
                                               const std::string& lock_file,
                                               const std::string& command, int task, int tasks,
                                               const std::string& advice) {
-  std::filesystem::create_directories(out_dir);
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) throw InputError(out_dir, "cannot create the output folder: " + ec.message());
   const std::string lock_path = out_dir + "/" + lock_file;  // byte K: task K
   std::unique_ptr<io::FileLock> lock = io::FileLock::TryAcquire(lock_path, task);
   if (!lock) {

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -144,9 +145,19 @@ std::vector<std::string> Strings(const std::map<std::string, std::string>& m,
   if (h.descr.size() < 3 || h.descr.compare(0, 2, "<U") != 0 || h.shape.size() != 1) {
     throw InputError(where, "expected a 1-D '<U' string array, got " + h.descr);
   }
-  const size_t n = std::stoul(h.descr.substr(2));
+  // n code units per string: digits only, bounded (no std::stoul exception, no overflow of
+  // count * n * 4 below).
+  const std::string units = h.descr.substr(2);
+  if (units.size() > 4 || units.find_first_not_of("0123456789") != std::string::npos ||
+      std::stoul(units) == 0) {
+    throw InputError(where,
+                     "expected a 1-D '<U' string array of 1..9999 characters, got " + h.descr);
+  }
+  const size_t n = std::stoul(units);
   const size_t count = static_cast<size_t>(h.shape[0]);
-  if (it->second.size() < h.data_offset + count * n * 4) throw InputError(where, "truncated");
+  const size_t data_bytes =
+      it->second.size() > h.data_offset ? it->second.size() - h.data_offset : 0;
+  if (count > data_bytes / (n * 4)) throw InputError(where, "truncated");
   std::vector<std::string> out(count);
   const auto* data = reinterpret_cast<const unsigned char*>(it->second.data() + h.data_offset);
   for (size_t k = 0; k < count; ++k) {
@@ -193,6 +204,39 @@ SceneCovisibility ReadSceneCovisibility(const std::string& path, const std::stri
             g.o_ji.size() == p && g.self.size() == g.frame_ids.size();
   for (size_t k = 0; ok && k < p; ++k) ok = g.i[k] >= 0 && g.i[k] < g.j[k] && g.j[k] < f;
   if (!ok) throw InputError(path, "expected i < j < F and arrays of matching sizes");
+  // What occgt covis writes, checked so that a damaged or hand-made graph cannot turn into
+  // tuples of missing, repeated or NaN-scored frames.
+  for (size_t k = 1; k < p; ++k) {
+    if (g.i[k] < g.i[k - 1] || (g.i[k] == g.i[k - 1] && g.j[k] <= g.j[k - 1])) {
+      throw InputError(path, "pair " + std::to_string(k) + " (" + std::to_string(g.i[k]) + ", " +
+                                 std::to_string(g.j[k]) +
+                                 "): expected distinct pairs in increasing (i, j)");
+    }
+  }
+  std::set<std::string> ids;
+  for (size_t k = 0; k < g.frame_ids.size(); ++k) {
+    const std::string& id = g.frame_ids[k];
+    if (id.empty() || !ids.insert(id).second) {
+      throw InputError(path + ":frame_ids.npy",
+                       "entry " + std::to_string(k) + ": expected distinct non-empty frame ids, " +
+                           (id.empty() ? "got an empty one" : "'" + id + "' repeats"));
+    }
+  }
+  for (const auto& [name, values] :
+       {std::pair<const char*, const std::vector<float>*>{"c_ij", &g.c_ij},
+        {"c_ji", &g.c_ji},
+        {"o_ij", &g.o_ij},
+        {"o_ji", &g.o_ji},
+        {"self", &g.self}}) {
+    for (size_t k = 0; k < values->size(); ++k) {
+      const float v = (*values)[k];
+      if (!(v >= 0.0f && v <= 1.0f)) {
+        throw InputError(path + ":" + name + ".npy", "entry " + std::to_string(k) + " is " +
+                                                         std::to_string(v) +
+                                                         ", expected a score in [0, 1]");
+      }
+    }
+  }
   return g;
 }
 
@@ -236,7 +280,9 @@ void WriteSceneCovisibility(const std::string& path, const SceneCovisibility& g,
   m["score_stride"] = io::EncodeNpy<int32_t>({}, std::vector<int32_t>{g.score_stride});
   m["options_digest"] = io::EncodeNpy("|u1", {static_cast<int64_t>(options_digest.size())},
                                       options_digest.data(), options_digest.size());
-  fs::create_directories(fs::path(path).parent_path());
+  std::error_code ec;
+  fs::create_directories(fs::path(path).parent_path(), ec);
+  if (ec) throw InputError(path, "cannot create the parent folder: " + ec.message());
   io::WriteNpz(path, m);
 }
 
@@ -286,7 +332,9 @@ nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOption
   };
   const auto write_dense = [&](const std::string& name, const SceneCovisibility& g) {
     const fs::path path = dense_path(name, g);
-    fs::create_directories(path.parent_path());
+    std::error_code ec;
+    fs::create_directories(path.parent_path(), ec);
+    if (ec) throw InputError(path.string(), "cannot create the parent folder: " + ec.message());
     const auto f = static_cast<int64_t>(g.frame_ids.size());
     io::WriteNpy<float>(path.string(), {f, f}, DenseCovisibility(g));
   };

@@ -2,6 +2,7 @@
 
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -39,7 +40,21 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
   int64_t total = 0;
   std::vector<TupleLine> rows;
   for (const std::string& scene : scenes) {
-    const SceneCovisibility g = ReadSceneCovisibility(CovisibilityPath(out_dir, scene), digest);
+    const std::string path = CovisibilityPath(out_dir, scene);
+    const SceneCovisibility g = ReadSceneCovisibility(path, digest);
+    // The digest leaves out the dataset root (a moved dataset keeps its graphs): a graph of
+    // other data under the same scene name would name frames the scene does not have.
+    std::set<std::string> scene_ids;
+    for (const Frame& frame : ReadRecipeScene(recipe, reader, scene).frames) {
+      scene_ids.insert(frame.id);
+    }
+    for (const std::string& id : g.frame_ids) {
+      if (!scene_ids.count(id)) {
+        throw InputError(path, "frame '" + id + "' is not a frame of scene " + scene + " under " +
+                                   recipe.dataset.root +
+                                   " (a graph of other data?); re-run occgt covis for it");
+      }
+    }
     const std::vector<float> dense = DenseCovisibility(g);
     const size_t f = g.frame_ids.size();
     const pairs::CovisibilityPairs graph{

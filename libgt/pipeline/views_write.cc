@@ -260,7 +260,9 @@ json WriteViewsShards(const Recipe& recipe, const datasets::DatasetReader& reade
                       const std::string& out_dir, const std::vector<TupleLine>& lines) {
   BuildOptions options;
   options.out_dir = ViewsShardDir(out_dir);
-  std::filesystem::create_directories(options.out_dir);
+  std::error_code ec;
+  std::filesystem::create_directories(options.out_dir, ec);
+  if (ec) throw InputError(options.out_dir, "cannot create the output folder: " + ec.message());
   const int64_t total = static_cast<int64_t>(lines.size());
   const std::vector<int64_t> sizes = PlanViewsShards(recipe, total);
   WritePlan(options, recipe.split, sizes);

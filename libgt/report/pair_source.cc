@@ -178,7 +178,16 @@ PairData PairFromFields(const std::map<std::string, std::string>& fields, const 
   }
   const bool occ0 = fields.count("occ0.npy") || fields.count("occ0_dense.npy");
   const bool occ1 = fields.count("occ1.npy") || fields.count("occ1_dense.npy");
-  if (!fields.count("label01.npy") && occ0 && occ1) {  // occupancy only
+  // One camera's volume without the other's, or some of the label fields without label01,
+  // is a broken sample, not a pair without occupancy or labels: nothing is left out quietly.
+  if (occ0 != occ1)
+    throw InputError(source, occ0 ? "missing field occ1.npy" : "missing field occ0.npy");
+  bool any_label_field = false;
+  for (const char* f : {"label01.npy", "label10.npy", "matches.npy", "match_type.npy",
+                        "match_xy.npy", "cells0.npy", "cells1.npy"}) {
+    any_label_field = any_label_field || fields.count(f) > 0;
+  }
+  if (!any_label_field && occ0 && occ1) {  // occupancy only
     p.has_labels = false;
     p.occ0 = VolumeFromFields(fields, 0, p.meta, source);
     p.occ1 = VolumeFromFields(fields, 1, p.meta, source);
@@ -522,12 +531,22 @@ PairPictures RenderPair(const PairData& pair, const PairPictureOptions& options)
   MatchPictureOptions mo = options.matches;
   mo.stride = pair.stride;
   mo.anchor = pair.anchor;
-  if (pair.has_labels) {
-    out.matches = RenderMatches(pair.image0, pair.image1, pair.matches, mo);
-    out.labels =
-        RenderLabels(pair.image0, pair.labels01, pair.image1, pair.labels10, options.labels);
+  try {
+    if (pair.has_labels) {
+      out.matches = RenderMatches(pair.image0, pair.image1, pair.matches, mo);
+      out.labels =
+          RenderLabels(pair.image0, pair.labels01, pair.image1, pair.labels10, options.labels);
+    }
+    if (pair.has_occupancy) {
+      out.occupancy = RenderOccupancy(pair.occ0, &pair.occ1, options.occupancy);
+    }
+  } catch (const InputError& e) {
+    // A bad value of the pair's arrays ("matches: match 0: cell outside ..."): named with
+    // the pair it came from (a shard sample, a folder). A flag's error stays the flag's.
+    if (e.where().rfind("--", 0) == 0) throw;
+    throw InputError(pair.name + ":" + e.where(),
+                     std::string(e.what()).substr(e.where().size() + 2));
   }
-  if (pair.has_occupancy) out.occupancy = RenderOccupancy(pair.occ0, &pair.occ1, options.occupancy);
   out.depth = pair.depth_sources;
   return out;
 }

@@ -720,7 +720,9 @@ std::vector<std::string> WriteSplitReport(const std::string& split_dir, const st
   const SplitData split = LoadSplit(split_dir, options);
   EvalReportData eval;
   if (!options.eval_paths.empty()) eval = LoadEvalReport(options.eval_paths, split);
-  fs::create_directories(out_dir);
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) throw InputError(out_dir, "cannot create the report folder: " + ec.message());
   const std::string scratch = (fs::path(out_dir) / ".plots.tmp").string();
   fs::remove_all(scratch);
   std::vector<NamedImage> plots, eval_plots, tuple_plots;

@@ -1,14 +1,16 @@
 """Builders of small valid inputs and the mutations that break them (tests/badinput/README.md).
 
 Every case of cases.json starts from one base ("scannet", "tartanair", "sevenscenes", "tum",
-"generic", "build", "empty") laid out in the case's scratch folder, then applies its
-"mutate" operations in order. Bases are tiny and made here (or by `occgt synth`), never
-copied from ../shared/data.
+"generic", "build", "covis", "pair", "empty") laid out in the case's scratch folder, then
+applies its "mutate" operations in order. Bases are tiny and made here (or by `occgt synth`),
+never copied from ../shared/data.
 
 Layout of a case folder CASE:
   CASE/data/...        the dataset (or, for "build", a finished `occgt build` output in
-                       CASE/out and its dataset in CASE/data)
-  CASE/recipe.yaml     a valid recipe reading CASE/data as a generic dataset
+                       CASE/out and its dataset in CASE/data; "covis": `occgt covis` in
+                       CASE/out; "pair": `occgt pair` + `occgt occupancy` in CASE/pair)
+  CASE/recipe.yaml     a valid recipe reading CASE/data as a generic dataset (with N-view
+                       tuples for "covis")
   CASE/out/            where commands write
 """
 import json
@@ -211,6 +213,42 @@ def base_build(case, occgt, cache):
     shutil.copytree(src, case, dirs_exist_ok=True, symlinks=True)
 
 
+# RECIPE with N-view tuples (`occgt covis` / `occgt tuples`): every pair of the 8 frames is
+# scored (no frustum, distance or angle pruning).
+TUPLES_RECIPE = RECIPE.replace("""  pruning: {frustum: false, max_distance_m: 100, max_view_angle_deg: 180}
+""", """  pruning: {frustum: false, max_distance_m: 100, max_view_angle_deg: 180}
+  views: [2, 3]
+  tuples: {edge_threshold: 0.05, restarts: 4, quota_per_scene: 4}
+""")
+
+
+def base_covis(case, occgt, cache):
+    """`occgt covis` of TUPLES_RECIPE (CASE/recipe.yaml) on the generic base: CASE/out holds
+    covisibility/synth_000.npz, which `occgt tuples CASE/recipe.yaml --out CASE/out` reads."""
+    src = os.path.join(cache, "covis")
+    if not os.path.exists(src):
+        os.makedirs(src)
+        base_generic(src, occgt, cache)
+        write_text(os.path.join(src, "recipe.yaml"), TUPLES_RECIPE)
+        occgt("covis", os.path.join(src, "recipe.yaml"), "--out", os.path.join(src, "out"))
+    shutil.copytree(src, case, dirs_exist_ok=True, symlinks=True)
+
+
+def base_pair(case, occgt, cache):
+    """`occgt pair` and `occgt occupancy` of frames 000000,000001 of the generic base into
+    CASE/pair (the folder `occgt inspect pair --pair-dir` reads)."""
+    src = os.path.join(cache, "pair")
+    if not os.path.exists(src):
+        os.makedirs(src)
+        base_generic(src, occgt, cache)
+        common = ["--root", os.path.join(src, "data"), "--format", "generic", "--scene", "synth_000",
+                  "--frames", "000000,000001", "--resolution", f"{W}x{H}",
+                  "--out", os.path.join(src, "pair")]
+        occgt("pair", *common)
+        occgt("occupancy", *common, "--voxel-m", "0.1")
+    shutil.copytree(src, case, dirs_exist_ok=True, symlinks=True)
+
+
 def base_empty(case, occgt, cache):
     os.makedirs(os.path.join(case, "data"), exist_ok=True)
 
@@ -222,6 +260,8 @@ BASES = {
     "tum": base_tum,
     "generic": base_generic,
     "build": base_build,
+    "covis": base_covis,
+    "pair": base_pair,
     "empty": base_empty,
 }
 
@@ -395,6 +435,31 @@ def op_npz_raw(case, m):
     with zipfile.ZipFile(buf, "w", zipfile.ZIP_STORED) as z:
         z.writestr(m["member"], npy_bytes(m["header"]))
     write_bytes(os.path.join(case, m["path"]), buf.getvalue())
+
+
+def op_npz_member(case, m):
+    """Replaces member `member` (no .npy suffix) of an existing .npz: with a raw .npy of a
+    literal `header` and `data_bytes` zero bytes, or with the member's own shape and dtype
+    filled with `fill` (a number, "nan", or a string for a string array)."""
+    import io
+    import zipfile
+    p = os.path.join(case, m["path"])
+    with zipfile.ZipFile(p) as z:
+        members = {n: z.read(n) for n in z.namelist()}
+    name = m["member"] + ".npy"
+    assert name in members, f"{p}: no member {name}"
+    if "header" in m:
+        members[name] = npy_bytes(m["header"], b"\0" * m.get("data_bytes", 0))
+    else:
+        arr = np.load(io.BytesIO(members[name]))
+        b = io.BytesIO()
+        np.save(b, np.full_like(arr, m["fill"]))
+        members[name] = b.getvalue()
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_STORED) as z:
+        for n, data in members.items():
+            z.writestr(n, data)
+    write_bytes(p, buf.getvalue())
 
 
 def op_tar_size_field(case, m):

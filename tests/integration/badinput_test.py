@@ -206,6 +206,18 @@ def check_bases(cache):
     with open(os.path.join(d, "out", "index.json")) as f:
         if len(json.load(f)["shardlist"]) < 3:
             fail("base build", "expected at least 3 shards in the base build")
+    # The covisibility graph gives tuples, the pair folder draws (so their cases test occgt).
+    d = common.scratch("badinput/_base_covis")
+    generators.build_case(d, {"id": "covis", "base": "covis"}, common.occgt, cache)
+    r, _ = run(["tuples", "--json", os.path.join(d, "recipe.yaml"), "--out", os.path.join(d, "out")])
+    if r.returncode != 0 or json.loads(r.stdout)["tuples"] < 1:
+        fail("base covis", f"occgt tuples gives no tuple on the unmodified graph: {r.stdout}{r.stderr}")
+    d = common.scratch("badinput/_base_pair")
+    generators.build_case(d, {"id": "pair", "base": "pair"}, common.occgt, cache)
+    r, _ = run(["inspect", "pair", "--pair-dir", os.path.join(d, "pair"), "--out",
+                os.path.join(d, "pictures")])
+    if r.returncode != 0 or "matches" not in r.stdout or "occupancy" not in r.stdout:
+        fail("base pair", f"inspect pair does not draw the unmodified folder: {r.stdout}{r.stderr}")
     # The hand-written EXR of generators.exr_bytes reads back (so the EXR cases test occgt).
     d = common.scratch("badinput/_base_exr")
     generators.build_case(d, {"id": "exr", "base": "generic", "mutate": EXR_FRAME0}, common.occgt,
