@@ -671,7 +671,10 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
 
 json ReportJson(const SplitData& split, const SplitReportOptions& options,
                 const json& tuples_summary, const std::vector<size_t>& gallery_tuples) {
+  // version 2 since occgt 0.2 (consistent_overlap_min); 0.1 wrote no version
+  // (visible_overlap_min).
   json out = {{"kind", "occgt-split-report"},
+              {"version", 2},
               {"dir", split.dir},
               {"seed", options.seed},
               {"histogram_bins", options.histogram_bins},
