@@ -145,7 +145,8 @@ void RunInspectSplit(const InspectSplitArgs& a) {
   // A build with rendered depth (mesh or fused): the sensor-vs-mesh shares of its frames.
   const std::optional<gt::report::SplitDepthShares> shares =
       gt::pipeline::ComputeSplitDepthShares(a.dir, a.root);
-  const auto written = gt::report::WriteSplitReport(a.dir, out, o, shares ? &*shares : nullptr);
+  const gt::report::SplitReportFiles files =
+      gt::report::WriteSplitReport(a.dir, out, o, shares ? &*shares : nullptr);
   std::printf("inspect split %s\n", a.dir.c_str());
   if (shares) {
     const double n = static_cast<double>(std::max<int64_t>(1, shares->total.Total()));
@@ -156,7 +157,12 @@ void RunInspectSplit(const InspectSplitArgs& a) {
         shares->tolerance.abs_tol_m, shares->tolerance.rel_tol, shares->total.sensor_only / n,
         shares->total.mesh_only / n, shares->total.agree / n, shares->total.disagree / n);
   }
-  for (const auto& p : written) std::printf("  wrote %s\n", p.c_str());
+  for (const auto& p : files.written) std::printf("  wrote %s\n", p.c_str());
+  // Shown on the page too; said here so that a script sees it (the report is still written).
+  if (!files.unreadable.empty()) {
+    std::fprintf(stderr, "occgt: warning: %zu gallery entries could not be read (first: %s)\n",
+                 files.unreadable.size(), files.unreadable.front().c_str());
+  }
 }
 
 }  // namespace

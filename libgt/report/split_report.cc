@@ -717,9 +717,10 @@ json ReportJson(const SplitData& split, const SplitReportOptions& options,
   return out;
 }
 
-std::vector<std::string> WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
-                                          const SplitReportOptions& options,
-                                          const SplitDepthShares* depth_shares) {
+SplitReportFiles WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
+                                  const SplitReportOptions& options,
+                                  const SplitDepthShares* depth_shares) {
+  SplitReportFiles files;
   const SplitData split = LoadSplit(split_dir, options);
   EvalReportData eval;
   if (!options.eval_paths.empty()) eval = LoadEvalReport(options.eval_paths, split);
@@ -777,6 +778,7 @@ std::vector<std::string> WriteSplitReport(const std::string& split_dir, const st
       }
     } catch (const InputError& e) {
       item.caption += " — could not be read: " + std::string(e.what());
+      files.unreadable.push_back(p.key + ": " + e.what());
     }
     gallery.push_back(std::move(item));
   }
@@ -787,13 +789,18 @@ std::vector<std::string> WriteSplitReport(const std::string& split_dir, const st
   if (split.tuples) {
     tuples_summary = SummarizeTuples(*split.tuples, options.histogram_bins);
     gallery_tuples = PickGalleryTuples(*split.tuples, options.gallery_tuples, options.seed);
-    tuples_section = RenderTuplesSection(
-        *split.tuples, tuples_summary, tuple_plots,
-        MakeTupleGallery(*split.tuples, gallery_tuples, options.tuple_thumb_width_px),
-        options.seed);
+    const std::vector<TupleGalleryItem> thumbs =
+        MakeTupleGallery(*split.tuples, gallery_tuples, options.tuple_thumb_width_px);
+    for (const TupleGalleryItem& t : thumbs) {
+      if (t.unreadable) {
+        files.unreadable.push_back("tuple " + std::to_string(t.index) + ": " + t.note);
+      }
+    }
+    tuples_section =
+        RenderTuplesSection(*split.tuples, tuples_summary, tuple_plots, thumbs, options.seed);
   }
 
-  std::vector<std::string> written;
+  std::vector<std::string>& written = files.written;
   for (const std::vector<NamedImage>* group : {&plots, &eval_plots, &tuple_plots}) {
     for (const auto& p : *group) {
       const std::string path = (fs::path(out_dir) / p.name).string();
@@ -814,7 +821,7 @@ std::vector<std::string> WriteSplitReport(const std::string& split_dir, const st
   gt::io::WriteFileAtomic(
       json_path, ReportJson(split, options, tuples_summary, gallery_tuples).dump(1) + "\n");
   written.push_back(json_path);
-  return written;
+  return files;
 }
 
 }  // namespace gt::report

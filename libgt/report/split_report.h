@@ -169,9 +169,14 @@ nlohmann::json ReportJson(const SplitData& split, const SplitReportOptions& opti
 // Everything: plots as PNG files (with options.eval_paths, the eval plots too; with tuples,
 // theirs), report.html and report.json, into out_dir (atomic writes), and with depth_shares
 // depth_sources.json and a "Depth sources" section. The eval files are checked before any
-// work. Returns the paths written.
-std::vector<std::string> WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
-                                          const SplitReportOptions& options,
-                                          const SplitDepthShares* depth_shares = nullptr);
+// work. A gallery pair or tuple that cannot be read is shown with its error on the page and
+// listed in `unreadable` (the report is still written).
+struct SplitReportFiles {
+  std::vector<std::string> written;     // paths written
+  std::vector<std::string> unreadable;  // "<pair key>: <error>", "tuple <k>: <error>"
+};
+SplitReportFiles WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
+                                  const SplitReportOptions& options,
+                                  const SplitDepthShares* depth_shares = nullptr);
 
 }  // namespace gt::report

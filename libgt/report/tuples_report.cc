@@ -370,6 +370,7 @@ std::vector<TupleGalleryItem> MakeTupleGallery(const TupleSet& set,
     } catch (const InputError& e) {
       item.views.clear();
       item.note = "could not be read: " + std::string(e.what());
+      item.unreadable = true;
     }
     out.push_back(std::move(item));
   }

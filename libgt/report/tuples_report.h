@@ -75,6 +75,7 @@ struct TupleGalleryItem {
   std::string caption;            // scene, frames, covisibility and occlusion
   std::vector<NamedImage> views;  // one thumbnail per view (empty without shards)
   std::string note;               // why there are no thumbnails, when there are none
+  bool unreadable = false;        // the note is a read error (the shard or sample is bad)
 };
 
 // Thumbnails of `indices` at most thumb_width_px wide (JPEG).

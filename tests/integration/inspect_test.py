@@ -11,6 +11,7 @@
 - `inspect pair --root ... --frames` on the real TartanAir sample and `inspect split` on a
   folder written by this test (an empty split, a malformed line).
 """
+import glob
 import gzip
 import io
 import json
@@ -221,6 +222,20 @@ def main():
     check(got == want, f"most-occluded gallery {got}, expected {want}")
     r = common.occgt("inspect", "split", build, "--gallery-order", "worst", check=False)
     check(r.returncode == 2 and r.stderr.startswith("occgt: error: --gallery-order"), r.stderr)
+
+    # --- a gallery pair whose shard is gone: the page shows the error and the terminal says
+    # it (it was on the page only); the report is still written, exit 0.
+    cut = os.path.join(tmp, "cut_split")
+    shutil.copytree(build, cut, ignore=shutil.ignore_patterns("inspect", "report*"))
+    gone = sorted(glob.glob(os.path.join(cut, "*.tar")))
+    for t in gone:
+        os.remove(t)
+    r = common.occgt("inspect", "split", cut, "--out", os.path.join(cut, "r"), "--gallery", "3")
+    text5 = open(os.path.join(cut, "r", "report.html"), encoding="utf-8").read()
+    check(text5.count("could not be read: ") == 3, "cut split: the page does not show 3 errors")
+    check(r.stderr.count("\n") == 1 and r.stderr.startswith(
+        "occgt: warning: 3 gallery entries could not be read (first: ") and
+        ".tar: cannot open the tar archive" in r.stderr, f"cut split stderr: {r.stderr!r}")
 
     # --- a split with a caveat and no images: the warning box says both.
     plain = os.path.join(tmp, "plain")
