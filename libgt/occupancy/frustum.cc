@@ -22,8 +22,8 @@ bool BinOptions::Check(std::string* error) const {
     return false;
   };
   if (num_bins < 1 || num_bins > 64) return fail("num_bins must be in 1..64");
-  if (!(near_m > 0.0) || !std::isfinite(near_m)) return fail("near_m must be > 0");
-  if (!(far_m > near_m) || !std::isfinite(far_m)) return fail("far_m must be > near_m");
+  if (!(near_m > 0.0) || !std::isfinite(near_m)) return fail("near_m must be finite and > 0");
+  if (!(far_m > near_m) || !std::isfinite(far_m)) return fail("far_m must be finite and > near_m");
   return true;
 }
 

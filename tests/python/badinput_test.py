@@ -208,8 +208,9 @@ class BadInput(unittest.TestCase):
         self.check(r"stride", stride=0)
         self.check(r"num_bins must be in 1\.\.64", bins=65, occupancy=True)
         self.check(r"num_bins must be in 1\.\.64", bins=0, occupancy=True)
-        self.check(r"far_m must be > near_m", near_m=5.0, far_m=1.0, occupancy=True)
-        self.check(r"near_m must be > 0", near_m=0.0, occupancy=True)
+        self.check(r"far_m must be finite and > near_m", near_m=5.0, far_m=1.0, occupancy=True)
+        self.check(r"near_m must be finite and > 0", near_m=0.0, occupancy=True)
+        self.check(r"near_m must be finite and > 0", near_m=float("inf"), occupancy=True)
         self.check(r"voxel_m must be > 0", voxel_m=0.0, occupancy=True)
         self.check(r"max_range_m must be finite", max_range_m=float("inf"), occupancy=True)
         # A wrong Python type is pybind11's TypeError (not a crash either).
