@@ -30,6 +30,9 @@ struct ScanArgs {
   std::string scene;
   std::string device = "dslr";
   bool device_given = false;  // --device on the command line (scannetpp only)
+  // Flags of one format or of a mesh given on the command line: refused where they would be
+  // ignored (the first such flag).
+  std::string exr_channel_flag, tum_flag, mesh_flag;
   bool json = false;
   gt::datasets::ReaderOptions reader;
   gt::datasets::ScanOptions scan;
@@ -175,6 +178,18 @@ void RunScan(const ScanArgs& args) {
   if (args.device_given && format != gt::DatasetFormat::kScanNetPP) {
     throw gt::InputError("--device", "only for the scannetpp format");
   }
+  if (!args.exr_channel_flag.empty() && format != gt::DatasetFormat::kGeneric) {
+    throw gt::InputError(args.exr_channel_flag, "only for the generic format");
+  }
+  if (!args.tum_flag.empty() && format != gt::DatasetFormat::kTum) {
+    throw gt::InputError(args.tum_flag, "only for the tum format");
+  }
+  // Only ScanNet's and ScanNet++'s readers know a scene's mesh; others need --mesh.
+  if (!args.mesh_flag.empty() && args.mesh.empty() && format != gt::DatasetFormat::kScanNet &&
+      format != gt::DatasetFormat::kScanNetPP) {
+    throw gt::InputError(args.mesh_flag, "only with a mesh: --mesh PATH (the " + args.format +
+                                             " reader has none of its own)");
+  }
   const auto reader = gt::datasets::MakeReader(format, reader_options);
   std::vector<std::string> names;
   if (!args.scene.empty()) {
@@ -269,8 +284,17 @@ void AddScanCommand(CLI::App& app) {
   cmd->add_option("--abs-tol-m", args->tolerance.abs_tol_m,
                   "With a mesh: sensor and mesh agree within abs-tol-m + rel-tol * depth (0.2)");
   cmd->add_option("--rel-tol", args->tolerance.rel_tol, "With a mesh: see --abs-tol-m (0.01)");
-  cmd->callback([args, device] {
+  cmd->callback([args, device, cmd] {
     args->device_given = device->count() > 0;
+    const auto first_given = [cmd](std::initializer_list<const char*> flags) {
+      for (const char* f : flags) {
+        if (cmd->get_option(f)->count() > 0) return std::string(f);
+      }
+      return std::string();
+    };
+    args->exr_channel_flag = first_given({"--exr-channel"});
+    args->tum_flag = first_given({"--tum-max-dt"});
+    args->mesh_flag = first_given({"--mesh-stride", "--abs-tol-m", "--rel-tol"});
     RunScan(*args);
   });
 }
