@@ -1,9 +1,9 @@
 // NumPy .npy / .npz reading and writing (rules in npy.h and SHARDS.md).
 #include "libgt/io/npy.h"
-#include "libgt/io/npz_members.h"
 
 #include <zip.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <cstring>
@@ -15,6 +15,7 @@
 #include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
+#include "libgt/io/npz_members.h"
 
 namespace gt::io {
 namespace {
@@ -348,10 +349,11 @@ NpyArray ParseNpy(std::string_view bytes, const std::string& name) {
 
 NpyArray ReadNpy(const std::string& path) { return ParseNpy(ReadFileBytes(path), path); }
 
-std::string EncodeNpy(const std::string& descr, const std::vector<int64_t>& shape, const void* data,
-                      size_t nbytes) {
-  const size_t item_size = SupportedItemSize(descr);
-  GT_ASSERT_MSG(item_size > 0, "EncodeNpy: unsupported descr " + descr);
+namespace {
+
+// The .npy bytes of an array of `item_size`-byte elements of dtype `descr` (not checked).
+std::string EncodeNpyOf(const std::string& descr, size_t item_size,
+                        const std::vector<int64_t>& shape, const void* data, size_t nbytes) {
   uint64_t expected = item_size;
   for (int64_t dim : shape) {
     GT_ASSERT(dim >= 0);
@@ -386,6 +388,132 @@ std::string EncodeNpy(const std::string& descr, const std::vector<int64_t>& shap
   out.push_back('\n');
   GT_ASSERT(out.size() % kAlign == 0);
   if (nbytes > 0) out.append(static_cast<const char*>(data), nbytes);
+  return out;
+}
+
+// The Unicode scalar values of UTF-8 text; false when it is not UTF-8 (overlong forms,
+// surrogates and values above U+10FFFF are not).
+bool Utf8CodePoints(const std::string& text, std::vector<uint32_t>* out) {
+  out->clear();
+  for (size_t i = 0; i < text.size();) {
+    const auto b = static_cast<unsigned char>(text[i]);
+    int extra = 0;
+    uint32_t code = 0, min = 0;
+    if (b < 0x80) {
+      code = b;
+    } else if ((b & 0xE0) == 0xC0) {
+      extra = 1, code = b & 0x1F, min = 0x80;
+    } else if ((b & 0xF0) == 0xE0) {
+      extra = 2, code = b & 0x0F, min = 0x800;
+    } else if ((b & 0xF8) == 0xF0) {
+      extra = 3, code = b & 0x07, min = 0x10000;
+    } else {
+      return false;
+    }
+    if (i + extra >= text.size() && extra > 0) return false;  // cut short
+    for (int k = 1; k <= extra; ++k) {
+      const auto c = static_cast<unsigned char>(text[i + k]);
+      if ((c & 0xC0) != 0x80) return false;
+      code = (code << 6) | (c & 0x3F);
+    }
+    if (code < min || code > 0x10FFFF || (code >= 0xD800 && code <= 0xDFFF)) return false;
+    out->push_back(code);
+    i += 1 + extra;
+  }
+  return true;
+}
+
+void AppendUtf8(uint32_t code, std::string* out) {
+  if (code < 0x80) {
+    out->push_back(static_cast<char>(code));
+  } else if (code < 0x800) {
+    out->push_back(static_cast<char>(0xC0 | (code >> 6)));
+    out->push_back(static_cast<char>(0x80 | (code & 0x3F)));
+  } else if (code < 0x10000) {
+    out->push_back(static_cast<char>(0xE0 | (code >> 12)));
+    out->push_back(static_cast<char>(0x80 | ((code >> 6) & 0x3F)));
+    out->push_back(static_cast<char>(0x80 | (code & 0x3F)));
+  } else {
+    out->push_back(static_cast<char>(0xF0 | (code >> 18)));
+    out->push_back(static_cast<char>(0x80 | ((code >> 12) & 0x3F)));
+    out->push_back(static_cast<char>(0x80 | ((code >> 6) & 0x3F)));
+    out->push_back(static_cast<char>(0x80 | (code & 0x3F)));
+  }
+}
+
+}  // namespace
+
+std::string EncodeNpy(const std::string& descr, const std::vector<int64_t>& shape, const void* data,
+                      size_t nbytes) {
+  const size_t item_size = SupportedItemSize(descr);
+  GT_ASSERT_MSG(item_size > 0, "EncodeNpy: unsupported descr " + descr);
+  return EncodeNpyOf(descr, item_size, shape, data, nbytes);
+}
+
+std::string EncodeStringsNpy(const std::vector<std::string>& values, const std::string& what) {
+  std::vector<std::vector<uint32_t>> codes(values.size());
+  size_t n = 1;
+  for (size_t k = 0; k < values.size(); ++k) {
+    if (!Utf8CodePoints(values[k], &codes[k])) {
+      std::string shown;  // the bytes outside printable ASCII as \xNN: one readable line
+      for (const char ch : values[k]) {
+        const auto b = static_cast<unsigned char>(ch);
+        if (b >= 0x20 && b < 0x7f) {
+          shown.push_back(ch);
+        } else {
+          const char* hex = "0123456789abcdef";
+          shown += std::string("\\x") + hex[b >> 4] + hex[b & 15];
+        }
+      }
+      throw InputError(what,
+                       "string " + std::to_string(k) + " is not UTF-8 text: \"" + shown + "\"");
+    }
+    n = std::max(n, codes[k].size());
+  }
+  std::string data(values.size() * n * 4, '\0');
+  for (size_t k = 0; k < codes.size(); ++k) {
+    for (size_t c = 0; c < codes[k].size(); ++c) {
+      for (int b = 0; b < 4; ++b) {
+        data[(k * n + c) * 4 + b] = static_cast<char>((codes[k][c] >> (8 * b)) & 0xff);
+      }
+    }
+  }
+  return EncodeNpyOf("<U" + std::to_string(n), n * 4, {static_cast<int64_t>(values.size())},
+                     data.data(), data.size());
+}
+
+std::vector<std::string> DecodeStringsNpy(std::string_view bytes, const std::string& name) {
+  const NpyHeader h = ParseNpyHeader(bytes, name);
+  if (h.descr.size() < 3 || h.descr.compare(0, 2, "<U") != 0 || h.shape.size() != 1 ||
+      h.fortran_order) {
+    throw InputError(name, "expected a 1-D '<U' string array, got " + h.descr);
+  }
+  // n code units a string: digits only, bounded (no std::stoul exception, no overflow of
+  // count * n * 4 below).
+  const std::string units = h.descr.substr(2);
+  if (units.size() > 4 || units.find_first_not_of("0123456789") != std::string::npos ||
+      std::stoul(units) == 0) {
+    throw InputError(name,
+                     "expected a 1-D '<U' string array of 1..9999 characters, got " + h.descr);
+  }
+  const size_t n = std::stoul(units);
+  const size_t count = static_cast<size_t>(h.shape[0]);
+  const size_t data_bytes = bytes.size() > h.data_offset ? bytes.size() - h.data_offset : 0;
+  if (count > data_bytes / (n * 4)) throw InputError(name, "truncated");
+  std::vector<std::string> out(count);
+  const auto* data = reinterpret_cast<const unsigned char*>(bytes.data() + h.data_offset);
+  for (size_t k = 0; k < count; ++k) {
+    for (size_t c = 0; c < n; ++c) {
+      const unsigned char* u = data + (k * n + c) * 4;
+      const uint32_t code = u[0] | (u[1] << 8) | (u[2] << 16) | (static_cast<uint32_t>(u[3]) << 24);
+      if (code == 0) break;  // numpy pads shorter strings with NULs
+      if (code > 0x10FFFF || (code >= 0xD800 && code <= 0xDFFF)) {
+        throw InputError(name, "string " + std::to_string(k) + ": code unit " +
+                                   std::to_string(code) + " is not a Unicode character");
+      }
+      AppendUtf8(code, &out[k]);
+    }
+  }
   return out;
 }
 

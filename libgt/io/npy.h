@@ -75,6 +75,14 @@ template <typename T, typename A = std::allocator<T>>
 std::string EncodeNpy(const std::vector<int64_t>& shape, const std::vector<T, A>& values) {
   return EncodeNpy(NpyDescr<T>(), shape, values.data(), values.size() * sizeof(T));
 }
+// Strings as a 1-D NumPy unicode array (descr '<U<n>': n UTF-32LE code units a string, n the
+// longest and at least 1), as np.save writes a list of str; the strings are UTF-8 text.
+// Throws InputError(what, ...) for one that is not UTF-8.
+std::string EncodeStringsNpy(const std::vector<std::string>& values, const std::string& what);
+// The strings of such an array, as UTF-8 (numpy's NUL padding dropped). Throws InputError
+// naming `name` for another dtype or rank, n outside 1..9999, a truncated array or a code
+// unit that is not a Unicode scalar value.
+std::vector<std::string> DecodeStringsNpy(std::string_view bytes, const std::string& name);
 // Atomic write (atomic_file.h WriteFileAtomic) of EncodeNpy.
 template <typename T>
 void WriteNpy(const std::string& path, const std::vector<int64_t>& shape,

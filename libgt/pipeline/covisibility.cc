@@ -28,31 +28,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Strings as a NumPy unicode array (descr "<U<n>": UTF-32LE code units, n the longest).
-// Frame ids are bytes; each byte becomes one code unit (ids are ASCII in every reader).
-std::string EncodeStrings(const std::vector<std::string>& values) {
-  size_t n = 1;
-  for (const std::string& s : values) n = std::max(n, s.size());
-  std::string data(values.size() * n * 4, '\0');
-  for (size_t k = 0; k < values.size(); ++k) {
-    for (size_t c = 0; c < values[k].size(); ++c) {
-      data[(k * n + c) * 4] = values[k][c];
-    }
-  }
-  // EncodeNpy takes numeric dtypes only: the same .npy 1.0 layout written here (header
-  // padded with spaces and ended by '\n' so that the data starts at a multiple of 64).
-  std::string header = "{'descr': '<U" + std::to_string(n) +
-                       "', 'fortran_order': False, 'shape': (" + std::to_string(values.size()) +
-                       ",), }";
-  const size_t unpadded = 10 + header.size() + 1;
-  header.append((64 - unpadded % 64) % 64, ' ');
-  header.push_back('\n');
-  std::string out = std::string("\x93NUMPY\x01\x00", 8);
-  out.push_back(static_cast<char>(header.size() & 0xff));
-  out.push_back(static_cast<char>(header.size() >> 8));
-  return out + header + data;
-}
-
 // The digest stored in a graph (the recipe's md5, 32 hex characters), or "" when none.
 std::string StoredDigest(const std::string& path) {
   const std::map<std::string, std::string> npz = io::ReadNpzBytes(path);  // frame_ids: '<U'
@@ -135,41 +110,12 @@ std::vector<T> Member(const std::map<std::string, std::string>& m, const std::st
   return std::vector<T>(p, p + a.NumElements());
 }
 
-// '<U<n>' [F] (UTF-32LE); every code unit must be a byte (the ids occgt writes).
+// '<U<n>' [F]: the frame ids (io::DecodeStringsNpy).
 std::vector<std::string> Strings(const std::map<std::string, std::string>& m,
                                  const std::string& key, const std::string& path) {
   auto it = m.find(key);
   if (it == m.end()) throw InputError(path, "expected a member '" + key + "'");
-  const std::string where = path + ":" + key + ".npy";
-  const io::NpyHeader h = io::ParseNpyHeader(it->second, where);
-  if (h.descr.size() < 3 || h.descr.compare(0, 2, "<U") != 0 || h.shape.size() != 1) {
-    throw InputError(where, "expected a 1-D '<U' string array, got " + h.descr);
-  }
-  // n code units per string: digits only, bounded (no std::stoul exception, no overflow of
-  // count * n * 4 below).
-  const std::string units = h.descr.substr(2);
-  if (units.size() > 4 || units.find_first_not_of("0123456789") != std::string::npos ||
-      std::stoul(units) == 0) {
-    throw InputError(where,
-                     "expected a 1-D '<U' string array of 1..9999 characters, got " + h.descr);
-  }
-  const size_t n = std::stoul(units);
-  const size_t count = static_cast<size_t>(h.shape[0]);
-  const size_t data_bytes =
-      it->second.size() > h.data_offset ? it->second.size() - h.data_offset : 0;
-  if (count > data_bytes / (n * 4)) throw InputError(where, "truncated");
-  std::vector<std::string> out(count);
-  const auto* data = reinterpret_cast<const unsigned char*>(it->second.data() + h.data_offset);
-  for (size_t k = 0; k < count; ++k) {
-    for (size_t c = 0; c < n; ++c) {
-      const unsigned char* u = data + (k * n + c) * 4;
-      const uint32_t code = u[0] | (u[1] << 8) | (u[2] << 16) | (static_cast<uint32_t>(u[3]) << 24);
-      if (code == 0) break;
-      if (code > 255) throw InputError(where, "expected byte strings (frame ids)");
-      out[k].push_back(static_cast<char>(code));
-    }
-  }
-  return out;
+  return io::DecodeStringsNpy(it->second, path + ":" + key + ".npy");
 }
 
 }  // namespace
@@ -269,7 +215,7 @@ void WriteSceneCovisibility(const std::string& path, const SceneCovisibility& g,
   const int64_t p = static_cast<int64_t>(g.i.size());
   const int64_t f = static_cast<int64_t>(g.frame_ids.size());
   std::map<std::string, std::string> m;
-  m["frame_ids"] = EncodeStrings(g.frame_ids);
+  m["frame_ids"] = io::EncodeStringsNpy(g.frame_ids, "frame_ids");
   m["i"] = io::EncodeNpy<int32_t>({p}, g.i);
   m["j"] = io::EncodeNpy<int32_t>({p}, g.j);
   m["c_ij"] = io::EncodeNpy<float>({p}, g.c_ij);

@@ -219,34 +219,6 @@ void WriteExportJson(const std::string& path, const char* format, double units_p
   io::WriteFileAtomic(path, doc.dump(2) + "\n");
 }
 
-// A 1-D numpy unicode array ('<U<len>', UTF-32LE) of ASCII strings, as np.savez writes a
-// list of str (DUSt3R's loaders read it without allow_pickle).
-std::string EncodeAsciiStringsNpy(const std::vector<std::string>& values) {
-  size_t len = 1;
-  for (const std::string& v : values) len = std::max(len, v.size());
-  std::string data(values.size() * len * 4, '\0');
-  for (size_t i = 0; i < values.size(); ++i) {
-    for (size_t j = 0; j < values[i].size(); ++j) {
-      const auto c = static_cast<unsigned char>(values[i][j]);
-      if (c >= 0x80) throw InputError("dust3r export", "non-ASCII name " + values[i]);
-      data[(i * len + j) * 4] = static_cast<char>(c);
-    }
-  }
-  // The .npy 1.0 header: magic, version, little-endian header length, the dict padded with
-  // spaces and a final '\n' so that the data starts at a multiple of 64 bytes.
-  std::string dict = "{'descr': '<U" + std::to_string(len) +
-                     "', 'fortran_order': False, 'shape': (" + std::to_string(values.size()) +
-                     ",), }";
-  const size_t prefix = 10;
-  const size_t total = ((prefix + dict.size() + 1 + 63) / 64) * 64;
-  dict.append(total - prefix - dict.size() - 1, ' ');
-  dict += '\n';
-  std::string out("\x93NUMPY\x01\x00", 8);
-  out.push_back(static_cast<char>(dict.size() & 0xff));
-  out.push_back(static_cast<char>((dict.size() >> 8) & 0xff));
-  return out + dict + data;
-}
-
 void AppendMatrix(const Eigen::MatrixXd& m, std::vector<double>* out) {
   for (int r = 0; r < m.rows(); ++r) {
     for (int c = 0; c < m.cols(); ++c) out->push_back(m(r, c));
@@ -370,7 +342,7 @@ PosedExportStats ExportDust3r(const std::string& out_dir,
     const auto v = static_cast<int64_t>(s.frames.size());
     const auto np = static_cast<int64_t>(s.pairs.size());
     io::WriteNpz(dir + "/scene_metadata.npz",
-                 {{"images", EncodeAsciiStringsNpy(scene_images)},
+                 {{"images", io::EncodeStringsNpy(scene_images, "dust3r export")},
                   {"intrinsics", io::EncodeNpy<double>({v, 3, 3}, scene_k)},
                   {"pairs", io::EncodeNpy<double>({np, 5}, scene_pairs)},
                   {"trajectories", io::EncodeNpy<double>({v, 4, 4}, scene_t)}});
@@ -379,7 +351,7 @@ PosedExportStats ExportDust3r(const std::string& out_dir,
     io::WriteNpz(dir + "/selected_pairs.npz",
                  {{"overlaps", io::EncodeNpy<double>({np, 2}, selected_overlaps)},
                   {"pairs", io::EncodeNpy<double>({np, 3}, selected_pairs)},
-                  {"selection", EncodeAsciiStringsNpy(stems)}});
+                  {"selection", io::EncodeStringsNpy(stems, "dust3r export")}});
     RemoveOthers(dir, {"images", "depth", "scene_metadata.npz", "selected_pairs.npz"});
     scene_list.push_back(s.folder);
     scene_names.push_back(s.folder);
@@ -396,11 +368,11 @@ PosedExportStats ExportDust3r(const std::string& out_dir,
   const auto np = static_cast<int64_t>(all_pairs.size() / 5);
   io::WriteNpz(out_dir + "/all_metadata.npz",
                {{"counts", io::EncodeNpy<int64_t>({ns}, counts)},
-                {"images", EncodeAsciiStringsNpy(images)},
+                {"images", io::EncodeStringsNpy(images, "dust3r export")},
                 {"intrinsics", io::EncodeNpy<double>({nv, 3, 3}, intrinsics)},
                 {"pairs", io::EncodeNpy<double>({np, 5}, all_pairs)},
                 {"sceneids", io::EncodeNpy<int64_t>({nv}, sceneids)},
-                {"scenes", EncodeAsciiStringsNpy(scene_names)},
+                {"scenes", io::EncodeStringsNpy(scene_names, "dust3r export")},
                 {"trajectories", io::EncodeNpy<double>({nv, 4, 4}, trajectories)}});
   io::WriteFileAtomic(out_dir + "/scene_list.json", scene_list.dump() + "\n");
   RemoveOthers(out_dir, keep);

@@ -428,5 +428,63 @@ TEST(Npy, ExchangeWithNumPy) {
   EXPECT_EQ(checked.stdout_text, "ok\n");
 }
 
+// Strings: '<U<n>' arrays round-trip UTF-8 text (ASCII ids, accents, a CJK character, an
+// emoji outside the BMP), are laid out as NumPy's (n = the longest, NUL padding, data at a
+// multiple of 64) and are exchanged with NumPy both ways; bad text and bad arrays are refused.
+TEST(NpyStrings, RoundTripLayoutAndExchangeWithNumPy) {
+  const std::vector<std::string> values = {"000150", "", "caf\xc3\xa9", "\xe6\x88\xbf",
+                                           "a\xf0\x9f\x98\x80z"};
+  const std::string bytes = EncodeStringsNpy(values, "test");
+  EXPECT_EQ(DecodeStringsNpy(bytes, "test"), values);
+  const NpyHeader h = ParseNpyHeader(bytes, "test");
+  EXPECT_EQ(h.descr, "<U6");
+  EXPECT_EQ(h.shape, (std::vector<int64_t>{5}));
+  EXPECT_EQ(h.data_offset % 64, 0u);
+  EXPECT_EQ(bytes.size(), h.data_offset + 5 * 6 * 4);
+  // U+00E9 of "café" is code unit 3 of string 2, little-endian.
+  EXPECT_EQ(static_cast<unsigned char>(bytes[h.data_offset + (2 * 6 + 3) * 4]), 0xE9);
+  EXPECT_EQ(DecodeStringsNpy(EncodeStringsNpy({}, "test"), "test"), std::vector<std::string>{});
+  EXPECT_EQ(ParseNpyHeader(EncodeStringsNpy({}, "test"), "test").descr, "<U1");
+
+  const std::string dir = test::ScratchDir("npy_strings");
+  WriteFileAtomic(dir + "/ours.npy", bytes);
+  {
+    std::ofstream py(dir + "/check.py");
+    py << "import numpy as np, sys\n"
+          "d = sys.argv[1]\n"
+          "a = np.load(d + '/ours.npy')\n"
+          "assert a.dtype == np.dtype('<U6'), a.dtype\n"
+          "assert a.tolist() == ['000150', '', 'caf\\u00e9', '\\u623f', 'a\\U0001F600z'], a\n"
+          "np.save(d + '/numpy.npy', np.array(['x', 'f\\u00fc\\u00df', '000001']))\n"
+          "print('ok')\n";
+  }
+  const auto checked = test::RunShell("/usr/bin/python3 '" + dir + "/check.py' '" + dir + "'");
+  ASSERT_EQ(checked.exit_code, 0) << checked.stderr_text;
+  EXPECT_EQ(DecodeStringsNpy(ReadFileBytes(dir + "/numpy.npy"), "numpy.npy"),
+            (std::vector<std::string>{"x", "f\xc3\xbc\xc3\x9f", "000001"}));
+
+  for (const std::string& bad : {std::string("\xff"), std::string("\xc3"), std::string("\xc0\xaf"),
+                                 std::string("\xed\xa0\x80")}) {
+    ExpectInputError(
+        [&] {
+          EncodeStringsNpy({"ok", bad}, "frame_ids");
+        },
+        {"frame_ids", "not UTF-8 text"});
+  }
+  ExpectInputError(
+      [&] {
+        DecodeStringsNpy(EncodeNpy<int32_t>({2}, {1, 2}), "ids.npy");
+      },
+      {"ids.npy", "expected a 1-D '<U' string array, got <i4"});
+  std::string cut = bytes;
+  cut.resize(cut.size() - 4);
+  ExpectInputError([&] { DecodeStringsNpy(cut, "cut.npy"); }, {"cut.npy", "truncated"});
+  std::string surrogate = EncodeStringsNpy({"ab"}, "test");
+  surrogate[surrogate.size() - 4] = '\x00';
+  surrogate[surrogate.size() - 3] = '\xd8';  // U+D800
+  ExpectInputError([&] { DecodeStringsNpy(surrogate, "s.npy"); },
+                   {"s.npy", "string 0: code unit 55296 is not a Unicode character"});
+}
+
 }  // namespace
 }  // namespace gt::io
