@@ -190,6 +190,36 @@ std::vector<int32_t> SampleQueries(const DepthImage& depth, const LabelOptions& 
   return uv;
 }
 
+SeenBy CountSeenBy(const uint32_t* visible_in, const uint8_t* valid, int num_views,
+                   size_t pixels_per_view) {
+  if (num_views < 1 || num_views > kMaxViews) {
+    throw InputError("visible_in", "expected 1.." + std::to_string(kMaxViews) + " views, got " +
+                                       std::to_string(num_views));
+  }
+  const size_t total = pixels_per_view * static_cast<size_t>(num_views);
+  const uint32_t views_mask = num_views == kMaxViews ? ~0u : (1u << num_views) - 1;
+  for (size_t p = 0; p < total; ++p) {
+    if ((visible_in[p] & ~views_mask) != 0) {
+      throw InputError("visible_in", "bit for a view >= " + std::to_string(num_views) +
+                                         " (the number of views) set at element " +
+                                         std::to_string(p));
+    }
+    if (valid[p] > 1) {
+      throw InputError("valid", "expected 0 or 1, got " + std::to_string(valid[p]) +
+                                    " at element " + std::to_string(p));
+    }
+  }
+  SeenBy out;
+  out.seen_by.resize(total);
+  out.histogram.assign(static_cast<size_t>(num_views) * num_views, 0);
+  for (int i = 0; i < num_views; ++i) {
+    const size_t p0 = pixels_per_view * i;
+    SeenStats(visible_in + p0, ~(1u << i), valid + p0, pixels_per_view, out.seen_by.data() + p0,
+              num_views, out.histogram.data() + static_cast<size_t>(i) * num_views);
+  }
+  return out;
+}
+
 ViewsTruth ComputeViewsTruth(const std::vector<WorkingFrame>& views,
                              const ViewsTruthOptions& options,
                              const std::optional<std::vector<int32_t>>& queries_uv) {

@@ -101,4 +101,15 @@ ViewsTruth ComputeViewsTruth(const std::vector<WorkingFrame>& views,
 std::vector<int32_t> SampleQueries(const DepthImage& depth, const LabelOptions& labels,
                                    int num_tracks, uint64_t seed);
 
+// seen_by and seen_by_histogram of stored bitmasks (an N-view shard's visible_in and valid),
+// as ComputeViewsTruth returns them with those masks. visible_in uint32 and valid uint8, both
+// [num_views, pixels_per_view]. Throws InputError("visible_in", ...) for num_views outside
+// 1..32 or a bit set for a view >= num_views, ("valid", ...) for a value other than 0 and 1.
+struct SeenBy {
+  std::vector<uint8_t> seen_by;    // [N, H, W]
+  std::vector<int64_t> histogram;  // [N, N]
+};
+SeenBy CountSeenBy(const uint32_t* visible_in, const uint8_t* valid, int num_views,
+                   size_t pixels_per_view);
+
 }  // namespace gt::truth

@@ -14,6 +14,7 @@ Functions:
     pair_from_scene    pair_ground_truth of two frames of a scene, as ``occgt pair`` computes it
     views_ground_truth N views (N <= 32): per-pixel visibility of every view in every other
                        view as bitmasks, and tracks of query pixels with a state per view
+    views_seen_by      seen_by and its histogram of stored bitmasks (an N-view shard's)
     load_mesh          a triangle mesh (PLY) and its ray-casting BVH, built once
     render_depth       planar depth of a mesh seen by a pinhole, OpenCV or OpenCV-fisheye camera
 
@@ -87,6 +88,8 @@ __all__ = [
     "pair_ground_truth",
     "pair_options",
     "views_ground_truth",
+    "views_seen_by",
+    "SeenBy",
     "ViewsGroundTruth",
     "TRACK_VISIBLE",
     "TRACK_OCCLUDED",
@@ -398,6 +401,30 @@ def views_ground_truth(
         bounds=bounds, target_lookup=target_lookup, missing_target=missing_target,
         dataset_depth_range=dataset_depth_range, dataset_min_depth_m=dataset_min_depth_m,
         dataset_max_depth_m=dataset_max_depth_m)
+    return result
+
+
+class SeenBy(TypedDict):
+    """What views_seen_by returns (N views of H x W)."""
+
+    seen_by: npt.NDArray[np.uint8]  # [N, H, W] other views in which the pixel is VISIBLE
+    seen_by_histogram: npt.NDArray[np.int64]  # [N, N] [i, k]: valid pixels seen by k others
+
+
+def views_seen_by(visible_in: npt.ArrayLike, valid: npt.ArrayLike) -> SeenBy:
+    """``seen_by`` and ``seen_by_histogram`` of stored bitmasks (C++ ``truth::CountSeenBy``):
+    for the ``visible_in`` and ``valid`` of ``views_ground_truth`` (or of an N-view shard),
+    the same arrays ``views_ground_truth`` returned with them.
+
+    Args:
+        visible_in: uint32 [N, H, W], 1 <= N <= 32 (bit j: VISIBLE in view j).
+        valid: uint8 [N, H, W], 0 or 1.
+
+    Raises:
+        ValueError: another dtype or shape, a bit set for a view >= N, a valid value other
+            than 0 and 1.
+    """
+    result: SeenBy = _occgt.views_seen_by(visible_in, valid)
     return result
 
 

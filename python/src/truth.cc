@@ -373,6 +373,39 @@ py::array_t<uint8_t> DenseVolume(py::handle occ, py::handle known, py::handle bi
   return ToArray(std::move(dense), {bins, v.height, v.width});
 }
 
+// seen_by and seen_by_histogram of stored bitmasks (truth::CountSeenBy).
+py::dict ViewsSeenBy(py::handle visible_in, py::handle valid) {
+  const py::array v = AsArray(visible_in, "visible_in");
+  const py::array m = AsArray(valid, "valid");
+  if (v.dtype().kind() != 'u' || v.itemsize() != 4 || v.ndim() != 3) {
+    ThrowValue("visible_in", "expected uint32 [N, H, W] (views_ground_truth's visible_in), got " +
+                                 DtypeText(v) + " " + ShapeText(v));
+  }
+  if (m.dtype().kind() != 'u' || m.itemsize() != 1 || m.ndim() != 3 || m.shape(0) != v.shape(0) ||
+      m.shape(1) != v.shape(1) || m.shape(2) != v.shape(2)) {
+    ThrowValue("valid", "expected uint8 of visible_in's shape " + ShapeText(v) + ", got " +
+                            DtypeText(m) + " " + ShapeText(m));
+  }
+  const auto vc = py::array_t<uint32_t, py::array::c_style | py::array::forcecast>::ensure(v);
+  const auto mc = py::array_t<uint8_t, py::array::c_style | py::array::forcecast>::ensure(m);
+  if (!vc || !mc) throw py::error_already_set();
+  const py::ssize_t n = v.shape(0), h = v.shape(1), w = v.shape(2);
+  if (n < 1 || n > gt::truth::kMaxViews) {
+    ThrowValue("visible_in", "expected 1.." + std::to_string(gt::truth::kMaxViews) +
+                                 " views, got " + std::to_string(n));
+  }
+  gt::truth::SeenBy s;
+  {
+    py::gil_scoped_release no_gil;
+    s = gt::truth::CountSeenBy(vc.data(), mc.data(), static_cast<int>(n),
+                               static_cast<size_t>(h) * static_cast<size_t>(w));
+  }
+  py::dict out;
+  out["seen_by"] = ToArray(std::move(s.seen_by), {n, h, w});
+  out["seen_by_histogram"] = ToArray(std::move(s.histogram), {n, n});
+  return out;
+}
+
 // The value every keyword argument of pair_ground_truth takes when None: the defaults of the
 // C++ Options structs as truth::ResolvePairTruthOptions gives them (the Python signatures
 // show these values; none is written in Python).
@@ -490,6 +523,9 @@ void BindTruth(py::module_& m) {
     m.attr("TRACK_STATE_NAMES") = names;
   }
 
+  m.def("views_seen_by", &ViewsSeenBy, "visible_in"_a, "valid"_a,
+        "seen_by uint8 [N, H, W] and seen_by_histogram int64 [N, N] of stored N-view bitmasks "
+        "(truth::CountSeenBy), as views_ground_truth returns them; see occgt.views_seen_by.");
   m.def("dense_volume", &DenseVolume, "occ"_a, "known"_a,
         "bins"_a = gt::occupancy::BinOptions().num_bins,
         "uint8 [bins, H/2, W/2] (0 free, 1 occupied, 255 unknown) of occupancy words "

@@ -247,6 +247,41 @@ TEST(ComputeViewsTruth, StatisticsCountTheOtherViewsThatSeeAPixel) {
   EXPECT_EQ(t.seen_by_histogram, hist);
 }
 
+TEST(CountSeenBy, StoredBitmasksGiveTheStatisticsOfComputeViewsTruth) {
+  for (const std::vector<int>& indices : {std::vector<int>{3}, std::vector<int>{0, 1, 2, 6, 12}}) {
+    ViewsTruthOptions o = Options("default");
+    o.query_view = 0;  // one view: its own
+    const ViewsTruth t = ComputeViewsTruth(Views(indices), o);
+    const SeenBy s = CountSeenBy(t.visible_in.data(), t.valid.data(), t.num_views,
+                                 static_cast<size_t>(t.width) * t.height);
+    EXPECT_TRUE(std::equal(s.seen_by.begin(), s.seen_by.end(), t.seen_by.begin(), t.seen_by.end()));
+    EXPECT_EQ(s.histogram, t.seen_by_histogram);
+  }
+}
+
+TEST(CountSeenBy, RefusesBitsOfAbsentViewsAndValidOtherThanZeroOrOne) {
+  std::vector<uint32_t> vis = {1u, 3u, 2u, 0u};  // 2 views of 2 pixels
+  std::vector<uint8_t> valid = {1, 1, 1, 0};
+  const SeenBy s = CountSeenBy(vis.data(), valid.data(), 2, 2);
+  EXPECT_EQ(s.seen_by, (std::vector<uint8_t>{0, 1, 0, 0}));
+  EXPECT_EQ(s.histogram, (std::vector<int64_t>{1, 1, 1, 0}));
+  vis[3] = 4u;  // view 2 of 2 views
+  EXPECT_EQ(ErrorOf([&] { CountSeenBy(vis.data(), valid.data(), 2, 2); }),
+            "visible_in: bit for a view >= 2 (the number of views) set at element 3");
+  vis[3] = 0u;
+  valid[2] = 7;
+  EXPECT_EQ(ErrorOf([&] { CountSeenBy(vis.data(), valid.data(), 2, 2); }),
+            "valid: expected 0 or 1, got 7 at element 2");
+  EXPECT_EQ(ErrorOf([&] { CountSeenBy(vis.data(), valid.data(), 33, 0); }),
+            "visible_in: expected 1..32 views, got 33");
+  // 32 views: every bit is a view's.
+  std::vector<uint32_t> all(32, ~0u);
+  std::vector<uint8_t> ones(32, 1);
+  const SeenBy full = CountSeenBy(all.data(), ones.data(), 32, 1);
+  EXPECT_EQ(full.seen_by, std::vector<uint8_t>(32, 31));
+  EXPECT_EQ(full.histogram[31], 1);
+}
+
 TEST(ComputeViewsTruth, IdenticalViewsSeeEachOther) {
   const std::vector<WorkingFrame> views = Views({4, 4, 4});
   const ViewsTruth t = ComputeViewsTruth(views, Options("default"));

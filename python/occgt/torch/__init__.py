@@ -22,7 +22,8 @@ A sample (a dict) has the same keys whichever dataset yields it:
   ``("<scene>/<frame id>", "<scene>/<frame id>")``.
 - On request, ``color0``, ``color1`` uint8 [3, H, W] RGB (``ShardDataset(color=True)``).
 
-N-view tuples (``TupleIndexDataset``, docs/MULTIVIEW.md) have their own keys: VGGT's
+N-view tuples (``TupleIndexDataset`` computes them, ``TupleShardDataset`` reads them from the
+shards of ``occgt tuples --shards``; docs/MULTIVIEW.md) have their own keys: VGGT's
 (``images``, ``depths``, ``extrinsics``, ``intrinsics``, ``point_masks``, ``tracks``,
 ``track_vis_mask``) and occgt's (``visible_in``, ``occluded_in``, ``track_state``,
 ``seen_by``); ``collate_tuples`` batches tuples of different sizes.
@@ -34,6 +35,7 @@ from .collate import VARIABLE_KEYS, Collate, collate
 from .pairs import PairIndexDataset, PairRef, read_pair_index
 from .shards import ShardDataset
 from .supervision import loftr_supervision
+from .tuple_shards import TupleShardDataset
 from .tuples import TRACK_STATE_PADDED, TupleIndexDataset, TupleRef, collate_tuples, read_tuples
 
 __all__ = [
@@ -44,6 +46,7 @@ __all__ = [
     "PairRef",
     "ShardDataset",
     "TupleIndexDataset",
+    "TupleShardDataset",
     "TupleRef",
     "collate_tuples",
     "read_tuples",

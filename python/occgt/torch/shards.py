@@ -117,50 +117,13 @@ def _npy(buf: bytearray, offset: int, size: int, where: str) -> np.ndarray:
     return array.reshape(shape, order="F" if fortran else "C")
 
 
-class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
-    """Map-style dataset over the shards of one split (``torch.utils.data.Dataset`` protocol).
+class _ShardSplit(torch.utils.data.Dataset):  # type: ignore[type-arg]
+    """The shards of one split folder (its ``index.json``), listed once by the C++ shard
+    reader; a sample's members are read with one ``os.preadv`` by byte range. The base of
+    ShardDataset (pair samples) and TupleShardDataset (N-view samples)."""
 
-    Args:
-        split_dir: the split folder written by ``occgt build`` / ``occgt merge`` (holds
-            ``index.json``, the ``.tar`` shards and ``pairs.jsonl``).
-        occupancy: ``"words"``: ``occ0``, ``known0``, ``occ1``, ``known1`` int64 [H/2, W/2]
-            (the uint64 words' bits); ``"dense"``: ``occupancy0``, ``occupancy1`` uint8
-            [D, H/2, W/2] (0 free, 1 occupied, 255 unknown), the ``occ*_dense.npy`` member when
-            the split stores it, else ``occgt.dense_volume`` of the words (C++); ``"none"``:
-            no occupancy keys.
-        images: ``image0``, ``image1`` float32 [1, H, W] grey in [0, 1]: the ``image0.png`` /
-            ``.jpg`` member decoded by OpenCV, ``cv2.COLOR_BGR2GRAY``, divided by 255 (the
-            contract's grey, as ``PairIndexDataset``'s).
-        color: also ``color0``, ``color1`` uint8 [3, H, W] RGB.
-        depth: ``depth0``, ``depth1`` float32 [H, W] metres, 0 = invalid.
-        labels: ``label01``, ``label10`` uint8 [H, W] and ``cells0``, ``cells1`` uint8
-            [H/s, W/s] (``matches``, ``match_type``, ``match_xy``, ``metrics01``,
-            ``metrics10`` and the LoFTR keys are always there).
-        dataset_name: the ``dataset_name`` value of every sample (shards do not record the
-            dataset's format; LoFTR's evaluation picks thresholds by this name, e.g.
-            ``"ScanNet"``).
-
-    Raises:
-        ValueError: naming the file and what was expected, when ``index.json`` is missing or
-            malformed, a shard is missing, has another size than index.json says, is not a
-            readable tar (the C++ reader's message: the header byte or member, e.g. a checksum
-            mismatch or a truncated member) or holds another number of samples, or a sample
-            lacks a member the options ask for.
-    """
-
-    def __init__(self, split_dir: Union[str, "os.PathLike[str]"], *,
-                 occupancy: str = "words", images: bool = True, color: bool = False,
-                 depth: bool = True, labels: bool = True, dataset_name: str = "occgt") -> None:
-        if occupancy not in _OCCUPANCY_MODES:
-            raise ValueError(f"occupancy: expected one of {', '.join(_OCCUPANCY_MODES)}, got "
-                             f"{occupancy!r}")
+    def __init__(self, split_dir: Union[str, "os.PathLike[str]"]) -> None:
         self.split_dir = os.fspath(split_dir)
-        self.occupancy = occupancy
-        self.images = bool(images)
-        self.color = bool(color)
-        self.depth = bool(depth)
-        self.labels = bool(labels)
-        self.dataset_name = dataset_name
         index_path = os.path.join(self.split_dir, "index.json")
         try:
             with open(index_path) as f:
@@ -187,51 +150,9 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             if got != nsamples:
                 raise ValueError(f"{path}: {got} samples, index.json says {nsamples}")
             self._paths.append(path)
-        for i, sample in enumerate(self._samples):
-            missing = self._missing(sample.members)
-            if missing and _has(sample.members, "visible_in.npy"):
-                raise ValueError(f"{self._paths[sample.shard]}: sample {self._keys[i]} is an "
-                                 f"N-view sample (occgt tuples --shards, docs/MULTIVIEW.md); "
-                                 f"ShardDataset reads the pair samples of occgt build")
-            if missing:
-                raise ValueError(f"{self._paths[sample.shard]}: sample {self._keys[i]} has no "
-                                 f"{' or '.join(missing)} member (asked for by "
-                                 f"{self._reason(missing[0])})")
         self._pairs: Optional[List[str]] = None
         self._pid = -1
         self._fds: Dict[int, int] = {}
-
-    def _missing(self, members: Dict[str, Tuple[int, int]]) -> List[str]:
-        need = ["json", "matches.npy", "match_type.npy", "match_xy.npy"]
-        if self.labels:
-            need += ["label01.npy", "label10.npy", "cells0.npy", "cells1.npy"]
-        if self.depth:
-            need += ["depth0.npy", "depth1.npy"]
-        missing = [m for m in need if not _has(members, m)]
-        if missing:
-            return missing[:1]
-        for c in "01":
-            words = [f"occ{c}.npy", f"known{c}.npy"]
-            if self.occupancy == "words" or (self.occupancy == "dense" and
-                                             not _has(members, f"occ{c}_dense.npy")):
-                for m in words:
-                    if not _has(members, m):
-                        return [m] if self.occupancy == "words" else [f"occ{c}_dense.npy", m]
-            if (self.images or self.color) and not (f"image{c}.png" in members or
-                                                    f"image{c}.jpg" in members):
-                return [f"image{c}.png", f"image{c}.jpg"]
-        return []
-
-    def _reason(self, member: str) -> str:
-        if member.startswith(("occ", "known")):
-            return f"occupancy={self.occupancy!r}"
-        if member.startswith("image"):
-            return "images=True / color=True"
-        if member.startswith("depth"):
-            return "depth=True"
-        if member.startswith(("label", "cells")):
-            return "labels=True"
-        return "every sample"
 
     def __len__(self) -> int:
         return len(self._samples)
@@ -301,20 +222,143 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                              f"at byte {sample.start} (the shard changed since it was indexed)")
         return buf, sample.members
 
+    def _array(self, buf: bytearray, members: Dict[str, Tuple[int, int]], field: str,
+               where: str, dtype: str, shape: Tuple[Optional[int], ...],
+               size_text: str) -> np.ndarray:
+        """The ``.npy`` member `field` (or its ``.gz``) of a sample read by read_raw, checked
+        against the contract: dtype (numpy's ``str`` without the byte order, e.g. ``"f4"``;
+        either byte order) and shape (None: any length); size_text says where the expected
+        shape comes from."""
+        if field in members:
+            offset, size = members[field]
+            a = _npy(buf, offset, size, f"{where}.{field}")
+            name = field
+        else:  # a compressed member (recipe sample.compression: deflate): "<field>.gz"
+            name = field + ".gz"
+            offset, size = members[name]
+            # libdeflate, without the GIL (C++).
+            raw = gunzip(memoryview(buf)[offset:offset + size], f"{where}.{name}")
+            a = _npy(raw, 0, len(raw), f"{where}.{name}")
+        if (a.dtype.str[1:] != dtype or a.ndim != len(shape) or
+                any(n is not None and n != m for n, m in zip(shape, a.shape))):
+            want = ", ".join("*" if n is None else str(n) for n in shape)
+            raise ValueError(f"{where}.{name}: expected {np.dtype(dtype)} [{want}] "
+                             f"({size_text}), got {a.dtype} {list(a.shape)}")
+        return a
+
+    def __getstate__(self) -> Dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_fds"] = {}  # file descriptors never travel to another process
+        state["_pid"] = -1
+        return state
+
+    def close(self) -> None:
+        """Closes the files this process opened (they reopen on the next read)."""
+        if self._pid == os.getpid():
+            for fd in self._fds.values():
+                os.close(fd)
+        self._fds = {}
+
+    def __del__(self) -> None:
+        try:
+            self.close()
+        except (OSError, AttributeError):
+            pass
+
+
+
+class ShardDataset(_ShardSplit):
+    """Map-style dataset over the shards of one split (``torch.utils.data.Dataset`` protocol).
+
+    Args:
+        split_dir: the split folder written by ``occgt build`` / ``occgt merge`` (holds
+            ``index.json``, the ``.tar`` shards and ``pairs.jsonl``).
+        occupancy: ``"words"``: ``occ0``, ``known0``, ``occ1``, ``known1`` int64 [H/2, W/2]
+            (the uint64 words' bits); ``"dense"``: ``occupancy0``, ``occupancy1`` uint8
+            [D, H/2, W/2] (0 free, 1 occupied, 255 unknown), the ``occ*_dense.npy`` member when
+            the split stores it, else ``occgt.dense_volume`` of the words (C++); ``"none"``:
+            no occupancy keys.
+        images: ``image0``, ``image1`` float32 [1, H, W] grey in [0, 1]: the ``image0.png`` /
+            ``.jpg`` member decoded by OpenCV, ``cv2.COLOR_BGR2GRAY``, divided by 255 (the
+            contract's grey, as ``PairIndexDataset``'s).
+        color: also ``color0``, ``color1`` uint8 [3, H, W] RGB.
+        depth: ``depth0``, ``depth1`` float32 [H, W] metres, 0 = invalid.
+        labels: ``label01``, ``label10`` uint8 [H, W] and ``cells0``, ``cells1`` uint8
+            [H/s, W/s] (``matches``, ``match_type``, ``match_xy``, ``metrics01``,
+            ``metrics10`` and the LoFTR keys are always there).
+        dataset_name: the ``dataset_name`` value of every sample (shards do not record the
+            dataset's format; LoFTR's evaluation picks thresholds by this name, e.g.
+            ``"ScanNet"``).
+
+    Raises:
+        ValueError: naming the file and what was expected, when ``index.json`` is missing or
+            malformed, a shard is missing, has another size than index.json says, is not a
+            readable tar (the C++ reader's message: the header byte or member, e.g. a checksum
+            mismatch or a truncated member) or holds another number of samples, or a sample
+            lacks a member the options ask for.
+    """
+
+    def __init__(self, split_dir: Union[str, "os.PathLike[str]"], *,
+                 occupancy: str = "words", images: bool = True, color: bool = False,
+                 depth: bool = True, labels: bool = True, dataset_name: str = "occgt") -> None:
+        if occupancy not in _OCCUPANCY_MODES:
+            raise ValueError(f"occupancy: expected one of {', '.join(_OCCUPANCY_MODES)}, got "
+                             f"{occupancy!r}")
+        self.occupancy = occupancy
+        self.images = bool(images)
+        self.color = bool(color)
+        self.depth = bool(depth)
+        self.labels = bool(labels)
+        self.dataset_name = dataset_name
+        super().__init__(split_dir)
+        for i, sample in enumerate(self._samples):
+            missing = self._missing(sample.members)
+            if missing and _has(sample.members, "visible_in.npy"):
+                raise ValueError(f"{self._paths[sample.shard]}: sample {self._keys[i]} is an "
+                                 f"N-view sample (occgt tuples --shards, docs/MULTIVIEW.md); "
+                                 f"ShardDataset reads the pair samples of occgt build, "
+                                 f"TupleShardDataset the N-view ones")
+            if missing:
+                raise ValueError(f"{self._paths[sample.shard]}: sample {self._keys[i]} has no "
+                                 f"{' or '.join(missing)} member (asked for by "
+                                 f"{self._reason(missing[0])})")
+
+    def _missing(self, members: Dict[str, Tuple[int, int]]) -> List[str]:
+        need = ["json", "matches.npy", "match_type.npy", "match_xy.npy"]
+        if self.labels:
+            need += ["label01.npy", "label10.npy", "cells0.npy", "cells1.npy"]
+        if self.depth:
+            need += ["depth0.npy", "depth1.npy"]
+        missing = [m for m in need if not _has(members, m)]
+        if missing:
+            return missing[:1]
+        for c in "01":
+            words = [f"occ{c}.npy", f"known{c}.npy"]
+            if self.occupancy == "words" or (self.occupancy == "dense" and
+                                             not _has(members, f"occ{c}_dense.npy")):
+                for m in words:
+                    if not _has(members, m):
+                        return [m] if self.occupancy == "words" else [f"occ{c}_dense.npy", m]
+            if (self.images or self.color) and not (f"image{c}.png" in members or
+                                                    f"image{c}.jpg" in members):
+                return [f"image{c}.png", f"image{c}.jpg"]
+        return []
+
+    def _reason(self, member: str) -> str:
+        if member.startswith(("occ", "known")):
+            return f"occupancy={self.occupancy!r}"
+        if member.startswith("image"):
+            return "images=True / color=True"
+        if member.startswith("depth"):
+            return "depth=True"
+        if member.startswith(("label", "cells")):
+            return "labels=True"
+        return "every sample"
+
     def __getitem__(self, i: int) -> Dict[str, Any]:
         j = self._index(i)
         buf, members = self.read_raw(j)
         where = f"{self._paths[self._samples[j].shard]}: {self._keys[j]}"
-
-        def npy(field: str) -> np.ndarray:
-            if field in members:
-                offset, size = members[field]
-                return _npy(buf, offset, size, f"{where}.{field}")
-            # A compressed member (recipe sample.compression: deflate): "<field>.gz".
-            offset, size = members[field + ".gz"]
-            # libdeflate, without the GIL (C++).
-            raw = gunzip(memoryview(buf)[offset:offset + size], f"{where}.{field}.gz")
-            return _npy(raw, 0, len(raw), f"{where}.{field}.gz")
 
         offset, size = members["json"]
         try:
@@ -343,17 +387,10 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         grid = _grid(meta)
 
         def member(field: str, dtype: str, shape: Tuple[Optional[int], ...]) -> np.ndarray:
-            """npy(field), checked against the contract (schemas/sample.schema.json, the
-            arrays of libgt/pipeline/sample.cc): dtype (either byte order) and shape (None:
-            any length)."""
-            a = npy(field)
-            if (a.dtype.str[1:] != dtype or a.ndim != len(shape) or
-                    any(n is not None and n != m for n, m in zip(shape, a.shape))):
-                want = ", ".join("*" if n is None else str(n) for n in shape)
-                name = field if field in members else field + ".gz"
-                raise ValueError(f"{where}.{name}: expected {np.dtype(dtype)} [{want}] (sample "
-                                 f"resolution {W}x{H}), got {a.dtype} {list(a.shape)}")
-            return a
+            """The member, checked against the contract (schemas/sample.schema.json, the
+            arrays of libgt/pipeline/sample.cc)."""
+            return self._array(buf, members, field, where, dtype, shape,
+                               f"sample resolution {W}x{H}")
 
         out: Dict[str, Any] = {}
         if self.images or self.color:
@@ -405,26 +442,6 @@ class ShardDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         out["metrics01"] = metrics01
         out["metrics10"] = metrics10
         return out
-
-    def __getstate__(self) -> Dict[str, Any]:
-        state = self.__dict__.copy()
-        state["_fds"] = {}  # file descriptors never travel to another process
-        state["_pid"] = -1
-        return state
-
-    def close(self) -> None:
-        """Closes the files this process opened (they reopen on the next read)."""
-        if self._pid == os.getpid():
-            for fd in self._fds.values():
-                os.close(fd)
-        self._fds = {}
-
-    def __del__(self) -> None:
-        try:
-            self.close()
-        except (OSError, AttributeError):
-            pass
-
 
 def _cv2() -> Any:
     try:

@@ -13,7 +13,7 @@ import dataclasses
 import json
 import operator
 import os
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import torch
@@ -197,42 +197,59 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             colors = np.stack([scene.load_color(i, self.width, self.height)
                                for i in ref.frame_ids]).transpose(0, 3, 1, 2)  # [S, 3, H, W]
         numbers = {f.id: f.number for f in scene.frames}
-        if self.views == "dust3r":
-            out = []
-            for s, frame_id in enumerate(ref.frame_ids):
-                view: Dict[str, Any] = {
-                    "depthmap": to_tensor(depths[s]),
-                    "camera_pose": to_tensor(poses[s].astype(np.float32)),
-                    "camera_intrinsics": to_tensor(Ks[s].astype(np.float32)),
-                    "dataset": self.format, "label": ref.scene, "instance": frame_id,
-                    "idx": (index, s), "true_shape": np.array([self.height, self.width]),
-                    "valid_mask": to_tensor(truth["valid"][s].astype(bool)),
-                    "visible_in": to_tensor(truth["visible_in"][s]),
-                    "occluded_in": to_tensor(truth["occluded_in"][s]),
-                }
-                if colors is not None:
-                    view["img"] = to_tensor(colors[s].astype(np.float32) / 127.5 - 1.0)
-                out.append(view)
-            return out
-        cam_from_world = np.linalg.inv(poses)[:, :3, :].astype(np.float32)
-        xy = truth["track_xy"]
-        sample: Dict[str, Any] = {
-            "depths": to_tensor(depths),
-            "extrinsics": to_tensor(cam_from_world),
-            "intrinsics": to_tensor(Ks.astype(np.float32)),
-            "point_masks": to_tensor(truth["valid"].astype(bool)),
-            "tracks": to_tensor(np.where(np.isnan(xy), np.float32(0), xy)),
-            "track_vis_mask": to_tensor(truth["track_state"] == occgt.TRACK_VISIBLE),
-            "track_state": to_tensor(truth["track_state"]),
-            "visible_in": to_tensor(truth["visible_in"]),
-            "occluded_in": to_tensor(truth["occluded_in"]),
-            "seen_by": to_tensor(truth["seen_by"]),
-            "ids": to_tensor(np.array([numbers[i] for i in ref.frame_ids], np.int64)),
-            "frame_ids": ref.frame_ids, "scene_id": ref.scene, "tuple_id": index,
-        }
-        if colors is not None:
-            sample["images"] = to_tensor(colors.astype(np.float32) / 255.0)
-        return sample
+        return _tuple_item(self.views, depths=depths, Ks=Ks, world_from_cams=poses,
+                           truth=truth, colors=colors, scene=ref.scene,
+                           frame_ids=ref.frame_ids,
+                           numbers=[numbers[i] for i in ref.frame_ids], index=index,
+                           dataset=self.format)
+
+
+def _tuple_item(views: str, *, depths: np.ndarray, Ks: np.ndarray, world_from_cams: np.ndarray,
+                truth: Mapping[str, Any], colors: Optional[np.ndarray], scene: str,
+                frame_ids: Tuple[str, ...], numbers: Sequence[int], index: int,
+                dataset: str) -> Any:
+    """One item of TupleIndexDataset / TupleShardDataset (their docstrings) from the tuple's
+    arrays: depths float32 [S, H, W], Ks [S, 3, 3], world_from_cams float64 [S, 4, 4], the
+    N-view truth (``valid``, ``visible_in``, ``occluded_in``, ``seen_by``, ``track_xy``,
+    ``track_state`` as views_ground_truth returns them), colors uint8 [S, 3, H, W] RGB or
+    None, the frame ids and numbers, the tuple's index and the dataset's name."""
+    height, width = depths.shape[1:]
+    if views == "dust3r":
+        out = []
+        for s, frame_id in enumerate(frame_ids):
+            view: Dict[str, Any] = {
+                "depthmap": to_tensor(depths[s]),
+                "camera_pose": to_tensor(world_from_cams[s].astype(np.float32)),
+                "camera_intrinsics": to_tensor(Ks[s].astype(np.float32)),
+                "dataset": dataset, "label": scene, "instance": frame_id,
+                "idx": (index, s), "true_shape": np.array([height, width]),
+                "valid_mask": to_tensor(truth["valid"][s].astype(bool)),
+                "visible_in": to_tensor(truth["visible_in"][s]),
+                "occluded_in": to_tensor(truth["occluded_in"][s]),
+            }
+            if colors is not None:
+                view["img"] = to_tensor(colors[s].astype(np.float32) / 127.5 - 1.0)
+            out.append(view)
+        return out
+    cam_from_world = np.linalg.inv(world_from_cams)[:, :3, :].astype(np.float32)
+    xy = truth["track_xy"]
+    sample: Dict[str, Any] = {
+        "depths": to_tensor(depths),
+        "extrinsics": to_tensor(cam_from_world),
+        "intrinsics": to_tensor(Ks.astype(np.float32)),
+        "point_masks": to_tensor(truth["valid"].astype(bool)),
+        "tracks": to_tensor(np.where(np.isnan(xy), np.float32(0), xy)),
+        "track_vis_mask": to_tensor(truth["track_state"] == occgt.TRACK_VISIBLE),
+        "track_state": to_tensor(truth["track_state"]),
+        "visible_in": to_tensor(truth["visible_in"]),
+        "occluded_in": to_tensor(truth["occluded_in"]),
+        "seen_by": to_tensor(truth["seen_by"]),
+        "ids": to_tensor(np.array(numbers, np.int64)),
+        "frame_ids": tuple(frame_ids), "scene_id": scene, "tuple_id": index,
+    }
+    if colors is not None:
+        sample["images"] = to_tensor(colors.astype(np.float32) / 255.0)
+    return sample
 
 
 def collate_tuples(batch: Sequence[Dict[str, Any]]) -> Dict[str, Any]:

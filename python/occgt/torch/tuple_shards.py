@@ -1,0 +1,152 @@
+"""TupleShardDataset: map-style random access into the N-view shards of ``occgt tuples
+--shards`` (``DIR/views``), with the items of TupleIndexDataset read instead of computed.
+
+The shards are listed once by the C++ shard reader, as for ShardDataset (shards.py); a
+sample's members are read with one ``os.preadv``. The stored ground truth (``visible_in``,
+``occluded_in``, ``valid``, the tracks) is the one ``occgt tuples --shards`` computed; only
+``seen_by`` is derived, by the C++ (``occgt.views_seen_by``). docs/MULTIVIEW.md.
+"""
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Dict, List, Tuple, Union
+
+import numpy as np
+
+import occgt
+
+from .shards import _decode, _has, _ShardSplit
+from .tuples import _tuple_item
+
+__all__ = ["TupleShardDataset"]
+
+# The members every N-view sample holds (docs/FORMATS.md "N-view shards"); the images and
+# depth<i> per view are checked when an item is read (the json gives the number of views).
+_NEED = ("json", "intrinsics.npy", "world_from_cam.npy", "visible_in.npy", "occluded_in.npy",
+         "valid.npy", "track_xy.npy", "track_state.npy", "depth0.npy")
+
+
+class TupleShardDataset(_ShardSplit):
+    """Map-style dataset over the N-view shards of ``occgt tuples --shards``.
+
+    Args:
+        split_dir: the N-view split folder, ``DIR/views`` of ``occgt tuples RECIPE --out DIR
+            --shards`` (``index.json``, the ``.tar`` shards, ``pairs.jsonl``).
+        images: read each view's ``image<i>.png`` / ``.jpg`` (``images``); a split written
+            with ``sample.image: none`` has none (ValueError at construction).
+        views: ``"vggt"`` (default) or ``"dust3r"``, as TupleIndexDataset.
+        dataset_name: the ``dataset`` value of ``"dust3r"`` views (shards do not record the
+            dataset's format; TupleIndexDataset puts its ``format`` there).
+
+    Item i is sample i in shard order (the split's ``pairs.jsonl`` order, i.e. tuples.jsonl's
+    order): the keys, dtypes and shapes of TupleIndexDataset's items, and the same values as
+    ``TupleIndexDataset(DIR/tuples.jsonl, root, format, width=W, height=H, preset=...,
+    num_tracks=..., seed=<the recipe's seed>)[i]`` (tests/python/tuple_shards_test.py), with
+    ``tuple_id`` = the sample's ``tuple_index``. The tracks are those of the json's
+    ``tracks.query_view`` (the recipe's ``selection.tuples.query_view``, 0 by default: the
+    first view, as TupleIndexDataset's and VGGT's).
+
+    Raises:
+        ValueError: as ShardDataset's, naming the file: a missing or malformed
+            ``index.json`` (and where the N-view shards are when given ``DIR``), a missing or
+            damaged shard, a pair sample of ``occgt build`` (read by ShardDataset), a sample
+            lacking a member, a member of another dtype or shape than its json's
+            ``num_views`` and ``resolution`` say, a pose that is not rigid, a bitmask with a
+            bit for a view the tuple does not have.
+    """
+
+    def __init__(self, split_dir: Union[str, "os.PathLike[str]"], *, images: bool = True,
+                 views: str = "vggt", dataset_name: str = "occgt") -> None:
+        if views not in ("vggt", "dust3r"):
+            raise ValueError(f"views: expected 'vggt' or 'dust3r', got {views!r}")
+        self.images = bool(images)
+        self.views = views
+        self.dataset_name = dataset_name
+        folder = os.fspath(split_dir)
+        if (not os.path.exists(os.path.join(folder, "index.json")) and
+                os.path.exists(os.path.join(folder, "views", "index.json"))):
+            raise ValueError(f"{os.path.join(folder, 'index.json')}: missing; the N-view shards "
+                             f"of occgt tuples --shards are in {os.path.join(folder, 'views')}")
+        super().__init__(folder)
+        for i, sample in enumerate(self._samples):
+            where = f"{self._paths[sample.shard]}: sample {self._keys[i]}"
+            if not _has(sample.members, "visible_in.npy") and _has(sample.members,
+                                                                   "label01.npy"):
+                raise ValueError(f"{where} is a pair sample of occgt build (read by "
+                                 f"ShardDataset); TupleShardDataset reads the N-view samples "
+                                 f"of occgt tuples --shards")
+            for m in _NEED:
+                if not _has(sample.members, m):
+                    raise ValueError(f"{where} has no {m} member (every N-view sample has it)")
+            if self.images and not ("image0.png" in sample.members or
+                                    "image0.jpg" in sample.members):
+                raise ValueError(f"{where} has no image0.png or image0.jpg member (asked for "
+                                 f"by images=True; the recipe's sample.image was none?)")
+
+    def __getitem__(self, i: int) -> Any:
+        j = self._index(i)
+        buf, members = self.read_raw(j)
+        where = f"{self._paths[self._samples[j].shard]}: {self._keys[j]}"
+        offset, size = members["json"]
+        try:
+            meta = json.loads(bytes(memoryview(buf)[offset:offset + size]))
+            n = int(meta["num_views"])
+            W, H = (int(v) for v in meta["resolution"])
+            scene = str(meta["scene"])
+            index = int(meta["tuple_index"])
+            frames: List[Tuple[str, int]] = [(str(f["id"]), int(f["number"]))
+                                             for f in meta["frames"]]
+            if not 1 <= n <= 32 or len(frames) != n:
+                raise ValueError(f"num_views {n} with {len(frames)} frames (expected 1..32, "
+                                 f"one frame each)")
+        except (KeyError, TypeError, ValueError) as e:
+            raise ValueError(f"{where}.json: expected the N-view sample fields of "
+                             f"schemas/views_sample.schema.json (num_views, resolution, scene, "
+                             f"tuple_index, frames [{{id, number}}]): {type(e).__name__}: "
+                             f"{e}") from None
+        size_text = f"{n} views of {W}x{H}"
+
+        def array(field: str, dtype: str, shape: Tuple[Any, ...]) -> np.ndarray:
+            return self._array(buf, members, field, where, dtype, shape, size_text)
+
+        for v in range(n):
+            if not _has(members, f"depth{v}.npy"):
+                raise ValueError(f"{where}: no depth{v}.npy member ({size_text})")
+        depths = np.stack([array(f"depth{v}.npy", "f4", (H, W)) for v in range(n)])
+        Ks = array("intrinsics.npy", "f8", (n, 3, 3))
+        poses = array("world_from_cam.npy", "f8", (n, 4, 4))
+        rigid = (np.isfinite(poses).all() and np.isfinite(Ks).all() and
+                 (poses[:, 3] == [0, 0, 0, 1]).all() and
+                 (np.abs(np.linalg.det(poses[:, :3, :3]) - 1) <= 0.1).all())
+        if not rigid:
+            raise ValueError(f"{where}: world_from_cam.npy / intrinsics.npy: expected finite "
+                             f"K and rigid transforms [[R, t], [0, 0, 0, 1]]")
+        truth: Dict[str, Any] = {
+            "visible_in": array("visible_in.npy", "u4", (n, H, W)),
+            "occluded_in": array("occluded_in.npy", "u4", (n, H, W)),
+            "valid": array("valid.npy", "u1", (n, H, W)),
+        }
+        truth["track_xy"] = array("track_xy.npy", "f4", (n, None, 2))
+        truth["track_state"] = array("track_state.npy", "u1", (n, truth["track_xy"].shape[1]))
+        try:  # the C++ count; it also refuses bits for views the tuple does not have
+            truth["seen_by"] = occgt.views_seen_by(truth["visible_in"], truth["valid"])["seen_by"]
+        except ValueError as e:
+            raise ValueError(f"{where}: {e}") from None
+        colors = None
+        if self.images:
+            rgb = []
+            for v in range(n):
+                field = f"image{v}.png" if f"image{v}.png" in members else f"image{v}.jpg"
+                if field not in members:
+                    raise ValueError(f"{where}: no image{v}.png or image{v}.jpg member "
+                                     f"({size_text}; images=True)")
+                offset, size = members[field]
+                data = np.frombuffer(buf, dtype=np.uint8, count=size, offset=offset)
+                rgb.append(_decode(data, f"{where}.{field}", H, W)[:, :, ::-1].transpose(2, 0, 1))
+            colors = np.ascontiguousarray(np.stack(rgb))
+        return _tuple_item(self.views, depths=depths, Ks=Ks, world_from_cams=poses,
+                           truth=truth, colors=colors, scene=scene,
+                           frame_ids=tuple(f for f, _ in frames),
+                           numbers=[number for _, number in frames], index=index,
+                           dataset=self.dataset_name)

@@ -1,0 +1,224 @@
+"""occgt.torch.TupleShardDataset over the N-view shards of `occgt tuples --shards`
+(docs/MULTIVIEW.md "Training on tuples"): every item equals TupleIndexDataset's item of the
+same tuple (computed on the fly from the dataset) key for key and bit for bit, in both
+"vggt" and "dust3r" forms, for deflate and uncompressed splits; occgt.views_seen_by gives
+views_ground_truth's seen_by and histogram; a DataLoader with workers and collate_tuples
+batches the items; bad splits and damaged samples raise ValueError naming the file."""
+from __future__ import annotations
+
+import io
+import json
+import os
+import shutil
+import tarfile
+import unittest
+from typing import Any
+
+import numpy as np
+import torch
+
+import common
+import occgt
+from occgt.torch import TupleIndexDataset, TupleShardDataset, collate_tuples
+
+RECIPE = """name: tuple-shards-test
+split: views
+seed: 11
+resolution: [96, 72]
+dataset:
+  format: generic
+  root: {root}
+  frame_stride: 1
+  min_valid_depth_fraction: 0.3
+labels: {{preset: default}}
+selection:
+  max_frame_gap: 0
+  pruning: {{max_distance_m: 4.0, max_view_angle_deg: 120, frustum: true}}
+  score_stride: 4
+  overlap: [0.0, 1.0]
+  visible_overlap: [0.0, 1.0]
+  occlusion: [0.0, 1.0]
+  quota_per_scene: 0
+  views: [2, 4]
+  tuples: {{edge_threshold: 0.2, pair_covisibility: [0.0, 0.97], restarts: 4,
+            quota_per_scene: 3, num_tracks: 60}}
+occupancy: {{enabled: false}}
+shards: {{samples_per_shard: 2}}
+sample: {{image: png, depth: true, labels: true, occupancy: false, compression: {compression}}}
+"""
+
+
+def assert_same_item(test: unittest.TestCase, a: Any, b: Any, where: str) -> None:
+    """Equal keys, tensors equal in dtype, shape and bits, other values equal."""
+    if isinstance(a, list):
+        test.assertIsInstance(b, list, where)
+        test.assertEqual(len(a), len(b), where)
+        for k, (x, y) in enumerate(zip(a, b)):
+            assert_same_item(test, x, y, f"{where}[{k}]")
+        return
+    test.assertEqual(list(a), list(b), where)
+    for key in a:
+        x, y = a[key], b[key]
+        if isinstance(x, torch.Tensor):
+            test.assertIsInstance(y, torch.Tensor, f"{where}.{key}")
+            test.assertEqual((x.dtype, tuple(x.shape)), (y.dtype, tuple(y.shape)),
+                             f"{where}.{key}")
+            test.assertTrue(torch.equal(x, y), f"{where}.{key}")
+        elif isinstance(x, np.ndarray):
+            np.testing.assert_array_equal(x, y, f"{where}.{key}")
+        else:
+            test.assertEqual(x, y, f"{where}.{key}")
+
+
+class TupleShards(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.root = common.synth_dataset("tuple_shards_data", frames=9, resolution="96x72")
+        cls.dir = common.scratch("tuple_shards")
+        cls.out = {}
+        for compression in ("deflate", "none"):
+            recipe = os.path.join(cls.dir, f"{compression}.yaml")
+            with open(recipe, "w") as f:
+                f.write(RECIPE.format(root=cls.root, compression=compression))
+            out = os.path.join(cls.dir, compression)
+            common.occgt("covis", recipe, "--out", out)
+            common.occgt("tuples", recipe, "--out", out, "--shards")
+            cls.out[compression] = out
+        cls.tuples = os.path.join(cls.out["deflate"], "tuples.jsonl")
+        with open(cls.tuples) as f:
+            cls.count = sum(1 for line in f if line.strip())
+
+    def computed(self, **kw: Any) -> TupleIndexDataset:
+        return TupleIndexDataset(self.tuples, self.root, "generic", width=96, height=72,
+                                 preset="default", num_tracks=60, seed=11, **kw)
+
+    def test_items_equal_the_computed_ones(self) -> None:
+        self.assertGreaterEqual(self.count, 3)
+        computed = self.computed()
+        for compression, out in self.out.items():
+            stored = TupleShardDataset(os.path.join(out, "views"))
+            self.assertEqual(len(stored), self.count)
+            sizes = set()
+            for k in range(len(stored)):
+                item = stored[k]
+                assert_same_item(self, item, computed[k], f"{compression} item {k}")
+                self.assertEqual(item["tuple_id"], k)
+                self.assertEqual(stored.pair(k)["frame_ids"], list(item["frame_ids"]))
+                sizes.add(int(item["depths"].shape[0]))
+                # The stored bitmasks are the computed ones: not all empty.
+                self.assertGreater(int((item["visible_in"] != 0).sum()), 0)
+            self.assertGreaterEqual(len(sizes), 1)
+
+    def test_dust3r_views_equal_the_computed_ones(self) -> None:
+        computed = self.computed(views="dust3r")
+        stored = TupleShardDataset(os.path.join(self.out["deflate"], "views"), views="dust3r",
+                                   dataset_name="generic")
+        for k in range(len(stored)):
+            assert_same_item(self, stored[k], computed[k], f"dust3r item {k}")
+
+    def test_without_images(self) -> None:
+        stored = TupleShardDataset(os.path.join(self.out["none"], "views"), images=False)
+        computed = self.computed(images=False)
+        assert_same_item(self, stored[0], computed[0], "images=False item 0")
+        self.assertNotIn("images", stored[0])
+
+    def test_seen_by_of_stored_bitmasks(self) -> None:
+        stored = TupleShardDataset(os.path.join(self.out["none"], "views"))
+        scene = occgt.open_dataset(self.root, "generic").scene(stored[0]["scene_id"])
+        frames = [scene.load(i, 96, 72) for i in stored[0]["frame_ids"]]
+        truth = occgt.views_ground_truth(
+            [f[0] for f in frames], [f[1] for f in frames], [f[2] for f in frames],
+            num_tracks=0, dataset_depth_range=(scene.min_depth_m, scene.max_depth_m))
+        got = occgt.views_seen_by(truth["visible_in"], truth["valid"])
+        np.testing.assert_array_equal(got["seen_by"], truth["seen_by"])
+        np.testing.assert_array_equal(got["seen_by_histogram"], truth["seen_by_histogram"])
+        # Against a direct count: popcount of the other views' bits.
+        n = truth["visible_in"].shape[0]
+        for i in range(n):
+            others = truth["visible_in"][i] & np.uint32(~(1 << i) & 0xFFFFFFFF)
+            count = np.zeros(others.shape, np.uint8)
+            for j in range(n):
+                count += ((others >> np.uint32(j)) & np.uint32(1)).astype(np.uint8)
+            np.testing.assert_array_equal(got["seen_by"][i], count)
+            hist = np.bincount(count[truth["valid"][i] == 1], minlength=n)
+            np.testing.assert_array_equal(got["seen_by_histogram"][i], hist)
+        # Bad bitmasks: a bit for a view the tuple does not have, valid not 0/1, dtypes.
+        vis = truth["visible_in"].copy()
+        vis[0, 0, 0] |= np.uint32(1 << n)
+        with self.assertRaisesRegex(ValueError, "visible_in: bit for a view >= "):
+            occgt.views_seen_by(vis, truth["valid"])
+        valid = truth["valid"].copy()
+        valid[0, 0, 0] = 2
+        with self.assertRaisesRegex(ValueError, "valid: expected 0 or 1, got 2"):
+            occgt.views_seen_by(truth["visible_in"], valid)
+        with self.assertRaisesRegex(ValueError, "visible_in: expected uint32"):
+            occgt.views_seen_by(truth["visible_in"].astype(np.int64), truth["valid"])
+        with self.assertRaisesRegex(ValueError, "valid: expected uint8 of visible_in's shape"):
+            occgt.views_seen_by(truth["visible_in"], truth["valid"][:1])
+
+    def test_dataloader_with_workers(self) -> None:
+        stored = TupleShardDataset(os.path.join(self.out["deflate"], "views"))
+        stored[0]  # files opened in this process before the workers fork
+        loader = torch.utils.data.DataLoader(stored, batch_size=2, num_workers=2,
+                                             collate_fn=collate_tuples)
+        batches = list(loader)
+        self.assertEqual(sum(len(b["tuple_id"]) for b in batches), len(stored))
+        first = collate_tuples([stored[0], stored[1]])
+        for key, value in first.items():
+            if isinstance(value, torch.Tensor):
+                self.assertTrue(torch.equal(value, batches[0][key]), key)
+
+    def test_bad_splits(self) -> None:
+        out = self.out["none"]
+        with self.assertRaisesRegex(ValueError, "index.json: missing; the N-view shards of "
+                                                "occgt tuples --shards are in .*views"):
+            TupleShardDataset(out)
+        with self.assertRaisesRegex(ValueError, "views: expected 'vggt' or 'dust3r'"):
+            TupleShardDataset(os.path.join(out, "views"), views="vgg")
+        # A pair split (occgt build's samples) is named as such.
+        pair_dir = common.scratch("tuple_shards_pairs")
+        self.write_split(pair_dir, {"a/0_1.json": b"{}", "a/0_1.label01.npy":
+                                    common.npy_bytes(np.zeros((2, 2), np.uint8))})
+        with self.assertRaisesRegex(ValueError, "is a pair sample of occgt build"):
+            TupleShardDataset(pair_dir)
+        # A damaged sample: a bit set for a view the tuple does not have.
+        bad = common.scratch("tuple_shards_bad")
+        shutil.copytree(os.path.join(out, "views"), os.path.join(bad, "views"))
+        views = os.path.join(bad, "views")
+        shard = os.path.join(views, json.load(open(os.path.join(views, "index.json")))
+                             ["shardlist"][0]["url"])
+        with tarfile.open(shard) as t:
+            m = next(x for x in t.getmembers() if x.name.endswith("visible_in.npy"))
+            array = np.load(io.BytesIO(t.extractfile(m).read()))  # type: ignore[union-attr]
+            data_offset = m.offset_data + len(common.npy_bytes(array)) - array.nbytes
+        with open(shard, "r+b") as f:
+            f.seek(data_offset + 3)  # the high byte of the first word (little-endian)
+            f.write(bytes([0x80]))
+        ds = TupleShardDataset(views)
+        with self.assertRaisesRegex(ValueError, r"views-000000\.tar: .*visible_in: bit for a "
+                                                r"view >= \d"):
+            ds[0]
+        # A sample without a member every N-view sample has.
+        missing = common.scratch("tuple_shards_missing")
+        self.write_split(missing, {"a/tuple_000000.json": b"{}",
+                                   "a/tuple_000000.visible_in.npy":
+                                   common.npy_bytes(np.zeros((1, 2, 2), np.uint32))})
+        with self.assertRaisesRegex(ValueError, "has no intrinsics.npy member"):
+            TupleShardDataset(missing)
+
+    @staticmethod
+    def write_split(folder: str, members: dict) -> None:
+        shard = os.path.join(folder, "x-000000.tar")
+        with tarfile.open(shard, "w", format=tarfile.USTAR_FORMAT) as t:
+            for name, data in members.items():
+                info = tarfile.TarInfo(name)
+                info.size = len(data)
+                t.addfile(info, io.BytesIO(data))
+        with open(os.path.join(folder, "index.json"), "w") as f:
+            json.dump({"__kind__": "wids-shard-index-v1", "wids_version": 1, "shardlist": [
+                {"url": "x-000000.tar", "nsamples": 1,
+                 "filesize": os.path.getsize(shard)}]}, f)
+
+
+if __name__ == "__main__":
+    unittest.main()
