@@ -295,6 +295,24 @@ class ShippedRecipe(unittest.TestCase):
                          "track_xy", "track_depth"]:
                 np.testing.assert_array_equal(s[name], truth[name], err_msg=name)  # type: ignore
             self.assertGreater(meta["metrics"]["counts"]["OCCLUDED"], 0)
+        # occgt.torch.TupleShardDataset reads these shards as TupleIndexDataset computes the
+        # same tuples from the real frames (tests/python/tuple_shards_test.py: every key).
+        from occgt.torch import TupleIndexDataset, TupleShardDataset
+        stored = TupleShardDataset(os.path.join(out, "views"))
+        computed = TupleIndexDataset(
+            os.path.join(out, "tuples.jsonl"),
+            os.path.join(common.SHARED, "tartanair", "hospital_sample"), "tartanair",
+            width=640, height=480, preset="default", seed=0, dataset_max_depth_m=100.0)
+        self.assertEqual(len(stored), len(samples))
+        for k in range(0, len(stored), 5):
+            a, b = stored[k], computed[k]
+            self.assertEqual(list(a), list(b))
+            for key in a:
+                if hasattr(a[key], "dtype"):
+                    self.assertEqual(a[key].dtype, b[key].dtype, key)
+                    np.testing.assert_array_equal(a[key].numpy(), b[key].numpy(), err_msg=key)
+                else:
+                    self.assertEqual(a[key], b[key], key)
 
 
 if __name__ == "__main__":
