@@ -222,6 +222,15 @@ class _ShardSplit(torch.utils.data.Dataset):  # type: ignore[type-arg]
                              f"at byte {sample.start} (the shard changed since it was indexed)")
         return buf, sample.members
 
+    def _read(self, i: int) -> Tuple[int, bytearray, Dict[str, Tuple[int, int]], str, bytes]:
+        """Sample i's position, bytes and member ranges (read_raw), its name for messages
+        (``<shard>: <key>``) and its ``json`` member's bytes."""
+        j = self._index(i)
+        buf, members = self.read_raw(j)
+        offset, size = members["json"]
+        return (j, buf, members, f"{self._paths[self._samples[j].shard]}: {self._keys[j]}",
+                bytes(memoryview(buf)[offset:offset + size]))
+
     def _array(self, buf: bytearray, members: Dict[str, Tuple[int, int]], field: str,
                where: str, dtype: str, shape: Tuple[Optional[int], ...],
                size_text: str) -> np.ndarray:
@@ -356,13 +365,9 @@ class ShardDataset(_ShardSplit):
         return "every sample"
 
     def __getitem__(self, i: int) -> Dict[str, Any]:
-        j = self._index(i)
-        buf, members = self.read_raw(j)
-        where = f"{self._paths[self._samples[j].shard]}: {self._keys[j]}"
-
-        offset, size = members["json"]
+        j, buf, members, where, meta_bytes = self._read(i)
         try:
-            meta = json.loads(bytes(memoryview(buf)[offset:offset + size]))
+            meta = json.loads(meta_bytes)
             T_0to1 = np.asarray(meta["T_0to1"], dtype=np.float64).reshape(4, 4)
             K0 = np.asarray(meta["K0"], dtype=np.float32).reshape(3, 3)
             K1 = np.asarray(meta["K1"], dtype=np.float32).reshape(3, 3)

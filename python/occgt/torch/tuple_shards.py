@@ -85,12 +85,9 @@ class TupleShardDataset(_ShardSplit):
                                  f"by images=True; the recipe's sample.image was none?)")
 
     def __getitem__(self, i: int) -> Any:
-        j = self._index(i)
-        buf, members = self.read_raw(j)
-        where = f"{self._paths[self._samples[j].shard]}: {self._keys[j]}"
-        offset, size = members["json"]
+        _, buf, members, where, meta_bytes = self._read(i)
         try:
-            meta = json.loads(bytes(memoryview(buf)[offset:offset + size]))
+            meta = json.loads(meta_bytes)
             n = int(meta["num_views"])
             W, H = (int(v) for v in meta["resolution"])
             scene = str(meta["scene"])
