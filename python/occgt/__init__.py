@@ -466,7 +466,7 @@ def depth_at_image_size(
     Raises:
         ValueError: a bad argument, or an image that covers more than the depth map.
     """
-    return _occgt.depth_at_image_size(depth, K, (float(scale[0]), float(scale[1])), width, height)
+    return _occgt.depth_at_image_size(depth, K, scale, width, height)
 
 
 def load_mesh(path: Union[str, "os.PathLike[str]"]) -> Mesh:
@@ -480,8 +480,14 @@ def load_mesh(path: Union[str, "os.PathLike[str]"]) -> Mesh:
 
     Raises:
         ValueError: an unreadable, malformed, truncated or oversized file (the message names it).
+        TypeError: path is not a str or os.PathLike.
     """
-    return _occgt.load_mesh(os.fspath(path))
+    try:
+        file = os.fspath(path)
+    except TypeError:
+        raise TypeError(f"path: expected a path (str or os.PathLike), got "
+                        f"{type(path).__name__}") from None
+    return _occgt.load_mesh(file)
 
 
 def render_depth(

@@ -66,6 +66,23 @@ std::string Arg<std::string>(py::handle value, const std::string& argument) {
   return value.cast<std::string>();
 }
 
+template <>
+double Arg<double>(py::handle value, const std::string& argument) {
+  PyObject* v = value.ptr();
+  const bool number =
+      PyFloat_Check(v) || PyLong_Check(v) || PyIndex_Check(v) ||
+      (Py_TYPE(v)->tp_as_number != nullptr && Py_TYPE(v)->tp_as_number->nb_float != nullptr);
+  if (PyBool_Check(v) || PyUnicode_Check(v) || PyBytes_Check(v) || !number) {
+    throw py::type_error(argument + ": expected a number, got " + TypeName(value));
+  }
+  const double d = PyFloat_AsDouble(v);
+  if (d == -1.0 && PyErr_Occurred()) {  // e.g. an array of 2 elements
+    PyErr_Clear();
+    throw py::type_error(argument + ": expected a number, got " + TypeName(value));
+  }
+  return d;
+}
+
 py::array AsArray(py::handle obj, const std::string& argument) {
   if (py::isinstance<py::array>(obj)) return py::reinterpret_borrow<py::array>(obj);
   try {

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -52,6 +53,16 @@ template <>
 uint64_t Arg<uint64_t>(py::handle value, const std::string& argument);
 template <>
 std::string Arg<std::string>(py::handle value, const std::string& argument);
+// A real number: a Python int or float, a NumPy or 0-d torch scalar (anything with
+// __float__ but str, bytes and bool): TypeError("<argument>: expected a number, got str").
+template <>
+double Arg<double>(py::handle value, const std::string& argument);
+// Arg<T> of a value that may be None (nullopt).
+template <typename T>
+std::optional<T> OptionalArg(py::handle value, const std::string& argument) {
+  if (value.is_none()) return std::nullopt;
+  return Arg<T>(value, argument);
+}
 // The name of value's Python type ("str", "Tensor") for messages.
 std::string TypeName(py::handle value);
 

@@ -130,11 +130,19 @@ class PyScene {
   }
 
   PyScopeMap Fuse(py::handle id0_arg, py::handle id1_arg, py::handle width_arg,
-                  py::handle height_arg, py::handle scope_arg, std::optional<double> voxel_m,
-                  std::optional<double> max_range_m, std::optional<double> far_m,
-                  std::optional<double> min_depth_m, std::optional<double> max_depth_m,
-                  py::handle preset_arg, std::optional<double> dataset_min_depth_m,
-                  std::optional<double> dataset_max_depth_m) const {
+                  py::handle height_arg, py::handle scope_arg, py::handle voxel_arg,
+                  py::handle max_range_arg, py::handle far_arg, py::handle min_depth_arg,
+                  py::handle max_depth_arg, py::handle preset_arg, py::handle dataset_min_depth_arg,
+                  py::handle dataset_max_depth_arg) const {
+    const std::optional<double> voxel_m = OptionalArg<double>(voxel_arg, "voxel_m");
+    const std::optional<double> max_range_m = OptionalArg<double>(max_range_arg, "max_range_m");
+    const std::optional<double> far_m = OptionalArg<double>(far_arg, "far_m");
+    const std::optional<double> min_depth_m = OptionalArg<double>(min_depth_arg, "min_depth_m");
+    const std::optional<double> max_depth_m = OptionalArg<double>(max_depth_arg, "max_depth_m");
+    const std::optional<double> dataset_min_depth_m =
+        OptionalArg<double>(dataset_min_depth_arg, "dataset_min_depth_m");
+    const std::optional<double> dataset_max_depth_m =
+        OptionalArg<double>(dataset_max_depth_arg, "dataset_max_depth_m");
     const std::string id0 = Arg<std::string>(id0_arg, "id0");
     const std::string id1 = Arg<std::string>(id1_arg, "id1");
     const std::string scope = Arg<std::string>(scope_arg, "scope");

@@ -56,9 +56,17 @@ gt::LensModel ParseModel(const std::string& model) {
   ThrowValue("model", "expected 'pinhole', 'opencv' or 'opencv_fisheye', got '" + model + "'");
 }
 
-py::array_t<float> RenderDepth(const PyMesh& mesh, py::handle K, py::handle world_from_cam,
-                               int width, int height, const std::string& model, py::handle dist,
-                               double near_m, double far_m) {
+py::array_t<float> RenderDepth(py::handle mesh_arg, py::handle K, py::handle world_from_cam,
+                               py::handle width_arg, py::handle height_arg, py::handle model_arg,
+                               py::handle dist, py::handle near_arg, py::handle far_arg) {
+  if (!py::isinstance<PyMesh>(mesh_arg)) {
+    throw py::type_error("mesh: expected an occgt.Mesh (occgt.load_mesh), got " +
+                         TypeName(mesh_arg));
+  }
+  const PyMesh& mesh = mesh_arg.cast<const PyMesh&>();
+  const int width = Arg<int>(width_arg, "width"), height = Arg<int>(height_arg, "height");
+  const std::string model = Arg<std::string>(model_arg, "model");
+  const double near_m = Arg<double>(near_arg, "near_m"), far_m = Arg<double>(far_arg, "far_m");
   const gt::truth::Resolution resolution{width, height};
   std::string error;
   if (!resolution.Check(&error)) ThrowValue("width, height", error);

@@ -188,8 +188,18 @@ py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle
 // of the depth map (MegaDepth's depth is padded at the bottom and right), which are resampled
 // to width x height with the pixel-centre rules of core/camera.h (ResizeDepthNearest,
 // Camera::Resized).
-py::tuple DepthAtImageSize(py::handle depth, py::handle K, std::array<double, 2> scale, int width,
-                           int height) {
+py::tuple DepthAtImageSize(py::handle depth, py::handle K, py::handle scale_arg,
+                           py::handle width_arg, py::handle height_arg) {
+  const py::array scale_array = AsArray(scale_arg, "scale");
+  if (scale_array.size() != 2 ||
+      (scale_array.dtype().kind() != 'f' && scale_array.dtype().kind() != 'i' &&
+       scale_array.dtype().kind() != 'u')) {
+    ThrowValue("scale", "expected (sx, sy), two numbers, got " +
+                            std::string(py::repr(scale_arg)).substr(0, 80));
+  }
+  const py::array_t<double, py::array::forcecast> scale_values(scale_array);
+  const std::array<double, 2> scale = {scale_values.data()[0], scale_values.data()[1]};
+  const int width = Arg<int>(width_arg, "width"), height = Arg<int>(height_arg, "height");
   CheckScale(scale, "scale");
   if (width < 2 || height < 2) {
     ThrowValue("width/height", "expected an image of at least 2 x 2 pixels, got " +

@@ -310,6 +310,50 @@ class BadInput(unittest.TestCase):
                 call()
         depth, _, _ = scene.load(frame, np.int64(64), np.int32(48))
         self.assertEqual(depth.shape, (48, 64))
+        # Fusion's numbers, render_depth's and depth_at_image_size's arguments.
+        for call, error, pattern in [
+                (lambda: scene.fuse(frame, frame, voxel_m="0.05"), TypeError,
+                 r"^voxel_m: expected a number, got str$"),
+                (lambda: scene.fuse(frame, frame, far_m=True), TypeError,
+                 r"^far_m: expected a number, got bool$"),
+                (lambda: scene.fuse(frame, frame, dataset_max_depth_m=[1.0]), TypeError,
+                 r"^dataset_max_depth_m: expected a number, got list$"),
+                (lambda: scene.fuse(frame, frame, max_range_m=np.array([1.0, 2.0])), TypeError,
+                 r"^max_range_m: expected a number, got ndarray$")]:
+            with self.subTest(pattern=pattern), self.assertRaisesRegex(error, pattern):
+                call()
+        self.assertEqual(scene.fuse(frame, frame, voxel_m=np.float32(0.1), far_m=5).scope, "pair")
+        mesh = occgt.load_mesh(common.shared("meshes/sevenscenes-rgbd-frames-tsdf.ply"))
+        K = np.array([[50.0, 0, 31.5], [0, 50.0, 23.5], [0, 0, 1]])
+        for call, error, pattern in [
+                (lambda: occgt.load_mesh(3), TypeError,  # type: ignore[arg-type]
+                 r"^path: expected a path \(str or os.PathLike\), got int$"),
+                (lambda: occgt.render_depth("mesh.ply", K, np.eye(4), 64, 48), TypeError,
+                 r"^mesh: expected an occgt.Mesh \(occgt.load_mesh\), got str$"),
+                (lambda: occgt.render_depth(mesh, K, np.eye(4), "64", 48), TypeError,
+                 r"^width: expected an int, got str$"),
+                (lambda: occgt.render_depth(mesh, K, np.eye(4), 64, 48.0), TypeError,
+                 r"^height: expected an int, got float$"),
+                (lambda: occgt.render_depth(mesh, K, np.eye(4), 64, 48, model=0), TypeError,
+                 r"^model: expected a str, got int$"),
+                (lambda: occgt.render_depth(mesh, K, np.eye(4), 64, 48, near_m="0.1"), TypeError,
+                 r"^near_m: expected a number, got str$"),
+                (lambda: occgt.depth_at_image_size(np.ones((8, 8), np.float32), K, "2", 4, 4),
+                 ValueError, r"^scale: expected \(sx, sy\), two numbers, got '2'$"),
+                (lambda: occgt.depth_at_image_size(np.ones((8, 8), np.float32), K, (2, 2, 2), 4,
+                                                   4),
+                 ValueError, r"^scale: expected \(sx, sy\), two numbers, got \(2, 2, 2\)$"),
+                (lambda: occgt.depth_at_image_size(np.ones((8, 8), np.float32), K, (2, 2), 4.0,
+                                                   4),
+                 TypeError, r"^width: expected an int, got float$")]:
+            with self.subTest(pattern=pattern), self.assertRaisesRegex(error, pattern):
+                call()
+        # LoFTR's scale0 is a tensor or an array; numpy scalars are numbers.
+        d, _ = occgt.depth_at_image_size(np.ones((8, 8), np.float32), K, np.array([2.0, 2.0]),
+                                         4, 4)
+        self.assertEqual(d.shape, (4, 4))
+        self.assertEqual(occgt.render_depth(mesh, K, np.eye(4), np.int64(64), 48,
+                                            near_m=np.float64(0.1), far_m=10).shape, (48, 64))
 
     def test_torch_tensors_and_array_likes(self) -> None:
         """CPU tensors are inputs; one numpy cannot read says why (numpy's reason)."""
