@@ -153,8 +153,8 @@ cv::Mat DecodePng(std::string_view bytes, ChannelOrder order, const std::string&
   return image;
 }
 
-bool PngWrite(png_structp png, png_infop info, const PngLayout& layout, int level, bool bgr,
-              png_bytepp rows) {
+bool PngWrite(png_structp png, png_infop info, const PngLayout& layout, int level, PngFilter filter,
+              bool bgr, png_bytepp rows) {
   if (setjmp(png_jmpbuf(png))) return false;
   const int colour_type = layout.channels == 1   ? PNG_COLOR_TYPE_GRAY
                           : layout.channels == 3 ? PNG_COLOR_TYPE_RGB
@@ -162,6 +162,7 @@ bool PngWrite(png_structp png, png_infop info, const PngLayout& layout, int leve
   png_set_IHDR(png, info, layout.width, layout.height, layout.bit_depth, colour_type,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_compression_level(png, level);
+  if (filter == PngFilter::kSub) png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
   png_write_info(png, info);
   if (bgr && layout.channels != 1) png_set_bgr(png);
   if (layout.bit_depth == 16 && HostIsLittleEndian()) png_set_swap(png);
@@ -573,7 +574,7 @@ cv::Mat DecodeImageBytes(std::string_view bytes, ChannelOrder order, const std::
 }
 
 std::string EncodePngBytes(const cv::Mat& image, ChannelOrder order, int level,
-                           const std::string& what) {
+                           const std::string& what, PngFilter filter) {
   const int channels = image.channels();
   if (image.empty() || (image.depth() != CV_8U && image.depth() != CV_16U) ||
       (channels != 1 && channels != 3 && channels != 4) || level < 0 || level > 9) {
@@ -602,7 +603,7 @@ std::string EncodePngBytes(const cv::Mat& image, ChannelOrder order, int level,
   layout.bit_depth = image.depth() == CV_16U ? 16 : 8;
   std::vector<png_bytep> rows(static_cast<size_t>(image.rows));
   for (int v = 0; v < image.rows; ++v) rows[v] = const_cast<png_bytep>(image.ptr<png_byte>(v));
-  if (!PngWrite(png, info, layout, level, order == ChannelOrder::kBgr, rows.data())) {
+  if (!PngWrite(png, info, layout, level, filter, order == ChannelOrder::kBgr, rows.data())) {
     throw InputError(what, std::string("cannot encode PNG: ") + state.message);
   }
   return out;

@@ -55,11 +55,16 @@ bool DecodeJpegRgbInto(std::string_view bytes, const std::string& what, std::vec
 // is not a Netpbm file or these tokens are missing or malformed. ReadImageSize uses it.
 bool NetpbmSize(std::string_view head, int* width, int* height);
 
+// PNG row filters: libpng's adaptive choice per row (the smallest files), or Sub on every
+// row (decodes 1.4-2x faster in libpng/OpenCV, the files 0-4 % larger at zlib level 1 on
+// camera images: docs/PERFORMANCE.md "Reading shards from Python").
+enum class PngFilter { kAdaptive, kSub };
+
 // 8-bit (CV_8UC1 grey, CV_8UC3 colour in `order`, CV_8UC4 with alpha) or 16-bit grey or
-// colour (CV_16UC1 / CV_16UC3) to PNG with zlib level `level` (0..9) and libpng's adaptive
-// row filters.
+// colour (CV_16UC1 / CV_16UC3) to PNG with zlib level `level` (0..9) and row filters
+// `filter`.
 std::string EncodePngBytes(const cv::Mat& image, ChannelOrder order, int level,
-                           const std::string& what);
+                           const std::string& what, PngFilter filter = PngFilter::kAdaptive);
 
 // CV_8UC1 or CV_8UC3 (colour in `order`) to a baseline JPEG of `quality` (1..100), 4:2:0
 // chroma for colour, standard Huffman tables (libjpeg's defaults).

@@ -23,7 +23,8 @@ std::string EncodeImage(const io::ColorImage& image, ImageFormat format, const s
   if (format == ImageFormat::kJpg)
     return io::EncodeJpegBytes(rgb, io::ChannelOrder::kRgb, 95, what);
   GT_ASSERT(format == ImageFormat::kPng);
-  return io::EncodePngBytes(rgb, io::ChannelOrder::kRgb, 1, what);
+  // Sub filters: the trainers decode these images every epoch (io::PngFilter).
+  return io::EncodePngBytes(rgb, io::ChannelOrder::kRgb, 1, what, io::PngFilter::kSub);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 #include <png.h>
+#include <zlib.h>
 
 #include <csetjmp>
 #include <cstdio>
@@ -133,6 +134,45 @@ TEST(Png, RoundTripsEveryEncodableLayoutExactly) {
       EXPECT_TRUE(SameMat(cv_read, m)) << type << " level " << level;
     }
   }
+}
+
+// The filter byte of every row of a PNG (8-bit, not interlaced): its IDAT data inflated.
+std::vector<int> RowFilters(const std::string& png, int rows, size_t row_bytes) {
+  std::string idat;
+  for (size_t p = 8; p + 12 <= png.size();) {
+    const auto* b = reinterpret_cast<const unsigned char*>(png.data() + p);
+    const size_t length = (size_t{b[0]} << 24) | (size_t{b[1]} << 16) | (size_t{b[2]} << 8) | b[3];
+    if (png.compare(p + 4, 4, "IDAT") == 0) idat += png.substr(p + 8, length);
+    p += 12 + length;
+  }
+  std::vector<unsigned char> raw(static_cast<size_t>(rows) * (row_bytes + 1));
+  uLongf size = raw.size();
+  EXPECT_EQ(uncompress(raw.data(), &size, reinterpret_cast<const Bytef*>(idat.data()), idat.size()),
+            Z_OK);
+  EXPECT_EQ(size, raw.size());
+  std::vector<int> filters;
+  for (int r = 0; r < rows; ++r) filters.push_back(raw[r * (row_bytes + 1)]);
+  return filters;
+}
+
+TEST(Png, SubFilterOnEveryRowRoundTripsExactly) {
+  for (int type : {CV_8UC1, CV_8UC3, CV_8UC4}) {
+    for (int level : {0, 1, 9}) {
+      const cv::Mat m = RandomMat(17, 23, type, 11 + type + level);
+      const std::string png = EncodePngBytes(m, ChannelOrder::kBgr, level, "t", PngFilter::kSub);
+      EXPECT_TRUE(SameMat(DecodeImageBytes(png, ChannelOrder::kBgr, "t"), m)) << type;
+      const cv::Mat cv_read =
+          cv::imdecode(std::vector<uchar>(png.begin(), png.end()), cv::IMREAD_UNCHANGED);
+      EXPECT_TRUE(SameMat(cv_read, m)) << type << " level " << level;
+      EXPECT_EQ(RowFilters(png, m.rows, m.cols * m.elemSize()), std::vector<int>(m.rows, 1))
+          << type << " level " << level;
+    }
+  }
+  // The adaptive default picks other filters on a smooth image (so the option matters).
+  const cv::Mat smooth = SmoothBgr(32, 48);
+  const std::vector<int> adaptive =
+      RowFilters(EncodePngBytes(smooth, ChannelOrder::kBgr, 1, "t"), 32, 48 * 3);
+  EXPECT_NE(adaptive, std::vector<int>(32, 1));
 }
 
 TEST(Png, ChannelOrderSwapsRedAndBlueOnly) {
