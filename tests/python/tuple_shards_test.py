@@ -12,7 +12,7 @@ import os
 import shutil
 import tarfile
 import unittest
-from typing import Any
+from typing import Any, Callable, Dict
 
 import numpy as np
 import torch
@@ -205,6 +205,104 @@ class TupleShards(unittest.TestCase):
                                    common.npy_bytes(np.zeros((1, 2, 2), np.uint32))})
         with self.assertRaisesRegex(ValueError, "has no intrinsics.npy member"):
             TupleShardDataset(missing)
+
+    def damaged(self, name: str, change: Callable[[Dict[str, Any]], None]) -> str:
+        """A copy of the uncompressed split whose first sample's members (field -> bytes, the
+        json and .npy members as a dict and arrays) are rewritten by change."""
+        views = os.path.join(common.scratch(name), "views")
+        shutil.copytree(os.path.join(self.out["none"], "views"), views)
+        index_path = os.path.join(views, "index.json")
+        index = json.load(open(index_path))
+        shard = os.path.join(views, index["shardlist"][0]["url"])
+        with tarfile.open(shard) as t:
+            members = [(m.name, t.extractfile(m).read())  # type: ignore[union-attr]
+                       for m in t.getmembers()]
+        key = members[0][0].split(".")[0]
+        fields: Dict[str, Any] = {}
+        for member, data in members:
+            if member.split(".")[0] == key:
+                field = member[len(key) + 1:]
+                fields[field] = (json.loads(data) if field == "json" else
+                                 np.load(io.BytesIO(data)) if field.endswith(".npy") else data)
+        change(fields)
+        with tarfile.open(shard, "w", format=tarfile.USTAR_FORMAT) as t:
+            rewritten = [(f"{key}.{field}", json.dumps(v).encode() if field == "json" else
+                          common.npy_bytes(v) if field.endswith(".npy") else v)
+                         for field, v in fields.items()]
+            for member, data in rewritten + [m for m in members
+                                             if m[0].split(".")[0] != key]:
+                info = tarfile.TarInfo(member)
+                info.size = len(data)
+                t.addfile(info, io.BytesIO(data))
+        index["shardlist"][0]["filesize"] = os.path.getsize(shard)
+        with open(index_path, "w") as f:
+            json.dump(index, f)
+        return views
+
+    def test_damaged_samples(self) -> None:
+        def set_json(field: str, value: Any) -> Callable[[Dict[str, Any]], None]:
+            return lambda m: m["json"].__setitem__(field, value)
+
+        def set_array(field: str, at: Any, value: Any) -> Callable[[Dict[str, Any]], None]:
+            return lambda m: m[field].__setitem__(at, value)
+
+        def scale_pose(m: Dict[str, Any]) -> None:
+            m["world_from_cam.npy"][1, :3, :3] *= 1.03  # det 1.09: within the old 0.1
+
+        def frame_number_text(m: Dict[str, Any]) -> None:
+            m["json"]["frames"][0]["number"] = str(m["json"]["frames"][0]["number"])
+
+        cases = [  # (change, the message after the sample's name); each was read before
+            (set_json("tuple_index", "0"), r"\.json: .*tuple_index: expected an integer"),
+            (set_json("num_views", 3.0), r"\.json: .*num_views: expected an integer 1\.\.32"),
+            (set_json("resolution", [96.0, 72]), r"\.json: .*resolution: expected an integer"),
+            (set_json("scene", None), r"\.json: .*scene: expected a non-empty string"),
+            (frame_number_text, r"\.json: .*frames: expected num_views \(\d+\) objects"),
+            (set_json("key", "a/tuple_000009"), r"\.json: .*key 'a/tuple_000009', expected "
+                                                r"the sample's"),
+            (scale_pose, r": world_from_cam\.npy: expected finite rigid transforms"),
+            (set_array("intrinsics.npy", (0, 0, 0), 0.0), r": intrinsics\.npy: expected finite "
+                                                         r"K with fx, fy > 0"),
+            (set_array("occluded_in.npy", (0, 0, 0), np.uint32(1 << 31)),
+             r": occluded_in\.npy: bit for a view >= \d"),
+            (set_array("track_state.npy", (0, 0), 9), r": track_state\.npy: expected states "
+                                                      r"0\.\.4, got 9"),
+            (set_array("track_xy.npy", (0, 0, 0), np.inf), r": track_xy\.npy: expected finite"),
+            (set_array("depth1.npy", (0, 0), np.nan), r": depth1\.npy: expected finite depths"),
+            (set_array("depth1.npy", (0, 0), -1.0), r": depth1\.npy: expected finite depths"),
+        ]
+        for n, (change, message) in enumerate(cases):
+            ds = TupleShardDataset(self.damaged("tuple_shards_damaged", change))
+            with self.assertRaisesRegex(ValueError, r"views-000000\.tar: \w+/tuple_000000" +
+                                        message, msg=f"case {n}"):
+                ds[0]
+            ds[1]  # the other samples are read as before
+
+    def test_bad_arguments_and_indexes(self) -> None:
+        views = os.path.join(self.out["none"], "views")
+        with self.assertRaisesRegex(TypeError, "images: expected a bool, got str"):
+            TupleShardDataset(views, images="no")  # type: ignore[arg-type]
+        with self.assertRaisesRegex(TypeError, "dataset_name: expected a str, got int"):
+            TupleShardDataset(views, views="dust3r", dataset_name=5)  # type: ignore[arg-type]
+        # index.json with a count of another type: named, not "2 samples, ... says 2".
+        copy = os.path.join(common.scratch("tuple_shards_index"), "views")
+        shutil.copytree(views, copy)
+        index = json.load(open(os.path.join(copy, "index.json")))
+        index["shardlist"][0]["nsamples"] = str(index["shardlist"][0]["nsamples"])
+        with open(os.path.join(copy, "index.json"), "w") as f:
+            json.dump(index, f)
+        with self.assertRaisesRegex(ValueError, r"index\.json: shardlist\[0\]: expected url "
+                                                r"\(a string\), nsamples and filesize"):
+            TupleShardDataset(copy)
+        # A shard removed after the split was indexed (e.g. before a DataLoader worker opens
+        # it): a ValueError naming it, not FileNotFoundError.
+        shutil.rmtree(copy)
+        shutil.copytree(views, copy)
+        ds = TupleShardDataset(copy)
+        os.remove(os.path.join(copy, "views-000000.tar"))
+        with self.assertRaisesRegex(ValueError, r"views-000000\.tar: shard missing \(removed "
+                                                r"since it was indexed\)"):
+            ds[0]
 
     @staticmethod
     def write_split(folder: str, members: dict) -> None:

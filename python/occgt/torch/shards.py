@@ -142,9 +142,12 @@ class _ShardSplit(torch.utils.data.Dataset):  # type: ignore[type-arg]
         for n, entry in enumerate(shardlist):
             try:
                 url, nsamples, filesize = entry["url"], entry["nsamples"], entry["filesize"]
+                if (not isinstance(url, str) or
+                        not all(type(v) is int and v >= 0 for v in (nsamples, filesize))):
+                    raise TypeError
             except (KeyError, TypeError):
-                raise ValueError(f"{index_path}: shardlist[{n}]: expected url, nsamples and "
-                                 f"filesize") from None
+                raise ValueError(f"{index_path}: shardlist[{n}]: expected url (a string), "
+                                 f"nsamples and filesize (integers >= 0)") from None
             path = os.path.join(self.split_dir, url)
             got = _index_shard(path, n, int(filesize), self._samples, self._keys)
             if got != nsamples:
@@ -208,7 +211,11 @@ class _ShardSplit(torch.utils.data.Dataset):  # type: ignore[type-arg]
             self._pid = pid
         fd = self._fds.get(shard)
         if fd is None:
-            fd = os.open(self._paths[shard], os.O_RDONLY)
+            try:
+                fd = os.open(self._paths[shard], os.O_RDONLY)
+            except FileNotFoundError:
+                raise ValueError(f"{self._paths[shard]}: shard missing (removed since it was "
+                                 f"indexed)") from None
             self._fds[shard] = fd
         return fd
 

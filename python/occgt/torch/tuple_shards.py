@@ -26,6 +26,45 @@ __all__ = ["TupleShardDataset"]
 _NEED = ("json", "intrinsics.npy", "world_from_cam.npy", "visible_in.npy", "occluded_in.npy",
          "valid.npy", "track_xy.npy", "track_state.npy", "depth0.npy")
 
+# |R^T R - I| of a rigid pose (libgt/core/pose.h kRigidTolerance, GROUND_TRUTH.md §1).
+_RIGID_TOLERANCE = 1e-3
+
+
+def _whole(field: str, value: Any, low: int, high: int) -> int:
+    """value, an integer in low..high (not a bool, float or string), of the json's field."""
+    if type(value) is not int or not low <= value <= high:
+        raise ValueError(f"{field}: expected an integer {low}..{high}, got {value!r:.40}")
+    return value
+
+
+def _fields(meta_bytes: bytes, key: str) -> Tuple[int, int, int, str, int,
+                                                  List[Tuple[str, int]]]:
+    """num_views, W, H, scene, tuple_index and frames [(id, number)] of a sample's json
+    member, checked against views_sample.schema.json and the sample's key (ValueError)."""
+    meta = json.loads(meta_bytes)
+    if not isinstance(meta, dict):
+        raise ValueError(f"expected an object, got {type(meta).__name__}")
+    missing = [f for f in ("key", "scene", "tuple_index", "num_views", "frames", "resolution")
+               if f not in meta]
+    if missing:
+        raise ValueError(f"no {', '.join(missing)}")
+    if meta["key"] != key:
+        raise ValueError(f"key {meta['key']!r:.60}, expected the sample's {key!r}")
+    n = _whole("num_views", meta["num_views"], 1, 32)
+    index = _whole("tuple_index", meta["tuple_index"], 0, 2**63 - 1)
+    scene, frames, size = meta["scene"], meta["frames"], meta["resolution"]
+    if not isinstance(scene, str) or not scene:
+        raise ValueError(f"scene: expected a non-empty string, got {scene!r:.40}")
+    if not isinstance(size, list) or len(size) != 2:
+        raise ValueError(f"resolution: expected [W, H], got {size!r:.40}")
+    W, H = (_whole("resolution", v, 1, 2**31 - 1) for v in size)
+    if (not isinstance(frames, list) or len(frames) != n or
+            not all(isinstance(f, dict) and isinstance(f.get("id"), str) and
+                    type(f.get("number")) is int for f in frames)):
+        raise ValueError(f"frames: expected num_views ({n}) objects {{id: string, number: "
+                         f"integer}}, got {frames!r:.60}")
+    return n, W, H, scene, index, [(f["id"], f["number"]) for f in frames]
+
 
 class TupleShardDataset(_ShardSplit):
     """Map-style dataset over the N-view shards of ``occgt tuples --shards``.
@@ -52,14 +91,21 @@ class TupleShardDataset(_ShardSplit):
             ``index.json`` (and where the N-view shards are when given ``DIR``), a missing or
             damaged shard, a pair sample of ``occgt build`` (read by ShardDataset), a sample
             lacking a member, a member of another dtype or shape than its json's
-            ``num_views`` and ``resolution`` say, a pose that is not rigid, a bitmask with a
-            bit for a view the tuple does not have.
+            ``num_views`` and ``resolution`` say, a json field of another type or value
+            than views_sample.schema.json's or a ``key`` other than the sample's, a pose that
+            is not rigid, a K that is not a pinhole's, a depth that is negative or not
+            finite, a bitmask with a bit for a view the tuple does not have, a track state
+            other than 0..4.
     """
 
     def __init__(self, split_dir: Union[str, "os.PathLike[str]"], *, images: bool = True,
                  views: str = "vggt", dataset_name: str = "occgt") -> None:
         if views not in ("vggt", "dust3r"):
             raise ValueError(f"views: expected 'vggt' or 'dust3r', got {views!r}")
+        if not isinstance(images, (bool, np.bool_)):
+            raise TypeError(f"images: expected a bool, got {type(images).__name__}")
+        if not isinstance(dataset_name, str):
+            raise TypeError(f"dataset_name: expected a str, got {type(dataset_name).__name__}")
         self.images = bool(images)
         self.views = views
         self.dataset_name = dataset_name
@@ -85,23 +131,12 @@ class TupleShardDataset(_ShardSplit):
                                  f"by images=True; the recipe's sample.image was none?)")
 
     def __getitem__(self, i: int) -> Any:
-        _, buf, members, where, meta_bytes = self._read(i)
+        j, buf, members, where, meta_bytes = self._read(i)
         try:
-            meta = json.loads(meta_bytes)
-            n = int(meta["num_views"])
-            W, H = (int(v) for v in meta["resolution"])
-            scene = str(meta["scene"])
-            index = int(meta["tuple_index"])
-            frames: List[Tuple[str, int]] = [(str(f["id"]), int(f["number"]))
-                                             for f in meta["frames"]]
-            if not 1 <= n <= 32 or len(frames) != n:
-                raise ValueError(f"num_views {n} with {len(frames)} frames (expected 1..32, "
-                                 f"one frame each)")
-        except (KeyError, TypeError, ValueError) as e:
+            n, W, H, scene, index, frames = _fields(meta_bytes, self._keys[j])
+        except ValueError as e:  # JSONDecodeError, UnicodeDecodeError too
             raise ValueError(f"{where}.json: expected the N-view sample fields of "
-                             f"schemas/views_sample.schema.json (num_views, resolution, scene, "
-                             f"tuple_index, frames [{{id, number}}]): {type(e).__name__}: "
-                             f"{e}") from None
+                             f"schemas/views_sample.schema.json: {e}") from None
         size_text = f"{n} views of {W}x{H}"
 
         def array(field: str, dtype: str, shape: Tuple[Any, ...]) -> np.ndarray:
@@ -113,12 +148,22 @@ class TupleShardDataset(_ShardSplit):
         depths = np.stack([array(f"depth{v}.npy", "f4", (H, W)) for v in range(n)])
         Ks = array("intrinsics.npy", "f8", (n, 3, 3))
         poses = array("world_from_cam.npy", "f8", (n, 4, 4))
-        rigid = (np.isfinite(poses).all() and np.isfinite(Ks).all() and
-                 (poses[:, 3] == [0, 0, 0, 1]).all() and
-                 (np.abs(np.linalg.det(poses[:, :3, :3]) - 1) <= 0.1).all())
+        if not (np.isfinite(Ks).all() and (Ks[:, 2] == [0, 0, 1]).all() and
+                (Ks[:, 0, 0] > 0).all() and (Ks[:, 1, 1] > 0).all()):
+            raise ValueError(f"{where}: intrinsics.npy: expected finite K with fx, fy > 0 and "
+                             f"last row [0, 0, 1]")
+        R = poses[:, :3, :3]
+        rigid = (np.isfinite(poses).all() and (poses[:, 3] == [0, 0, 0, 1]).all() and
+                 (np.abs(R.transpose(0, 2, 1) @ R - np.eye(3)) <= _RIGID_TOLERANCE).all() and
+                 (np.linalg.det(R) > 0).all())
         if not rigid:
-            raise ValueError(f"{where}: world_from_cam.npy / intrinsics.npy: expected finite "
-                             f"K and rigid transforms [[R, t], [0, 0, 0, 1]]")
+            raise ValueError(f"{where}: world_from_cam.npy: expected finite rigid transforms "
+                             f"[[R, t], [0, 0, 0, 1]] (|R^T R - I| <= {_RIGID_TOLERANCE}, "
+                             f"det R > 0)")
+        for v in range(n):
+            if not (np.isfinite(depths[v]).all() and (depths[v] >= 0).all()):
+                raise ValueError(f"{where}: depth{v}.npy: expected finite depths >= 0 "
+                                 f"(0 = invalid)")
         truth: Dict[str, Any] = {
             "visible_in": array("visible_in.npy", "u4", (n, H, W)),
             "occluded_in": array("occluded_in.npy", "u4", (n, H, W)),
@@ -126,6 +171,14 @@ class TupleShardDataset(_ShardSplit):
         }
         truth["track_xy"] = array("track_xy.npy", "f4", (n, None, 2))
         truth["track_state"] = array("track_state.npy", "u1", (n, truth["track_xy"].shape[1]))
+        if n < 32 and (truth["occluded_in"] >> np.uint32(n)).any():
+            raise ValueError(f"{where}: occluded_in.npy: bit for a view >= {n} (the number "
+                             f"of views) set")
+        if truth["track_state"].size and truth["track_state"].max() > occgt.TRACK_INCONSISTENT:
+            raise ValueError(f"{where}: track_state.npy: expected states 0.."
+                             f"{occgt.TRACK_INCONSISTENT}, got {truth['track_state'].max()}")
+        if np.isinf(truth["track_xy"]).any():
+            raise ValueError(f"{where}: track_xy.npy: expected finite positions or NaN")
         try:  # the C++ count; it also refuses bits for views the tuple does not have
             truth["seen_by"] = occgt.views_seen_by(truth["visible_in"], truth["valid"])["seen_by"]
         except ValueError as e:
