@@ -56,7 +56,7 @@ bool DecodeJpegRgbInto(std::string_view bytes, const std::string& what, std::vec
 bool NetpbmSize(std::string_view head, int* width, int* height);
 
 // PNG row filters: libpng's adaptive choice per row (the smallest files), or Sub on every
-// row (decodes 1.4-2x faster in libpng/OpenCV, the files 0-4 % larger at zlib level 1 on
+// row (decodes 1.4-2x faster in libpng/OpenCV, the files 0-6 % larger at zlib level 1 on
 // camera images: docs/PERFORMANCE.md "Reading shards from Python").
 enum class PngFilter { kAdaptive, kSub };
 
