@@ -12,6 +12,7 @@ PRESETS: Tuple[str, ...]  # label presets
 FORMATS: Tuple[str, ...]  # dataset formats of open_dataset
 
 PAIR_DEFAULTS: Dict[str, Any]  # default of each pair_ground_truth argument, from the C++
+RIGID_TOLERANCE: float  # |R^T R - I| above which a pose is not rigid (core/pose.h)
 VIEWS_DEFAULTS: Dict[str, Any]  # views_ground_truth: num_tracks, query_view, seed
 RENDER_DEFAULTS: Dict[str, Any]  # render_depth: model, near_m, far_m
 SUPERVISION_DEFAULTS: Dict[str, Any]  # loftr_coarse_supervision: coarse_stride, compat

@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "libgt/core/error.h"
+#include "libgt/core/pose.h"
 #include "libgt/geometry/labels.h"
 #include "libgt/geometry/patches.h"
 #include "libgt/occupancy/frustum.h"
@@ -490,6 +491,8 @@ void BindTruth(py::module_& m) {
       "The options pair_ground_truth resolves from the same arguments (its 'options' entry), "
       "without computing anything; see occgt.pair_options.");
   m.attr("PAIR_DEFAULTS") = PairDefaults();
+  // |R^T R - I| above which a pose is not rigid (core/pose.h): readers of stored poses use it.
+  m.attr("RIGID_TOLERANCE") = gt::kRigidTolerance;
   {
     const gt::truth::ViewsTruthOptions views;
     py::dict d;

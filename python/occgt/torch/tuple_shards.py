@@ -15,6 +15,7 @@ from typing import Any, Dict, List, Tuple, Union
 import numpy as np
 
 import occgt
+from occgt import _occgt
 
 from .shards import _decode, _has, _ShardSplit
 from .tuples import _tuple_item
@@ -26,8 +27,8 @@ __all__ = ["TupleShardDataset"]
 _NEED = ("json", "intrinsics.npy", "world_from_cam.npy", "visible_in.npy", "occluded_in.npy",
          "valid.npy", "track_xy.npy", "track_state.npy", "depth0.npy")
 
-# |R^T R - I| of a rigid pose (libgt/core/pose.h kRigidTolerance, GROUND_TRUTH.md §1).
-_RIGID_TOLERANCE = 1e-3
+# |R^T R - I| of a rigid pose: libgt/core/pose.h kRigidTolerance, from the C++.
+_RIGID_TOLERANCE: float = _occgt.RIGID_TOLERANCE
 
 
 def _whole(field: str, value: Any, low: int, high: int) -> int:
