@@ -100,6 +100,13 @@ def main():
                  "--out", out_t)
     _, mt = check(out_t, stride=16)
     assert mt["resolution"] == [320, 240]
+    # No upper depth limit: JSON has no infinity, so max_depth_m is null (the schema says so).
+    out_inf = common.scratch("pair_inf")
+    common.occgt("pair", "--root", roott, "--format", "tartanair", "--scene", "hospital_sample",
+                 "--frames", "000000,000020", "--resolution", "320x240", "--max-depth-m", "inf",
+                 "--out", out_inf)
+    _, mi = check(out_inf)
+    assert mi["label_options"]["max_depth_m"] is None, mi["label_options"]
 
     # Usage errors (docs/CLI.md): one `occgt: error: --flag` line, exit 2, nothing written.
     out_bad = common.scratch("pair_bad")
