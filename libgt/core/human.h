@@ -1,8 +1,10 @@
-// Numbers for people: byte counts in decimal units ("79.2 MB").
+// Values for people: byte counts in decimal units ("79.2 MB"), strings quoted for one-line
+// messages.
 #pragma once
 
 #include <cstdio>
 #include <string>
+#include <string_view>
 
 namespace gt {
 
@@ -13,6 +15,24 @@ inline std::string HumanBytes(double bytes) {
   char text[32];
   std::snprintf(text, sizeof(text), u == 0 ? "%.0f %s" : "%.1f %s", bytes, units[u]);
   return text;
+}
+
+// s in double quotes for a one-line message, its bytes outside printable ASCII (controls,
+// DEL, non-ASCII) as \xNN: "a\x0ab".
+inline std::string Quoted(std::string_view s) {
+  static const char* kHex = "0123456789abcdef";
+  std::string out = "\"";
+  for (const char c : s) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u >= 0x7f) {
+      out += "\\x";
+      out += kHex[u >> 4];
+      out += kHex[u & 15];
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
 }
 
 }  // namespace gt

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "libgt/core/error.h"
+#include "libgt/core/human.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/npz_members.h"
@@ -455,18 +456,8 @@ std::string EncodeStringsNpy(const std::vector<std::string>& values, const std::
   size_t n = 1;
   for (size_t k = 0; k < values.size(); ++k) {
     if (!Utf8CodePoints(values[k], &codes[k])) {
-      std::string shown;  // the bytes outside printable ASCII as \xNN: one readable line
-      for (const char ch : values[k]) {
-        const auto b = static_cast<unsigned char>(ch);
-        if (b >= 0x20 && b < 0x7f) {
-          shown.push_back(ch);
-        } else {
-          const char* hex = "0123456789abcdef";
-          shown += std::string("\\x") + hex[b >> 4] + hex[b & 15];
-        }
-      }
       throw InputError(what,
-                       "string " + std::to_string(k) + " is not UTF-8 text: \"" + shown + "\"");
+                       "string " + std::to_string(k) + " is not UTF-8 text: " + Quoted(values[k]));
     }
     n = std::max(n, codes[k].size());
   }
