@@ -8,6 +8,7 @@
 #include <set>
 
 #include "libgt/core/error.h"
+#include "libgt/datasets/json_input.h"
 #include "libgt/datasets/readers.h"
 #include "libgt/datasets/text_parsing.h"
 #include "libgt/io/depth_io.h"
@@ -109,17 +110,8 @@ class Validator {
   std::string path_;
 };
 
-json ParseManifestJson(std::string_view bytes, const std::string& path) {
-  try {
-    return json::parse(bytes);
-  } catch (const json::exception& e) {
-    // parse_error, and out_of_range for a number beyond double's range (found by fuzzing).
-    throw InputError(path, std::string("invalid JSON: ") + e.what());
-  }
-}
-
 json ParseManifest(const std::string& path) {
-  return ParseManifestJson(io::ReadFileBytes(path), path);
+  return ParseJsonInput(io::ReadFileBytes(path), path);
 }
 
 std::string ResolvePath(const fs::path& base, const std::string& p) {
@@ -184,7 +176,7 @@ Scene GenericReader::ReadScene(const std::string& root, const std::string& scene
 Scene ParseGenericManifest(std::string_view text, const std::string& manifest,
                            const std::string& scene_name, const ReaderOptions& options) {
   const Validator val(manifest);
-  const json j = ParseManifestJson(text, manifest);
+  const json j = ParseJsonInput(text, manifest);
   val.RequireObject(j, "", {"$schema", "format", "version", "scene", "depth_range_m", "frames"},
                     {"format", "version", "scene", "frames"});
   if (!j["format"].is_string() || j["format"].get<std::string>() != "occgt-scene-manifest") {

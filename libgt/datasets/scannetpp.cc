@@ -22,6 +22,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/datasets/colmap.h"
+#include "libgt/datasets/json_input.h"
 #include "libgt/datasets/readers.h"
 #include "libgt/datasets/text_parsing.h"
 #include "libgt/datasets/undistorted_camera.h"
@@ -89,12 +90,7 @@ std::set<std::string> ImageFiles(const fs::path& folder) {
 std::set<std::string> ReadTrainTestLists(const fs::path& path) {
   std::set<std::string> names;
   if (!io::FileExists(path.string())) return names;
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(io::ReadFileBytes(path.string()));
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path.string(), std::string("not valid JSON: ") + e.what());
-  }
+  const nlohmann::json j = ParseJsonInput(io::ReadFileBytes(path.string()), path.string());
   if (!j.is_object()) {
     throw InputError(path.string(), "expected an object {\"train\": [...], \"test\": [...]}");
   }

@@ -251,7 +251,7 @@ TEST(Generic, MalformedFieldsNameManifestAndField) {
     FAIL();
   } catch (const InputError& e) {
     EXPECT_EQ(e.where(), dir + "/scene.json");
-    EXPECT_NE(std::string(e.what()).find("invalid JSON"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("not valid JSON"), std::string::npos);
   }
 }
 
@@ -326,8 +326,57 @@ TEST(Generic, BadPoseNamesTheFieldPath) {
       ADD_FAILURE() << token << ": expected InputError";
     } catch (const InputError& e) {
       EXPECT_EQ(e.where(), manifest) << e.what();
-      EXPECT_NE(std::string(e.what()).find("invalid JSON"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("not valid JSON"), std::string::npos) << e.what();
     }
+  }
+}
+
+// nlohmann::json keeps the last of two equal keys; an edited manifest that gives a key twice
+// is refused instead, with the JSON field path of the second one. Equal keys in different
+// objects, and equal strings as values, are fine.
+TEST(Generic, DuplicateKeyNamesTheFieldPath) {
+  const std::string dir = test::ScratchDir("gen_dup_key");
+  const json j = ValidManifest();
+  const std::string manifest = WriteManifest(dir, j);
+  ReaderOptions options;
+  options.check_depth_files = false;
+  const auto reader = MakeReader(gt::DatasetFormat::kGeneric, options);
+  ASSERT_EQ(reader->ReadScene(dir, "").frames.size(), 3u);  // keys "K" in every frame: fine
+  const std::string text = j.dump();
+  struct Case {
+    std::string after, insert, field;  // insert `insert` right after the first `after`
+  };
+  const std::vector<Case> cases = {
+      {"{", "\"format\": \"generic\", ", "format"},
+      {"\"frames\":[{", "\"K\": [[1,0,0],[0,1,0],[0,0,1]], ", "frames[0].K"},
+      {"\"frames\":[{", "\"extra\": {\"a\": 1, \"a\": 2}, ", "frames[0].extra.a"},
+  };
+  for (const Case& c : cases) {
+    std::string edited = text;
+    size_t at = edited.find(c.after);
+    ASSERT_NE(at, std::string::npos) << c.after;
+    edited.insert(at + c.after.size(), c.insert);
+    WriteFileAtomic(manifest, edited);
+    try {
+      reader->ReadScene(dir, "");
+      ADD_FAILURE() << c.field << ": expected InputError";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()),
+                manifest + ": " + c.field + ": duplicate key (a key may appear once in an object)");
+    }
+  }
+  // The third frame's K given twice: the path counts the array elements before it.
+  std::string edited = text;
+  size_t at = 0;
+  for (int k = 0; k < 3; ++k) at = edited.find("\"K\":", at) + 1;
+  edited.insert(at - 1, "\"K\":[[1,0,0],[0,1,0],[0,0,1]],");
+  WriteFileAtomic(manifest, edited);
+  try {
+    reader->ReadScene(dir, "");
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              manifest + ": frames[2].K: duplicate key (a key may appear once in an object)");
   }
 }
 

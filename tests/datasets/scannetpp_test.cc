@@ -413,6 +413,9 @@ TEST_F(ScanNetPP, BadInputIsOneClearError) {
   write(dslr / "train_test_lists.json", "{\"train\": [");
   m = message(copy, datasets::ScanNetPPDevice::kDslr);
   EXPECT_NE(m.find("not valid JSON"), std::string::npos) << m;
+  write(dslr / "train_test_lists.json", "{\"train\": [], \"test\": [], \"train\": []}");
+  m = message(copy, datasets::ScanNetPPDevice::kDslr);
+  EXPECT_NE(m.find("train_test_lists.json: train: duplicate key"), std::string::npos) << m;
   fs::remove(dslr / "train_test_lists.json");
   // No COLMAP model at all.
   fs::remove_all(dslr / "colmap");

@@ -36,7 +36,7 @@ TEST(FuzzRegressions, ManifestNumberOverflowIsInputError) {
   options.check_depth_files = false;
   const std::string msg = InputErrorOf(
       [&] { ParseGenericManifest(R"({"format": 1e999999})", "/x/scene.json", "", options); });
-  EXPECT_NE(msg.find("/x/scene.json: invalid JSON"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("/x/scene.json: not valid JSON"), std::string::npos) << msg;
 }
 
 // fuzz_depth_png: arbitrary bytes went to cv::imdecode, which tries every codec OpenCV

@@ -271,6 +271,13 @@ class Indices(unittest.TestCase):
             f.write(b'{"scene": "\xff"}\n')
         with self.assertRaisesRegex(ValueError, "^" + path + ":1: .*UnicodeDecodeError"):
             read_pair_index(path)
+        # A key given twice, here inside frame1: json.loads would keep the second silently.
+        with open(path, "w") as f:
+            f.write('{"scene": "s", "frame0": {"id": "1", "number": 1}, '
+                    '"frame1": {"id": "2", "number": 2, "id": "3"}}\n')
+        with self.assertRaisesRegex(ValueError, "^" + path + ":1: expected a pair line .*"
+                                    "duplicate key 'id'"):
+            read_pair_index(path)
         path = os.path.join(out, "score.npz")
         np.savez(path, name=np.zeros((1, 4), np.int64), score=np.array(["high"]))
         with self.assertRaisesRegex(ValueError, "^" + path + r":score: expected shape \[1\] "

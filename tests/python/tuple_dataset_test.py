@@ -144,6 +144,13 @@ class TupleDataset(unittest.TestCase):
             f.write(b'{"scene": "\xff", "frame_ids": []}\n')
         with self.assertRaisesRegex(ValueError, "^" + path + ":1: .*UnicodeDecodeError"):
             read_tuples(path)
+        # A key given twice: json.loads would keep the second frame list silently.
+        with open(path, "w") as f:
+            f.write(json.dumps({"scene": scene, "frame_ids": self.ids[:2]})[:-1] +
+                    ', "frame_ids": ' + json.dumps(self.ids[1:3]) + "}\n")
+        with self.assertRaisesRegex(ValueError, "^" + path + ":1: expected a tuple line .*"
+                                    "duplicate key 'frame_ids'"):
+            read_tuples(path)
         with self.assertRaisesRegex(ValueError, r"^tuples\[1\]: expected a TupleRef or \(scene, "
                                     r"\[frame ids\]\) \(ValueError: frame_ids: expected a list of "
                                     r"str, got str\)"):

@@ -20,6 +20,7 @@ import torch
 import occgt
 
 from ._convert import to_tensor
+from ._json import loads_strict
 
 #: LoFTR's dataset_name for occgt's reader formats (its evaluation picks thresholds by it).
 _DATASET_NAMES = {"scannet": "ScanNet", "megadepth": "MegaDepth"}
@@ -103,7 +104,7 @@ def _read_jsonl(path: str) -> List[PairRef]:
                 line = raw.decode("utf-8")
                 if not line.strip():
                     continue
-                p = json.loads(line)
+                p = loads_strict(line)
                 f0, f1 = p["frame0"], p["frame1"]  # frame records {id, number}
                 for what, value, kind in (("scene", p["scene"], str), ("frame0.id", f0["id"], str),
                                           ("frame1.id", f1["id"], str),

@@ -10,7 +10,6 @@ docs/PYTHON.md.
 from __future__ import annotations
 
 import dataclasses
-import json
 import operator
 import os
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
@@ -21,6 +20,7 @@ import torch
 import occgt
 
 from ._convert import to_tensor
+from ._json import loads_strict
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,7 +56,7 @@ def read_tuples(path: Union[str, os.PathLike]) -> List[TupleRef]:
                 line = raw.decode("utf-8")
                 if not line.strip():
                     continue
-                t = json.loads(line)
+                t = loads_strict(line)
                 refs.append(_tuple_ref(t["scene"], t["frame_ids"]))
             except (ValueError, KeyError, TypeError) as e:
                 raise ValueError(f"{p}:{number}: expected a tuple line with scene and frame_ids "
