@@ -19,6 +19,7 @@
 #include "libgt/io/npy.h"
 #include "libgt/shards/loftr_tree.h"
 #include "libgt/shards/sample.h"
+#include "libgt/shards/split.h"
 #include "libgt/shards/tar_shard.h"
 
 namespace gt::eval {
@@ -121,23 +122,9 @@ bool EvalOptions::Check(std::string* error) const {
 SplitIndex LoadSplitIndex(const std::string& dir) {
   SplitIndex split;
   split.dir = dir;
-  const std::string index_path = dir + "/index.json";
-  json index;
-  try {
-    index = json::parse(io::ReadFileBytes(index_path));
-  } catch (const json::exception& e) {
-    throw InputError(index_path, std::string("not valid JSON: ") + e.what());
-  }
-  if (!index.is_object() || !index.contains("shardlist") || !index["shardlist"].is_array()) {
-    throw InputError(index_path, "expected a wids index with a 'shardlist' array");
-  }
-  split.name = index.value("name", "");
-  for (const json& s : index["shardlist"]) {
-    if (!s.is_object() || !s.contains("url") || !s["url"].is_string()) {
-      throw InputError(index_path + ":shardlist", "expected objects with a string 'url'");
-    }
-    split.shard_urls.push_back(s["url"].get<std::string>());
-  }
+  const shards::ShardIndex index = shards::ReadShardIndex(dir);
+  split.name = index.name;
+  for (const shards::IndexedShard& s : index.shards) split.shard_urls.push_back(s.url);
   const std::string pairs_path = dir + "/pairs.jsonl";
   std::istringstream lines(io::ReadFileBytes(pairs_path));
   std::string line;

@@ -26,6 +26,7 @@
 #include <valijson/validator.hpp>
 
 #include "libgt/core/error.h"
+#include "libgt/core/human.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/md5.h"
@@ -461,6 +462,68 @@ bool IsShardComplete(const std::string& dir, const std::string& split, int64_t s
   }
 }
 
+namespace {
+
+bool IsNonNegativeInteger(const json& j) {
+  return j.is_number_unsigned() || (j.is_number_integer() && j.get<int64_t>() >= 0);
+}
+
+// index.json's shardlist[i] (`e`) into `out`: "" or the problem, "<field>: expected ...".
+std::string ParseIndexEntry(const json& e, size_t i, IndexedShard* out) {
+  const std::string field = "shardlist[" + std::to_string(i) + "]";
+  if (!e.is_object()) return field + ": expected an object {url, nsamples, md5sum, filesize}";
+  if (!e.contains("url") || !e["url"].is_string()) return field + ".url: expected a string";
+  out->url = e["url"].get<std::string>();
+  if (out->url.empty() || out->url == "." || out->url == ".." ||
+      out->url.find('/') != std::string::npos || out->url.find('\0') != std::string::npos) {
+    return field + ".url: " + Quoted(out->url) +
+           " is not a file name in the split's folder (the folder holding index.json)";
+  }
+  for (const char* key : {"nsamples", "filesize"}) {
+    if (!e.contains(key) || !IsNonNegativeInteger(e[key]) ||
+        e[key].get<uint64_t>() > static_cast<uint64_t>(INT64_MAX)) {
+      return field + "." + key + ": expected an integer >= 0";
+    }
+  }
+  out->nsamples = e["nsamples"].get<int64_t>();
+  out->filesize = e["filesize"].get<int64_t>();
+  out->md5sum.clear();
+  if (e.contains("md5sum")) {
+    if (!e["md5sum"].is_string()) return field + ".md5sum: expected a string";
+    out->md5sum = e["md5sum"].get<std::string>();
+  }
+  return "";
+}
+
+}  // namespace
+
+ShardIndex ReadShardIndex(const std::string& dir) {
+  ShardIndex index;
+  index.path = (fs::path(dir) / "index.json").string();
+  if (!io::FileExists(index.path)) {
+    throw InputError(index.path,
+                     "missing (expected the split's wids shard index, written by "
+                     "occgt build or occgt merge)");
+  }
+  const json doc = ParseJsonFile(index.path);
+  if (!doc.is_object() || !doc.contains("shardlist") || !doc["shardlist"].is_array()) {
+    throw InputError(index.path, "expected an object with a \"shardlist\" array");
+  }
+  if (doc.contains("name")) {
+    if (!doc["name"].is_string()) throw InputError(index.path, "name: expected a string");
+    index.name = doc["name"].get<std::string>();
+  }
+  const json& list = doc["shardlist"];
+  index.shards.resize(list.size());
+  for (size_t i = 0; i < list.size(); ++i) {
+    if (const std::string problem = ParseIndexEntry(list[i], i, &index.shards[i]);
+        !problem.empty()) {
+      throw InputError(index.path, problem);
+    }
+  }
+  return index;
+}
+
 std::string IndexJson(const std::string& name, const std::vector<PartRecord>& parts) {
   json doc;
   doc["__kind__"] = "wids-shard-index-v1";
@@ -755,18 +818,16 @@ ShardProblems CheckListedShard(const std::string& dir, const std::string& index_
   auto problem = [&](const std::string& where, const std::string& what) {
     out.problems.push_back(where + ": " + what);
   };
-  const std::string where = index_path + ": shardlist[" + std::to_string(i) + "]";
-  if (!e.is_object() || !e.contains("url") || !e["url"].is_string() || !e.contains("nsamples") ||
-      !e["nsamples"].is_number_integer() || !e.contains("md5sum") || !e["md5sum"].is_string() ||
-      !e.contains("filesize") || !e["filesize"].is_number_integer()) {
-    problem(where, "expected {url, nsamples, md5sum, filesize}");
+  IndexedShard entry;
+  if (const std::string p = ParseIndexEntry(e, i, &entry); !p.empty()) {
+    problem(index_path, p);
     return out;
   }
-  out.url = e["url"].get<std::string>();
-  if (out.url.empty() || out.url.front() == '/' || out.url.find("..") != std::string::npos) {
-    problem(where, "url \"" + out.url + "\" is not a relative path inside the folder");
+  if (!e.contains("md5sum")) {
+    problem(index_path, "shardlist[" + std::to_string(i) + "].md5sum: missing");
     return out;
   }
+  out.url = entry.url;
   out.shard = (fs::path(dir) / out.url).string();
   const std::string& shard = out.shard;
   const int64_t size = FileSize(shard);
@@ -774,14 +835,14 @@ ShardProblems CheckListedShard(const std::string& dir, const std::string& index_
     problem(shard, "missing shard");
     return out;
   }
-  if (size != e["filesize"].get<int64_t>()) {
+  if (size != entry.filesize) {
     problem(shard, "size " + std::to_string(size) + " differs from index.json's " +
-                       std::to_string(e["filesize"].get<int64_t>()));
+                       std::to_string(entry.filesize));
   }
   try {
     const std::string md5 = io::Md5HexOfFile(shard);
-    if (md5 != e["md5sum"].get<std::string>()) {
-      problem(shard, "md5 " + md5 + " differs from index.json's " + e["md5sum"].get<std::string>());
+    if (md5 != entry.md5sum) {
+      problem(shard, "md5 " + md5 + " differs from index.json's " + entry.md5sum);
     }
   } catch (const InputError& err) {
     problem(shard, std::string("unreadable: ") + err.what());
@@ -795,9 +856,9 @@ ShardProblems CheckListedShard(const std::string& dir, const std::string& index_
     problem(shard, std::string("unreadable: ") + err.what());
     return out;
   }
-  if (static_cast<int64_t>(out.keys.size()) != e["nsamples"].get<int64_t>()) {
+  if (static_cast<int64_t>(out.keys.size()) != entry.nsamples) {
     problem(shard, "holds " + std::to_string(out.keys.size()) + " samples, index.json says " +
-                       std::to_string(e["nsamples"].get<int64_t>()));
+                       std::to_string(entry.nsamples));
   }
   out.read = true;
   return out;

@@ -105,6 +105,26 @@ bool IsShardComplete(const std::string& dir, const std::string& split, int64_t s
 
 // wids index.json text (sorted keys, 2-space indent, trailing newline).
 std::string IndexJson(const std::string& name, const std::vector<PartRecord>& parts);
+
+// One entry of index.json's shardlist.
+struct IndexedShard {
+  std::string url;  // the shard's file name, in the split folder
+  int64_t nsamples = 0;
+  int64_t filesize = 0;
+  std::string md5sum;  // "" when the entry has none (ValidateSplit requires it)
+};
+struct ShardIndex {
+  std::string path;  // DIR/index.json
+  std::string name;  // "" when the index has none
+  std::vector<IndexedShard> shards;
+};
+// DIR/index.json as every reader of a published split needs it (ShardDataset, `occgt eval`;
+// ValidateSplit checks each entry the same way): an object with a shardlist whose entries
+// have a url that is a file name in DIR (no folder part, so an edited index cannot point a
+// reader outside the split), nsamples and filesize integers >= 0, md5sum a string when
+// present. Throws InputError naming index.json (and shardlist[i]); the shards themselves
+// are not opened.
+ShardIndex ReadShardIndex(const std::string& dir);
 // Writes lines (each without '\n') as a JSONL file atomically.
 void WriteJsonLines(const std::string& path, const std::vector<std::string>& lines);
 

@@ -1,13 +1,16 @@
-// Bindings of libgt/shards for occgt.torch.ShardDataset: shard_samples(path) lists where the
-// members of every sample of a tar shard are (shards::ListShardSamples: one pass over the
-// headers with libarchive, the data is not read), without the GIL. A bad or truncated shard
-// raises ValueError naming the file (and the member or header byte).
+// Bindings of libgt/shards for occgt.torch.ShardDataset: shard_index(split_dir) reads the
+// split's index.json (shards::ReadShardIndex, the checks `occgt eval` and validate make);
+// shard_samples(path) lists where the members of every sample of a tar shard are
+// (shards::ListShardSamples: one pass over the headers with libarchive, the data is not
+// read), without the GIL. A bad index or a bad or truncated shard raises ValueError naming
+// the file (and the field, member or header byte).
 #include <pybind11/pybind11.h>
 
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "libgt/shards/split.h"
 #include "libgt/shards/tar_shard.h"
 
 namespace occgt_py {
@@ -16,6 +19,21 @@ namespace py = pybind11;
 using namespace pybind11::literals;
 
 void BindShards(py::module_& m) {
+  m.def(
+      "shard_index",
+      [](const std::string& split_dir) {
+        const gt::shards::ShardIndex index = gt::shards::ReadShardIndex(split_dir);
+        py::list shards(index.shards.size());
+        for (size_t i = 0; i < index.shards.size(); ++i) {
+          const gt::shards::IndexedShard& s = index.shards[i];
+          shards[i] = py::make_tuple(s.url, s.nsamples, s.filesize);
+        }
+        return py::make_tuple(index.path, index.name, std::move(shards));
+      },
+      "split_dir"_a,
+      "The split's index.json as (path, name, [(url, nsamples, filesize)]), in shard order; "
+      "every url is a file name in split_dir. ValueError naming index.json and the field "
+      "(shardlist[i].url, ...) for a missing or bad index.");
   m.def(
       "shard_samples",
       [](const std::string& path) {

@@ -627,6 +627,18 @@ class ShardDatasetTest(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, r"index.json: expected an object with a "
                                     r"\"shardlist\" array"):
             ShardDataset(empty)
+        # A url that leaves the folder (or names a subfolder) is refused before any file is
+        # opened: an edited index cannot point the reader at other tars.
+        outside = os.path.join(self.full, "sd-full-000000.tar")
+        for url in ["../" + os.path.basename(self.full) + "/sd-full-000000.tar", outside,
+                    "sub/x-000000.tar", "..", ""]:
+            with open(os.path.join(empty, "index.json"), "w") as f:
+                json.dump({"shardlist": [{"url": url, "nsamples": 1,
+                                          "filesize": os.path.getsize(outside)}]}, f)
+            with self.subTest(url=url), self.assertRaisesRegex(
+                    ValueError, r"index\.json: shardlist\[0\]\.url: " + re.escape(json.dumps(url)) +
+                    r" is not a file name in the split's folder"):
+                ShardDataset(empty)
 
         missing = copy_split(self.full, "sd_missing_shard")
         os.remove(os.path.join(missing, "sd-full-000001.tar"))

@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
@@ -457,6 +458,87 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   const auto p3 = ValidateSplit(dir2, ValidateOptions{SchemasDir()});
   ASSERT_FALSE(p3.empty());
   EXPECT_NE(p3[0].find("index.schema.json"), std::string::npos) << p3[0];
+}
+
+// index.json as the readers (ShardDataset, occgt eval) take it: the merge's entries back, and
+// one error naming the field for what no reader can use; validate reports the same entry
+// problems as lines.
+TEST(Split, ReadShardIndexGivesTheMergedShardsAndNamesBadEntries) {
+  const std::string dir = test::ScratchDir("shards_read_index");
+  WriteSplit(dir);
+  const MergeResult merged = MergeSplit(dir, MergeOptions{});
+  const ShardIndex index = ReadShardIndex(dir);
+  EXPECT_EQ(index.path, dir + "/index.json");
+  EXPECT_EQ(index.name, "train");
+  ASSERT_EQ(index.shards.size(), merged.parts.size());
+  for (size_t i = 0; i < index.shards.size(); ++i) {
+    EXPECT_EQ(index.shards[i].url, merged.parts[i].url);
+    EXPECT_EQ(index.shards[i].nsamples, merged.parts[i].info.nsamples);
+    EXPECT_EQ(index.shards[i].filesize, merged.parts[i].info.filesize);
+    EXPECT_EQ(index.shards[i].md5sum, merged.parts[i].info.md5sum);
+  }
+  const json good = json::parse(io::ReadFileBytes(index.path));
+  struct Case {
+    std::function<void(json&)> edit;
+    std::string message;  // after "<dir>/index.json: "
+  };
+  const std::vector<Case> cases = {
+      {[](json& j) { j["shardlist"][1]["url"] = "../train-000001.tar"; },
+       "shardlist[1].url: \"../train-000001.tar\" is not a file name in the split's folder (the "
+       "folder holding index.json)"},
+      {[&](json& j) { j["shardlist"][0]["url"] = dir + "/train-000000.tar"; },
+       "shardlist[0].url: \"" + dir +
+           "/train-000000.tar\" is not a file name in the split's folder (the folder holding "
+           "index.json)"},
+      {[](json& j) { j["shardlist"][0]["url"] = ".."; }, "shardlist[0].url: \"..\" is not"},
+      {[](json& j) { j["shardlist"][0]["url"] = 3; }, "shardlist[0].url: expected a string"},
+      {[](json& j) { j["shardlist"][2]["nsamples"] = -1; },
+       "shardlist[2].nsamples: expected an integer >= 0"},
+      {[](json& j) { j["shardlist"][2]["nsamples"] = "3"; },
+       "shardlist[2].nsamples: expected an integer >= 0"},
+      {[](json& j) { j["shardlist"][0].erase("filesize"); },
+       "shardlist[0].filesize: expected an integer >= 0"},
+      {[](json& j) { j["shardlist"][0]["filesize"] = 1.5; },
+       "shardlist[0].filesize: expected an integer >= 0"},
+      {[](json& j) { j["shardlist"][0]["md5sum"] = 7; }, "shardlist[0].md5sum: expected a string"},
+      {[](json& j) { j["shardlist"][1] = "train-000001.tar"; },
+       "shardlist[1]: expected an object {url, nsamples, md5sum, filesize}"},
+      {[](json& j) { j["name"] = 1; }, "name: expected a string"},
+      {[](json& j) { j["shardlist"] = json::object(); },
+       "expected an object with a \"shardlist\" array"},
+  };
+  for (const Case& c : cases) {
+    json edited = good;
+    c.edit(edited);
+    io::WriteFileAtomic(index.path, edited.dump(2));
+    try {
+      ReadShardIndex(dir);
+      ADD_FAILURE() << "expected InputError: " << c.message;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(index.path + ": " + c.message, 0), 0u) << e.what();
+    }
+  }
+  // validate: the same entry problem, as one line; the other shards are still checked.
+  json edited = good;
+  edited["shardlist"][1]["url"] = "../train-000001.tar";
+  edited["shardlist"][2].erase("md5sum");
+  io::WriteFileAtomic(index.path, edited.dump(2));
+  const std::vector<std::string> problems = ValidateSplit(dir, ValidateOptions{});
+  ASSERT_GE(problems.size(), 3u);
+  EXPECT_EQ(problems[0], index.path +
+                             ": shardlist[1].url: \"../train-000001.tar\" is not a file name in "
+                             "the split's folder (the folder holding index.json)");
+  EXPECT_EQ(problems[1], index.path + ": shardlist[2].md5sum: missing");
+  EXPECT_EQ(problems[2], dir + "/train-000001.tar: shard not listed in index.json");
+  fs::remove(index.path);
+  try {
+    ReadShardIndex(dir);
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), index.path +
+                                         ": missing (expected the split's wids shard index, "
+                                         "written by occgt build or occgt merge)");
+  }
 }
 
 TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasByVerifyAndValidate) {

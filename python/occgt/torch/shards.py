@@ -24,7 +24,7 @@ from typing import Any, Dict, List, Optional, Tuple, Union
 import numpy as np
 import torch.utils.data
 
-from .._occgt import gunzip, npy_header, shard_samples
+from .._occgt import gunzip, npy_header, shard_index, shard_samples
 from ._convert import to_tensor
 
 __all__ = ["ShardDataset"]
@@ -124,32 +124,14 @@ class _ShardSplit(torch.utils.data.Dataset):  # type: ignore[type-arg]
 
     def __init__(self, split_dir: Union[str, "os.PathLike[str]"]) -> None:
         self.split_dir = os.fspath(split_dir)
-        index_path = os.path.join(self.split_dir, "index.json")
-        try:
-            with open(index_path) as f:
-                index = json.load(f)
-        except FileNotFoundError:
-            raise ValueError(f"{index_path}: missing (expected the split's wids shard index "
-                             f"written by occgt build / occgt merge)") from None
-        except json.JSONDecodeError as e:
-            raise ValueError(f"{index_path}: not JSON ({e})") from None
-        shardlist = index.get("shardlist") if isinstance(index, dict) else None
-        if not isinstance(shardlist, list):
-            raise ValueError(f"{index_path}: expected an object with a \"shardlist\" array")
+        # The C++ reader of index.json (ValueError naming it and the field at fault).
+        _, _, shardlist = shard_index(self.split_dir)
         self._paths: List[str] = []
         self._samples: List[_Sample] = []
         self._keys: List[str] = []
-        for n, entry in enumerate(shardlist):
-            try:
-                url, nsamples, filesize = entry["url"], entry["nsamples"], entry["filesize"]
-                if (not isinstance(url, str) or
-                        not all(type(v) is int and v >= 0 for v in (nsamples, filesize))):
-                    raise TypeError
-            except (KeyError, TypeError):
-                raise ValueError(f"{index_path}: shardlist[{n}]: expected url (a string), "
-                                 f"nsamples and filesize (integers >= 0)") from None
+        for n, (url, nsamples, filesize) in enumerate(shardlist):
             path = os.path.join(self.split_dir, url)
-            got = _index_shard(path, n, int(filesize), self._samples, self._keys)
+            got = _index_shard(path, n, filesize, self._samples, self._keys)
             if got != nsamples:
                 raise ValueError(f"{path}: {got} samples, index.json says {nsamples}")
             self._paths.append(path)
