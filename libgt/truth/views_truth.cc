@@ -220,6 +220,63 @@ SeenBy CountSeenBy(const uint32_t* visible_in, const uint8_t* valid, int num_vie
   return out;
 }
 
+void CheckStoredViewsTruth(const uint32_t* visible_in, const uint32_t* occluded_in,
+                           const uint8_t* valid, int num_views, size_t pixels_per_view,
+                           const float* track_xy, const uint8_t* track_state, size_t num_queries) {
+  if (num_views < 1 || num_views > kMaxViews) {
+    throw InputError("visible_in", "expected 1.." + std::to_string(kMaxViews) + " views, got " +
+                                       std::to_string(num_views));
+  }
+  const uint32_t views_mask = num_views == kMaxViews ? ~0u : (1u << num_views) - 1;
+  const auto fail = [](const char* array, const std::string& what, size_t element) {
+    throw InputError(array, what + " at element " + std::to_string(element));
+  };
+  const std::string beyond =
+      "bit for a view >= " + std::to_string(num_views) + " (the number of views) set";
+  for (int i = 0; i < num_views; ++i) {
+    const uint32_t self = 1u << i;
+    const size_t p0 = pixels_per_view * static_cast<size_t>(i);
+    for (size_t p = p0; p < p0 + pixels_per_view; ++p) {
+      const uint32_t vis = visible_in[p], occ = occluded_in[p];
+      if ((vis & ~views_mask) != 0) fail("visible_in", beyond, p);
+      if ((occ & ~views_mask) != 0) fail("occluded_in", beyond, p);
+      if (valid[p] > 1) fail("valid", "expected 0 or 1, got " + std::to_string(valid[p]), p);
+      if ((vis & occ) != 0) {
+        fail("occluded_in", "a pixel both VISIBLE (visible_in) and OCCLUDED in one view", p);
+      }
+      if (valid[p] == 0 && (vis | occ) != 0) {
+        fail(vis != 0 ? "visible_in" : "occluded_in",
+             "a bit set for a pixel without valid depth (valid = 0)", p);
+      }
+      if (valid[p] == 1 && (vis & self) == 0) {
+        fail("visible_in",
+             "view " + std::to_string(i) + "'s own bit (the diagonal) not set for a valid pixel",
+             p);
+      }
+    }
+  }
+  for (size_t k = 0; k < static_cast<size_t>(num_views) * num_queries; ++k) {
+    const uint8_t state = track_state[k];
+    if (state >= kNumTrackStates) {
+      fail("track_state",
+           "expected 0.." + std::to_string(kNumTrackStates - 1) + ", got " + std::to_string(state),
+           k);
+    }
+    const float x = track_xy[2 * k], y = track_xy[2 * k + 1];
+    if (std::isinf(x) || std::isinf(y) || std::isnan(x) != std::isnan(y)) {
+      fail("track_xy", "expected (x, y) both finite or both NaN", 2 * k);
+    }
+    const auto s = static_cast<TrackState>(state);
+    if (std::isnan(x) && (s == TrackState::kVisible || s == TrackState::kOccluded ||
+                          s == TrackState::kInconsistent)) {
+      fail("track_xy",
+           std::string("NaN for a track whose state is ") + TrackStateName(s) +
+               " (a projected point has a position)",
+           2 * k);
+    }
+  }
+}
+
 ViewsTruth ComputeViewsTruth(const std::vector<WorkingFrame>& views,
                              const ViewsTruthOptions& options,
                              const std::optional<std::vector<int32_t>>& queries_uv) {

@@ -112,4 +112,17 @@ struct SeenBy {
 SeenBy CountSeenBy(const uint32_t* visible_in, const uint8_t* valid, int num_views,
                    size_t pixels_per_view);
 
+// Stored N-view ground truth (an N-view shard's members), checked for what every
+// ComputeViewsTruth result satisfies, so that a damaged or hand-edited sample is refused
+// rather than trained on: per pixel, no bit for a view >= num_views, `valid` 0 or 1, a
+// pixel never both VISIBLE and OCCLUDED in one view, no bit at all where not valid, and the
+// diagonal (bit i of view i) VISIBLE exactly where valid; per track and view, a state in
+// 0..kNumTrackStates-1, x and y both NaN or both finite, and finite where VISIBLE, OCCLUDED
+// or INCONSISTENT (LabelDirection's warped_xy). Arrays as in ViewsTruth: [N, pixels_per_view]
+// and [N, num_queries(, 2)]. Throws InputError("<array>", "... at element k") naming the
+// first element at fault (visible_in, occluded_in, valid, track_xy, track_state).
+void CheckStoredViewsTruth(const uint32_t* visible_in, const uint32_t* occluded_in,
+                           const uint8_t* valid, int num_views, size_t pixels_per_view,
+                           const float* track_xy, const uint8_t* track_state, size_t num_queries);
+
 }  // namespace gt::truth

@@ -12,7 +12,6 @@ PRESETS: Tuple[str, ...]  # label presets
 FORMATS: Tuple[str, ...]  # dataset formats of open_dataset
 
 PAIR_DEFAULTS: Dict[str, Any]  # default of each pair_ground_truth argument, from the C++
-RIGID_TOLERANCE: float  # |R^T R - I| above which a pose is not rigid (core/pose.h)
 VIEWS_DEFAULTS: Dict[str, Any]  # views_ground_truth: num_tracks, query_view, seed
 RENDER_DEFAULTS: Dict[str, Any]  # render_depth: model, near_m, far_m
 SUPERVISION_DEFAULTS: Dict[str, Any]  # loftr_coarse_supervision: coarse_stride, compat
@@ -49,6 +48,9 @@ def npy_header(buf: Any, offset: int, size: int, what: str) -> Tuple[str, bool, 
 def shard_samples(path: str) -> List[Tuple[str, int, int, Dict[str, Tuple[int, int]]]]: ...
 def shard_index(split_dir: str) -> Tuple[str, str, List[Tuple[str, int, int]]]: ...
 def views_seen_by(visible_in: npt.ArrayLike, valid: npt.ArrayLike) -> Any: ...  # occgt.SeenBy
+def check_views_sample(depths: Any, Ks: Any, world_from_cams: Any, visible_in: npt.ArrayLike,
+                       occluded_in: npt.ArrayLike, valid: npt.ArrayLike, track_xy: npt.ArrayLike,
+                       track_state: npt.ArrayLike) -> None: ...
 def dense_volume(occ: npt.ArrayLike, known: npt.ArrayLike, bins: int = ...) -> npt.NDArray[np.uint8]: ...
 
 WARP_STATUS_NAMES: Tuple[str, ...]  # index = uint8 code of status0/status1

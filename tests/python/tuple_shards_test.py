@@ -12,7 +12,7 @@ import os
 import shutil
 import tarfile
 import unittest
-from typing import Any, Callable, Dict
+from typing import Any, Callable, Dict, Tuple
 
 import numpy as np
 import torch
@@ -195,8 +195,8 @@ class TupleShards(unittest.TestCase):
             f.seek(data_offset + 3)  # the high byte of the first word (little-endian)
             f.write(bytes([0x80]))
         ds = TupleShardDataset(views)
-        with self.assertRaisesRegex(ValueError, r"views-000000\.tar: .*visible_in: bit for a "
-                                                r"view >= \d"):
+        with self.assertRaisesRegex(ValueError, r"views-000000\.tar: .*visible_in\.npy: bit for "
+                                                r"a view >= \d"):
             ds[0]
         # A sample without a member every N-view sample has.
         missing = common.scratch("tuple_shards_missing")
@@ -252,6 +252,27 @@ class TupleShards(unittest.TestCase):
         def frame_number_text(m: Dict[str, Any]) -> None:
             m["json"]["frames"][0]["number"] = str(m["json"]["frames"][0]["number"])
 
+        def at_valid_pixel(edit: Callable[[Dict[str, Any], Tuple[int, int, int]], None]
+                           ) -> Callable[[Dict[str, Any]], None]:
+            """edit(members, (0, v, u)) at the first valid pixel of view 0."""
+            def change(m: Dict[str, Any]) -> None:
+                v, u = np.argwhere(m["valid.npy"][0] == 1)[0]
+                edit(m, (0, int(v), int(u)))
+            return change
+
+        def occlude_own_pixel(m: Dict[str, Any], at: Tuple[int, int, int]) -> None:
+            m["occluded_in.npy"][at] |= np.uint32(1)  # view 0 occluded in itself
+
+        def clear_diagonal(m: Dict[str, Any], at: Tuple[int, int, int]) -> None:
+            m["visible_in.npy"][at] &= np.uint32(0xFFFFFFFE)
+
+        def invalidate(m: Dict[str, Any], at: Tuple[int, int, int]) -> None:
+            m["valid.npy"][at] = 0  # its bits stay
+
+        def lose_visible_track(m: Dict[str, Any]) -> None:
+            k = int(np.argwhere(m["track_state.npy"][0] == occgt.TRACK_VISIBLE)[0][0])
+            m["track_xy.npy"][0, k] = np.nan
+
         cases = [  # (change, the message after the sample's name); each was read before
             (set_json("tuple_index", "0"), r"\.json: .*tuple_index: expected an integer"),
             (set_json("num_views", 3.0), r"\.json: .*num_views: expected an integer 1\.\.32"),
@@ -260,14 +281,22 @@ class TupleShards(unittest.TestCase):
             (frame_number_text, r"\.json: .*frames: expected num_views \(\d+\) objects"),
             (set_json("key", "a/tuple_000009"), r"\.json: .*key 'a/tuple_000009', expected "
                                                 r"the sample's"),
-            (scale_pose, r": world_from_cam\.npy: expected finite rigid transforms"),
-            (set_array("intrinsics.npy", (0, 0, 0), 0.0), r": intrinsics\.npy: expected finite "
-                                                         r"K with fx, fy > 0"),
+            (scale_pose, r": world_from_cam\.npy\[1\]: rotation is not orthonormal "
+                         r"\(\|R\^T R - I\| = 0\.0609 > 0\.001\)"),
+            (set_array("intrinsics.npy", (0, 0, 0), 0.0), r": intrinsics\.npy\[0\]: .*focal"),
             (set_array("occluded_in.npy", (0, 0, 0), np.uint32(1 << 31)),
              r": occluded_in\.npy: bit for a view >= \d"),
-            (set_array("track_state.npy", (0, 0), 9), r": track_state\.npy: expected states "
-                                                      r"0\.\.4, got 9"),
-            (set_array("track_xy.npy", (0, 0, 0), np.inf), r": track_xy\.npy: expected finite"),
+            (set_array("track_state.npy", (0, 0), 9), r": track_state\.npy: expected 0\.\.4, "
+                                                      r"got 9 at element 0"),
+            (set_array("track_xy.npy", (0, 0, 0), np.inf), r": track_xy\.npy: expected \(x, y\) "
+                                                           r"both finite or both NaN"),
+            (at_valid_pixel(occlude_own_pixel), r": occluded_in\.npy: a pixel both VISIBLE "
+                                                r"\(visible_in\) and OCCLUDED in one view"),
+            (at_valid_pixel(clear_diagonal), r": visible_in\.npy: view 0's own bit \(the "
+                                             r"diagonal\) not set for a valid pixel"),
+            (at_valid_pixel(invalidate), r": visible_in\.npy: a bit set for a pixel without "
+                                         r"valid depth"),
+            (lose_visible_track, r": track_xy\.npy: NaN for a track whose state is VISIBLE"),
             (set_array("depth1.npy", (0, 0), np.nan), r": depth1\.npy: expected finite depths"),
             (set_array("depth1.npy", (0, 0), -1.0), r": depth1\.npy: expected finite depths"),
         ]

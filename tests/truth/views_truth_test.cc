@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <set>
 #include <string>
@@ -280,6 +281,77 @@ TEST(CountSeenBy, RefusesBitsOfAbsentViewsAndValidOtherThanZeroOrOne) {
   const SeenBy full = CountSeenBy(all.data(), ones.data(), 32, 1);
   EXPECT_EQ(full.seen_by, std::vector<uint8_t>(32, 31));
   EXPECT_EQ(full.histogram[31], 1);
+}
+
+// What every ComputeViewsTruth result satisfies, under every preset, and one damaged element
+// of each kind refused by name.
+TEST(CheckStoredViewsTruth, PassesEveryComputedResultAndNamesEachDamage) {
+  const auto check = [](const ViewsTruth& t) {
+    CheckStoredViewsTruth(t.visible_in.data(), t.occluded_in.data(), t.valid.data(), t.num_views,
+                          static_cast<size_t>(t.width) * t.height, t.track_xy.data(),
+                          t.track_state.data(), t.num_queries());
+  };
+  for (const char* preset : {"default", "occ2net", "loftr", "occ2net-compat"}) {
+    ViewsTruthOptions o = Options(preset);
+    o.query_view = 1;
+    const ViewsTruth t = ComputeViewsTruth(Views({0, 1, 2, 6, 12}), o);
+    EXPECT_EQ(ErrorOf([&] { check(t); }), "") << preset;
+  }
+  const ViewsTruth good = ComputeViewsTruth(Views({0, 2, 6}), Options("default"));
+  const size_t hw = static_cast<size_t>(good.width) * good.height;
+  size_t p = 0;  // a valid pixel of view 0 that view 1 sees (bits 0 and 1)
+  while (!(good.valid[p] == 1 && (good.visible_in[p] & 2u))) ++p;
+  size_t invalid = 0;  // a pixel of view 0 without depth
+  while (good.valid[invalid] == 1) ++invalid;
+  ASSERT_LT(p, hw);
+  ASSERT_LT(invalid, hw);
+  size_t k = 0;  // a track VISIBLE in view 1
+  while (good.track_state[good.num_queries() + k] != static_cast<uint8_t>(TrackState::kVisible)) {
+    ++k;
+  }
+  const size_t in1 = good.num_queries() + k;
+  struct Case {
+    std::function<void(ViewsTruth&)> damage;
+    std::string message;
+  };
+  const std::string at_p = " at element " + std::to_string(p);
+  const std::vector<Case> cases = {
+      {[&](ViewsTruth& t) { t.visible_in[p] |= 8u; },
+       "visible_in: bit for a view >= 3 (the number of views) set" + at_p},
+      {[&](ViewsTruth& t) { t.occluded_in[p] |= 1u << 31; },
+       "occluded_in: bit for a view >= 3 (the number of views) set" + at_p},
+      {[&](ViewsTruth& t) { t.valid[p] = 2; }, "valid: expected 0 or 1, got 2" + at_p},
+      {[&](ViewsTruth& t) { t.occluded_in[p] |= 2u; },
+       "occluded_in: a pixel both VISIBLE (visible_in) and OCCLUDED in one view" + at_p},
+      {[&](ViewsTruth& t) { t.valid[p] = 0; },
+       "visible_in: a bit set for a pixel without valid depth (valid = 0)" + at_p},
+      {[&](ViewsTruth& t) { t.occluded_in[invalid] = 4u; },
+       "occluded_in: a bit set for a pixel without valid depth (valid = 0) at element " +
+           std::to_string(invalid)},
+      {[&](ViewsTruth& t) { t.visible_in[p] &= ~1u; },
+       "visible_in: view 0's own bit (the diagonal) not set for a valid pixel" + at_p},
+      {[&](ViewsTruth& t) { t.track_state[in1] = 5; },
+       "track_state: expected 0..4, got 5 at element " + std::to_string(in1)},
+      {[&](ViewsTruth& t) { t.track_xy[2 * in1 + 1] = std::numeric_limits<float>::infinity(); },
+       "track_xy: expected (x, y) both finite or both NaN at element " + std::to_string(2 * in1)},
+      {[&](ViewsTruth& t) { t.track_xy[2 * in1] = std::numeric_limits<float>::quiet_NaN(); },
+       "track_xy: expected (x, y) both finite or both NaN at element " + std::to_string(2 * in1)},
+      {[&](ViewsTruth& t) {
+         t.track_xy[2 * in1] = t.track_xy[2 * in1 + 1] = std::numeric_limits<float>::quiet_NaN();
+       },
+       "track_xy: NaN for a track whose state is VISIBLE (a projected point has a position) at "
+       "element " +
+           std::to_string(2 * in1)},
+  };
+  for (const Case& c : cases) {
+    ViewsTruth t = good;
+    c.damage(t);
+    EXPECT_EQ(ErrorOf([&] { check(t); }), c.message);
+  }
+  ViewsTruth t = good;  // a track state that is not projected may have no position
+  t.track_state[in1] = static_cast<uint8_t>(TrackState::kOutOfView);
+  t.track_xy[2 * in1] = t.track_xy[2 * in1 + 1] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(ErrorOf([&] { check(t); }), "");
 }
 
 TEST(ComputeViewsTruth, IdenticalViewsSeeEachOther) {

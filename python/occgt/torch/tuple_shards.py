@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from typing import Any, Dict, List, Tuple, Union
 
 import numpy as np
@@ -27,8 +28,25 @@ __all__ = ["TupleShardDataset"]
 _NEED = ("json", "intrinsics.npy", "world_from_cam.npy", "visible_in.npy", "occluded_in.npy",
          "valid.npy", "track_xy.npy", "track_state.npy", "depth0.npy")
 
-# |R^T R - I| of a rigid pose: libgt/core/pose.h kRigidTolerance, from the C++.
-_RIGID_TOLERANCE: float = _occgt.RIGID_TOLERANCE
+# The sample member behind each argument of _occgt.check_views_sample / views_seen_by
+# ("{}": the view index of "depths[i]", or "[i]" after the member of a stacked array).
+_MEMBERS = {"depths": "depth{}.npy", "Ks": "intrinsics.npy{}", "world_from_cams":
+            "world_from_cam.npy{}", "visible_in": "visible_in.npy", "occluded_in":
+            "occluded_in.npy", "valid": "valid.npy", "track_xy": "track_xy.npy",
+            "track_state": "track_state.npy"}
+
+
+def _member_message(message: str) -> str:
+    """A check's message "<argument>: ..." with the argument as the sample's member
+    ("depths[2]: ..." -> "depth2.npy: ...", "Ks[1]: ..." -> "intrinsics.npy[1]: ...")."""
+    argument, sep, rest = message.partition(": ")
+    match = re.fullmatch(r"(\w+)(?:\[(\d+)\])?", argument)
+    if not sep or not match or match.group(1) not in _MEMBERS:
+        return message
+    name, view = match.groups()
+    if name == "depths":
+        return f"{_MEMBERS[name].format(view or '')}: {rest}"
+    return f"{_MEMBERS[name].format(f'[{view}]' if view else '')}: {rest}"
 
 
 def _whole(field: str, value: Any, low: int, high: int) -> int:
@@ -93,10 +111,13 @@ class TupleShardDataset(_ShardSplit):
             damaged shard, a pair sample of ``occgt build`` (read by ShardDataset), a sample
             lacking a member, a member of another dtype or shape than its json's
             ``num_views`` and ``resolution`` say, a json field of another type or value
-            than views_sample.schema.json's or a ``key`` other than the sample's, a pose that
-            is not rigid, a K that is not a pinhole's, a depth that is negative or not
-            finite, a bitmask with a bit for a view the tuple does not have, a track state
-            other than 0..4.
+            than views_sample.schema.json's or a ``key`` other than the sample's; and arrays
+            that no computed result has (C++ ``truth::CheckStoredViewsTruth`` and the checks
+            of views_ground_truth's arguments): a pose that is not rigid, a K that is not a
+            pinhole's, a depth that is negative or not finite, a bit for a view the tuple
+            does not have, a pixel both VISIBLE and OCCLUDED in a view, a bit where ``valid``
+            is 0, a diagonal bit that is not ``valid``, a track state other than 0..4, a
+            track without a position where its state is VISIBLE, OCCLUDED or INCONSISTENT.
     """
 
     def __init__(self, split_dir: Union[str, "os.PathLike[str]"], *, images: bool = True,
@@ -149,22 +170,6 @@ class TupleShardDataset(_ShardSplit):
         depths = np.stack([array(f"depth{v}.npy", "f4", (H, W)) for v in range(n)])
         Ks = array("intrinsics.npy", "f8", (n, 3, 3))
         poses = array("world_from_cam.npy", "f8", (n, 4, 4))
-        if not (np.isfinite(Ks).all() and (Ks[:, 2] == [0, 0, 1]).all() and
-                (Ks[:, 0, 0] > 0).all() and (Ks[:, 1, 1] > 0).all()):
-            raise ValueError(f"{where}: intrinsics.npy: expected finite K with fx, fy > 0 and "
-                             f"last row [0, 0, 1]")
-        R = poses[:, :3, :3]
-        rigid = (np.isfinite(poses).all() and (poses[:, 3] == [0, 0, 0, 1]).all() and
-                 (np.abs(R.transpose(0, 2, 1) @ R - np.eye(3)) <= _RIGID_TOLERANCE).all() and
-                 (np.linalg.det(R) > 0).all())
-        if not rigid:
-            raise ValueError(f"{where}: world_from_cam.npy: expected finite rigid transforms "
-                             f"[[R, t], [0, 0, 0, 1]] (|R^T R - I| <= {_RIGID_TOLERANCE}, "
-                             f"det R > 0)")
-        for v in range(n):
-            if not (np.isfinite(depths[v]).all() and (depths[v] >= 0).all()):
-                raise ValueError(f"{where}: depth{v}.npy: expected finite depths >= 0 "
-                                 f"(0 = invalid)")
         truth: Dict[str, Any] = {
             "visible_in": array("visible_in.npy", "u4", (n, H, W)),
             "occluded_in": array("occluded_in.npy", "u4", (n, H, W)),
@@ -172,18 +177,13 @@ class TupleShardDataset(_ShardSplit):
         }
         truth["track_xy"] = array("track_xy.npy", "f4", (n, None, 2))
         truth["track_state"] = array("track_state.npy", "u1", (n, truth["track_xy"].shape[1]))
-        if n < 32 and (truth["occluded_in"] >> np.uint32(n)).any():
-            raise ValueError(f"{where}: occluded_in.npy: bit for a view >= {n} (the number "
-                             f"of views) set")
-        if truth["track_state"].size and truth["track_state"].max() > occgt.TRACK_INCONSISTENT:
-            raise ValueError(f"{where}: track_state.npy: expected states 0.."
-                             f"{occgt.TRACK_INCONSISTENT}, got {truth['track_state'].max()}")
-        if np.isinf(truth["track_xy"]).any():
-            raise ValueError(f"{where}: track_xy.npy: expected finite positions or NaN")
-        try:  # the C++ count; it also refuses bits for views the tuple does not have
+        try:  # the C++ checks of every stored array, then the C++ count of seen_by
+            _occgt.check_views_sample(depths, Ks, poses, truth["visible_in"],
+                                      truth["occluded_in"], truth["valid"], truth["track_xy"],
+                                      truth["track_state"])
             truth["seen_by"] = occgt.views_seen_by(truth["visible_in"], truth["valid"])["seen_by"]
         except ValueError as e:
-            raise ValueError(f"{where}: {e}") from None
+            raise ValueError(f"{where}: {_member_message(str(e))}") from None
         colors = None
         if self.images:
             rgb = []
