@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "apps/commands.h"
+#include "apps/job_flags.h"
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/io/atomic_file.h"
@@ -33,8 +34,7 @@ namespace {
 
 struct RenderArgs {
   std::string root, format, scene, mesh, frames, out;
-  std::string device = "dslr";  // scannetpp
-  bool device_given = false;    // --device on the command line (scannetpp only)
+  DeviceFlag device;
   int stride = 1;
   std::optional<std::string> resolution;
   gt::render::FrameDepthOptions depth;
@@ -60,10 +60,7 @@ void RunRender(const RenderArgs& args) {
   std::optional<gt::truth::Resolution> resolution;
   if (args.resolution) resolution = gt::truth::ParseResolution(*args.resolution, "--resolution");
   gt::datasets::ReaderOptions reader_options;
-  reader_options.scannetpp_device = gt::datasets::ParseScanNetPPDevice(args.device, "--device");
-  if (args.device_given && format != gt::DatasetFormat::kScanNetPP) {
-    throw gt::InputError("--device", "only for the scannetpp format");
-  }
+  reader_options.scannetpp_device = args.device.Resolve(format);
   gt::Scene scene =
       gt::datasets::MakeReader(format, reader_options)->ReadScene(args.root, args.scene);
   gt::pipeline::ApplyMeshPath(args.mesh, &scene);
@@ -179,8 +176,7 @@ void AddRenderCommand(CLI::App& app) {
   cmd->add_option("--root", args->root, "dataset root")->required();
   cmd->add_option("--format", args->format, "dataset format (scannet, sevenscenes, ...)")
       ->required();
-  CLI::Option* device =
-      cmd->add_option("--device", args->device, "scannetpp: dslr or iphone")->capture_default_str();
+  AddDeviceFlag(cmd, &args->device);
   cmd->add_option("--scene", args->scene, "scene name (see occgt scan)")->required();
   cmd->add_option("--mesh", args->mesh,
                   "the scene's mesh (PLY, in the poses' world frame; default: the dataset's own)");
@@ -197,10 +193,7 @@ void AddRenderCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--rel-tol", args->depth.fused.rel_tol, "see --abs-tol-m")->capture_default_str();
   cmd->add_option("--out", args->out, "output folder")->required();
-  cmd->callback([args, device] {
-    args->device_given = device->count() > 0;
-    RunRender(*args);
-  });
+  cmd->callback([args] { RunRender(*args); });
 }
 
 }  // namespace occgt

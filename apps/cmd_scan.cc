@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "apps/commands.h"
+#include "apps/job_flags.h"
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/datasets/scan.h"
@@ -28,8 +29,7 @@ struct ScanArgs {
   std::string root;
   std::string format;
   std::string scene;
-  std::string device = "dslr";
-  bool device_given = false;  // --device on the command line (scannetpp only)
+  DeviceFlag device;
   // Flags of one format or of a mesh given on the command line: refused where they would be
   // ignored (the first such flag).
   std::string exr_channel_flag, tum_flag, mesh_flag;
@@ -174,10 +174,7 @@ void RunScan(const ScanArgs& args) {
   }
   const gt::DatasetFormat format = gt::ParseDatasetFormat(args.format, "--format");
   gt::datasets::ReaderOptions reader_options = args.reader;
-  reader_options.scannetpp_device = gt::datasets::ParseScanNetPPDevice(args.device, "--device");
-  if (args.device_given && format != gt::DatasetFormat::kScanNetPP) {
-    throw gt::InputError("--device", "only for the scannetpp format");
-  }
+  reader_options.scannetpp_device = args.device.Resolve(format);
   if (!args.exr_channel_flag.empty() && format != gt::DatasetFormat::kGeneric) {
     throw gt::InputError(args.exr_channel_flag, "only for the generic format");
   }
@@ -224,7 +221,7 @@ void RunScan(const ScanArgs& args) {
     j["format"] = args.format;
     j["root"] = args.root;
     j["check_depth"] = args.scan.check_depth;
-    if (format == gt::DatasetFormat::kScanNetPP) j["device"] = args.device;
+    if (format == gt::DatasetFormat::kScanNetPP) j["device"] = args.device.name;
     j["scenes"] = nlohmann::ordered_json::array();
     for (size_t i = 0; i < summaries.size(); ++i) {
       j["scenes"].push_back(SceneJson(summaries[i]));
@@ -272,8 +269,7 @@ void AddScanCommand(CLI::App& app) {
   cmd->add_option("--tum-max-dt", args->reader.tum_max_dt_s,
                   "TUM: max time difference for pose/colour association (s)")
       ->capture_default_str();
-  CLI::Option* device =
-      cmd->add_option("--device", args->device, "ScanNet++: dslr or iphone")->capture_default_str();
+  AddDeviceFlag(cmd, &args->device);
   cmd->add_option("--exr-channel", args->reader.exr_channel,
                   "Generic: default EXR depth channel (name or suffix)");
   cmd->add_option("--mesh", args->mesh,
@@ -284,8 +280,7 @@ void AddScanCommand(CLI::App& app) {
   cmd->add_option("--abs-tol-m", args->tolerance.abs_tol_m,
                   "With a mesh: sensor and mesh agree within abs-tol-m + rel-tol * depth (0.2)");
   cmd->add_option("--rel-tol", args->tolerance.rel_tol, "With a mesh: see --abs-tol-m (0.01)");
-  cmd->callback([args, device, cmd] {
-    args->device_given = device->count() > 0;
+  cmd->callback([args, cmd] {
     const auto first_given = [cmd](std::initializer_list<const char*> flags) {
       for (const char* f : flags) {
         if (cmd->get_option(f)->count() > 0) return std::string(f);

@@ -22,6 +22,19 @@ TaskFlags AddTaskFlags(CLI::App* cmd, int* task, int* tasks) {
   return flags;
 }
 
+gt::datasets::ScanNetPPDevice DeviceFlag::Resolve(gt::DatasetFormat format) const {
+  const gt::datasets::ScanNetPPDevice device = gt::datasets::ParseScanNetPPDevice(name, "--device");
+  if (option != nullptr && option->count() > 0 && format != gt::DatasetFormat::kScanNetPP) {
+    throw gt::InputError("--device", "only for the scannetpp format");
+  }
+  return device;
+}
+
+void AddDeviceFlag(CLI::App* cmd, DeviceFlag* flag) {
+  flag->option = cmd->add_option("--device", flag->name, "ScanNet++'s camera: dslr or iphone")
+                     ->capture_default_str();
+}
+
 void AddDepthCacheFlag(CLI::App* cmd, size_t* depth_cache_mb) {
   NonNegative(cmd->add_option("--depth-cache-mb", *depth_cache_mb,
                               "Budget of decoded depth maps held per scene (LRU, default " +

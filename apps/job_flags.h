@@ -1,7 +1,8 @@
 // Flags shared by the dataset jobs `occgt build`, `occgt covis` and `occgt tuples`: the
 // dataset root override, the task of a split (--task/--tasks, else a Slurm array's) and the
-// per-scene depth cache budget; and --threads of every command with worker threads (build,
-// covis, tuples, eval, merge, validate). Help texts take their defaults from the options
+// per-scene depth cache budget; --threads of every command with worker threads (build,
+// covis, tuples, eval, merge, validate); --device of the commands that read a dataset given
+// by --root/--format (scan, render). Help texts take their defaults from the options
 // structs.
 #pragma once
 
@@ -12,7 +13,20 @@
 #include <memory>
 #include <string>
 
+#include "libgt/core/frame.h"
+#include "libgt/datasets/reader.h"
+
 namespace occgt {
+
+// --device: ScanNet++'s camera (dslr, the default, or iphone).
+struct DeviceFlag {
+  std::string name = "dslr";
+  CLI::Option* option = nullptr;  // set by AddDeviceFlag
+  // The device to read `format` with: InputError("--device", ...) for a name other than
+  // dslr and iphone, or for the flag on the command line with a format other than scannetpp.
+  gt::datasets::ScanNetPPDevice Resolve(gt::DatasetFormat format) const;
+};
+void AddDeviceFlag(CLI::App* cmd, DeviceFlag* flag);
 
 // --root: the dataset root overriding the recipe's dataset.root.
 void AddRootFlag(CLI::App* cmd, std::string* root);
