@@ -186,8 +186,9 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
     }
     const occupancy::VolumeCounts c0 = occupancy::CountBins(occ.cam0);
     const occupancy::VolumeCounts c1 = occupancy::CountBins(occ.cam1);
-    // The bin edges under occupancy.json's name ("bins"."edges_m"); the voxel size and the
-    // other options are occupancy_options' (one key for one number).
+    // The bin edges and the fusion statistics under occupancy.json's names ("bins"."edges_m",
+    // "fusion"."stats"); the voxel size and the other options are occupancy_options' (one
+    // key for one number).
     occupancy_json = {
         {"bins", {{"edges_m", occ.cam0.edges_m}}},
         {"mode", occupancy::OccupancyModeName(options.truth.mode)},
@@ -195,8 +196,9 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
         {"grid", {occ.cam0.width, occ.cam0.height}},
         {"counts0", {{"occupied", c0.occupied}, {"free", c0.free}, {"unknown", c0.unknown}}},
         {"counts1", {{"occupied", c1.occupied}, {"free", c1.free}, {"unknown", c1.unknown}}},
-        {"fusion_stats",
-         occ.fusion_stats ? json(truth::FusionStatsJson(*occ.fusion_stats)) : json(nullptr)}};
+        {"fusion",
+         {{"stats", occ.fusion_stats ? json(truth::FusionStatsJson(*occ.fusion_stats))
+                                     : json(nullptr)}}}};
   }
   json image_json = nullptr;
   if (with_images) {

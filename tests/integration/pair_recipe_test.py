@@ -105,15 +105,26 @@ def check_pairs(name, recipe, build, extra=()):
                     fail(f"{tag}: occgt occupancy --recipe {file} differs from the shard's {member}")
         if compared < 4:
             fail(f"{tag}: the shard has {compared} occupancy members")
-        # One vocabulary: the sample json names the bin edges and the voxel size as
-        # occupancy.json does, each once ("occupancy"."bins"."edges_m", and the options'
-        # "fusion"."voxel_m").
+        # One vocabulary: the sample json names the bin edges, the fusion statistics and the
+        # voxel size as occupancy.json does, each once ("occupancy"."bins"."edges_m",
+        # "occupancy"."fusion"."stats", and the options' "fusion"."voxel_m").
         sample = json.loads(members["json"])
         with open(os.path.join(occ_dir, "occupancy.json")) as f:
             occ_meta = json.load(f)
         if sample["occupancy"]["bins"] != {"edges_m": occ_meta["bins"]["edges_m"]}:
             fail(f"{tag}: the sample's occupancy.bins {sample['occupancy']['bins']} are not "
                  f"occupancy.json's bins.edges_m {occ_meta['bins']['edges_m']}")
+        stats = occ_meta["fusion"]["stats"]
+        if stats is not None:
+            stats = {k: v for k, v in stats.items() if k != "leaf_nodes"}  # occupancy.json's only
+        if sample["occupancy"]["fusion"] != {"stats": stats} or "fusion_stats" in sample["occupancy"]:
+            fail(f"{tag}: the sample's occupancy.fusion {sample['occupancy'].get('fusion')} is "
+                 f"not occupancy.json's fusion.stats {stats}")
+        for c in ("counts0", "counts1"):  # occupancy.json adds the fractions
+            if sample["occupancy"][c] != {k: occ_meta[c][k] for k in ("occupied", "free",
+                                                                      "unknown")}:
+                fail(f"{tag}: the sample's occupancy.{c} {sample['occupancy'][c]} against "
+                     f"occupancy.json's {occ_meta[c]}")
         options = sample["occupancy_options"]
         if options["fusion"]["voxel_m"] != occ_meta["fusion"]["voxel_m"] or \
                 "voxel_m" in sample["occupancy"]:
