@@ -96,6 +96,17 @@ bool TaskFromSlurm(int* task, int* tasks) {
   return true;
 }
 
+std::string DropsText(const nlohmann::json& s) {
+  if (!s.contains("drops") || !s["drops"].is_object() || s["drops"].empty()) return "";
+  std::string text = "  dropped:";
+  bool first = true;
+  for (const auto& [reason, n] : s["drops"].items()) {
+    text += (first ? " " : ", ") + reason + " " + n.dump();
+    first = false;
+  }
+  return text + "\n";
+}
+
 namespace {
 
 void PrintProgress(const gt::pipeline::Progress& p) {
@@ -173,15 +184,7 @@ std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
     std::snprintf(line, sizeof(line), " (%.1f s)\n", seconds);
     text += line;
   }
-  if (s.contains("drops") && s["drops"].is_object() && !s["drops"].empty()) {
-    text += "  dropped:";
-    bool first = true;
-    for (const auto& [reason, n] : s["drops"].items()) {
-      text += (first ? " " : ", ") + reason + " " + n.dump();
-      first = false;
-    }
-    text += "\n";
-  }
+  text += DropsText(s);
   if (!s.value("complete", false) && !s.value("dry_run", false) &&
       s.value("stage", "all") != "select") {
     text += "  this task's part is done; the split is published once every task has run\n";

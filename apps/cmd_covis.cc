@@ -8,6 +8,7 @@
 #include <tbb/global_control.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -32,7 +33,8 @@ struct CovisArgs {
 
 void Run(const CovisArgs& args_in) {
   CovisArgs args = args_in;
-  if (!args.task_given) TaskFromSlurm(&args.options.task, &args.options.tasks);
+  const bool from_slurm =
+      !args.task_given && TaskFromSlurm(&args.options.task, &args.options.tasks);
   const std::unique_ptr<tbb::global_control> limit = LimitThreads(args.threads);
   std::string error;
   if (!args.options.Check(&error)) {  // "--flag: expected ...": a usage error naming the flag
@@ -42,6 +44,10 @@ void Run(const CovisArgs& args_in) {
   gt::pipeline::RecipeOverrides overrides;
   overrides.root = args.root;
   const gt::pipeline::Recipe recipe = gt::pipeline::LoadRecipe(args.recipe, overrides);
+  if (from_slurm) {
+    std::fprintf(stderr, "[covis] task %d of %d (from SLURM_ARRAY_TASK_ID %s)\n", args.options.task,
+                 args.options.tasks, std::getenv("SLURM_ARRAY_TASK_ID"));
+  }
   const nlohmann::json s =
       gt::pipeline::RunCovisibility(recipe, args.options, [](int64_t done, int64_t total) {
         std::fprintf(stderr, "[covis] %lld/%lld scenes\n", static_cast<long long>(done),
@@ -58,6 +64,7 @@ void Run(const CovisArgs& args_in) {
         static_cast<long long>(s["pairs_scored"].get<int64_t>()),
         static_cast<long long>(s["candidates"].get<int64_t>()), s["seconds"].get<double>(),
         args.options.out_dir.c_str());
+    std::fputs(DropsText(s).c_str(), stdout);
   }
 }
 

@@ -38,6 +38,16 @@ void Run(const TuplesArgs& args) {
     std::printf("%lld tuples from %lld scenes written to %s/tuples.jsonl\n",
                 static_cast<long long>(s["tuples"].get<int64_t>()),
                 static_cast<long long>(s["scenes"].get<int64_t>()), args.out_dir.c_str());
+    const nlohmann::json& empty = s["scenes_without_tuples"];
+    if (!empty.empty()) {
+      std::string names;
+      for (size_t k = 0; k < empty.size() && k < 5; ++k) {
+        names += (k ? ", " : "") + empty[k].get<std::string>();
+      }
+      std::printf("  %zu scene(s) gave no tuple: %s%s\n", empty.size(), names.c_str(),
+                  empty.size() > 5 ? ", ..." : "");
+    }
+    std::fputs(DropsText(s).c_str(), stdout);
     if (s.contains("shards")) {
       std::printf("%lld N-view samples in %lld shards in %s (%lld written, %lld complete)\n",
                   static_cast<long long>(s["shards"]["samples"].get<int64_t>()),

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 #include <string>
 
 namespace occgt {
@@ -26,5 +27,8 @@ void AddTuplesCommand(CLI::App& app);   // cmd_tuples.cc
 // Task layout of a Slurm array task (SLURM_ARRAY_TASK_ID - MIN of COUNT; cmd_build.cc): false
 // when not in an array job; InputError naming the variable for an inconsistent array.
 bool TaskFromSlurm(int* task, int* tasks);
+// "  dropped: <reason> <n>, ...\n" of a summary's "drops" object ("" when it has none): the
+// drops by reason of the text summaries of build, covis and tuples (cmd_build.cc).
+std::string DropsText(const nlohmann::json& summary);
 
 }  // namespace occgt

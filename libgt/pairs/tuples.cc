@@ -29,7 +29,11 @@ bool TupleOptions::Check(std::string* error) const {
     return false;
   }
   if (restarts < 0) return *error = "restarts: expected an integer >= 0", false;
-  if (quota < 1) return *error = "quota_per_scene: expected an integer >= 1", false;
+  if (quota < 1 || quota > kMaxTupleQuota) {
+    return *error = "quota_per_scene: expected an integer in [1, " +
+                    std::to_string(kMaxTupleQuota) + "], got " + std::to_string(quota),
+           false;
+  }
   if (balance_occlusion < 0 || balance_occlusion > 100) {
     return *error = "balance_occlusion: expected an integer in [0, 100]", false;
   }
@@ -77,15 +81,21 @@ double TupleOcclusion(const CovisibilityPairs& g, const std::vector<int32_t>& fr
   return in_view > 0 ? hidden / in_view : 0.0;
 }
 
+namespace {
+
+// Up to `quota` distinct tuples from at most 4·quota + 16 draws (the walk of the header;
+// o.quota and o.balance_occlusion are not used).
+std::vector<Tuple> DrawTuples(const CovisibilityPairs& g, const TupleOptions& o, int64_t quota,
+                              uint64_t seed, DropCounts* drops);
+
+}  // namespace
+
 std::vector<Tuple> SampleTuples(const CovisibilityPairs& g, const TupleOptions& o, uint64_t seed,
                                 DropCounts* drops) {
   std::string error;
   if (!o.Check(&error)) throw InputError("tuples", error);
   if (o.balance_occlusion > 0) {
-    TupleOptions candidates = o;
-    candidates.balance_occlusion = 0;
-    candidates.quota = 4 * o.quota;
-    std::vector<Tuple> pool = SampleTuples(g, candidates, seed, drops);
+    std::vector<Tuple> pool = DrawTuples(g, o, 4 * static_cast<int64_t>(o.quota), seed, drops);
     const int nb = o.balance_occlusion;
     std::vector<std::vector<size_t>> bins(nb);
     double lo = 1, hi = 0;
@@ -110,6 +120,13 @@ std::vector<Tuple> SampleTuples(const CovisibilityPairs& g, const TupleOptions& 
     }
     return out;
   }
+  return DrawTuples(g, o, o.quota, seed, drops);
+}
+
+namespace {
+
+std::vector<Tuple> DrawTuples(const CovisibilityPairs& g, const TupleOptions& o, int64_t quota,
+                              uint64_t seed, DropCounts* drops) {
   const int f = g.num_frames;
   const std::vector<float> score = PairScores(g);
   const auto sc = [&](int a, int b) { return score[static_cast<size_t>(a) * f + b]; };
@@ -127,8 +144,8 @@ std::vector<Tuple> SampleTuples(const CovisibilityPairs& g, const TupleOptions& 
   if (starts.empty()) return out;
   std::mt19937_64 rng(seed);
   std::set<std::vector<int32_t>> seen;
-  const int draws = 4 * o.quota + 16;
-  for (int d = 0; d < draws && static_cast<int>(out.size()) < o.quota; ++d) {
+  const int64_t draws = 4 * quota + 16;
+  for (int64_t d = 0; d < draws && static_cast<int64_t>(out.size()) < quota; ++d) {
     const int n = o.min_views + static_cast<int>(UniformBelow(
                                     static_cast<uint64_t>(o.max_views - o.min_views + 1), &rng));
     std::vector<char> tried(f, 0);
@@ -195,5 +212,7 @@ std::vector<Tuple> SampleTuples(const CovisibilityPairs& g, const TupleOptions& 
   }
   return out;
 }
+
+}  // namespace
 
 }  // namespace gt::pairs

@@ -30,13 +30,17 @@
 
 namespace gt::pairs {
 
+// The largest quota: 4·quota + 16 draws (and with balance_occlusion 4·quota candidates held
+// in memory) stay far inside int64 and an afternoon's run.
+inline constexpr int kMaxTupleQuota = 1000000;
+
 struct TupleOptions {
   int min_views = 2, max_views = 2;     // recipe `tuples.views`: N or [min, max]; 2..32
   double edge_threshold = 0.25;         // neighbours: pair score >= this (MapAnything: 0.25)
   double pair_lo = 0.0, pair_hi = 1.0;  // every pair of a tuple within [lo, hi]
   double min_spread_score = 0.0;        // unused bound when 0 (see above)
   int restarts = 4;                     // extra walks per tuple
-  int quota = 100;                      // tuples per scene (>= 1)
+  int quota = 100;                      // tuples per scene, 1..kMaxTupleQuota
   // > 0: balance the tuples on their occlusion (TupleOcclusion) over this many equal bins of
   // [lo, hi], the smallest and largest occlusion of the scene's candidates: 4·quota candidates
   // are sampled as above (quota 4·quota, same seed), then taken round robin over the bins

@@ -44,7 +44,9 @@ std::string CovisibilityDigest(const Recipe& recipe) {
                       {"dataset", r["dataset"]},
                       {"labels", r["labels"]},
                       {"pruning", r["selection"]["pruning"]},
-                      {"score_stride", r["selection"]["score_stride"]}};
+                      {"score_stride", r["selection"]["score_stride"]},
+                      // The kept frames leave out those without colour when images are stored.
+                      {"needs_color", recipe.sample.image != ImageFormat::kNone}};
   j["dataset"].erase("root");
   j["dataset"].erase("split_file");
   j["dataset"].erase("scenes");
@@ -62,12 +64,9 @@ SceneCovisibility ComputeSceneCovisibility(const Recipe& r, const Scene& scene,
   SceneCovisibility out;
   out.scene = scene.name;
   out.score_stride = r.selection.score_stride;
-  FrameScanOptions scan;
-  scan.frame_stride = r.dataset.frame_stride;
-  scan.min_valid_depth_fraction = r.dataset.min_valid_depth_fraction;
-  scan.min_depth_m = labels.min_depth_m;
-  scan.max_depth_m = labels.max_depth_m;
-  const ScanResult scanned = ScanFrames(scene, scan, cache);
+  // The frames the build keeps (without colour when the recipe stores images: the N-view
+  // samples of occgt tuples --shards carry every view's image).
+  const ScanResult scanned = ScanRecipeFrames(r, scene, labels, cache);
   AddCounts(scanned.drops, &out.drops);
   const std::vector<CandidatePair> candidates = GenerateCandidates(scanned.kept, 0);
   out.candidates = static_cast<int64_t>(candidates.size());
@@ -100,12 +99,19 @@ SceneCovisibility ComputeSceneCovisibility(const Recipe& r, const Scene& scene,
 
 namespace {
 
+// Member `key`, of `ndim` dimensions (0: a scalar, 1: [n]).
 template <typename T>
 std::vector<T> Member(const std::map<std::string, std::string>& m, const std::string& key,
-                      const std::string& path) {
+                      const std::string& path, int ndim) {
   auto it = m.find(key);
   if (it == m.end()) throw InputError(path, "expected a member '" + key + "'");
-  const io::NpyArray a = io::ParseNpy(it->second, path + ":" + key + ".npy");
+  const std::string where = path + ":" + key + ".npy";
+  const io::NpyArray a = io::ParseNpy(it->second, where);
+  if (static_cast<int>(a.shape.size()) != ndim) {
+    throw InputError(where, "expected " +
+                                std::string(ndim == 0 ? "a scalar (shape [])" : "shape [n]") +
+                                ", got " + std::to_string(a.shape.size()) + " dimensions");
+  }
   const T* p = a.As<T>(path + ":" + key);
   return std::vector<T>(p, p + a.NumElements());
 }
@@ -120,12 +126,13 @@ std::vector<std::string> Strings(const std::map<std::string, std::string>& m,
 
 }  // namespace
 
-SceneCovisibility ReadSceneCovisibility(const std::string& path, const std::string& digest) {
+SceneCovisibility ReadSceneCovisibility(const std::string& path, const std::string& digest,
+                                        int score_stride) {
   if (!io::FileExists(path)) {
     throw InputError(path, "missing: run `occgt covis` with this recipe and --out first");
   }
   const std::map<std::string, std::string> m = io::ReadNpzBytes(path);
-  const std::vector<uint8_t> d = Member<uint8_t>(m, "options_digest", path);
+  const std::vector<uint8_t> d = Member<uint8_t>(m, "options_digest", path, 1);
   if (std::string(d.begin(), d.end()) != digest) {
     throw InputError(path, "written under other covisibility options (digest " +
                                std::string(d.begin(), d.end()) + ", this recipe's " + digest +
@@ -133,16 +140,18 @@ SceneCovisibility ReadSceneCovisibility(const std::string& path, const std::stri
   }
   SceneCovisibility g;
   g.frame_ids = Strings(m, "frame_ids", path);
-  g.i = Member<int32_t>(m, "i", path);
-  g.j = Member<int32_t>(m, "j", path);
-  g.c_ij = Member<float>(m, "c_ij", path);
-  g.c_ji = Member<float>(m, "c_ji", path);
-  g.o_ij = Member<float>(m, "o_ij", path);
-  g.o_ji = Member<float>(m, "o_ji", path);
-  g.self = Member<float>(m, "self", path);
-  if (const std::vector<int32_t> stride = Member<int32_t>(m, "score_stride", path);
-      stride.size() == 1) {
-    g.score_stride = stride[0];
+  g.i = Member<int32_t>(m, "i", path, 1);
+  g.j = Member<int32_t>(m, "j", path, 1);
+  g.c_ij = Member<float>(m, "c_ij", path, 1);
+  g.c_ji = Member<float>(m, "c_ji", path, 1);
+  g.o_ij = Member<float>(m, "o_ij", path, 1);
+  g.o_ji = Member<float>(m, "o_ji", path, 1);
+  g.self = Member<float>(m, "self", path, 1);
+  g.score_stride = Member<int32_t>(m, "score_stride", path, 0).at(0);
+  if (g.score_stride != score_stride) {  // the digest holds the recipe's: a damaged member
+    throw InputError(path + ":score_stride.npy",
+                     std::to_string(g.score_stride) + ", expected the recipe's " +
+                         std::to_string(score_stride) + " (which its options digest holds)");
   }
   const size_t p = g.i.size();
   const auto f = static_cast<int32_t>(g.frame_ids.size());
@@ -294,12 +303,16 @@ nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOption
                                    "); remove it or write into another --out");
       }
       ++skipped;
-      // A complete scene gets its dense matrix when asked for and missing (a first run
-      // without --dense): from the stored graph, not scored again.
-      if (options.dense) {
-        const SceneCovisibility g = ReadSceneCovisibility(path, digest);
-        if (!fs::exists(dense_path(name, g))) write_dense(name, g);
+      // A complete scene's graph is read through (a damaged one is not counted complete); it
+      // gets its dense matrix when asked for and missing (a first run without --dense): from
+      // the stored graph, not scored again.
+      SceneCovisibility g;
+      try {
+        g = ReadSceneCovisibility(path, digest, recipe.selection.score_stride);
+      } catch (const InputError& e) {
+        throw InputError(e.what(), "remove the file to compute the scene again");
       }
+      if (options.dense && !fs::exists(dense_path(name, g))) write_dense(name, g);
     } else {
       const Scene scene = ReadRecipeScene(recipe, *reader, name);
       pairs::DepthCache cache(scene, recipe.width, recipe.height, options.depth_cache_mb << 20,

@@ -56,21 +56,24 @@ SceneCovisibility ComputeSceneCovisibility(const Recipe& recipe, const Scene& sc
 
 // md5 (hex) of the recipe options a graph depends on: resolution, dataset (its format,
 // frame stride, minimum valid depth fraction, depth range; not its root or scene list),
-// labels, selection.pruning and selection.score_stride. A graph of another digest is refused.
+// labels, selection.pruning, selection.score_stride and whether sample.image stores images
+// (frames without colour are then not kept). A graph of another digest is refused.
 std::string CovisibilityDigest(const Recipe& recipe);
 
 // A scene's graph as `occgt covis` wrote it (the members above; candidates and drops are not
 // stored); an InputError naming the file when it is missing, of another options digest, or
-// malformed.
-SceneCovisibility ReadSceneCovisibility(const std::string& path, const std::string& digest);
+// malformed (a member of another dtype or number of dimensions, a score_stride other than
+// `score_stride`, the recipe's, pairs or scores out of range).
+SceneCovisibility ReadSceneCovisibility(const std::string& path, const std::string& digest,
+                                        int score_stride);
 
 // The dense F×F matrix of a graph (the layout above).
 std::vector<float> DenseCovisibility(const SceneCovisibility& graph);
 
 struct CovisibilityOptions {
-  std::string out_dir;          // DIR
-  int task = 0, tasks = 1;      // this task of the split, 0 <= task < tasks
-  bool dense = false;           // also write pairwise_covisibility--FxF.npy
+  std::string out_dir;                                  // DIR
+  int task = 0, tasks = 1;                              // this task of the split, 0 <= task < tasks
+  bool dense = false;                                   // also write pairwise_covisibility--FxF.npy
   size_t depth_cache_mb = pairs::kDefaultDepthCacheMb;  // per-scene LRU of decoded depth maps
 
   bool Check(std::string* error) const;

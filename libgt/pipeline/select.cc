@@ -205,6 +205,40 @@ SelectedPair PairFromJson(const json& j) {
 
 }  // namespace
 
+bool NeedsColor(const Recipe& r, const Scene& scene) {
+  if (r.sample.image == ImageFormat::kNone) return false;
+  for (const Frame& f : scene.frames) {
+    if (!f.color_path.empty()) return true;
+  }
+  if (scene.NumUsable() > 0) {
+    throw InputError(r.file + ": sample.image",
+                     std::string("expected colour images (") + ImageFormatName(r.sample.image) +
+                         "), but no frame of scene " + scene.name +
+                         " has one; set sample.image: none to build without images");
+  }
+  return true;
+}
+
+pairs::ScanResult ScanRecipeFrames(const Recipe& r, const Scene& scene, const LabelOptions& labels,
+                                   pairs::DepthCache* cache) {
+  pairs::FrameScanOptions scan;
+  scan.frame_stride = r.dataset.frame_stride;
+  scan.min_valid_depth_fraction = r.dataset.min_valid_depth_fraction;
+  scan.min_depth_m = labels.min_depth_m;
+  scan.max_depth_m = labels.max_depth_m;
+  pairs::ScanResult scanned = pairs::ScanFrames(scene, scan, cache);
+  if (NeedsColor(r, scene)) {
+    const size_t before = scanned.kept.size();
+    scanned.kept.erase(std::remove_if(scanned.kept.begin(), scanned.kept.end(),
+                                      [&](size_t i) { return scene.frames[i].color_path.empty(); }),
+                       scanned.kept.end());
+    if (scanned.kept.size() < before) {
+      scanned.drops["scan.no_color"] += static_cast<int64_t>(before - scanned.kept.size());
+    }
+  }
+  return scanned;
+}
+
 SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCache* cache,
                            const ImportList* imports) {
   using namespace pairs;  // NOLINT(google-build-using-namespace): the stage's vocabulary
@@ -220,18 +254,8 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
   int64_t frames_kept = 0;
   // A recipe that stores images needs both frames' colour: frames without it are skipped
   // and counted (scan.no_color, import.no_color); a scene with none at all is an error.
-  const bool need_color = r.sample.image != ImageFormat::kNone;
+  const bool need_color = NeedsColor(r, scene);
   auto has_color = [&](size_t i) { return !scene.frames[i].color_path.empty(); };
-  if (need_color) {
-    bool any = false;
-    for (size_t i = 0; i < scene.frames.size(); ++i) any = any || has_color(i);
-    if (!any && scene.NumUsable() > 0) {
-      throw InputError(r.file + ": sample.image",
-                       std::string("expected colour images (") + ImageFormatName(r.sample.image) +
-                           "), but no frame of scene " + scene_name +
-                           " has one; set sample.image: none to build without images");
-    }
-  }
   if (imports) {
     std::map<int64_t, size_t> by_number;
     std::map<std::string, size_t> by_id;
@@ -266,21 +290,7 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
     pruned = candidates;
     frames_kept = static_cast<int64_t>(scene.NumUsable());
   } else {
-    FrameScanOptions scan;
-    scan.frame_stride = r.dataset.frame_stride;
-    scan.min_valid_depth_fraction = r.dataset.min_valid_depth_fraction;
-    scan.min_depth_m = labels.min_depth_m;
-    scan.max_depth_m = labels.max_depth_m;
-    ScanResult scanned = ScanFrames(scene, scan, cache);
-    if (need_color) {
-      const size_t before = scanned.kept.size();
-      scanned.kept.erase(std::remove_if(scanned.kept.begin(), scanned.kept.end(),
-                                        [&](size_t i) { return !has_color(i); }),
-                         scanned.kept.end());
-      if (scanned.kept.size() < before) {
-        scanned.drops["scan.no_color"] += static_cast<int64_t>(before - scanned.kept.size());
-      }
-    }
+    const ScanResult scanned = ScanRecipeFrames(r, scene, labels, cache);
     AddCounts(scanned.drops, &drops);
     frames_kept = static_cast<int64_t>(scanned.kept.size());
     candidates = GenerateCandidates(scanned.kept, r.selection.max_frame_gap);

@@ -17,10 +17,10 @@
 #include <utility>
 #include <vector>
 
-#include "libgt/pipeline/recipe.h"
-#include "libgt/pipeline/sample.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/pairs/selection.h"
+#include "libgt/pipeline/recipe.h"
+#include "libgt/pipeline/sample.h"
 
 namespace gt::pipeline {
 
@@ -54,6 +54,16 @@ struct SceneSelection {
   std::vector<SelectedPair> pairs;
   nlohmann::json stats;  // counts, drops, options_digest
 };
+
+// Whether the recipe stores images (sample.image other than none), which needs each frame's
+// colour; then InputError("<recipe>: sample.image", ...) when the scene has usable frames but
+// none with colour.
+bool NeedsColor(const Recipe& recipe, const Scene& scene);
+// The frames the recipe keeps, as the build and `occgt covis` scan them: pairs::ScanFrames
+// with the recipe's frame stride, minimum valid depth fraction and the labels' depth range,
+// then, when NeedsColor, without the frames that have no colour ("scan.no_color").
+pairs::ScanResult ScanRecipeFrames(const Recipe& recipe, const Scene& scene,
+                                   const LabelOptions& labels, pairs::DepthCache* cache);
 
 // Selects the pairs of one scene (decoding depth through `cache`).
 SceneSelection SelectScene(const Recipe& recipe, const Scene& scene, pairs::DepthCache* cache,

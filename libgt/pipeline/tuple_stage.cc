@@ -2,7 +2,6 @@
 
 #include <map>
 #include <memory>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -39,20 +38,36 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
   std::map<std::string, int64_t> sizes;
   int64_t total = 0;
   std::vector<TupleLine> rows;
+  std::vector<std::string> without_tuples;  // scenes whose graph gave none
   for (const std::string& scene : scenes) {
     const std::string path = CovisibilityPath(out_dir, scene);
-    const SceneCovisibility g = ReadSceneCovisibility(path, digest);
+    const SceneCovisibility g = ReadSceneCovisibility(path, digest, recipe.selection.score_stride);
     // The digest leaves out the dataset root (a moved dataset keeps its graphs): a graph of
-    // other data under the same scene name would name frames the scene does not have.
-    std::set<std::string> scene_ids;
-    for (const Frame& frame : ReadRecipeScene(recipe, reader, scene).frames) {
-      scene_ids.insert(frame.id);
+    // other data under the same scene name, or of data changed since, would name frames the
+    // scene does not have, or no longer uses, or in another order (covis keeps frames in
+    // scene order).
+    std::map<std::string, size_t> scene_index;
+    const Scene scene_now = ReadRecipeScene(recipe, reader, scene);
+    for (size_t k = 0; k < scene_now.frames.size(); ++k) {
+      scene_index.emplace(scene_now.frames[k].id, k);
     }
-    for (const std::string& id : g.frame_ids) {
-      if (!scene_ids.count(id)) {
-        throw InputError(path, "frame '" + id + "' is not a frame of scene " + scene + " under " +
-                                   recipe.dataset.root +
-                                   " (a graph of other data?); re-run occgt covis for it");
+    const std::string rerun = "; re-run occgt covis for it (delete " + path + " first)";
+    for (size_t k = 0; k < g.frame_ids.size(); ++k) {
+      const std::string& id = g.frame_ids[k];
+      const std::string field = "frame_ids[" + std::to_string(k) + "] '" + id + "'";
+      const auto it = scene_index.find(id);
+      if (it == scene_index.end()) {
+        throw InputError(path, field + " is not a frame of scene " + scene + " under " +
+                                   recipe.dataset.root + " (a graph of other data?)" + rerun);
+      }
+      if (!scene_now.frames[it->second].usable) {
+        throw InputError(path, field + " is a frame the dataset now marks unusable (" +
+                                   scene_now.frames[it->second].unusable_reason +
+                                   "): the data changed since occgt covis" + rerun);
+      }
+      if (k > 0 && it->second <= scene_index.at(g.frame_ids[k - 1])) {
+        throw InputError(path, field + " comes before frame_ids[" + std::to_string(k - 1) +
+                                   "] in the scene: expected the scene's order" + rerun);
       }
     }
     const std::vector<float> dense = DenseCovisibility(g);
@@ -61,6 +76,7 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
         static_cast<int>(f), g.i, g.j, g.c_ij, g.c_ji, g.o_ij, g.o_ji, g.self};
     const std::vector<pairs::Tuple> tuples =
         pairs::SampleTuples(graph, *recipe.tuples, pairs::SceneSeed(recipe.seed, scene), &drops);
+    if (tuples.empty()) without_tuples.push_back(scene);
     for (const pairs::Tuple& t : tuples) {
       json ids = json::array(), cov = json::array();
       TupleLine tl;
@@ -90,7 +106,8 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
   json summary = {{"scenes", static_cast<int64_t>(scenes.size())},
                   {"tuples", total},
                   {"views", sizes},
-                  {"drops", drops}};
+                  {"drops", drops},
+                  {"scenes_without_tuples", without_tuples}};
   if (write_shards) summary["shards"] = WriteViewsShards(recipe, reader, out_dir, rows);
   return summary;
 }

@@ -7,6 +7,7 @@
 #include <bitset>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -92,6 +93,30 @@ EncodedSample ComputeViewsSample(const ViewsScene& d, const TupleLine& line, int
   vo.query_view = recipe.tuple_tracks.query_view;
   vo.seed = recipe.seed + static_cast<uint64_t>(index);
   const truth::ViewsTruth t = truth::ComputeViewsTruth(views, vo);
+  // Every view is a frame the graph kept: occgt covis's scan (ScanRecipeFrames) needs colour
+  // when images are stored and this much valid depth. A frame that fails now was changed
+  // since the graph was made; its sample would come without images or without ground truth.
+  const size_t hw = static_cast<size_t>(t.width) * t.height;
+  const std::string rerun =
+      " (changed since occgt covis made the graph?); re-run occgt covis "
+      "for scene " +
+      line.scene + " after deleting its graph";
+  for (size_t a = 0; a < n; ++a) {
+    const Frame& f = d.scene.frames[frames[a]];
+    if (options.image != ImageFormat::kNone && f.color_path.empty()) {
+      throw InputError(where, "frame " + f.id + " has no colour image, which sample.image (" +
+                                  ImageFormatName(options.image) + ") needs" + rerun);
+    }
+    const auto valid = static_cast<size_t>(
+        std::count(t.valid.begin() + a * hw, t.valid.begin() + (a + 1) * hw, uint8_t{1}));
+    const double fraction = static_cast<double>(valid) / static_cast<double>(hw);
+    if (valid == 0 || fraction < recipe.dataset.min_valid_depth_fraction) {
+      throw InputError(where, "frame " + f.id + " has " + std::to_string(valid) +
+                                  " valid depth pixels of " + std::to_string(hw) +
+                                  ", below dataset.min_valid_depth_fraction " +
+                                  std::to_string(recipe.dataset.min_valid_depth_fraction) + rerun);
+    }
+  }
 
   EncodedSample out;
   shards::Sample& sample = out.sample;
@@ -101,9 +126,8 @@ EncodedSample ComputeViewsSample(const ViewsScene& d, const TupleLine& line, int
   auto add = [&](const std::string& name, std::string bytes) {
     AddSampleField(&sample, name, std::move(bytes), options.compression);
   };
-  add("json", "");  // filled last
-  bool with_images = options.image != ImageFormat::kNone;
-  for (size_t f : frames) with_images = with_images && !d.scene.frames[f].color_path.empty();
+  add("json", "");                                               // filled last
+  const bool with_images = options.image != ImageFormat::kNone;  // each view has colour (above)
   std::vector<double> K, world_from_cam;
   json frames_json = json::array(), K_json = json::array(), pose_json = json::array();
   json color_K_json = json::array();
@@ -290,9 +314,18 @@ json WriteViewsShards(const Recipe& recipe, const datasets::DatasetReader& reade
         data[k - c] = it->second;
       }
       std::vector<EncodedSample> samples(end - c);
+      // A bad sample's error is the first in line order, whatever the thread count.
+      std::vector<std::exception_ptr> failed(end - c);
       tbb::parallel_for(int64_t{0}, end - c, [&](int64_t k) {
-        samples[k] = ComputeViewsSample(*data[k], lines[c + k], c + k, recipe);
+        try {
+          samples[k] = ComputeViewsSample(*data[k], lines[c + k], c + k, recipe);
+        } catch (...) {
+          failed[k] = std::current_exception();
+        }
       });
+      for (const std::exception_ptr& e : failed) {
+        if (e) std::rethrow_exception(e);
+      }
       for (EncodedSample& e : samples) writer.Add(std::move(e.sample), e.pair_line);
     }
     writer.Finish();

@@ -205,6 +205,14 @@ TEST(Recipe, RangesThatWouldFailLaterNameTheirKeyAtLoad) {
             "lo <= hi <= 1");
   EXPECT_EQ(
       ErrorOf(m + "selection: {views: [5, 3]}\n").rfind("recipes/x.yaml: selection.views:", 0), 0u);
+  // 4·quota + 16 draws wrapped around in 32 bits: 536870908 gave 0 tuples, silently.
+  for (const char* quota : {"536870908", "1000001", "2147483647"}) {
+    EXPECT_EQ(ErrorOf(m + "selection: {views: 3, tuples: {quota_per_scene: " + quota + "}}\n"),
+              "recipes/x.yaml: selection.tuples.quota_per_scene: expected an integer in [1, "
+              "1000000]: tuples per scene")
+        << quota;
+  }
+  EXPECT_EQ(ErrorOf(m + "selection: {views: 3, tuples: {quota_per_scene: 1000000}}\n"), "");
 }
 
 TEST(Recipe, KeysThatWouldBeIgnoredAreRefused) {

@@ -11,6 +11,7 @@ from __future__ import annotations
 import glob
 import json
 import os
+import shutil
 import subprocess
 import unittest
 from typing import Dict, Tuple
@@ -154,6 +155,9 @@ class Covis(unittest.TestCase):
     def test_tuples(self) -> None:
         r = json.loads(common.occgt("tuples", self.recipe, "--out", self.out1, "--json",
                                     "--root", self.data).stdout)
+        with open(os.path.join(common.SOURCE, "schemas", "tuples_summary.schema.json")) as f:
+            jsonschema.validate(r, json.load(f))
+        self.assertEqual(r["scenes_without_tuples"], [])
         with open(os.path.join(common.SOURCE, "schemas", "tuples_line.schema.json")) as f:
             schema = json.load(f)
         text = common.read_bytes(os.path.join(self.out1, "tuples.jsonl"))
@@ -215,6 +219,133 @@ class Covis(unittest.TestCase):
                             capture_output=True, text=True)
         self.assertEqual(r2.returncode, 1)
         self.assertIn("missing: run `occgt covis`", r2.stderr)
+
+
+class StaleGraphs(unittest.TestCase):
+    """Graphs that no longer match the data are refused by name, not turned into samples
+    without images or ground truth; covis keeps the build's frames (scan.no_color when images
+    are stored); tuples names the scenes that gave no tuple; the text summaries print the
+    drops; covis in a Slurm array prints its task."""
+
+    def test_stale_graphs_and_reports(self) -> None:
+        base = common.scratch("covis_stale")
+        data = os.path.join(base, "data")
+        common.occgt("synth", "--out", data, "--scenes", 3, "--frames", 14, "--resolution",
+                     "160x120", "--seed", 3)
+        text = RECIPE.replace("format: synthetic\n  synthetic: {scenes: 3, frames: 14, width: "
+                              "160, height: 120, seed: 3}", "format: generic")
+        self.assertNotEqual(text, RECIPE)
+        text = text.replace("sample: {image: none,", "sample: {image: png,")
+        recipe = os.path.join(base, "r.yaml")
+        with open(recipe, "w") as f:
+            f.write(text)
+
+        def run(*args: object, env: Dict[str, str] = None) -> subprocess.CompletedProcess:
+            return subprocess.run([common.BINARY, *map(str, args), "--root", data],
+                                  capture_output=True, text=True, env=env)
+
+        # A frame without colour is not kept when images are stored, and counted.
+        os.remove(os.path.join(data, "synth_001", "color", "000005.png"))
+        out = os.path.join(base, "out")
+        r = run("covis", recipe, "--out", out)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("dropped: ", r.stdout)
+        self.assertIn("scan.no_color 1", r.stdout)
+        g = np.load(os.path.join(out, "covisibility", "synth_001.npz"))
+        self.assertNotIn("000005", list(g["frame_ids"]))
+        self.assertEqual(len(g["frame_ids"]), 13)
+        r = run("tuples", recipe, "--out", out, "--shards")
+        self.assertEqual(r.returncode, 0, r.stderr)
+
+        def refused(message: str) -> None:
+            shutil.rmtree(os.path.join(out, "views"), ignore_errors=True)  # complete: kept
+            r = run("tuples", recipe, "--out", out, "--shards")
+            self.assertEqual(r.returncode, 1, r.stdout)
+            self.assertEqual(len(r.stderr.splitlines()), 1, r.stderr)
+            self.assertRegex(r.stderr, message)
+
+        # Data changed since the graph: a view's colour, its depth, its pose.
+        with open(os.path.join(out, "tuples.jsonl")) as f:
+            first = json.loads(f.readline())
+        scene, view = first["scene"], first["frame_ids"][1]
+        color = os.path.join(data, scene, "color", view + ".png")
+        kept = common.read_bytes(color)
+        os.remove(color)
+        refused(r"tuples\.jsonl line 1: frame " + view + r" has no colour image, which "
+                r"sample\.image \(png\) needs \(changed since occgt covis")
+        with open(color, "wb") as f:
+            f.write(kept)
+        depth = os.path.join(data, scene, "depth", view + ".npy")
+        kept = common.read_bytes(depth)
+        np.save(depth, np.zeros((120, 160), np.float32))
+        refused(r"tuples\.jsonl line 1: frame " + view + r" has 0 valid depth pixels of 19200, "
+                r"below dataset\.min_valid_depth_fraction 0\.3")
+        with open(depth, "wb") as f:
+            f.write(kept)
+        manifest = os.path.join(data, "synth_002", "scene.json")
+        kept = common.read_bytes(manifest)
+        doc = json.loads(kept)
+        graph_ids = list(np.load(os.path.join(out, "covisibility", "synth_002.npz"))["frame_ids"])
+        doc["frames"][int(graph_ids[2])]["world_from_cam"][0][0] = 2.0
+        with open(manifest, "w") as f:
+            json.dump(doc, f)
+        refused(r"synth_002\.npz: frame_ids\[2\] '" + graph_ids[2] + r"' is a frame the dataset "
+                r"now marks unusable \(pose: ")
+        with open(manifest, "wb") as f:
+            f.write(kept)
+        # frame_ids out of the scene's order (their scores would go to the wrong frames).
+        path = os.path.join(out, "covisibility", "synth_002.npz")
+        kept = common.read_bytes(path)
+        members = dict(np.load(path))
+        ids = members["frame_ids"].copy()
+        ids[[3, 4]] = ids[[4, 3]]
+        members["frame_ids"] = ids
+        np.savez(path, **members)
+        refused(r"synth_002\.npz: frame_ids\[4\] '" + ids[4] + r"' comes before frame_ids\[3\] "
+                r"in the scene: expected the scene's order")
+        # Members of another shape, or a score_stride the digest does not hold: refused by
+        # tuples, and by covis, which no longer counts such a graph complete.
+        for member, value, message in [
+                ("c_ij", members["c_ij"].reshape(1, -1),
+                 r"c_ij\.npy: expected shape \[n\], got 2 dimensions"),
+                ("score_stride", np.array([4], np.int32),
+                 r"score_stride\.npy: expected a scalar \(shape \[\]\), got 1 dimensions"),
+                ("score_stride", np.array(8, np.int32),
+                 r"score_stride\.npy: 8, expected the recipe's 4")]:
+            damaged = dict(np.load(path))
+            damaged[member] = value
+            np.savez(path, **damaged)
+            refused(message)
+            r = run("covis", recipe, "--out", out)
+            self.assertEqual(r.returncode, 1, r.stdout)
+            self.assertRegex(r.stderr, message + r".*: remove the file to compute the scene again")
+            with open(path, "wb") as f:
+                f.write(kept)
+        r = run("tuples", recipe, "--out", out, "--shards")
+        self.assertEqual(r.returncode, 0, r.stderr)
+
+        # No neighbours at all: every scene is named, in --json (schema'd) and in the text (the
+        # N-view shards of the other tuples would no longer match: removed first).
+        shutil.rmtree(os.path.join(out, "views"))
+        lonely = os.path.join(base, "lonely.yaml")
+        with open(lonely, "w") as f:
+            f.write(text.replace("edge_threshold: 0.2", "edge_threshold: 1.0"))
+        r = run("tuples", lonely, "--out", out, "--json")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        summary = json.loads(r.stdout)
+        with open(os.path.join(common.SOURCE, "schemas", "tuples_summary.schema.json")) as f:
+            jsonschema.validate(summary, json.load(f))
+        self.assertEqual(summary["tuples"], 0)
+        self.assertEqual(summary["scenes_without_tuples"], ["synth_000", "synth_001", "synth_002"])
+        r = run("tuples", lonely, "--out", out)
+        self.assertIn("3 scene(s) gave no tuple: synth_000, synth_001, synth_002", r.stdout)
+
+        # A Slurm array task says which task it is, as occgt build does.
+        env = dict(os.environ, SLURM_ARRAY_TASK_ID="1", SLURM_ARRAY_TASK_MIN="0",
+                   SLURM_ARRAY_TASK_MAX="1", SLURM_ARRAY_TASK_COUNT="2")
+        r = run("covis", recipe, "--out", os.path.join(base, "slurm"), env=env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("[covis] task 1 of 2 (from SLURM_ARRAY_TASK_ID 1)", r.stderr)
 
 
 class ShippedRecipe(unittest.TestCase):
