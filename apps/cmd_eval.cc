@@ -6,7 +6,9 @@
 // Prints a one-screen summary; writes eval.json (schemas/eval.schema.json) atomically.
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -26,11 +28,34 @@
 namespace occgt {
 namespace {
 
+// The items of a comma list; an empty item (",5", "5,,10", a trailing "5,10,") is a usage
+// error naming the flag, as is an item given twice.
+std::vector<std::string> SplitList(const std::string& text, const std::string& flag,
+                                   const std::string& what) {
+  std::vector<std::string> items;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = text.find(',', start);
+    items.push_back(text.substr(start, comma - start));
+    if (items.back().empty()) {
+      throw gt::InputError(flag, "expected comma-separated " + what + ", got '" + text + "'");
+    }
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  for (size_t i = 0; i < items.size(); ++i) {
+    for (size_t j = 0; j < i; ++j) {
+      if (items[i] == items[j]) {
+        throw gt::InputError(flag, "'" + items[i] + "' given twice in '" + text + "'");
+      }
+    }
+  }
+  return items;
+}
+
 std::vector<double> ParseList(const std::string& text, const std::string& flag) {
   std::vector<double> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
+  for (const std::string& item : SplitList(text, flag, "numbers")) {
     size_t used = 0;
     double v = 0;
     try {
@@ -38,12 +63,14 @@ std::vector<double> ParseList(const std::string& text, const std::string& flag) 
     } catch (const std::exception&) {
       used = 0;
     }
-    if (item.empty() || used != item.size()) {
+    if (used != item.size()) {
       throw gt::InputError(flag, "expected comma-separated numbers, got '" + text + "'");
+    }
+    for (const double earlier : out) {
+      if (earlier == v) throw gt::InputError(flag, "'" + item + "' given twice in '" + text + "'");
     }
     out.push_back(v);
   }
-  if (out.empty()) throw gt::InputError(flag, "expected comma-separated numbers, got ''");
   return out;
 }
 
@@ -108,8 +135,7 @@ void SetEstimators(const Args& args, gt::eval::EvalOptions* options) {
     thresholds = ParseList(args.ransac_px, "--ransac-px");
   }
   options->estimators.clear();
-  std::stringstream methods(args.estimator);
-  for (std::string m; std::getline(methods, m, ',');) {
+  for (const std::string& m : SplitList(args.estimator, "--estimator", "methods")) {
     for (const double px : thresholds) {
       gt::eval::PoseEstimatorOptions e;
       e.method = gt::eval::ParsePoseMethod(m, "--estimator");
@@ -138,7 +164,29 @@ void SetEstimators(const Args& args, gt::eval::EvalOptions* options) {
   options->protocol = loftr ? gt::eval::ProtocolName::kLoftr : gt::eval::ProtocolName::kCustom;
 }
 
+// --out must take a new file, and not one this run reads (the predictions, the split's
+// index, pair list, recipe or shards): checked before any work.
+void CheckOut(const Args& args, const gt::eval::SplitIndex& split,
+              const std::vector<std::string>& prediction_paths) {
+  std::error_code ec;
+  if (!std::filesystem::exists(args.out, ec)) return;
+  std::vector<std::string> inputs = prediction_paths;
+  for (const char* f : {"index.json", "pairs.jsonl", "recipe.json"}) {
+    inputs.push_back(split.dir + "/" + f);
+  }
+  for (const std::string& url : split.shard_urls) inputs.push_back(split.dir + "/" + url);
+  for (const std::string& input : inputs) {
+    if (std::filesystem::equivalent(args.out, input, ec)) {
+      throw gt::InputError("--out", "'" + args.out + "' is " + input +
+                                        ", an input of this run: expected another file");
+    }
+  }
+}
+
 void Run(const Args& args) {
+  if (const std::string problem = gt::io::OutputFileProblem(args.out); !problem.empty()) {
+    throw gt::InputError("--out", "'" + args.out + "' " + problem);
+  }
   gt::eval::EvalOptions options = args.options;
   SetEstimators(args, &options);
   options.auc_thresholds_deg = ParseList(args.auc, "--auc");
@@ -153,8 +201,7 @@ void Run(const Args& args) {
         ParseList(args.consistent_overlap_bins, consistent_overlap_flag);
   }
   options.occlusion_definitions.clear();
-  std::stringstream defs(args.occlusion);
-  for (std::string d; std::getline(defs, d, ',');) {
+  for (const std::string& d : SplitList(args.occlusion, "--occlusion", "definitions")) {
     options.occlusion_definitions.push_back(gt::eval::ParseOcclusionDefinition(d, "--occlusion"));
   }
   options.aggregate = gt::ParseAggregate(args.aggregate, "--aggregate");
@@ -179,9 +226,7 @@ void Run(const Args& args) {
   const std::unique_ptr<tbb::global_control> limit = LimitThreads(args.threads);
   const gt::eval::SplitIndex split = gt::eval::LoadSplitIndex(args.split_dir);
   const std::set<std::string> keys(split.keys.begin(), split.keys.end());
-  std::vector<gt::eval::PredictionSet> sets;
-  std::vector<std::string> problems;
-  std::vector<std::string> problem_paths;  // per problem: the predictions path it came from
+  std::vector<std::string> set_names, prediction_paths;
   std::set<std::string> names;
   for (const std::string& arg : args.predictions) {
     // NAME=PATH names the set; else its file or folder name without ".npz".
@@ -199,12 +244,30 @@ void Run(const Args& args) {
       }
       name = base;
     }
-    if (name.empty() || !names.insert(name).second) {
-      throw gt::InputError("--predictions",
-                           "set name '" + name + "' is empty or repeats (use NAME=PATH)");
+    if (path.empty()) {
+      throw gt::InputError("--predictions", "'" + arg + "': expected [NAME=]PATH with a path");
     }
-    sets.push_back(gt::eval::ReadPredictions(name, path, keys, split.width, split.height, &problems,
-                                             split.loftr_names));
+    const bool visible =
+        !name.empty() && name.find_first_not_of(" \t") != std::string::npos &&
+        std::none_of(name.begin(), name.end(), [](char c) {
+          return static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) == 0x7f;
+        });
+    if (!visible || !names.insert(name).second) {
+      throw gt::InputError("--predictions", "set name '" + name +
+                                                "' is blank, holds control characters or "
+                                                "repeats (use NAME=PATH)");
+    }
+    set_names.push_back(name);
+    prediction_paths.push_back(path);
+  }
+  CheckOut(args, split, prediction_paths);
+  std::vector<gt::eval::PredictionSet> sets;
+  std::vector<std::string> problems;
+  std::vector<std::string> problem_paths;  // per problem: the predictions path it came from
+  for (size_t s = 0; s < set_names.size(); ++s) {
+    const std::string& path = prediction_paths[s];
+    sets.push_back(gt::eval::ReadPredictions(set_names[s], path, keys, split.width, split.height,
+                                             &problems, split.loftr_names));
     gt::eval::FilterByConfidence(options.min_confidence, &sets.back(), &problems);
     problem_paths.resize(problems.size(), path);
   }

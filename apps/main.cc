@@ -64,6 +64,7 @@ int main(int argc, char** argv) {
   occgt::AddEvalCommand(app);
   occgt::AddCovisCommand(app);
   occgt::AddTuplesCommand(app);
+  occgt::RefuseEmptyValues(app, {"--scene"});
   // Usage errors (docs/CLI.md): one line, exit 2. Bad input (files, data): one line, exit 1.
   const std::vector<std::string> args(argv + 1, argv + argc);
   if (const std::optional<int> code = occgt::HandleHelpOrUnknownCommand(app, args)) return *code;
@@ -78,10 +79,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return occgt::UsageError(occgt::DescribeParseError(app, args, e));
   } catch (const gt::InputError& e) {
-    std::fprintf(stderr, "occgt: error: %s\n", e.what());
+    std::fprintf(stderr, "occgt: error: %s\n", occgt::OneLine(e.what()).c_str());
     return e.where().rfind("--", 0) == 0 ? occgt::kUsageExit : 1;  // a flag's value
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "occgt: error: %s\n", e.what());
+    std::fprintf(stderr, "occgt: error: %s\n", occgt::OneLine(e.what()).c_str());
     return 1;
   }
   return 0;

@@ -103,8 +103,41 @@ void RethrowNamingFlag(const gt::InputError& error, const std::vector<FieldFlag>
 }
 
 int UsageError(const std::string& message) {
-  std::fprintf(stderr, "occgt: error: %s\n", message.c_str());
+  std::fprintf(stderr, "occgt: error: %s\n", OneLine(message).c_str());
   return kUsageExit;
+}
+
+std::string OneLine(const std::string& text) {
+  static const char* kHex = "0123456789abcdef";
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7f) {
+      out += "\\x";
+      out += kHex[u >> 4];
+      out += kHex[u & 15];
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+void RefuseEmptyValues(CLI::App& app, const std::set<std::string>& empty_allowed) {
+  const CLI::Validator non_empty(
+      [](std::string& value) {
+        return value.empty() ? std::string("expected a value, got ''") : std::string();
+      },
+      "", "non-empty");
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    for (CLI::Option* o : sub->get_options([](CLI::Option*) { return true; })) {
+      const bool allowed =
+          std::any_of(empty_allowed.begin(), empty_allowed.end(),
+                      [o](const std::string& name) { return o->check_name(name); });
+      if (o->get_type_size_max() > 0 && !allowed) o->check(non_empty);
+    }
+  }
 }
 
 std::optional<int> HandleHelpOrUnknownCommand(CLI::App& app, const std::vector<std::string>& args) {

@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,16 @@ inline constexpr int kUsageExit = 2;
 
 // Prints `occgt: error: <message>` and returns kUsageExit.
 int UsageError(const std::string& message);
+
+// `text` on one line: control characters (a newline in a file name) as \xNN; other bytes,
+// UTF-8 included, as they are. Every error and warning line of the binary goes through it.
+std::string OneLine(const std::string& text);
+
+// Every option of every subcommand that takes a value refuses an empty one (`--failure-error
+// ''` parsed as 0 and changed the results): a usage error "<flag>: expected a value, got ''";
+// but the flags in `empty_allowed`, for which "" means something (`--scene ""`: the root is
+// the scene's own folder).
+void RefuseEmptyValues(CLI::App& app, const std::set<std::string>& empty_allowed);
 
 // `occgt help`, `occgt help CMD` (exit 0) and an unknown first word (exit 2); nullopt when
 // the arguments are for CLI11 to parse.

@@ -77,8 +77,10 @@ bool EvalOptions::Check(std::string* error) const {
   }
   for (size_t i = 0; i < auc_thresholds_deg.size(); ++i) {
     const double t = auc_thresholds_deg[i];
-    if (!(t > 0) || !std::isfinite(t) || (i > 0 && !(t > auc_thresholds_deg[i - 1]))) {
-      *error = "auc_thresholds_deg: expected finite, increasing thresholds > 0 (degrees)";
+    if (!(t > 0 && t <= 180) || (i > 0 && !(t > auc_thresholds_deg[i - 1]))) {
+      *error =
+          "auc_thresholds_deg: expected increasing thresholds in (0, 180] (degrees; a pose "
+          "error is at most 180)";
       return false;
     }
   }
@@ -104,8 +106,10 @@ bool EvalOptions::Check(std::string* error) const {
   }
   if (!CheckEdges(occlusion_bins, "occlusion_bins", error)) return false;
   if (!CheckEdges(consistent_overlap_bins, "consistent_overlap_bins", error)) return false;
-  if (!(curve_step > 0 && curve_step <= 1)) {
-    *error = "curve_step: expected a number in (0, 1]";
+  if (!(curve_step >= kMinCurveStep && curve_step <= 1)) {
+    *error = "curve_step: expected a number in [" + std::to_string(kMinCurveStep).substr(0, 5) +
+             ", 1] (at most " + std::to_string(static_cast<int>(1 / kMinCurveStep)) +
+             " curve points)";
     return false;
   }
   if (!(min_confidence >= 0) || !std::isfinite(min_confidence)) {
@@ -124,7 +128,12 @@ SplitIndex LoadSplitIndex(const std::string& dir) {
   split.dir = dir;
   const shards::ShardIndex index = shards::ReadShardIndex(dir);
   split.name = index.name;
-  for (const shards::IndexedShard& s : index.shards) split.shard_urls.push_back(s.url);
+  int64_t indexed = 0;
+  for (const shards::IndexedShard& s : index.shards) {
+    split.shard_urls.push_back(s.url);
+    split.shard_nsamples.push_back(s.nsamples);
+    indexed += s.nsamples;
+  }
   const std::string pairs_path = dir + "/pairs.jsonl";
   std::istringstream lines(io::ReadFileBytes(pairs_path));
   std::string line;
@@ -159,6 +168,13 @@ SplitIndex LoadSplitIndex(const std::string& dir) {
     frames.emplace_back(j["scene"].get<std::string>(), f0["number"].get<int64_t>(),
                         f1["number"].get<int64_t>());
     scenes.insert(std::get<0>(frames.back()));
+  }
+  // The split itself first: a pairs.jsonl without a sample's line would otherwise be
+  // reported as predictions of pairs that are not in the split.
+  if (static_cast<int64_t>(split.keys.size()) != indexed) {
+    throw InputError(pairs_path, std::to_string(split.keys.size()) + " sample lines, " +
+                                     index.path + " counts " + std::to_string(indexed) +
+                                     " samples: expected one line per sample");
   }
   std::map<std::string, std::string> folders;
   try {
@@ -430,6 +446,7 @@ EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& s
   tbb::parallel_for(size_t{0}, nshards, size_t{1}, [&](size_t sh) {
     const std::string tar = split.dir + "/" + split.shard_urls[sh];
     try {
+      int64_t samples = 0;
       SampleData current;
       auto flush = [&] {
         if (current.key.empty()) return;
@@ -439,6 +456,7 @@ EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& s
         }
         const size_t i = it->second;
         if (seen[i]++ != 0) throw InputError(tar, "sample " + current.key + " repeats");
+        ++samples;
         result.pairs[i].key = current.key;
         missing_reason[i] =
             ProcessSample(tar, current, split, sets, options, &result.pairs[i], &geometry[i]);
@@ -464,6 +482,10 @@ EvalResult Evaluate(const SplitIndex& split, const std::vector<PredictionSet>& s
         }
       });
       flush();
+      if (samples != split.shard_nsamples[sh]) {
+        throw InputError(tar, "holds " + std::to_string(samples) + " samples, index.json says " +
+                                  std::to_string(split.shard_nsamples[sh]));
+      }
     } catch (const InputError& e) {
       shard_error[sh] = e.what();
     }

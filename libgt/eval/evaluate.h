@@ -45,22 +45,27 @@ enum class OcclusionDefinition {
 OcclusionDefinition ParseOcclusionDefinition(const std::string& text, const std::string& field);
 const char* OcclusionDefinitionName(OcclusionDefinition d);
 
+// The finest cumulative curve: 1000 points over the occlusion ratio (a finer step only
+// grows eval.json; 1e-9 asked for 10^9 points and ran out of memory).
+inline constexpr double kMinCurveStep = 0.001;
+
 struct EvalOptions {
   std::vector<PoseEstimatorOptions> estimators{PoseEstimatorOptions{}};  // >= 1
   // The protocol the estimators came from (recorded; kCustom: set by hand) and how a
   // set's pose figure is chosen among them (protocol.h).
   ProtocolName protocol = ProtocolName::kLoftr;
   Selection selection = Selection::kEvery;
-  std::vector<double> auc_thresholds_deg{5, 10, 20};  // increasing, > 0
+  std::vector<double> auc_thresholds_deg{5, 10, 20};  // increasing, in (0, 180]
   double epipolar_threshold = 5e-4;  // symmetric epipolar distance (LoFTR ScanNet; 1e-4 MegaDepth)
   QualityOptions quality;            // px for per-type precision/recall
   std::vector<OcclusionDefinition> occlusion_definitions{OcclusionDefinition::kImage,
                                                          OcclusionDefinition::kVisible};
-  std::vector<double> occlusion_bins{0, 0.05, 0.1, 0.15, 0.2, 0.3, 1.0};  // edges, increasing
+  std::vector<double> occlusion_bins{0, 0.05, 0.1, 0.15, 0.2, 0.3, 1.0};    // edges, increasing
   std::vector<double> consistent_overlap_bins{0, 0.2, 0.4, 0.6, 0.8, 1.0};  // consistent_overlap
   Aggregate aggregate = Aggregate::kMean;  // both directions of a metric -> the pair's value
-  double curve_step = 0.05;                // cumulative curve sampled at step, 2*step, ... (ratio)
-  double failure_error_deg = 180;          // a failed pair's error inside means (medians use +inf)
+  double curve_step =
+      0.05;  // cumulative curve sampled at step, 2*step, ... (ratio), >= kMinCurveStep
+  double failure_error_deg = 180;  // a failed pair's error inside means (medians use +inf)
   // Matches under this confidence were dropped before scoring (FilterByConfidence, by the
   // caller); recorded in eval.json so that its readers (the report) drop the same.
   double min_confidence = 0;
@@ -71,6 +76,7 @@ struct EvalOptions {
 struct SplitIndex {
   std::string dir, name;
   std::vector<std::string> shard_urls;  // index.json order
+  std::vector<int64_t> shard_nsamples;  // index.json's count of each shard
   std::vector<std::string> keys;        // pairs.jsonl order
   int width = 0, height = 0;            // recipe.json "resolution"
   // LoFTR pair name (predictions.h LoftrPairName, with the scene's LoFTR folder,

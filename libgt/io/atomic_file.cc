@@ -27,6 +27,17 @@ bool WriteAll(int fd, std::string_view bytes) {
   return true;
 }
 
+std::string OutputFileProblem(const std::string& path) {
+  if (path.empty()) return "expected a file path, got ''";
+  if (path.back() == '/') return "names a folder (it ends with '/'): expected a file path";
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);  // follows symbolic links
+  if (ec || !fs::exists(status) || fs::is_regular_file(status)) return "";
+  if (fs::is_directory(status)) return "is a folder: expected a file path";
+  return "exists and is not a regular file (a device, FIFO or socket), which writing a new file "
+         "onto its path would replace";
+}
+
 namespace {
 
 // Writes `bytes` to path + ".tmp" (creating missing parent folders) and fsyncs it. Returns
@@ -81,11 +92,21 @@ void SyncFolder(const std::string& dir) {
 }  // namespace
 
 void WriteFileAtomic(const std::string& path, std::string_view bytes) {
-  if (std::string problem = StageTemporary(path, bytes); !problem.empty()) {
+  if (std::string problem = OutputFileProblem(path); !problem.empty()) {
     throw InputError(path, problem);
   }
-  PublishTemporary(path);
-  SyncFolder(ParentFolder(path));
+  std::error_code ec;
+  // A link is written through: its target is the file replaced (the link stays).
+  std::string target = path;
+  if (fs::is_symlink(fs::symlink_status(path, ec))) {
+    target = fs::weakly_canonical(path, ec).string();
+    if (ec) throw InputError(path, "cannot resolve the symbolic link: " + ec.message());
+  }
+  if (std::string problem = StageTemporary(target, bytes); !problem.empty()) {
+    throw InputError(path, problem);
+  }
+  PublishTemporary(target);
+  SyncFolder(ParentFolder(target));
 }
 
 void WriteFilesAtomic(const std::vector<FileToWrite>& files) {

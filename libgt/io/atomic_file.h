@@ -9,9 +9,15 @@
 
 namespace gt::io {
 
+// Why `path` cannot take a new file, or "": empty, ending with '/', an existing folder, or an
+// existing file that is not a regular one (a device such as /dev/null, a FIFO, a socket:
+// renaming onto it would replace the node). A symbolic link counts as its target.
+std::string OutputFileProblem(const std::string& path);
+
 // Writes `bytes` to path + ".tmp", fsyncs, renames onto `path`. Creates missing parent
-// folders. Throws InputError naming the path on any failure (disk full, permissions) and
-// removes the temporary file, so a reader never sees a half-written output.
+// folders. A symbolic link is written through: the file replaces its target (the link
+// stays). Throws InputError naming the path on any failure (OutputFileProblem, disk full,
+// permissions) and removes the temporary file, so a reader never sees a half-written output.
 void WriteFileAtomic(const std::string& path, std::string_view bytes);
 
 // write(2) of all bytes to fd, retrying on EINTR; false on error (errno set).

@@ -9,6 +9,8 @@ the same at 1 and 2 threads and valid against schemas/eval.schema.json; each bad
 prediction file fails with one clear line and writes nothing; missing pairs are failures."""
 import json
 import os
+import shutil
+import stat
 import sys
 
 import numpy as np
@@ -19,6 +21,11 @@ sys.path.insert(0, os.path.join(HERE, "..", "integration"))
 import common  # noqa: E402
 import predictions  # noqa: E402
 import reference  # noqa: E402
+
+
+def read_bytes(path):
+    with open(path, "rb") as f:
+        return f.read()
 
 
 def run_eval(split, out, *args, check=True):
@@ -307,11 +314,79 @@ def main():
                  ["--occlusion-bins", "0.5,0.1"], ["--overlap-bins", "0"],
                  ["--consistent-overlap-bins", "0"], ["--consistent-overlap-bins", "0.5,x"],
                  ["--overlap-bins", "0.5,x"],
-                 ["--ransac-conf", "1"], ["--ransac-iters", "0"], ["--ransac-px", "0"]):
+                 ["--ransac-conf", "1"], ["--ransac-iters", "0"], ["--ransac-px", "0"],
+                 # Found by a probe of ~300 inputs: an empty value (--failure-error '' was 0
+                 # and changed the results), an empty item or a trailing comma (dropped), an
+                 # item twice (two identical estimator settings), a curve of 10^9 points (out
+                 # of memory), an AUC beyond the largest pose error.
+                 ["--failure-error", ""], ["--min-confidence", ""], ["--protocol", ""],
+                 ["--occlusion-bins", ""], ["--threads", ""], ["--auc", "5,10,"],
+                 ["--auc", "5,,10"], ["--occlusion", "image,"], ["--estimator", "ransac,"],
+                 ["--ransac-px", "0.5,0.5"], ["--estimator", "ransac,ransac"],
+                 ["--curve-step", "1e-9"], ["--auc", "5,200"],
+                 # A --predictions without a path, or a set name that is blank or breaks the
+                 # summary's lines.
+                 ["--predictions", "foo="], ["--predictions", " =" + gt_path],
+                 ["--predictions", "a\nb=" + gt_path]):
         r = run_eval(split, os.path.join(work, "x.json"), "--predictions", gt_path, *args,
                      check=False)
         assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, (args, r.returncode, r.stderr)
         assert r.stderr.startswith("occgt: error: " + args[0] + ": "), (args, r.stderr)
+        assert not os.path.exists(os.path.join(work, "x.json")), args
+    # --out: checked before any work. Not a folder, a device or an input of the run (each was
+    # replaced by eval.json, or failed after the whole evaluation); a link is written through.
+    victim = os.path.join(work, "victim.npz")
+    shutil.copyfile(gt_path, victim)
+    fifo = os.path.join(work, "fifo")
+    if not os.path.exists(fifo):
+        os.mkfifo(fifo)
+    for out, message in [(work, "is a folder"), (work + "/new/", "names a folder"),
+                         ("/dev/null", "exists and is not a regular file"), (fifo, "exists and "
+                                                                              "is not a regular"),
+                         (victim, "an input of this run"),
+                         (os.path.join(split, "index.json"), "an input of this run"), ("", "")]:
+        before = {p: read_bytes(p) for p in (victim, os.path.join(split, "index.json"))}
+        r = run_eval(split, out, "--predictions", victim, check=False)
+        assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, (out, r.returncode, r.stderr)
+        assert r.stderr.startswith("occgt: error: --out: ") and message in r.stderr, r.stderr
+        assert all(read_bytes(p) == b for p, b in before.items()), out
+    assert stat.S_ISCHR(os.stat("/dev/null").st_mode) and stat.S_ISFIFO(os.stat(fifo).st_mode)
+    assert not os.path.exists(work + "/new")
+    target = os.path.join(work, "target.json")
+    link = os.path.join(work, "link.json")
+    for p in (target, link):
+        if os.path.lexists(p):
+            os.remove(p)
+    with open(target, "w") as f:
+        f.write("old")
+    os.symlink(target, link)
+    run_eval(split, link, "--predictions", gt_path)
+    assert os.path.islink(link) and json.loads(read_bytes(target))["sets"], target
+    # A damaged split is named, not blamed on the predictions: pairs.jsonl without a line,
+    # index.json counting a sample its shard does not hold.
+    damaged = os.path.join(work, "damaged")
+    shutil.rmtree(damaged, ignore_errors=True)
+    shutil.copytree(split, damaged)
+    with open(os.path.join(damaged, "pairs.jsonl")) as f:
+        lines = f.readlines()
+    with open(os.path.join(damaged, "pairs.jsonl"), "w") as f:
+        f.writelines(lines[1:])
+    r = run_eval(damaged, os.path.join(work, "x.json"), "--predictions", gt_path, check=False)
+    assert r.returncode == 1 and len(r.stderr.splitlines()) == 1, r.stderr
+    assert f"pairs.jsonl: {len(lines) - 1} sample lines, " in r.stderr, r.stderr
+    with open(os.path.join(damaged, "pairs.jsonl"), "w") as f:
+        f.writelines(lines)
+    with open(os.path.join(damaged, "index.json")) as f:
+        index = json.load(f)
+    index["shardlist"][0]["nsamples"] += 1
+    with open(os.path.join(damaged, "pairs.jsonl"), "a") as f:
+        f.write(lines[0].replace(json.loads(lines[0])["key"], "synth_009/000000_000001"))
+    with open(os.path.join(damaged, "index.json"), "w") as f:
+        json.dump(index, f)
+    r = run_eval(damaged, os.path.join(work, "x.json"), "--predictions", gt_path, check=False)
+    errors = [x for x in r.stderr.splitlines() if x.startswith("occgt: error: ")]
+    assert r.returncode == 1 and len(errors) == 1, r.stderr  # after the missing pair's warning
+    assert "000000.tar: holds " in errors[0] and "samples, index.json says" in errors[0], r.stderr
     # Both spellings of the consistent_overlap bins at once: a usage error naming both.
     r = run_eval(split, os.path.join(work, "x.json"), "--predictions", gt_path, "--overlap-bins",
                  "0,1", "--consistent-overlap-bins", "0,1", check=False)

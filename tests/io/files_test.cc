@@ -232,6 +232,43 @@ TEST(WriteFileAtomic, FailureNamesThePathAndKeepsTheOldFile) {
   }
 }
 
+// A path that cannot take a new file is refused before anything is written (renaming onto a
+// device or FIFO replaced the node: /dev/null as root); a symbolic link is written through.
+TEST(WriteFileAtomic, RefusesFoldersAndSpecialFilesAndWritesThroughLinks) {
+  const std::string dir = test::ScratchDir("atomic_special");
+  EXPECT_EQ(OutputFileProblem(""), "expected a file path, got ''");
+  EXPECT_EQ(OutputFileProblem(dir + "/new/"),
+            "names a folder (it ends with '/'): expected a file path");
+  EXPECT_EQ(OutputFileProblem(dir), "is a folder: expected a file path");
+  EXPECT_EQ(OutputFileProblem(dir + "/absent.json"), "");
+  const std::string fifo = dir + "/fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  for (const std::string& special : {fifo, std::string("/dev/null")}) {
+    EXPECT_EQ(OutputFileProblem(special).rfind("exists and is not a regular file", 0), 0u);
+    try {
+      WriteFileAtomic(special, "x");
+      ADD_FAILURE() << special;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where(), special);
+    }
+  }
+  struct stat st {};
+  ASSERT_EQ(::stat(fifo.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+  ASSERT_EQ(::stat("/dev/null", &st), 0);
+  EXPECT_TRUE(S_ISCHR(st.st_mode));
+  EXPECT_FALSE(fs::exists(dir + "/new"));
+  // A link to a file (and a link to a link): the target gets the bytes, the links stay.
+  WriteFileAtomic(dir + "/target.json", "old");
+  fs::create_symlink(dir + "/target.json", dir + "/link.json");
+  fs::create_symlink("link.json", dir + "/link2.json");
+  WriteFileAtomic(dir + "/link2.json", "new");
+  EXPECT_TRUE(fs::is_symlink(dir + "/link.json"));
+  EXPECT_TRUE(fs::is_symlink(dir + "/link2.json"));
+  EXPECT_EQ(ReadFileBytes(dir + "/target.json"), "new");
+  EXPECT_FALSE(fs::exists(dir + "/target.json.tmp"));
+}
+
 TEST(WriteFilesAtomic, WritesEveryFileAndLeavesNoTemporary) {
   const std::string dir = test::ScratchDir("atomic_batch");
   std::vector<FileToWrite> files;
