@@ -929,6 +929,9 @@ Recipe LoadRecipe(const std::string& path, const RecipeOverrides& overrides) {
   Recipe r = ParseRecipe(text, path, base, overrides);
   // Inputs that must exist before any work starts.
   if (!r.dataset.is_synthetic && !fs::is_directory(r.dataset.root)) {
+    if (!overrides.root.empty()) {  // the flag's value, not the recipe's: a usage error
+      throw InputError("--root", "expected an existing folder, not found: " + r.dataset.root);
+    }
     throw InputError(path,
                      "dataset.root: expected an existing folder, not found: " + r.dataset.root);
   }

@@ -259,6 +259,16 @@ TEST(Recipe, LoadFailsBeforeWorkWhenDatasetRootIsMissing) {
         << e.what();
   }
   EXPECT_THROW(LoadRecipe(dir + "/absent.yaml"), InputError);
+  // The same from --root names the flag (a usage error), not the recipe's dataset.root.
+  RecipeOverrides overrides;
+  overrides.root = dir + "/elsewhere";
+  try {
+    LoadRecipe(path, overrides);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "--root: expected an existing folder, not found: " + dir + "/elsewhere");
+  }
 }
 
 TEST(Recipe, EnvironmentExpansionAndRootOverride) {
