@@ -36,9 +36,10 @@ void AddDeviceFlag(CLI::App* cmd, DeviceFlag* flag) {
 }
 
 void AddDepthCacheFlag(CLI::App* cmd, size_t* depth_cache_mb) {
-  NonNegative(cmd->add_option("--depth-cache-mb", *depth_cache_mb,
-                              "Budget of decoded depth maps held per scene (LRU, default " +
-                                  std::to_string(*depth_cache_mb) + ")"));
+  AtLeast(cmd->add_option("--depth-cache-mb", *depth_cache_mb,
+                          "Budget of decoded depth maps held per scene (LRU, default " +
+                              std::to_string(*depth_cache_mb) + ")"),
+          1);
 }
 
 void AddThreadsFlag(CLI::App* cmd, int* threads, const std::string& what) {

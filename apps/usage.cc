@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 
 #include "libgt/core/error.h"
@@ -65,6 +67,23 @@ CLI::Option* NonNegative(CLI::Option* option) {
         return std::string();
       },
       "", "non-negative"));
+}
+
+CLI::Option* AtLeast(CLI::Option* option, unsigned long long min) {
+  return option->check(CLI::Validator(
+      [min](std::string& value) {
+        const size_t first = value.find_first_not_of(" \t");
+        const bool negative = first != std::string::npos && value[first] == '-';
+        char* end = nullptr;
+        errno = 0;
+        const unsigned long long v = negative ? 0 : std::strtoull(value.c_str(), &end, 10);
+        const bool parsed = negative || (end != value.c_str() && *end == '\0' && errno == 0);
+        if (parsed && (negative || v < min)) {
+          return "expected an integer >= " + std::to_string(min) + ", got '" + value + "'";
+        }
+        return std::string();  // not a number: CLI11's own conversion error follows
+      },
+      "", "at-least"));
 }
 
 std::string Num(double value) {

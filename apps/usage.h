@@ -51,6 +51,9 @@ struct FieldFlag {
 // around to a huge one (`--seed -1` = 2^64 - 1): a usage error "<flag>: expected an integer
 // >= 0, got '-1'". Returns the option.
 CLI::Option* NonNegative(CLI::Option* option);
+// An unsigned flag that must be at least `min` (>= 1): "<flag>: expected an integer >= min, got
+// '<text>'" for a negative or smaller value. Returns the option.
+CLI::Option* AtLeast(CLI::Option* option, unsigned long long min);
 
 // A default value as help text shows it ("0.05", "10", "64").
 std::string Num(double value);

@@ -193,7 +193,8 @@ bool BuildOptions::Check(std::string* error) const {
   if (out_dir.empty()) return *error = "--out: expected an output folder", false;
   if (tasks < 1) return *error = "--tasks: expected an integer >= 1", false;
   if (task < 0 || task >= tasks) return *error = "--task: expected 0 <= task < tasks", false;
-  if (depth_cache_mb < 1) return *error = "--depth-cache-mb: expected >= 1", false;
+  if (depth_cache_mb < 1)
+    return *error = "--depth-cache-mb: expected an integer >= 1, got 0", false;
   return true;
 }
 
