@@ -1,5 +1,6 @@
 #include "libgt/pipeline/tuple_stage.h"
 
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
@@ -23,6 +24,11 @@ using nlohmann::json;
 json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_shards) {
   if (!recipe_in.tuples) {
     throw InputError(recipe_in.file, "selection.views: expected N or [min, max] (the tuple size)");
+  }
+  // Before the lock, which would create the folder: tuples reads what covis wrote there.
+  if (!std::filesystem::is_directory(out_dir + "/covisibility")) {
+    throw InputError(out_dir + "/covisibility",
+                     "missing: run `occgt covis` with this recipe and --out first");
   }
   // One run per folder: a second one would rename the first's tuples.jsonl and shards.
   const std::unique_ptr<io::FileLock> lock =

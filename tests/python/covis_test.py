@@ -219,6 +219,7 @@ class Covis(unittest.TestCase):
                             capture_output=True, text=True)
         self.assertEqual(r2.returncode, 1)
         self.assertIn("missing: run `occgt covis`", r2.stderr)
+        self.assertFalse(os.path.exists(os.path.join(self.dir, "none")))  # nor a lock file
 
 
 class StaleGraphs(unittest.TestCase):
