@@ -154,7 +154,12 @@ TEST(Recipe, WrongTypeNamesFieldAndExpectation) {
             "recipes/x.yaml: selection.overlap: expected [lo, hi] with 0 <= lo <= hi <= 1");
   // Quoted numbers stay strings.
   EXPECT_EQ(ErrorOf(std::string(kMinimal) + "seed: \"3\"\n"),
-            "recipes/x.yaml: seed: expected an integer >= 0");
+            "recipes/x.yaml: seed: expected an integer in [0, 9223372036854775807]");
+  // Beyond int64 (a uint64 seed such as 2^64 - 1 read as a double): the range is stated, where
+  // ">= 0" was said of a value that is >= 0.
+  EXPECT_EQ(ErrorOf(std::string(kMinimal) + "seed: 18446744073709551615\n"),
+            "recipes/x.yaml: seed: expected an integer in [0, 9223372036854775807]");
+  EXPECT_EQ(ErrorOf(std::string(kMinimal) + "seed: 9223372036854775807\n"), "");
   EXPECT_EQ(ErrorOf(std::string(kMinimal) + "sample: {depth: yes}\n"),
             "recipes/x.yaml: sample.depth: expected true or false");
   EXPECT_EQ(ErrorOf(std::string(kMinimal) + "dust3r_export: 1\n"),
