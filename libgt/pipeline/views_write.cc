@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <utility>
 
 #include "libgt/core/error.h"
@@ -107,8 +108,9 @@ EncodedSample ComputeViewsSample(const ViewsScene& d, const TupleLine& line, int
       throw InputError(where, "frame " + f.id + " has no colour image, which sample.image (" +
                                   ImageFormatName(options.image) + ") needs" + rerun);
     }
-    const auto valid = static_cast<size_t>(
-        std::count(t.valid.begin() + a * hw, t.valid.begin() + (a + 1) * hw, uint8_t{1}));
+    // Row a of the histogram counts view a's valid pixels by how many views see them.
+    const auto row = t.seen_by_histogram.begin() + static_cast<std::ptrdiff_t>(a * n);
+    const auto valid = static_cast<size_t>(std::accumulate(row, row + n, int64_t{0}));
     const double fraction = static_cast<double>(valid) / static_cast<double>(hw);
     if (valid == 0 || fraction < recipe.dataset.min_valid_depth_fraction) {
       throw InputError(where, "frame " + f.id + " has " + std::to_string(valid) +
