@@ -17,6 +17,7 @@
 #include "apps/usage.h"
 #include "gt/core/version.h"
 #include "libgt/core/error.h"
+#include "libgt/core/human.h"
 
 namespace {
 
@@ -79,10 +80,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return occgt::UsageError(occgt::DescribeParseError(app, args, e));
   } catch (const gt::InputError& e) {
-    std::fprintf(stderr, "occgt: error: %s\n", occgt::OneLine(e.what()).c_str());
+    std::fprintf(stderr, "occgt: error: %s\n", gt::OneLine(e.what()).c_str());
     return e.where().rfind("--", 0) == 0 ? occgt::kUsageExit : 1;  // a flag's value
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "occgt: error: %s\n", occgt::OneLine(e.what()).c_str());
+    std::fprintf(stderr, "occgt: error: %s\n", gt::OneLine(e.what()).c_str());
     return 1;
   }
   return 0;

@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "libgt/core/error.h"
+#include "libgt/core/human.h"
 
 namespace occgt {
 namespace {
@@ -57,17 +58,7 @@ std::vector<std::string> FlagNames(const CLI::App* sub) {
 
 }  // namespace
 
-CLI::Option* NonNegative(CLI::Option* option) {
-  return option->check(CLI::Validator(
-      [](std::string& value) {
-        const size_t first = value.find_first_not_of(" \t");
-        if (first != std::string::npos && value[first] == '-') {
-          return "expected an integer >= 0, got '" + value + "'";
-        }
-        return std::string();
-      },
-      "", "non-negative"));
-}
+CLI::Option* NonNegative(CLI::Option* option) { return AtLeast(option, 0); }
 
 CLI::Option* AtLeast(CLI::Option* option, unsigned long long min) {
   return option->check(CLI::Validator(
@@ -122,25 +113,8 @@ void RethrowNamingFlag(const gt::InputError& error, const std::vector<FieldFlag>
 }
 
 int UsageError(const std::string& message) {
-  std::fprintf(stderr, "occgt: error: %s\n", OneLine(message).c_str());
+  std::fprintf(stderr, "occgt: error: %s\n", gt::OneLine(message).c_str());
   return kUsageExit;
-}
-
-std::string OneLine(const std::string& text) {
-  static const char* kHex = "0123456789abcdef";
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    const auto u = static_cast<unsigned char>(c);
-    if (u < 0x20 || u == 0x7f) {
-      out += "\\x";
-      out += kHex[u >> 4];
-      out += kHex[u & 15];
-    } else {
-      out += c;
-    }
-  }
-  return out;
 }
 
 void RefuseEmptyValues(CLI::App& app, const std::set<std::string>& empty_allowed) {

@@ -19,10 +19,6 @@ inline constexpr int kUsageExit = 2;
 // Prints `occgt: error: <message>` and returns kUsageExit.
 int UsageError(const std::string& message);
 
-// `text` on one line: control characters (a newline in a file name) as \xNN; other bytes,
-// UTF-8 included, as they are. Every error and warning line of the binary goes through it.
-std::string OneLine(const std::string& text);
-
 // Every option of every subcommand that takes a value refuses an empty one (`--failure-error
 // ''` parsed as 0 and changed the results): a usage error "<flag>: expected a value, got ''";
 // but the flags in `empty_allowed`, for which "" means something (`--scene ""`: the root is
@@ -48,12 +44,12 @@ struct FieldFlag {
   bool given;         // the flag is on the command line
 };
 // An unsigned flag (a seed, a size in MB) refuses a negative value, which CLI11 would wrap
-// around to a huge one (`--seed -1` = 2^64 - 1): a usage error "<flag>: expected an integer
-// >= 0, got '-1'". Returns the option.
-CLI::Option* NonNegative(CLI::Option* option);
-// An unsigned flag that must be at least `min` (>= 1): "<flag>: expected an integer >= min, got
-// '<text>'" for a negative or smaller value. Returns the option.
+// around to a huge one (`--seed -1` = 2^64 - 1), and one below `min`: a usage error
+// "<flag>: expected an integer >= <min>, got '-1'". A value that is not a number is left to
+// CLI11's conversion error. Returns the option.
 CLI::Option* AtLeast(CLI::Option* option, unsigned long long min);
+// AtLeast(option, 0).
+CLI::Option* NonNegative(CLI::Option* option);
 
 // A default value as help text shows it ("0.05", "10", "64").
 std::string Num(double value);

@@ -17,14 +17,15 @@ inline std::string HumanBytes(double bytes) {
   return text;
 }
 
-// s in double quotes for a one-line message, its bytes outside printable ASCII (controls,
-// DEL, non-ASCII) as \xNN: "a\x0ab".
-inline std::string Quoted(std::string_view s) {
+// s with its control bytes (below 0x20, DEL) as \xNN, and with `non_ascii` its bytes >= 0x80
+// too; every other byte as it is.
+inline std::string EscapedBytes(std::string_view s, bool non_ascii) {
   static const char* kHex = "0123456789abcdef";
-  std::string out = "\"";
+  std::string out;
+  out.reserve(s.size());
   for (const char c : s) {
     const auto u = static_cast<unsigned char>(c);
-    if (u < 0x20 || u >= 0x7f) {
+    if (u < 0x20 || u == 0x7f || (non_ascii && u > 0x7f)) {
       out += "\\x";
       out += kHex[u >> 4];
       out += kHex[u & 15];
@@ -32,7 +33,14 @@ inline std::string Quoted(std::string_view s) {
       out += c;
     }
   }
-  return out + "\"";
+  return out;
 }
+
+// s in double quotes for a one-line message, its bytes outside printable ASCII (controls,
+// DEL, non-ASCII) as \xNN: "a\x0ab".
+inline std::string Quoted(std::string_view s) { return "\"" + EscapedBytes(s, true) + "\""; }
+
+// s on one line: control bytes (a newline in a file name) as \xNN; UTF-8 kept as it is.
+inline std::string OneLine(std::string_view s) { return EscapedBytes(s, false); }
 
 }  // namespace gt
