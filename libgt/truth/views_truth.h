@@ -120,9 +120,10 @@ SeenBy CountSeenBy(const uint32_t* visible_in, const uint8_t* valid, int num_vie
 // 0..kNumTrackStates-1, x and y both NaN or both finite, and finite where VISIBLE, OCCLUDED
 // or INCONSISTENT (LabelDirection's warped_xy). Arrays as in ViewsTruth: [N, pixels_per_view]
 // and [N, num_queries(, 2)]. Throws InputError("<array>", "... at element k") naming the
-// first element at fault (visible_in, occluded_in, valid, track_xy, track_state).
-void CheckStoredViewsTruth(const uint32_t* visible_in, const uint32_t* occluded_in,
-                           const uint8_t* valid, int num_views, size_t pixels_per_view,
-                           const float* track_xy, const uint8_t* track_state, size_t num_queries);
+// first element at fault (CountSeenBy's checks first: visible_in, valid; then occluded_in,
+// visible_in, track_xy, track_state). Returns CountSeenBy of the arrays (checked once).
+SeenBy CheckStoredViewsTruth(const uint32_t* visible_in, const uint32_t* occluded_in,
+                             const uint8_t* valid, int num_views, size_t pixels_per_view,
+                             const float* track_xy, const uint8_t* track_state, size_t num_queries);
 
 }  // namespace gt::truth

@@ -433,11 +433,12 @@ py::array_t<T, py::array::c_style> StoredArray(py::handle obj, const std::string
 
 // The checks of a stored N-view sample (an N-view shard's members, for TupleShardDataset):
 // each view's depth finite and >= 0, K a pinhole camera's, world_from_cam rigid (the checks
-// of views_ground_truth's arguments), then truth::CheckStoredViewsTruth. ValueError naming
-// the argument.
-void CheckViewsSample(py::handle depths, py::handle Ks, py::handle world_from_cams,
-                      py::handle visible_in, py::handle occluded_in, py::handle valid,
-                      py::handle track_xy, py::handle track_state) {
+// of views_ground_truth's arguments), then truth::CheckStoredViewsTruth; returns its seen_by
+// uint8 [N, H, W]. ValueError naming the argument.
+py::array_t<uint8_t> CheckViewsSample(py::handle depths, py::handle Ks, py::handle world_from_cams,
+                                      py::handle visible_in, py::handle occluded_in,
+                                      py::handle valid, py::handle track_xy,
+                                      py::handle track_state) {
   const std::vector<py::object> d = Items(depths, "depths", 2);
   const std::vector<py::object> k = Items(Ks, "Ks", 2);
   const std::vector<py::object> p = Items(world_from_cams, "world_from_cams", 2);
@@ -472,10 +473,14 @@ void CheckViewsSample(py::handle depths, py::handle Ks, py::handle world_from_ca
   const auto xy = StoredArray<float>(track_xy, "track_xy", "float32", {n, -1, 2});
   const py::ssize_t q = xy.shape(1);
   const auto state = StoredArray<uint8_t>(track_state, "track_state", "uint8", {n, q});
-  py::gil_scoped_release no_gil;
-  gt::truth::CheckStoredViewsTruth(vis.data(), occ.data(), ok.data(), static_cast<int>(n),
-                                   static_cast<size_t>(h) * static_cast<size_t>(w), xy.data(),
-                                   state.data(), static_cast<size_t>(q));
+  gt::truth::SeenBy seen;
+  {
+    py::gil_scoped_release no_gil;
+    seen = gt::truth::CheckStoredViewsTruth(vis.data(), occ.data(), ok.data(), static_cast<int>(n),
+                                            static_cast<size_t>(h) * static_cast<size_t>(w),
+                                            xy.data(), state.data(), static_cast<size_t>(q));
+  }
+  return ToArray(std::move(seen.seen_by), {n, h, w});
 }
 
 // The value every keyword argument of pair_ground_truth takes when None: the defaults of the
@@ -600,9 +605,9 @@ void BindTruth(py::module_& m) {
         "(truth::CountSeenBy), as views_ground_truth returns them; see occgt.views_seen_by.");
   m.def("check_views_sample", &CheckViewsSample, "depths"_a, "Ks"_a, "world_from_cams"_a,
         "visible_in"_a, "occluded_in"_a, "valid"_a, "track_xy"_a, "track_state"_a,
-        "None, or ValueError naming the argument at fault: the checks of a stored N-view "
-        "sample (TupleShardDataset): views_ground_truth's checks of depths, Ks and poses, "
-        "then truth::CheckStoredViewsTruth of the bitmasks and tracks.");
+        "seen_by uint8 [N, H, W] of a stored N-view sample (TupleShardDataset) once it passes "
+        "views_ground_truth's checks of depths, Ks and poses and truth::CheckStoredViewsTruth "
+        "of the bitmasks and tracks; else ValueError naming the argument at fault.");
   m.def("dense_volume", &DenseVolume, "occ"_a, "known"_a,
         "bins"_a = gt::occupancy::BinOptions().num_bins,
         "uint8 [bins, H/2, W/2] (0 free, 1 occupied, 255 unknown) of occupancy words "

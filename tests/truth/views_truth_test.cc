@@ -296,6 +296,14 @@ TEST(CheckStoredViewsTruth, PassesEveryComputedResultAndNamesEachDamage) {
     o.query_view = 1;
     const ViewsTruth t = ComputeViewsTruth(Views({0, 1, 2, 6, 12}), o);
     EXPECT_EQ(ErrorOf([&] { check(t); }), "") << preset;
+    // It returns the statistics ComputeViewsTruth gave (the arrays are read once).
+    const SeenBy s =
+        CheckStoredViewsTruth(t.visible_in.data(), t.occluded_in.data(), t.valid.data(),
+                              t.num_views, static_cast<size_t>(t.width) * t.height,
+                              t.track_xy.data(), t.track_state.data(), t.num_queries());
+    EXPECT_TRUE(std::equal(s.seen_by.begin(), s.seen_by.end(), t.seen_by.begin(), t.seen_by.end()))
+        << preset;
+    EXPECT_EQ(s.histogram, t.seen_by_histogram) << preset;
   }
   const ViewsTruth good = ComputeViewsTruth(Views({0, 2, 6}), Options("default"));
   const size_t hw = static_cast<size_t>(good.width) * good.height;

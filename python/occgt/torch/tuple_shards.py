@@ -4,7 +4,8 @@
 The shards are listed once by the C++ shard reader, as for ShardDataset (shards.py); a
 sample's members are read with one ``os.preadv``. The stored ground truth (``visible_in``,
 ``occluded_in``, ``valid``, the tracks) is the one ``occgt tuples --shards`` computed; only
-``seen_by`` is derived, by the C++ (``occgt.views_seen_by``). docs/MULTIVIEW.md.
+``seen_by`` is derived, by the C++ that checks each item (``truth::CheckStoredViewsTruth``,
+with the count of ``occgt.views_seen_by``). docs/MULTIVIEW.md.
 """
 from __future__ import annotations
 
@@ -15,7 +16,6 @@ from typing import Any, Dict, List, Tuple, Union
 
 import numpy as np
 
-import occgt
 from occgt import _occgt
 
 from .shards import _decode, _has, _ShardSplit
@@ -28,7 +28,7 @@ __all__ = ["TupleShardDataset"]
 _NEED = ("json", "intrinsics.npy", "world_from_cam.npy", "visible_in.npy", "occluded_in.npy",
          "valid.npy", "track_xy.npy", "track_state.npy", "depth0.npy")
 
-# The sample member behind each argument of _occgt.check_views_sample / views_seen_by
+# The sample member behind each argument of _occgt.check_views_sample
 # ("{}": the view index of "depths[i]", or "[i]" after the member of a stacked array).
 _MEMBERS = {"depths": "depth{}.npy", "Ks": "intrinsics.npy{}", "world_from_cams":
             "world_from_cam.npy{}", "visible_in": "visible_in.npy", "occluded_in":
@@ -177,11 +177,10 @@ class TupleShardDataset(_ShardSplit):
         }
         truth["track_xy"] = array("track_xy.npy", "f4", (n, None, 2))
         truth["track_state"] = array("track_state.npy", "u1", (n, truth["track_xy"].shape[1]))
-        try:  # the C++ checks of every stored array, then the C++ count of seen_by
-            _occgt.check_views_sample(depths, Ks, poses, truth["visible_in"],
-                                      truth["occluded_in"], truth["valid"], truth["track_xy"],
-                                      truth["track_state"])
-            truth["seen_by"] = occgt.views_seen_by(truth["visible_in"], truth["valid"])["seen_by"]
+        try:  # the C++ checks of every stored array, with the C++ count of seen_by
+            truth["seen_by"] = _occgt.check_views_sample(
+                depths, Ks, poses, truth["visible_in"], truth["occluded_in"], truth["valid"],
+                truth["track_xy"], truth["track_state"])
         except ValueError as e:
             raise ValueError(f"{where}: {_member_message(str(e))}") from None
         colors = None
