@@ -100,7 +100,7 @@ void RunPair(const PairArgs& args) {
 
 void AddPairCommand(CLI::App& app) {
   auto args = std::make_shared<PairArgs>();
-  auto* cmd = app.add_subcommand("pair", "label one pair of frames and write its ground truth");
+  auto* cmd = app.add_subcommand("pair", "Label one pair of frames and write its ground truth");
   PairDatasetArgs& d = args->data;
   AddPairDatasetFlags(cmd, &d, "its resolution, depth range, labels and patches");
   std::string presets;

@@ -172,7 +172,7 @@ void RunRender(const RenderArgs& args) {
 void AddRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   auto* cmd = app.add_subcommand(
-      "render", "render depth and triangle ids of frames from the scene's mesh (docs/CLI.md)");
+      "render", "Render depth and triangle ids of frames from the scene's mesh (docs/CLI.md)");
   cmd->add_option("--root", args->root, "dataset root")->required();
   cmd->add_option("--format", args->format, "dataset format (scannet, sevenscenes, ...)")
       ->required();

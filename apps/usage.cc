@@ -196,7 +196,20 @@ std::string DescribeParseError(const CLI::App& app, const std::vector<std::strin
     const std::string rest = what.substr(convert.size());
     const size_t eq = rest.find(" = ");
     if (eq != std::string::npos) {
-      what = rest.substr(0, eq) + ": expected a number, got '" + rest.substr(eq + 3) + "'";
+      const std::string name = rest.substr(0, eq);
+      const std::string value = rest.substr(eq + 3);
+      const CLI::Option* option = sub->get_option_no_throw(name);
+      const std::string type = option != nullptr ? option->get_type_name() : "";
+      if (type == "INT" || type == "UINT") {
+        // Digits that did not convert are out of the flag's integer range.
+        const size_t digits = !value.empty() && (value[0] == '-' || value[0] == '+') ? 1 : 0;
+        const bool integer = value.size() > digits &&
+                             value.find_first_not_of("0123456789", digits) == std::string::npos;
+        what = name + (integer ? ": integer out of range, got '" : ": expected an integer, got '") +
+               value + "'";
+      } else {
+        what = name + ": expected a number, got '" + value + "'";
+      }
     }
   }
   return what + " (`" + path + " --help` lists the flags)";
