@@ -31,6 +31,20 @@ uint64_t Le(const std::string& s, size_t offset, int nbytes) {
   return v;
 }
 
+// Runs a NumPy script with Debian's Python: `body` follows "import numpy as np, sys" and
+// "d = sys.argv[1]" (d = dir), and is written to DIR/NAME first.
+test::CommandResult RunNumPy(const std::string& dir, const std::string& name,
+                             const std::string& body) {
+  const std::string script = dir + "/" + name;
+  {
+    std::ofstream py(script);
+    py << "import numpy as np, sys\n"
+          "d = sys.argv[1]\n"
+       << body;
+  }
+  return test::RunShell("/usr/bin/python3 '" + script + "' '" + dir + "'");
+}
+
 // A .npy file built by hand from a header dict: magic, version, length, dict padded with
 // spaces to 64 bytes and '\n', then raw data. Independent of EncodeNpy.
 std::string CraftNpy(const std::string& dict, const std::string& data, int major = 1,
@@ -360,22 +374,17 @@ TEST(Npz, LoftrScanNetTest1500) {
 // big-endian for the rejections) and occgt reads; occgt writes and NumPy reads.
 TEST(Npy, ExchangeWithNumPy) {
   const std::string dir = test::ScratchDir("npy_numpy");
-  const std::string script = dir + "/make.py";
-  {
-    std::ofstream py(script);
-    py << "import numpy as np, sys\n"
-          "d = sys.argv[1]\n"
-          "np.save(d + '/f4.npy', np.arange(12, dtype=np.float32).reshape(3, 4) / 4)\n"
-          "np.save(d + '/scalar.npy', np.float64(2.5))\n"
-          "np.save(d + '/u2.npy', np.arange(5, dtype=np.uint16) * 1000)\n"
-          "np.save(d + '/big.npy', np.arange(3, dtype='>f4'))\n"
-          "np.save(d + '/fortran.npy', np.asfortranarray(np.ones((2, 3))))\n"
-          "np.save(d + '/obj.npy', np.array([{}, 1], dtype=object), allow_pickle=True)\n"
-          "np.savez(d + '/s.npz', b=np.arange(6, dtype=np.int64).reshape(2, 3), "
-          "a=np.array([1, 2], dtype=np.uint8))\n"
-          "np.savez_compressed(d + '/c.npz', x=np.linspace(0, 1, 1000, dtype=np.float64))\n";
-  }
-  const auto made = test::RunShell("/usr/bin/python3 '" + script + "' '" + dir + "'");
+  const auto made =
+      RunNumPy(dir, "make.py",
+               "np.save(d + '/f4.npy', np.arange(12, dtype=np.float32).reshape(3, 4) / 4)\n"
+               "np.save(d + '/scalar.npy', np.float64(2.5))\n"
+               "np.save(d + '/u2.npy', np.arange(5, dtype=np.uint16) * 1000)\n"
+               "np.save(d + '/big.npy', np.arange(3, dtype='>f4'))\n"
+               "np.save(d + '/fortran.npy', np.asfortranarray(np.ones((2, 3))))\n"
+               "np.save(d + '/obj.npy', np.array([{}, 1], dtype=object), allow_pickle=True)\n"
+               "np.savez(d + '/s.npz', b=np.arange(6, dtype=np.int64).reshape(2, 3), "
+               "a=np.array([1, 2], dtype=np.uint8))\n"
+               "np.savez_compressed(d + '/c.npz', x=np.linspace(0, 1, 1000, dtype=np.float64))\n");
   ASSERT_EQ(made.exit_code, 0) << made.stderr_text;
 
   const NpyArray f4 = ReadNpy(dir + "/f4.npy");
@@ -405,25 +414,21 @@ TEST(Npy, ExchangeWithNumPy) {
   WriteNpy<uint64_t>(dir + "/ours_u8.npy", {3}, {1, 2, 1ull << 63});
   WriteNpz(dir + "/ours.npz", {{"k", EncodeNpy<double>({3, 3}, {1, 0, 2, 0, 1, 3, 0, 0, 1})},
                                {"ids", EncodeNpy<int32_t>({2}, {-1, 7})}});
-  {
-    std::ofstream py(dir + "/check.py");
-    py << "import numpy as np, sys\n"
-          "d = sys.argv[1]\n"
-          "a = np.load(d + '/ours.npy')\n"
-          "assert a.dtype == np.dtype('<f4') and a.shape == (6, 5), (a.dtype, a.shape)\n"
-          "assert (a == 0.25 * np.arange(30, dtype=np.float32).reshape(6, 5)).all()\n"
-          "m = np.load(d + '/ours.npy', mmap_mode='r')\n"
-          "assert m.offset % 64 == 0, m.offset\n"
-          "u = np.load(d + '/ours_u8.npy')\n"
-          "assert u.dtype == np.uint64 and u.tolist() == [1, 2, 2**63]\n"
-          "z = np.load(d + '/ours.npz')\n"
-          "assert sorted(z.files) == ['ids', 'k']\n"
-          "assert (z['k'] == [[1, 0, 2], [0, 1, 3], [0, 0, 1]]).all() and z['k'].dtype == "
-          "np.float64\n"
-          "assert z['ids'].tolist() == [-1, 7] and z['ids'].dtype == np.int32\n"
-          "print('ok')\n";
-  }
-  const auto checked = test::RunShell("/usr/bin/python3 '" + dir + "/check.py' '" + dir + "'");
+  const auto checked =
+      RunNumPy(dir, "check.py",
+               "a = np.load(d + '/ours.npy')\n"
+               "assert a.dtype == np.dtype('<f4') and a.shape == (6, 5), (a.dtype, a.shape)\n"
+               "assert (a == 0.25 * np.arange(30, dtype=np.float32).reshape(6, 5)).all()\n"
+               "m = np.load(d + '/ours.npy', mmap_mode='r')\n"
+               "assert m.offset % 64 == 0, m.offset\n"
+               "u = np.load(d + '/ours_u8.npy')\n"
+               "assert u.dtype == np.uint64 and u.tolist() == [1, 2, 2**63]\n"
+               "z = np.load(d + '/ours.npz')\n"
+               "assert sorted(z.files) == ['ids', 'k']\n"
+               "assert (z['k'] == [[1, 0, 2], [0, 1, 3], [0, 0, 1]]).all() and z['k'].dtype == "
+               "np.float64\n"
+               "assert z['ids'].tolist() == [-1, 7] and z['ids'].dtype == np.int32\n"
+               "print('ok')\n");
   EXPECT_EQ(checked.exit_code, 0) << checked.stderr_text;
   EXPECT_EQ(checked.stdout_text, "ok\n");
 }
@@ -448,17 +453,13 @@ TEST(NpyStrings, RoundTripLayoutAndExchangeWithNumPy) {
 
   const std::string dir = test::ScratchDir("npy_strings");
   WriteFileAtomic(dir + "/ours.npy", bytes);
-  {
-    std::ofstream py(dir + "/check.py");
-    py << "import numpy as np, sys\n"
-          "d = sys.argv[1]\n"
-          "a = np.load(d + '/ours.npy')\n"
-          "assert a.dtype == np.dtype('<U6'), a.dtype\n"
-          "assert a.tolist() == ['000150', '', 'caf\\u00e9', '\\u623f', 'a\\U0001F600z'], a\n"
-          "np.save(d + '/numpy.npy', np.array(['x', 'f\\u00fc\\u00df', '000001']))\n"
-          "print('ok')\n";
-  }
-  const auto checked = test::RunShell("/usr/bin/python3 '" + dir + "/check.py' '" + dir + "'");
+  const auto checked =
+      RunNumPy(dir, "check.py",
+               "a = np.load(d + '/ours.npy')\n"
+               "assert a.dtype == np.dtype('<U6'), a.dtype\n"
+               "assert a.tolist() == ['000150', '', 'caf\\u00e9', '\\u623f', 'a\\U0001F600z'], a\n"
+               "np.save(d + '/numpy.npy', np.array(['x', 'f\\u00fc\\u00df', '000001']))\n"
+               "print('ok')\n");
   ASSERT_EQ(checked.exit_code, 0) << checked.stderr_text;
   EXPECT_EQ(DecodeStringsNpy(ReadFileBytes(dir + "/numpy.npy"), "numpy.npy"),
             (std::vector<std::string>{"x", "f\xc3\xbc\xc3\x9f", "000001"}));
