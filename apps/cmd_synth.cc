@@ -12,6 +12,7 @@
 #include "apps/commands.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
+#include "libgt/core/human.h"
 #include "libgt/synth/dataset.h"
 #include "libgt/synth/scannetpp_layout.h"
 
@@ -48,10 +49,11 @@ void RunScanNetPPSynth(const SynthArgs& args) {
   const gt::synth::ScanNetPPSynthSummary summary = gt::synth::WriteScanNetPPSynth(args.out, o);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::cout << "synth: " << summary.scene_names.size() << " scenes in ScanNet++'s layout, "
-            << o.frames << " DSLR and " << o.frames << " iPhone frames each (DSLR " << o.dslr_width
-            << "x" << o.dslr_height << ", seed " << o.seed << ") written to " << args.out << " in "
-            << std::fixed << std::setprecision(2) << seconds << " s\n"
+  std::cout << "synth: " << gt::Counted(static_cast<long long>(summary.scene_names.size()), "scene")
+            << " in ScanNet++'s layout, " << o.frames << " DSLR and " << o.frames
+            << " iPhone frames each (DSLR " << o.dslr_width << "x" << o.dslr_height << ", seed "
+            << o.seed << ") written to " << args.out << " in " << std::fixed << std::setprecision(2)
+            << seconds << " s\n"
             << "  read it with --format scannetpp " << args.out << "\n";
 }
 
@@ -79,10 +81,10 @@ void RunSynth(SynthArgs& args) {
   const gt::synth::SynthSummary summary = gt::synth::WriteSyntheticDataset(args.out, args.options);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::cout << "synth: " << summary.scene_names.size() << " scenes, " << summary.frames
-            << " frames (" << args.options.width << "x" << args.options.height << ", seed "
-            << args.options.seed << ") written to " << args.out << " in " << std::fixed
-            << std::setprecision(2) << seconds << " s\n"
+  std::cout << "synth: " << gt::Counted(static_cast<long long>(summary.scene_names.size()), "scene")
+            << ", " << gt::Counted(summary.frames, "frame") << " (" << args.options.width << "x"
+            << args.options.height << ", seed " << args.options.seed << ") written to " << args.out
+            << " in " << std::fixed << std::setprecision(2) << seconds << " s\n"
             << "  read it with --format generic " << args.out << "\n";
 }
 

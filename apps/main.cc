@@ -65,9 +65,10 @@ int main(int argc, char** argv) {
   occgt::AddEvalCommand(app);
   occgt::AddCovisCommand(app);
   occgt::AddTuplesCommand(app);
-  occgt::RefuseEmptyValues(app, {"--scene"});
+  occgt::CheckFlagValues(app, {"--scene"});
   // Usage errors (docs/CLI.md): one line, exit 2. Bad input (files, data): one line, exit 1.
   const std::vector<std::string> args(argv + 1, argv + argc);
+  if (const std::optional<int> code = occgt::RefuseDanglingEquals(args)) return *code;
   if (const std::optional<int> code = occgt::HandleHelpOrUnknownCommand(app, args)) return *code;
   try {
     app.parse(argc, argv);

@@ -117,20 +117,54 @@ int UsageError(const std::string& message) {
   return kUsageExit;
 }
 
-void RefuseEmptyValues(CLI::App& app, const std::set<std::string>& empty_allowed) {
+void CheckFlagValues(CLI::App& app, const std::set<std::string>& empty_allowed) {
   const CLI::Validator non_empty(
       [](std::string& value) {
         return value.empty() ? std::string("expected a value, got ''") : std::string();
       },
       "", "non-empty");
-  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+  const CLI::Validator within_64_bits(
+      [](std::string& value) {
+        const size_t sign = !value.empty() && (value[0] == '-' || value[0] == '+') ? 1 : 0;
+        if (value.size() <= sign ||
+            value.find_first_not_of("0123456789", sign) != std::string::npos) {
+          return std::string();  // not an integer: CLI11's own conversion error follows
+        }
+        errno = 0;
+        if (value[0] == '-') {
+          (void)std::strtoll(value.c_str(), nullptr, 10);
+        } else {
+          (void)std::strtoull(value.c_str(), nullptr, 10);
+        }
+        return errno == ERANGE ? "integer out of range, got '" + value + "'" : std::string();
+      },
+      "", "within-64-bits");
+  // Every command and nested command (`inspect pair`, `inspect split`).
+  std::vector<CLI::App*> commands = app.get_subcommands([](CLI::App*) { return true; });
+  for (size_t c = 0; c < commands.size(); ++c) {
+    CLI::App* sub = commands[c];
+    for (CLI::App* nested : sub->get_subcommands([](CLI::App*) { return true; })) {
+      commands.push_back(nested);
+    }
     for (CLI::Option* o : sub->get_options([](CLI::Option*) { return true; })) {
       const bool allowed =
           std::any_of(empty_allowed.begin(), empty_allowed.end(),
                       [o](const std::string& name) { return o->check_name(name); });
       if (o->get_type_size_max() > 0 && !allowed) o->check(non_empty);
+      const std::string type = o->get_type_name();
+      if (type == "INT" || type == "UINT") o->check(within_64_bits);
     }
   }
+}
+
+std::optional<int> RefuseDanglingEquals(const std::vector<std::string>& args) {
+  for (const std::string& a : args) {
+    if (a == "--") break;
+    if (a.size() > 3 && a.rfind("--", 0) == 0 && a.back() == '=' && a.find('=') == a.size() - 1) {
+      return UsageError(a + ": expected a value after '='");
+    }
+  }
+  return std::nullopt;
 }
 
 std::optional<int> HandleHelpOrUnknownCommand(CLI::App& app, const std::vector<std::string>& args) {

@@ -19,11 +19,18 @@ inline constexpr int kUsageExit = 2;
 // Prints `occgt: error: <message>` and returns kUsageExit.
 int UsageError(const std::string& message);
 
-// Every option of every subcommand that takes a value refuses an empty one (`--failure-error
-// ''` parsed as 0 and changed the results): a usage error "<flag>: expected a value, got ''";
-// but the flags in `empty_allowed`, for which "" means something (`--scene ""`: the root is
-// the scene's own folder).
-void RefuseEmptyValues(CLI::App& app, const std::set<std::string>& empty_allowed);
+// Checks every option of every subcommand that takes a value:
+// - an empty value is refused (`--failure-error ''` parsed as 0 and changed the results): a
+//   usage error "<flag>: expected a value, got ''"; but the flags in `empty_allowed`, for
+//   which "" means something (`--scene ""`: the root is the scene's own folder);
+// - an integer flag's digits beyond 64 bits are refused: "<flag>: integer out of range, got
+//   '...'" (CLI11 saturated them: `--seed 99999999999999999999` ran with 2^64 - 1).
+void CheckFlagValues(CLI::App& app, const std::set<std::string>& empty_allowed);
+
+// `--flag=` with nothing after '=' (CLI11 would take the next argument as its value, so
+// `--auc= --out x` read "--out" as the AUC list): a usage error "--flag=: expected a value
+// after '='". Arguments after a lone `--` are positionals and are not looked at.
+std::optional<int> RefuseDanglingEquals(const std::vector<std::string>& args);
 
 // `occgt help`, `occgt help CMD` (exit 0) and an unknown first word (exit 2); nullopt when
 // the arguments are for CLI11 to parse.

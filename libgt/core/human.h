@@ -1,5 +1,5 @@
 // Values for people: byte counts in decimal units ("79.2 MB"), strings quoted for one-line
-// messages.
+// messages, counts with their noun ("1 scene").
 #pragma once
 
 #include <cstdio>
@@ -42,5 +42,10 @@ inline std::string Quoted(std::string_view s) { return "\"" + EscapedBytes(s, tr
 
 // s on one line: control bytes (a newline in a file name) as \xNN; UTF-8 kept as it is.
 inline std::string OneLine(std::string_view s) { return EscapedBytes(s, false); }
+
+// "1 scene", "2 scenes", "0 scenes": a count with its noun, plural by adding "s".
+inline std::string Counted(long long n, std::string_view noun) {
+  return std::to_string(n) + " " + std::string(noun) + (n == 1 ? "" : "s");
+}
 
 }  // namespace gt

@@ -172,7 +172,7 @@ TEST(SynthCli, WritesDeterministicallyAndRejectsBadFlags) {
   const std::string flags = " --scenes 1 --frames 3 --resolution 80x60 --seed 9";
   const auto ra = test::RunOccgt("synth --out '" + a + "'" + flags);
   ASSERT_EQ(ra.exit_code, 0) << ra.stderr_text;
-  EXPECT_NE(ra.stdout_text.find("1 scenes, 3 frames"), std::string::npos) << ra.stdout_text;
+  EXPECT_NE(ra.stdout_text.find("1 scene, 3 frames"), std::string::npos) << ra.stdout_text;
   ASSERT_EQ(test::RunOccgt("synth --out '" + b + "'" + flags).exit_code, 0);
   EXPECT_TRUE(Tree(a) == Tree(b));
   EXPECT_EQ(io::ReadNpy(a + "/synth_000/depth/000002.npy").shape, (std::vector<int64_t>{60, 80}));
