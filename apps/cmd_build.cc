@@ -172,7 +172,9 @@ std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
                   static_cast<long long>(num("samples")), static_cast<long long>(num("scenes")),
                   static_cast<long long>(num("shards_planned")));
     text += line;
-    if (written == 0) {
+    if (num("samples") == 0) {
+      text += "; no pair passed the selection (the drops below say why)";
+    } else if (written == 0) {
       text += "; nothing to write: every shard of this task was complete already";
     } else {
       std::snprintf(line, sizeof(line), "; wrote %lld pairs, %lld shards, %s",

@@ -621,6 +621,13 @@ std::map<std::string, std::string> ReadNpzMemberBytes(zip_t* archive, const std:
 }  // namespace
 
 void WriteNpz(const std::string& path, const std::map<std::string, std::string>& npy_members) {
+  if (npy_members.empty()) {
+    // libzip's zip_close removes an archive without entries instead of writing it. An empty
+    // .npz (np.savez with no arrays) is a zip of one end-of-central-directory record: the
+    // signature and 18 zero bytes.
+    WriteFileAtomic(path, std::string("PK\x05\x06", 4) + std::string(18, '\0'));
+    return;
+  }
   // libzip writes to a file; write it beside the target, then publish its bytes atomically.
   const std::string staging = path + ".zip.tmp";
   std::error_code ec;

@@ -307,6 +307,30 @@ def main():
     assert s["dry_run"] and s["samples"] == 24 and s["shards_planned"] == 3
     assert not glob.glob(os.path.join(out_e, "*.tar")) and not os.path.exists(os.path.join(out_e, "selection"))
 
+    # A recipe that selects no pair publishes an empty split with every export (the LoFTR
+    # export's intrinsics.npz without members used to fail: libzip writes no empty archive).
+    with open(recipe) as f:
+        doc = yaml.safe_load(f)
+    doc["selection"]["overlap"] = [0.99, 1.0]
+    none_recipe = os.path.join(root, "demo-none.yaml")
+    with open(none_recipe, "w") as f:
+        yaml.safe_dump(doc, f)
+    out_n = os.path.join(root, "none")
+    r = common.occgt("build", "--json", none_recipe, "--out", out_n)
+    s = json.loads(r.stdout)
+    validate(s, "summary.schema.json")
+    assert s["samples"] == 0 and s["shards_planned"] == 0 and s["drops"]["filter.overlap"] > 0, s
+    with open(os.path.join(out_n, "index.json")) as f:
+        assert json.load(f)["shardlist"] == []
+    t = np.load(os.path.join(out_n, "loftr", "test.npz"))
+    assert t["name"].shape == (0, 4) and t["rel_pose"].shape == (0, 12)
+    assert np.load(os.path.join(out_n, "loftr", "intrinsics.npz")).files == []
+    for export in ("gluefactory/export.json", "dust3r/export.json", "loftr/tree.json"):
+        assert os.path.isfile(os.path.join(out_n, export)), export
+    r = common.occgt("build", none_recipe, "--out", out_n)
+    assert "no pair passed the selection" in r.stdout, r.stdout
+    common.occgt("validate", out_n)
+
     # Bad recipes: one line naming the file and field, exit 1, nothing created.
     bad_dir = common.scratch("build_demo_bad")
     cases = {

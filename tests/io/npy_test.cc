@@ -292,6 +292,12 @@ TEST(Npz, WriteIsStoredSortedDeterministicAndReadBack) {
   EXPECT_EQ(read.at("alpha").shape, (std::vector<int64_t>{2, 2}));
   EXPECT_EQ(read.at("alpha").As<double>("alpha")[3], 4.0);
   EXPECT_EQ(read.at("zeta").As<int32_t>("zeta")[1], -6);
+
+  // No member (a LoFTR export of a split without pairs): libzip would write no file at all.
+  WriteNpz(dir + "/empty.npz", {});
+  EXPECT_EQ(ReadFileBytes(dir + "/empty.npz").size(), 22u);
+  EXPECT_TRUE(ReadNpz(dir + "/empty.npz").empty());
+  EXPECT_FALSE(std::filesystem::exists(dir + "/empty.npz.zip.tmp"));
 }
 
 TEST(Npz, Rejections) {
@@ -414,6 +420,7 @@ TEST(Npy, ExchangeWithNumPy) {
   WriteNpy<uint64_t>(dir + "/ours_u8.npy", {3}, {1, 2, 1ull << 63});
   WriteNpz(dir + "/ours.npz", {{"k", EncodeNpy<double>({3, 3}, {1, 0, 2, 0, 1, 3, 0, 0, 1})},
                                {"ids", EncodeNpy<int32_t>({2}, {-1, 7})}});
+  WriteNpz(dir + "/ours_empty.npz", {});
   const auto checked =
       RunNumPy(dir, "check.py",
                "a = np.load(d + '/ours.npy')\n"
@@ -428,6 +435,7 @@ TEST(Npy, ExchangeWithNumPy) {
                "assert (z['k'] == [[1, 0, 2], [0, 1, 3], [0, 0, 1]]).all() and z['k'].dtype == "
                "np.float64\n"
                "assert z['ids'].tolist() == [-1, 7] and z['ids'].dtype == np.int32\n"
+               "assert np.load(d + '/ours_empty.npz').files == []\n"
                "print('ok')\n");
   EXPECT_EQ(checked.exit_code, 0) << checked.stderr_text;
   EXPECT_EQ(checked.stdout_text, "ok\n");
