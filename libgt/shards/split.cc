@@ -711,6 +711,15 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
     result.split = splits[0];
   }
   const SplitPlan plan = ReadPlan(dir, result.split);
+  // Every file the merge publishes (summary.json by occgt merge or the build after it) can
+  // take a new file, before any is published: a summary.json that is a folder used to fail
+  // after pairs.jsonl and index.json were out, and the split looked published.
+  for (const char* name : {"pairs.jsonl", "index.json", "summary.json"}) {
+    const std::string path = (fs::path(dir) / name).string();
+    if (const std::string problem = io::OutputFileProblem(path); !problem.empty()) {
+      throw InputError(path, problem);
+    }
+  }
   // Lines and samples against their schemas only with `verify`: a per-line cost of its own.
   const SplitSchemas schemas = options.verify ? SplitSchemas(options.schemas_dir) : SplitSchemas();
   const size_t nshards = plan.shard_nsamples.size();
