@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 namespace gt {
@@ -29,8 +30,15 @@ struct DepthImage {
 inline constexpr double kDefaultMinDepthM = 0.0;
 inline constexpr double kDefaultMaxDepthM = 1000.0;
 
+// The smallest depth counted as > 0: the smallest normal float (1.18e-38 m). A denormal
+// depth is invalid, so that no result depends on the denormals-are-zero / flush-to-zero mode
+// of the threads that compute it: torch.set_flush_denormal(True) sets it in a trainer, and
+// Embree's BVH builds left it in TBB's workers; under it a denormal threshold compares as 0,
+// and `d >= denorm_min` counted depth 0 as valid.
+inline constexpr float kMinPositiveDepthM = std::numeric_limits<float>::min();
+
 inline bool IsValidDepth(float d, double min_depth_m, double max_depth_m) {
-  return std::isfinite(d) && d > 0.0f && d >= min_depth_m && d <= max_depth_m;
+  return std::isfinite(d) && d >= kMinPositiveDepthM && d >= min_depth_m && d <= max_depth_m;
 }
 
 // Nearest-neighbour resampling under the pixel-centre convention of camera.h: target

@@ -29,7 +29,8 @@ struct Kernel {
   // a·u is rounded to float once per call (Columns), b·v + c and k once per row.
   double a[3], b[3], c[3], k[3];
   // IsValidDepth(d, min, max) for a float d is exactly depth_lo <= d <= depth_hi: d > 0 is
-  // d >= the smallest positive float, isfinite is d <= FLT_MAX, NaN fails both.
+  // d >= the smallest normal float, isfinite is d <= FLT_MAX, NaN fails both. No threshold is
+  // a denormal, so the decisions are the same with denormals-are-zero set (core/depth.h).
   double depth_lo, depth_hi;
   double z_min;  // OUT_OF_VIEW unless z > z_min; -inf without cheirality (z is finite for
                  // every valid depth)
@@ -81,7 +82,7 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
     kn.k[r] = t(r);
   }
   const double inf = std::numeric_limits<double>::infinity();
-  kn.depth_lo = std::max(o.min_depth_m, double{std::numeric_limits<float>::denorm_min()});
+  kn.depth_lo = std::max(o.min_depth_m, double{kMinPositiveDepthM});
   kn.depth_hi = std::min(o.max_depth_m, double{std::numeric_limits<float>::max()});
   kn.z_min = o.cheirality ? o.min_depth_m : -inf;
   kn.abs_tol_m = o.abs_tol_m;
@@ -95,8 +96,8 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
     kn.y_min = -0.5;
     kn.x_max = cam_b.width - 0.5;
     kn.y_max = cam_b.height - 0.5;
-  } else {  // x > 0  <=>  x >= the smallest positive double
-    kn.x_min = std::nextafter(0.0, inf);
+  } else {  // x > 0, as x >= the smallest normal float (as depth: no denormal threshold)
+    kn.x_min = std::numeric_limits<float>::min();
     kn.y_min = kn.x_min;
     kn.x_max = cam_b.width - 1.0;
     kn.y_max = cam_b.height - 1.0;
@@ -108,8 +109,11 @@ Kernel MakeKernel(const Camera& cam_a, const Camera& cam_b, const Rigid3d& b_fro
   kn.depth_lo_f = FloatAtLeast(kn.depth_lo);
   kn.depth_hi_f = FloatAtMost(kn.depth_hi);
   // For a float z: z > z_min  <=>  z > the largest float <= z_min.
-  kn.z_min_f = o.cheirality ? FloatAtMost(kn.z_min) : -std::numeric_limits<float>::infinity();
-  kn.x_min_f = o.bounds == Bounds::kPixelArea ? -0.5f : std::numeric_limits<float>::denorm_min();
+  // z > 0 is z > the largest denormal (z >= the smallest normal float) in every FP mode.
+  kn.z_min_f = !o.cheirality                           ? -std::numeric_limits<float>::infinity()
+               : kn.z_min < double{kMinPositiveDepthM} ? std::nextafter(kMinPositiveDepthM, 0.0f)
+                                                       : FloatAtMost(kn.z_min);
+  kn.x_min_f = o.bounds == Bounds::kPixelArea ? -0.5f : std::numeric_limits<float>::min();
   kn.y_min_f = kn.x_min_f;
   // x < x_max  <=>  x < the smallest float >= x_max (W − 0.5 and W − 1 are floats anyway).
   kn.x_max_f = FloatAtLeast(kn.x_max);
@@ -182,21 +186,18 @@ __attribute__((noinline, optimize("no-tree-vectorize"))) void GatherDepths(
 // target_clones on a function template; g++ inlines the body and vectorises each clone).
 enum class RowMode { kMaps, kCounts, kBits, kPoints };
 struct RowOut {
-  int32_t* __restrict codes = nullptr;  // kMaps, kPoints
-  float* __restrict xy = nullptr;       // kMaps, kPoints
-  float* __restrict z = nullptr;        // kPoints
+  int32_t* __restrict codes = nullptr;   // kMaps, kPoints
+  float* __restrict xy = nullptr;        // kMaps, kPoints
+  float* __restrict z = nullptr;         // kPoints
   int64_t* __restrict counts = nullptr;  // kCounts
   uint32_t* __restrict vis = nullptr;    // kBits
   uint32_t* __restrict occ = nullptr;    // kBits
   int bit = 0;                           // kBits
 };
 template <RowMode kMode>
-inline __attribute__((always_inline)) void LabelRowBody(const Kernel& kn,
-                                                        const float* __restrict col_x,
-                                                        const float* __restrict col_y,
-                                                        const float* __restrict col_z,
-                                                        const float* __restrict dep, int n, int v,
-                                                        const RowOut& out) {
+inline __attribute__((always_inline)) void LabelRowBody(
+    const Kernel& kn, const float* __restrict col_x, const float* __restrict col_y,
+    const float* __restrict col_z, const float* __restrict dep, int n, int v, const RowOut& out) {
   constexpr bool kMaps = kMode == RowMode::kMaps || kMode == RowMode::kPoints;
   int32_t* __restrict codes = out.codes;
   float* __restrict xy = out.xy;
@@ -307,8 +308,7 @@ __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRo
     int64_t* __restrict counts) {
   RowOut out;
   out.counts = counts;
-  LabelRowBody<RowMode::kCounts>(kn, cols.x.data(), cols.y.data(), cols.z.data(), dep, n, v,
-                                 out);
+  LabelRowBody<RowMode::kCounts>(kn, cols.x.data(), cols.y.data(), cols.z.data(), dep, n, v, out);
 }
 
 __attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void LabelRowBits(
@@ -328,8 +328,8 @@ void LabelPoint(const Kernel& kn, const Columns& cols, int i, float d, int v, in
   out.codes = code;
   out.xy = xy;
   out.z = z;
-  LabelRowBody<RowMode::kPoints>(kn, cols.x.data() + i, cols.y.data() + i, cols.z.data() + i, &d,
-                                 1, v, out);
+  LabelRowBody<RowMode::kPoints>(kn, cols.x.data() + i, cols.y.data() + i, cols.z.data() + i, &d, 1,
+                                 v, out);
 }
 
 // labels[i] = codes[i] for i < n, and counts[k] += the number of codes k (0 .. 5; every
@@ -569,8 +569,8 @@ PointLabels LabelPoints(const DepthImage& depth_a, const Camera& cam_a, const De
     const int u = pixels_uv[2 * i], v = pixels_uv[2 * i + 1];
     if (u < 0 || u >= cam_a.width || v < 0 || v >= cam_a.height) {
       std::ostringstream msg;
-      msg << "expected pixels inside the " << cam_a.width << "x" << cam_a.height
-          << " image, got (" << u << ", " << v << ") at " << i;
+      msg << "expected pixels inside the " << cam_a.width << "x" << cam_a.height << " image, got ("
+          << u << ", " << v << ") at " << i;
       throw InputError("pixels", msg.str());
     }
     cols.Set(kn, static_cast<int>(i), u);
@@ -583,8 +583,8 @@ PointLabels LabelPoints(const DepthImage& depth_a, const Camera& cam_a, const De
   for (size_t i = 0; i < q; ++i) {
     const int u = pixels_uv[2 * i], v = pixels_uv[2 * i + 1];
     int32_t code = 0;
-    LabelPoint(kn, cols, static_cast<int>(i), depth_a.values_m[v * w + u], v, &code,
-               &out.xy[2 * i], &out.z_m[i]);
+    LabelPoint(kn, cols, static_cast<int>(i), depth_a.values_m[v * w + u], v, &code, &out.xy[2 * i],
+               &out.z_m[i]);
     out.labels[i] = static_cast<uint8_t>(code);
   }
   return out;

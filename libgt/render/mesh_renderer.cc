@@ -3,6 +3,7 @@
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <atomic>
 #include <cmath>
@@ -106,7 +107,11 @@ MeshRenderer::MeshRenderer(const TriangleMesh& mesh) : impl_(std::make_unique<Im
     rtcAttachGeometryByID(impl_->scene, geometry, 0);
     rtcReleaseGeometry(geometry);
   }
-  rtcCommitScene(impl_->scene);
+  // The BVH build runs TBB tasks with flush-to-zero and denormals-are-zero set, and the
+  // setting stayed with the caller's arena: every later parallel loop of the caller ran
+  // with it (core/depth.h). In an arena of its own, it stays there.
+  tbb::task_arena build_arena;
+  build_arena.execute([&] { rtcCommitScene(impl_->scene); });
   impl_->ThrowIfError("BVH build");
 }
 

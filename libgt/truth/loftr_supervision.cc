@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 
+#include "libgt/core/depth.h"
 #include "libgt/core/error.h"
 
 namespace gt::truth {
@@ -115,7 +116,7 @@ void WarpGrid(const LoftrView& a, const LoftrView& b, const Eigen::Matrix4d& b_f
                           ? a.depth_m[static_cast<size_t>(v) * static_cast<size_t>(a.depth_width) +
                                       static_cast<size_t>(u)]
                           : 0.0f;
-      const bool has_depth = inside && std::isfinite(d) && d > 0.0f;
+      const bool has_depth = inside && std::isfinite(d) && d >= kMinPositiveDepthM;
       const Eigen::Vector3d p =
           Ka_inv * Eigen::Vector3d(static_cast<double>(gx) * d, static_cast<double>(gy) * d, d);
       const Eigen::Vector3d q = R * p + t;

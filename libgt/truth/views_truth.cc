@@ -49,8 +49,8 @@ void StartRows(const float* __restrict depth, const LabelOptions& lo, size_t cou
   for (size_t p = 0; p < count; ++p) {
     const float d = depth[p];
     const double dd = d;
-    const bool ok = (std::fabs(d) <= std::numeric_limits<float>::max()) & (d > 0.0f) &
-                    (dd >= min_m) & (dd <= max_m);
+    const bool ok = (std::fabs(d) <= std::numeric_limits<float>::max()) &
+                    (d >= kMinPositiveDepthM) & (dd >= min_m) & (dd <= max_m);
     valid[p] = ok ? 1 : 0;
     vis[p] = static_cast<uint32_t>(ok) << self;
     occ[p] = 0;
