@@ -37,8 +37,8 @@ void AddMergeCommand(CLI::App& app) {
   cmd->add_option("dir", args->dir, "Output folder of `occgt build` (holds parts/)")->required();
   cmd->add_option("--split", args->options.split, "Split name (default: the only one planned)");
   cmd->add_option("--schemas", args->options.schemas_dir,
-                  "Folder with sample.schema.json / pairs_line.schema.json "
-                  "(default: $OCCGT_SCHEMAS or the source tree's schemas/, when found)");
+                  "Folder of the split's JSON Schemas for --verify (default: the copies of "
+                  "schemas/ built into occgt)");
   auto* verify = cmd->add_flag("--verify", args->options.verify,
                                "Also re-hash every shard and read every tar back (reads every "
                                "byte; default: trust the digests recorded while writing)");
@@ -52,7 +52,6 @@ void AddMergeCommand(CLI::App& app) {
   cmd->callback([args] {
     gt::shards::MergeOptions options = args->options;
     const bool schemas_given = !options.schemas_dir.empty();
-    if (options.schemas_dir.empty()) options.schemas_dir = DefaultSchemasDir();
     const std::unique_ptr<tbb::global_control> limit = LimitThreads(args->threads);
     std::string error;
     if (!options.Check(&error)) {

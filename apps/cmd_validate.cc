@@ -1,13 +1,11 @@
 // occgt validate DIR [--threads N]: re-checks a published split from DIR/index.json (MD5
 // and size of every shard, sample counts and member names read back from the tars, .npy
-// headers, JSON against schemas/) and prints one line per problem; exit code 1 when any.
-// Reads every byte; shards are checked in parallel on N threads (0 = all cores), and the
-// output is the same for every N.
+// headers, JSON against the schemas built in from schemas/) and prints one line per problem; exit
+// code 1 when any. Reads every byte; shards are checked in parallel on N threads (0 = all cores),
+// and the output is the same for every N.
 #include <tbb/global_control.h>
 
 #include <cstdio>
-#include <cstdlib>
-#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -29,13 +27,12 @@ void AddValidateCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("validate", "Re-check the shards and indices of a split");
   cmd->add_option("dir", args->dir, "Folder holding index.json")->required();
   cmd->add_option("--schemas", args->options.schemas_dir,
-                  "Folder with index/sample/pairs_line schemas "
-                  "(default: $OCCGT_SCHEMAS or the source tree's schemas/, when found)");
+                  "Folder of the split's JSON Schemas (default: the copies of schemas/ built "
+                  "into occgt)");
   AddThreadsFlag(cmd, &args->threads, "Threads checking shards");
   cmd->callback([args] {
     gt::shards::ValidateOptions options = args->options;
     const bool schemas_given = !options.schemas_dir.empty();
-    if (options.schemas_dir.empty()) options.schemas_dir = DefaultSchemasDir();
     const std::unique_ptr<tbb::global_control> limit = LimitThreads(args->threads);
     std::string error;
     if (!options.Check(&error)) {
@@ -48,27 +45,6 @@ void AddValidateCommand(CLI::App& app) {
     }
     std::printf("%s: valid\n", args->dir.c_str());
   });
-}
-
-}  // namespace occgt
-
-namespace occgt {
-
-std::string DefaultSchemasDir() {
-  namespace fs = std::filesystem;
-  if (const char* env = std::getenv("OCCGT_SCHEMAS"); env != nullptr && *env != '\0') {
-    return env;
-  }
-  std::error_code ec;
-  const fs::path exe_dir = fs::read_symlink("/proc/self/exe", ec).parent_path();
-  if (ec) return "";
-  for (const fs::path& candidate : {exe_dir / ".." / "schemas", exe_dir / ".." / ".." / "schemas",
-                                    exe_dir / ".." / "share" / "occgt" / "schemas"}) {
-    if (fs::exists(candidate / "index.schema.json", ec)) {
-      return fs::weakly_canonical(candidate, ec).string();
-    }
-  }
-  return "";
 }
 
 }  // namespace occgt

@@ -16,9 +16,6 @@ void AddOccupancyCommand(CLI::App& app);  // cmd_occupancy.cc
 void AddMergeCommand(CLI::App& app);      // cmd_merge.cc
 void AddValidateCommand(CLI::App& app);   // cmd_validate.cc
 void AddRenderCommand(CLI::App& app);     // cmd_render.cc
-// Folder of the JSON Schemas: $OCCGT_SCHEMAS, else schemas/ found next to the binary
-// (../schemas, ../../schemas, ../share/occgt/schemas); "" when none (cmd_validate.cc).
-std::string DefaultSchemasDir();
 void AddBuildCommand(CLI::App& app);    // cmd_build.cc
 void AddInspectCommand(CLI::App& app);  // cmd_inspect.cc
 void AddEvalCommand(CLI::App& app);     // cmd_eval.cc

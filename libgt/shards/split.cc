@@ -77,17 +77,26 @@ int64_t FileSize(const std::string& path) {
   return static_cast<int64_t>(st.st_size);
 }
 
-// A parsed JSON Schema, reused for many documents.
+// The split's schemas built into the binary from schemas/ (file name, text).
+struct EmbeddedSchema {
+  const char* file;
+  const char* text;
+};
+const EmbeddedSchema kEmbeddedSchemas[] = {
+#include "gt/shards/split_schemas.inc"
+};
+
+// A parsed JSON Schema, reused for many documents. `where` names it in messages (its
+// path, or its file name for a built-in one).
 class SchemaChecker {
  public:
-  explicit SchemaChecker(const std::string& schema_path) : path_(schema_path) {
-    const json doc = ParseJsonFile(schema_path);
+  SchemaChecker(const std::string& where, const json& doc) : path_(where) {
     try {
       valijson::SchemaParser parser;
       valijson::adapters::NlohmannJsonAdapter adapter(doc);
       parser.populateSchema(adapter, schema_);
     } catch (const std::exception& e) {
-      throw InputError(schema_path, std::string("unusable JSON Schema: ") + e.what());
+      throw InputError(where, std::string("unusable JSON Schema: ") + e.what());
     }
   }
   std::vector<std::string> Check(const json& doc) const {
@@ -111,12 +120,19 @@ class SchemaChecker {
   valijson::Schema schema_;
 };
 
-// Optional schema in a folder: nullptr when the folder is "" or the file does not exist.
+// The schema `file` of folder `dir` (which must hold it), or the built-in one when `dir`
+// is "".
 std::unique_ptr<SchemaChecker> LoadSchema(const std::string& dir, const std::string& file) {
-  if (dir.empty()) return nullptr;
+  if (dir.empty()) {
+    for (const EmbeddedSchema& e : kEmbeddedSchemas) {
+      if (file == e.file) return std::make_unique<SchemaChecker>(file, json::parse(e.text));
+    }
+    GT_ASSERT_MSG(false, "schema not built in");
+  }
   const std::string path = (fs::path(dir) / file).string();
-  if (!io::FileExists(path)) return nullptr;
-  return std::make_unique<SchemaChecker>(path);
+  if (!io::FileExists(path))
+    throw InputError(path, "missing (a --schemas folder holds every schema)");
+  return std::make_unique<SchemaChecker>(path, ParseJsonFile(path));
 }
 
 std::string FirstLines(const std::vector<std::string>& problems) {
@@ -130,8 +146,8 @@ std::string FirstLines(const std::vector<std::string>& problems) {
 // split: pair samples (`occgt build`: sample.schema.json, pairs_line.schema.json) and N-view
 // samples (`occgt tuples --shards`: views_sample.schema.json, views_line.schema.json). Each
 // document is checked against the schema of its own kind: a sample json whose "kind" is
-// "occgt-views-sample", or a line with "frame_ids", is an N-view one. Default-constructed,
-// or for a schema file the folder lacks: no check.
+// "occgt-views-sample", or a line with "frame_ids", is an N-view one. From a folder (which
+// must hold all four), or built in when the folder is ""; default-constructed: no check.
 class SplitSchemas {
  public:
   SplitSchemas() = default;
@@ -904,10 +920,8 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
     problems.push_back(e.what());
     return problems;
   }
-  if (index_schema) {
-    for (const std::string& p : index_schema->Check(index)) {
-      problem(index_path, "index.schema.json: " + p);
-    }
+  for (const std::string& p : index_schema->Check(index)) {
+    problem(index_path, "index.schema.json: " + p);
   }
   if (!index.is_object() || index.value("__kind__", "") != "wids-shard-index-v1" ||
       index.value("wids_version", 0) != 1 || !index.contains("shardlist") ||
@@ -994,7 +1008,7 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
 
 std::vector<std::string> ValidateJsonAgainstSchema(const std::string& document,
                                                    const std::string& schema_path) {
-  const SchemaChecker checker(schema_path);
+  const SchemaChecker checker(schema_path, ParseJsonFile(schema_path));
   const json doc = json::parse(document, nullptr, false);
   if (doc.is_discarded()) return {"not valid JSON"};
   return checker.Check(doc);

@@ -134,8 +134,8 @@ struct MergeOptions {
                             // member names, .npy headers), and check sample JSON and
                             // pair lines against the schemas; shards in parallel; reads
                             // every byte
-  std::string schemas_dir;  // folder with sample.schema.json / pairs_line.schema.json, used
-                            // by `verify`; "" = no JSON Schema checks
+  std::string schemas_dir;  // the schemas `verify` checks against, as ValidateOptions'
+                            // ("" = built in); the default merge checks no JSON Schema
   bool Check(std::string* error) const;
 };
 
@@ -172,7 +172,9 @@ std::string MergeSummaryJson(const MergeResult& result);
 bool WriteMergeSummary(const std::string& dir, const MergeResult& result);
 
 struct ValidateOptions {
-  std::string schemas_dir;  // "" = skip JSON Schema checks (structure is still checked)
+  std::string schemas_dir;  // the JSON Schemas' folder (index, sample, views_sample,
+                            // pairs_line, views_line .schema.json, all required); "" = the
+                            // copies of schemas/ built into the binary
   bool Check(std::string* error) const;
 };
 

@@ -48,8 +48,7 @@ def run(args, fsize_kb=None, timeout=120):
             resource.setrlimit(resource.RLIMIT_FSIZE, (fsize_kb * 1024, fsize_kb * 1024))
     t0 = time.monotonic()
     r = subprocess.run([common.BINARY, *args], capture_output=True, text=True, timeout=timeout,
-                       preexec_fn=limit if fsize_kb is not None else None,
-                       env=dict(os.environ, OCCGT_SCHEMAS=os.path.join(common.SOURCE, "schemas")))
+                       preexec_fn=limit if fsize_kb is not None else None)
     return r, time.monotonic() - t0
 
 

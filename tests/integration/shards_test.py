@@ -82,6 +82,24 @@ def check_real_build():
     schemas = os.path.join(common.SOURCE, "schemas")
     r = common.occgt("validate", "--schemas", schemas, out, check=False)
     check(r.returncode == 0, f"validate of a build output:\n{r.stdout}{r.stderr}")
+    # Without --schemas, the copies built into occgt: every check runs from any folder.
+    r = common.occgt("validate", out, check=False)
+    check(r.returncode == 0, f"validate with the built-in schemas:\n{r.stdout}{r.stderr}")
+    edited = os.path.join(common.scratch("shards_build_demo_edited"), "split")
+    shutil.rmtree(os.path.dirname(edited))
+    shutil.copytree(out, edited)
+    with open(os.path.join(edited, "pairs.jsonl")) as f:
+        lines = [json.loads(line) for line in f]
+    lines[5]["score_metrics"]["01"]["overlap"] = "x"
+    with open(os.path.join(edited, "pairs.jsonl"), "w") as f:
+        f.write("".join(json.dumps(line) + "\n" for line in lines))
+    r = common.occgt("validate", edited, check=False)
+    check(r.returncode == 1 and "pairs.jsonl:6: pairs_line.schema.json: " in r.stdout,
+          f"a schema violation found without --schemas:\n{r.stdout}{r.stderr}")
+    empty = common.scratch("shards_schemas_empty")
+    r = common.occgt("validate", "--schemas", empty, out, check=False)
+    check(r.returncode == 1 and "index.schema.json: missing" in r.stdout,
+          f"a --schemas folder without the schemas is a problem:\n{r.stdout}{r.stderr}")
     before = {f: open(os.path.join(out, f), "rb").read()
               for f in ("index.json", "pairs.jsonl", "summary.json")}
     common.occgt("merge", "--schemas", schemas, out)
@@ -194,9 +212,13 @@ def main():
           "doc reader json")
 
     # occgt validate: clean, then a flipped byte and a missing shard.
-    # Only the index schema applies: the demo samples are not `occgt build` samples.
+    # Only the index schema applies: the demo samples are not `occgt build` samples, so the
+    # folder's sample and line schemas accept any document.
     schemas = common.scratch("shards_schemas")
     shutil.copy(os.path.join(common.SOURCE, "schemas", "index.schema.json"), schemas)
+    for name in ("sample", "views_sample", "pairs_line", "views_line"):
+        with open(os.path.join(schemas, f"{name}.schema.json"), "w") as f:
+            f.write("{}\n")
     r = common.occgt("validate", "--schemas", schemas, out, check=False)
     check(r.returncode == 0, f"validate on a clean split: {r.stdout}{r.stderr}")
     bad = common.scratch("shards_demo_bad")
