@@ -72,6 +72,12 @@ void RunOccupancy(const OccupancyArgs& args) {
                                                   "occupancy options", occupancy_flags);
   if (o.mode == occ::OccupancyMode::kTwoPoint && !args.save_octree.empty())
     throw gt::InputError("--save-octree", "needs --mode octomap");
+  // OctoMap's binary format is .bt (octovis goes by the suffix); the suffix also keeps a
+  // mistyped path from replacing a dataset file (a depth .npy was overwritten).
+  if (const std::string& p = args.save_octree;
+      !p.empty() && (p.size() < 4 || p.compare(p.size() - 3, 3, ".bt") != 0)) {
+    throw gt::InputError("--save-octree", "expected a path ending in .bt, got '" + p + "'");
+  }
   const PairDatasetArgs& d = args.data;
   gt::truth::PairSource source{setup.format, d.scene,           "", "", 0, 0, "", setup.resolution,
                                "",           setup.depth.source};

@@ -322,6 +322,17 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
       if (!meta.is_object()) {
         throw InputError((fs::path(dir) / "meta.json").string(), "expected an object");
       }
+      // Both files of one pair: `occgt occupancy` of other frames or another resolution into
+      // the same folder was drawn beside the labels.
+      for (const char* key : {"format", "scene", "frame0", "frame1", "resolution"}) {
+        if (occupancy.is_object() && meta.contains(key) && occupancy.contains(key) &&
+            meta[key] != occupancy[key]) {
+          throw InputError(occ_path, std::string("\"") + key + "\" " + occupancy[key].dump() +
+                                         " differs from meta.json's " + meta[key].dump() +
+                                         ": the folder holds two pairs (write each into its "
+                                         "own --out)");
+        }
+      }
       meta["occupancy"] = std::move(occupancy);
     } else {
       meta = std::move(occupancy);

@@ -8,6 +8,7 @@
 #include <map>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <unordered_map>
 
 #include "libgt/core/error.h"
 #include "libgt/core/human.h"
@@ -24,11 +25,33 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+std::string JsonScalar(const json& v);
+
 double NeedNumber(const json& j, const char* key, const std::string& where) {
   if (!j.is_object() || !j.contains(key) || !j.at(key).is_number()) {
     throw InputError(where, std::string("expected a number \"") + key + "\"");
   }
   return j.at(key).get<double>();
+}
+
+// A number in [0, 1] (an overlap, an occlusion ratio, a share).
+double NeedFraction(const json& j, const char* key, const std::string& where) {
+  const double v = NeedNumber(j, key, where);
+  if (!(v >= 0 && v <= 1)) {
+    throw InputError(where, std::string("\"") + key + "\": expected a number in [0, 1], got " +
+                                JsonScalar(j.at(key)));
+  }
+  return v;
+}
+
+// The string `key` of an object, or "" when the object has none.
+std::string OptionalString(const json& j, const char* key, const std::string& where) {
+  if (!j.contains(key)) return "";
+  if (!j.at(key).is_string()) {
+    throw InputError(
+        where, std::string("\"") + key + "\": expected a string, got " + JsonScalar(j.at(key)));
+  }
+  return j.at(key).get<std::string>();
 }
 
 std::string NeedString(const json& j, const char* key, const std::string& where) {
@@ -124,6 +147,7 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
   const std::vector<std::pair<std::string, json>> lines =
       split.has_pairs ? ReadJsonLines(pairs_path) : std::vector<std::pair<std::string, json>>();
   const char* occ_key = OcclusionMetricField(options.occlusion_metric);
+  std::unordered_map<std::string, std::string> line_of_key;  // key -> its first line
   for (const auto& line : lines) {
     const std::string& where = line.first;  // a named reference: lambdas below capture it
     const json& j = line.second;
@@ -131,19 +155,25 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
     p.scene = NeedString(j, "scene", where);
     p.frame0 = NeedFrameId(j, "frame0", where);
     p.frame1 = NeedFrameId(j, "frame1", where);
-    p.shard = j.value("shard", "");
-    p.key = j.value("key", "");
+    p.shard = OptionalString(j, "shard", where);
+    p.key = OptionalString(j, "key", where);
+    if (!p.key.empty()) {
+      if (const auto [it, inserted] = line_of_key.emplace(p.key, where); !inserted) {
+        throw InputError(where, "key " + p.key + " repeats " + it->second +
+                                    " (pairs.jsonl holds each pair once)");
+      }
+    }
     if (!j.contains("metrics") || !j["metrics"].is_object()) {
       throw InputError(where, "expected \"metrics\": {\"01\": {...}, \"10\": {...}}");
     }
     const json& m = j["metrics"];
     const json m01 = m.value("01", json()), m10 = m.value("10", json());
-    p.overlap01 = NeedNumber(m01, "overlap", where + ": metrics.01");
-    p.overlap10 = NeedNumber(m10, "overlap", where + ": metrics.10");
-    p.occlusion01 = NeedNumber(m01, occ_key, where + ": metrics.01");
-    p.occlusion10 = NeedNumber(m10, occ_key, where + ": metrics.10");
-    p.visible01 = NeedNumber(m01, "consistent_overlap", where + ": metrics.01");
-    p.visible10 = NeedNumber(m10, "consistent_overlap", where + ": metrics.10");
+    p.overlap01 = NeedFraction(m01, "overlap", where + ": metrics.01");
+    p.overlap10 = NeedFraction(m10, "overlap", where + ": metrics.10");
+    p.occlusion01 = NeedFraction(m01, occ_key, where + ": metrics.01");
+    p.occlusion10 = NeedFraction(m10, occ_key, where + ": metrics.10");
+    p.visible01 = NeedFraction(m01, "consistent_overlap", where + ": metrics.01");
+    p.visible10 = NeedFraction(m10, "consistent_overlap", where + ": metrics.10");
     p.visible_min = std::min(p.visible01, p.visible10);
     const double valid = NeedNumber(m01, "valid", where + ": metrics.01") +
                          NeedNumber(m10, "valid", where + ": metrics.10");
@@ -164,11 +194,11 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
     const json& sm = j["score_metrics"];
     const json s01 = sm.value("01", json()), s10 = sm.value("10", json());
     p.score_overlap =
-        Combine(NeedNumber(s01, "overlap", where + ": score_metrics.01"),
-                NeedNumber(s10, "overlap", where + ": score_metrics.10"), options.aggregate);
+        Combine(NeedFraction(s01, "overlap", where + ": score_metrics.01"),
+                NeedFraction(s10, "overlap", where + ": score_metrics.10"), options.aggregate);
     p.score_occlusion =
-        Combine(NeedNumber(s01, occ_key, where + ": score_metrics.01"),
-                NeedNumber(s10, occ_key, where + ": score_metrics.10"), options.aggregate);
+        Combine(NeedFraction(s01, occ_key, where + ": score_metrics.01"),
+                NeedFraction(s10, occ_key, where + ": score_metrics.10"), options.aggregate);
     const double stride = NeedNumber(j, "score_stride", where);
     if (split.score_stride == 0) split.score_stride = static_cast<int>(stride);
     if (stride != split.score_stride) {

@@ -442,6 +442,32 @@ def main():
     check(r.returncode == 1, f"malformed pairs.jsonl: exit {r.returncode}")
     check("pairs.jsonl:1" in r.stderr and len(r.stderr.strip().splitlines()) == 1,
           f"malformed pairs.jsonl: stderr {r.stderr!r}")
+    # Edited lines of a real split: a key that is not a string (was the JSON library's own
+    # message, naming no file), an overlap outside [0, 1] (was reported as its maximum) and a
+    # repeated line (counted twice): one line naming the file and line, exit 1.
+    with open(os.path.join(build, "pairs.jsonl")) as f:
+        real = [json.loads(x) for x in f]
+    edits = [
+        (lambda ls: ls[1].update(key=5), r"pairs\.jsonl:2: \"key\": expected a string, got 5"),
+        (lambda ls: ls[2]["metrics"]["01"].update(overlap=7.5),
+         r"pairs\.jsonl:3: metrics\.01: \"overlap\": expected a number in \[0, 1\], got 7\.5"),
+        (lambda ls: ls.extend(ls[:1]),
+         r"pairs\.jsonl:%d: key \S+ repeats \S+pairs\.jsonl:1 " % (len(real) + 1)),
+    ]
+    for edit, pattern in edits:
+        edited = os.path.join(tmp, "edited")
+        shutil.rmtree(edited, ignore_errors=True)
+        os.makedirs(edited)
+        for name in ("summary.json", "index.json", "recipe.json"):
+            shutil.copyfile(os.path.join(build, name), os.path.join(edited, name))
+        lines_e = json.loads(json.dumps(real))
+        edit(lines_e)
+        with open(os.path.join(edited, "pairs.jsonl"), "w") as f:
+            f.write("".join(json.dumps(x) + "\n" for x in lines_e))
+        r = common.occgt("inspect", "split", edited, check=False)
+        check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and
+              re.search(pattern, r.stderr) is not None,
+              f"edited pairs.jsonl /{pattern}/: exit {r.returncode}, stderr {r.stderr!r}")
     r = common.occgt("inspect", "pair", "--shard", os.path.join(build, line["shard"]), "--key",
                      "no/such_key", "--out", os.path.join(tmp, "x"), check=False)
     check(r.returncode == 1 and "no/such_key" in r.stderr, f"missing key: {r.stderr!r}")
