@@ -10,6 +10,7 @@
 #include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
+#include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
 #include "libgt/synth/random.h"
 #include "libgt/synth/render.h"
@@ -150,6 +151,23 @@ SynthSummary WriteSyntheticDataset(const std::string& out_dir, const SynthOption
                         {"holes", options.holes},
                         {"max_holes_per_frame", options.max_holes_per_frame},
                         {"focal_px", options.focal_px}};
+  // A folder holding a synthetic dataset of other options is refused: the frames and scenes
+  // this run does not write would stay beside the new ones (a scan finds both).
+  const std::string dataset_path = (fs::path(out_dir) / "dataset.json").string();
+  if (io::FileExists(dataset_path)) {
+    const ojson have = ojson::parse(io::ReadFileBytes(dataset_path), nullptr, false);
+    if (have.is_discarded() || !have.is_object() || !have.contains("options")) {
+      throw InputError(dataset_path,
+                       "is not the dataset.json of occgt synth: write into an "
+                       "empty folder");
+    }
+    if (have["options"] != dataset["options"]) {
+      throw InputError(dataset_path, "holds a synthetic dataset of other options " +
+                                         have["options"].dump() +
+                                         ": write into an empty folder, or delete this one, so "
+                                         "that the two do not mix");
+    }
+  }
   dataset["scenes"] = ojson::array();
 
   for (int s = 0; s < options.scenes; ++s) {

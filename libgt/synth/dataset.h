@@ -63,7 +63,9 @@ struct SynthSummary {
 };
 
 // Writes the dataset under out_dir (created when missing); existing files of the same
-// names are replaced. Throws InputError for invalid options or a failed write.
+// names are replaced. An out_dir whose dataset.json is not occgt synth's, or holds other
+// options, is refused (files of both would mix). Throws InputError for invalid options, such
+// a folder or a failed write.
 SynthSummary WriteSyntheticDataset(const std::string& out_dir, const SynthOptions& options);
 
 }  // namespace gt::synth

@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "libgt/core/error.h"
+#include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
 #include "libgt/synth/render.h"
@@ -60,6 +61,28 @@ TEST(SynthDataset, RerunsAreByteIdenticalAndSeedsDiffer) {
   const auto tc = Tree(c);
   EXPECT_NE(ta.at("synth_000/depth/000000.npy"), tc.at("synth_000/depth/000000.npy"));
   EXPECT_NE(ta.at("synth_000/scene.json"), tc.at("synth_000/scene.json"));
+
+  // The same options again into the same folder: the same files. Other options (one scene
+  // fewer would leave synth_001 behind) or another program's dataset.json: refused, nothing
+  // changed.
+  WriteSyntheticDataset(a, Small());
+  EXPECT_TRUE(Tree(a) == ta);
+  SynthOptions fewer = Small();
+  fewer.scenes = 1;
+  try {
+    WriteSyntheticDataset(a, fewer);
+    ADD_FAILURE() << "other options into the same folder";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), a + "/dataset.json");
+    EXPECT_NE(std::string(e.what()).find("holds a synthetic dataset of other options"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(Tree(a) == ta);
+  const std::string d = test::ScratchDir("synth_d");
+  io::WriteFileAtomic(d + "/dataset.json", "{\"name\": \"mine\"}\n");
+  EXPECT_THROW(WriteSyntheticDataset(d, Small()), InputError);
+  EXPECT_EQ(Tree(d).size(), 1u);
 }
 
 TEST(SynthDataset, FilesMatchManifestRenderAndRecordedHoles) {
