@@ -72,7 +72,8 @@ double Arg<double>(py::handle value, const std::string& argument) {
   const bool number =
       PyFloat_Check(v) || PyLong_Check(v) || PyIndex_Check(v) ||
       (Py_TYPE(v)->tp_as_number != nullptr && Py_TYPE(v)->tp_as_number->nb_float != nullptr);
-  if (PyBool_Check(v) || PyUnicode_Check(v) || PyBytes_Check(v) || !number) {
+  if (PyBool_Check(v) || PyUnicode_Check(v) || PyBytes_Check(v) || !number ||
+      TypeName(value) == "bool_") {  // numpy.bool_ is not a number either
     throw py::type_error(argument + ": expected a number, got " + TypeName(value));
   }
   const double d = PyFloat_AsDouble(v);

@@ -54,7 +54,8 @@ uint64_t Arg<uint64_t>(py::handle value, const std::string& argument);
 template <>
 std::string Arg<std::string>(py::handle value, const std::string& argument);
 // A real number: a Python int or float, a NumPy or 0-d torch scalar (anything with
-// __float__ but str, bytes and bool): TypeError("<argument>: expected a number, got str").
+// __float__ but str, bytes, bool and numpy.bool_): TypeError("<argument>: expected a number, got
+// str").
 template <>
 double Arg<double>(py::handle value, const std::string& argument);
 // Arg<T> of a value that may be None (nullopt).

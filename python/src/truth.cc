@@ -62,8 +62,15 @@ std::optional<T> Take(py::dict* kwargs, const char* name) {
   const py::object value = (*kwargs)[name];
   PyDict_DelItemString(kwargs->ptr(), name);
   if (value.is_none()) return std::nullopt;
-  if constexpr (std::is_same_v<T, int> || std::is_same_v<T, std::string>) {
-    return Arg<T>(value, name);  // an int out of range is a ValueError, not "got int"
+  if constexpr (std::is_same_v<T, int> || std::is_same_v<T, std::string> ||
+                std::is_same_v<T, double>) {
+    return Arg<T>(value, name);  // an int out of range is a ValueError, not "got int"; a bool
+                                 // is not a number (abs_tol_m=True was 1.0)
+  }
+  if constexpr (std::is_same_v<T, bool>) {  // True/False or numpy.bool_, not 0/1 (mutual=0)
+    if (!PyBool_Check(value.ptr()) && TypeName(value) != "bool_") {
+      throw py::type_error(std::string(name) + ": expected a bool, got " + TypeName(value));
+    }
   }
   try {
     return value.cast<T>();
@@ -251,9 +258,9 @@ std::vector<py::object> Items(py::handle obj, const std::string& argument, int i
   return items;
 }
 
-py::dict ViewsGroundTruth(py::handle depths, py::handle Ks, py::handle world_from_cams,
-                          const std::string& preset, py::handle queries, int num_tracks,
-                          int query_view, uint64_t seed, const py::kwargs& given) {
+// views_ground_truth's options from its arguments, checked before any array is looked at.
+gt::truth::ViewsTruthOptions ViewsOptions(const std::string& preset, int num_tracks, int query_view,
+                                          uint64_t seed, const py::kwargs& given) {
   py::dict kw(given);
   PairArguments a;
   TakeLabelArguments(preset, &kw, &a);
@@ -264,6 +271,15 @@ py::dict ViewsGroundTruth(py::handle depths, py::handle Ks, py::handle world_fro
   options.query_view = query_view;
   options.seed = seed;
   if (num_tracks < 0) ThrowValue("num_tracks", "expected >= 0, got " + std::to_string(num_tracks));
+  if (query_view < 0) ThrowValue("query_view", "expected >= 0, got " + std::to_string(query_view));
+  return options;
+}
+
+py::dict ViewsGroundTruth(py::handle depths, py::handle Ks, py::handle world_from_cams,
+                          const std::string& preset, py::handle queries, int num_tracks,
+                          int query_view, uint64_t seed, const py::kwargs& given) {
+  const gt::truth::ViewsTruthOptions options =
+      ViewsOptions(preset, num_tracks, query_view, seed, given);
   const std::vector<py::object> d = Items(depths, "depths", 2);
   const std::vector<py::object> k = Items(Ks, "Ks", 2);
   const std::vector<py::object> p = Items(world_from_cams, "world_from_cams", 2);
@@ -600,6 +616,30 @@ void BindTruth(py::module_& m) {
     m.attr("TRACK_STATE_NAMES") = names;
   }
 
+  m.def(
+      "check_resolution",
+      [](py::handle width, py::handle height) {
+        const gt::truth::Resolution r{Arg<int>(width, "width"), Arg<int>(height, "height")};
+        if (std::string error; !r.Check(&error)) ThrowValue("width, height", error);
+      },
+      "width"_a, "height"_a,
+      "None for a working resolution the datasets accept (truth::Resolution), else TypeError "
+      "(not an int) or ValueError.");
+  m.def(
+      "views_options",
+      [](py::handle preset, py::handle num_tracks, py::handle query_view, py::handle seed,
+         const py::kwargs& kwargs) {
+        const gt::truth::ViewsTruthOptions options =
+            ViewsOptions(Arg<std::string>(preset, "preset"), Arg<int>(num_tracks, "num_tracks"),
+                         Arg<int>(query_view, "query_view"), Arg<uint64_t>(seed, "seed"), kwargs);
+        return JsonToPython(gt::truth::LabelOptionsJson(options.labels));
+      },
+      "preset"_a = gt::truth::LabelSettings().preset,
+      "num_tracks"_a = gt::truth::ViewsTruthOptions().num_tracks,
+      "query_view"_a = gt::truth::ViewsTruthOptions().query_view,
+      "seed"_a = gt::truth::ViewsTruthOptions().seed,
+      "The label options views_ground_truth resolves from the same arguments (its "
+      "'label_options' entry), checked, without computing anything (TupleIndexDataset).");
   m.def("views_seen_by", &ViewsSeenBy, "visible_in"_a, "valid"_a,
         "seen_by uint8 [N, H, W] and seen_by_histogram int64 [N, N] of stored N-view bitmasks "
         "(truth::CountSeenBy), as views_ground_truth returns them; see occgt.views_seen_by.");
@@ -608,6 +648,17 @@ void BindTruth(py::module_& m) {
         "seen_by uint8 [N, H, W] of a stored N-view sample (TupleShardDataset) once it passes "
         "views_ground_truth's checks of depths, Ks and poses and truth::CheckStoredViewsTruth "
         "of the bitmasks and tracks; else ValueError naming the argument at fault.");
+  m.def(
+      "check_pair_sample",
+      [](py::handle T_0to1, py::handle K0, py::handle K1, int width, int height) {
+        PoseFromArray(T_0to1, "T_0to1");
+        CameraFromArray(K0, width, height, "K0");
+        CameraFromArray(K1, width, height, "K1");
+      },
+      "T_0to1"_a, "K0"_a, "K1"_a, "width"_a, "height"_a,
+      "None once a stored pair sample's T_0to1 and K0/K1 pass pair_ground_truth's checks "
+      "(rigid within 1e-3, K of the sample's resolution; ShardDataset); else ValueError naming "
+      "the field.");
   m.def("dense_volume", &DenseVolume, "occ"_a, "known"_a,
         "bins"_a = gt::occupancy::BinOptions().num_bins,
         "uint8 [bins, H/2, W/2] (0 free, 1 occupied, 255 unknown) of occupancy words "

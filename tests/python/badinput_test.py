@@ -216,6 +216,20 @@ class BadInput(unittest.TestCase):
         # A wrong Python type is pybind11's TypeError (not a crash either).
         with self.assertRaises(TypeError):
             occgt.pair_ground_truth(**good(), stride="8")  # type: ignore[arg-type]
+        # A bool is not a number, and a number is not a bool (abs_tol_m=True was 1.0 m,
+        # mutual=0 was False).
+        for kwargs, pattern in [
+                ({"abs_tol_m": True}, r"^abs_tol_m: expected a number, got bool$"),
+                ({"voxel_m": True, "occupancy": True}, r"^voxel_m: expected a number, got bool$"),
+                ({"min_depth_m": np.True_}, r"^min_depth_m: expected a number, got bool_$"),
+                ({"mutual": 0}, r"^mutual: expected a bool, got int$"),
+                ({"occupancy": 1}, r"^occupancy: expected a bool, got int$")]:
+            with self.subTest(kwargs=kwargs), self.assertRaisesRegex(TypeError, pattern):
+                occgt.pair_ground_truth(**good(), **kwargs)
+            with self.subTest(kwargs=kwargs), self.assertRaisesRegex(TypeError, pattern):
+                occgt.pair_options(**kwargs)
+        self.assertTrue(occgt.pair_ground_truth(**good(), mutual=np.bool_(False),
+                                                abs_tol_m=np.float32(0.05))["options"])
 
     def test_readers(self) -> None:
         with self.assertRaisesRegex(ValueError, r"^format: unknown format .colmap., expected one of"):

@@ -301,6 +301,19 @@ class Indices(unittest.TestCase):
             PairIndexDataset([("synth_000", "000000", "000001")], data, "generic")  # type: ignore
         with self.assertRaisesRegex(ValueError, r"^root: /no/such/root: no such dataset"):
             PairIndexDataset(split, "/no/such/root", "generic")
+        # Options are checked here, as pair_ground_truth resolves them, not in the first
+        # worker's first item (a misspelt option, a bad preset or value, a size that is not
+        # an int, which was truncated: 64.9 -> 64).
+        for kwargs, error, pattern in [
+                ({"abs_tol": 0.1}, TypeError, r"abs_tol"),
+                ({"preset": "ocl"}, ValueError, r"^preset: expected one of"),
+                ({"stride": 0}, ValueError, r"stride"),
+                ({"width": 0}, ValueError, r"^width, height: expected width and height in 2\.\.8192"),
+                ({"width": 64.9}, TypeError, r"^width: expected an int, got float$"),
+                ({"height": "48"}, TypeError, r"^height: expected an int, got str$")]:
+            with self.subTest(kwargs=kwargs), self.assertRaisesRegex(error, pattern):
+                PairIndexDataset(split, data, "generic", **kwargs)
+        self.assertEqual(PairIndexDataset(split, data, "generic", width=np.int64(80)).width, 80)
         ds = PairIndexDataset(split, data, "generic", width=80, height=60, occupancy="words",
                               scope="scene:4")
         with self.assertRaisesRegex(TypeError, r"^index: expected an int, got float$"):

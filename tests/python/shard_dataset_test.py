@@ -536,6 +536,12 @@ class ShardDatasetTest(unittest.TestCase):
         singular = json.dumps({**self.plain[0]["json"], "T_0to1": np.zeros((4, 4)).tolist()})
         nan_T = json.dumps({**self.plain[0]["json"],
                             "T_0to1": np.full((4, 4), np.nan).tolist()})
+        # Rigid within pair_ground_truth's 1e-3 (was |det R - 1| <= 0.1: a 5 % scale passed).
+        scaled = np.array(self.plain[0]["json"]["T_0to1"])
+        scaled[:3, :3] = scaled[:3, :3] @ np.diag([1, 1, 1.05])
+        scaled_T = json.dumps({**self.plain[0]["json"], "T_0to1": scaled.tolist()})
+        bad_K = json.dumps({**self.plain[0]["json"],
+                            "K0": [[-1.0, 0, 0], [0, -1.0, 0], [0, 0, 0]]})
         cases = [
             ("label01.npy", common.npy_bytes(self.plain[0]["label01.npy"].astype(np.float64)),
              r"label01\.npy: expected uint8 \[120, 160\] \(sample resolution 160x120\), got "
@@ -549,10 +555,14 @@ class ShardDatasetTest(unittest.TestCase):
              r"matches\.npy: expected int32 \[\*, 2\] .*got float32"),
             ("occ0.npy", common.npy_bytes(self.plain[0]["occ0.npy"].view(np.int64)),
              r"occ0\.npy: expected uint64 \[60, 80\] .*got int64 \[60, 80\]"),
-            ("json", singular.encode(), r"json: expected the sample fields .*T_0to1 is not a "
-                                        r"rigid transform"),
-            ("json", nan_T.encode(), r"json: expected the sample fields .*T_0to1 has "
-                                     r"non-finite entries"),
+            ("json", singular.encode(), r"json: expected the sample fields .*T_0to1: last row "
+                                        r"of the pose is not \[0 0 0 1\]"),
+            ("json", nan_T.encode(), r"json: expected the sample fields .*T_0to1: non-finite "
+                                     r"pose entries"),
+            ("json", scaled_T.encode(), r"json: expected the sample fields .*T_0to1: rotation "
+                                        r"is not orthonormal"),
+            ("json", bad_K.encode(), r"json: expected the sample fields .*K0: expected "
+                                     r"\[\[fx, 0, cx\]"),
         ]
         for field, data, pattern in cases:
             split = copy_split(self.full, "sd_contract")

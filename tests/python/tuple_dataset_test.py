@@ -120,6 +120,19 @@ class TupleDataset(unittest.TestCase):
             self.dataset(views="mast3r")
         with self.assertRaisesRegex(ValueError, r"tuples\[0\]: expected 1..32 frame ids"):
             TupleIndexDataset([(self.scene_name, [])], self.root, "generic")
+        # Options are checked here, as views_ground_truth resolves them, not in the first
+        # worker's first item: a misspelt or pair-only option, a bad preset, a negative track
+        # count or seed (item 0 failed, items >= 1 worked: seed + index), a size not an int.
+        for kwargs, error, pattern in [
+                ({"abs_tol": 0.1}, TypeError, r"abs_tol"),
+                ({"stride": 8}, TypeError, r"stride"),
+                ({"preset": "ocl"}, ValueError, r"^preset: expected one of"),
+                ({"num_tracks": -1}, ValueError, r"^num_tracks: expected >= 0, got -1$"),
+                ({"num_tracks": 2.7}, TypeError, r"^num_tracks: expected an int, got float$"),
+                ({"seed": -1}, ValueError, r"^seed: "),
+                ({"width": 96.5}, TypeError, r"^width: expected an int, got float$")]:
+            with self.subTest(kwargs=kwargs), self.assertRaisesRegex(error, pattern):
+                TupleIndexDataset(self.tuples, self.root, "generic", **kwargs)
 
     def test_tuple_lines_are_typed(self) -> None:
         """scene a non-empty str, frame_ids a list of str: a str is not split into one frame

@@ -19,6 +19,7 @@ import torch
 
 import occgt
 
+from .._occgt import check_resolution
 from ._convert import to_tensor
 from ._json import loads_strict
 
@@ -219,8 +220,12 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             if not isinstance(ref, PairRef):
                 raise TypeError(f"pairs[{k}]: expected an occgt.torch.PairRef, got "
                                 f"{type(ref).__name__}")
+        # Fail here, not in a worker: the size, and the options as pair_ground_truth resolves
+        # them (a misspelt or unknown option, a bad preset or value).
+        check_resolution(width, height)
+        occgt.pair_options(preset, occupancy=occupancy is not None, **options)
         self.root, self.format, self.device = root, format, device
-        self.width, self.height = int(width), int(height)
+        self.width, self.height = operator.index(width), operator.index(height)
         self.preset, self.images, self.occupancy = preset, bool(images), occupancy
         if not (scope == "pair" or scope.startswith("window:") or scope.startswith("scene:")):
             raise ValueError(f"scope: expected 'pair', 'window:N' or 'scene:S', got {scope!r}")

@@ -24,7 +24,7 @@ from typing import Any, Dict, List, Optional, Tuple, Union
 import numpy as np
 import torch.utils.data
 
-from .._occgt import gunzip, npy_header, shard_index, shard_samples
+from .._occgt import check_pair_sample, gunzip, npy_header, shard_index, shard_samples
 from ._convert import to_tensor
 
 __all__ = ["ShardDataset"]
@@ -360,14 +360,9 @@ class ShardDataset(_ShardSplit):
             T_0to1 = np.asarray(meta["T_0to1"], dtype=np.float64).reshape(4, 4)
             K0 = np.asarray(meta["K0"], dtype=np.float32).reshape(3, 3)
             K1 = np.asarray(meta["K1"], dtype=np.float32).reshape(3, 3)
-            matrices: Dict[str, np.ndarray] = {"T_0to1": T_0to1, "K0": K0, "K1": K1}
-            for name, m in matrices.items():
-                if not np.isfinite(m).all():
-                    raise ValueError(f"{name} has non-finite entries")
-            if not np.array_equal(T_0to1[3], [0, 0, 0, 1]) or abs(
-                    np.linalg.det(T_0to1[:3, :3]) - 1) > 0.1:
-                raise ValueError("T_0to1 is not a rigid transform [[R, t], [0, 0, 0, 1]]")
             W, H = (int(n) for n in meta["resolution"])
+            # pair_ground_truth's checks, in C++: rigid within 1e-3, K of the resolution.
+            check_pair_sample(T_0to1, K0, K1, W, H)
             scene = str(meta["scene"])
             names = (f"{scene}/{meta['frame0']['id']}", f"{scene}/{meta['frame1']['id']}")
             metrics01, metrics10 = meta["metrics"]["01"], meta["metrics"]["10"]

@@ -19,6 +19,7 @@ import torch
 
 import occgt
 
+from .._occgt import check_resolution, views_options
 from ._convert import to_tensor
 from ._json import loads_strict
 
@@ -136,10 +137,14 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                                  f"{len(t.frame_ids)}")
         if depth_source not in ("sensor", "mesh", "fused"):
             raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")
+        # Fail here, not in a worker: the size, and the options as views_ground_truth resolves
+        # them (a misspelt or unknown option, a bad preset or value, a negative seed).
+        check_resolution(width, height)
+        views_options(preset, num_tracks=num_tracks, seed=seed, **label_options)
         self.root, self.format, self.device = root, format, device
         self.depth_source, self.mesh_path, self.fused_depth = depth_source, mesh_path, fused_depth
-        self.width, self.height = int(width), int(height)
-        self.preset, self.num_tracks, self.seed = preset, int(num_tracks), int(seed)
+        self.width, self.height = operator.index(width), operator.index(height)
+        self.preset, self.num_tracks, self.seed = preset, operator.index(num_tracks), operator.index(seed)
         self.images, self.views = bool(images), views
         self.label_options = dict(label_options)
         self._dataset: Optional[occgt.Dataset] = None
