@@ -104,7 +104,15 @@ std::string DropsText(const nlohmann::json& s) {
     text += (first ? " " : ", ") + reason + " " + n.dump();
     first = false;
   }
-  return text + "\n";
+  text += "\n";
+  // The first error behind a reason, so that a missing mesh or file is named.
+  if (s.contains("drop_examples") && s["drop_examples"].is_object()) {
+    for (const auto& [reason, example] : s["drop_examples"].items()) {
+      if (example.is_string())
+        text += "  first " + reason + ": " + example.get<std::string>() + "\n";
+    }
+  }
+  return text;
 }
 
 namespace {
@@ -149,42 +157,32 @@ std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
   char line[512];
   const std::string name = s.value("recipe", "") + " / " + s.value("split", "");
   const double seconds = s.contains("timings") ? s["timings"].value("total_s", 0.0) : 0.0;
+  std::snprintf(line, sizeof(line), " (%.1f s)\n", seconds);
+  const std::string took = line;
+  const std::string pairs = gt::Counted(num("samples"), "pair");
+  const std::string scenes = gt::Counted(num("scenes"), "scene");
   if (s.value("dry_run", false)) {
-    std::snprintf(line, sizeof(line),
-                  "%s: dry run: %lld pairs in %lld scenes would be written as %lld shards, about "
-                  "%s; nothing written (%.1f s)\n",
-                  name.c_str(), static_cast<long long>(num("samples")),
-                  static_cast<long long>(num("scenes")),
-                  static_cast<long long>(num("shards_planned")),
-                  HumanBytes(static_cast<double>(num("estimated_bytes"))).c_str(), seconds);
-    text += line;
+    text += name + ": dry run: " + pairs + " in " + scenes + " would be written as " +
+            gt::Counted(num("shards_planned"), "shard") + ", about " +
+            HumanBytes(static_cast<double>(num("estimated_bytes"))) + "; nothing written" + took;
   } else if (s.value("stage", "all") == "select") {
-    std::snprintf(line, sizeof(line),
-                  "%s: selected %lld pairs in %lld scenes (%lld scenes this run); nothing "
-                  "written yet: run --stage write (%.1f s)\n",
-                  name.c_str(), static_cast<long long>(num("samples")),
-                  static_cast<long long>(num("scenes")),
-                  static_cast<long long>(num("scenes_selected_this_run")), seconds);
-    text += line;
+    text += name + ": selected " + pairs + " in " + scenes + " (" +
+            gt::Counted(num("scenes_selected_this_run"), "scene") +
+            " this run); nothing written yet: run --stage write" + took;
   } else {
     const int64_t written = num("samples_written_this_run");
-    std::snprintf(line, sizeof(line), "%s: %lld pairs in %lld scenes, %lld shards", name.c_str(),
-                  static_cast<long long>(num("samples")), static_cast<long long>(num("scenes")),
-                  static_cast<long long>(num("shards_planned")));
-    text += line;
+    text +=
+        name + ": " + pairs + " in " + scenes + ", " + gt::Counted(num("shards_planned"), "shard");
     if (num("samples") == 0) {
       text += "; no pair passed the selection (the drops below say why)";
     } else if (written == 0) {
       text += "; nothing to write: every shard of this task was complete already";
     } else {
-      std::snprintf(line, sizeof(line), "; wrote %lld pairs, %lld shards, %s",
-                    static_cast<long long>(written),
-                    static_cast<long long>(num("shards_written_this_run")),
-                    HumanBytes(static_cast<double>(num("bytes_written"))).c_str());
-      text += line;
+      text += "; wrote " + gt::Counted(written, "pair") + ", " +
+              gt::Counted(num("shards_written_this_run"), "shard") + ", " +
+              HumanBytes(static_cast<double>(num("bytes_written")));
     }
-    std::snprintf(line, sizeof(line), " (%.1f s)\n", seconds);
-    text += line;
+    text += took;
   }
   text += DropsText(s);
   if (!s.value("complete", false) && !s.value("dry_run", false) &&

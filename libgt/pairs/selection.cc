@@ -105,6 +105,7 @@ ScanResult ScanFrames(const Scene& scene, const FrameScanOptions& options, Depth
   const size_t n = scene.frames.size();
   std::vector<int> status(n, 0);  // 0 kept, 1 stride, 2 unusable, 3 read error, 4 low depth
   std::vector<double> medians(n, 0.0);
+  std::vector<std::string> read_errors(n);  // per frame, for status 3
   // The depth files are read ahead (io::PrefetchDepth) kScanPrefetch scanned frames in
   // advance, so that a file missing from the page cache is read from disk while the
   // threads work on the frames before it, instead of stalling one of them.
@@ -126,8 +127,9 @@ ScanResult ScanFrames(const Scene& scene, const FrameScanOptions& options, Depth
     std::shared_ptr<const DepthImage> depth;
     try {
       depth = cache->Get(i);
-    } catch (const InputError&) {
+    } catch (const InputError& e) {
       status[i] = 3;
+      read_errors[i] = e.what();
       return;
     }
     std::vector<float> valid;
@@ -152,6 +154,9 @@ ScanResult ScanFrames(const Scene& scene, const FrameScanOptions& options, Depth
       result.median_depth_m[i] = medians[i];
     } else {
       ++result.drops[kReasons[status[i]]];
+      if (status[i] == 3 && result.first_read_error.empty()) {
+        result.first_read_error = scene.frames[i].id + ": " + read_errors[i];
+      }
     }
   }
   return result;

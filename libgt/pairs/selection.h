@@ -88,8 +88,7 @@ class DepthCache {
  public:
   // Maps from `depth.source` (render/frame_depth.h; the sensor's by default).
   DepthCache(const Scene& scene, int width, int height,
-             size_t max_bytes = kDefaultDepthCacheMb << 20,
-             render::FrameDepthOptions depth = {});
+             size_t max_bytes = kDefaultDepthCacheMb << 20, render::FrameDepthOptions depth = {});
   std::shared_ptr<const DepthImage> Get(size_t frame_index);
   // Whether the frame's map is held now (a hint: another thread may add or drop it).
   bool Contains(size_t frame_index) const;
@@ -114,8 +113,8 @@ class DepthCache {
 };
 
 struct FrameScanOptions {
-  int frame_stride = 1;                   // keep frames at positions 0, s, 2s, ... of the scene
-  double min_valid_depth_fraction = 0.1;  // at the working resolution
+  int frame_stride = 1;                    // keep frames at positions 0, s, 2s, ... of the scene
+  double min_valid_depth_fraction = 0.1;   // at the working resolution
   double min_depth_m = kDefaultMinDepthM;  // validity range (depth.h IsValidDepth)
   double max_depth_m = kDefaultMaxDepthM;
 
@@ -128,6 +127,9 @@ struct ScanResult {
   std::map<size_t, double> median_depth_m;  // per kept frame: median valid depth
   int64_t frames_total = 0;
   DropCounts drops;  // "scan.stride", "scan.unusable", "scan.read_error", "scan.low_valid_depth"
+  // The first frame (in scene order) whose depth could not be read: "<frame id>: <error>",
+  // or "" (so that a missing mesh or file is named, not only counted).
+  std::string first_read_error;
 };
 // Decodes each frame after the stride (through the cache). A frame whose depth cannot be
 // read is skipped and counted, never fatal.

@@ -126,6 +126,23 @@ std::map<std::string, SceneSelection> SelectStage(const Recipe& recipe,
   return selections;
 }
 
+// Whether every export the recipe asks for is in out_dir: gluefactory/ and dust3r/ by their
+// export.json, loftr/ as a folder that is not empty (its files depend on the kind).
+bool RequestedExportsPresent(const Recipe& recipe, const std::string& out_dir) {
+  if (recipe.gluefactory_export && !io::FileExists(out_dir + "/gluefactory/export.json")) {
+    return false;
+  }
+  if (recipe.dust3r_export && !io::FileExists(out_dir + "/dust3r/export.json")) return false;
+  if (recipe.loftr_export != LoftrExportKind::kNone) {
+    std::error_code ec;
+    if (!std::filesystem::is_directory(out_dir + "/loftr", ec) ||
+        std::filesystem::is_empty(out_dir + "/loftr", ec)) {
+      return false;
+    }
+  }
+  return true;
+}
+
 // Counts, drops and the distribution of the selected pairs' scores, over every completed
 // scene.
 void AddSelectionStatistics(const Recipe& recipe,
@@ -134,14 +151,20 @@ void AddSelectionStatistics(const Recipe& recipe,
   json counts = {{"frames_total", 0},  {"frames_kept", 0}, {"candidates", 0},
                  {"after_pruning", 0}, {"scored", 0},      {"selected", 0}};
   pairs::DropCounts drops;
+  json examples = json::object();  // per reason, the first scene's example (scene order)
   json per_scene = json::object();
   for (const auto& [scene, sel] : selections) {
     for (auto& [k, v] : counts.items()) v = v.get<int64_t>() + sel.stats.value(k, int64_t{0});
     for (const auto& [k, v] : sel.stats.at("drops").items()) drops[k] += v.get<int64_t>();
+    const json scene_examples = sel.stats.value("drop_examples", json::object());
+    for (const auto& [k, v] : scene_examples.items()) {
+      if (!examples.contains(k)) examples[k] = v;
+    }
     per_scene[scene] = sel.stats.at("selected");
   }
   (*summary)["counts"] = counts;
   (*summary)["drops"] = drops;
+  (*summary)["drop_examples"] = examples;
   (*summary)["pairs_per_scene"] = per_scene;
   (*summary)["scenes_complete"] = static_cast<int64_t>(selections.size());
   std::vector<double> overlaps, occlusions;
@@ -309,9 +332,11 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
   summary["complete"] = complete;
   std::optional<io::FolderLock> lock;
   if (complete) lock.emplace(options.out_dir);
+  // An export folder deleted since is written again.
   const bool current = written.shards_written == 0 &&
                        io::FileExists(options.out_dir + "/index.json") &&
-                       io::FileExists(options.out_dir + "/summary.json");
+                       io::FileExists(options.out_dir + "/summary.json") &&
+                       RequestedExportsPresent(recipe, options.out_dir);
   if (complete && !current) {
     const auto t_index = Clock::now();
     PublishIndices(recipe, *reader, options, all);

@@ -250,6 +250,7 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
   SceneSelection out;
   out.scene = scene_name;
   DropCounts drops;
+  json drop_examples = json::object();  // reason -> "<scene>/<frame id>: <error>" (the first)
   std::vector<CandidatePair> candidates, pruned;
   int64_t frames_kept = 0;
   // A recipe that stores images needs both frames' colour: frames without it are skipped
@@ -292,6 +293,9 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
   } else {
     const ScanResult scanned = ScanRecipeFrames(r, scene, labels, cache);
     AddCounts(scanned.drops, &drops);
+    if (!scanned.first_read_error.empty()) {
+      drop_examples["scan.read_error"] = scene_name + "/" + scanned.first_read_error;
+    }
     frames_kept = static_cast<int64_t>(scanned.kept.size());
     candidates = GenerateCandidates(scanned.kept, r.selection.max_frame_gap);
     pruned = PruneCandidates(scene, cams, candidates, scanned.median_depth_m, r.selection.pruning,
@@ -326,6 +330,7 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
                {"scored", static_cast<int64_t>(scored.size())},
                {"selected", static_cast<int64_t>(out.pairs.size())},
                {"drops", drops},
+               {"drop_examples", drop_examples},
                {"score_stride", r.selection.score_stride},
                {"options_digest", r.Digest()}};
   return out;

@@ -219,6 +219,14 @@ def main():
     for row, p in zip(t["rel_pose"], lines):
         assert np.allclose(row.reshape(3, 4), np.array(p["T_0to1"])[:3], atol=1e-5)
     assert [int(x) for x in t["name"][:, 2]] == [p["frame0"]["number"] for p in lines]
+    # Export folders deleted after a complete build are written again by a re-run (it
+    # printed "nothing to write" and left them missing), with the same bytes.
+    exported = {f: file_bytes(out, f) for f in ("loftr/test.npz", "gluefactory/export.json")}
+    shutil.rmtree(os.path.join(out, "loftr"))
+    shutil.rmtree(os.path.join(out, "gluefactory"))
+    common.occgt("build", recipe, "--out", out)
+    for f, data in exported.items():
+        assert file_bytes(out, f) == data, f"{f} not restored as it was"
 
     # LoFTR train export (ScanNet style) of the same recipe: names and overlap scores.
     with open(recipe) as f:
@@ -330,6 +338,19 @@ def main():
     r = common.occgt("build", none_recipe, "--out", out_n)
     assert "no pair passed the selection" in r.stdout, r.stdout
     common.occgt("validate", out_n)
+    # Frames whose depth cannot be read are counted and the first error is named: a mesh
+    # depth source without a mesh (was only "scan.read_error 32").
+    r = common.occgt("build", "--json", recipe, "--out", os.path.join(root, "nomesh"),
+                     "--depth-source", "mesh", "--dry-run")
+    s = json.loads(r.stdout)
+    validate(s, "summary.schema.json")
+    assert s["samples"] == 0 and s["drops"]["scan.read_error"] == 32, s["drops"]
+    assert s["drop_examples"] == {"scan.read_error": "synth_000/000000: synth_000: depth source "
+                                  "'mesh' needs a mesh, and the scene has none "
+                                  "(dataset.mesh_path)"}, s["drop_examples"]
+    r = common.occgt("build", recipe, "--out", os.path.join(root, "nomesh"), "--depth-source",
+                     "mesh", "--dry-run")
+    assert "  first scan.read_error: synth_000/000000: " in r.stdout, r.stdout
 
     # Bad recipes: one line naming the file and field, exit 1, nothing created.
     bad_dir = common.scratch("build_demo_bad")
