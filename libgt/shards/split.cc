@@ -531,10 +531,16 @@ ShardIndex ReadShardIndex(const std::string& dir) {
   }
   const json& list = doc["shardlist"];
   index.shards.resize(list.size());
+  std::map<std::string, size_t> entry_of_url;  // a shard listed twice was read twice
   for (size_t i = 0; i < list.size(); ++i) {
     if (const std::string problem = ParseIndexEntry(list[i], i, &index.shards[i]);
         !problem.empty()) {
       throw InputError(index.path, problem);
+    }
+    if (const auto [it, inserted] = entry_of_url.emplace(index.shards[i].url, i); !inserted) {
+      throw InputError(index.path, "shardlist[" + std::to_string(i) + "].url: \"" +
+                                       index.shards[i].url + "\" repeats shardlist[" +
+                                       std::to_string(it->second) + "]");
     }
   }
   return index;
@@ -938,8 +944,17 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
   // Then in shard order, the same whatever the thread count: key -> shard url, for the
   // repeat and the pairs.jsonl checks.
   std::map<std::string, std::string> shard_of_key;
+  std::map<std::string, size_t> entry_of_url;
   int64_t total = 0;
-  for (ShardProblems& c : checked) {
+  for (size_t i = 0; i < checked.size(); ++i) {
+    ShardProblems& c = checked[i];
+    if (!c.url.empty()) {
+      if (const auto [it, inserted] = entry_of_url.emplace(c.url, i); !inserted) {
+        problem(index_path, "shardlist[" + std::to_string(i) + "].url: \"" + c.url +
+                                "\" repeats shardlist[" + std::to_string(it->second) + "]");
+        continue;  // its samples are the first entry's, not repeats of their own
+      }
+    }
     problems.insert(problems.end(), std::make_move_iterator(c.problems.begin()),
                     std::make_move_iterator(c.problems.end()));
     if (!c.read) continue;

@@ -517,6 +517,9 @@ TEST(Split, ReadShardIndexGivesTheMergedShardsAndNamesBadEntries) {
       {[](json& j) { j["shardlist"][0]["filesize"] = 1.5; },
        "shardlist[0].filesize: expected an integer >= 0"},
       {[](json& j) { j["shardlist"][0]["md5sum"] = 7; }, "shardlist[0].md5sum: expected a string"},
+      // A shard listed twice: its samples were read twice (ShardDataset gave 32 of 24).
+      {[](json& j) { j["shardlist"][2] = j["shardlist"][0]; },
+       "shardlist[2].url: \"train-000000.tar\" repeats shardlist[0]"},
       {[](json& j) { j["shardlist"][1] = "train-000001.tar"; },
        "shardlist[1]: expected an object {url, nsamples, md5sum, filesize}"},
       {[](json& j) { j["name"] = 1; }, "name: expected a string"},
@@ -547,6 +550,17 @@ TEST(Split, ReadShardIndexGivesTheMergedShardsAndNamesBadEntries) {
                              "the split's folder (the folder holding index.json)");
   EXPECT_EQ(problems[1], index.path + ": shardlist[2].md5sum: missing");
   EXPECT_EQ(problems[2], dir + "/train-000001.tar: shard not listed in index.json");
+  // A shard listed twice: one line, not one "repeats" line per sample.
+  edited = good;
+  edited["shardlist"].push_back(good["shardlist"][1]);
+  io::WriteFileAtomic(index.path, edited.dump(2));
+  const std::vector<std::string> twice =
+      ValidateSplit(dir, ValidateOptions{PermissiveSchemasDir()});
+  ASSERT_FALSE(twice.empty());
+  EXPECT_EQ(twice[0], index.path + ": shardlist[" + std::to_string(good["shardlist"].size()) +
+                          "].url: \"train-000001.tar\" repeats shardlist[1]");
+  for (const std::string& p : twice) EXPECT_EQ(p.find("repeats\n"), std::string::npos) << p;
+  for (const std::string& p : twice) EXPECT_EQ(p.find(": sample "), std::string::npos) << p;
   fs::remove(index.path);
   try {
     ReadShardIndex(dir);
