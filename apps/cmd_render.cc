@@ -17,6 +17,7 @@
 
 #include "apps/commands.h"
 #include "apps/job_flags.h"
+#include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/io/atomic_file.h"
@@ -42,6 +43,9 @@ struct RenderArgs {
 
 std::vector<std::string> SplitComma(const std::string& text) {
   std::vector<std::string> out;
+  if (text.empty() || text.back() == ',') {  // getline drops a trailing empty item
+    throw gt::InputError("--frames", "expected ID,ID,... without empty ids");
+  }
   std::stringstream in(text);
   std::string item;
   while (std::getline(in, item, ',')) {
@@ -53,8 +57,13 @@ std::vector<std::string> SplitComma(const std::string& text) {
 
 void RunRender(const RenderArgs& args) {
   std::string error;
-  if (!args.depth.Check(&error))
-    throw gt::InputError("--near-m/--far-m/--abs-tol-m/--rel-tol", error);
+  if (!args.depth.Check(&error)) {
+    ThrowOptionsError(error, "render options",
+                      {{"near_m", "--near-m", true},
+                       {"far_m", "--far-m", true},
+                       {"abs_tol_m", "--abs-tol-m", true},
+                       {"rel_tol", "--rel-tol", true}});
+  }
   if (args.stride < 1) throw gt::InputError("--stride", "expected an integer >= 1");
   const gt::DatasetFormat format = gt::ParseDatasetFormat(args.format, "--format");
   std::optional<gt::truth::Resolution> resolution;
@@ -85,7 +94,7 @@ void RunRender(const RenderArgs& args) {
   const auto renderer = gt::render::SharedMeshRenderer(scene.mesh_path);
   std::error_code ec;
   std::filesystem::create_directories(args.out, ec);
-  if (ec) throw gt::InputError("--out", "cannot create the folder: " + ec.message());
+  if (ec) throw gt::InputError(args.out, "cannot create the folder: " + ec.message());
   gt::render::RenderOptions options;
   options.near_m = args.depth.near_m;
   options.far_m = args.depth.far_m;
@@ -180,9 +189,11 @@ void AddRenderCommand(CLI::App& app) {
   cmd->add_option("--scene", args->scene, "scene name (see occgt scan)")->required();
   cmd->add_option("--mesh", args->mesh,
                   "the scene's mesh (PLY, in the poses' world frame; default: the dataset's own)");
-  cmd->add_option("--frames", args->frames, "frame ids ID,ID,... (default: every usable frame)");
+  auto* frames = cmd->add_option("--frames", args->frames,
+                                 "frame ids ID,ID,... (default: every usable frame)");
   cmd->add_option("--stride", args->stride, "without --frames: every n-th usable frame")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->excludes(frames);
   cmd->add_option("--resolution", args->resolution, "WxH (default: the depth camera's size)");
   cmd->add_option("--near-m", args->depth.near_m, "nearest depth rendered (m)")
       ->capture_default_str();

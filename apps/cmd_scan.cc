@@ -14,6 +14,7 @@
 
 #include "apps/commands.h"
 #include "apps/job_flags.h"
+#include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/datasets/scan.h"
@@ -196,7 +197,10 @@ void RunScan(const ScanArgs& args) {
   }
   if (args.mesh_stride < 1) throw gt::InputError("--mesh-stride", "expected an integer >= 1");
   std::string error;
-  if (!args.tolerance.Check(&error)) throw gt::InputError("--abs-tol-m/--rel-tol", error);
+  if (!args.tolerance.Check(&error)) {
+    ThrowOptionsError(error, "scan options",
+                      {{"abs_tol_m", "--abs-tol-m", true}, {"rel_tol", "--rel-tol", true}});
+  }
   std::vector<gt::datasets::SceneSummary> summaries;
   std::vector<std::optional<MeshAgreement>> agreements;
   for (const auto& name : names) {

@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
   // the process and leaves its *.tmp behind. Ignored, the write fails with EFBIG instead:
   // the writers remove their temporary file and report one line naming it.
   std::signal(SIGXFSZ, SIG_IGN);
-  CLI::App app{"occgt: ground truth and datasets for occlusion-aware image matching"};
+  CLI::App app{"occgt: ground truth and datasets for occlusion-aware image matching", "occgt"};
   app.set_version_flag("--version", std::string("occgt ") + gt::kVersion);
   app.require_subcommand(1);
   occgt::AddScanCommand(app);

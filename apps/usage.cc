@@ -179,9 +179,27 @@ std::optional<int> HandleHelpOrUnknownCommand(CLI::App& app, const std::vector<s
     try {
       sub = app.get_subcommand(args[1]);
     } catch (const CLI::OptionNotFound&) {
-      return UsageError("help " + args[1] + ": unknown command" + Nearest(args[1], names));
+      const std::vector<std::string> commands(names.begin() + 1, names.end());  // not "help"
+      return UsageError("help " + args[1] + ": unknown command" + Nearest(args[1], commands));
     }
-    std::cout << sub->help();
+    // `occgt help inspect pair`: the nested command's own help.
+    std::string path = "occgt " + args[1];
+    for (size_t i = 2; i < args.size(); ++i) {
+      std::vector<std::string> nested;
+      CLI::App* next = nullptr;
+      for (CLI::App* child : sub->get_subcommands({})) {
+        nested.push_back(child->get_name());
+        if (child->get_name() == args[i]) next = child;
+      }
+      if (next == nullptr) {
+        return UsageError("help " + args[i] + ": unknown command of `" + path + "`" +
+                          Nearest(args[i], nested));
+      }
+      sub = next;
+      path += " " + args[i];
+    }
+    // "Usage: occgt inspect pair [OPTIONS]", as `occgt inspect pair --help` prints it.
+    std::cout << sub->help(path.substr(0, path.rfind(' ')));
     return 0;
   }
   if (std::find(names.begin(), names.end(), args[0]) != names.end()) return std::nullopt;

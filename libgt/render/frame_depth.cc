@@ -33,9 +33,14 @@ DepthSourceMode ParseDepthSourceMode(std::string_view name, const std::string& f
 }
 
 bool FusedDepthOptions::Check(std::string* error) const {
-  if (!std::isfinite(abs_tol_m) || !std::isfinite(rel_tol) || abs_tol_m < 0 || rel_tol < 0) {
-    *error = "fused depth: expected finite abs_tol_m >= 0 and rel_tol >= 0";
-    return false;
+  // Each message names its field first (the CLI names the flag from it).
+  for (const auto& [name, value] : {std::pair<const char*, double>{"abs_tol_m", abs_tol_m},
+                                    std::pair<const char*, double>{"rel_tol", rel_tol}}) {
+    if (!std::isfinite(value) || value < 0) {
+      *error = std::string(name) + ": expected a finite number >= 0 (fused depth), got " +
+               std::to_string(value);
+      return false;
+    }
   }
   return true;
 }
@@ -151,12 +156,14 @@ std::shared_ptr<const MeshRenderer> SharedMeshRenderer(const std::string& path) 
     if (it != recent.end()) recent.erase(it);
     recent.push_front(entry);
     if (recent.size() > kKeep) recent.pop_back();
-    for (auto c = cache.begin(); c != cache.end();) c = c->second.expired() ? cache.erase(c) : std::next(c);
+    for (auto c = cache.begin(); c != cache.end();)
+      c = c->second.expired() ? cache.erase(c) : std::next(c);
   }
   std::call_once(entry->once, [&] {
     entry->renderer = std::make_shared<const MeshRenderer>(ReadPlyMesh(path));
   });
-  if (!entry->renderer) throw InputError(path, "the mesh could not be read before (see the first error)");
+  if (!entry->renderer)
+    throw InputError(path, "the mesh could not be read before (see the first error)");
   return entry->renderer;
 }
 

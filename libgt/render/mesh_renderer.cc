@@ -31,9 +31,14 @@ bool MemoryMonitor(void* user, ssize_t bytes, bool /*post*/) {
 }  // namespace
 
 bool RenderOptions::Check(std::string* error) const {
-  if (!std::isfinite(near_m) || !std::isfinite(far_m) || near_m < 0 || far_m <= near_m) {
-    *error = "render: expected finite 0 <= near_m < far_m, got near_m " + std::to_string(near_m) +
-             ", far_m " + std::to_string(far_m);
+  // Each message names its field first (the CLI names the flag from it).
+  if (!std::isfinite(near_m) || near_m < 0) {
+    *error = "near_m: expected a finite number >= 0 (render), got " + std::to_string(near_m);
+    return false;
+  }
+  if (!std::isfinite(far_m) || far_m <= near_m) {
+    *error = "far_m: expected a finite number > near_m " + std::to_string(near_m) +
+             " (render), got " + std::to_string(far_m);
     return false;
   }
   return true;
