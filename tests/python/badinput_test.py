@@ -213,6 +213,9 @@ class BadInput(unittest.TestCase):
         self.check(r"near_m must be finite and > 0", near_m=float("inf"), occupancy=True)
         self.check(r"voxel_m must be > 0", voxel_m=0.0, occupancy=True)
         self.check(r"max_range_m must be finite", max_range_m=float("inf"), occupancy=True)
+        # far_m is the ray range when max_range_m is not given: the message says so.
+        self.check(r"max_range_m must be finite.* \(max_range_m is far_m when not given: "
+                   r"far_m=nan\)$", far_m=float("nan"), occupancy=True)
         # A wrong Python type is pybind11's TypeError (not a crash either).
         with self.assertRaises(TypeError):
             occgt.pair_ground_truth(**good(), stride="8")  # type: ignore[arg-type]
