@@ -246,6 +246,11 @@ PairData PairFromFields(const std::map<std::string, std::string>& fields, const 
 
   cv::Mat img0 = image0.empty() ? FieldImage(fields, "image0", source) : image0;
   cv::Mat img1 = image1.empty() ? FieldImage(fields, "image1", source) : image1;
+  if (img0.empty() != img1.empty()) {  // part of a group: an error, not a silent drop
+    const std::string missing = img0.empty() ? "image0" : "image1";
+    throw InputError(source,
+                     "missing field " + missing + ".png (or .jpg): the other image is there");
+  }
   p.has_images = !img0.empty() && !img1.empty();
   p.image0 = PrepareImage(img0, p.width, p.height);
   p.image1 = PrepareImage(img1, p.labels10.width, p.labels10.height);
