@@ -139,6 +139,11 @@ Eigen::MatrixXd RealMatrix(py::handle obj, int rows, int cols, const std::string
 }  // namespace
 
 py::array CheckedDepthArray(py::handle obj, const std::string& argument) {
+  // numpy.asarray drops a masked array's mask: its masked pixels would count as valid depth.
+  if (py::isinstance(obj, py::module_::import("numpy.ma").attr("MaskedArray"))) {
+    ThrowValue(argument,
+               "a masked array (numpy.ma) would lose its mask: pass depth.filled(0) (0 = invalid)");
+  }
   py::array a = AsArray(obj, argument);
   if (!IsFloat32Or64(a)) {
     ThrowValue(argument,

@@ -77,7 +77,8 @@ std::string DtypeText(const py::array& a);
 // Depth map [H, W] float32 or float64 (any strides; float64 is rounded to float32), planar
 // metres; 2 <= H, W <= 8192 (truth::Resolution). One copy into the DepthImage.
 // A depth map argument as a NumPy array, checked: dtype float32 or float64 (planar metres),
-// shape (H, W) with 2 <= H, W <= 8192; ValueError naming the argument otherwise.
+// shape (H, W) with 2 <= H, W <= 8192, not a numpy.ma masked array (its mask would be
+// dropped); ValueError naming the argument otherwise.
 py::array CheckedDepthArray(py::handle obj, const std::string& argument);
 std::shared_ptr<const gt::DepthImage> DepthFromArray(py::handle obj, const std::string& argument);
 // K [3, 3] (float or integer) = [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] for an image of

@@ -213,6 +213,10 @@ class BadInput(unittest.TestCase):
         self.check(r"near_m must be finite and > 0", near_m=float("inf"), occupancy=True)
         self.check(r"voxel_m must be > 0", voxel_m=0.0, occupancy=True)
         self.check(r"max_range_m must be finite", max_range_m=float("inf"), occupancy=True)
+        # A masked array's mask would be dropped by numpy.asarray (masked pixels valid).
+        masked = np.ma.masked_less(good()["depth0"], 10.0)
+        self.check(r"^depth0: a masked array \(numpy\.ma\) would lose its mask: pass "
+                   r"depth\.filled\(0\)", depth0=masked)
         # far_m is the ray range when max_range_m is not given: the message says so.
         self.check(r"max_range_m must be finite.* \(max_range_m is far_m when not given: "
                    r"far_m=nan\)$", far_m=float("nan"), occupancy=True)

@@ -288,6 +288,12 @@ class Indices(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, "^" + path + r":name\[1\]: expected scene, "
                                     r"sub-scene and frame numbers >= 0, got \[-1, 0, 3, 4\]"):
             read_pair_index(path)
+        # uint64 names beyond int64 stay what they are (they wrapped to negative numbers).
+        path = os.path.join(out, "uint64.npz")
+        np.savez(path, name=np.array([[2**63, 0, 2**63 + 1, 4]], np.uint64))
+        ref = read_pair_index(path)[0]
+        self.assertEqual((ref.scene, ref.number0, ref.number1),
+                         (f"scene{2**63:04d}_00", 2**63 + 1, 4))
 
     def test_refs_root_index_and_pickle(self) -> None:
         """A list of tuples instead of PairRef, a missing root (the readers open it lazily:

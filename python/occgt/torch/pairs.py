@@ -83,7 +83,7 @@ def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> List[PairRef]:
         names_file = _scene_names_file(path)
         scene_names = _read_lines(names_file) if names_file else None
     refs = []
-    for r, (s, sub, n0, n1) in enumerate(name.astype(np.int64).tolist()):
+    for r, (s, sub, n0, n1) in enumerate(name.tolist()):  # Python ints: uint64 stays exact
         if scene_names is not None:
             if not 0 <= s < len(scene_names) or sub != 0:
                 raise ValueError(f"{path}:name[{r}]: scene ({s}, {sub}) is not in the scene list "
