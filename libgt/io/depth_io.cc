@@ -427,7 +427,8 @@ DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected
   if (source.path.empty()) {
     throw InputError("depth",
                      "the frame has no depth file (ScanNet++ DSLR images have no "
-                     "sensor depth: it is rendered from the scene's mesh)");
+                     "sensor depth: render it from the scene's mesh with --depth-source mesh, "
+                     "dataset.depth_source: mesh or depth_source=\"mesh\")");
   }
   if (source.format == DepthFormat::kSensZlib || source.format == DepthFormat::kSensRaw ||
       source.format == DepthFormat::kIphoneBinRecord) {

@@ -234,6 +234,9 @@ def main():
     check(r.returncode == 1, f"validate exit code {r.returncode}")
     check("train-000001.tar: md5" in r.stdout, f"flipped byte not reported:\n{r.stdout}")
     check("train-000002.tar: missing shard" in r.stdout, f"missing shard not reported:\n{r.stdout}")
+    # One line for the missing shard, not one more per pairs.jsonl line naming it.
+    check("is not in shard" not in r.stdout and " lines for " not in r.stdout,
+          f"lines of a shard already reported:\n{r.stdout}")
 
     # LoFTR export read with NumPy.
     loftr = os.path.join(out, "loftr")
