@@ -36,6 +36,10 @@ struct InspectPairArgs {
   uint64_t seed = 0;
   double alpha = 0.55;
   int slice_row = -1;
+  // The flags given that only a computed pair uses (a shard sample or a pair folder holds
+  // its own resolution, labels and occupancy): refused with --shard or --pair-dir.
+  std::vector<std::string> computed_only_given;
+  bool images_given = false;  // --image0/--image1: --pair-dir only
 };
 
 struct InspectSplitArgs {
@@ -59,6 +63,16 @@ void RunInspectPair(const InspectPairArgs& a) {
     throw gt::InputError("--shard/--pair-dir/--root",
                          "expected exactly one source: --shard/--key, --pair-dir, or "
                          "--root/--format/--scene/--frames");
+  }
+  const bool read_source = !a.shard.empty() || !a.key.empty() || !a.pair_dir.empty();
+  if (read_source && !a.computed_only_given.empty()) {
+    throw gt::InputError(a.computed_only_given.front(),
+                         "only for a pair computed here (--root/--scene/--frames): the pair of "
+                         "--shard or --pair-dir has its own (it would be ignored)");
+  }
+  if (a.pair_dir.empty() && a.images_given) {
+    throw gt::InputError(a.image0.empty() ? "--image1" : "--image0",
+                         "only with --pair-dir (it would be ignored)");
   }
   if (a.image0.empty() != a.image1.empty()) {  // one colour image alone would be ignored
     throw gt::InputError(a.image0.empty() ? "--image0" : "--image1",
@@ -202,7 +216,15 @@ void AddInspectCommand(CLI::App& app) {
   pair->add_option("--slice-row", pa->slice_row,
                    "half-grid row of the occupancy slice (-1: middle)")
       ->capture_default_str();
-  pair->callback([pa] { RunInspectPair(*pa); });
+  pair->callback([pa, pair] {
+    for (const char* flag :
+         {"--recipe", "--format", "--resolution", "--min-depth-m", "--max-depth-m",
+          "--depth-source", "--device", "--mesh", "--preset", "--no-occupancy"}) {
+      if (pair->count(flag) > 0) pa->computed_only_given.push_back(flag);
+    }
+    pa->images_given = pair->count("--image0") + pair->count("--image1") > 0;
+    RunInspectPair(*pa);
+  });
 
   auto sa = std::make_shared<InspectSplitArgs>();
   auto* split = cmd->add_subcommand(
