@@ -320,6 +320,20 @@ class Indices(unittest.TestCase):
             with self.subTest(kwargs=kwargs), self.assertRaisesRegex(error, pattern):
                 PairIndexDataset(split, data, "generic", **kwargs)
         self.assertEqual(PairIndexDataset(split, data, "generic", width=np.int64(80)).width, 80)
+        # A pairs.jsonl line whose frame number is another frame's than its id: an error
+        # naming both (the id was used silently).
+        edited = os.path.join(common.scratch("pd_number"), "pairs.jsonl")
+        with open(os.path.join(split, "pairs.jsonl")) as f:
+            line = json.loads(f.readline())
+        line["frame0"]["number"] = line["frame1"]["number"]
+        with open(edited, "w") as f:
+            f.write(json.dumps(line) + "\n")
+        with self.assertRaisesRegex(ValueError, r"^pair 0: frame id %s and number %d do not name "
+                                    r"the same frame of scene %s \(number %d is frame %s\)$" % (
+                                        line["frame0"]["id"], line["frame1"]["number"],
+                                        line["scene"], line["frame1"]["number"],
+                                        line["frame1"]["id"])):
+            PairIndexDataset(edited, data, "generic", width=80, height=60)[0]
         ds = PairIndexDataset(split, data, "generic", width=80, height=60, occupancy="words",
                               scope="scene:4")
         with self.assertRaisesRegex(TypeError, r"^index: expected an int, got float$"):

@@ -591,6 +591,12 @@ class ShardDatasetTest(unittest.TestCase):
             ds[1.5]  # type: ignore[index]
         self.assertEqual(ds[np.int64(2)]["pair_id"], 2)
         self.assertEqual(ds[torch.tensor(3)]["pair_id"], 3)  # type: ignore[index]
+        # Flags are bools and the name a str, as TupleShardDataset's ("no" was truthy).
+        for kwargs, pattern in [({"images": "no"}, r"^images: expected a bool, got str$"),
+                                ({"labels": 0}, r"^labels: expected a bool, got int$"),
+                                ({"dataset_name": 5}, r"^dataset_name: expected a str, got int$")]:
+            with self.subTest(kwargs=kwargs), self.assertRaisesRegex(TypeError, pattern):
+                ShardDataset(self.full, **kwargs)  # type: ignore[arg-type]
 
     def test_dense_only_compressed_split(self) -> None:
         """occupancy encoding: dense with sample.compression: deflate (the default) stores

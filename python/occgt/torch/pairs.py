@@ -332,6 +332,14 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
 
         def resolve(frame_id: Optional[str], number: Optional[int]) -> str:
             if frame_id is not None:
+                # A line naming a frame by id and number: both must be the same frame (an
+                # edited line used the id silently).
+                if number is not None and by_number.get(number) != frame_id:
+                    other = by_number.get(number)
+                    raise ValueError(f"pair {index}: frame id {frame_id} and number {number} "
+                                     f"do not name the same frame of scene {ref.scene} (number "
+                                     f"{number} is " + (f"frame {other})" if other is not None
+                                                        else "no frame of it)"))
                 return frame_id
             if number not in by_number:
                 raise ValueError(f"pair {index}: scene {ref.scene} has no frame number {number}")

@@ -302,6 +302,13 @@ class ShardDataset(_ShardSplit):
         if occupancy not in _OCCUPANCY_MODES:
             raise ValueError(f"occupancy: expected one of {', '.join(_OCCUPANCY_MODES)}, got "
                              f"{occupancy!r}")
+        # As TupleShardDataset: a str such as "no" is not a bool (it was truthy).
+        for name, flag in (("images", images), ("color", color), ("depth", depth),
+                           ("labels", labels)):
+            if not isinstance(flag, (bool, np.bool_)):
+                raise TypeError(f"{name}: expected a bool, got {type(flag).__name__}")
+        if not isinstance(dataset_name, str):
+            raise TypeError(f"dataset_name: expected a str, got {type(dataset_name).__name__}")
         self.occupancy = occupancy
         self.images = bool(images)
         self.color = bool(color)
