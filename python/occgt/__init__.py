@@ -575,6 +575,11 @@ def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"
     ``fused_depth``: the tolerances of "fused" (``Scene.load``; a recipe's
     ``dataset.fused_depth``).
     """
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene: expected an occgt.Scene (Dataset.scene), got "
+                        f"{type(scene).__name__}")
+    if not isinstance(scope, str):
+        raise TypeError(f"scope: expected a str, got {type(scope).__name__}")
     if scope != "pair" and not options.get("occupancy"):
         raise ValueError(f"scope: {scope!r} is the frames fused for occupancy, which is off; "
                          f"pass occupancy=True")

@@ -326,7 +326,11 @@ class BadInput(unittest.TestCase):
                 (lambda: scene.load_color(None), TypeError, r"^frame_id: expected a str"),
                 (lambda: scene.load_color(frame, 64, 1.5), TypeError, r"^height: expected an int"),
                 (lambda: scene.fuse(frame, 1), TypeError, r"^id1: expected a str, got int$"),
-                (lambda: scene.fuse(frame, frame, scope=None), TypeError, r"^scope: expected a str")]:
+                (lambda: scene.fuse(frame, frame, scope=None), TypeError, r"^scope: expected a str"),
+                (lambda: occgt.pair_from_scene(None, frame, frame),  # type: ignore[arg-type]
+                 TypeError, r"^scene: expected an occgt.Scene \(Dataset.scene\), got NoneType$"),
+                (lambda: occgt.pair_from_scene(scene, frame, frame, scope=None),  # type: ignore
+                 TypeError, r"^scope: expected a str, got NoneType$")]:
             with self.subTest(pattern=pattern), self.assertRaisesRegex(error, pattern):
                 call()
         depth, _, _ = scene.load(frame, np.int64(64), np.int32(48))
