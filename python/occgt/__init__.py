@@ -591,6 +591,10 @@ def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"
     depth1, K1, world_from_cam1 = scene.load(id1, width, height, depth_source=depth_source,
                                              fused_depth=fused_depth)
     options.setdefault("dataset_depth_range", (scene.min_depth_m, scene.max_depth_m))
+    scope_map = options.get("scope_map")
+    if isinstance(scope_map, ScopeMap) and scope_map.scene != scene.name:
+        raise ValueError(f"scope_map: fused from scene {scope_map.scene}; expected scene "
+                         f"{scene.name} (the pair's)")
     if scope != "pair" and options.get("occupancy") and "scope_map" not in options:
         options["scope_map"] = fuse_scope(scene, id0, id1, width, height, scope, preset, options)
     return pair_ground_truth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1, preset,

@@ -207,6 +207,17 @@ py::dict PairGroundTruth(py::handle depth0, py::handle depth1, py::handle K0, py
       problem << "fused with voxel_m " << scope->voxel_m << ", max_range_m " << scope->max_range_m
               << "; expected the same here, got voxel_m " << options.fusion.voxel_m
               << ", max_range_m " << options.fusion.max_range_m;
+    // The depth maps it fused were of this size and depth range (a map of other frames' size
+    // or range was used silently).
+    else if (scope->width != f0.depth->width || scope->height != f0.depth->height)
+      problem << "fused at " << scope->width << "x" << scope->height
+              << "; expected the size of depth0 here, " << f0.depth->width << "x"
+              << f0.depth->height;
+    else if (scope->min_depth_m != options.labels.min_depth_m ||
+             scope->max_depth_m != options.labels.max_depth_m)
+      problem << "fused with depth range [" << scope->min_depth_m << ", " << scope->max_depth_m
+              << "] m; expected the same here, got [" << options.labels.min_depth_m << ", "
+              << options.labels.max_depth_m << "] m";
     if (!problem.str().empty()) ThrowValue("scope_map", problem.str());
   }
   gt::truth::PairTruth truth;

@@ -77,6 +77,17 @@ class Scopes(unittest.TestCase):
             occgt.pair_ground_truth(d0, d1, K0, K1, T0, T1, occupancy=True, scope_map=fused)
         with self.assertRaisesRegex(ValueError, "scope_map: given without occupancy=True"):
             occgt.pair_ground_truth(d0, d1, K0, K1, T0, T1, voxel_m=0.1, scope_map=fused)
+        # A map of other depth maps than the pair's: another size or depth range (it was used).
+        s0, sK0, _ = self.scene.load(PAIR[0], 80, 60)
+        s1, sK1, _ = self.scene.load(PAIR[1], 80, 60)
+        with self.assertRaisesRegex(ValueError, r"^scope_map: fused at 160x120; expected the "
+                                    r"size of depth0 here, 80x60$"):
+            occgt.pair_ground_truth(s0, s1, sK0, sK1, T0, T1, occupancy=True, voxel_m=0.1,
+                                    scope_map=fused, **depth_range)
+        with self.assertRaisesRegex(ValueError, r"^scope_map: fused with depth range \["):
+            occgt.pair_ground_truth(d0, d1, K0, K1, T0, T1, occupancy=True, voxel_m=0.1,
+                                    scope_map=fused, min_depth_m=0.5,
+                                    max_depth_m=self.scene.max_depth_m)
         with self.assertRaisesRegex(ValueError, "^scope: "):
             self.scene.fuse(*PAIR, 160, 120, scope="window")
         with self.assertRaisesRegex(ValueError, "id1"):
