@@ -195,6 +195,16 @@ py::dict PairGroundTruth(py::handle depth0, py::handle depth1, py::handle K0, py
   const gt::truth::PairTruthOptions options = MakeOptions(args);
   const gt::truth::WorkingFrame f0 = MakeFrame(depth0, K0, world_from_cam0, "0");
   const gt::truth::WorkingFrame f1 = MakeFrame(depth1, K1, world_from_cam1, "1");
+  // One patch cell must fit the image (the labels failed later without naming stride).
+  const int stride = options.patches.stride;
+  for (const gt::truth::WorkingFrame* f : {&f0, &f1}) {
+    if (options.labels_and_matches && (f->depth->width < stride || f->depth->height < stride)) {
+      ThrowValue("stride", "stride " + std::to_string(stride) + " is larger than the " +
+                               std::to_string(f->depth->width) + "x" +
+                               std::to_string(f->depth->height) +
+                               " depth map (one patch cell must fit)");
+    }
+  }
   const PyScopeMap* scope = args.scope_map;
   if (scope) {
     std::ostringstream problem;

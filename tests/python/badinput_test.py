@@ -206,6 +206,8 @@ class BadInput(unittest.TestCase):
         self.check(r"min_depth_m must be finite", min_depth_m=-1.0)
         self.check(r"max_depth_m must be > min_depth_m", min_depth_m=5.0, max_depth_m=1.0)
         self.check(r"stride", stride=0)
+        self.check(r"^stride: stride 1000 is larger than the %dx%d depth map \(one patch cell "
+                   r"must fit\)$" % (W, H), stride=1000)
         self.check(r"num_bins must be in 1\.\.64", bins=65, occupancy=True)
         self.check(r"num_bins must be in 1\.\.64", bins=0, occupancy=True)
         self.check(r"far_m must be finite and > near_m", near_m=5.0, far_m=1.0, occupancy=True)

@@ -578,6 +578,12 @@ class SevenScenes(unittest.TestCase, Checks):
             loftr_supervision(batch, "occ2net", preset="nonsense")
         with self.assertRaises(ValueError):
             loftr_supervision(batch, "occ2net", compat=True)
+        # mode "loftr" takes no preset or anchor (a value given was ignored).
+        with self.assertRaisesRegex(ValueError, r"^preset: not an option of mode 'loftr' "
+                                    r"\(got 'occ2net'\)$"):
+            loftr_supervision(batch, "loftr", preset="occ2net")
+        with self.assertRaisesRegex(ValueError, r"^anchor: not an option of mode 'loftr'"):
+            loftr_supervision(batch, "loftr", anchor="corner")
         bad = Collate("pad")(samples)
         del bad["match_mask"]
         with self.assertRaises(ValueError):

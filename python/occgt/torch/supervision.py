@@ -174,6 +174,10 @@ def loftr_supervision(
     if mode == "loftr":
         if label_options:
             raise ValueError(f"{sorted(label_options)[0]}: not an option of mode 'loftr'")
+        # LoFTR's targets take no label preset or anchor: a value given would be ignored.
+        for name, value in (("preset", preset), ("anchor", anchor)):
+            if value != _occgt.PAIR_DEFAULTS[name]:
+                raise ValueError(f"{name}: not an option of mode 'loftr' (got {value!r})")
         out = _loftr(batch, coarse_stride, fine_stride, fine_window, compat, dense_conf_matrix)
     else:
         if compat:
