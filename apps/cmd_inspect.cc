@@ -129,9 +129,10 @@ void RunInspectPair(const InspectPairArgs& a) {
                 pair.name.c_str(), pair.width, pair.height);
   }
   if (!pair.depth_source.empty()) {
-    std::printf(
-        "  labels from depth source %s%s\n", pair.depth_source.c_str(),
-        pair.depth_sources.empty() ? "" : " (depth.png: sensor | rendered | fused | agreement)");
+    std::printf("  labels from depth source %s%s\n", pair.depth_source.c_str(),
+                pair.depth_sources.empty()
+                    ? ""
+                    : " (depth.png: sensor | rendered | fused | sensor vs mesh)");
   }
   for (const auto& p : written) std::printf("  wrote %s\n", p.c_str());
 }

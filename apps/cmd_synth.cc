@@ -37,6 +37,9 @@ const std::vector<FieldFlag> kSynthFlags = {{"scenes", "--scenes", true},
 
 // --layout scannetpp: the fixture of libgt/synth/scannetpp_layout.h (DSLR at --resolution).
 void RunScanNetPPSynth(const SynthArgs& args) {
+  if (args.no_holes) {  // that layout punches no holes: the flag would be ignored
+    throw gt::InputError("--no-holes", "only for --layout generic");
+  }
   gt::synth::ScanNetPPSynthOptions o;
   o.scenes = args.options.scenes;
   o.frames = args.options.frames_per_scene;
