@@ -209,6 +209,24 @@ PairData PairFromFields(const std::map<std::string, std::string>& fields, const 
   p.width = p.labels01.width;
   p.height = p.labels01.height;
   if (p.width <= 0 || p.height <= 0) throw InputError(source + ":label01.npy", "empty");
+  // The label maps at the json's resolution (a cut label01 was blamed on cells0.npy).
+  if (const nlohmann::json* r = FindJson(p.meta, [](const std::string& k, const nlohmann::json& v) {
+        return k == "resolution" && v.is_array() && v.size() == 2 && v[0].is_number_integer() &&
+               v[1].is_number_integer();
+      })) {
+    const int w = (*r)[0].get<int>(), h = (*r)[1].get<int>();
+    for (const auto& [name, labels] :
+         {std::pair<const char*, const LabelMap*>{"label01.npy", &p.labels01},
+          std::pair<const char*, const LabelMap*>{"label10.npy", &p.labels10}}) {
+      if (labels->width != w || labels->height != h) {
+        throw InputError(source + ":" + name, "expected [" + std::to_string(h) + ", " +
+                                                  std::to_string(w) + "] (the json's resolution " +
+                                                  std::to_string(w) + "x" + std::to_string(h) +
+                                                  "), got [" + std::to_string(labels->height) +
+                                                  ", " + std::to_string(labels->width) + "]");
+      }
+    }
+  }
 
   const auto matches = NeedArray(fields, "matches.npy", source, "<i4", 2);
   const auto types = NeedArray(fields, "match_type.npy", source, "|u1", 1);
