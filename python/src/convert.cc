@@ -16,6 +16,14 @@ void ThrowValue(const std::string& argument, const std::string& problem) {
   throw py::value_error(argument + ": " + problem);
 }
 
+void ThrowOptionsValue(std::string error, const std::optional<double>& max_range_m,
+                       const std::optional<double>& far_m) {
+  if (!max_range_m && far_m && error.find("max_range_m") != std::string::npos) {
+    error += " (max_range_m is far_m when not given: far_m=" + std::to_string(*far_m) + ")";
+  }
+  ThrowValue("options", error);
+}
+
 std::string TypeName(py::handle value) { return py::str(py::type::of(value).attr("__name__")); }
 
 namespace {

@@ -26,6 +26,10 @@ namespace py = pybind11;
 
 // ValueError("<argument>: <problem>").
 [[noreturn]] void ThrowValue(const std::string& argument, const std::string& problem);
+// ValueError("options: <error>") for options that failed their Check; when the error is
+// about max_range_m and only far_m was given (far_m is then the ray range), it says so.
+[[noreturn]] void ThrowOptionsValue(std::string error, const std::optional<double>& max_range_m,
+                                    const std::optional<double>& far_m);
 
 // Runs f; an InputError of a parser (whose field is a CLI flag such as "--preset") becomes
 // ValueError("<argument>: <problem>").

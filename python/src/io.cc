@@ -169,7 +169,7 @@ class PyScene {
     range.set_max_depth_m = dataset_max_depth_m;
     gt::truth::PairTruthOptions o = gt::truth::ResolvePairTruthOptions(settings, range);
     o.labels_and_matches = false;
-    if (!o.Check(&error)) ThrowValue("options", error);
+    if (!o.Check(&error)) ThrowOptionsValue(error, max_range_m, far_m);
     PyScopeMap out;
     {
       py::gil_scoped_release no_gil;

@@ -159,12 +159,7 @@ gt::truth::PairTruthOptions MakeOptions(const PairArguments& a) {
   const gt::truth::PairTruthOptions o = gt::truth::ResolvePairTruthOptions(a.settings, a.range);
   std::string error;
   if (!o.Check(&error)) {
-    // far_m is also the ray range when max_range_m is not given: name what was passed.
-    const gt::truth::OccupancySettings& os = a.settings.occupancy;
-    if (!os.max_range_m && os.far_m && error.find("max_range_m") != std::string::npos) {
-      error += " (max_range_m is far_m when not given: far_m=" + std::to_string(*os.far_m) + ")";
-    }
-    ThrowValue("options", error);
+    ThrowOptionsValue(error, a.settings.occupancy.max_range_m, a.settings.occupancy.far_m);
   }
   return o;
 }

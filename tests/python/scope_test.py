@@ -90,6 +90,9 @@ class Scopes(unittest.TestCase):
                                     max_depth_m=self.scene.max_depth_m)
         with self.assertRaisesRegex(ValueError, "^scope: "):
             self.scene.fuse(*PAIR, 160, 120, scope="window")
+        with self.assertRaisesRegex(ValueError, r"max_range_m must be finite.* \(max_range_m is "
+                                    r"far_m when not given: far_m=nan\)$"):
+            self.scene.fuse(*PAIR, 160, 120, far_m=float("nan"))
         with self.assertRaisesRegex(ValueError, "id1"):
             self.scene.fuse(PAIR[0], "999999", 160, 120)
         with self.assertRaises(TypeError):
