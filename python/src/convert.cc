@@ -227,12 +227,20 @@ gt::Rigid3d PoseFromArray(py::handle obj, const std::string& argument) {
 std::vector<uint64_t> WordsFromArray(py::handle obj, const std::string& argument,
                                      std::vector<py::ssize_t>* shape) {
   py::array a = AsArray(obj, argument);
-  if (a.dtype().kind() != 'u' || a.itemsize() != 8) {
+  // int64: the same bits as torch holds them (torch has no uint64; occgt.torch's words).
+  if ((a.dtype().kind() != 'u' && a.dtype().kind() != 'i') || a.itemsize() != 8) {
     ThrowValue(argument,
-               "expected dtype uint64 (one bit per depth bin), got dtype " + DtypeText(a));
+               "expected dtype uint64 or int64 (one bit per depth bin), got dtype " + DtypeText(a));
   }
   if (a.ndim() != 2) ThrowValue(argument, "expected shape (H/2, W/2), got shape " + ShapeText(a));
   *shape = {a.shape(0), a.shape(1)};
+  if (a.dtype().kind() == 'i') {
+    auto c = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(a);
+    if (!c) throw py::error_already_set();
+    std::vector<uint64_t> words(static_cast<size_t>(c.size()));
+    for (size_t i = 0; i < words.size(); ++i) words[i] = static_cast<uint64_t>(c.data()[i]);
+    return words;
+  }
   auto c = py::array_t<uint64_t, py::array::c_style | py::array::forcecast>::ensure(a);
   if (!c) throw py::error_already_set();
   return std::vector<uint64_t>(c.data(), c.data() + c.size());

@@ -92,7 +92,8 @@ gt::Camera CameraFromArray(py::handle obj, int width, int height, const std::str
 // 0 0 0 1, |R^T R - I| <= 1e-3, det R > 0). Used as given (R is not re-orthonormalised), so a
 // pose from Scene.load gives the same bits as the CLI.
 gt::Rigid3d PoseFromArray(py::handle obj, const std::string& argument);
-// A uint64 array of shape [H, W] (occupancy words), copied into a vector.
+// A uint64 (or int64, the same bits: occgt.torch's words) array of shape [H, W] (occupancy
+// words), copied into a vector.
 std::vector<uint64_t> WordsFromArray(py::handle obj, const std::string& argument,
                                      std::vector<py::ssize_t>* shape);
 

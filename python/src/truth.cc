@@ -403,6 +403,19 @@ py::array_t<uint8_t> DenseVolume(py::handle occ, py::handle known, py::handle bi
   b.num_bins = bins;
   std::string error;
   if (!b.Check(&error)) ThrowValue("bins", error);
+  // A bit at or past `bins` is of another bin count (it was ignored).
+  if (bins < 64) {
+    for (const auto& [name, words] :
+         {std::pair<const char*, const std::vector<uint64_t>*>{"occ", &v.occ},
+          std::pair<const char*, const std::vector<uint64_t>*>{"known", &v.known}}) {
+      for (size_t i = 0; i < words->size(); ++i) {
+        if ((*words)[i] >> bins) {
+          ThrowValue(name, "element " + std::to_string(i) + " has a bit at or past bins=" +
+                               std::to_string(bins) + " (words of another bin count?)");
+        }
+      }
+    }
+  }
   v.height = static_cast<int>(shape_occ[0]);
   v.width = static_cast<int>(shape_occ[1]);
   v.edges_m = gt::occupancy::BinEdges(b);  // only their number matters here

@@ -435,10 +435,20 @@ class BadInput(unittest.TestCase):
 
     def test_dense_volume(self) -> None:
         words = np.zeros((4, 5), np.uint64)
-        with self.assertRaisesRegex(ValueError, r"^occ: expected dtype uint64"):
-            occgt.dense_volume(words.astype(np.int64), words)
-        with self.assertRaisesRegex(ValueError, r"^known: expected dtype uint64"):
+        with self.assertRaisesRegex(ValueError, r"^occ: expected dtype uint64 or int64"):
+            occgt.dense_volume(words.astype(np.int32), words)
+        with self.assertRaisesRegex(ValueError, r"^known: expected dtype uint64 or int64"):
             occgt.dense_volume(words, words.astype(np.float64))
+        # int64 is the same bits (occgt.torch's words: torch has no uint64), bit 63 included.
+        bits = np.array([[1 << 63, 5, 0], [2, 1 << 40, 3]], np.uint64)
+        known = np.full_like(bits, np.uint64(2**64 - 1))
+        self.assertTrue(np.array_equal(occgt.dense_volume(bits.view(np.int64), known.view(np.int64)),
+                                       occgt.dense_volume(bits, known)))
+        # A bit at or past bins is of another bin count (it was ignored).
+        with self.assertRaisesRegex(ValueError, r"^occ: element 0 has a bit at or past bins=8 "):
+            occgt.dense_volume(bits, known, bins=8)
+        with self.assertRaisesRegex(ValueError, r"^known: element 0 has a bit at or past bins=2 "):
+            occgt.dense_volume(np.zeros_like(bits), known, bins=2)
         with self.assertRaisesRegex(ValueError, r"^occ: expected shape \(H/2, W/2\)"):
             occgt.dense_volume(words.ravel(), words)
         with self.assertRaisesRegex(ValueError, r"^known: expected the shape of occ \(4, 5\)"):
