@@ -153,6 +153,21 @@ py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle
   const Eigen::Matrix4d cam0_from_cam1 =
       T_1to0.is_none() ? Eigen::Matrix4d(gt::Rigid3d(cam1_from_cam0).inverse().matrix())
                        : RelativePoseFromArray(T_1to0, "T_1to0");
+  // LoFTR's batches carry both: one that is not the other's inverse warped image 1 with
+  // another pose (0 matches, silently). The translation is compared relative to its length
+  // (float32 poses of MegaDepth's arbitrary scale).
+  {
+    const Eigen::Matrix4d p = cam0_from_cam1 * cam1_from_cam0;
+    const double scale = std::max(1.0, cam1_from_cam0.block<3, 1>(0, 3).norm());
+    const double off =
+        std::max((p.block<3, 3>(0, 0) - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(),
+                 p.block<3, 1>(0, 3).cwiseAbs().maxCoeff() / scale);
+    if (!(off <= gt::kRigidTolerance)) {
+      ThrowValue("T_1to0", "expected the inverse of T_0to1 (|T_1to0 T_0to1 - I| = " +
+                               std::to_string(off) + " > " +
+                               std::to_string(gt::kRigidTolerance) + ", translation relative)");
+    }
+  }
   gt::truth::LoftrCoarseSupervision s;
   try {
     py::gil_scoped_release no_gil;

@@ -465,6 +465,20 @@ class SevenScenes(unittest.TestCase, Checks):
         self.assertEqual(ids(coarse16), ids(ref16))
         fine = loftr_supervision(batch, fine_stride=4, fine_window=7)
         self.assertTrue(torch.allclose(fine["expec_f_gt"] * 4 * 3, dense["expec_f_gt"] * 2 * 2))
+        # A T_1to0 that is not T_0to1's inverse (it gave 0 matches, silently); a MegaDepth-
+        # scale translation in float32 is still the inverse.
+        wrong = dict(batch)
+        wrong["T_1to0"] = batch["T_1to0"].clone()
+        wrong["T_1to0"][0, 0, 3] += 0.05
+        with self.assertRaisesRegex(ValueError, r"^T_1to0: expected the inverse of T_0to1"):
+            loftr_supervision(wrong)
+        big = np.eye(4)
+        big[:3, :3] = np.array([[0.6, -0.8, 0], [0.8, 0.6, 0], [0, 0, 1]])
+        big[:3, 3] = [3e4, -2e4, 1e4]
+        occgt._occgt.loftr_coarse_supervision(
+            batch["depth0"][0].numpy(), batch["depth1"][0].numpy(), batch["K0"][0].numpy(),
+            batch["K1"][0].numpy(), big.astype(np.float32),
+            np.linalg.inv(big.astype(np.float32)).astype(np.float32))
         # No match at all: empty ids; compat gives LoFTR's dummy (0, 0, 0).
         far = dict(batch)
         far["T_0to1"] = batch["T_0to1"].clone()
