@@ -163,9 +163,9 @@ py::dict LoftrCoarseSupervision(py::handle depth0, py::handle depth1, py::handle
         std::max((p.block<3, 3>(0, 0) - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(),
                  p.block<3, 1>(0, 3).cwiseAbs().maxCoeff() / scale);
     if (!(off <= gt::kRigidTolerance)) {
-      ThrowValue("T_1to0", "expected the inverse of T_0to1 (|T_1to0 T_0to1 - I| = " +
-                               std::to_string(off) + " > " +
-                               std::to_string(gt::kRigidTolerance) + ", translation relative)");
+      ThrowValue("T_1to0",
+                 "expected the inverse of T_0to1 (|T_1to0 T_0to1 - I| = " + std::to_string(off) +
+                     " > " + std::to_string(gt::kRigidTolerance) + ", translation relative)");
     }
   }
   gt::truth::LoftrCoarseSupervision s;
