@@ -602,6 +602,18 @@ class SevenScenes(unittest.TestCase, Checks):
         del bad["match_mask"]
         with self.assertRaises(ValueError):
             loftr_supervision(bad, "occ2net")
+        # A damaged stored match: a cell outside the grid, a type outside 0..2.
+        damaged = Collate("pad")(samples)
+        damaged["matches"] = damaged["matches"].clone()
+        damaged["matches"][0, 0, 0] = 10**6
+        with self.assertRaisesRegex(ValueError, r"^batch\['matches'\]: row 0 names cell 1000000 "
+                                    r"of image 0, which has \d+ cells$"):
+            loftr_supervision(damaged, "occ2net")
+        damaged = Collate("pad")(samples)
+        damaged["match_type"] = damaged["match_type"].clone()
+        damaged["match_type"][0, 0] = 7
+        with self.assertRaisesRegex(ValueError, r"^batch\['match_type'\]: expected 0"):
+            loftr_supervision(damaged, "occ2net")
 
     def check_occ2net(self, out: Dict[str, torch.Tensor], b: np.ndarray, m: np.ndarray,
                       t: np.ndarray, xy: np.ndarray, anchor: str) -> None:

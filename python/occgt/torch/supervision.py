@@ -377,6 +377,16 @@ def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_windo
     i_ids = matches[:, 0].to(torch.int64).contiguous()
     j_ids = matches[:, 1].to(torch.int64).contiguous()
     types = types.to(torch.int64)
+    # A batch's stored matches name cells of the grids and the three types (a damaged cell
+    # index reached the index arithmetic below).
+    for name, ids, count in (("image 0", i_ids, l0), ("image 1", j_ids, l1)):
+        outside = (ids < 0) | (ids >= count)
+        if bool(outside.any()):
+            k = int(torch.nonzero(outside)[0, 0])
+            raise ValueError(f"batch['matches']: row {k} names cell {int(ids[k])} of {name}, "
+                             f"which has {count} cells")
+    if bool(((types < 0) | (types > 2)).any()):
+        raise ValueError("batch['match_type']: expected 0 (vv), 1 (vo) or 2 (ov)")
     xy = xy.to(torch.float32)
     # The anchor pixel of a cell (geometry/patches.h AnchorPixel): the target cell is j in
     # image 1 for vv/vo and i in image 0 for ov.
