@@ -1,6 +1,7 @@
 """Type stubs of the extension module occgt._occgt (python/src/*.cc). Use the package
 ``occgt``: its functions document every argument (python/occgt/__init__.py)."""
-from typing import Any, Dict, List, Optional, Tuple
+import os
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -155,7 +156,7 @@ class Scene:
     @property
     def mesh_path(self) -> str: ...  # the mesh depth_source "mesh"/"fused" renders ('' = none)
     @mesh_path.setter
-    def mesh_path(self, path: str) -> None: ...
+    def mesh_path(self, path: Union[str, "os.PathLike[str]"]) -> None: ...
     def load(
         self, frame_id: str, width: int = ..., height: int = ..., *, depth_source: str = ...,
         fused_depth: Optional[Dict[str, float]] = ...

@@ -73,9 +73,19 @@ class PyScene {
   const gt::Scene& scene() const { return *scene_; }
 
   // Scene::mesh_path (a copy of the scene: the frames are shared by value, once).
-  void SetMeshPath(const std::string& path) {
+  // A str or os.PathLike; anything else is one TypeError line (pybind11's own was a list
+  // of the accepted signatures).
+  void SetMeshPath(py::handle value) {
+    py::object path = py::reinterpret_borrow<py::object>(value);
+    if (!py::isinstance<py::str>(path) && py::hasattr(path, "__fspath__")) {
+      path = py::module_::import("os").attr("fspath")(path);
+    }
+    if (!py::isinstance<py::str>(path)) {
+      throw py::type_error("mesh_path: expected a path (str or os.PathLike), got " +
+                           TypeName(value));
+    }
     auto copy = std::make_shared<gt::Scene>(*scene_);
-    copy->mesh_path = path;
+    copy->mesh_path = path.cast<std::string>();
     scene_ = std::move(copy);
   }
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import pathlib
 import re
 import sys
 import unittest
@@ -429,6 +430,11 @@ class BadInput(unittest.TestCase):
                                     r": cannot open file"):
             scene.load(frame.id, 64, 48)
         missing = os.path.join(root, "no-mesh.ply")
+        with self.assertRaisesRegex(TypeError, r"^mesh_path: expected a path \(str or "
+                                    r"os\.PathLike\), got int$"):
+            scene.mesh_path = 3  # type: ignore[assignment]
+        scene.mesh_path = pathlib.Path(missing)  # type: ignore[assignment]
+        self.assertEqual(scene.mesh_path, missing)
         scene.mesh_path = missing
         with self.assertRaisesRegex(ValueError, "^" + re.escape(missing) + r": cannot open file"):
             scene.load(scene.frames[0].id, 64, 48, depth_source="mesh")
