@@ -28,31 +28,6 @@
 namespace occgt {
 namespace {
 
-// The items of a comma list; an empty item (",5", "5,,10", a trailing "5,10,") is a usage
-// error naming the flag, as is an item given twice.
-std::vector<std::string> SplitList(const std::string& text, const std::string& flag,
-                                   const std::string& what) {
-  std::vector<std::string> items;
-  size_t start = 0;
-  while (true) {
-    const size_t comma = text.find(',', start);
-    items.push_back(text.substr(start, comma - start));
-    if (items.back().empty()) {
-      throw gt::InputError(flag, "expected comma-separated " + what + ", got '" + text + "'");
-    }
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  for (size_t i = 0; i < items.size(); ++i) {
-    for (size_t j = 0; j < i; ++j) {
-      if (items[i] == items[j]) {
-        throw gt::InputError(flag, "'" + items[i] + "' given twice in '" + text + "'");
-      }
-    }
-  }
-  return items;
-}
-
 std::vector<double> ParseList(const std::string& text, const std::string& flag) {
   std::vector<double> out;
   for (const std::string& item : SplitList(text, flag, "numbers")) {

@@ -11,7 +11,6 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -41,20 +40,6 @@ struct RenderArgs {
   gt::render::FrameDepthOptions depth;
 };
 
-std::vector<std::string> SplitComma(const std::string& text) {
-  std::vector<std::string> out;
-  if (text.empty() || text.back() == ',') {  // getline drops a trailing empty item
-    throw gt::InputError("--frames", "expected ID,ID,... without empty ids");
-  }
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    if (item.empty()) throw gt::InputError("--frames", "expected ID,ID,... without empty ids");
-    out.push_back(item);
-  }
-  return out;
-}
-
 void RunRender(const RenderArgs& args) {
   std::string error;
   if (!args.depth.Check(&error)) {
@@ -78,12 +63,8 @@ void RunRender(const RenderArgs& args) {
   }
   std::vector<size_t> frames;
   if (!args.frames.empty()) {
-    for (const std::string& id : SplitComma(args.frames)) {
-      const size_t i = gt::truth::FindFrame(scene, id);
-      if (std::find(frames.begin(), frames.end(), i) != frames.end()) {
-        throw gt::InputError("--frames", "frame " + id + " is listed twice");
-      }
-      frames.push_back(i);
+    for (const std::string& id : SplitList(args.frames, "--frames", "frame ids")) {
+      frames.push_back(gt::truth::FindFrame(scene, id));
     }
   } else {
     int k = 0;

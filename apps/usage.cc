@@ -56,6 +56,12 @@ std::vector<std::string> FlagNames(const CLI::App* sub) {
   return names;
 }
 
+// Whether `value` is a decimal integer: an optional sign, then digits only.
+bool IsDecimalInteger(const std::string& value) {
+  const size_t sign = !value.empty() && (value[0] == '-' || value[0] == '+') ? 1 : 0;
+  return value.size() > sign && value.find_first_not_of("0123456789", sign) == std::string::npos;
+}
+
 }  // namespace
 
 CLI::Option* NonNegative(CLI::Option* option) { return AtLeast(option, 0); }
@@ -112,6 +118,29 @@ void RethrowNamingFlag(const gt::InputError& error, const std::vector<FieldFlag>
   throw error;
 }
 
+std::vector<std::string> SplitList(const std::string& text, const std::string& flag,
+                                   const std::string& what) {
+  std::vector<std::string> items;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = text.find(',', start);
+    items.push_back(text.substr(start, comma - start));
+    if (items.back().empty()) {
+      throw gt::InputError(flag, "expected comma-separated " + what + ", got '" + text + "'");
+    }
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  for (size_t i = 0; i < items.size(); ++i) {
+    for (size_t j = 0; j < i; ++j) {
+      if (items[i] == items[j]) {
+        throw gt::InputError(flag, "'" + items[i] + "' given twice in '" + text + "'");
+      }
+    }
+  }
+  return items;
+}
+
 int UsageError(const std::string& message) {
   std::fprintf(stderr, "occgt: error: %s\n", gt::OneLine(message).c_str());
   return kUsageExit;
@@ -125,9 +154,7 @@ void CheckFlagValues(CLI::App& app, const std::set<std::string>& empty_allowed) 
       "", "non-empty");
   const CLI::Validator within_64_bits(
       [](std::string& value) {
-        const size_t sign = !value.empty() && (value[0] == '-' || value[0] == '+') ? 1 : 0;
-        if (value.size() <= sign ||
-            value.find_first_not_of("0123456789", sign) != std::string::npos) {
+        if (!IsDecimalInteger(value)) {
           return std::string();  // not an integer: CLI11's own conversion error follows
         }
         errno = 0;
@@ -254,10 +281,9 @@ std::string DescribeParseError(const CLI::App& app, const std::vector<std::strin
       const std::string type = option != nullptr ? option->get_type_name() : "";
       if (type == "INT" || type == "UINT") {
         // Digits that did not convert are out of the flag's integer range.
-        const size_t digits = !value.empty() && (value[0] == '-' || value[0] == '+') ? 1 : 0;
-        const bool integer = value.size() > digits &&
-                             value.find_first_not_of("0123456789", digits) == std::string::npos;
-        what = name + (integer ? ": integer out of range, got '" : ": expected an integer, got '") +
+        what = name +
+               (IsDecimalInteger(value) ? ": integer out of range, got '"
+                                        : ": expected an integer, got '") +
                value + "'";
       } else {
         what = name + ": expected a number, got '" + value + "'";

@@ -16,6 +16,12 @@ namespace occgt {
 
 inline constexpr int kUsageExit = 2;
 
+// The items of a comma list flag (eval's lists, render's --frames); an empty item (",5",
+// "5,,10", a trailing "5,10,") is a usage error naming the flag, as is an item given twice:
+// "<flag>: expected comma-separated <what>, got '<text>'".
+std::vector<std::string> SplitList(const std::string& text, const std::string& flag,
+                                   const std::string& what);
+
 // Prints `occgt: error: <message>` and returns kUsageExit.
 int UsageError(const std::string& message);
 
