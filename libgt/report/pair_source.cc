@@ -77,6 +77,15 @@ const nlohmann::json* FindJson(
   return nullptr;
 }
 
+// The pair's "resolution" [W, H] in its metadata (the sample json, meta.json or
+// occupancy.json), or nullptr.
+const nlohmann::json* FindResolution(const nlohmann::json& meta) {
+  return FindJson(meta, [](const std::string& k, const nlohmann::json& v) {
+    return k == "resolution" && v.is_array() && v.size() == 2 && v[0].is_number_integer() &&
+           v[1].is_number_integer();
+  });
+}
+
 bool EndsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() &&
          s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -194,11 +203,7 @@ PairData PairFromFields(const std::map<std::string, std::string>& fields, const 
     p.has_occupancy = true;
     p.width = 2 * p.occ0.width;
     p.height = 2 * p.occ0.height;
-    const nlohmann::json* r = FindJson(p.meta, [](const std::string& k, const nlohmann::json& v) {
-      return k == "resolution" && v.is_array() && v.size() == 2 && v[0].is_number_integer() &&
-             v[1].is_number_integer();
-    });
-    if (r != nullptr) {
+    if (const nlohmann::json* r = FindResolution(p.meta)) {
       p.width = (*r)[0].get<int>();
       p.height = (*r)[1].get<int>();
     }
@@ -210,10 +215,7 @@ PairData PairFromFields(const std::map<std::string, std::string>& fields, const 
   p.height = p.labels01.height;
   if (p.width <= 0 || p.height <= 0) throw InputError(source + ":label01.npy", "empty");
   // The label maps at the json's resolution (a cut label01 was blamed on cells0.npy).
-  if (const nlohmann::json* r = FindJson(p.meta, [](const std::string& k, const nlohmann::json& v) {
-        return k == "resolution" && v.is_array() && v.size() == 2 && v[0].is_number_integer() &&
-               v[1].is_number_integer();
-      })) {
+  if (const nlohmann::json* r = FindResolution(p.meta)) {
     const int w = (*r)[0].get<int>(), h = (*r)[1].get<int>();
     for (const auto& [name, labels] :
          {std::pair<const char*, const LabelMap*>{"label01.npy", &p.labels01},

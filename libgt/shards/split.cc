@@ -513,6 +513,17 @@ std::string ParseIndexEntry(const json& e, size_t i, IndexedShard* out) {
 
 }  // namespace
 
+namespace {
+// "" the first time `url` is listed (entry i), else the problem naming the earlier entry: a
+// shard listed twice was read twice.
+std::string RepeatedUrl(const std::string& url, size_t i, std::map<std::string, size_t>* seen) {
+  const auto [it, inserted] = seen->emplace(url, i);
+  return inserted ? std::string()
+                  : "shardlist[" + std::to_string(i) + "].url: \"" + url + "\" repeats shardlist[" +
+                        std::to_string(it->second) + "]";
+}
+}  // namespace
+
 ShardIndex ReadShardIndex(const std::string& dir) {
   ShardIndex index;
   index.path = (fs::path(dir) / "index.json").string();
@@ -531,16 +542,15 @@ ShardIndex ReadShardIndex(const std::string& dir) {
   }
   const json& list = doc["shardlist"];
   index.shards.resize(list.size());
-  std::map<std::string, size_t> entry_of_url;  // a shard listed twice was read twice
+  std::map<std::string, size_t> entry_of_url;
   for (size_t i = 0; i < list.size(); ++i) {
     if (const std::string problem = ParseIndexEntry(list[i], i, &index.shards[i]);
         !problem.empty()) {
       throw InputError(index.path, problem);
     }
-    if (const auto [it, inserted] = entry_of_url.emplace(index.shards[i].url, i); !inserted) {
-      throw InputError(index.path, "shardlist[" + std::to_string(i) + "].url: \"" +
-                                       index.shards[i].url + "\" repeats shardlist[" +
-                                       std::to_string(it->second) + "]");
+    if (const std::string problem = RepeatedUrl(index.shards[i].url, i, &entry_of_url);
+        !problem.empty()) {
+      throw InputError(index.path, problem);
     }
   }
   return index;
@@ -949,12 +959,10 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
   int64_t total = 0;
   for (size_t i = 0; i < checked.size(); ++i) {
     ShardProblems& c = checked[i];
-    if (!c.url.empty()) {
-      if (const auto [it, inserted] = entry_of_url.emplace(c.url, i); !inserted) {
-        problem(index_path, "shardlist[" + std::to_string(i) + "].url: \"" + c.url +
-                                "\" repeats shardlist[" + std::to_string(it->second) + "]");
-        continue;  // its samples are the first entry's, not repeats of their own
-      }
+    if (const std::string repeated = c.url.empty() ? "" : RepeatedUrl(c.url, i, &entry_of_url);
+        !repeated.empty()) {
+      problem(index_path, repeated);
+      continue;  // its samples are the first entry's, not repeats of their own
     }
     problems.insert(problems.end(), std::make_move_iterator(c.problems.begin()),
                     std::make_move_iterator(c.problems.end()));
