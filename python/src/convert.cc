@@ -80,8 +80,10 @@ double Arg<double>(py::handle value, const std::string& argument) {
   const bool number =
       PyFloat_Check(v) || PyLong_Check(v) || PyIndex_Check(v) ||
       (Py_TYPE(v)->tp_as_number != nullptr && Py_TYPE(v)->tp_as_number->nb_float != nullptr);
+  // numpy.bool_ is not a number either (looked up only for objects that are not a Python
+  // float or int, so that the common case costs no type-name string).
   if (PyBool_Check(v) || PyUnicode_Check(v) || PyBytes_Check(v) || !number ||
-      TypeName(value) == "bool_") {  // numpy.bool_ is not a number either
+      (!PyFloat_Check(v) && !PyLong_Check(v) && TypeName(value) == "bool_")) {
     throw py::type_error(argument + ": expected a number, got " + TypeName(value));
   }
   const double d = PyFloat_AsDouble(v);
@@ -234,13 +236,7 @@ std::vector<uint64_t> WordsFromArray(py::handle obj, const std::string& argument
   }
   if (a.ndim() != 2) ThrowValue(argument, "expected shape (H/2, W/2), got shape " + ShapeText(a));
   *shape = {a.shape(0), a.shape(1)};
-  if (a.dtype().kind() == 'i') {
-    auto c = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(a);
-    if (!c) throw py::error_already_set();
-    std::vector<uint64_t> words(static_cast<size_t>(c.size()));
-    for (size_t i = 0; i < words.size(); ++i) words[i] = static_cast<uint64_t>(c.data()[i]);
-    return words;
-  }
+  if (a.dtype().kind() == 'i') a = a.attr("view")(py::dtype::of<uint64_t>());  // same bits
   auto c = py::array_t<uint64_t, py::array::c_style | py::array::forcecast>::ensure(a);
   if (!c) throw py::error_already_set();
   return std::vector<uint64_t>(c.data(), c.data() + c.size());
