@@ -130,6 +130,30 @@ std::string GunzipBytes(std::string_view gz, const std::string& what, size_t max
   return GunzipWithZlib(gz, what, max_bytes);
 }
 
+std::string GunzipPrefix(std::string_view gz, size_t max_bytes, const std::string& what) {
+  CheckGzipSignature(gz, what);
+  z_stream z;
+  std::memset(&z, 0, sizeof z);
+  if (inflateInit2(&z, 15 + 16) != Z_OK) throw InputError(what, "zlib inflateInit2 failed");
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(gz.data()));
+  z.avail_in = static_cast<uInt>(gz.size());
+  std::string out(max_bytes, '\0');
+  z.next_out = reinterpret_cast<Bytef*>(out.data());
+  z.avail_out = static_cast<uInt>(max_bytes);
+  int rc = Z_OK;
+  while (rc == Z_OK && z.avail_out > 0) {
+    const uInt before = z.avail_out;
+    rc = inflate(&z, Z_NO_FLUSH);
+    if (rc == Z_OK && z.avail_out == before && z.avail_in == 0) rc = Z_BUF_ERROR;
+  }
+  const size_t produced = max_bytes - z.avail_out;
+  const std::string msg = z.msg ? z.msg : (rc == Z_BUF_ERROR ? "truncated" : "corrupt");
+  inflateEnd(&z);
+  if (rc != Z_OK && rc != Z_STREAM_END) throw InputError(what, "bad gzip data: " + msg);
+  out.resize(produced);
+  return out;
+}
+
 void GunzipInto(std::string_view gz, char* out, size_t size, const std::string& what) {
   CheckGzipSignature(gz, what);
   if (InflateExactly(gz, out, size)) return;

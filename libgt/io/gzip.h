@@ -29,6 +29,11 @@ std::string GunzipBytes(std::string_view gz, const std::string& what,
 // inflate to exactly `size` bytes.
 void GunzipInto(std::string_view gz, char* out, size_t size, const std::string& what);
 
+// The first plain bytes of a gzip stream, at most `max_bytes` (fewer when the stream is
+// shorter): only that much is inflated. Throws InputError(what, ...) when it is not gzip or
+// the data is bad before that point.
+std::string GunzipPrefix(std::string_view gz, size_t max_bytes, const std::string& what);
+
 // The plain size a gzip member's trailer records (ISIZE, the size mod 2^32; 0 when shorter
 // than 4 bytes). Only a hint: the data may lie.
 uint32_t GzipTrailerSize(std::string_view gz);

@@ -16,6 +16,7 @@
 #include "libgt/core/human.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
+#include "libgt/io/gzip.h"
 #include "libgt/io/npz_members.h"
 
 namespace gt::io {
@@ -288,6 +289,51 @@ NpyHeader ParseNpyHeader(std::string_view bytes, const std::string& name) {
   parser.Parse(&header.descr, &header.fortran_order, &header.shape);
   header.data_offset = header_start + header_len;
   return header;
+}
+
+size_t GzippedNpyPlainSize(std::string_view gz, const std::string& name) {
+  // magic, version, a 4-byte length and the longest header the reader accepts
+  const std::string head = GunzipPrefix(gz, kMagicLen + 2 + 4 + kMaxHeaderBytes, name);
+  const NpyHeader header = ParseNpyHeader(head, name);
+  // The item size of "<f4", "|u1", "<U7" (4 bytes a code unit), "|S5", "<M8[ns]": the
+  // digits after the type code.
+  const std::string& d = header.descr;
+  size_t pos = d.empty() || std::isalpha(static_cast<unsigned char>(d[0])) ? 0 : 1;
+  const bool utf32 = pos < d.size() && d[pos] == 'U';
+  ++pos;
+  size_t item = 0;
+  for (; pos < d.size() && std::isdigit(static_cast<unsigned char>(d[pos])) && item < 1000000;
+       ++pos) {
+    item = item * 10 + static_cast<size_t>(d[pos] - '0');
+  }
+  if (item == 0) return GzipPlainSize(gz, name);
+  if (utf32) item *= 4;
+  constexpr size_t kMaxPlain = size_t{1} << 31;
+  size_t bytes = header.data_offset;
+  size_t count = 1;
+  bool over = false;
+  for (const int64_t n : header.shape) {
+    if (n < 0) throw InputError(name + ": header field 'shape'", "negative dimension");
+    if (n != 0 && count > kMaxPlain / static_cast<size_t>(n)) over = true;
+    count = over ? count : count * static_cast<size_t>(n);
+  }
+  over = over || (count != 0 && item > kMaxPlain / count);
+  if (!over) bytes += count * item;
+  if (over || bytes > kMaxPlain || bytes > gz.size() * 1032 + 64) {
+    throw InputError(
+        name + ": header field 'shape'",
+        "the header declares an array larger than " +
+            std::string(over || bytes > kMaxPlain
+                            ? "2 GiB"
+                            : "these " + std::to_string(gz.size()) + " gzip bytes can hold"));
+  }
+  return bytes;
+}
+
+std::string GunzipNpy(std::string_view gz, const std::string& name) {
+  std::string out(GzippedNpyPlainSize(gz, name), '\0');
+  GunzipInto(gz, out.data(), out.size(), name);
+  return out;
 }
 
 NpyArray ParseNpy(std::string_view bytes, const std::string& name) {

@@ -64,6 +64,17 @@ struct NpyHeader {
 };
 NpyHeader ParseNpyHeader(std::string_view bytes, const std::string& name);
 
+// The plain size of a gzip'd .npy (a shard's `<field>.npy.gz`) as its own header gives it:
+// only the header is inflated to find it, so that a caller inflating exactly this many
+// bytes (GunzipInto) never inflates more than the array the header declares, whatever the
+// gzip trailer says. Throws InputError naming `name` for bad gzip data, a bad header, or a
+// size over 2 GiB or beyond what DEFLATE reaches from these bytes (~1032:1). A descr
+// without an item size (none of occgt's) falls back to the trailer's size.
+size_t GzippedNpyPlainSize(std::string_view gz, const std::string& name);
+// The plain bytes of a gzip'd .npy, inflated into exactly that size: InputError naming
+// `name` when the data inflates to another size.
+std::string GunzipNpy(std::string_view gz, const std::string& name);
+
 // Parse .npy bytes; `name` is used in error messages (a path or "file.npz:member").
 NpyArray ParseNpy(std::string_view bytes, const std::string& name);
 NpyArray ReadNpy(const std::string& path);

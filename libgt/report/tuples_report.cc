@@ -12,7 +12,6 @@
 #include "libgt/core/error.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/file_read.h"
-#include "libgt/io/gzip.h"
 #include "libgt/io/npy.h"
 #include "libgt/shards/tar_shard.h"
 
@@ -94,7 +93,7 @@ std::string NpyMember(const std::map<std::string, std::string>& fields, const st
                       const std::string& where) {
   if (auto it = fields.find(name); it != fields.end()) return it->second;
   if (auto it = fields.find(name + ".gz"); it != fields.end()) {
-    return io::GunzipBytes(it->second, where + ":" + name + ".gz");
+    return io::GunzipNpy(it->second, where + ":" + name + ".gz");
   }
   throw InputError(where, "expected a member " + name);
 }

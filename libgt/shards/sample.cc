@@ -5,6 +5,7 @@
 #include "libgt/core/error.h"
 #include "libgt/core/human.h"
 #include "libgt/io/gzip.h"
+#include "libgt/io/npy.h"
 
 namespace gt::shards {
 namespace {
@@ -143,6 +144,10 @@ std::string DecodeMember(std::string* field, std::string_view bytes, const std::
   const size_t plain = PlainFieldName(*field).size();
   if (plain == field->size()) return std::string(bytes);
   field->resize(plain);
+  // A .npy is inflated only up to the size its header declares.
+  if (field->size() > 4 && field->compare(field->size() - 4, 4, ".npy") == 0) {
+    return io::GunzipNpy(bytes, where);
+  }
   return io::GunzipBytes(bytes, where);
 }
 

@@ -42,7 +42,7 @@ def views_ground_truth(
     seed: int = ...,
     **options: Any,
 ) -> Any: ...  # occgt.ViewsGroundTruth
-def gunzip(gz: Any, what: str) -> bytearray: ...  # bytes-like gzip member in
+def gunzip_npy(gz: Any, what: str) -> bytearray: ...  # a bytes-like gzip'd .npy member in
 # (descr, fortran_order, shape, data_offset) of the .npy member buf[offset:offset + size]
 def npy_header(buf: Any, offset: int, size: int, what: str) -> Tuple[str, bool, Tuple[int, ...], int]: ...
 # [(key, start, length, {field: (offset from start, size)})] of a tar shard, in file order

@@ -260,19 +260,20 @@ void BindIo(py::module_& m) {
     m.attr("DATASET_DEFAULTS") = d;
   }
 
-  // A compressed shard member (sample.compression: deflate) inflated into a new bytearray
-  // (occgt.torch.ShardDataset parses it in place): sized by io::GzipPlainSize, filled by
-  // io::GunzipInto (libdeflate) without the GIL.
+  // A compressed .npy shard member (sample.compression: deflate) inflated into a new
+  // bytearray (occgt.torch.ShardDataset parses it in place): sized by the .npy header inside
+  // (io::GzippedNpyPlainSize, so a crafted member cannot inflate beyond the array it
+  // declares), filled by io::GunzipInto (libdeflate) without the GIL.
   m.def(
-      "gunzip",
+      "gunzip_npy",
       [](py::buffer gz, const std::string& what) {
         const py::buffer_info in = gz.request();
         if (in.ndim != 1 || in.itemsize != 1 || in.strides[0] != 1) {
-          throw gt::InputError(what, "gunzip: expected a contiguous byte buffer");
+          throw gt::InputError(what, "gunzip_npy: expected a contiguous byte buffer");
         }
         const std::string_view bytes(static_cast<const char*>(in.ptr),
                                      static_cast<size_t>(in.size));
-        const size_t size = gt::io::GzipPlainSize(bytes, what);
+        const size_t size = gt::io::GzippedNpyPlainSize(bytes, what);
         auto out = py::reinterpret_steal<py::bytearray>(
             PyByteArray_FromStringAndSize(nullptr, static_cast<Py_ssize_t>(size)));
         if (!out) throw py::error_already_set();
@@ -284,8 +285,8 @@ void BindIo(py::module_& m) {
         return out;
       },
       "gz"_a, "what"_a,
-      "The plain bytes of the gzip member `gz` as a bytearray (ValueError naming `what` on "
-      "bad data)");
+      "The plain bytes of the gzip'd .npy member `gz` as a bytearray (ValueError naming "
+      "`what` on bad data or another size than its header declares)");
 
   // The header of a .npy shard member in place (io::ParseNpyHeader: no copy of the data);
   // occgt.torch.ShardDataset maps descr with numpy and views the data with np.frombuffer.

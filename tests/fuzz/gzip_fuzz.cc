@@ -1,4 +1,4 @@
-// gzip bytes -> gt::io::GunzipBytes and GunzipInto (compressed shard members,
+// gzip bytes -> gt::io::GunzipBytes, GunzipInto and GunzipNpy (compressed shard members,
 // sample.compression: deflate): the plain bytes or one InputError, never a crash or a large
 // allocation, whatever the trailer claims; both entry points agree, and what is read is
 // written again (GzipBytes) and reads back the same.
@@ -7,6 +7,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/io/gzip.h"
+#include "libgt/io/npy.h"
 #include "tests/fuzz/fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -31,5 +32,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       __builtin_trap();  // GunzipBytes refused these bytes: GunzipInto must as well
     });
   }
+  // A .npy inside: inflated only to its header's size, and then the same bytes.
+  std::string npy;
+  bool npy_ok = false;
+  gt::fuzz::ExpectValueOrInputError("npy", [&] {
+    npy = gt::io::GunzipNpy(bytes, "m.npy.gz");
+    npy_ok = true;
+  });
+  if (npy_ok && (ok ? npy != plain : npy.size() <= (size_t{1} << 24))) __builtin_trap();
   return 0;
 }

@@ -104,7 +104,9 @@ TEST(Gzip, GunzipIntoNeedsTheExactSize) {
     EXPECT_EQ(out, data) << n;
     std::string small(n + 1, 'x');
     EXPECT_THROW(GunzipInto(gz, small.data(), small.size(), "into"), InputError) << n;
-    if (n > 0) EXPECT_THROW(GunzipInto(gz, out.data(), n - 1, "into"), InputError) << n;
+    if (n > 0) {
+      EXPECT_THROW(GunzipInto(gz, out.data(), n - 1, "into"), InputError) << n;
+    }
   }
   std::string out(10, 'x');
   EXPECT_THROW(GunzipInto("not gzip at all, no", out.data(), out.size(), "into"), InputError);
@@ -138,6 +140,28 @@ TEST(Gzip, PlainSizeRefusesImpossibleTrailers) {
     EXPECT_NE(std::string(e.what()).find("trailer claims 4294967295"), std::string::npos)
         << e.what();
   }
+}
+
+// GunzipPrefix inflates only the first bytes: exactly the plain prefix, all of a shorter
+// stream, and an error only for damage inside what it inflates.
+TEST(Gzip, PrefixInflatesOnlyTheStart) {
+  const std::string data = Random(200000, 6, 9);
+  const std::string gz = GzipBytes(data, 1);
+  for (size_t n :
+       {size_t{0}, size_t{1}, size_t{10012}, size_t{199999}, size_t{200000}, size_t{300000}}) {
+    EXPECT_EQ(GunzipPrefix(gz, n, "p"), data.substr(0, n)) << n;
+  }
+  // A cut stream: its start is still there; asking past the cut is "truncated".
+  const std::string cut = gz.substr(0, gz.size() / 2);
+  EXPECT_EQ(GunzipPrefix(cut, 100, "p"), data.substr(0, 100));
+  try {
+    (void)GunzipPrefix(cut, data.size(), "cut.npy.gz");
+    ADD_FAILURE() << "a cut stream gave its whole prefix";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cut.npy.gz"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW((void)GunzipPrefix("not gzip data at all", 10, "p"), InputError);
 }
 
 }  // namespace

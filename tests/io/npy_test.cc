@@ -19,6 +19,7 @@
 #include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
+#include "libgt/io/gzip.h"
 #include "tests/support/test_support.h"
 
 namespace gt::io {
@@ -265,6 +266,55 @@ TEST(Npy, Rejections) {
   ExpectInputError([&] { a.As<double>("a.npy"); }, {"a.npy", "<f4", "<f8"});
   // Missing file.
   ExpectInputError([&] { ReadNpy("/nonexistent/x.npy"); }, {"/nonexistent/x.npy"});
+}
+
+// A shard's `<field>.npy.gz`: its plain size comes from the .npy header inside, so a
+// member whose stream runs on past the array its header declares (a gzip bomb behind a
+// small header, a lying trailer) is refused after inflating that much, not 2 GiB.
+TEST(NpyGzip, PlainSizeComesFromTheHeaderInside) {
+  const std::vector<std::string> arrays = {
+      EncodeNpy({480, 640}, Values<float>(480 * 640, 1)),
+      EncodeNpy({0}, std::vector<uint8_t>{}),
+      EncodeNpy({3, 2}, Values<uint64_t>(6, 2)),
+      EncodeStringsNpy({"scene0000_00", "a"}, "strings"),
+      CraftNpy(Dict("|S3", "(2,)"), "abcdef"),
+  };
+  for (const std::string& npy : arrays) {
+    const std::string gz = GzipBytes(npy, 1);
+    EXPECT_EQ(GzippedNpyPlainSize(gz, "m.npy.gz"), npy.size());
+    EXPECT_EQ(GunzipNpy(gz, "m.npy.gz"), npy);
+    // The trailer is not what sizes it, and a lie there is still refused.
+    std::string lie = gz;
+    for (size_t k = 0; k < 4; ++k) lie[lie.size() - 4 + k] = static_cast<char>(0xff);
+    EXPECT_THROW((void)GunzipNpy(lie, "m.npy.gz"), InputError);
+  }
+
+  // 64 MiB of zeros behind a header of 4 floats: refused at 4 floats' size.
+  const std::string small = EncodeNpy({4}, Values<float>(4, 3));
+  const std::string bomb = GzipBytes(small + std::string(size_t{64} << 20, '\0'), 9);
+  ASSERT_LT(bomb.size(), size_t{1} << 20);
+  EXPECT_EQ(GzippedNpyPlainSize(bomb, "bomb.npy.gz"), small.size());
+  ExpectInputError([&] { (void)GunzipNpy(bomb, "bomb.npy.gz"); },
+                   {"bomb.npy.gz", "more than " + std::to_string(small.size()) + " bytes"});
+
+  // A header that declares more than 2 GiB, or more than DEFLATE can reach from the bytes.
+  ExpectInputError(
+      [&] {
+        (void)GzippedNpyPlainSize(GzipBytes(CraftNpy(Dict("<f8", "(100000, 100000)"), ""), 1),
+                                  "huge.npy.gz");
+      },
+      {"huge.npy.gz", "'shape'", "2 GiB"});
+  ExpectInputError(
+      [&] {
+        (void)GzippedNpyPlainSize(GzipBytes(CraftNpy(Dict("<f4", "(1000000,)"), ""), 1),
+                                  "short.npy.gz");
+      },
+      {"short.npy.gz", "'shape'", "gzip bytes can hold"});
+  // Not a .npy inside, or not gzip at all: the reader's own messages.
+  ExpectInputError([&] { (void)GzippedNpyPlainSize(GzipBytes("plain text", 1), "t.npy.gz"); },
+                   {"t.npy.gz", "not a .npy file"});
+  ExpectInputError([&] { (void)GzippedNpyPlainSize("not gzip data at all", "n.npy.gz"); },
+                   {"n.npy.gz", "not gzip"});
 }
 
 TEST(Npz, WriteIsStoredSortedDeterministicAndReadBack) {

@@ -10,6 +10,7 @@ own dense members and a bit-by-bit reference written here; broken folders raise 
 naming the file and what was expected."""
 from __future__ import annotations
 
+import gzip
 import io
 import json
 import os
@@ -314,6 +315,20 @@ class ShardDatasetTest(unittest.TestCase):
             with self.subTest(offset=offset), \
                     self.assertRaisesRegex(ValueError, r"label01\.npy\.gz: .*(" + message + ")"):
                 ShardDataset(bad)[0]
+
+    def test_compressed_npy_inflates_only_to_its_header_size(self) -> None:
+        # A member whose gzip stream runs 64 MiB past the array its .npy header declares is
+        # refused at the header's size (it used to inflate up to the trailer's 4 GiB).
+        from occgt._occgt import gunzip_npy
+        buf = io.BytesIO()
+        np.save(buf, np.arange(4, dtype=np.float32))
+        npy = buf.getvalue()
+        self.assertEqual(bytes(gunzip_npy(gzip.compress(npy), "k.depth0.npy.gz")), npy)
+        bomb = gzip.compress(npy + bytes(64 << 20), 9)
+        self.assertLess(len(bomb), 1 << 20)
+        with self.assertRaisesRegex(ValueError, rf"k\.depth0\.npy\.gz: gzip data inflates to "
+                                    rf"more than {len(npy)} bytes"):
+            gunzip_npy(bomb, "k.depth0.npy.gz")
 
     def test_color_and_options(self) -> None:
         ds = ShardDataset(self.full, color=True, depth=False, occupancy="none")

@@ -717,6 +717,21 @@ TEST(TarShard, CompressedMemberNamesDecodeByOneRule) {
   EXPECT_EQ(field, "cells0.npy");
   field = "cells0.npy.gz";
   EXPECT_THROW((void)DecodeMember(&field, npy, "m"), InputError);  // not gzip
+  // A .npy is inflated only up to its header's size: 32 MiB behind a 6-byte array stop
+  // there, while another field inflates to its end.
+  const std::string tail(size_t{32} << 20, '\0');
+  field = "cells0.npy.gz";
+  try {
+    (void)DecodeMember(&field, io::GzipBytes(npy + tail, 9), "s.tar:k.cells0.npy.gz");
+    ADD_FAILURE() << "a .npy.gz running past its array was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("s.tar:k.cells0.npy.gz: gzip data inflates to more than " +
+                                         std::to_string(npy.size()) + " bytes"),
+              std::string::npos)
+        << e.what();
+  }
+  field = "json.gz";
+  EXPECT_EQ(DecodeMember(&field, io::GzipBytes("{}" + tail, 9), "m").size(), 2 + tail.size());
 }
 
 }  // namespace

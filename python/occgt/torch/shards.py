@@ -24,7 +24,7 @@ from typing import Any, Dict, List, Optional, Tuple, Union
 import numpy as np
 import torch.utils.data
 
-from .._occgt import check_pair_sample, gunzip, npy_header, shard_index, shard_samples
+from .._occgt import check_pair_sample, gunzip_npy, npy_header, shard_index, shard_samples
 from ._convert import to_tensor
 
 __all__ = ["ShardDataset"]
@@ -235,7 +235,7 @@ class _ShardSplit(torch.utils.data.Dataset):  # type: ignore[type-arg]
             name = field + ".gz"
             offset, size = members[name]
             # libdeflate, without the GIL (C++).
-            raw = gunzip(memoryview(buf)[offset:offset + size], f"{where}.{name}")
+            raw = gunzip_npy(memoryview(buf)[offset:offset + size], f"{where}.{name}")
             a = _npy(raw, 0, len(raw), f"{where}.{name}")
         if (a.dtype.str[1:] != dtype or a.ndim != len(shape) or
                 any(n is not None and n != m for n, m in zip(shape, a.shape))):
