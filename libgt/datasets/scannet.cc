@@ -192,7 +192,8 @@ Scene ScanNetReader::ReadScene(const std::string& root, const std::string& scene
   return scene;
 }
 
-Scene ScanNetReader::ReadSceneFolder(const std::string& folder, const std::string& scene_name) const {
+Scene ScanNetReader::ReadSceneFolder(const std::string& folder,
+                                     const std::string& scene_name) const {
   if (!IsPythonExport(folder) && IsCppExport(folder)) return ReadCppExport(folder, scene_name);
   if (!IsPythonExport(folder) && IsSensScene(folder)) return ReadSens(folder, scene_name);
   const std::string pose_dir = (fs::path(folder) / "pose").string();
@@ -217,15 +218,18 @@ Scene ScanNetReader::ReadSceneFolder(const std::string& folder, const std::strin
   const Eigen::Matrix3d K_depth =
       ReadIntrinsicsText((fs::path(intrinsic_dir) / "intrinsic_depth.txt").string());
 
-  // Sizes from the first depth / colour file present.
+  // Sizes from the first depth / colour file that can be read: a damaged one is that
+  // frame's problem (skipped and counted when it is read), not the scene's.
   int depth_w = kDefaultDepthWidth, depth_h = kDefaultDepthHeight;
   for (const auto& p : frames) {
     const std::string d = (fs::path(folder) / "depth" / (p.stem + ".png")).string();
-    if (io::FileExists(d)) {
+    if (!io::FileExists(d)) continue;
+    try {
       const io::ImageSize s = io::ReadImageSize(d);
       depth_w = s.width;
       depth_h = s.height;
       break;
+    } catch (const InputError&) {
     }
   }
   const Camera depth_camera = Camera::FromK(K_depth, depth_w, depth_h);
@@ -233,7 +237,12 @@ Scene ScanNetReader::ReadSceneFolder(const std::string& folder, const std::strin
   for (const auto& p : frames) {
     const std::string c = ColorPath(folder, p.stem);
     if (c.empty()) continue;
-    const io::ImageSize s = io::ReadImageSize(c);
+    io::ImageSize s;
+    try {
+      s = io::ReadImageSize(c);
+    } catch (const InputError&) {
+      continue;
+    }
     const std::string color_k_path = (fs::path(intrinsic_dir) / "intrinsic_color.txt").string();
     color_camera = io::FileExists(color_k_path)
                        ? Camera::FromK(ReadIntrinsicsText(color_k_path), s.width, s.height)

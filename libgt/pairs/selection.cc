@@ -241,8 +241,11 @@ std::vector<CandidatePair> PruneCandidates(const Scene& scene, const std::vector
 std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>& cameras,
                                    const std::vector<CandidatePair>& candidates,
                                    const LabelOptions& label_options, int score_stride,
-                                   DepthCache* cache, DropCounts* drops) {
+                                   DepthCache* cache, DropCounts* drops,
+                                   std::string* first_read_error) {
   std::vector<std::optional<ScoredPair>> results(candidates.size());
+  std::vector<std::string> read_errors(candidates.size());  // "<frame id>: <error>"
+
   // Visit order: by block of (i0 / B, i1 / B), then candidate order (results by index).
   const size_t block = std::max<size_t>(1, cache->CapacityMaps() / 4);
   std::vector<size_t> order(candidates.size());
@@ -257,10 +260,13 @@ std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>
     const size_t k = order[position];
     const CandidatePair& c = candidates[k];
     std::shared_ptr<const DepthImage> d0, d1;
+    size_t reading = c.i0;
     try {
       d0 = cache->Get(c.i0);
+      reading = c.i1;
       d1 = cache->Get(c.i1);
-    } catch (const InputError&) {
+    } catch (const InputError& e) {
+      read_errors[k] = scene.frames[reading].id + ": " + e.what();
       return;
     }
     const Rigid3d& w0 = scene.frames[c.i0].world_from_cam;
@@ -276,10 +282,11 @@ std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>
   std::vector<ScoredPair> out;
   out.reserve(results.size());
   int64_t errors = 0;
-  for (auto& r : results) {
-    if (r) {
-      out.push_back(*r);
+  for (size_t k = 0; k < results.size(); ++k) {
+    if (results[k]) {
+      out.push_back(*results[k]);
     } else {
+      if (errors == 0 && first_read_error != nullptr) *first_read_error = read_errors[k];
       ++errors;
     }
   }

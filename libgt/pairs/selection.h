@@ -166,14 +166,17 @@ struct ScoredPair {
 };
 
 // ScoreDirection both ways for every candidate, in parallel, results in candidate order.
-// A candidate whose depth cannot be read is dropped and counted ("score.read_error").
+// A candidate whose depth cannot be read is dropped and counted ("score.read_error"); the
+// first such error in candidate order goes to `first_read_error` when given, as
+// "<frame id>: <error>".
 // Candidates are visited in blocks of frames (frame index / B for both frames, B a quarter
 // of the cache capacity) so that the depth maps a block needs stay cached even for "all
 // pairs" of a long scene: decodes grow like (frames / B)² · B, not like the pair count.
 std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>& cameras,
                                    const std::vector<CandidatePair>& candidates,
                                    const LabelOptions& label_options, int score_stride,
-                                   DepthCache* cache, DropCounts* drops);
+                                   DepthCache* cache, DropCounts* drops,
+                                   std::string* first_read_error = nullptr);
 
 // The two directions combined (geometry/aggregate.h).
 double PairOverlap(const ScoredPair& p, Aggregate aggregate);

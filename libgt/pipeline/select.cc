@@ -302,8 +302,12 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
                              &drops);
   }
   // Imported pairs may list (i0 > i1); scoring and labels keep the file's order.
-  const std::vector<ScoredPair> scored =
-      ScorePairs(scene, cams, pruned, labels, r.selection.score_stride, cache, &drops);
+  std::string first_score_error;
+  const std::vector<ScoredPair> scored = ScorePairs(
+      scene, cams, pruned, labels, r.selection.score_stride, cache, &drops, &first_score_error);
+  if (!first_score_error.empty()) {
+    drop_examples["score.read_error"] = scene_name + "/" + first_score_error;
+  }
   std::vector<size_t> chosen;
   if (imports) {
     for (size_t k = 0; k < scored.size(); ++k) chosen.push_back(k);

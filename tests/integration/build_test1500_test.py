@@ -83,6 +83,45 @@ def main():
                 got.append((int(scene[5:9]), int(scene[10:12]), p["frame0"]["number"], p["frame1"]["number"]))
     assert got == expected
 
+    # 1b. A depth map that cannot be decoded drops the pairs that use it at scoring (the
+    # import has no scan), counted and named: the first error in summary.json and the text.
+    # It is the scene's first depth file, which the reader no longer needs for the size.
+    s0, sub0, _, _ = expected[0]
+    broken = common.scratch("build_test1500_broken")
+    scene0 = f"scene{s0:04d}_{sub0:02d}"
+    f0 = min(scenes[scene0])
+    os.makedirs(os.path.join(broken, scene0))
+    for sub in ("color", "depth", "pose", "intrinsic"):
+        os.symlink(os.path.join(data, scene0, sub), os.path.join(broken, scene0, sub))
+    os.unlink(os.path.join(broken, scene0, "depth"))
+    os.makedirs(os.path.join(broken, scene0, "depth"))
+    for name in os.listdir(os.path.join(data, scene0, "depth")):
+        os.symlink(os.path.join(data, scene0, "depth", name), os.path.join(broken, scene0, "depth", name))
+    os.unlink(os.path.join(broken, scene0, "depth", f"{f0}.png"))
+    with open(os.path.join(broken, scene0, "depth", f"{f0}.png"), "wb") as f:
+        f.write(b"not a PNG")
+    one = [n for n in names if f"scene{n[0]:04d}_{n[1]:02d}" == scene0]
+    uses = sum(1 for n in one if f0 in (n[2], n[3]))
+    one_npz = os.path.join(broken, "one-scene.npz")
+    np.savez(one_npz, **{k: loftr[k][[i for i in range(len(names)) if tuple(names[i]) in
+                                      {tuple(n) for n in one}]] for k in loftr.files})
+    with open(recipe) as f:
+        doc = yaml.safe_load(f)
+    doc["selection"]["import_pairs"]["path"] = one_npz
+    one_recipe = os.path.join(broken, "one-scene.yaml")
+    with open(one_recipe, "w") as f:
+        yaml.safe_dump(doc, f)
+    r = common.occgt("build", one_recipe, "--out", os.path.join(broken, "out"), "--root", broken,
+                     "--stage", "select", env=env)
+    s = json.loads(common.occgt("build", "--json", one_recipe, "--out", os.path.join(broken, "out2"),
+                                "--root", broken, "--stage", "select", env=env).stdout)
+    assert uses > 0 and s["drops"] == {"score.read_error": uses}, (uses, s["drops"])
+    assert s["counts"]["selected"] == len(one) - uses, s["counts"]
+    example = s["drop_examples"]["score.read_error"]
+    assert example.startswith(f"{scene0}/{f0}: ") and f"{f0}.png" in example, example
+    assert f"  first score.read_error: {example}" in r.stdout, r.stdout
+    validate(s, "summary.schema.json")
+
     # 2. The same recipe at 80x60 without images/occupancy: a full build and the export.
     # Under a sanitizer (common.SANITIZER) on the pairs of the first 10 scenes only (150 of
     # the 1500, a test.npz of those rows): the same code on a tenth of the work.
