@@ -792,7 +792,7 @@ std::string EvalJson(const EvalResult& r) {
                         (e.method == PoseMethod::kRansac ? "RANSAC" : PoseMethodName(e.method)) +
                         ", prob, threshold, maxIters) on K-normalised points" +
                         (prosac ? " sorted by decreasing confidence" : "") +
-                        ", cv::recoverPose per 3x3 block, most inliers"},
+                        ", cv::recoverPose (distanceThresh 50) per 3x3 block, most inliers"},
          {"opencv_version", CV_VERSION},
          {"ransac_px", e.ransac_px},
          {"confidence", e.confidence},

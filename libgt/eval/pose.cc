@@ -289,7 +289,7 @@ std::optional<PoseEstimate> PoseFromEssential(const EssentialEstimate& e,
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) block(r, c) = e.E[9 * k + 3 * r + c];
     }
-    const RecoveredPose pose = RecoverPose(block, p0, p1, 1e9, &mask);
+    const RecoveredPose pose = RecoverPose(block, p0, p1, kLoftrRecoverPoseDistance, &mask);
     if (pose.inliers > best_inliers) {
       best_inliers = pose.inliers;
       best = PoseEstimate{pose.cam1_from_cam0_R, pose.cam1_from_cam0_t, pose.inliers};

@@ -8,7 +8,7 @@
 // K0[0,0], K1[1,1], or glue-factory's mean of all four); cv::findEssentialMat(method,
 // prob = confidence, maxIters) on the normalised points with K = I (USAC_PROSAC on the
 // matches sorted by decreasing confidence, stable);
-// cv::recoverPose(E_k, ..., I, distanceThresh 1e9, mask) on each 3x3 block E_k of E, the
+// cv::recoverPose(E_k, ..., I, distanceThresh 50, mask) on each 3x3 block E_k of E, the
 // same mask passed on from block to block (OpenCV updates it in place, as LoFTR's Python
 // loop does), the block with most inliers wins; fewer than `min_matches` matches, no E, or
 // no block with an inlier -> no pose (pose error +inf). recoverPose is RecoverPose below:
@@ -32,6 +32,14 @@
 #include <vector>
 
 namespace gt::eval {
+
+// The distanceThresh of recoverPose in LoFTR's loop as it runs. Its Python line,
+// `cv2.recoverPose(_E, kpts0, kpts1, np.eye(3), 1e9, mask=mask)`, reads as 1e9, but
+// OpenCV's binding takes the overload without distanceThresh (the 1e9 lands in its R
+// output; it returns 4 values, not 5), so OpenCV's default of 50 applies: a point
+// triangulated farther than 50 baselines is no inlier. SuperGlue, EfficientLoFTR and
+// glue-factory's OpenCV estimator make the same call.
+inline constexpr double kLoftrRecoverPoseDistance = 50.0;
 
 // The robust method of cv::findEssentialMat (OpenCV 4.6's flags).
 enum class PoseMethod {

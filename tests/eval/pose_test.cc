@@ -9,16 +9,19 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <numeric>
 #include <opencv2/calib3d.hpp>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include "libgt/core/error.h"
 #include "libgt/eval/evaluate.h"
 #include "libgt/eval/match_quality.h"
 #include "libgt/eval/protocol.h"
+#include "tests/support/test_support.h"
 
 namespace gt::eval {
 namespace {
@@ -111,6 +114,97 @@ TEST(EstimateRelativePose, ExactMatchesGiveTheTruePose) {
   bad = PoseEstimatorOptions{};
   bad.confidence = 1;
   EXPECT_FALSE(bad.Check(&error));
+}
+
+// LoFTR's loop runs `cv2.recoverPose(_E, kpts0, kpts1, np.eye(3), 1e9, mask=mask)` in
+// Python. OpenCV's binding gives that call the overload without distanceThresh (the 1e9
+// lands in its R output), so the default distance of 50 applies: a point triangulated
+// farther than 50 baselines is no inlier. EstimateRelativePose follows the call as it runs.
+// Points up to 120 baselines away tell the two apart; LoFTR's Python loop (cv2, the same
+// OpenCV) is the reference, and C++'s cv::recoverPose shows that 1e9 would count more.
+TEST(EstimateRelativePose, SameAsLoftrsPythonCallOnFarPoints) {
+  Scene s;
+  s.K << 500, 0, 319.5, 0, 520, 239.5, 0, 0, 1;
+  s.R = Rot(2, {0.1, 1, 0});
+  s.t = Eigen::Vector3d(0.05, 0.01, 0);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1), z(1, 6);
+  while (s.kpts0.size() < 2 * 200) {
+    const Eigen::Vector3d p0(u(rng), 0.7 * u(rng), z(rng));
+    const Eigen::Vector3d p1 = s.R * p0 + s.t;
+    const Eigen::Vector3d x0 = s.K * p0 / p0.z(), x1 = s.K * p1 / p1.z();
+    if (x0.x() < 0 || x0.x() > 639 || x0.y() < 0 || x0.y() > 479 || x1.x() < 0 || x1.x() > 639 ||
+        x1.y() < 0 || x1.y() > 479) {
+      continue;
+    }
+    s.kpts0.insert(s.kpts0.end(), {static_cast<float>(x0.x()), static_cast<float>(x0.y())});
+    s.kpts1.insert(s.kpts1.end(), {static_cast<float>(x1.x()), static_cast<float>(x1.y())});
+  }
+  const auto pose = EstimateRelativePose(s.kpts0, s.kpts1, s.K, s.K, PoseEstimatorOptions{});
+  ASSERT_TRUE(pose.has_value());
+
+  const std::string dir = test::ScratchDir("pose_loftr_call");
+  {
+    std::ofstream f(dir + "/kpts.txt");
+    f.precision(9);  // float32 round trip
+    for (size_t k = 0; k < s.kpts0.size(); k += 2) {
+      f << s.kpts0[k] << " " << s.kpts0[k + 1] << " " << s.kpts1[k] << " " << s.kpts1[k + 1]
+        << "\n";
+    }
+  }
+  // LoFTR's estimate_pose (src/utils/metrics.py) at its defaults: thresh 0.5 px, conf
+  // 0.99999, K0 = K1 = K; prints the winning block's count, R and t.
+  const auto r = test::RunShell(
+      "/usr/bin/python3 -c \"\n"
+      "import sys, numpy as np, cv2\n"
+      "a = np.loadtxt(sys.argv[1], dtype=np.float32).astype(np.float64)\n"
+      "K = np.array([[500, 0, 319.5], [0, 520, 239.5], [0, 0, 1]], np.float64)\n"
+      "k0 = (a[:, 0:2] - K[[0, 1], [2, 2]]) / K[[0, 1], [0, 1]]\n"
+      "k1 = (a[:, 2:4] - K[[0, 1], [2, 2]]) / K[[0, 1], [0, 1]]\n"
+      "thr = 0.5 / np.mean([K[0, 0], K[1, 1], K[0, 0], K[1, 1]])\n"
+      "E, mask = cv2.findEssentialMat(k0, k1, np.eye(3), threshold=thr, prob=0.99999, "
+      "method=cv2.RANSAC)\n"
+      "best = None\n"
+      "for _E in np.split(E, len(E) / 3):\n"
+      "    n, R, t, _ = cv2.recoverPose(_E, k0, k1, np.eye(3), 1e9, mask=mask)\n"
+      "    if best is None or n > best[0]: best = (n, R, t)\n"
+      "print(best[0], *map(repr, best[1].ravel()), *map(repr, best[2].ravel()))\n"
+      "\" '" +
+      dir + "/kpts.txt'");
+  ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
+  std::istringstream in(r.stdout_text);
+  int inliers = 0;
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  in >> inliers;
+  for (int k = 0; k < 9; ++k) in >> R(k / 3, k % 3);
+  for (int k = 0; k < 3; ++k) in >> t(k);
+  ASSERT_TRUE(in) << r.stdout_text;
+  EXPECT_EQ(pose->inliers, inliers);
+  EXPECT_EQ(pose->cam1_from_cam0_R, R);
+  EXPECT_EQ(pose->cam1_from_cam0_t, t);
+
+  // The same E and mask with distanceThresh 1e9 (what the Python line seems to ask for):
+  // more inliers, so this scene tells the two apart.
+  const int n = static_cast<int>(s.kpts0.size() / 2);
+  cv::Mat p0(n, 2, CV_64F), p1(n, 2, CV_64F);
+  for (int i = 0; i < n; ++i) {
+    p0.at<double>(i, 0) = (static_cast<double>(s.kpts0[2 * i]) - 319.5) / 500;
+    p0.at<double>(i, 1) = (static_cast<double>(s.kpts0[2 * i + 1]) - 239.5) / 520;
+    p1.at<double>(i, 0) = (static_cast<double>(s.kpts1[2 * i]) - 319.5) / 500;
+    p1.at<double>(i, 1) = (static_cast<double>(s.kpts1[2 * i + 1]) - 239.5) / 520;
+  }
+  cv::Mat mask;
+  const double thr = 0.5 / ((500.0 + 520.0 + 500.0 + 520.0) / 4);
+  const cv::Mat E = cv::findEssentialMat(p0, p1, cv::Mat::eye(3, 3, CV_64F), cv::RANSAC, 0.99999,
+                                         thr, 1000, mask);
+  int most_far = 0;
+  for (int k = 0; k < E.rows / 3; ++k) {
+    cv::Mat m = mask.clone(), Rk, tk;
+    most_far = std::max(most_far, cv::recoverPose(E.rowRange(3 * k, 3 * k + 3).clone(), p0, p1,
+                                                  cv::Mat::eye(3, 3, CV_64F), Rk, tk, 1e9, m));
+  }
+  EXPECT_GT(most_far, inliers + 20);
 }
 
 const PoseMethod kAllMethods[] = {PoseMethod::kRansac,      PoseMethod::kLmeds,
@@ -373,7 +467,8 @@ TEST(SelectBestOfSweep, FirstThresholdLastGroupOnTies) {
   EXPECT_EQ(SelectBestOfSweep(r, 0).best, 0u);
 }
 
-// RecoverPose is cv::recoverPose(E, p0, p1, I, R, t, 1e9, mask) computed differently; the
+// RecoverPose is cv::recoverPose(E, p0, p1, I, R, t, distanceThresh, mask) computed
+// differently, here at LoFTR's 50 (kLoftrRecoverPoseDistance) and at 1e9; the
 // slow reference here is OpenCV itself. Every case runs LoFTR's loop on both sides: each
 // block of findEssentialMat's E in turn, the mask narrowed from block to block; counts,
 // narrowed masks, R and t must be equal, bit for bit.
@@ -412,31 +507,35 @@ int64_t ExpectSameAsOpenCV(const Correspondences& c, const cv::Mat& E, const cv:
   const int n = static_cast<int>(c.p0.size() / 2);
   cv::Mat p0(n, 2, CV_64F, const_cast<double*>(c.p0.data()));
   cv::Mat p1(n, 2, CV_64F, const_cast<double*>(c.p1.data()));
-  cv::Mat mask_cv = mask_in.clone();
-  std::vector<uint8_t> mask(mask_cv.data, mask_cv.data + mask_cv.total());
   int64_t compared = 0;
-  for (int k = 0; k < E.rows / 3; ++k) {
-    SCOPED_TRACE(what + ", block " + std::to_string(k));
-    cv::Mat R_cv, t_cv;
-    const int expected = cv::recoverPose(E.rowRange(3 * k, 3 * k + 3).clone(), p0, p1,
-                                         cv::Mat::eye(3, 3, CV_64F), R_cv, t_cv, 1e9, mask_cv);
-    Eigen::Matrix3d block;
-    for (int r = 0; r < 3; ++r) {
-      for (int col = 0; col < 3; ++col) block(r, col) = E.at<double>(3 * k + r, col);
+  for (const double distance : {kLoftrRecoverPoseDistance, 1e9}) {
+    cv::Mat mask_cv = mask_in.clone();
+    std::vector<uint8_t> mask(mask_cv.data, mask_cv.data + mask_cv.total());
+    for (int k = 0; k < E.rows / 3; ++k) {
+      SCOPED_TRACE(what + ", block " + std::to_string(k) + ", distance " +
+                   std::to_string(distance));
+      cv::Mat R_cv, t_cv;
+      const int expected =
+          cv::recoverPose(E.rowRange(3 * k, 3 * k + 3).clone(), p0, p1, cv::Mat::eye(3, 3, CV_64F),
+                          R_cv, t_cv, distance, mask_cv);
+      Eigen::Matrix3d block;
+      for (int r = 0; r < 3; ++r) {
+        for (int col = 0; col < 3; ++col) block(r, col) = E.at<double>(3 * k + r, col);
+      }
+      const RecoveredPose got = RecoverPose(block, c.p0, c.p1, distance, &mask);
+      EXPECT_EQ(got.inliers, expected);
+      if (mask.size() != mask_cv.total()) {
+        ADD_FAILURE() << "mask size " << mask.size() << ", OpenCV's " << mask_cv.total();
+        return compared;
+      }
+      EXPECT_TRUE(std::equal(mask.begin(), mask.end(), mask_cv.data));
+      for (int r = 0; r < 3; ++r) {
+        for (int col = 0; col < 3; ++col)
+          EXPECT_EQ(got.cam1_from_cam0_R(r, col), R_cv.at<double>(r, col));
+        EXPECT_EQ(got.cam1_from_cam0_t(r), t_cv.at<double>(r, 0));
+      }
+      compared += n;
     }
-    const RecoveredPose got = RecoverPose(block, c.p0, c.p1, 1e9, &mask);
-    EXPECT_EQ(got.inliers, expected);
-    if (mask.size() != mask_cv.total()) {
-      ADD_FAILURE() << "mask size " << mask.size() << ", OpenCV's " << mask_cv.total();
-      return compared;
-    }
-    EXPECT_TRUE(std::equal(mask.begin(), mask.end(), mask_cv.data));
-    for (int r = 0; r < 3; ++r) {
-      for (int col = 0; col < 3; ++col)
-        EXPECT_EQ(got.cam1_from_cam0_R(r, col), R_cv.at<double>(r, col));
-      EXPECT_EQ(got.cam1_from_cam0_t(r), t_cv.at<double>(r, 0));
-    }
-    compared += n;
   }
   return compared;
 }
@@ -608,8 +707,9 @@ TEST(EstimateRelativePoses, SameAsOpenCVPerEstimator) {
       cv::Mat best_R, best_t;
       for (int k = 0; !E.empty() && k < E.rows / 3; ++k) {
         cv::Mat R, t;
-        const int inliers = cv::recoverPose(E.rowRange(3 * k, 3 * k + 3).clone(), p0, p1,
-                                            cv::Mat::eye(3, 3, CV_64F), R, t, 1e9, mask);
+        const int inliers =
+            cv::recoverPose(E.rowRange(3 * k, 3 * k + 3).clone(), p0, p1,
+                            cv::Mat::eye(3, 3, CV_64F), R, t, kLoftrRecoverPoseDistance, mask);
         if (inliers > best) {
           best = inliers;
           best_R = R;

@@ -38,6 +38,8 @@ def estimate_pose(kpts0: np.ndarray, kpts1: np.ndarray, K0: np.ndarray, K1: np.n
         return None
     best, best_n = None, 0
     for block in np.split(E, len(E) / 3):
+        # LoFTR's line as written: this overload has no distanceThresh (the 1e9 goes to
+        # its R output), so OpenCV's default of 50 applies (docs/EVAL.md).
         n, R, t, _ = cv2.recoverPose(block, p0, p1, np.eye(3), 1e9, mask=mask)
         if n > best_n:
             best, best_n = (R, t[:, 0]), n
