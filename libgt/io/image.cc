@@ -90,8 +90,8 @@ ColorImage ReadFrameColor(const Frame& frame) {
     const ColorImage distorted = ReadColor(frame.color_path);
     const LensCamera& lens = *frame.color_lens;
     if (distorted.width != lens.pinhole.width || distorted.height != lens.pinhole.height) {
-      throw InputError(frame.color_path, SizeMismatch(distorted.width, distorted.height,
-                                                      lens.pinhole));
+      throw InputError(frame.color_path,
+                       SizeMismatch(distorted.width, distorted.height, lens.pinhole));
     }
     const cv::Mat src(distorted.height, distorted.width, CV_8UC3,
                       const_cast<uint8_t*>(distorted.rgb.data()));
@@ -128,6 +128,15 @@ ColorImage ReadFrameColor(const Frame& frame) {
     }
   }
   return DecodeColor(bytes, where);
+}
+
+void CheckFrameColorHeader(const Frame& frame) {
+  if (frame.color_path.empty() || frame.color_range.size != 0 || frame.color_lens) return;
+  const ImageSize header = ReadImageSize(frame.color_path);
+  const Camera& camera = frame.color_camera;
+  if (camera.width > 0 && (header.width != camera.width || header.height != camera.height)) {
+    throw InputError(frame.color_path, SizeMismatch(header.width, header.height, camera));
+  }
 }
 
 ColorImage ReadFrameColorResized(const Frame& frame, int new_width, int new_height,

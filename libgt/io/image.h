@@ -1,6 +1,6 @@
-// Colour images: loading (PNG, JPEG, Netpbm via libgt/io/codec.h) and bilinear resizing to the working
-// resolution, with K rescaled by Camera::Resized (camera.h: pixel areas stay aligned,
-// which is also what cv::resize with INTER_LINEAR assumes).
+// Colour images: loading (PNG, JPEG, Netpbm via libgt/io/codec.h) and bilinear resizing to the
+// working resolution, with K rescaled by Camera::Resized (camera.h: pixel areas stay aligned, which
+// is also what cv::resize with INTER_LINEAR assumes).
 //
 // Layout: ColorImage::rgb is uint8, row-major [height, width, 3], channels in R, G, B
 // order. Grey and 16-bit inputs are converted to 8-bit RGB (16-bit: round(v / 257)); an
@@ -46,6 +46,12 @@ ColorImage ReadColorResized(const std::string& path, const Camera& camera, int n
 // frame.color_camera (io/undistort.h). InputError naming the file (and the payload's
 // offset) on any problem.
 ColorImage ReadFrameColor(const Frame& frame);
+// The cheap part of ReadFrameColor, for a scan over many frames: a colour image file
+// (frame.color_path without a payload range or a lens) whose header cannot be read or gives
+// another size than frame.color_camera is an InputError naming the file. The pixels are not
+// decoded (a file cut inside its pixel data still fails when it is read), and payloads
+// inside a container or behind a lens are left to the reader.
+void CheckFrameColorHeader(const Frame& frame);
 // ReadColorResized for a frame's colour (its camera is frame.color_camera).
 ColorImage ReadFrameColorResized(const Frame& frame, int new_width, int new_height,
                                  Camera* resized_camera = nullptr);

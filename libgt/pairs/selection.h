@@ -130,6 +130,9 @@ struct ScanResult {
   // The first frame (in scene order) whose depth could not be read: "<frame id>: <error>",
   // or "" (so that a missing mesh or file is named, not only counted).
   std::string first_read_error;
+  // The same for "scan.color_error" (ScanRecipeFrames: a colour image whose header cannot
+  // be read or gives another size, when the recipe stores images).
+  std::string first_color_error;
 };
 // Decodes each frame after the stride (through the cache). A frame whose depth cannot be
 // read is skipped and counted, never fatal.

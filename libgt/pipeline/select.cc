@@ -11,6 +11,7 @@
 #include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
+#include "libgt/io/image.h"
 #include "libgt/io/npy.h"
 #include "libgt/io/pickle.h"
 #include "libgt/truth/pair_files.h"
@@ -235,6 +236,21 @@ pairs::ScanResult ScanRecipeFrames(const Recipe& r, const Scene& scene, const La
     if (scanned.kept.size() < before) {
       scanned.drops["scan.no_color"] += static_cast<int64_t>(before - scanned.kept.size());
     }
+    // A colour file that cannot be stored (not an image, another size) is that frame's
+    // problem, found here from its header rather than when a sample is written.
+    std::vector<size_t> kept;
+    for (const size_t i : scanned.kept) {
+      try {
+        io::CheckFrameColorHeader(scene.frames[i]);
+        kept.push_back(i);
+      } catch (const InputError& e) {
+        ++scanned.drops["scan.color_error"];
+        if (scanned.first_color_error.empty()) {
+          scanned.first_color_error = scene.frames[i].id + ": " + e.what();
+        }
+      }
+    }
+    scanned.kept = std::move(kept);
   }
   return scanned;
 }
@@ -257,6 +273,23 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
   // and counted (scan.no_color, import.no_color); a scene with none at all is an error.
   const bool need_color = NeedsColor(r, scene);
   auto has_color = [&](size_t i) { return !scene.frames[i].color_path.empty(); };
+  // io::CheckFrameColorHeader's problem with frame a's colour, else b's, as "<frame id>:
+  // <error>"; "" when neither has one. Each frame is checked once.
+  std::map<size_t, std::string> color_errors;
+  auto ColorHeaderError = [&](size_t a, size_t b) -> std::string {
+    for (const size_t i : {a, b}) {
+      auto [it, added] = color_errors.try_emplace(i);
+      if (added) {
+        try {
+          io::CheckFrameColorHeader(scene.frames[i]);
+        } catch (const InputError& e) {
+          it->second = scene.frames[i].id + ": " + e.what();
+        }
+      }
+      if (!it->second.empty()) return it->second;
+    }
+    return "";
+  };
   if (imports) {
     std::map<int64_t, size_t> by_number;
     std::map<std::string, size_t> by_id;
@@ -283,6 +316,12 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
           ++drops["import.unusable_frame"];
         } else if (need_color && (!has_color(*a) || !has_color(*b))) {
           ++drops["import.no_color"];
+        } else if (const std::string e = need_color ? ColorHeaderError(*a, *b) : std::string();
+                   !e.empty()) {
+          ++drops["import.color_error"];
+          if (!drop_examples.contains("import.color_error")) {
+            drop_examples["import.color_error"] = scene_name + "/" + e;
+          }
         } else {
           candidates.push_back({*a, *b});
         }
@@ -295,6 +334,9 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
     AddCounts(scanned.drops, &drops);
     if (!scanned.first_read_error.empty()) {
       drop_examples["scan.read_error"] = scene_name + "/" + scanned.first_read_error;
+    }
+    if (!scanned.first_color_error.empty()) {
+      drop_examples["scan.color_error"] = scene_name + "/" + scanned.first_color_error;
     }
     frames_kept = static_cast<int64_t>(scanned.kept.size());
     candidates = GenerateCandidates(scanned.kept, r.selection.max_frame_gap);

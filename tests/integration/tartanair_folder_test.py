@@ -7,6 +7,9 @@ import json
 import os
 import sys
 
+import cv2
+import numpy as np
+
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import common  # noqa: E402
 
@@ -107,6 +110,31 @@ def main():
     assert common_pairs, (env_pairs, ref_pairs)
     for p in common_pairs:
         assert strip(p) == by_frames[(p["frame0"]["id"], p["frame1"]["id"])], p["key"]
+    # Colour images that cannot be stored (not an image; another size) are that frame's
+    # problem: skipped, counted and named (scan.color_error), and the build completes. It
+    # used to fail as a whole when the first sample with such a frame was written.
+    bad = make_root(sample, tmp, "bad_colour", (("P000", 0),))
+    images = os.path.join(bad, "P000", "image_left")
+    os.unlink(os.path.join(images, "000001_left.png"))
+    with open(os.path.join(images, "000001_left.png"), "wb") as f:
+        f.write(b"not an image")
+    os.unlink(os.path.join(images, "000003_left.png"))
+    cv2.imwrite(os.path.join(images, "000003_left.png"), np.zeros((480, 640, 3), np.uint8)[::2, ::2])
+    with open(recipe, "w") as f:
+        f.write(RECIPE.format(root=bad, scene="P000"))
+    out_bad = os.path.join(tmp, "out_bad_colour")
+    r = common.occgt("build", recipe, "--out", out_bad)
+    with open(os.path.join(out_bad, "summary.json")) as f:
+        s = json.load(f)
+    assert s["complete"] and s["drops"]["scan.color_error"] == 2, s["drops"]
+    first = s["drop_examples"]["scan.color_error"]
+    assert first.startswith("P000/000001: ") and "000001_left.png" in first, first
+    assert "  first scan.color_error: P000/000001: " in r.stdout, r.stdout
+    with open(os.path.join(out_bad, "pairs.jsonl")) as f:
+        used = {p[k]["id"] for p in map(json.loads, f) for k in ("frame0", "frame1")}
+    assert used and not used & {"000001", "000003"}, used
+    common.occgt("validate", out_bad)
+
     print(f"tartanair_folder: scan lists {names} and {env_names}; scenes [P000] built {len(pairs)} pairs")
 
 
