@@ -28,7 +28,7 @@ struct PairArgs {
   std::optional<int> stride;
   std::optional<std::string> anchor;
   bool mutual = false, no_mutual = false;  // neither: the recipe's patches.mutual
-  int score_stride = 1;
+  std::optional<int> score_stride;         // unset: the recipe's selection.score_stride, else 1
 };
 
 void RunPair(const PairArgs& args) {
@@ -57,7 +57,9 @@ void RunPair(const PairArgs& args) {
       {"abs_tol_m", "--abs-tol-m", args.abs_tol_m.has_value()},
       {"rel_tol", "--rel-tol", args.rel_tol.has_value()}};
   ResolveSettings(setup, d, PairOutputs::kAll, "pair options", pair_flags);
-  if (args.score_stride < 1) throw gt::InputError("--score-stride", "expected >= 1");
+  const int score_stride =
+      args.score_stride.value_or(setup.recipe ? setup.recipe->selection.score_stride : 1);
+  if (score_stride < 1) throw gt::InputError("--score-stride", "expected >= 1");
   gt::truth::PairSource source{
       setup.format, d.scene, "", "", 0, 0, ls.preset, setup.resolution, "", setup.depth.source};
   if (setup.format == gt::DatasetFormat::kScanNetPP) {
@@ -76,17 +78,16 @@ void RunPair(const PairArgs& args) {
   const gt::truth::WorkingFrame w0 = LoadSetupFrame(setup, scene, f0);
   const gt::truth::WorkingFrame w1 = LoadSetupFrame(setup, scene, f1);
   const gt::truth::PairTruth truth = gt::truth::ComputePairTruth(w0, w1, o);
-  gt::truth::WritePairFolder(d.out, source, w0, w1, o, truth, args.score_stride);
+  gt::truth::WritePairFolder(d.out, source, w0, w1, o, truth, score_stride);
 
   const gt::PairLabels& p = truth.labels;
   const gt::DirectionMetrics m01 =
-      args.score_stride == 1 ? p.m01 : gt::MetricsFromLabels(p.l01, args.score_stride);
+      score_stride == 1 ? p.m01 : gt::MetricsFromLabels(p.l01, score_stride);
   const gt::DirectionMetrics m10 =
-      args.score_stride == 1 ? p.m10 : gt::MetricsFromLabels(p.l10, args.score_stride);
+      score_stride == 1 ? p.m10 : gt::MetricsFromLabels(p.l10, score_stride);
   const gt::MatchTypeCounts c = gt::CountMatchTypes(p.patches);
-  const std::string grid = args.score_stride == 1
-                               ? ""
-                               : " (score grid, every " + std::to_string(args.score_stride) + ")";
+  const std::string grid =
+      score_stride == 1 ? "" : " (score grid, every " + std::to_string(score_stride) + ")";
   std::printf(
       "pair %s %s,%s: overlap %.3f / %.3f, occlusion %.3f / %.3f%s, matches %zu "
       "(vv %lld, vo %lld, ov %lld) -> %s\n",
@@ -125,7 +126,8 @@ void AddPairCommand(CLI::App& app) {
                 "patches.mutual")
       ->excludes(mutual);
   cmd->add_option("--score-stride", args->score_stride,
-                  "metrics on every N-th pixel in x and y (default 1)");
+                  "metrics on every N-th pixel in x and y (default: the recipe's "
+                  "selection.score_stride, else 1)");
   cmd->callback([args] { RunPair(*args); });
 }
 

@@ -94,6 +94,14 @@ def check_pairs(name, recipe, build, extra=()):
         for m in PAIR_MEMBERS:
             if read(os.path.join(pair_dir, m)) != members[m]:
                 fail(f"{tag}: occgt pair --recipe {m} differs from the shard's")
+        # The score grid too: the recipe's selection.score_stride (it was 1 unless given).
+        with open(os.path.join(pair_dir, "meta.json")) as f:
+            meta = json.load(f)
+        shard_json = json.loads(members["json"])
+        for k in ("score_stride", "score_metrics"):
+            if meta[k] != shard_json[k]:
+                fail(f"{tag}: occgt pair --recipe meta.json {k} {meta[k]} against the shard's "
+                     f"{shard_json[k]}")
         occ_dir = common.scratch(f"pair_recipe/{name}_occupancy")
         common.occgt("occupancy", "--recipe", recipe, "--scene", line["scene"], "--frames", frames,
                      "--dense", "--out", occ_dir, *extra)
