@@ -493,6 +493,11 @@ std::vector<double> ParseNumbers(std::string_view line, const std::string& path,
     const std::string_view tok = line.substr(i, j - i);
     double v = 0;
     if (!ParseToken(tok, &v)) {
+      if (line_no == 1 && i == 0 && tok.substr(0, 3) == "\xEF\xBB\xBF") {  // invisible in print
+        throw InputError(LineWhere(path, line_no),
+                         "the file starts with a UTF-8 byte-order mark (bytes EF BB BF); "
+                         "expected a number: save it without the mark");
+      }
       throw InputError(LineWhere(path, line_no),
                        "expected a number, found '" + std::string(tok) + "'");
     }

@@ -138,6 +138,18 @@ TEST(ParseNumbers, BadTokenNamesFileAndLine) {
   }
 }
 
+// A byte-order mark (as some editors save) is invisible in a message: it is named.
+TEST(ParseNumbers, ByteOrderMarkIsNamed) {
+  try {
+    (void)ParseNumbers("\xEF\xBB\xBF-1.5 2 3", "pose_left.txt", 1);
+    ADD_FAILURE() << "a leading byte-order mark was read as a number";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "pose_left.txt:1: the file starts with a UTF-8 byte-order mark (bytes EF BB BF); "
+              "expected a number: save it without the mark");
+  }
+}
+
 TEST(ReadLines, StripsCarriageReturnsAndKeepsEmptyLines) {
   const std::string dir = test::ScratchDir("readlines");
   WriteFileAtomic(dir + "/a.txt", "one\r\n\ntwo\nthree");
