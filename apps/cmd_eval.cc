@@ -4,6 +4,7 @@
 // precision, per-type precision and recall, all stratified by occlusion ratio and
 // consistent_overlap.
 // Prints a one-screen summary; writes eval.json (schemas/eval.schema.json) atomically.
+#include <strings.h>
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -214,23 +215,27 @@ void Run(const Args& args) {
       std::string base = arg;
       while (base.size() > 1 && base.back() == '/') base.pop_back();
       base = base.substr(base.rfind('/') == std::string::npos ? 0 : base.rfind('/') + 1);
-      if (base.size() > 4 && base.compare(base.size() - 4, 4, ".npz") == 0) {
-        base.resize(base.size() - 4);
+      if (base.size() > 4 && strcasecmp(base.c_str() + base.size() - 4, ".npz") == 0) {
+        base.resize(base.size() - 4);  // any case: "S.NPZ" names the set "S"
       }
       name = base;
     }
     if (path.empty()) {
       throw gt::InputError("--predictions", "'" + arg + "': expected [NAME=]PATH with a path");
     }
-    const bool visible =
-        !name.empty() && name.find_first_not_of(" \t") != std::string::npos &&
-        std::none_of(name.begin(), name.end(), [](char c) {
-          return static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) == 0x7f;
-        });
-    if (!visible || !names.insert(name).second) {
-      throw gt::InputError("--predictions", "set name '" + name +
-                                                "' is blank, holds control characters or "
-                                                "repeats (use NAME=PATH)");
+    const bool blank = name.find_first_not_of(" \t") == std::string::npos;
+    const bool control = std::any_of(name.begin(), name.end(), [](char c) {
+      return static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) == 0x7f;
+    });
+    if (blank || control) {
+      throw gt::InputError("--predictions", "'" + arg + "': the set name '" + name + "' is " +
+                                                (blank ? "blank" : "not printable") +
+                                                " (use NAME=PATH)");
+    }
+    if (!names.insert(name).second) {
+      throw gt::InputError("--predictions", "'" + arg + "': the set name '" + name +
+                                                "' is given twice (use NAME=PATH to tell the "
+                                                "sets apart)");
     }
     set_names.push_back(name);
     prediction_paths.push_back(path);
@@ -256,9 +261,16 @@ void Run(const Args& args) {
     throw gt::InputError(line.substr(0, sep), line.substr(sep + 2));
   }
   if (!problems.empty()) {
-    for (const std::string& p : problems) std::fprintf(stderr, "occgt: error: %s\n", p.c_str());
-    throw gt::InputError("predictions", std::to_string(problems.size()) +
-                                            " problems (listed above); nothing written");
+    // The first 20, so that a wrong folder (thousands of files) stays readable.
+    constexpr size_t kListed = 20;
+    for (size_t k = 0; k < problems.size() && k < kListed; ++k) {
+      std::fprintf(stderr, "occgt: error: %s\n", problems[k].c_str());
+    }
+    const std::string listed = problems.size() > kListed
+                                   ? "the first " + std::to_string(kListed) + " listed above"
+                                   : "listed above";
+    throw gt::InputError("predictions", std::to_string(problems.size()) + " problems (" + listed +
+                                            "); nothing written");
   }
   for (const gt::eval::PredictionSet& s : sets) {
     const size_t missing = keys.size() - s.pairs.size();

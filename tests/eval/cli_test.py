@@ -333,6 +333,32 @@ def main():
         assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, (args, r.returncode, r.stderr)
         assert r.stderr.startswith("occgt: error: " + args[0] + ": "), (args, r.stderr)
         assert not os.path.exists(os.path.join(work, "x.json")), args
+    # Several problems: each listed, the first 20 of a folder of 25 foreign files, then
+    # the count.
+    foreign = os.path.join(work, "foreign")
+    os.makedirs(foreign, exist_ok=True)
+    for i in range(25):
+        shutil.copyfile(gt_path, os.path.join(foreign, f"x{i:02d}.npz"))
+    r = run_eval(split, os.path.join(work, "x.json"), "--predictions", foreign, check=False)
+    lines = r.stderr.splitlines()
+    assert r.returncode == 1 and len(lines) == 21, (r.returncode, lines[:3], len(lines))
+    assert all(x.startswith(f"occgt: error: {foreign}/x") for x in lines[:20]), lines[:3]
+    assert lines[20] == ("occgt: error: predictions: 25 problems (the first 20 listed above); "
+                         "nothing written"), lines[20]
+    assert not os.path.exists(os.path.join(work, "x.json"))
+    # Which name is at fault: a path given twice names its set; ".NPZ" in any case is
+    # dropped from a set's name.
+    r = run_eval(split, os.path.join(work, "x.json"), "--predictions", gt_path, "--predictions",
+                 gt_path, check=False)
+    name = os.path.basename(gt_path)[:-4]
+    assert r.returncode == 2 and r.stderr == (
+        f"occgt: error: --predictions: '{gt_path}': the set name '{name}' is given twice (use "
+        "NAME=PATH to tell the sets apart)\n"), r.stderr
+    upper = os.path.join(work, "SET.NPZ")
+    shutil.copyfile(gt_path, upper)
+    run_eval(split, os.path.join(work, "upper.json"), "--predictions", upper)
+    with open(os.path.join(work, "upper.json")) as f:
+        assert [x["name"] for x in json.load(f)["sets"]] == ["SET"]
     # --out: checked before any work. Not a folder, a device or an input of the run (each was
     # replaced by eval.json, or failed after the whole evaluation); a link is written through.
     victim = os.path.join(work, "victim.npz")
