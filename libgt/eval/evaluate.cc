@@ -1031,17 +1031,20 @@ std::string EvalSummary(const EvalResult& r) {
       }
       s << ", unscored " << st["types"]["unscored"]["count"].get<int64_t>() << "\n";
     }
-    // AUC at the middle threshold per occlusion bin, first definition.
+    // AUC at the middle threshold per occlusion bin, first definition, first estimator
+    // (named: with several, it is not the best of a sweep); bins half-open but the last.
     const size_t mid = o.auc_thresholds_deg.size() / 2;
     s << "  AUC@" << o.auc_thresholds_deg[mid] << " by occlusion ("
-      << OcclusionDefinitionName(o.occlusion_definitions[0]) << "):";
+      << OcclusionDefinitionName(o.occlusion_definitions[0])
+      << (o.estimators.size() > 1 ? ", " + PoseEstimatorName(o.estimators[0]) : "") << "):";
     const json bins =
         Binned(r, k, o.occlusion_bins, [](const PairInfo& p) { return p.occlusion[0]; });
-    for (const json& b : bins) {
-      if (b["pairs"].get<size_t>() == 0) continue;
-      std::snprintf(buf, sizeof buf, " [%.2g,%.2g] %.1f (%zu)", b["lo"].get<double>(),
-                    b["hi"].get<double>(), b["pose"][0]["auc_percent"][mid].get<double>(),
-                    b["pairs"].get<size_t>());
+    for (size_t b = 0; b < bins.size(); ++b) {
+      if (bins[b]["pairs"].get<size_t>() == 0) continue;
+      std::snprintf(buf, sizeof buf, " [%.4g,%.4g%c %.1f (%zu)", bins[b]["lo"].get<double>(),
+                    bins[b]["hi"].get<double>(), b + 1 == bins.size() ? ']' : ')',
+                    bins[b]["pose"][0]["auc_percent"][mid].get<double>(),
+                    bins[b]["pairs"].get<size_t>());
       s << buf;
     }
     s << "\n";

@@ -66,6 +66,14 @@ def main():
     predictions.check_eval_schema(doc, common.SOURCE)
     assert "AUC" in r.stdout and "per-type" in r.stdout, r.stdout
     assert [e["ransac_px"] for e in doc["options"]["estimators"]] == [0.5, 1.0]
+    # The summary's occlusion line names the estimator it shows (the first of two) and its
+    # bins as they are, half-open but the last, with the edges of eval.json.
+    line = next(x for x in r.stdout.splitlines() if " by occlusion (" in x)
+    assert f"by occlusion (image, {doc['options']['estimators'][0]['name']}):" in line, line
+    bins = [b for b in doc["sets"][0]["by_occlusion"]["image"] if b["pairs"]]
+    for b in bins:
+        close = "]" if b["hi"] == doc["sets"][0]["by_occlusion"]["image"][-1]["hi"] else ")"
+        assert f"[{b['lo']:.4g},{b['hi']:.4g}{close} " in line, (b, line)
     overall = doc["sets"][0]["overall"]
     for t in ("vv", "vo", "ov"):
         x = overall["types"][t]
