@@ -955,7 +955,8 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
   // repeat and the pairs.jsonl checks.
   std::map<std::string, std::string> shard_of_key;
   std::map<std::string, size_t> entry_of_url;
-  std::set<std::string> unread;  // listed shards that could not be read through
+  std::set<std::string> unread;           // listed shards that could not be read through
+  std::vector<std::string> sample_order;  // the keys of the read shards, in shard order
   int64_t total = 0;
   for (size_t i = 0; i < checked.size(); ++i) {
     ShardProblems& c = checked[i];
@@ -972,6 +973,7 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
     }
     for (const std::string& k : c.keys) {
       if (!shard_of_key.emplace(k, c.url).second) problem(c.shard, "sample " + k + " repeats");
+      sample_order.push_back(k);
     }
     total += static_cast<int64_t>(c.keys.size());
   }
@@ -1005,18 +1007,22 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
     return problems;
   }
   int64_t nlines = 0, lines_of_unread = 0;
+  size_t position = 0;  // of the next line among the samples of the read shards
+  bool order_reported = false;
   for (const std::string& text : io::ReadLines(pairs_path)) {
     ++nlines;
     const std::string where = pairs_path + ":" + std::to_string(nlines);
     const json line = json::parse(text, nullptr, false);
     if (line.is_discarded() || !line.is_object()) {
       problem(where, "not a JSON object");
+      ++position;  // still a sample's line
       continue;
     }
     if (const std::string p = schemas->CheckLine(line); !p.empty()) problem(where, p);
     if (!line.contains("key") || !line["key"].is_string() || !line.contains("shard") ||
         !line["shard"].is_string()) {
       problem(where, "fields \"key\" and \"shard\": expected strings");
+      ++position;
       continue;
     }
     const std::string key = line["key"].get<std::string>();
@@ -1028,7 +1034,13 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
     const auto it = shard_of_key.find(key);
     if (it == shard_of_key.end() || it->second != shard) {
       problem(where, "key \"" + key + "\" is not in shard \"" + shard + "\"");
+    } else if (position < sample_order.size() && sample_order[position] != key &&
+               !order_reported) {  // the first line out of order only, not every one after
+      problem(where, "key \"" + key + "\" is out of order: the shards hold \"" +
+                         sample_order[position] + "\" here (one line per sample, in shard order)");
+      order_reported = true;
     }
+    ++position;
   }
   if (nlines - lines_of_unread != total) {
     problem(pairs_path, std::to_string(nlines - lines_of_unread) + " lines for " +

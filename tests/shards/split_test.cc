@@ -456,6 +456,7 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   fs::copy_file(dir3 + "/train-000000.tar", dir3 + "/train-000099.tar");
   io::WriteFileAtomic(dir3 + "/stale.tar.tmp", "x");
   std::vector<std::string> lines = io::ReadLines(dir3 + "/pairs.jsonl");
+  const std::string line0 = lines[0];
   json first = json::parse(lines[0]);
   first["key"] = 7;
   lines[0] = first.dump();
@@ -468,6 +469,21 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   EXPECT_NE(all3.find("pairs.jsonl:1: fields \"key\" and \"shard\": expected strings"),
             std::string::npos)
       << all3;
+  EXPECT_EQ(all3.find("out of order"), std::string::npos) << all3;  // the bad line is line 1
+
+  // Lines in another order than the samples: the first one out of place is named, once.
+  lines = io::ReadLines(dir3 + "/pairs.jsonl");
+  lines[0] = line0;
+  const std::string key1 = json::parse(lines[1])["key"].get<std::string>();
+  const std::string key2 = json::parse(lines[2])["key"].get<std::string>();
+  std::swap(lines[1], lines[2]);
+  WriteJsonLines(dir3 + "/pairs.jsonl", lines);
+  fs::remove(dir3 + "/train-000099.tar");
+  fs::remove(dir3 + "/stale.tar.tmp");
+  EXPECT_EQ(ValidateSplit(dir3, ValidateOptions{SchemasDir()}),
+            std::vector<std::string>{dir3 + "/pairs.jsonl:2: key \"" + key2 +
+                                     "\" is out of order: the shards hold \"" + key1 +
+                                     "\" here (one line per sample, in shard order)"});
 
   // index.json that breaks the schema.
   index["__kind__"] = "something-else";
