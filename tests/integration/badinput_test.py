@@ -163,6 +163,10 @@ def check_case(spec, case_dir):
                     fail(cid, f"expected drops[{key}] = {count}, got {doc['drops']}")
             if "samples_min" in expect and doc["samples"] < expect["samples_min"]:
                 fail(cid, f"expected at least {expect['samples_min']} samples, got {doc['samples']}")
+            for key, pattern in expect.get("drop_examples", {}).items():
+                if not re.search(pattern, doc.get("drop_examples", {}).get(key, "")):
+                    fail(cid, f"drop_examples[{key}] does not match /{pattern}/: "
+                              f"{doc.get('drop_examples')}")
     elif kind == "problem":
         if r.returncode != 1:
             fail(cid, f"expected exit 1{shown}\n  stdout: {r.stdout}")
