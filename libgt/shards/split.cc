@@ -818,8 +818,8 @@ std::string MergeSummaryJson(const MergeResult& result) {
   json doc;
   doc["kind"] = "occgt-merge-summary";
   doc["split"] = result.split;
-  doc["nshards"] = result.nshards;
-  doc["nsamples"] = result.nsamples;
+  doc["shards"] = result.nshards;  // the names of the build's summary for the same facts
+  doc["samples"] = result.nsamples;
   doc["bytes"] = result.total_bytes;
   json per_scene = json::object();
   for (const auto& [scene, n] : result.pairs_per_scene) per_scene[scene] = n;

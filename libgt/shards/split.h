@@ -163,8 +163,8 @@ struct MergeResult {
 // order whatever the thread count (with `verify`, the record checks of every shard come
 // before the tar reads); nothing is published then.
 MergeResult MergeSplit(const std::string& dir, const MergeOptions& options);
-// summary.json content of a merge: {"kind": "occgt-merge-summary", "split", "nshards",
-// "nsamples", "bytes", "pairs_per_scene": {scene: n} (from the pair lines' "scene" field)}.
+// summary.json content of a merge: {"kind": "occgt-merge-summary", "split", "shards",
+// "samples" (the build summary's name), "bytes", "pairs_per_scene": {scene: n} (from the pair lines' "scene" field)}.
 std::string MergeSummaryJson(const MergeResult& result);
 // Writes DIR/summary.json (MergeSummaryJson) atomically unless DIR/summary.json already
 // holds another document (the richer summary of `occgt build`, schemas/summary.schema.json),

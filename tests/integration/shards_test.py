@@ -116,7 +116,7 @@ def check_real_build():
         merged = json.load(f)
     with open(os.path.join(schemas, "summary.schema.json")) as f:
         jsonschema.validate(merged, json.load(f), cls=jsonschema.Draft202012Validator)
-    check(merged["kind"] == "occgt-merge-summary" and merged["nsamples"] == 24, str(merged))
+    check(merged["kind"] == "occgt-merge-summary" and merged["samples"] == 24, str(merged))
     # Its report still lists the build's drops: summed over selection/*.json.
     common.occgt("inspect", "split", bare, "--gallery", 0)
     with open(os.path.join(bare, "inspect", "report.html")) as f:

@@ -653,7 +653,7 @@ TEST(Split, CommandsMergeAndValidate) {
   ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
   EXPECT_NE(r.stdout_text.find("11 samples"), std::string::npos) << r.stdout_text;
   const json summary = json::parse(io::ReadFileBytes(dir + "/summary.json"));
-  EXPECT_EQ(summary["nsamples"], 11);
+  EXPECT_EQ(summary["samples"], 11);
   EXPECT_EQ(summary["kind"], "occgt-merge-summary");
   // A summary.json written by `occgt build` (another document) is kept as it is.
   io::WriteFileAtomic(dir + "/summary.json", "{\"recipe\": \"x.yaml\"}\n");
