@@ -19,6 +19,7 @@
 #include "libgt/io/npy.h"
 #include "libgt/io/npz_members.h"
 #include "libgt/pipeline/build.h"
+#include "libgt/pipeline/sample.h"
 #include "libgt/pipeline/select.h"
 #include "libgt/pipeline/synthetic.h"
 #include "libgt/truth/working_frame.h"
@@ -195,6 +196,68 @@ SceneCovisibility ReadSceneCovisibility(const std::string& path, const std::stri
   return g;
 }
 
+void CheckGraphFrames(const Recipe& recipe, const Scene& scene, const SceneCovisibility& g,
+                      const std::string& path, size_t depth_cache_mb) {
+  const std::string rerun = "; re-run occgt covis for it (delete " + path + " first)";
+  std::map<std::string, size_t> scene_index;
+  for (size_t k = 0; k < scene.frames.size(); ++k) scene_index.emplace(scene.frames[k].id, k);
+  const bool needs_color = NeedsColor(recipe, scene);
+  const auto stride = static_cast<size_t>(recipe.dataset.frame_stride);
+  std::vector<size_t> held;  // scene index of each frame_ids entry
+  for (size_t k = 0; k < g.frame_ids.size(); ++k) {
+    const std::string& id = g.frame_ids[k];
+    const std::string field = "frame_ids[" + std::to_string(k) + "] '" + id + "'";
+    const auto it = scene_index.find(id);
+    if (it == scene_index.end()) {
+      throw InputError(path, field + " is not a frame of scene " + scene.name + " under " +
+                                 recipe.dataset.root + " (a graph of other data?)" + rerun);
+    }
+    const Frame& frame = scene.frames[it->second];
+    if (!frame.usable) {
+      throw InputError(path, field + " is a frame the dataset now marks unusable (" +
+                                 frame.unusable_reason + "): the data changed since occgt covis" +
+                                 rerun);
+    }
+    if (k > 0 && it->second <= held.back()) {
+      throw InputError(path, field + " comes before frame_ids[" + std::to_string(k - 1) +
+                                 "] in the scene: expected the scene's order" + rerun);
+    }
+    if (it->second % stride != 0) {
+      throw InputError(path, field + " is frame " + std::to_string(it->second) + " of scene " +
+                                 scene.name + ", which dataset.frame_stride " +
+                                 std::to_string(stride) +
+                                 " skips: the data changed since occgt covis" + rerun);
+    }
+    if (needs_color && frame.color_path.empty()) {
+      throw InputError(path, field + " has no colour image, which sample.image (" +
+                                 ImageFormatName(recipe.sample.image) +
+                                 ") needs: the data changed since occgt covis" + rerun);
+    }
+    held.push_back(it->second);
+  }
+  // The frames the graph lacks, scanned as covis scans (the held ones marked unusable, so
+  // that only the others' depth is decoded): one kept now is a frame the graph should hold.
+  Scene rest = scene;
+  for (size_t f : held) rest.frames[f].usable = false;
+  pairs::DepthCache cache(rest, recipe.width, recipe.height, depth_cache_mb << 20,
+                          RecipeFrameDepthOptions(recipe));
+  const pairs::ScanResult scanned =
+      ScanRecipeFrames(recipe, rest, RecipePairTruthOptions(recipe, rest).labels, &cache);
+  if (scanned.kept.empty()) return;
+  const size_t missing = scanned.kept.front();
+  const size_t k =
+      static_cast<size_t>(std::upper_bound(held.begin(), held.end(), missing) - held.begin());
+  const std::string where =
+      k < held.size() ? "before frame_ids[" + std::to_string(k) + "] '" + g.frame_ids[k] + "'"
+      : k > 0 ? "after frame_ids[" + std::to_string(k - 1) + "] '" + g.frame_ids[k - 1] + "'"
+              : "frame_ids is empty";
+  throw InputError(path, "frame_ids lacks frame '" + scene.frames[missing].id + "' of scene " +
+                             scene.name + " (" + where +
+                             "), which the recipe's scan keeps now: the data changed since "
+                             "occgt covis" +
+                             rerun);
+}
+
 std::vector<float> DenseCovisibility(const SceneCovisibility& g) {
   const size_t f = g.frame_ids.size();
   std::vector<float> c(f * f, 0.0f);
@@ -304,7 +367,8 @@ nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOption
                                    "); remove it or write into another --out");
       }
       ++skipped;
-      // A complete scene's graph is read through (a damaged one is not counted complete); it
+      // A complete scene's graph is read through (a damaged or stale one is not counted
+      // complete); it
       // gets its dense matrix when asked for and missing (a first run without --dense): from
       // the stored graph, not scored again.
       SceneCovisibility g;
@@ -313,6 +377,9 @@ nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOption
       } catch (const InputError& e) {
         throw InputError(e.what(), "remove the file to compute the scene again");
       }
+      // ... and checked against the data as occgt tuples checks it (the same frames kept now).
+      CheckGraphFrames(recipe, ReadRecipeScene(recipe, *reader, name), g, path,
+                       options.depth_cache_mb);
       if (options.dense && !fs::exists(dense_path(name, g))) write_dense(name, g);
     } else {
       const Scene scene = ReadRecipeScene(recipe, *reader, name);

@@ -67,6 +67,19 @@ std::string CovisibilityDigest(const Recipe& recipe);
 SceneCovisibility ReadSceneCovisibility(const std::string& path, const std::string& digest,
                                         int score_stride);
 
+// Checks a graph read by ReadSceneCovisibility against `scene` as the recipe's dataset has it
+// now (the digest leaves out the dataset root, so a graph of other data under the same scene
+// name, or of data changed since, gets here): its frame_ids must be the frames the recipe's
+// scan (ScanRecipeFrames) keeps now, in scene order. Each id is a frame of the scene, usable,
+// at a multiple of dataset.frame_stride, with colour when sample.image stores images, after
+// the one before it; and no frame the graph lacks is kept now (only those frames' depth is
+// decoded, through a cache of `depth_cache_mb`: the frames the graph holds are not scanned
+// again). Otherwise an InputError naming `path` and the first differing frame, ending in what
+// to do (delete the graph, re-run occgt covis). `occgt covis` (a complete scene) and
+// `occgt tuples` both call it.
+void CheckGraphFrames(const Recipe& recipe, const Scene& scene, const SceneCovisibility& graph,
+                      const std::string& path, size_t depth_cache_mb);
+
 // The dense F×F matrix of a graph (the layout above).
 std::vector<float> DenseCovisibility(const SceneCovisibility& graph);
 

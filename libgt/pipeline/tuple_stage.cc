@@ -49,33 +49,9 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
     const std::string path = CovisibilityPath(out_dir, scene);
     const SceneCovisibility g = ReadSceneCovisibility(path, digest, recipe.selection.score_stride);
     // The digest leaves out the dataset root (a moved dataset keeps its graphs): a graph of
-    // other data under the same scene name, or of data changed since, would name frames the
-    // scene does not have, or no longer uses, or in another order (covis keeps frames in
-    // scene order).
-    std::map<std::string, size_t> scene_index;
-    const Scene scene_now = ReadRecipeScene(recipe, reader, scene);
-    for (size_t k = 0; k < scene_now.frames.size(); ++k) {
-      scene_index.emplace(scene_now.frames[k].id, k);
-    }
-    const std::string rerun = "; re-run occgt covis for it (delete " + path + " first)";
-    for (size_t k = 0; k < g.frame_ids.size(); ++k) {
-      const std::string& id = g.frame_ids[k];
-      const std::string field = "frame_ids[" + std::to_string(k) + "] '" + id + "'";
-      const auto it = scene_index.find(id);
-      if (it == scene_index.end()) {
-        throw InputError(path, field + " is not a frame of scene " + scene + " under " +
-                                   recipe.dataset.root + " (a graph of other data?)" + rerun);
-      }
-      if (!scene_now.frames[it->second].usable) {
-        throw InputError(path, field + " is a frame the dataset now marks unusable (" +
-                                   scene_now.frames[it->second].unusable_reason +
-                                   "): the data changed since occgt covis" + rerun);
-      }
-      if (k > 0 && it->second <= scene_index.at(g.frame_ids[k - 1])) {
-        throw InputError(path, field + " comes before frame_ids[" + std::to_string(k - 1) +
-                                   "] in the scene: expected the scene's order" + rerun);
-      }
-    }
+    // other data under the same scene name, or of data changed since, is refused here.
+    CheckGraphFrames(recipe, ReadRecipeScene(recipe, reader, scene), g, path,
+                     pairs::kDefaultDepthCacheMb);
     const std::vector<float> dense = DenseCovisibility(g);
     const size_t f = g.frame_ids.size();
     const pairs::CovisibilityPairs graph{

@@ -272,8 +272,10 @@ class StaleGraphs(unittest.TestCase):
         color = os.path.join(data, scene, "color", view + ".png")
         kept = common.read_bytes(color)
         os.remove(color)
-        refused(r"tuples\.jsonl line 1: frame " + view + r" has no colour image, which "
-                r"sample\.image \(png\) needs \(changed since occgt covis")
+        # (a frame of the graph without colour: refused with the graph, before any view)
+        refused(scene + r"\.npz: frame_ids\[\d+\] '" + view + r"' has no colour image, which "
+                r"sample\.image \(png\) needs: the data changed since occgt covis; re-run occgt "
+                r"covis for it \(delete .*" + scene + r"\.npz first\)$")
         with open(color, "wb") as f:
             f.write(kept)
         depth = os.path.join(data, scene, "depth", view + ".npy")
@@ -294,6 +296,7 @@ class StaleGraphs(unittest.TestCase):
                 r"now marks unusable \(pose: ")
         with open(manifest, "wb") as f:
             f.write(kept)
+        kept_manifest = kept
         # frame_ids out of the scene's order (their scores would go to the wrong frames).
         path = os.path.join(out, "covisibility", "synth_002.npz")
         kept = common.read_bytes(path)
@@ -302,8 +305,53 @@ class StaleGraphs(unittest.TestCase):
         ids[[3, 4]] = ids[[4, 3]]
         members["frame_ids"] = ids
         np.savez(path, **members)
-        refused(r"synth_002\.npz: frame_ids\[4\] '" + ids[4] + r"' comes before frame_ids\[3\] "
-                r"in the scene: expected the scene's order")
+        order = (r"synth_002\.npz: frame_ids\[4\] '" + ids[4] + r"' comes before frame_ids\[3\] "
+                 r"in the scene: expected the scene's order")
+        refused(order)
+
+        def covis_refuses(message: str) -> None:  # as tuples: not counted complete
+            r = run("covis", recipe, "--out", out, "--dense")
+            self.assertEqual(r.returncode, 1, r.stdout)
+            *progress, last = r.stderr.splitlines()
+            self.assertTrue(all(x.startswith("[covis] ") for x in progress), r.stderr)
+            self.assertRegex(last, message)
+
+        covis_refuses(order)
+        with open(path, "wb") as f:
+            f.write(kept)
+        # A frame id of other data, every member emptied: refused by both, naming the file.
+        for edit, message in [
+                (lambda m: m["frame_ids"].__setitem__(-1, "999999"),
+                 r"synth_002\.npz: frame_ids\[\d+\] '999999' is not a frame of scene synth_002"),
+                (lambda m: m.update({k: m[k][:0] for k in
+                                     ["frame_ids", "i", "j", "c_ij", "c_ji", "o_ij", "o_ji",
+                                      "self"]}),
+                 r"synth_002\.npz: frame_ids lacks frame '000000' of scene synth_002 \(frame_ids "
+                 r"is empty\), which the recipe's scan keeps now: the data changed since occgt "
+                 r"covis; re-run occgt covis for it \(delete .*synth_002\.npz first\)$")]:
+            damaged = dict(np.load(path))
+            damaged["frame_ids"] = damaged["frame_ids"].copy()
+            edit(damaged)
+            np.savez(path, **damaged)
+            refused(message)
+            covis_refuses(message)
+        with open(path, "wb") as f:
+            f.write(kept)
+        # A broken scene manifest is read by covis too, not passed over as complete.
+        with open(manifest, "w") as f:
+            f.write("{")
+        covis_refuses(r"synth_002/scene\.json: ")
+        with open(manifest, "wb") as f:
+            f.write(kept_manifest)
+        # A stale graph: the frame without colour at covis time has it now, so the scan keeps
+        # it and the graph lacks it.
+        no_color = os.path.join(data, "synth_001", "color", "000005.png")
+        shutil.copy(os.path.join(data, "synth_001", "color", "000004.png"), no_color)
+        stale = (r"synth_001\.npz: frame_ids lacks frame '000005' of scene synth_001 \(before "
+                 r"frame_ids\[5\] '000006'\), which the recipe's scan keeps now")
+        refused(stale)
+        covis_refuses(stale)
+        os.remove(no_color)
         # Members of another shape, or a score_stride the digest does not hold: refused by
         # tuples, and by covis, which no longer counts such a graph complete.
         for member, value, message in [
