@@ -33,6 +33,33 @@ class TupleDataset(unittest.TestCase):
         return TupleIndexDataset(self.tuples, self.root, "generic", width=96, height=72,
                                  num_tracks=40, seed=3, **kw)  # type: ignore[arg-type]
 
+    def test_query_view_and_depth_range(self) -> None:
+        """query_view picks the tracks' view (as a recipe's selection.tuples.query_view), a
+        given dataset_depth_range replaces the scene's: both reach views_ground_truth once
+        (they used to raise TypeError, multiple values, in every item)."""
+        ds = self.dataset(query_view=2, dataset_depth_range=(0.5, 4.0))
+        item = ds[1]
+        frames = [self.scene.load(i, 96, 72) for i in self.tuples[1].frame_ids]  # type: ignore[union-attr]
+        truth = occgt.views_ground_truth(
+            [f[0] for f in frames], [f[1] for f in frames], [f[2] for f in frames],
+            num_tracks=40, seed=3 + 1, query_view=2, dataset_depth_range=(0.5, 4.0))
+        np.testing.assert_array_equal(item["track_state"].numpy(), truth["track_state"])
+        xy = truth["track_xy"]
+        np.testing.assert_array_equal(item["tracks"].numpy(), np.where(np.isnan(xy), 0, xy))
+        np.testing.assert_array_equal(item["point_masks"].numpy(), truth["valid"] == 1)
+        # The query pixels are view 2's: its tracks sit where they started.
+        state = truth["track_state"][2]
+        self.assertTrue((state == occgt.TRACK_VISIBLE).all())
+        self.assertFalse(np.array_equal(truth["track_xy"][0], truth["track_xy"][2]))
+        # Checked here, against every tuple (tuples[0] has 3 views).
+        with self.assertRaisesRegex(ValueError, r"^query_view: expected a view of every tuple, "
+                                    r"got 3; tuples\[0\] has 3 views"):
+            self.dataset(query_view=3)
+        with self.assertRaisesRegex(ValueError, r"^query_view: expected >= 0, got -1$"):
+            self.dataset(query_view=-1)
+        with self.assertRaisesRegex(TypeError, r"queries"):  # not a label option
+            self.dataset(queries=np.zeros((1, 2), np.int64))
+
     def test_item_is_the_views_ground_truth(self) -> None:
         ds = self.dataset()
         self.assertEqual(len(ds), 2)

@@ -109,6 +109,38 @@ class TupleShards(unittest.TestCase):
                 self.assertGreater(int((item["visible_in"] != 0).sum()), 0)
             self.assertGreaterEqual(len(sizes), 1)
 
+    def test_recipe_query_view_and_max_depth(self) -> None:
+        """A recipe with selection.tuples.query_view 1 and dataset.max_depth_m: its shards
+        are TupleIndexDataset's items with query_view=1, dataset_max_depth_m= (the arguments
+        docs/MULTIVIEW.md lists)."""
+        text = RECIPE.format(root=self.root, compression="deflate")
+        text = text.replace("num_tracks: 60}", "num_tracks: 60, query_view: 1}")
+        text = text.replace("  frame_stride: 1\n", "  frame_stride: 1\n  max_depth_m: 3.5\n")
+        self.assertEqual(text.count("query_view: 1"), 1)
+        self.assertEqual(text.count("max_depth_m: 3.5"), 1)
+        recipe = os.path.join(self.dir, "query_view.yaml")
+        with open(recipe, "w") as f:
+            f.write(text)
+        out = os.path.join(self.dir, "query_view")
+        common.occgt("covis", recipe, "--out", out)
+        common.occgt("tuples", recipe, "--out", out, "--shards")
+        stored = TupleShardDataset(os.path.join(out, "views"))
+        computed = TupleIndexDataset(os.path.join(out, "tuples.jsonl"), self.root, "generic",
+                                     width=96, height=72, preset="default", num_tracks=60,
+                                     seed=11, query_view=1, dataset_max_depth_m=3.5)
+        self.assertGreaterEqual(len(stored), 2)
+        self.assertEqual(len(stored), len(computed))
+        for k in range(len(stored)):
+            assert_same_item(self, stored[k], computed[k], f"query_view item {k}")
+        # Not the default's items: the query view and the depth range both matter.
+        for kw, key in (({"dataset_max_depth_m": 3.5}, "tracks"),  # of view 0
+                        ({"query_view": 1}, "point_masks")):  # depth up to the scene's range
+            other = TupleIndexDataset(os.path.join(out, "tuples.jsonl"), self.root, "generic",
+                                      width=96, height=72, preset="default", num_tracks=60,
+                                      seed=11, **kw)  # type: ignore[arg-type]
+            self.assertFalse(all(torch.equal(other[k][key], stored[k][key])
+                                 for k in range(len(stored))), kw)
+
     def test_dust3r_views_equal_the_computed_ones(self) -> None:
         computed = self.computed(views="dust3r")
         stored = TupleShardDataset(os.path.join(self.out["deflate"], "views"), views="dust3r",

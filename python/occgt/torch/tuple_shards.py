@@ -100,10 +100,12 @@ class TupleShardDataset(_ShardSplit):
     Item i is sample i in shard order (the split's ``pairs.jsonl`` order, i.e. tuples.jsonl's
     order): the keys, dtypes and shapes of TupleIndexDataset's items, and the same values as
     ``TupleIndexDataset(DIR/tuples.jsonl, root, format, width=W, height=H, preset=...,
-    num_tracks=..., seed=<the recipe's seed>)[i]`` (tests/python/tuple_shards_test.py), with
-    ``tuple_id`` = the sample's ``tuple_index``. The tracks are those of the json's
-    ``tracks.query_view`` (the recipe's ``selection.tuples.query_view``, 0 by default: the
-    first view, as TupleIndexDataset's and VGGT's).
+    num_tracks=..., query_view=..., seed=<the recipe's seed>, dataset_max_depth_m=...)[i]``
+    (the recipe's ``selection.tuples`` num_tracks and query_view, its ``dataset.min_depth_m``
+    / ``max_depth_m`` as ``dataset_min_depth_m`` / ``dataset_max_depth_m`` when set, its label
+    overrides; tests/python/tuple_shards_test.py), with ``tuple_id`` = the sample's
+    ``tuple_index``. The tracks are those of the json's ``tracks.query_view`` (the recipe's
+    ``selection.tuples.query_view``, 0 by default: the first view, as VGGT's).
 
     Raises:
         ValueError: as ShardDataset's, naming the file: a missing or malformed

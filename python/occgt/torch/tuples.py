@@ -86,9 +86,13 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             ``dataset.fused_depth``; None: the defaults).
         width, height: the working resolution of every view.
         preset, **label_options: the label options of ``occgt.views_ground_truth`` (the
-            scene's depth range is passed as ``dataset_depth_range``).
-        num_tracks: tracks sampled from the first view's valid pixels (seed ``seed + index``,
-            so an item is the same in every epoch and worker).
+            scene's depth range is passed as ``dataset_depth_range`` unless given; a recipe's
+            ``dataset.min_depth_m`` / ``max_depth_m`` are ``dataset_min_depth_m`` /
+            ``dataset_max_depth_m``, its label overrides keep their names).
+        num_tracks: tracks sampled from view ``query_view``'s valid pixels (seed
+            ``seed + index``, so an item is the same in every epoch and worker).
+        query_view: the view of each tuple whose pixels are the tracks' queries (a recipe's
+            ``selection.tuples.query_view``); below every tuple's size (ValueError here).
         images: read the colour images (``images``; a frame without colour raises ValueError).
         views: ``"vggt"`` (default): one dict of stacked views; ``"dust3r"``: a list of view
             dicts.
@@ -96,7 +100,7 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     A ``"vggt"`` item (S views, P tracks): ``images`` float32 [S, 3, H, W] RGB in [0, 1];
     ``depths`` float32 [S, H, W] (0 = none); ``extrinsics`` float32 [S, 3, 4] camera-from-world
     (OpenCV); ``intrinsics`` float32 [S, 3, 3]; ``point_masks`` bool [S, H, W] (the view's own
-    valid depth); ``tracks`` float32 [S, P, 2] (x, y) of the first view's query pixels in each
+    valid depth); ``tracks`` float32 [S, P, 2] (x, y) of view query_view's query pixels in each
     view (0 where they do not project); ``track_vis_mask`` bool [S, P] (VISIBLE);
     ``track_state`` uint8 [S, P] (``occgt.TRACK_STATE_NAMES``); ``visible_in``,
     ``occluded_in`` int32 [S, H, W] (the uint32 bitmasks' bits: bit j = VISIBLE / OCCLUDED
@@ -113,7 +117,9 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                  format: str, *, width: int = occgt.PAIR_DEFAULTS["width"],
                  height: int = occgt.PAIR_DEFAULTS["height"],
                  preset: str = occgt.PAIR_DEFAULTS["preset"], num_tracks: int = occgt.VIEWS_DEFAULTS["num_tracks"],
-                 seed: int = occgt.VIEWS_DEFAULTS["seed"], images: bool = True, views: str = "vggt",
+                 seed: int = occgt.VIEWS_DEFAULTS["seed"],
+                 query_view: int = occgt.VIEWS_DEFAULTS["query_view"], images: bool = True,
+                 views: str = "vggt",
                  device: str = occgt.DATASET_DEFAULTS["device"],
                  depth_source: str = occgt.DATASET_DEFAULTS["depth_source"],
                  mesh_path: Optional[str] = None,
@@ -140,7 +146,14 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         # Fail here, not in a worker: the size, and the options as views_ground_truth resolves
         # them (a misspelt or unknown option, a bad preset or value, a negative seed).
         check_resolution(width, height)
-        views_options(preset, num_tracks=num_tracks, seed=seed, **label_options)
+        views_options(preset, num_tracks=num_tracks, query_view=query_view, seed=seed,
+                      **label_options)
+        self.query_view = operator.index(query_view)
+        for k, t in enumerate(self.tuples):
+            if self.query_view >= len(t.frame_ids):
+                raise ValueError(f"query_view: expected a view of every tuple, got "
+                                 f"{self.query_view}; tuples[{k}] has {len(t.frame_ids)} "
+                                 f"views ({t.scene}: {', '.join(t.frame_ids)})")
         self.root, self.format, self.device = root, format, device
         self.depth_source, self.mesh_path, self.fused_depth = depth_source, mesh_path, fused_depth
         self.width, self.height = operator.index(width), operator.index(height)
@@ -193,10 +206,11 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         depths = np.stack([d for d, _, _ in loaded])
         Ks = np.stack([K for _, K, _ in loaded])
         poses = np.stack([T for _, _, T in loaded])
+        options: Dict[str, Any] = {"dataset_depth_range": (scene.min_depth_m, scene.max_depth_m),
+                   **self.label_options}
         truth = occgt.views_ground_truth(
-            depths, Ks, poses, preset=self.preset, num_tracks=self.num_tracks, query_view=0,
-            seed=self.seed + index,
-            dataset_depth_range=(scene.min_depth_m, scene.max_depth_m), **self.label_options)
+            depths, Ks, poses, preset=self.preset, num_tracks=self.num_tracks,
+            query_view=self.query_view, seed=self.seed + index, **options)
         colors = None
         if self.images:
             colors = np.stack([scene.load_color(i, self.width, self.height)
