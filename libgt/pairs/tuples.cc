@@ -130,11 +130,18 @@ std::vector<Tuple> DrawTuples(const CovisibilityPairs& g, const TupleOptions& o,
   const int f = g.num_frames;
   const std::vector<float> score = PairScores(g);
   const auto sc = [&](int a, int b) { return score[static_cast<size_t>(a) * f + b]; };
+  // Neighbours are pairs of the graph only: a pair it lacks (pruned) scores 0 but is not one,
+  // even at edge_threshold 0. Each list in increasing frame index.
   std::vector<std::vector<int>> neighbours(f);
-  for (int a = 0; a < f; ++a) {
-    for (int b = 0; b < f; ++b) {
-      if (a != b && sc(a, b) >= o.edge_threshold) neighbours[a].push_back(b);
+  for (size_t p = 0; p < g.i.size(); ++p) {
+    if (sc(g.i[p], g.j[p]) >= o.edge_threshold) {
+      neighbours[g.i[p]].push_back(g.j[p]);
+      neighbours[g.j[p]].push_back(g.i[p]);
     }
+  }
+  for (std::vector<int>& list : neighbours) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
   }
   std::vector<int> starts;
   for (int a = 0; a < f; ++a) {

@@ -3,7 +3,8 @@
 //
 // Graph: F frames, pairs (i, j) with both directions' visible overlap c_ij, c_ji
 // (pipeline/covisibility.h). The score of a pair is (c_ij + c_ji) / 2 (0 for a pair not in the
-// graph); two frames are neighbours when their score >= edge_threshold.
+// graph); two frames are neighbours when their pair is in the graph and its score >=
+// edge_threshold (a pair the pruning dropped is never one, even at edge_threshold 0).
 //
 // One tuple: its size N is drawn in [min_views, max_views]; a start frame is drawn among the
 // frames with a neighbour; then, with a stack holding the walk, a frame is drawn among the
@@ -35,8 +36,8 @@ namespace gt::pairs {
 inline constexpr int kMaxTupleQuota = 1000000;
 
 struct TupleOptions {
-  int min_views = 2, max_views = 2;     // recipe `tuples.views`: N or [min, max]; 2..32
-  double edge_threshold = 0.25;         // neighbours: pair score >= this (MapAnything: 0.25)
+  int min_views = 2, max_views = 2;  // recipe `tuples.views`: N or [min, max]; 2..32
+  double edge_threshold = 0.25;      // neighbours: graph pairs scoring >= this (MapAnything: 0.25)
   double pair_lo = 0.0, pair_hi = 1.0;  // every pair of a tuple within [lo, hi]
   double min_spread_score = 0.0;        // unused bound when 0 (see above)
   int restarts = 4;                     // extra walks per tuple
