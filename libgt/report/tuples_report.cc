@@ -21,14 +21,24 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+// schemas/tuples_line.schema.json "frame_ids": 2..32 distinct strings.
 std::vector<std::string> NeedIds(const json& j, const std::string& where) {
-  if (!j.contains("frame_ids") || !j["frame_ids"].is_array() || j["frame_ids"].size() < 2) {
-    throw InputError(where, "expected \"frame_ids\": an array of at least 2 frame ids");
+  if (!j.contains("frame_ids") || !j["frame_ids"].is_array() || j["frame_ids"].size() < 2 ||
+      j["frame_ids"].size() > 32) {
+    throw InputError(where, "expected \"frame_ids\": an array of 2 to 32 frame ids" +
+                                (j.contains("frame_ids") && j["frame_ids"].is_array()
+                                     ? ", got " + std::to_string(j["frame_ids"].size())
+                                     : std::string()));
   }
   std::vector<std::string> ids;
+  std::set<std::string> seen;
   for (const json& v : j["frame_ids"]) {
     if (!v.is_string()) throw InputError(where, "expected \"frame_ids\" of strings");
     ids.push_back(v.get<std::string>());
+    if (!seen.insert(ids.back()).second) {
+      throw InputError(where,
+                       "\"frame_ids\": '" + ids.back() + "' repeats, expected distinct frame ids");
+    }
   }
   return ids;
 }
@@ -123,8 +133,15 @@ std::optional<TupleSet> LoadTupleSet(const std::string& dir) {
   set.dir = dir;
   for (const auto& [where, j] : ReadJsonLines(path)) {
     SplitTuple t;
-    if (!j.contains("scene") || !j["scene"].is_string()) {
-      throw InputError(where, "expected a string \"scene\"");
+    for (const auto& [key, value] : j.items()) {  // schemas/tuples_line.schema.json
+      if (key != "scene" && key != "frame_ids" && key != "covisibility" && key != "occlusion") {
+        throw InputError(where, "unexpected key \"" + key +
+                                    "\" (a tuple line has scene, frame_ids, covisibility and "
+                                    "occlusion)");
+      }
+    }
+    if (!j.contains("scene") || !j["scene"].is_string() || j["scene"].get<std::string>().empty()) {
+      throw InputError(where, "expected a non-empty string \"scene\"");
     }
     t.scene = j["scene"].get<std::string>();
     t.frame_ids = NeedIds(j, where);
@@ -141,6 +158,14 @@ std::optional<TupleSet> LoadTupleSet(const std::string& dir) {
     if (!ok) {
       throw InputError(where, "expected \"covisibility\": " + std::to_string(size) + "x" +
                                   std::to_string(size) + " numbers (one row per frame id)");
+    }
+    for (size_t k = 0; k < t.covisibility.size(); ++k) {
+      const double v = t.covisibility[k];
+      if (!(v >= 0 && v <= 1)) {
+        throw InputError(where, "\"covisibility\"[" + std::to_string(k / size) + "][" +
+                                    std::to_string(k % size) + "] is " + json(v).dump() +
+                                    ", expected a number in [0, 1]");
+      }
     }
     t.graph_estimate = OptionalFraction(j, "occlusion", where);
     set.tuples.push_back(std::move(t));

@@ -338,6 +338,31 @@ def main():
     check(r.returncode == 1 and r.stderr.count("\n") == 1 and
           f"tuples.jsonl:{len(lines) + 1}" in r.stderr and "covisibility" in r.stderr,
           f"malformed tuples line: {r.returncode} {r.stderr!r}")
+    # Lines that break schemas/tuples_line.schema.json: one line naming the line and field
+    # (a score out of [0, 1] used to reach report.json, which then broke report.schema.json).
+    def bad_line(edit, message):
+        t = json.loads(json.dumps(lines[0]))
+        edit(t)
+        with open(os.path.join(bare, "tuples.jsonl"), "w") as f:
+            f.writelines(json.dumps(x) + "\n" for x in lines + [t])
+        r = common.occgt("inspect", "split", bare, "--out", os.path.join(bare, "r3"), check=False)
+        check(r.returncode == 1 and r.stderr.count("\n") == 1 and
+              f"tuples.jsonl:{len(lines) + 1}: " in r.stderr and message in r.stderr,
+              f"bad tuples line ({message}): {r.returncode} {r.stderr!r}")
+
+    def many_views(t):
+        t["frame_ids"] = [f"{k:06d}" for k in range(33)]
+        t["covisibility"] = [[0.5] * 33 for _ in range(33)]
+
+    bad_line(lambda t: t["covisibility"][0].__setitem__(1, 2.0),
+             '"covisibility"[0][1] is 2.0, expected a number in [0, 1]')
+    bad_line(lambda t: t["covisibility"][0].__setitem__(1, -1.0),
+             '"covisibility"[0][1] is -1.0, expected a number in [0, 1]')
+    bad_line(many_views, '"frame_ids": an array of 2 to 32 frame ids, got 33')
+    bad_line(lambda t: t["frame_ids"].__setitem__(1, t["frame_ids"][0]),
+             f'"frame_ids": \'{lines[0]["frame_ids"][0]}\' repeats, expected distinct frame ids')
+    bad_line(lambda t: t.update(extra=1), 'unexpected key "extra"')
+    bad_line(lambda t: t.update(scene=""), 'expected a non-empty string "scene"')
     r = common.occgt("inspect", "split", out, "--gallery-tuples", 99, check=False)
     check(r.returncode == 2 and r.stderr.startswith("occgt: error: --gallery-tuples"), r.stderr)
     empty = os.path.join(tmp, "empty")
