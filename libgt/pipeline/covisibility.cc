@@ -258,6 +258,44 @@ void CheckGraphFrames(const Recipe& recipe, const Scene& scene, const SceneCovis
                              rerun);
 }
 
+void CheckGraphFramesDepth(const Recipe& recipe, const Scene& scene, const SceneCovisibility& g,
+                           const std::vector<int32_t>& frames, const std::string& path,
+                           size_t depth_cache_mb) {
+  std::map<std::string, size_t> scene_index;
+  for (size_t k = 0; k < scene.frames.size(); ++k) scene_index.emplace(scene.frames[k].id, k);
+  // Only the asked frames are scanned (the others marked unusable); `frames` are graph indices.
+  Scene only = scene;
+  std::vector<char> wanted(scene.frames.size(), 0);
+  for (int32_t k : frames) wanted[scene_index.at(g.frame_ids.at(static_cast<size_t>(k)))] = 1;
+  for (size_t f = 0; f < only.frames.size(); ++f) {
+    if (!wanted[f]) only.frames[f].usable = false;
+  }
+  pairs::DepthCache cache(only, recipe.width, recipe.height, depth_cache_mb << 20,
+                          RecipeFrameDepthOptions(recipe));
+  const LabelOptions labels = RecipePairTruthOptions(recipe, only).labels;
+  const pairs::ScanResult scanned = ScanRecipeFrames(recipe, only, labels, &cache);
+  const std::set<size_t> kept(scanned.kept.begin(), scanned.kept.end());
+  for (size_t k = 0; k < g.frame_ids.size(); ++k) {  // graph order = scene order
+    const size_t f = scene_index.at(g.frame_ids[k]);
+    if (!wanted[f] || kept.count(f)) continue;
+    std::string why;
+    try {
+      const std::shared_ptr<const DepthImage> d = cache.Get(f);
+      int64_t valid = 0;
+      for (float z : d->values_m) valid += IsValidDepth(z, labels.min_depth_m, labels.max_depth_m);
+      why = "has " + std::to_string(valid) + " valid depth pixels of " +
+            std::to_string(d->values_m.size()) + ", below dataset.min_valid_depth_fraction " +
+            std::to_string(recipe.dataset.min_valid_depth_fraction);
+    } catch (const InputError& e) {
+      why = "has a depth map that cannot be read (" + std::string(e.what()) + ")";
+    }
+    throw InputError(path, "frame_ids[" + std::to_string(k) + "] '" + g.frame_ids[k] + "' " + why +
+                               ": the data changed since occgt covis; re-run occgt covis for it "
+                               "(delete " +
+                               path + " first)");
+  }
+}
+
 std::vector<float> DenseCovisibility(const SceneCovisibility& g) {
   const size_t f = g.frame_ids.size();
   std::vector<float> c(f * f, 0.0f);

@@ -80,6 +80,16 @@ SceneCovisibility ReadSceneCovisibility(const std::string& path, const std::stri
 void CheckGraphFrames(const Recipe& recipe, const Scene& scene, const SceneCovisibility& graph,
                       const std::string& path, size_t depth_cache_mb);
 
+// With CheckGraphFrames passed: each graph frame `frames` indexes (into graph.frame_ids) must
+// still pass the recipe's scan (ScanRecipeFrames: its depth readable, with
+// dataset.min_valid_depth_fraction valid pixels in the labels' depth range), which
+// CheckGraphFrames does not decode again. `occgt tuples --shards` calls it with the views of
+// its tuples before it writes anything. InputError naming `path` and the first such frame in
+// graph order.
+void CheckGraphFramesDepth(const Recipe& recipe, const Scene& scene, const SceneCovisibility& graph,
+                           const std::vector<int32_t>& frames, const std::string& path,
+                           size_t depth_cache_mb);
+
 // The dense F×F matrix of a graph (the layout above).
 std::vector<float> DenseCovisibility(const SceneCovisibility& graph);
 

@@ -50,8 +50,8 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
     const SceneCovisibility g = ReadSceneCovisibility(path, digest, recipe.selection.score_stride);
     // The digest leaves out the dataset root (a moved dataset keeps its graphs): a graph of
     // other data under the same scene name, or of data changed since, is refused here.
-    CheckGraphFrames(recipe, ReadRecipeScene(recipe, reader, scene), g, path,
-                     pairs::kDefaultDepthCacheMb);
+    const Scene scene_now = ReadRecipeScene(recipe, reader, scene);
+    CheckGraphFrames(recipe, scene_now, g, path, pairs::kDefaultDepthCacheMb);
     const std::vector<float> dense = DenseCovisibility(g);
     const size_t f = g.frame_ids.size();
     const pairs::CovisibilityPairs graph{
@@ -59,6 +59,12 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
     const std::vector<pairs::Tuple> tuples =
         pairs::SampleTuples(graph, *recipe.tuples, pairs::SceneSeed(recipe.seed, scene), &drops);
     if (tuples.empty()) without_tuples.push_back(scene);
+    if (write_shards) {  // every view's depth checked before anything is written
+      std::vector<int32_t> views;
+      for (const pairs::Tuple& t : tuples)
+        views.insert(views.end(), t.frames.begin(), t.frames.end());
+      CheckGraphFramesDepth(recipe, scene_now, g, views, path, pairs::kDefaultDepthCacheMb);
+    }
     for (const pairs::Tuple& t : tuples) {
       json ids = json::array(), cov = json::array();
       TupleLine tl;

@@ -24,8 +24,9 @@
 
 namespace gt::pipeline {
 
-// Returns the summary {scenes, tuples, views: {N: count}, drops}. With write_shards, then
-// writes the N-view shards of the tuples (views_write.h, DIR/views/) and adds their summary
+// Returns the summary {scenes, tuples, views: {N: count}, drops}. With write_shards, every
+// view's depth is checked first (CheckGraphFramesDepth, before anything is written), then the
+// N-view shards of the tuples are written (views_write.h, DIR/views/) and their summary added
 // as "shards".
 nlohmann::json RunTuples(const Recipe& recipe, const std::string& out_dir,
                          bool write_shards = false);

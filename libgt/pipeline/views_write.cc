@@ -72,9 +72,9 @@ json Rows(const std::vector<float>& m, size_t n) {
 }
 
 EncodedSample ComputeViewsSample(const ViewsScene& d, const TupleLine& line, int64_t index,
-                                 const Recipe& recipe) {
+                                 const Recipe& recipe, const std::string& out_dir) {
   const SampleOptions& options = d.options;
-  const std::string where = "tuples.jsonl line " + std::to_string(index + 1);
+  const std::string where = out_dir + "/tuples.jsonl line " + std::to_string(index + 1);
   const size_t n = line.frame_ids.size();
   std::vector<size_t> frames;
   std::vector<truth::WorkingFrame> views;
@@ -320,13 +320,22 @@ json WriteViewsShards(const Recipe& recipe, const datasets::DatasetReader& reade
       std::vector<std::exception_ptr> failed(end - c);
       tbb::parallel_for(int64_t{0}, end - c, [&](int64_t k) {
         try {
-          samples[k] = ComputeViewsSample(*data[k], lines[c + k], c + k, recipe);
+          samples[k] = ComputeViewsSample(*data[k], lines[c + k], c + k, recipe, out_dir);
         } catch (...) {
           failed[k] = std::current_exception();
         }
       });
       for (const std::exception_ptr& e : failed) {
-        if (e) std::rethrow_exception(e);
+        if (!e) continue;
+        try {
+          std::rethrow_exception(e);
+        } catch (const InputError& error) {
+          // tuples.jsonl is this run's and shards before this one may be complete: a run on
+          // other graphs (other tuples) would find them and refuse its plan.
+          throw InputError(error.what(), "remove " + options.out_dir +
+                                             " too before a run on other graphs (it holds "
+                                             "shards of these tuples)");
+        }
       }
       for (EncodedSample& e : samples) writer.Add(std::move(e.sample), e.pair_line);
     }

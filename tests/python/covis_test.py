@@ -260,10 +260,14 @@ class StaleGraphs(unittest.TestCase):
 
         def refused(message: str) -> None:
             shutil.rmtree(os.path.join(out, "views"), ignore_errors=True)  # complete: kept
+            before = common.read_bytes(os.path.join(out, "tuples.jsonl"))
             r = run("tuples", recipe, "--out", out, "--shards")
             self.assertEqual(r.returncode, 1, r.stdout)
             self.assertEqual(len(r.stderr.splitlines()), 1, r.stderr)
             self.assertRegex(r.stderr, message)
+            # Refused before anything is written: tuples.jsonl as it was, no N-view shards.
+            self.assertEqual(common.read_bytes(os.path.join(out, "tuples.jsonl")), before)
+            self.assertFalse(os.path.exists(os.path.join(out, "views")))
 
         # Data changed since the graph: a view's colour, its depth, its pose.
         with open(os.path.join(out, "tuples.jsonl")) as f:
@@ -281,9 +285,27 @@ class StaleGraphs(unittest.TestCase):
         depth = os.path.join(data, scene, "depth", view + ".npy")
         kept = common.read_bytes(depth)
         np.save(depth, np.zeros((120, 160), np.float32))
-        refused(r"tuples\.jsonl line 1: frame " + view + r" has 0 valid depth pixels of 19200, "
-                r"below dataset\.min_valid_depth_fraction 0\.3")
+        # (checked for every view before anything is written: it used to replace tuples.jsonl
+        # and write shards first)
+        refused(scene + r"\.npz: frame_ids\[\d+\] '" + view + r"' has 0 valid depth pixels of "
+                r"19200, below dataset\.min_valid_depth_fraction 0\.3")
         with open(depth, "wb") as f:
+            f.write(kept)
+        # A failure while the shards are written (a colour file cut after its header, which
+        # the reader reads) names the file and says to remove DIR/views too.
+        kept = common.read_bytes(color)
+        with open(color, "wb") as f:
+            f.write(kept[:len(kept) // 3])
+        shutil.rmtree(os.path.join(out, "views"), ignore_errors=True)
+        r = run("tuples", recipe, "--out", out, "--shards")
+        self.assertEqual(r.returncode, 1, r.stdout)
+        self.assertEqual(len(r.stderr.splitlines()), 1, r.stderr)
+        self.assertTrue(r.stderr.startswith("occgt: error: " + color + ": truncated PNG"),
+                        r.stderr)
+        self.assertTrue(r.stderr.rstrip().endswith(
+            "remove " + os.path.join(out, "views") + " too before a run on other graphs (it "
+            "holds shards of these tuples)"), r.stderr)
+        with open(color, "wb") as f:
             f.write(kept)
         manifest = os.path.join(data, "synth_002", "scene.json")
         kept = common.read_bytes(manifest)
