@@ -172,7 +172,10 @@ class TupleDataset(unittest.TestCase):
                 ({"scene": scene, "frame_ids": [1, 2]}, "frame_ids: expected a list of str, got 1"),
                 ({"scene": scene, "frame_ids": {"a": 1}}, "frame_ids: expected a list of str, got dict"),
                 ({"scene": None, "frame_ids": self.ids[:2]}, "scene: expected a non-empty str, got None"),
-                ({"scene": scene, "frame_ids": [self.ids[:2]]}, "frame_ids: expected a list of str")]:
+                ({"scene": scene, "frame_ids": [self.ids[:2]]}, "frame_ids: expected a list of str"),
+                # schemas/tuples_line.schema.json: uniqueItems
+                ({"scene": scene, "frame_ids": [self.ids[1], self.ids[2], self.ids[1]]},
+                 "frame_ids: expected distinct frame ids, '" + self.ids[1] + "' repeats")]:
             path = os.path.join(folder, "tuples.jsonl")
             with open(path, "w") as f:
                 f.write(json.dumps({"scene": scene, "frame_ids": self.ids[:2]}) + "\n")
@@ -197,6 +200,30 @@ class TupleDataset(unittest.TestCase):
             TupleIndexDataset([(scene, self.ids[:2]), (scene, self.ids[2])], self.root, "generic")
         ds = TupleIndexDataset([(scene, np.array(self.ids[:2]))], self.root, "generic")
         self.assertEqual(ds.tuples[0], TupleRef(scene, tuple(self.ids[:2])))
+        with self.assertRaisesRegex(ValueError, r"^tuples\[0\]: .*frame_ids: expected distinct "
+                                    r"frame ids, '" + self.ids[0] + "' repeats"):
+            TupleIndexDataset([(scene, [self.ids[0], self.ids[0]])], self.root, "generic")
+        # An unknown frame names the tuple and where it came from (the line, or the list entry).
+        with open(path, "w") as f:
+            f.write(json.dumps({"scene": scene, "frame_ids": self.ids[:2]}) + "\n\n")
+            f.write(json.dumps({"scene": scene, "frame_ids": [self.ids[0], "999999"]}) + "\n")
+        ds = TupleIndexDataset(path, self.root, "generic", width=96, height=72)
+        ds[0]
+        with self.assertRaisesRegex(ValueError, "^tuple 1 \\(" + path + ":3\\): frame_ids: no "
+                                    "frame with id '999999' in scene " + scene):
+            ds[1]
+        ds = TupleIndexDataset([(scene, ["999999", self.ids[0]])], self.root, "generic")
+        with self.assertRaisesRegex(ValueError, r"^tuple 0 \(tuples\[0\]\): frame_ids: no frame "
+                                    r"with id '999999'"):
+            ds[0]
+        # occgt tuples' DIR instead of DIR/tuples.jsonl: a ValueError saying which file to pass.
+        with self.assertRaisesRegex(ValueError, "^" + folder + ": a folder, expected a "
+                                    "tuples.jsonl file \\(pass " + path + ": the tuples of occgt "
+                                    "tuples --out " + folder + "\\)$"):
+            TupleIndexDataset(folder, self.root, "generic")
+        with self.assertRaisesRegex(ValueError, "^" + self.root + ": a folder, expected a "
+                                    "tuples.jsonl file$"):
+            read_tuples(self.root)
 
     def test_root_and_index(self) -> None:
         """A missing root fails at construction (the readers open it lazily, so it failed in

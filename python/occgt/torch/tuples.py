@@ -43,14 +43,21 @@ def _tuple_ref(scene: Any, frame_ids: Any) -> TupleRef:
     bad = [i for i in ids if not isinstance(i, str)]
     if bad:
         raise ValueError(f"frame_ids: expected a list of str, got {bad[0]!r}")
+    repeated = [i for n, i in enumerate(ids) if i in ids[:n]]
+    if repeated:  # schemas/tuples_line.schema.json: uniqueItems
+        raise ValueError(f"frame_ids: expected distinct frame ids, {repeated[0]!r} repeats")
     return TupleRef(str(scene), tuple(str(i) for i in ids))
 
 
-def read_tuples(path: Union[str, os.PathLike]) -> List[TupleRef]:
-    """The tuples of an ``occgt tuples`` tuples.jsonl (schemas/tuples_line.schema.json), in
-    order; ValueError naming the line of a bad one (scene a str, frame_ids a list of str)."""
-    refs = []
+def _read_tuple_lines(path: Union[str, os.PathLike]) -> Tuple[List[TupleRef], List[str]]:
+    """read_tuples' tuples and, for each, where it is: ``<path>:<line>``."""
+    refs, where = [], []
     p = os.fspath(path)
+    if os.path.isdir(p):
+        inside = os.path.join(p, "tuples.jsonl")
+        raise ValueError(f"{p}: a folder, expected a tuples.jsonl file"
+                         + (f" (pass {inside}: the tuples of occgt tuples --out {p})"
+                            if os.path.isfile(inside) else ""))
     with open(p, "rb") as f:
         for number, raw in enumerate(f, 1):
             try:
@@ -59,10 +66,19 @@ def read_tuples(path: Union[str, os.PathLike]) -> List[TupleRef]:
                     continue
                 t = loads_strict(line)
                 refs.append(_tuple_ref(t["scene"], t["frame_ids"]))
+                where.append(f"{p}:{number}")
             except (ValueError, KeyError, TypeError) as e:
                 raise ValueError(f"{p}:{number}: expected a tuple line with scene and frame_ids "
                                  f"({type(e).__name__}: {e})") from None
-    return refs
+    return refs, where
+
+
+def read_tuples(path: Union[str, os.PathLike]) -> List[TupleRef]:
+    """The tuples of an ``occgt tuples`` tuples.jsonl (schemas/tuples_line.schema.json), in
+    order; ValueError naming the line of a bad one (scene a str, frame_ids a list of distinct
+    str), or saying so when ``path`` is a folder (``occgt tuples``' DIR: pass
+    DIR/tuples.jsonl)."""
+    return _read_tuple_lines(path)[0]
 
 
 TupleLike = Union[TupleRef, Tuple[str, Sequence[str]]]
@@ -76,7 +92,9 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     """N-view samples of a tuple index, ground truth computed on the fly.
 
     Args:
-        tuples: a tuples.jsonl path, or a list of ``TupleRef`` / ``(scene, [frame ids])``.
+        tuples: a tuples.jsonl path (not occgt tuples' DIR: ValueError), or a list of
+            ``TupleRef`` / ``(scene, [frame ids])``; distinct frame ids. An item whose frame
+            the scene lacks raises ValueError naming the tuple and its line (or list entry).
         root, format: the dataset (``occgt.open_dataset``).
         device: ScanNet++'s camera, ``"dslr"`` or ``"iphone"`` (``occgt.open_dataset``).
         depth_source, mesh_path, fused_depth: the depth of every view (``Scene.load``):
@@ -126,14 +144,16 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                  fused_depth: Optional[Dict[str, float]] = None, **label_options: Any) -> None:
         if views not in ("vggt", "dust3r"):
             raise ValueError(f"views: expected 'vggt' or 'dust3r', got {views!r}")
+        self._where: List[str]  # per tuple: "<tuples.jsonl>:<line>" or "tuples[k]"
         if isinstance(tuples, (str, os.PathLike)):
-            self.tuples = read_tuples(tuples)
+            self.tuples, self._where = _read_tuple_lines(tuples)
         else:
-            self.tuples = []
+            self.tuples, self._where = [], []
             for k, t in enumerate(tuples):
                 try:
                     scene, ids = (t.scene, t.frame_ids) if isinstance(t, TupleRef) else t
                     self.tuples.append(_tuple_ref(scene, ids))
+                    self._where.append(f"tuples[{k}]")
                 except (TypeError, ValueError) as e:
                     raise ValueError(f"tuples[{k}]: expected a TupleRef or (scene, [frame ids]) "
                                      f"({type(e).__name__}: {e})") from None
@@ -200,7 +220,15 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             raise IndexError(f"index {index} out of range for {len(self.tuples)} tuples")
         index %= len(self.tuples)
         ref = self.tuples[index]
-        scene = self._scene(ref.scene)
+        try:
+            scene = self._scene(ref.scene)
+            numbers = {f.id: f.number for f in scene.frames}
+        except ValueError as e:
+            raise ValueError(f"tuple {index} ({self._where[index]}): {e}") from None
+        unknown = [i for i in ref.frame_ids if i not in numbers]
+        if unknown:
+            raise ValueError(f"tuple {index} ({self._where[index]}): frame_ids: no frame with id "
+                             f"{unknown[0]!r} in scene {ref.scene} under {self.root}")
         loaded = [scene.load(i, self.width, self.height, depth_source=self.depth_source,
                              fused_depth=self.fused_depth) for i in ref.frame_ids]
         depths = np.stack([d for d, _, _ in loaded])
@@ -215,7 +243,6 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         if self.images:
             colors = np.stack([scene.load_color(i, self.width, self.height)
                                for i in ref.frame_ids]).transpose(0, 3, 1, 2)  # [S, 3, H, W]
-        numbers = {f.id: f.number for f in scene.frames}
         return _tuple_item(self.views, depths=depths, Ks=Ks, world_from_cams=poses,
                            truth=truth, colors=colors, scene=ref.scene,
                            frame_ids=ref.frame_ids,
