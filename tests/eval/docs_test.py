@@ -73,7 +73,7 @@ def main():
     # complaint.
     for name, npz, complaint in (
             ("write", "predictions.npz",
-             "pair scene0707_00/000015_000585 is not a sample of the split"),
+             "pair scene0707_00/15_585 is not a sample of the split"),
             ("loftr", "loftr_predictions.npz",
              "pair scene0707_00/color/15.jpg#scene0707_00/color/585.jpg (a LoFTR pair name) "
              "is not a pair of the split")):
