@@ -570,6 +570,15 @@ class ShardDatasetTest(unittest.TestCase):
              r"matches\.npy: expected int32 \[\*, 2\] .*got float32"),
             ("occ0.npy", common.npy_bytes(self.plain[0]["occ0.npy"].view(np.int64)),
              r"occ0\.npy: expected uint64 \[60, 80\] .*got int64 \[60, 80\]"),
+            # A cell index outside the grid, a type outside 0..2 (was passed through).
+            ("matches.npy", common.npy_bytes(np.where(
+                np.arange(self.plain[0]["matches.npy"].size).reshape(-1, 2) == 1, 10 ** 6,
+                self.plain[0]["matches.npy"]).astype(np.int32)),
+             r"matches\.npy: row 0 names cell 1000000 of image 1, which has 300 cells "
+             r"\(160x120, stride 8\)"),
+            ("match_type.npy", common.npy_bytes(np.full(len(self.plain[0]["matches.npy"]), 5,
+                                                        np.uint8)),
+             r"match_type\.npy: row 0 is 5; expected 0 \(vv\), 1 \(vo\) or 2 \(ov\)"),
             ("json", singular.encode(), r"json: expected the sample fields .*T_0to1: last row "
                                         r"of the pose is not \[0 0 0 1\]"),
             ("json", nan_T.encode(), r"json: expected the sample fields .*T_0to1: non-finite "

@@ -375,11 +375,15 @@ class ShardDataset(_ShardSplit):
             metrics01, metrics10 = meta["metrics"]["01"], meta["metrics"]["10"]
             bins = (len(_bin_edges(meta["occupancy"])) - 1 if self.occupancy == "dense"
                     else 0)
+            stride = int(meta["patch_options"]["stride"])
+            if stride < 1:
+                raise ValueError(f"patch_options.stride {stride} < 1")
         except (KeyError, TypeError, ValueError) as e:
             raise ValueError(f"{where}.json: expected the sample fields of "
                              f"schemas/sample.schema.json (T_0to1 4x4, K0/K1 3x3, resolution, "
-                             f"scene, frame0/frame1 id, metrics 01/10, occupancy bins.edges_m "
-                             f"for occupancy='dense'): {type(e).__name__}: {e}") from None
+                             f"scene, frame0/frame1 id, metrics 01/10, patch_options.stride, "
+                             f"occupancy bins.edges_m for occupancy='dense'): "
+                             f"{type(e).__name__}: {e}") from None
         grid = _grid(meta)
 
         def member(field: str, dtype: str, shape: Tuple[Optional[int], ...]) -> np.ndarray:
@@ -419,8 +423,22 @@ class ShardDataset(_ShardSplit):
                 out[name] = to_tensor(member(name + ".npy", "u1", (None, None)))
         matches = member("matches.npy", "i4", (None, 2))
         rows = matches.shape[0]
+        match_type = member("match_type.npy", "u1", (rows,))
+        # Cells of the floor(W/s) x floor(H/s) grid and the three types (geometry/patches.h),
+        # as loftr_supervision and occgt validate require: a damaged index never reaches a
+        # trainer's index arithmetic.
+        cells = (W // stride) * (H // stride)
+        outside = (matches < 0) | (matches >= cells)
+        if outside.any():
+            k, c = (int(x) for x in np.argwhere(outside)[0])
+            raise ValueError(f"{where}.matches.npy: row {k} names cell {int(matches[k, c])} of "
+                             f"image {c}, which has {cells} cells ({W}x{H}, stride {stride})")
+        if (match_type > 2).any():
+            k = int(np.argmax(match_type > 2))
+            raise ValueError(f"{where}.match_type.npy: row {k} is {int(match_type[k])}; "
+                             f"expected 0 (vv), 1 (vo) or 2 (ov)")
         out["matches"] = to_tensor(matches.astype(np.int64))
-        out["match_type"] = to_tensor(member("match_type.npy", "u1", (rows,)).astype(np.int64))
+        out["match_type"] = to_tensor(match_type.astype(np.int64))
         out["match_xy"] = to_tensor(member("match_xy.npy", "f4", (rows, 2)))
         if self.occupancy == "words":
             for name in ("occ0", "known0", "occ1", "known1"):
