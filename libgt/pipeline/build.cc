@@ -214,11 +214,17 @@ const char* StageName(Stage stage) {
 
 bool BuildOptions::Check(std::string* error) const {
   if (out_dir.empty()) return *error = "--out: expected an output folder", false;
-  if (tasks < 1) return *error = "--tasks: expected an integer >= 1", false;
-  if (task < 0 || task >= tasks) return *error = "--task: expected 0 <= task < tasks", false;
+  if (std::string e = TaskRangeError(task, tasks); !e.empty()) return *error = e, false;
   if (depth_cache_mb < 1)
     return *error = "--depth-cache-mb: expected an integer >= 1, got 0", false;
   return true;
+}
+
+std::string TaskRangeError(int task, int tasks) {
+  if (tasks < 1) return "--tasks: expected an integer >= 1";
+  if (task >= 0 && task < tasks) return "";
+  return "--task: expected 0 <= task < tasks, got task " + std::to_string(task) + " of " +
+         std::to_string(tasks) + (tasks == 1 ? " (--tasks N gives the number of tasks)" : "");
 }
 
 std::unique_ptr<io::FileLock> AcquireTaskLock(const std::string& out_dir,

@@ -34,11 +34,11 @@ Stage ParseStage(const std::string& text, const std::string& field);
 const char* StageName(Stage stage);
 
 struct BuildOptions {
-  std::string out_dir;          // DIR
-  int task = 0;                 // this task's index, 0 <= task < tasks
-  int tasks = 1;                // number of tasks the run is split into
-  Stage stage = Stage::kAll;    // which stages run
-  bool dry_run = false;         // select in memory, print the plan, write nothing
+  std::string out_dir;        // DIR
+  int task = 0;               // this task's index, 0 <= task < tasks
+  int tasks = 1;              // number of tasks the run is split into
+  Stage stage = Stage::kAll;  // which stages run
+  bool dry_run = false;       // select in memory, print the plan, write nothing
   size_t depth_cache_mb = pairs::kDefaultDepthCacheMb;  // per-scene LRU of decoded depth maps
 
   bool Check(std::string* error) const;
@@ -66,6 +66,10 @@ nlohmann::json RunBuild(const Recipe& recipe, const BuildOptions& options,
 // (docs/PERFORMANCE.md "Sample compression"), rounded up: labels, cells and occupancy 0.06,
 // depth 0.2, matches 0.9.
 int64_t EstimatedSampleBytes(const Recipe& recipe);
+
+// "" when 0 <= task < tasks and tasks >= 1, else the problem naming --task or --tasks (the
+// task split of occgt build and occgt covis).
+std::string TaskRangeError(int task, int tasks);
 
 // One process per command, task and output folder: byte `task` of DIR/<lock_file> (an fcntl
 // record lock, io::FileLock), held until the returned object is destroyed or the process

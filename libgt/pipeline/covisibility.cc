@@ -310,8 +310,7 @@ std::vector<float> DenseCovisibility(const SceneCovisibility& g) {
 
 bool CovisibilityOptions::Check(std::string* error) const {
   if (out_dir.empty()) return *error = "--out: expected a folder", false;
-  if (tasks < 1) return *error = "--tasks: expected an integer >= 1", false;
-  if (task < 0 || task >= tasks) return *error = "--task: expected 0 <= task < tasks", false;
+  if (std::string e = TaskRangeError(task, tasks); !e.empty()) return *error = e, false;
   if (depth_cache_mb < 1)
     return *error = "--depth-cache-mb: expected an integer >= 1, got 0", false;
   return true;

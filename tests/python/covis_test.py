@@ -150,7 +150,12 @@ class Covis(unittest.TestCase):
         r = subprocess.run([common.BINARY, "covis", self.recipe, "--out", self.out1, "--task",
                             "2", "--tasks", "2"], capture_output=True, text=True)
         self.assertEqual(r.returncode, 2)
-        self.assertIn("--task: expected 0 <= task < tasks", r.stderr)
+        self.assertIn("--task: expected 0 <= task < tasks, got task 2 of 2", r.stderr)
+        r = subprocess.run([common.BINARY, "covis", self.recipe, "--out", self.out1, "--task",
+                            "1"], capture_output=True, text=True)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--task: expected 0 <= task < tasks, got task 1 of 1 (--tasks N gives the "
+                      "number of tasks)", r.stderr)
 
     def test_tuples(self) -> None:
         r = json.loads(common.occgt("tuples", self.recipe, "--out", self.out1, "--json",
