@@ -164,7 +164,8 @@ struct MergeResult {
 // before the tar reads); nothing is published then.
 MergeResult MergeSplit(const std::string& dir, const MergeOptions& options);
 // summary.json content of a merge: {"kind": "occgt-merge-summary", "split", "shards",
-// "samples" (the build summary's name), "bytes", "pairs_per_scene": {scene: n} (from the pair lines' "scene" field)}.
+// "samples" (the build summary's name), "bytes", "pairs_per_scene": {scene: n} (from the pair
+// lines' "scene" field)}.
 std::string MergeSummaryJson(const MergeResult& result);
 // Writes DIR/summary.json (MergeSummaryJson) atomically unless DIR/summary.json already
 // holds another document (the richer summary of `occgt build`, schemas/summary.schema.json),
