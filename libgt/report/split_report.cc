@@ -726,7 +726,9 @@ json ReportJson(const SplitData& split, const SplitReportOptions& options,
     };
     out["pairs"] = {{"count", static_cast<int64_t>(split.pairs.size())},
                     {"aggregate", AggregateName(options.aggregate)},
-                    {"occlusion_metric", OcclusionMetricField(options.occlusion_metric)},
+                    // The recipe's and --occlusion-metric's word, and the metrics field it reads.
+                    {"occlusion_metric", OcclusionMetricName(options.occlusion_metric)},
+                    {"occlusion_field", OcclusionMetricField(options.occlusion_metric)},
                     {"overlap", stats(ov)},
                     {"occlusion", stats(oc)},
                     {"consistent_overlap_min", stats(vis)}};

@@ -158,6 +158,11 @@ def main():
         pairs_json = json.load(f)["pairs"]
     vmin = pairs_json.get("consistent_overlap_min") or {}
     check("visible_overlap_min" not in pairs_json, "report.json still has visible_overlap_min")
+    # The occlusion metric in the recipe's word, beside the field it reads.
+    check((pairs_json.get("occlusion_metric"), pairs_json.get("occlusion_field")) ==
+          ("image", "occlusion_ratio"),
+          f"report.json occlusion_metric/field {pairs_json.get('occlusion_metric')}, "
+          f"{pairs_json.get('occlusion_field')}")
     check(vmin.get("min") is not None and abs(vmin["min"] - weaker[0]) < 1e-12 and
           abs(vmin["max"] - weaker[-1]) < 1e-12 and
           abs(vmin["mean"] - sum(weaker) / len(weaker)) < 1e-9,
