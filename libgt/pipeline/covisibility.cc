@@ -417,7 +417,15 @@ nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOption
       // ... and checked against the data as occgt tuples checks it (the same frames kept now).
       CheckGraphFrames(recipe, ReadRecipeScene(recipe, *reader, name), g, path,
                        options.depth_cache_mb);
-      if (options.dense && !fs::exists(dense_path(name, g))) write_dense(name, g);
+      // A dense matrix that is missing, or not the graph's (cut, edited), is written again.
+      if (options.dense) {
+        const std::string dense = dense_path(name, g).string();
+        const auto f = static_cast<int64_t>(g.frame_ids.size());
+        if (!io::FileExists(dense) ||
+            io::ReadFileBytes(dense) != io::EncodeNpy({f, f}, DenseCovisibility(g))) {
+          write_dense(name, g);
+        }
+      }
     } else {
       const Scene scene = ReadRecipeScene(recipe, *reader, name);
       pairs::DepthCache cache(scene, recipe.width, recipe.height, options.depth_cache_mb << 20,
