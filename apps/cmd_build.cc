@@ -73,6 +73,13 @@ bool TaskFromSlurm(int* task, int* tasks) {
     throw gt::InputError("SLURM_ARRAY_TASK_COUNT",
                          "unset (and no SLURM_ARRAY_TASK_MAX): pass --task K --tasks N");
   }
+  // A stepped array (--array=0-6:2) skips indices: its tasks would not cover 0..N-1.
+  if (const std::optional<int> step = EnvIndex("SLURM_ARRAY_TASK_STEP"); step && *step != 1) {
+    throw gt::InputError("SLURM_ARRAY_TASK_STEP",
+                         std::to_string(*step) +
+                             ": expected 1 (use a contiguous --array=0-N-1 without a step, or "
+                             "pass --task K --tasks N)");
+  }
   if (*id < min || (max && *id > *max)) {
     throw gt::InputError("SLURM_ARRAY_TASK_ID", std::to_string(*id) + " outside the array " +
                                                     std::to_string(min) + "-" +
@@ -252,6 +259,7 @@ void AddBuildCommand(CLI::App& app) {
   AddRootFlag(cmd, &args->root);
   cmd->callback([args, task_flags] {
     args->task_given = task_flags.Given();
+    task_flags.Check(args->build.tasks);
     Run(*args);
   });
 }

@@ -88,6 +88,7 @@ void AddCovisCommand(CLI::App& app) {
   AddRootFlag(cmd, &args->root);
   cmd->callback([args, task_flags] {
     args->task_given = task_flags.Given();
+    task_flags.Check(args->options.tasks);
     Run(*args);
   });
 }

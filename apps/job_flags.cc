@@ -22,6 +22,14 @@ TaskFlags AddTaskFlags(CLI::App* cmd, int* task, int* tasks) {
   return flags;
 }
 
+void TaskFlags::Check(int tasks_value) const {
+  if (tasks->count() > 0 && task->count() == 0 && tasks_value > 1) {
+    throw gt::InputError("--tasks", std::to_string(tasks_value) + " needs --task K (0 <= K < " +
+                                        std::to_string(tasks_value) +
+                                        "): alone it would run task 0 in every task");
+  }
+}
+
 gt::datasets::ScanNetPPDevice DeviceFlag::Resolve(gt::DatasetFormat format) const {
   const gt::datasets::ScanNetPPDevice device = gt::datasets::ParseScanNetPPDevice(name, "--device");
   if (option != nullptr && option->count() > 0 && format != gt::DatasetFormat::kScanNetPP) {

@@ -37,6 +37,10 @@ struct TaskFlags {
   CLI::Option* tasks = nullptr;
   // Either flag on the command line (then Slurm's environment is ignored).
   bool Given() const { return task->count() > 0 || tasks->count() > 0; }
+  // --tasks N > 1 without --task would run task 0 in every task of an array (Slurm's
+  // variables are ignored once a task flag is given): InputError("--tasks", ...), a usage
+  // error. `--tasks 1` alone (one task, whatever the environment) is fine.
+  void Check(int tasks_value) const;
 };
 TaskFlags AddTaskFlags(CLI::App* cmd, int* task, int* tasks);
 

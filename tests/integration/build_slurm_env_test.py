@@ -14,7 +14,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import common  # noqa: E402
 
 SLURM_VARS = ("SLURM_ARRAY_TASK_ID", "SLURM_ARRAY_TASK_MIN", "SLURM_ARRAY_TASK_MAX",
-              "SLURM_ARRAY_TASK_COUNT")
+              "SLURM_ARRAY_TASK_COUNT", "SLURM_ARRAY_TASK_STEP")
 
 
 def slurm_env(**values):
@@ -84,6 +84,8 @@ def main():
         (dict(id=5, min=0, max=3, count=4), "SLURM_ARRAY_TASK_ID: 5 outside the array 0-3"),
         (dict(id=4, count=4), "SLURM_ARRAY_TASK_COUNT: 4 does not cover SLURM_ARRAY_TASK_ID 4"),
         (dict(id=0, count=0), "SLURM_ARRAY_TASK_COUNT: 0 does not cover SLURM_ARRAY_TASK_ID 0"),
+        # A stepped array without COUNT (MAX gives 7 tasks, of which 4 run): refused.
+        (dict(id=2, min=0, max=6, step=2), "SLURM_ARRAY_TASK_STEP: 2: expected 1"),
     ]
     for values, expected in cases:
         bad = os.path.join(root, "bad")
@@ -92,6 +94,12 @@ def main():
         assert r.returncode == 1, (values, r.returncode, r.stderr)
         assert len(lines) == 1 and lines[0].startswith("occgt: error: " + expected), (values, r.stderr)
         assert not os.path.exists(bad), f"{values}: output created before the check"
+    # --tasks without --task would run task 0 in every task of an array: a usage error.
+    r = common.occgt("build", recipe, "--out", os.path.join(root, "bad"), "--tasks", "3",
+                     env=slurm_env(id=1, count=3), check=False)
+    assert r.returncode == 2 and r.stderr.startswith(
+        "occgt: error: --tasks: 3 needs --task K (0 <= K < 3): alone it would run task 0"), \
+        (r.returncode, r.stderr)
     print(f"build_slurm_env: 1 passed, 0 failed ({n} files identical, {len(cases)} bad cases)")
 
 
