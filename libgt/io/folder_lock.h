@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace gt::io {
 
@@ -19,6 +20,13 @@ class FileLock {
  public:
   // Throws InputError naming the file when it cannot be created or opened.
   static std::unique_ptr<FileLock> TryAcquire(const std::string& path, int64_t slot);
+  // Every byte of `slots` at once, on one descriptor (one per byte would run out of file
+  // descriptors for a task of thousands of shards): null, *busy = the first byte another
+  // process holds, when any is held (none is then kept). POSIX record locks belong to the
+  // process: closing any other descriptor of the same file in this process releases them,
+  // so a file locked this way is opened nowhere else.
+  static std::unique_ptr<FileLock> TryAcquire(const std::string& path,
+                                              const std::vector<int64_t>& slots, int64_t* busy);
   ~FileLock();
   FileLock(const FileLock&) = delete;
   FileLock& operator=(const FileLock&) = delete;

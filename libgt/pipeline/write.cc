@@ -187,6 +187,23 @@ WriteResult WriteShards(const Recipe& recipe, const datasets::DatasetReader& rea
   int64_t my_samples = 0, done_samples = 0;  // progress unit of the write stage: samples
   std::vector<int64_t> skipped_sizes;
   const int64_t nshards = static_cast<int64_t>(shard_sizes.size());
+  // Byte s of DIR/.shards.lock while this task may write shard s: the task lock keeps out a
+  // second run of task K, this one a task of another --tasks count that owns the same shard
+  // (task 1 of 2 and task 3 of 4 both own shard 3), which would write the same temporary
+  // file. Taken before the shards are found complete, so a shard another task finished in
+  // between is skipped.
+  std::vector<int64_t> mine;
+  for (int64_t s = options.task; s < nshards; s += options.tasks) mine.push_back(s);
+  int64_t busy = 0;
+  const std::unique_ptr<io::FileLock> shard_locks =
+      io::FileLock::TryAcquire(options.out_dir + "/.shards.lock", mine, &busy);
+  if (!shard_locks) {
+    throw InputError(options.out_dir,
+                     "another occgt build is writing shard " + std::to_string(busy) + " of split " +
+                         recipe.split +
+                         " now (a task of another --tasks count?); wait for it to finish, or "
+                         "give every task of the split the same --tasks");
+  }
   for (int64_t s = 0, start = 0; s < nshards; start += shard_sizes[s], ++s) {
     if (s % options.tasks != options.task) continue;
     my_samples += shard_sizes[s];

@@ -44,6 +44,23 @@ def main():
     common.occgt("build", recipe, "--out", other)
     os.close(fd)
     common.assert_same_outputs(ref, other)
+    # A shard another task holds (a task of another --tasks count: task 2 of 3 and task 0 of
+    # 2 both own shard 2): refused before any shard is written, one line naming the shard.
+    shared = os.path.join(root, "shard_held")
+    common.occgt("build", recipe, "--out", shared, "--stage", "select")
+    fd = os.open(os.path.join(shared, ".shards.lock"), os.O_RDWR | os.O_CREAT, 0o644)
+    fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB, 1, 2)  # shard 2's byte
+    r = common.occgt("build", recipe, "--out", shared, "--stage", "write", "--tasks", "2",
+                     "--task", "0", check=False)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 1 and len(lines) == 1 and lines[0].startswith(
+        f"occgt: error: {shared}: another occgt build is writing shard 2 of split "), lines
+    assert not glob.glob(os.path.join(shared, "*.tar*")), "wrote a shard while one was held"
+    common.occgt("build", recipe, "--out", shared, "--stage", "write", "--tasks", "2", "--task",
+                 "1")  # shards 1: not held
+    os.close(fd)
+    common.occgt("build", recipe, "--out", shared)
+    common.assert_same_outputs(ref, shared)
 
     # 2. SIGINT after the first published shard, then a re-run.
     out = os.path.join(root, "interrupted")
