@@ -237,9 +237,9 @@ std::unique_ptr<io::FileLock> AcquireTaskLock(const std::string& out_dir,
   const std::string lock_path = out_dir + "/" + lock_file;  // byte K: task K
   std::unique_ptr<io::FileLock> lock = io::FileLock::TryAcquire(lock_path, task);
   if (!lock) {
-    // "of task K of N" only for a command split into tasks (occgt tuples has none).
-    const std::string of_task =
-        tasks > 1 ? " of task " + std::to_string(task) + " of " + std::to_string(tasks) : "";
+    // "of task K" only for a command split into tasks (occgt tuples has none); not "of N":
+    // the holder may have been started with another --tasks.
+    const std::string of_task = tasks > 1 ? " of task " + std::to_string(task) : "";
     throw InputError(out_dir, "another occgt " + command + of_task +
                                   " is writing this folder now (it holds byte " +
                                   std::to_string(task) + " of " + lock_path +

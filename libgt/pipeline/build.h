@@ -76,7 +76,7 @@ std::string TaskRangeError(int task, int tasks);
 // ends. `occgt build` holds DIR/.tasks.lock, `occgt covis` DIR/.covis.lock, `occgt tuples`
 // DIR/.tuples.lock (task 0): they write different files and may run together; a second run of
 // one command and task into one DIR is refused with InputError(DIR, "another occgt <command>
-// of task K of N is writing this folder now (it holds byte K of <lock>); wait for it to
+// of task K (when tasks > 1) is writing this folder now (it holds byte K of <lock>); wait for it to
 // finish, or <advice>"). Creates DIR when missing.
 std::unique_ptr<io::FileLock> AcquireTaskLock(const std::string& out_dir,
                                               const std::string& lock_file,

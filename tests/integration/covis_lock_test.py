@@ -47,7 +47,7 @@ def hold(path, slot):
 
 def refused(r, out, command, task, tasks):
     lines = r.stderr.strip().splitlines()
-    of_task = f" of task {task} of {tasks}" if tasks > 1 else ""
+    of_task = f" of task {task}" if tasks > 1 else ""
     want = f"occgt: error: {out}: another occgt {command}{of_task} is writing this folder now"
     assert r.returncode == 1 and len(lines) == 1 and lines[0].startswith(want), (r.returncode, lines)
 
