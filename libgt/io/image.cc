@@ -131,9 +131,10 @@ ColorImage ReadFrameColor(const Frame& frame) {
 }
 
 void CheckFrameColorHeader(const Frame& frame) {
-  if (frame.color_path.empty() || frame.color_range.size != 0 || frame.color_lens) return;
+  if (frame.color_path.empty() || frame.color_range.size != 0) return;
   const ImageSize header = ReadImageSize(frame.color_path);
-  const Camera& camera = frame.color_camera;
+  // Behind a lens the file is the distorted image, of the lens's size.
+  const Camera& camera = frame.color_lens ? frame.color_lens->pinhole : frame.color_camera;
   if (camera.width > 0 && (header.width != camera.width || header.height != camera.height)) {
     throw InputError(frame.color_path, SizeMismatch(header.width, header.height, camera));
   }

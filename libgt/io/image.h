@@ -50,7 +50,8 @@ ColorImage ReadFrameColor(const Frame& frame);
 // (frame.color_path without a payload range or a lens) whose header cannot be read or gives
 // another size than frame.color_camera is an InputError naming the file. The pixels are not
 // decoded (a file cut inside its pixel data still fails when it is read), and payloads
-// inside a container or behind a lens are left to the reader.
+// inside a container are left to the reader. Behind a lens (frame.color_lens) the file is
+// the distorted image, of color_lens->pinhole's size.
 void CheckFrameColorHeader(const Frame& frame);
 // ReadColorResized for a frame's colour (its camera is frame.color_camera).
 ColorImage ReadFrameColorResized(const Frame& frame, int new_width, int new_height,

@@ -12,6 +12,7 @@ import gzip
 import io
 import json
 import os
+import shutil
 import struct
 import sys
 import tarfile
@@ -138,6 +139,28 @@ def main():
     posed_readers.check_dust3r("scannetpp shipped recipe", shipped, posed,
                                posed_readers.shard_images(shipped, posed))
     check_selected_pairs(os.path.join(shipped, "dust3r"))
+
+    # One iPhone colour file that is not an image (behind the lens, as every ScanNet++
+    # frame): skipped and named at the scan (scan.color_error); it used to stop the build
+    # in its write stage.
+    broken = common.scratch("scannetpp_broken_colour")
+    shutil.copytree(os.path.join(root, "data"), os.path.join(broken, "data"))
+    rgb = os.path.join(broken, "data", "synthpp_000", "iphone", "rgb")
+    bad = sorted(os.listdir(rgb))[1]
+    with open(os.path.join(rgb, bad), "wb") as f:
+        f.write(b"garbage")
+    with open(os.path.join(root, "iphone.yaml")) as f:
+        text = f.read()
+    assert text.count(f"root: {root}\n") == 1, text
+    with open(os.path.join(broken, "iphone.yaml"), "w") as f:
+        f.write(text.replace(f"root: {root}\n", f"root: {broken}\n"))
+    out = os.path.join(broken, "out")
+    common.occgt("build", os.path.join(broken, "iphone.yaml"), "--out", out)
+    with open(os.path.join(out, "summary.json")) as f:
+        summary = json.load(f)
+    assert summary["drops"].get("scan.color_error") == 1, summary["drops"]
+    example = summary["drop_examples"]["scan.color_error"]
+    assert example.startswith("synthpp_000/") and bad in example, example
 
 
 def read_box_mesh(path):
