@@ -48,20 +48,29 @@ struct MeshAgreement {
   std::string mesh;
   std::vector<std::pair<std::string, gt::render::DepthAgreement>> frames;
   gt::render::DepthAgreement total;
+  // Frames whose sensor depth, mask or mesh could not be read: (id, error), skipped.
+  std::vector<std::pair<std::string, std::string>> unreadable;
 };
 
-MeshAgreement CompareWithMesh(const gt::Scene& scene, const ScanArgs& args) {
+// Every --mesh-stride-th frame the summary counts usable (its mask and, with --check-depth,
+// its depth checked): a frame that fails to read is skipped and listed, never fatal.
+MeshAgreement CompareWithMesh(const gt::Scene& scene, const gt::datasets::SceneSummary& summary,
+                              const ScanArgs& args) {
   MeshAgreement out;
   out.mesh = scene.mesh_path;
   gt::render::FrameDepthOptions options;
   options.fused = args.tolerance;
   int k = 0;
   for (const gt::Frame& f : scene.frames) {
-    if (!f.usable || k++ % args.mesh_stride != 0) continue;
-    const gt::render::DepthAgreement a = gt::truth::CompareWorkingDepthWithMesh(
-        scene, f, {f.depth_camera.width, f.depth_camera.height}, options);
-    out.total += a;
-    out.frames.emplace_back(f.id, a);
+    if (summary.usable_ids.count(f.id) == 0 || k++ % args.mesh_stride != 0) continue;
+    try {
+      const gt::render::DepthAgreement a = gt::truth::CompareWorkingDepthWithMesh(
+          scene, f, {f.depth_camera.width, f.depth_camera.height}, options);
+      out.total += a;
+      out.frames.emplace_back(f.id, a);
+    } catch (const gt::InputError& e) {
+      out.unreadable.emplace_back(f.id, e.what());
+    }
   }
   return out;
 }
@@ -77,6 +86,9 @@ nlohmann::ordered_json MeshAgreementJson(const MeshAgreement& m, const ScanArgs&
     j["frames"].push_back(f);
   }
   j["total"] = gt::truth::DepthAgreementJson(m.total);
+  j["unreadable"] = nlohmann::ordered_json::array();
+  for (const auto& [id, error] : m.unreadable)
+    j["unreadable"].push_back({{"id", id}, {"error", error}});
   return j;
 }
 
@@ -208,7 +220,9 @@ void RunScan(const ScanArgs& args) {
     gt::pipeline::ApplyMeshPath(args.mesh, &scene);
     summaries.push_back(gt::datasets::SummarizeScene(scene, args.scan));
     agreements.emplace_back();
-    if (!scene.mesh_path.empty()) agreements.back() = CompareWithMesh(scene, args);
+    if (!scene.mesh_path.empty()) {
+      agreements.back() = CompareWithMesh(scene, summaries.back(), args);
+    }
   }
   size_t frames = 0, usable = 0, with_color = 0;
   std::map<std::string, size_t> reasons;
@@ -250,6 +264,11 @@ void RunScan(const ScanArgs& args) {
           m->mesh.c_str(), m->frames.size(), args.tolerance.abs_tol_m, args.tolerance.rel_tol,
           m->total.agree / n, m->total.disagree / n, m->total.mesh_only / n,
           m->total.sensor_only / n);
+      if (!m->unreadable.empty()) {
+        std::printf("  mesh comparison skipped %zu unreadable frame(s), first %s: %s\n",
+                    m->unreadable.size(), m->unreadable[0].first.c_str(),
+                    m->unreadable[0].second.c_str());
+      }
     }
   }
   std::cout << "total: " << summaries.size() << " scene(s), " << frames << " frames, " << usable

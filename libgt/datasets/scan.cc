@@ -142,10 +142,9 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
     if (options.check_masks && !f.mask_path.empty()) {
       const std::string problem = MaskProblem(f.mask_path);
       if (!problem.empty()) {
-        count_unusable(f, problem == kReasonMaskCoversImage ? kReasonMaskCoversImage
-                                                            : kReasonMaskUnreadable,
-                       problem == kReasonMaskCoversImage ? f.mask_path + ": no pixel is 255"
-                                                         : problem);
+        count_unusable(
+            f, problem == kReasonMaskCoversImage ? kReasonMaskCoversImage : kReasonMaskUnreadable,
+            problem == kReasonMaskCoversImage ? f.mask_path + ": no pixel is 255" : problem);
         continue;
       }
     }
@@ -164,6 +163,7 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
       }
     }
     ++s.usable;
+    s.usable_ids.insert(f.id);
     if (f.color_path.empty() && first_without_color == nullptr) first_without_color = &f;
     if (!f.color_path.empty()) {
       ++s.usable_with_color;

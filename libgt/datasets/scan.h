@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,10 @@ struct SceneSummary {
   size_t depth_files_bad = 0;        // read failed (frame counted unusable)
   double mean_valid_fraction = 0.0;  // over the files read; 0 when none
   std::vector<std::string> depth_errors;
+
+  // The ids of the frames counted usable above (the reader's, less those the mask and depth
+  // checks refused), for a caller that goes on to read them.
+  std::set<std::string> usable_ids;
 
   size_t unusable() const { return frames - usable; }
 };

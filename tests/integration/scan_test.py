@@ -197,4 +197,25 @@ r = subprocess.run([common.BINARY, *argv], cwd=common.SOURCE, capture_output=Tru
 assert r.returncode == 0, r.stderr
 assert r.stdout.splitlines() == lines[1:], (r.stdout, lines[1:])
 
+# With a mesh, a sensor depth file that cannot be read is skipped by the comparison and
+# listed (it stopped the whole scan, without any report).
+seven = common.shared("sevenscenes")
+cut = common.scratch("scan_mesh_unreadable")
+os.makedirs(os.path.join(cut, "rgbd-frames"))
+shutil.copyfile(os.path.join(seven, "camera-intrinsics.txt"), os.path.join(cut, "camera-intrinsics.txt"))
+names = sorted(os.listdir(os.path.join(seven, "rgbd-frames")))
+for name in names[:12]:  # three frames: pose, colour, depth of each
+    os.symlink(os.path.join(seven, "rgbd-frames", name), os.path.join(cut, "rgbd-frames", name))
+depths = sorted(n for n in os.listdir(os.path.join(cut, "rgbd-frames")) if n.endswith(".depth.png"))
+victim = os.path.join(cut, "rgbd-frames", depths[1])
+data = open(victim, "rb").read()
+os.unlink(victim)
+with open(victim, "wb") as f:
+    f.write(data[:200])
+s = scan(cut, "sevenscenes", "--mesh",
+         common.shared("meshes/sevenscenes-rgbd-frames-tsdf.ply"))["scenes"][0]["mesh_depth"]
+frame = depths[1][len("frame-"):-len(".depth.png")]
+assert [u["id"] for u in s["unreadable"]] == [frame], s["unreadable"]
+assert "truncated PNG" in s["unreadable"][0]["error"], s["unreadable"]
+assert frame not in {f["id"] for f in s["frames"]} and len(s["frames"]) == len(depths) - 1, s["frames"]
 print("scan integration: OK")

@@ -111,6 +111,12 @@ def main():
                                      "mask: covers the whole image": 1,
                                      "pose: image not in the COLMAP model": 1}, s
     assert s["usable"] == FRAMES - 1, s
+    # The mesh comparison covers the frames the scan counts usable: not the one whose mask
+    # covers the whole image (it was compared, all "neither").
+    unusable = {e["frame"] for v in s["unusable_examples"].values() for e in v}
+    compared = {f["id"] for f in s["mesh_depth"]["frames"]}
+    assert len(compared) == s["usable"] and not compared & unusable, (compared, unusable)
+    assert s["mesh_depth"]["unreadable"] == [], s["mesh_depth"]["unreadable"]
     # The undistorted pinhole camera: principal point (w/2, h/2) in OpenCV's convention.
     assert s["K"][0][2] == 80.0 and s["K"][1][2] == 60.0, s["K"]
     iphone = scan(root, "iphone", validator)
