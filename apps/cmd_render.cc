@@ -93,52 +93,80 @@ void RunRender(const RenderArgs& args) {
   report["frames"] = nlohmann::ordered_json::array();
   gt::render::DepthAgreement total;
   bool any_sensor = false;
-  for (size_t i : frames) {
-    const gt::Frame& frame = scene.frames[i];
-    const gt::Camera camera =
-        resolution ? gt::truth::WorkingCamera(frame, *resolution) : frame.depth_camera;
-    const gt::render::RenderedDepth r = renderer->Render(camera, frame.world_from_cam, options);
-    gt::DepthImage mesh(camera.width, camera.height);
-    mesh.values_m.assign(r.depth_m.begin(), r.depth_m.end());
-    std::vector<int32_t> ids(r.triangle_id.begin(), r.triangle_id.end());
-    std::vector<uint16_t> mm(mesh.values_m.size());
-    for (size_t k = 0; k < mm.size(); ++k) {
-      const double v = std::round(mesh.values_m[k] * 1000.0);
-      mm[k] = v >= 1 && v <= 65535 ? static_cast<uint16_t>(v) : 0;  // beyond 65.535 m: none
+  // Every file is written under "<name>.part" first and renamed once every frame is done,
+  // so that a frame failing halfway leaves no file of this run (and replaces none of an
+  // earlier one); render.json comes last.
+  std::vector<std::string> staged;
+  const auto stage = [&](const std::string& path, const std::string& bytes) {
+    gt::io::WriteFileAtomic(path + ".part", bytes);
+    staged.push_back(path);
+  };
+  const auto unstage = [&] {
+    std::error_code ec;
+    for (const std::string& path : staged) std::filesystem::remove(path + ".part", ec);
+  };
+  try {
+    for (size_t i : frames) {
+      const gt::Frame& frame = scene.frames[i];
+      const gt::Camera camera =
+          resolution ? gt::truth::WorkingCamera(frame, *resolution) : frame.depth_camera;
+      const gt::render::RenderedDepth r = renderer->Render(camera, frame.world_from_cam, options);
+      gt::DepthImage mesh(camera.width, camera.height);
+      mesh.values_m.assign(r.depth_m.begin(), r.depth_m.end());
+      std::vector<int32_t> ids(r.triangle_id.begin(), r.triangle_id.end());
+      std::vector<uint16_t> mm(mesh.values_m.size());
+      for (size_t k = 0; k < mm.size(); ++k) {
+        const double v = std::round(mesh.values_m[k] * 1000.0);
+        mm[k] = v >= 1 && v <= 65535 ? static_cast<uint16_t>(v) : 0;  // beyond 65.535 m: none
+      }
+      std::optional<gt::DepthImage> sensor;
+      std::string sensor_error;  // a sensor depth file that cannot be read: the frame still renders
+      if (!frame.depth.path.empty() && gt::io::FileExists(frame.depth.path)) {
+        try {
+          sensor = gt::truth::LoadWorkingDepth(frame, {camera.width, camera.height});
+        } catch (const gt::InputError& e) {
+          sensor_error = e.what();
+        }
+      }
+      nlohmann::ordered_json fj;
+      fj["id"] = frame.id;
+      fj["size"] = {camera.width, camera.height};
+      int64_t hits = 0;
+      for (float d : mesh.values_m) hits += d > 0;
+      fj["rendered_fraction"] =
+          static_cast<double>(hits) / std::max<size_t>(1, mesh.values_m.size());
+      if (sensor) {
+        const gt::render::DepthAgreement a = gt::render::CompareSensorAndMesh(
+            *sensor, mesh, scene.min_depth_m, scene.max_depth_m, args.depth.fused);
+        total += a;
+        any_sensor = true;
+        fj["sensor"] = gt::truth::DepthAgreementJson(a);
+      } else {
+        fj["sensor"] = nullptr;
+        if (!sensor_error.empty()) fj["sensor_error"] = sensor_error;
+      }
+      const std::vector<int64_t> shape = {camera.height, camera.width};
+      const cv::Mat png16(camera.height, camera.width, CV_16UC1, mm.data());
+      const cv::Mat picture =
+          gt::render::DepthComparisonPicture(sensor ? &*sensor : nullptr, mesh, scene.min_depth_m,
+                                             scene.max_depth_m, args.depth.fused);
+      const std::string base = args.out + "/" + frame.id;
+      stage(base + "_depth.npy", gt::io::EncodeNpy<float>(shape, mesh.values_m));
+      stage(base + "_depth.png",
+            gt::io::EncodePngBytes(png16, gt::io::ChannelOrder::kRgb, 6, base + "_depth.png"));
+      stage(base + "_triangles.npy", gt::io::EncodeNpy<int32_t>(shape, ids));
+      stage(base + "_picture.png",
+            gt::io::EncodePngBytes(picture, gt::io::ChannelOrder::kRgb, 6, base + "_picture.png"));
+      report["frames"].push_back(fj);
     }
-    std::optional<gt::DepthImage> sensor;
-    if (!frame.depth.path.empty() && gt::io::FileExists(frame.depth.path)) {
-      sensor = gt::truth::LoadWorkingDepth(frame, {camera.width, camera.height});
+    for (const std::string& path : staged) {
+      std::error_code ec;
+      std::filesystem::rename(path + ".part", path, ec);
+      if (ec) throw gt::InputError(path, "cannot rename " + path + ".part: " + ec.message());
     }
-    nlohmann::ordered_json fj;
-    fj["id"] = frame.id;
-    fj["size"] = {camera.width, camera.height};
-    int64_t hits = 0;
-    for (float d : mesh.values_m) hits += d > 0;
-    fj["rendered_fraction"] = static_cast<double>(hits) / std::max<size_t>(1, mesh.values_m.size());
-    if (sensor) {
-      const gt::render::DepthAgreement a = gt::render::CompareSensorAndMesh(
-          *sensor, mesh, scene.min_depth_m, scene.max_depth_m, args.depth.fused);
-      total += a;
-      any_sensor = true;
-      fj["sensor"] = gt::truth::DepthAgreementJson(a);
-    } else {
-      fj["sensor"] = nullptr;
-    }
-    const std::vector<int64_t> shape = {camera.height, camera.width};
-    const cv::Mat png16(camera.height, camera.width, CV_16UC1, mm.data());
-    const cv::Mat picture = gt::render::DepthComparisonPicture(
-        sensor ? &*sensor : nullptr, mesh, scene.min_depth_m, scene.max_depth_m, args.depth.fused);
-    const std::string base = args.out + "/" + frame.id;
-    gt::io::WriteFileAtomic(base + "_depth.npy", gt::io::EncodeNpy<float>(shape, mesh.values_m));
-    gt::io::WriteFileAtomic(
-        base + "_depth.png",
-        gt::io::EncodePngBytes(png16, gt::io::ChannelOrder::kRgb, 6, base + "_depth.png"));
-    gt::io::WriteFileAtomic(base + "_triangles.npy", gt::io::EncodeNpy<int32_t>(shape, ids));
-    gt::io::WriteFileAtomic(
-        base + "_picture.png",
-        gt::io::EncodePngBytes(picture, gt::io::ChannelOrder::kRgb, 6, base + "_picture.png"));
-    report["frames"].push_back(fj);
+  } catch (...) {
+    unstage();
+    throw;
   }
   report["total"] =
       any_sensor ? gt::truth::DepthAgreementJson(total) : nlohmann::ordered_json(nullptr);
@@ -155,6 +183,17 @@ void RunRender(const RenderArgs& args) {
         total.mesh_only / n, total.sensor_only / n);
   }
   std::printf(" -> %s\n", args.out.c_str());
+  int unreadable = 0;
+  for (const auto& fj : report["frames"]) {
+    if (!fj.contains("sensor_error")) continue;
+    if (unreadable++ == 0) {
+      std::printf("  sensor depth unreadable for frame %s: %s\n",
+                  fj["id"].get<std::string>().c_str(),
+                  fj["sensor_error"].get<std::string>().c_str());
+    }
+  }
+  if (unreadable > 1)
+    std::printf("  ... and %d more frame(s) (render.json: sensor_error)\n", unreadable - 1);
 }
 
 }  // namespace

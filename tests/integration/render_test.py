@@ -181,8 +181,51 @@ def test_bad_render_flags():
     assert r.returncode == 1 and bad in r.stderr and r.stderr.count("\n") == 1, r.stderr
 
 
+def test_render_bad_sensor_and_nothing_half_written():
+    # A sensor depth file that cannot be read: the frame is rendered all the same, its
+    # comparison null with the reason (it stopped the render, leaving the earlier frames'
+    # files behind).
+    root = common.scratch("render_bad_sensor")
+    os.makedirs(os.path.join(root, "rgbd-frames"))
+    os.symlink(os.path.join(ROOT, "camera-intrinsics.txt"), os.path.join(root, "camera-intrinsics.txt"))
+    for fid in ("000150", "000160"):
+        for part in ("color.png", "depth.png", "pose.txt"):
+            src = os.path.join(ROOT, "rgbd-frames", f"frame-{fid}.{part}")
+            dst = os.path.join(root, "rgbd-frames", f"frame-{fid}.{part}")
+            if fid == "000160" and part == "depth.png":
+                with open(src, "rb") as f, open(dst, "wb") as g:
+                    g.write(f.read()[:200])
+            else:
+                os.symlink(src, dst)
+    args = ["--root", root, "--format", "sevenscenes", "--scene", "rgbd-frames", "--mesh", MESH,
+            "--frames", "000150,000160"]
+    out = os.path.join(root, "out")
+    r = common.occgt("render", *args, "--out", out)
+    assert "  sensor depth unreadable for frame 000160: " in r.stdout, r.stdout
+    with open(os.path.join(out, "render.json")) as f:
+        doc = json.load(f)
+    jsonschema.validate(doc, schema("render.schema.json"))
+    second = doc["frames"][1]
+    assert second["sensor"] is None and "truncated PNG" in second["sensor_error"], second
+    assert doc["frames"][0]["sensor"] is not None and "sensor_error" not in doc["frames"][0]
+    assert os.path.exists(os.path.join(out, "000160_depth.npy"))
+    # A frame that fails to be written leaves no file of the run, and an earlier file of the
+    # same name as it was.
+    out2 = os.path.join(root, "out2")
+    os.makedirs(os.path.join(out2, "000160_depth.npy.part"))  # its file cannot be written
+    with open(os.path.join(out2, "000150_depth.npy"), "w") as f:
+        f.write("an earlier run's file")
+    r = common.occgt("render", *args, "--out", out2, check=False)
+    assert r.returncode == 1 and r.stderr.count("\n") == 1, (r.returncode, r.stderr)
+    left = sorted(os.listdir(out2))
+    assert left == ["000150_depth.npy", "000160_depth.npy.part"], left
+    with open(os.path.join(out2, "000150_depth.npy")) as f:
+        assert f.read() == "an earlier run's file"
+
+
 if __name__ == "__main__":
     test_render()
+    test_render_bad_sensor_and_nothing_half_written()
     test_pair_depth_source()
     test_scan_mesh()
     test_build_depth_source()
