@@ -311,7 +311,9 @@ void WritePlan(const std::string& dir, const SplitPlan& plan) {
 SplitPlan ReadPlan(const std::string& dir, const std::string& split) {
   const std::string path = PlanPath(dir, split);
   if (!io::FileExists(path)) {
-    throw InputError(path, "missing split plan (the select stage writes it)");
+    throw InputError(path,
+                     "missing split plan (the write stage of occgt build writes it before its "
+                     "first shard: run it, then merge)");
   }
   const json doc = ParseJsonFile(path);
   SplitPlan plan;
@@ -733,12 +735,18 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
   if (std::string error; !options.Check(&error)) throw InputError("merge options", error);
   MergeResult result;
   result.split = options.split;
+  if (std::error_code ec; !fs::is_directory(dir, ec)) {
+    throw InputError(dir, "expected a split folder (occgt build's --out)");
+  }
   if (result.split.empty()) {
     const std::vector<std::string> splits = ListPlannedSplits(dir);
     if (splits.size() != 1) {
       throw InputError((fs::path(dir) / "parts").string(),
                        "expected exactly one <split>.plan.json, found " +
-                           std::to_string(splits.size()) + " (pass the split name)");
+                           std::to_string(splits.size()) +
+                           (splits.empty() ? " (the write stage of occgt build writes it before "
+                                             "its first shard: run it, then merge)"
+                                           : " (pass --split with one of them)"));
     }
     result.split = splits[0];
   }

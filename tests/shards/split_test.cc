@@ -648,6 +648,16 @@ TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasByVerifyAndValidate) {
 
 TEST(Split, CommandsMergeAndValidate) {
   const std::string dir = test::ScratchDir("shards_split_cli");
+  // A folder that is not there, or holds no plan yet: named, with what makes the plan.
+  auto missing = test::RunOccgt("merge '" + dir + "/none'");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_EQ(missing.stderr_text,
+            "occgt: error: " + dir + "/none: expected a split folder (occgt build's --out)\n");
+  missing = test::RunOccgt("merge '" + dir + "'");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.stderr_text.find("found 0 (the write stage of occgt build writes it"),
+            std::string::npos)
+      << missing.stderr_text;
   WriteSplit(dir);
   auto r = test::RunOccgt("merge --schemas '" + SchemasDir() + "' '" + dir + "'");
   ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
