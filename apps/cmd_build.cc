@@ -173,9 +173,14 @@ std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
             gt::Counted(num("shards_planned"), "shard") + ", about " +
             HumanBytes(static_cast<double>(num("estimated_bytes"))) + "; nothing written" + took;
   } else if (s.value("stage", "all") == "select") {
-    text += name + ": selected " + pairs + " in " + scenes + " (" +
+    // The pairs of the scenes selected so far (a task of several selects its own).
+    const int64_t complete = num("scenes_complete");
+    const std::string in =
+        complete < num("scenes") ? std::to_string(complete) + " of " + scenes + " so far" : scenes;
+    text += name + ": selected " + pairs + " in " + in + " (" +
             gt::Counted(num("scenes_selected_this_run"), "scene") +
-            " this run); nothing written yet: run --stage write" + took;
+            " this run); nothing written yet: run --stage write" +
+            (complete < num("scenes") ? " once every task has selected" : "") + took;
   } else {
     const int64_t written = num("samples_written_this_run");
     text +=

@@ -10,6 +10,7 @@ import gzip
 import io
 import json
 import os
+import re
 import shutil
 import sys
 import tarfile
@@ -299,7 +300,10 @@ def main():
 
     # Write before every selection exists: refused.
     out_d = os.path.join(root, "d")
-    common.occgt("build", "--json", recipe, "--out", out_d, "--tasks", "2", "--task", "0", "--stage", "select")
+    r = common.occgt("build", recipe, "--out", out_d, "--tasks", "2", "--task", "0", "--stage", "select")
+    # The text counts the scenes selected so far, not every scene of the split.
+    assert re.search(r": selected \d+ pairs? in 1 of 2 scenes so far \(1 scene this run\); nothing "
+                     r"written yet: run --stage write once every task has selected", r.stdout), r.stdout
     r = common.occgt("build", "--json", recipe, "--out", out_d, "--stage", "write", check=False)
     assert r.returncode == 1 and "not complete" in r.stderr, r.stderr
 
