@@ -320,7 +320,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
   if (!all_selected) {
     throw InputError(SelectionDir(options.out_dir),
                      "the selection of some scenes is not complete (run every task with --stage "
-                     "select first)");
+                     "select first, then --stage write; this task's selection is kept)");
   }
 
   const auto t_write = Clock::now();
