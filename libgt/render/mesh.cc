@@ -418,6 +418,17 @@ TriangleMesh ParsePlyMesh(std::string_view bytes, const std::string& where) {
       }
     }
   }
+  // Data after the last element: a header count too small (the rows past it would be
+  // dropped without a word) or a damaged file. ASCII may end with white space.
+  size_t rest = cursor.position();
+  if (header.encoding == Encoding::kAscii) {
+    while (rest < data.size() && std::isspace(static_cast<unsigned char>(data[rest]))) ++rest;
+  }
+  if (rest < data.size()) {
+    throw InputError(where, std::to_string(data.size() - rest) +
+                                " bytes of data after the last element (a count in the header "
+                                "smaller than the file's rows, or a damaged file)");
+  }
   // Nothing to render ("element face 0"): as the scene's mesh it would make every rendered
   // pixel "no depth" without a word.
   if (mesh.triangles.empty()) {

@@ -172,6 +172,19 @@ TEST(Ply, WrongCountsAreRefused) {
       "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
       "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n";
   EXPECT_NE(ErrorOf(neg).find("vertex index -1"), std::string::npos);
+  // Fewer faces in the header than in the data, or bytes after the last element: refused
+  // (the rows past the count were dropped without a word). ASCII may end in white space.
+  EXPECT_NE(ErrorOf(Replace(good, "element face 3", "element face 2"))
+                .find("bytes of data after the last element"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(good + "garbage").find("7 bytes of data after the last element"),
+            std::string::npos);
+  const std::string ascii_extra =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+      "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  EXPECT_EQ(ParsePlyMesh(ascii_extra + "\n \r\n", "a.ply").NumTriangles(), 1u);
+  EXPECT_NE(ErrorOf(ascii_extra + "3 0 1 2\n").find("after the last element"), std::string::npos);
 }
 
 // Found by fuzz_ply: a PLY whose face element has no face ("element face 0") was read as an
