@@ -398,7 +398,19 @@ void ApplyFrameMask(const Frame& frame, DepthImage* depth) {
   }
 }
 
+namespace {
+
+// A frame without a depth file: what to do instead.
+std::string NoDepthFile() {
+  return "the frame has no depth file (ScanNet++ DSLR images have no sensor depth: render it "
+         "from the scene's mesh with --depth-source mesh, dataset.depth_source: mesh or "
+         "depth_source=\"mesh\")";
+}
+
+}  // namespace
+
 DepthImage ReadFrameDepth(const Frame& frame) {
+  if (frame.depth.path.empty()) throw InputError("frame " + frame.id + ": depth", NoDepthFile());
   if (!frame.depth_lens) {
     DepthImage d = ReadDepth(frame.depth, frame.depth_camera.width, frame.depth_camera.height);
     ApplyFrameMask(frame, &d);
@@ -424,12 +436,7 @@ DepthImage ReadFrameDepth(const Frame& frame) {
 }
 
 DepthImage ReadDepth(const DepthSource& source, int expected_width, int expected_height) {
-  if (source.path.empty()) {
-    throw InputError("depth",
-                     "the frame has no depth file (ScanNet++ DSLR images have no "
-                     "sensor depth: render it from the scene's mesh with --depth-source mesh, "
-                     "dataset.depth_source: mesh or depth_source=\"mesh\")");
-  }
+  if (source.path.empty()) throw InputError("depth", NoDepthFile());
   if (source.format == DepthFormat::kSensZlib || source.format == DepthFormat::kSensRaw ||
       source.format == DepthFormat::kIphoneBinRecord) {
     return DecodeDepth(

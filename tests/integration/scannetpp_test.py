@@ -124,6 +124,12 @@ def main():
     assert s["unusable_reasons"] == {"pose: image not in the COLMAP model": 1}, s
     assert s["depth_size"] == [256, 192], s
 
+    # A DSLR pair with sensor depth (there is none): the frame is named, with what to do.
+    r = common.occgt("pair", "--root", root, "--format", "scannetpp", "--scene", "synthpp_000",
+                     "--frames", "DSC00010,DSC00020", "--out", os.path.join(root, "pair_dslr"),
+                     check=False)
+    assert r.returncode == 1 and r.stderr.startswith(
+        "occgt: error: frame DSC00010: depth: the frame has no depth file"), r.stderr
     # Bad device: a usage error naming the flag.
     r = common.occgt("scan", root, "--format", "scannetpp", "--device", "kinect", check=False)
     assert r.returncode != 0 and "--device" in r.stderr, r.stderr
