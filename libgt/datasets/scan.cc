@@ -123,6 +123,13 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
   if (std::string w = ColorPrincipalPointWarning(scene); !w.empty()) {
     s.warnings.push_back(std::move(w));
   }
+  // ScanNet++ renders the DSLR's depth from the scene's mesh: without it those frames have
+  // none (a build drops every one as scan.read_error).
+  if (scene.format == DatasetFormat::kScanNetPP && scene.mesh_path.empty()) {
+    s.warnings.push_back(
+        "no mesh (scans/mesh_aligned_0.05.ply is missing): the DSLR frames have no depth "
+        "without it, and depth_source mesh or fused cannot run on this scene");
+  }
   const Frame* first_without_color = nullptr;
   bool have_color_camera = false;
   s.depth_checked = options.check_depth;

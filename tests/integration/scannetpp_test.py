@@ -124,6 +124,14 @@ def main():
     assert s["unusable_reasons"] == {"pose: image not in the COLMAP model": 1}, s
     assert s["depth_size"] == [256, 192], s
 
+    assert not any(w.startswith("no mesh") for w in s["warnings"]), s["warnings"]
+    # A scene without its mesh: scan says so (a DSLR build would drop every frame).
+    nomesh = common.scratch("scannetpp_nomesh")
+    shutil.copytree(os.path.join(root, "data"), os.path.join(nomesh, "data"))
+    os.unlink(os.path.join(nomesh, "data", "synthpp_000", "scans", "mesh_aligned_0.05.ply"))
+    doc = scan(nomesh, "dslr", validator)
+    assert any(w.startswith("no mesh (scans/mesh_aligned_0.05.ply is missing)")
+               for w in doc["scenes"][0]["warnings"]), doc["scenes"][0]["warnings"]
     # A DSLR pair with sensor depth (there is none): the frame is named, with what to do.
     r = common.occgt("pair", "--root", root, "--format", "scannetpp", "--scene", "synthpp_000",
                      "--frames", "DSC00010,DSC00020", "--out", os.path.join(root, "pair_dslr"),
