@@ -430,9 +430,10 @@ class ShardDataset(_ShardSplit):
         cells = (W // stride) * (H // stride)
         outside = (matches < 0) | (matches >= cells)
         if outside.any():
-            k, c = (int(x) for x in np.argwhere(outside)[0])
-            raise ValueError(f"{where}.matches.npy: row {k} names cell {int(matches[k, c])} of "
-                             f"image {c}, which has {cells} cells ({W}x{H}, stride {stride})")
+            row, side = (int(x) for x in np.argwhere(outside)[0])
+            raise ValueError(f"{where}.matches.npy: row {row} names cell "
+                             f"{int(matches[row, side])} of image {side}, which has {cells} "
+                             f"cells ({W}x{H}, stride {stride})")
         if (match_type > 2).any():
             k = int(np.argmax(match_type > 2))
             raise ValueError(f"{where}.match_type.npy: row {k} is {int(match_type[k])}; "
