@@ -941,7 +941,13 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
     index_schema = LoadSchema(options.schemas_dir, "index.schema.json");
     schemas.emplace(options.schemas_dir);
   } catch (const InputError& e) {
-    problems.push_back(e.what());
+    // The output folder of occgt tuples --shards holds its split in views/.
+    const bool views = !io::FileExists(index_path) &&
+                       io::FileExists((fs::path(dir) / "views" / "index.json").string());
+    problems.push_back(std::string(e.what()) +
+                       (views ? " (the N-view shards of occgt tuples --shards are in " +
+                                    (fs::path(dir) / "views").string() + ": validate that folder)"
+                              : ""));
     return problems;
   }
   for (const std::string& p : index_schema->Check(index)) {

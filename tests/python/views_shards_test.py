@@ -130,6 +130,11 @@ class ViewsShards(unittest.TestCase):
         for row in rows:
             jsonschema.validate(row, line_schema)
         self.assertIn("valid", common.occgt("validate", self.views).stdout)
+        # The tuples' folder itself: the index is not found, and the message says where it is.
+        r = subprocess.run([common.BINARY, "validate", self.out1], capture_output=True, text=True)
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertIn(f"(the N-view shards of occgt tuples --shards are in {self.views}: "
+                      "validate that folder)", r.stdout)
         copy = os.path.join(self.dir, "views_copy")
         shutil.rmtree(copy, ignore_errors=True)
         shutil.copytree(self.views, copy)
