@@ -93,7 +93,7 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
   io::WriteFileAtomic(out_dir + "/tuples.jsonl", lines);
   json summary = {{"scenes", static_cast<int64_t>(scenes.size())},
                   {"tuples", total},
-                  {"views", sizes},
+                  {"sizes", sizes},  // report.json's name for the same counts
                   {"drops", drops},
                   {"scenes_without_tuples", without_tuples}};
   if (write_shards) summary["shards"] = WriteViewsShards(recipe, reader, out_dir, rows);

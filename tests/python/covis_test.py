@@ -169,6 +169,7 @@ class Covis(unittest.TestCase):
         with open(os.path.join(common.SOURCE, "schemas", "tuples_summary.schema.json")) as f:
             jsonschema.validate(r, json.load(f))
         self.assertEqual(r["scenes_without_tuples"], [])
+        self.assertEqual(sum(r["sizes"].values()), r["tuples"])  # report.json's word
         with open(os.path.join(common.SOURCE, "schemas", "tuples_line.schema.json")) as f:
             schema = json.load(f)
         text = common.read_bytes(os.path.join(self.out1, "tuples.jsonl"))
