@@ -278,7 +278,18 @@ TEST(NpyGzip, PlainSizeComesFromTheHeaderInside) {
       EncodeNpy({3, 2}, Values<uint64_t>(6, 2)),
       EncodeStringsNpy({"scene0000_00", "a"}, "strings"),
       CraftNpy(Dict("|S3", "(2,)"), "abcdef"),
+      // A header longer than the short prefix inflated first (80 dimensions of 1).
+      CraftNpy(Dict(
+                   "<u2", "(" +
+                              [] {
+                                std::string dims;
+                                for (int k = 0; k < 80; ++k) dims += "1, ";
+                                return dims;
+                              }() +
+                              "3)"),
+               std::string(6, '\x01')),
   };
+  ASSERT_GT(arrays.back().find('\n'), 256u);  // its header runs past the short prefix
   for (const std::string& npy : arrays) {
     const std::string gz = GzipBytes(npy, 1);
     EXPECT_EQ(GzippedNpyPlainSize(gz, "m.npy.gz"), npy.size());
