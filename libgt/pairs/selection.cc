@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <random>
 
@@ -244,7 +245,11 @@ std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>
                                    DepthCache* cache, DropCounts* drops,
                                    std::string* first_read_error) {
   std::vector<std::optional<ScoredPair>> results(candidates.size());
-  std::vector<std::string> read_errors(candidates.size());  // "<frame id>: <error>"
+  // The read error of the first failing candidate in candidate order (whatever the visit
+  // order): "<frame id>: <error>".
+  std::mutex error_mutex;
+  size_t error_k = candidates.size();
+  std::string error_text;
 
   // Visit order: by block of (i0 / B, i1 / B), then candidate order (results by index).
   const size_t block = std::max<size_t>(1, cache->CapacityMaps() / 4);
@@ -266,7 +271,11 @@ std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>
       reading = c.i1;
       d1 = cache->Get(c.i1);
     } catch (const InputError& e) {
-      read_errors[k] = scene.frames[reading].id + ": " + e.what();
+      const std::lock_guard<std::mutex> lock(error_mutex);
+      if (k < error_k) {
+        error_k = k;
+        error_text = scene.frames[reading].id + ": " + e.what();
+      }
       return;
     }
     const Rigid3d& w0 = scene.frames[c.i0].world_from_cam;
@@ -282,14 +291,14 @@ std::vector<ScoredPair> ScorePairs(const Scene& scene, const std::vector<Camera>
   std::vector<ScoredPair> out;
   out.reserve(results.size());
   int64_t errors = 0;
-  for (size_t k = 0; k < results.size(); ++k) {
-    if (results[k]) {
-      out.push_back(*results[k]);
+  for (auto& r : results) {
+    if (r) {
+      out.push_back(*r);
     } else {
-      if (errors == 0 && first_read_error != nullptr) *first_read_error = read_errors[k];
       ++errors;
     }
   }
+  if (errors && first_read_error != nullptr) *first_read_error = error_text;
   if (errors) (*drops)["score.read_error"] += errors;
   return out;
 }
