@@ -15,6 +15,7 @@
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/folder_lock.h"
+#include "libgt/io/image.h"
 #include "libgt/io/md5.h"
 #include "libgt/io/npy.h"
 #include "libgt/io/npz_members.h"
@@ -278,6 +279,8 @@ void CheckGraphFramesDepth(const Recipe& recipe, const Scene& scene, const Scene
   for (size_t k = 0; k < g.frame_ids.size(); ++k) {  // graph order = scene order
     const size_t f = scene_index.at(g.frame_ids[k]);
     if (!wanted[f] || kept.count(f)) continue;
+    // Why the scan drops it: its depth (unreadable, too few valid pixels), else its colour
+    // image (ScanRecipeFrames' header check).
     std::string why;
     try {
       const std::shared_ptr<const DepthImage> d = cache.Get(f);
@@ -286,8 +289,14 @@ void CheckGraphFramesDepth(const Recipe& recipe, const Scene& scene, const Scene
       why = "has " + std::to_string(valid) + " valid depth pixels of " +
             std::to_string(d->values_m.size()) + ", below dataset.min_valid_depth_fraction " +
             std::to_string(recipe.dataset.min_valid_depth_fraction);
+      // ScanFrames' rule: no valid pixel, or a fraction below the recipe's.
+      if (valid > 0 && static_cast<double>(valid) / static_cast<double>(d->values_m.size()) >=
+                           recipe.dataset.min_valid_depth_fraction) {
+        io::CheckFrameColorHeader(scene.frames[f]);
+        why = "is no longer kept by the recipe's scan";
+      }
     } catch (const InputError& e) {
-      why = "has a depth map that cannot be read (" + std::string(e.what()) + ")";
+      why = "has a file that cannot be used (" + std::string(e.what()) + ")";
     }
     throw InputError(path, "frame_ids[" + std::to_string(k) + "] '" + g.frame_ids[k] + "' " + why +
                                ": the data changed since occgt covis; re-run occgt covis for it "
@@ -405,9 +414,8 @@ nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOption
       }
       ++skipped;
       // A complete scene's graph is read through (a damaged or stale one is not counted
-      // complete); it
-      // gets its dense matrix when asked for and missing (a first run without --dense): from
-      // the stored graph, not scored again.
+      // complete); it gets its dense matrix when asked for and missing (a first run without
+      // --dense): from the stored graph, not scored again.
       SceneCovisibility g;
       try {
         g = ReadSceneCovisibility(path, digest, recipe.selection.score_stride);

@@ -135,6 +135,29 @@ def main():
     assert used and not used & {"000001", "000003"}, used
     common.occgt("validate", out_bad)
 
+    # The same damage found by occgt tuples --shards in a view of a stored graph (the
+    # TartanAir reader does not read colour headers): named as the colour file's problem,
+    # before anything is written (it was reported as too few valid depth pixels).
+    tup = make_root(sample, tmp, "tuples_colour", (("P000", 0),))
+    recipe_t = os.path.join(tmp, "tuples.yaml")
+    with open(recipe_t, "w") as f:
+        f.write(RECIPE.format(root=tup, scene="P000").replace(
+            "selection:\n", "selection:\n  views: 3\n  tuples: {edge_threshold: 0.1, "
+            "quota_per_scene: 4}\n"))
+    out_t = os.path.join(tmp, "out_tuples")
+    common.occgt("covis", recipe_t, "--out", out_t)
+    common.occgt("tuples", recipe_t, "--out", out_t)
+    with open(os.path.join(out_t, "tuples.jsonl")) as f:
+        view = json.loads(f.readline())["frame_ids"][0]
+    png = os.path.join(tup, "P000", "image_left", f"{view}_left.png")
+    os.unlink(png)
+    with open(png, "wb") as f:
+        f.write(b"not an image")
+    r = common.occgt("tuples", recipe_t, "--out", out_t, "--shards", check=False)
+    assert r.returncode == 1 and f"'{view}' has a file that cannot be used (" in r.stderr and \
+        "unsupported image format" in r.stderr, r.stderr
+    assert not os.path.exists(os.path.join(out_t, "views")), "shards written before the check"
+
     print(f"tartanair_folder: scan lists {names} and {env_names}; scenes [P000] built {len(pairs)} pairs")
 
 
