@@ -939,6 +939,13 @@ Recipe LoadRecipe(const std::string& path, const RecipeOverrides& overrides) {
     throw InputError(
         path, "dataset.split_file: expected an existing file, not found: " + r.dataset.split_file);
   }
+  // A mesh path without "{scene}" names one file for every scene: a missing one would make
+  // every frame of every scene a read error (with "{scene}", each scene's is checked there).
+  if (!r.dataset.mesh_path.empty() && r.dataset.mesh_path.find("{scene}") == std::string::npos &&
+      !fs::is_regular_file(r.dataset.mesh_path)) {
+    throw InputError(path, "dataset.mesh_path: expected an existing file, not found: " +
+                               r.dataset.mesh_path);
+  }
   if (!r.selection.import_pairs.path.empty() &&
       !fs::is_regular_file(r.selection.import_pairs.path)) {
     throw InputError(path, "selection.import_pairs.path: expected an existing file, not found: " +

@@ -276,6 +276,26 @@ TEST(Recipe, LoadFailsBeforeWorkWhenDatasetRootIsMissing) {
   }
 }
 
+TEST(Recipe, LoadFailsBeforeWorkWhenAFixedMeshPathIsMissing) {
+  const std::string dir = test::ScratchDir("recipe_missing_mesh");
+  fs::create_directories(dir + "/data");
+  const std::string path = dir + "/r.yaml";
+  io::WriteFileAtomic(path, "name: r\ndataset: {format: generic, root: data, mesh_path: m.ply}\n");
+  try {
+    LoadRecipe(path);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              path + ": dataset.mesh_path: expected an existing file, not found: " + dir + "/m.ply");
+  }
+  // Once the file is there, the recipe loads; a path with {scene} is checked per scene.
+  io::WriteFileAtomic(dir + "/m.ply", "ply\n");
+  EXPECT_EQ(LoadRecipe(path).dataset.mesh_path, dir + "/m.ply");
+  io::WriteFileAtomic(path,
+                      "name: r\ndataset: {format: generic, root: data, mesh_path: '{scene}.ply'}\n");
+  EXPECT_EQ(LoadRecipe(path).dataset.mesh_path, dir + "/{scene}.ply");
+}
+
 TEST(Recipe, EnvironmentExpansionAndRootOverride) {
   ::setenv("OCCGT_TEST_ROOT_VAR", "/from/env", 1);
   EXPECT_EQ(ExpandEnv("${OCCGT_TEST_ROOT_VAR}/x", "f"), "/from/env/x");
