@@ -241,7 +241,7 @@ void CheckViewsShards(const Recipe& recipe, const std::string& out_dir,
   const std::string dir = ViewsShardDir(out_dir);
   const std::string plan = shards::PlanPath(dir, recipe.split);
   if (!io::FileExists(plan)) return;  // no N-view shards yet
-  const std::vector<int64_t> sizes = PlanViewsShards(recipe, static_cast<int64_t>(lines.size()));
+  const std::vector<int64_t> sizes = PlanViewsShards(recipe, lines);
   if (shards::ReadPlan(dir, recipe.split).shard_nsamples != sizes) {
     throw InputError(plan,
                      "holds the N-view shard plan of other tuples than this run's; use a "
@@ -255,11 +255,10 @@ void CheckViewsShards(const Recipe& recipe, const std::string& out_dir,
   }
 }
 
-int64_t EstimatedViewsSampleBytes(const Recipe& r) {
+int64_t EstimatedViewsSampleBytes(const Recipe& r, int views) {
   const bool deflate = r.sample.compression == SampleCompression::kDeflate;
   const double sparse = deflate ? 0.06 : 1.0;
   const double px = static_cast<double>(r.width) * r.height;
-  const double views = r.tuples ? r.tuples->max_views : 2;
   const double tracks = r.tuples ? r.tuple_tracks.num_tracks : 0;
   double per_view =
       (deflate ? 0.2 : 1.0) * 4 * px + sparse * 9 * px + (deflate ? 0.9 : 1.0) * 13 * tracks;
@@ -268,16 +267,28 @@ int64_t EstimatedViewsSampleBytes(const Recipe& r) {
   return static_cast<int64_t>(std::ceil(4096 + 8 * tracks + views * per_view));
 }
 
-std::vector<int64_t> PlanViewsShards(const Recipe& recipe, int64_t total) {
-  int64_t per_shard = recipe.shards.samples_per_shard;
-  if (recipe.shards.target_mb > 0) {
-    per_shard = std::max<int64_t>(
-        1, static_cast<int64_t>(recipe.shards.target_mb * 1e6 /
-                                static_cast<double>(EstimatedViewsSampleBytes(recipe))));
-  }
+std::vector<int64_t> PlanViewsShards(const Recipe& recipe, const std::vector<TupleLine>& lines) {
+  const int64_t total = static_cast<int64_t>(lines.size());
   std::vector<int64_t> sizes;
-  for (int64_t start = 0; start < total; start += per_shard) {
-    sizes.push_back(std::min(per_shard, total - start));
+  if (recipe.shards.target_mb <= 0) {
+    const int64_t per_shard = recipe.shards.samples_per_shard;
+    for (int64_t start = 0; start < total; start += per_shard) {
+      sizes.push_back(std::min(per_shard, total - start));
+    }
+    return sizes;
+  }
+  // Integers, so that the plan cannot depend on a rounding order.
+  const auto target = static_cast<int64_t>(recipe.shards.target_mb * 1e6);
+  int64_t bytes = 0;
+  for (const TupleLine& line : lines) {
+    const int64_t sample =
+        EstimatedViewsSampleBytes(recipe, static_cast<int>(line.frame_ids.size()));
+    if (sizes.empty() || bytes + sample > target) {
+      sizes.push_back(0);
+      bytes = 0;
+    }
+    ++sizes.back();
+    bytes += sample;
   }
   return sizes;
 }
@@ -290,7 +301,7 @@ json WriteViewsShards(const Recipe& recipe, const datasets::DatasetReader& reade
   std::filesystem::create_directories(options.out_dir, ec);
   if (ec) throw InputError(options.out_dir, "cannot create the output folder: " + ec.message());
   const int64_t total = static_cast<int64_t>(lines.size());
-  const std::vector<int64_t> sizes = PlanViewsShards(recipe, total);
+  const std::vector<int64_t> sizes = PlanViewsShards(recipe, lines);
   WritePlan(options, recipe.split, sizes);
   const size_t threads = std::max<size_t>(
       1, tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));

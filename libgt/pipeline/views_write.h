@@ -20,8 +20,9 @@
 // of the scene (RecipePairTruthOptions, as pair samples), the tracks of
 // selection.tuples.num_tracks / query_view (recipe.tuple_tracks; defaults those of
 // truth::ViewsTruthOptions), seed recipe.seed + k.
-// Shards: shards.samples_per_shard samples each, or with shards.target_mb > 0
-// max(1, floor(target_mb · 10⁶ / EstimatedViewsSampleBytes(recipe))) (as pair shards).
+// Shards: shards.samples_per_shard samples each, or with shards.target_mb > 0 filled in
+// order while the sum of the samples' EstimatedViewsSampleBytes(recipe, N of the tuple) stays
+// within target_mb · 10⁶ (at least one sample a shard).
 //
 // Work: shards in order, each computed in chunks of samples in parallel (TBB) and added in
 // order, so the files are byte-identical for any thread count. A complete shard (part record
@@ -46,15 +47,15 @@ struct TupleLine {
   std::vector<float> covisibility;  // [N, N] row-major
 };
 
-// Estimated bytes of one N-view sample of the recipe's largest N (selection.views max), so
-// that shards.target_mb bounds a shard: per view its image (PNG 2 bytes/pixel, JPG 0.3),
+// Estimated bytes of one N-view sample of `views` views, so that shards.target_mb bounds a
+// shard: per view its image (PNG 2 bytes/pixel, JPG 0.3),
 // depth (4 bytes/pixel, ×0.2 deflated), visible_in + occluded_in (8) and valid (1) (×0.06
 // deflated, long runs), its tracks (13 bytes per track, ×0.9 deflated); plus 8 bytes per
 // track (queries) and 4096 (json). Zero tracks when selection.tuples is unset.
-int64_t EstimatedViewsSampleBytes(const Recipe& recipe);
+int64_t EstimatedViewsSampleBytes(const Recipe& recipe, int views);
 
-// Samples per N-view shard for `total` samples (the rule above), in order.
-std::vector<int64_t> PlanViewsShards(const Recipe& recipe, int64_t total);
+// Samples per N-view shard for the tuples `lines` (the rule above), in order.
+std::vector<int64_t> PlanViewsShards(const Recipe& recipe, const std::vector<TupleLine>& lines);
 
 // The folder of the N-view shards under an `occgt tuples` output: DIR/views.
 std::string ViewsShardDir(const std::string& out_dir);

@@ -20,7 +20,7 @@ import os
 import shutil
 import subprocess
 import unittest
-from typing import Any, Dict
+from typing import Any, Dict, List
 
 import numpy as np
 
@@ -52,11 +52,25 @@ def recipe_text(tracks: str = "", target: str = "") -> str:
     return RECIPE.replace("%TRACKS%", tracks).replace("%TARGET%", target)
 
 
-def estimated_sample_bytes(width: int, height: int, max_views: int, tracks: int) -> int:
+def estimated_sample_bytes(width: int, height: int, views: int, tracks: int) -> int:
     """docs/MULTIVIEW.md "N-view shards": the estimate of one sample (PNG images, deflate)."""
     px = width * height
     per_view = 0.2 * 4 * px + 0.06 * 9 * px + 0.9 * 13 * tracks + 2 * px
-    return math.ceil(4096 + 8 * tracks + max_views * per_view)
+    return math.ceil(4096 + 8 * tracks + views * per_view)
+
+
+def planned_sizes(views: List[int], target_bytes: int) -> List[int]:
+    """Shards filled in order while the estimates of their tuples sum to at most the target."""
+    sizes: List[int] = []
+    total = 0
+    for n in views:
+        sample = estimated_sample_bytes(96, 72, n, 512)
+        if not sizes or total + sample > target_bytes:
+            sizes.append(0)
+            total = 0
+        sizes[-1] += 1
+        total += sample
+    return sizes
 
 
 class ViewsTracks(unittest.TestCase):
@@ -135,15 +149,25 @@ class ViewsTracks(unittest.TestCase):
         self.assertEqual(tiny["shards"]["shards"], n)  # one sample per shard, not 100
         large = self.tuples("large", self.write("large.yaml", recipe_text(target=", target_mb: 1000")))
         self.assertEqual(large["shards"]["shards"], 1)
-        per = 2
-        target = per * estimated_sample_bytes(96, 72, 5, 512) / 1e6 + 1e-7
-        mid = self.tuples("mid", self.write("mid.yaml", recipe_text(target=f", target_mb: {target!r}")))
-        self.assertEqual(mid["shards"]["shards"], math.ceil(n / per))
+        # Tuples of 3 to 5 views: each counts at its own N, so that a shard of small tuples
+        # holds more of them than one of large tuples (a uniform count at the largest N left
+        # shards of small tuples far below the target).
+        with open(os.path.join(tiny["out"], "tuples.jsonl")) as f:
+            views = [len(json.loads(line)["frame_ids"]) for line in f]
+        self.assertEqual(len(views), n)
+        self.assertGreater(len(set(views)), 1, views)
+        target_bytes = 2 * estimated_sample_bytes(96, 72, 4, 512)
+        mid = self.tuples("mid", self.write(
+            "mid.yaml", recipe_text(target=f", target_mb: {target_bytes / 1e6 + 1e-7!r}")))
+        expected = planned_sizes(views, target_bytes)
+        self.assertEqual(mid["shards"]["shards"], len(expected))
         samples = common.read_shard_samples(os.path.join(mid["out"], "views"), images=False)
         self.assertEqual(len(samples), n)
         with open(os.path.join(mid["out"], "views", "index.json")) as f:
             sizes = [s["nsamples"] for s in json.load(f)["shardlist"]]
-        self.assertEqual(sizes, [per] * (n // per) + ([n % per] if n % per else []))
+        self.assertEqual(sizes, expected)
+        # Counted at the largest N (5), every shard would hold one tuple.
+        self.assertLess(len(sizes), n, (sizes, views))
 
     def test_bad_track_keys(self) -> None:
         for extra, key in ((", query_view: 3", "selection.tuples.query_view"),
