@@ -352,9 +352,11 @@ std::vector<std::string> ListPlannedSplits(const std::string& dir) {
 
 namespace {
 
-// ReadPartRecord, also returning the scene of every pair line (for the merge summary).
+// ReadPartRecord, also returning the scene of every pair line and whether a line is a
+// tuple's (has "tuple_index": N-view shards) (for the merge summary).
 PartRecord ReadPartRecordAndScenes(const std::string& dir, const std::string& split,
-                                   int64_t shard_index, std::vector<std::string>* scenes) {
+                                   int64_t shard_index, std::vector<std::string>* scenes,
+                                   bool* tuple_lines = nullptr) {
   const std::string path = PartRecordPath(dir, split, shard_index);
   const json doc = ParseJsonFile(path);
   PartRecord r;
@@ -396,6 +398,7 @@ PartRecord ReadPartRecordAndScenes(const std::string& dir, const std::string& sp
                                  key + " in " + r.url);
     }
     if (scenes != nullptr) scenes->push_back(SceneOfLine(pairs[i], key));
+    if (tuple_lines != nullptr && pairs[i].contains("tuple_index")) *tuple_lines = true;
     r.keys.push_back(key);
     r.pair_lines.push_back(pairs[i].dump());
   }
@@ -640,6 +643,7 @@ std::string VerifyShard(const std::string& shard, const PartRecord& r,
 struct LoadedShard {
   PartRecord record;
   std::vector<std::string> scenes;  // scene of every pair line
+  bool tuple_lines = false;         // some line is an N-view sample's
   std::exception_ptr error;
 };
 
@@ -654,7 +658,7 @@ LoadedShard LoadShard(const std::string& dir, const std::string& split, int64_t 
           shard, "missing part record " + record_path + " (shard not written or not finished)");
     }
     try {
-      out.record = ReadPartRecordAndScenes(dir, split, idx, &out.scenes);
+      out.record = ReadPartRecordAndScenes(dir, split, idx, &out.scenes, &out.tuple_lines);
     } catch (const InputError& e) {
       throw InputError(shard, std::string("bad part record: ") + e.what());
     }
@@ -791,8 +795,9 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
                       "JSONL line contains a newline");
         text += r.pair_lines[i];
         text += '\n';
-        ++result.pairs_per_scene[loaded.scenes[i]];
+        ++result.samples_per_scene[loaded.scenes[i]];
       }
+      result.tuples = result.tuples || loaded.tuple_lines;
       pairs_jsonl.Append(text);
       r.pair_lines.clear();  // in pairs.jsonl now
       r.pair_lines.shrink_to_fit();
@@ -830,8 +835,8 @@ std::string MergeSummaryJson(const MergeResult& result) {
   doc["samples"] = result.nsamples;
   doc["bytes"] = result.total_bytes;
   json per_scene = json::object();
-  for (const auto& [scene, n] : result.pairs_per_scene) per_scene[scene] = n;
-  doc["pairs_per_scene"] = std::move(per_scene);
+  for (const auto& [scene, n] : result.samples_per_scene) per_scene[scene] = n;
+  doc[result.tuples ? "tuples_per_scene" : "pairs_per_scene"] = std::move(per_scene);
   return doc.dump(2) + "\n";
 }
 

@@ -145,7 +145,8 @@ struct MergeResult {
   int64_t nsamples = 0;
   int64_t total_bytes = 0;
   std::vector<PartRecord> parts;  // in shard order; pair_lines left empty (in pairs.jsonl)
-  std::map<std::string, int64_t> pairs_per_scene;  // pair lines' "scene" (else key folder)
+  std::map<std::string, int64_t> samples_per_scene;  // lines' "scene" (else key folder)
+  bool tuples = false;  // the lines are N-view samples' (they have "tuple_index")
 };
 
 // Publishes a split whose shards the tasks have written: checks every shard of the plan
@@ -165,7 +166,7 @@ struct MergeResult {
 MergeResult MergeSplit(const std::string& dir, const MergeOptions& options);
 // summary.json content of a merge: {"kind": "occgt-merge-summary", "split", "shards",
 // "samples" (the build summary's name), "bytes", "pairs_per_scene": {scene: n} (from the pair
-// lines' "scene" field)}.
+// lines' "scene" field; "tuples_per_scene" for the N-view shards of `occgt tuples`)}.
 std::string MergeSummaryJson(const MergeResult& result);
 // Writes DIR/summary.json (MergeSummaryJson) atomically unless DIR/summary.json already
 // holds another document (the richer summary of `occgt build`, schemas/summary.schema.json),

@@ -139,6 +139,18 @@ class ViewsShards(unittest.TestCase):
         shutil.rmtree(copy, ignore_errors=True)
         shutil.copytree(self.views, copy)
         self.assertIn("(verified)", common.occgt("merge", copy, "--verify").stdout)
+        # Its summary counts tuples per scene, under that name, by the summary schema.
+        with open(os.path.join(copy, "summary.json")) as f:
+            merged = json.load(f)
+        with open(os.path.join(common.SOURCE, "schemas", "summary.schema.json")) as f:
+            summary_schema = json.load(f)
+        jsonschema.validate(merged, summary_schema)
+        self.assertNotIn("pairs_per_scene", merged)
+        per_scene: Dict[str, int] = {}
+        for row in rows:
+            per_scene[row["scene"]] = per_scene.get(row["scene"], 0) + 1
+        self.assertEqual(merged["tuples_per_scene"], per_scene)
+        self.assertEqual(merged["samples"], len(rows))
         del rows[1]["tuple_index"]
         with open(os.path.join(copy, "pairs.jsonl"), "w") as f:
             f.writelines(json.dumps(r) + "\n" for r in rows)
