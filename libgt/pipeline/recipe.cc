@@ -741,11 +741,12 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
   GetOpt(d, "dataset.min_depth_m", &r.dataset.min_depth_m, file);
   GetOpt(d, "dataset.max_depth_m", &r.dataset.max_depth_m, file);
   if (d.contains("depth_source")) {
-    r.dataset.depth_source =
-        render::ParseDepthSourceMode(d["depth_source"].get<std::string>(), file + ": dataset.depth_source");
+    r.dataset.depth_source = render::ParseDepthSourceMode(d["depth_source"].get<std::string>(),
+                                                          file + ": dataset.depth_source");
   }
   if (d.contains("mesh_path")) {
-    r.dataset.mesh_path = ResolvePath(d["mesh_path"].get<std::string>(), file + ": dataset.mesh_path", base_dir);
+    r.dataset.mesh_path =
+        ResolvePath(d["mesh_path"].get<std::string>(), file + ": dataset.mesh_path", base_dir);
   }
   if (d.contains("fused_depth")) {
     Get(d["fused_depth"], "dataset.fused_depth.abs_tol_m", &r.dataset.fused_depth.abs_tol_m, file);
@@ -823,8 +824,9 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     Get(s, "selection.balance_bins", &o.balance_bins, file);
     if (s.contains("views") || s.contains("tuples")) {
       if (!s.contains("views")) {
-        throw InputError(file, "selection.tuples: expected selection.views (N or [min, max]) "
-                               "beside it");
+        throw InputError(file,
+                         "selection.tuples: expected selection.views (N or [min, max]) "
+                         "beside it");
       }
       pairs::TupleOptions t;
       const json& v = s["views"];
@@ -943,8 +945,8 @@ Recipe LoadRecipe(const std::string& path, const RecipeOverrides& overrides) {
   // every frame of every scene a read error (with "{scene}", each scene's is checked there).
   if (!r.dataset.mesh_path.empty() && r.dataset.mesh_path.find("{scene}") == std::string::npos &&
       !fs::is_regular_file(r.dataset.mesh_path)) {
-    throw InputError(path, "dataset.mesh_path: expected an existing file, not found: " +
-                               r.dataset.mesh_path);
+    throw InputError(
+        path, "dataset.mesh_path: expected an existing file, not found: " + r.dataset.mesh_path);
   }
   if (!r.selection.import_pairs.path.empty() &&
       !fs::is_regular_file(r.selection.import_pairs.path)) {

@@ -285,14 +285,15 @@ TEST(Recipe, LoadFailsBeforeWorkWhenAFixedMeshPathIsMissing) {
     LoadRecipe(path);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()),
-              path + ": dataset.mesh_path: expected an existing file, not found: " + dir + "/m.ply");
+    EXPECT_EQ(
+        std::string(e.what()),
+        path + ": dataset.mesh_path: expected an existing file, not found: " + dir + "/m.ply");
   }
   // Once the file is there, the recipe loads; a path with {scene} is checked per scene.
   io::WriteFileAtomic(dir + "/m.ply", "ply\n");
   EXPECT_EQ(LoadRecipe(path).dataset.mesh_path, dir + "/m.ply");
-  io::WriteFileAtomic(path,
-                      "name: r\ndataset: {format: generic, root: data, mesh_path: '{scene}.ply'}\n");
+  io::WriteFileAtomic(
+      path, "name: r\ndataset: {format: generic, root: data, mesh_path: '{scene}.ply'}\n");
   EXPECT_EQ(LoadRecipe(path).dataset.mesh_path, dir + "/{scene}.ply");
 }
 
