@@ -160,6 +160,23 @@ int64_t ParseInteger(const std::string& token, const std::string& where, const c
   return v;
 }
 
+// The numbers of tokens t[begin, end), one number each (ParseNumbers alone would also split
+// a token at a comma: "0.5,0.5" would shift every later field).
+std::vector<double> ParseFieldNumbers(const std::vector<std::string>& t, size_t begin, size_t end,
+                                      const std::string& path, int line_no,
+                                      const std::string& where) {
+  std::vector<double> out;
+  for (size_t k = begin; k < end; ++k) {
+    const std::vector<double> v = ParseNumbers(t[k], path, line_no);
+    if (v.size() != 1) {
+      throw InputError(
+          where, "field " + std::to_string(k + 1) + ": expected one number, found '" + t[k] + "'");
+    }
+    out.push_back(v[0]);
+  }
+  return out;
+}
+
 // A uint64 size from a file as int64 (sizes above kMaxImageSidePx become kMaxImageSidePx + 1).
 int64_t Clamped(uint64_t v) {
   return static_cast<int64_t>(std::min<uint64_t>(v, kMaxImageSidePx + 1));
@@ -257,9 +274,7 @@ std::map<int64_t, ColmapCamera> ParseColmapCamerasText(std::string_view text,
       throw InputError(where, "model " + c.model + " has " + std::to_string(m->num_params) +
                                   " parameters, found " + std::to_string(t.size() - 4));
     }
-    std::string params;
-    for (size_t k = 4; k < t.size(); ++k) params += t[k] + " ";
-    c.params = ParseNumbers(params, path, static_cast<int>(i) + 1);
+    c.params = ParseFieldNumbers(t, 4, t.size(), path, static_cast<int>(i) + 1, where);
     AddCamera(std::move(c), where, &out);
   }
   return out;
@@ -280,15 +295,16 @@ std::vector<ColmapImage> ParseColmapImagesText(std::string_view text, const std:
     }
     ColmapImage im;
     im.id = ParseInteger(t[0], where, "IMAGE_ID");
-    std::string numbers;
-    for (size_t k = 1; k < 8; ++k) numbers += t[k] + " ";
-    const std::vector<double> v = ParseNumbers(numbers, path, static_cast<int>(i) + 1);
+    const std::vector<double> v = ParseFieldNumbers(t, 1, 8, path, static_cast<int>(i) + 1, where);
     im.qvec_wxyz = Eigen::Vector4d(v[0], v[1], v[2], v[3]);
     im.tvec = Eigen::Vector3d(v[4], v[5], v[6]);
     im.camera_id = ParseInteger(t[8], where, "CAMERA_ID");
     im.name = t[9];
     out.push_back(std::move(im));
-    ++i;  // the POINTS2D line that follows (possibly empty) is not read
+    // The POINTS2D line that follows (X Y POINT3D_ID triples, possibly empty) is not read.
+    // A model written without those lines has the next image's line there: 10 fields, never
+    // a multiple of 3, so it is read as an image (skipping it lost every second image).
+    if (i + 1 < lines.size() && Tokens(lines[i + 1]).size() % 3 == 0) ++i;
   }
   return out;
 }

@@ -214,6 +214,46 @@ TEST(Colmap, DistortedModelsAreNamed) {
             std::string::npos);
   EXPECT_NE(ErrorOf([] { ReadColmapModel("/nonexistent"); }).find("no COLMAP model"),
             std::string::npos);
+  // A comma inside a field is not a separator: the field is refused, not split into two
+  // numbers (a lone "," read past the fields and gave a pose of other numbers).
+  EXPECT_EQ(ErrorOf([] { ParseColmapImagesText("3 1 0 0 0 , 0 0 1 a.jpg\n", "images.txt"); }),
+            "images.txt:1: field 6: expected one number, found ','");
+  EXPECT_EQ(ErrorOf([] { ParseColmapImagesText("3 1 0 0 0 0.5,0.5 0 0 1 a.jpg\n", "i.txt"); }),
+            "i.txt:1: field 6: expected one number, found '0.5,0.5'");
+  EXPECT_EQ(ErrorOf([] { ParseColmapCamerasText("1 PINHOLE 64 48 50 52 , 24\n", "c.txt"); }),
+            "c.txt:1: field 7: expected one number, found ','");
+}
+
+// COLMAP writes a POINTS2D line (possibly empty) after every image line; a model written
+// without them has the images' lines one after the other, and every one of them is read.
+TEST(Colmap, ImagesWithoutPointLinesAreAllRead) {
+  const std::string with_points =
+      "1 1 0 0 0 0 0 0 1 a.jpg\n"
+      "\n"
+      "2 1 0 0 0 1 0 0 1 b.jpg\n"
+      "1.5 2.5 -1 3 4 7\n"
+      "3 1 0 0 0 2 0 0 1 c.jpg\n"
+      "\n";
+  const std::string without =
+      "# no POINTS2D lines\n"
+      "1 1 0 0 0 0 0 0 1 a.jpg\n"
+      "2 1 0 0 0 1 0 0 1 b.jpg\n"
+      "3 1 0 0 0 2 0 0 1 c.jpg\n"
+      "4 1 0 0 0 3 0 0 1 d.jpg\n";
+  const std::vector<ColmapImage> a = ParseColmapImagesText(with_points, "images.txt");
+  const std::vector<ColmapImage> b = ParseColmapImagesText(without, "images.txt");
+  ASSERT_EQ(a.size(), 3u);
+  ASSERT_EQ(b.size(), 4u);
+  for (size_t k = 0; k < b.size(); ++k) {
+    EXPECT_EQ(b[k].id, static_cast<int64_t>(k + 1));
+    EXPECT_EQ(b[k].name, std::string(1, static_cast<char>('a' + k)) + ".jpg");
+    EXPECT_EQ(b[k].tvec.x(), static_cast<double>(k));
+    if (k < a.size()) EXPECT_EQ(a[k].name, b[k].name);
+  }
+  // A damaged POINTS2D line (not triples) is not taken for an image line silently.
+  EXPECT_EQ(ErrorOf([] { ParseColmapImagesText("1 1 0 0 0 0 0 0 1 a.jpg\n1.5 2.5\n", "i.txt"); }),
+            "i.txt:2: expected 'IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME' (10 fields, a "
+            "name without spaces), found 2 fields");
 }
 
 }  // namespace
