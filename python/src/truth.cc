@@ -244,7 +244,13 @@ py::dict PairGroundTruth(py::handle depth0, py::handle depth1, py::handle K0, py
   out["T_0to1"] = MatrixToArray(p.cam1_from_cam0.matrix());
   out["metrics01"] = JsonToPython(gt::truth::MetricsJson<nlohmann::ordered_json>(p.m01));
   out["metrics10"] = JsonToPython(gt::truth::MetricsJson<nlohmann::ordered_json>(p.m10));
-  out["options"] = OptionsDict(options);
+  if (scope) {  // the options as a sample's json records them: the scope the map was fused over
+    gt::truth::PairTruthOptions shown = options;
+    gt::occupancy::ParseFusionScope(scope->scope, &shown.fusion);
+    out["options"] = OptionsDict(shown);
+  } else {
+    out["options"] = OptionsDict(options);
+  }
   if (truth.occupancy) {
     gt::occupancy::FrustumVolume& v0 = truth.occupancy->cam0;
     gt::occupancy::FrustumVolume& v1 = truth.occupancy->cam1;

@@ -34,6 +34,8 @@ class Scopes(unittest.TestCase):
             got = occgt.pair_from_scene(self.scene, *PAIR, width=320, height=240, occupancy=True,
                                         scope=scope)
             common.assert_same_as_folder(self, got, out, common.OCCUPANCY_ARRAYS, scope)
+            # The returned options name the scope fused over, as a sample's json does.
+            self.assertEqual(got["options"]["occupancy_options"]["fusion"]["scope"], scope)
             meta = common.read_json(os.path.join(out, "occupancy.json"))
             fused = self.scene.fuse(*PAIR, 320, 240, scope=scope)
             self.assertEqual(fused.scope, scope)
@@ -73,6 +75,8 @@ class Scopes(unittest.TestCase):
         b = occgt.pair_from_scene(self.scene, *PAIR, width=160, height=120, occupancy=True,
                                   voxel_m=0.1, scope="scene:20")
         self.assertTrue(np.array_equal(a["known1"], b["known1"]))
+        self.assertEqual(a["options"]["occupancy_options"]["fusion"]["scope"], "scene:20")
+        self.assertEqual(a["options"], b["options"])
         with self.assertRaisesRegex(ValueError, "scope_map: fused with voxel_m 0.1"):
             occgt.pair_ground_truth(d0, d1, K0, K1, T0, T1, occupancy=True, scope_map=fused)
         with self.assertRaisesRegex(ValueError, "scope_map: given without occupancy=True"):
