@@ -247,7 +247,7 @@ void Run(const Args& args) {
   for (size_t s = 0; s < set_names.size(); ++s) {
     const std::string& path = prediction_paths[s];
     sets.push_back(gt::eval::ReadPredictions(set_names[s], path, keys, split.width, split.height,
-                                             &problems, split.loftr_names));
+                                             &problems, split.pair_names));
     gt::eval::FilterByConfidence(options.min_confidence, &sets.back(), &problems);
     problem_paths.resize(problems.size(), path);
   }

@@ -140,6 +140,7 @@ SplitIndex LoadSplitIndex(const std::string& dir) {
   std::set<std::string> seen;
   // (scene, number0, number1) of every key, for the LoFTR pair names.
   std::vector<std::tuple<std::string, int64_t, int64_t>> frames;
+  std::vector<std::string> dataset_names;  // DatasetPairName of every key
   std::set<std::string> scenes;
   for (int n = 1; std::getline(lines, line); ++n) {
     if (line.empty()) continue;
@@ -167,6 +168,12 @@ SplitIndex LoadSplitIndex(const std::string& dir) {
     }
     frames.emplace_back(j["scene"].get<std::string>(), f0["number"].get<int64_t>(),
                         f1["number"].get<int64_t>());
+    if (f0.contains("id") && f0["id"].is_string() && f1.contains("id") && f1["id"].is_string()) {
+      dataset_names.push_back(DatasetPairName(
+          j["scene"].get<std::string>(), f0["id"].get<std::string>(), f1["id"].get<std::string>()));
+    } else {
+      dataset_names.emplace_back();
+    }
     scenes.insert(std::get<0>(frames.back()));
   }
   // The split itself first: a pairs.jsonl without a sample's line would otherwise be
@@ -184,7 +191,10 @@ SplitIndex LoadSplitIndex(const std::string& dir) {
   }
   for (size_t i = 0; i < frames.size(); ++i) {
     const auto& [scene, n0, n1] = frames[i];
-    split.loftr_names[LoftrPairName(folders.at(scene), n0, n1)] = split.keys[i];
+    split.pair_names[LoftrPairName(folders.at(scene), n0, n1)] = split.keys[i];
+  }
+  for (size_t i = 0; i < dataset_names.size(); ++i) {
+    if (!dataset_names[i].empty()) split.pair_names[dataset_names[i]] = split.keys[i];
   }
   const std::string recipe_path = dir + "/recipe.json";
   json recipe;

@@ -79,9 +79,10 @@ struct SplitIndex {
   std::vector<int64_t> shard_nsamples;  // index.json's count of each shard
   std::vector<std::string> keys;        // pairs.jsonl order
   int width = 0, height = 0;            // recipe.json "resolution"
-  // LoFTR pair name (predictions.h LoftrPairName, with the scene's LoFTR folder,
-  // shards::LoftrSceneFolders) -> sample key, for every pair of pairs.jsonl.
-  std::map<std::string, std::string> loftr_names;
+  // Other names of every pair of pairs.jsonl -> its sample key: the LoFTR pair name
+  // (predictions.h LoftrPairName, with the scene's LoFTR folder, shards::LoftrSceneFolders)
+  // and the name of occgt's torch datasets (predictions.h DatasetPairName).
+  std::map<std::string, std::string> pair_names;
 };
 // Throws InputError naming the file and field.
 SplitIndex LoadSplitIndex(const std::string& dir);

@@ -218,6 +218,11 @@ std::string LoftrPairName(const std::string& folder, int64_t number0, int64_t nu
          std::to_string(number1) + ".jpg";
 }
 
+std::string DatasetPairName(const std::string& scene, const std::string& id0,
+                            const std::string& id1) {
+  return scene + "/" + id0 + "#" + scene + "/" + id1;
+}
+
 std::string NormalizeLoftrPairName(const std::string& name) {
   const size_t hash = name.find('#');
   if (hash == std::string::npos || name.find('#', hash + 1) != std::string::npos) return "";
@@ -247,7 +252,7 @@ std::string NormalizeLoftrPairName(const std::string& name) {
 PredictionSet ReadPredictions(const std::string& name, const std::string& path,
                               const std::set<std::string>& split_keys, int width, int height,
                               std::vector<std::string>* problems,
-                              const std::map<std::string, std::string>& loftr_names) {
+                              const std::map<std::string, std::string>& pair_names) {
   namespace fs = std::filesystem;
   PredictionSet set;
   set.name = name;
@@ -260,10 +265,13 @@ PredictionSet ReadPredictions(const std::string& name, const std::string& path,
   auto keep = [&](const std::string& label, const std::string& where, const std::string& name,
                   const Members& members, const int64_t wh[2][2]) {
     std::string key = name;
-    if (split_keys.count(key) == 0) {
+    if (const auto named = pair_names.find(name);
+        split_keys.count(key) == 0 && named != pair_names.end()) {
+      key = named->second;  // a dataset pair name (or a LoFTR one as LoftrPairName writes it)
+    } else if (split_keys.count(key) == 0) {
       const std::string loftr = NormalizeLoftrPairName(name);
-      const auto it = loftr.empty() ? loftr_names.end() : loftr_names.find(loftr);
-      if (it == loftr_names.end()) {
+      const auto it = loftr.empty() ? pair_names.end() : pair_names.find(loftr);
+      if (it == pair_names.end()) {
         problems->push_back(label + ": pair " + name +
                             (loftr.empty() ? " is not a sample of the split"
                                            : " (a LoFTR pair name) is not a pair of the split"));

@@ -25,8 +25,11 @@
 // "scene0707_00/color/15.jpg#scene0707_00/color/585.jpg" (each side <folder>/color/<n>.jpg,
 // <folder> the LoFTR scene folder of the split's scene, <n> Frame::number; any leading
 // path components, such as a data root, are ignored). A key that is not a sample key is
-// looked up in `loftr_names` (LoftrPairName of every pair of the split); the same pair
+// looked up in `pair_names` (LoftrPairName of every pair of the split); the same pair
 // under two names is a problem.
+// Dataset pair names: what a LoFTR-style loop forms from the `pair_names` of occgt's torch
+// datasets (ShardDataset, PairIndexDataset): "<scene>/<id0>#<scene>/<id1>" (DatasetPairName),
+// looked up in `pair_names` as it is.
 #pragma once
 
 #include <cstdint>
@@ -58,10 +61,14 @@ struct PredictionSet {
 PredictionSet ReadPredictions(const std::string& name, const std::string& path,
                               const std::set<std::string>& split_keys, int width, int height,
                               std::vector<std::string>* problems,
-                              const std::map<std::string, std::string>& loftr_names = {});
+                              const std::map<std::string, std::string>& pair_names = {});
 
 // LoFTR's identifier of a pair: "<folder>/color/<n0>.jpg#<folder>/color/<n1>.jpg".
 std::string LoftrPairName(const std::string& folder, int64_t number0, int64_t number1);
+
+// The pair name of occgt's torch datasets: "<scene>/<id0>#<scene>/<id1>".
+std::string DatasetPairName(const std::string& scene, const std::string& id0,
+                            const std::string& id1);
 
 // A LoFTR pair name as LoftrPairName writes it: each '#'-side cut to its last three path
 // components ("<folder>/color/<n>.<ext>" with any image extension becomes ".jpg"); "" when

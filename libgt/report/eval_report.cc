@@ -390,7 +390,7 @@ std::vector<EvalGallery> MakeEvalGalleries(const EvalReportData& data, const Spl
     }
     std::vector<std::string> problems;
     gt::eval::PredictionSet set = gt::eval::ReadPredictions(
-        v.label, path, keys, index.width, index.height, &problems, index.loftr_names);
+        v.label, path, keys, index.width, index.height, &problems, index.pair_names);
     gt::eval::FilterByConfidence(v.options.value("min_confidence", 0.0), &set, &problems);
     if (!problems.empty()) {
       throw InputError(path, problems[0] + (problems.size() > 1

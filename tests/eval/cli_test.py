@@ -264,6 +264,21 @@ def main():
     c = predictions.load_json(out)
     assert c["sets"][0]["pairs_missing"] == 0 and a["sets"][0]["overall"] == c["sets"][0]["overall"]
 
+    # 5b'. Keyed by the pair names of occgt's torch datasets ('#'.join(pair_names) of a
+    #      LoFTR-style loop over ShardDataset / PairIndexDataset: "<scene>/<id0>#<scene>/<id1>";
+    #      tests/python/shard_dataset_test.py checks that the datasets give these names).
+    dataset_name = {}
+    with open(os.path.join(split, "pairs.jsonl")) as f:
+        for line in f:
+            p = json.loads(line)
+            dataset_name[p["key"]] = (f"{p['scene']}/{p['frame0']['id']}#"
+                                      f"{p['scene']}/{p['frame1']['id']}")
+    by_dataset = save("gt_dataset_names", {dataset_name[k]: v for k, v in truth.items()})
+    out = os.path.join(work, "gt_dataset_names.json")
+    run_eval(split, out, "--predictions", "gt=" + by_dataset, "--ransac-px", "0.5,1.0")
+    d = predictions.load_json(out)
+    assert d["sets"][0]["pairs_missing"] == 0 and a["sets"][0]["overall"] == d["sets"][0]["overall"]
+
     # 5c. --consistent-overlap-bins, and --overlap-bins (its earlier spelling): the same bytes.
     outs = []
     for flag in ("--consistent-overlap-bins", "--overlap-bins"):
@@ -294,6 +309,10 @@ def main():
                           r"\(a LoFTR pair name\) is not a pair of the split"),
         "twice": ({first: (k0, k1), loftr_name[first]: (k0, k1)}, None,
                   rf"pair {first} is given twice"),
+        "twice_dataset": ({first: (k0, k1), dataset_name[first]: (k0, k1)}, None,
+                          rf"pair {first} is given twice"),
+        "dataset_unknown": ({"synth_000/000000#synth_000/999999": (k0, k1)}, None,
+                            r"pair synth_000/000000#synth_000/999999 is not a sample of the split"),
         "dtype": ({first: (k0, k1)}, {first + "/confidence": np.ones(len(k0), np.int32)},
                   r"confidence: expected dtype float32"),
     }
