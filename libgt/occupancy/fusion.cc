@@ -266,6 +266,7 @@ std::vector<size_t> ScopeFrameIndices(const Scene& scene, size_t i0, size_t i1,
   const size_t n = scene.frames.size();
   if (i0 >= n || i1 >= n) throw InputError("--frames", "frame index outside the scene");
   std::vector<size_t> out;
+  size_t usable = 0;  // usable frames before i
   for (size_t i = 0; i < n; ++i) {
     bool take = false;
     switch (options.scope) {
@@ -279,10 +280,12 @@ std::vector<size_t> ScopeFrameIndices(const Scene& scene, size_t i0, size_t i1,
         break;
       }
       case FusionScope::kScene:
-        take = options.scene_stride > 0 && i % static_cast<size_t>(options.scene_stride) == 0;
+        take = options.scene_stride > 0 && usable % static_cast<size_t>(options.scene_stride) == 0;
         break;
     }
-    if (take && scene.frames[i].usable) out.push_back(i);
+    if (!scene.frames[i].usable) continue;
+    ++usable;
+    if (take) out.push_back(i);
   }
   return out;
 }

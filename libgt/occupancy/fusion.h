@@ -82,8 +82,9 @@ struct FusionOptions {
 void ParseFusionScope(const std::string& text, FusionOptions* options);
 // Indices into scene.frames of the frames to fuse for the pair (i0, i1), sorted, usable only:
 // kPair {i0, i1}; kWindow the usable frames within `window` positions (of scene.frames) of i0
-// or i1; kScene every frame i with i % scene_stride == 0 that is usable (independent of the
-// pair, so the map is shared by all pairs of the scene).
+// or i1; kScene every scene_stride-th usable frame (the usable frames numbered 0, S, 2S, ...
+// in scene order: never none when the scene has a usable frame; independent of the pair, so
+// the map is shared by all pairs of the scene, and it need not hold the pair's own frames).
 std::vector<size_t> ScopeFrameIndices(const Scene& scene, size_t i0, size_t i1,
                                       const FusionOptions& options);
 // Inverse of ParseFusionScope ("pair", "window:3", "scene:10").

@@ -85,6 +85,15 @@ ScopeMap FuseScope(const Scene& scene, size_t i0, size_t i1, const PairTruthOpti
     }
     out.fused_ids.push_back(scene.frames[i].id);
   }
+  if (frames.empty()) {  // an empty map: every bin unknown
+    throw InputError(scene.name,
+                     "occupancy scope " + occupancy::FusionScopeName(options.fusion) +
+                         ": no frame to fuse" +
+                         (out.skipped.empty()
+                              ? std::string(" (the scene has no usable frame)")
+                              : ": none of its " + std::to_string(out.skipped.size()) +
+                                    " frames could be read, the first: " + out.skipped[0].reason));
+  }
   std::vector<occupancy::FusionInput> inputs;
   inputs.reserve(frames.size());
   for (const WorkingFrame& f : frames) inputs.push_back(FusionInputOf(f, options.labels));

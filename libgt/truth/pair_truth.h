@@ -56,7 +56,8 @@ PairTruth ComputePairTruth(const WorkingFrame& frame0, const WorkingFrame& frame
 // The fused map of a window or scene scope (options.fusion.scope) for the pair (i0, i1) of
 // `scene`, its frames loaded with `load` (an index into scene.frames → the working frame).
 // A frame of the scope other than the pair that cannot be read is skipped and listed; an
-// error of the pair's own frames propagates.
+// error of the pair's own frames propagates; a scope with no frame left to fuse (no usable
+// frame, or none readable) is an InputError naming the scene, not an all-unknown map.
 struct ScopeMap {
   occupancy::OccupancyMap map;
   std::vector<std::string> fused_ids;  // frame ids, in fusion order

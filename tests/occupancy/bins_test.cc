@@ -121,8 +121,16 @@ TEST(Options, ScopeFrameIndices) {
   EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{1, 2, 3, 6, 7, 8}));
   ParseFusionScope("window:2", &f);
   EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{0, 1, 2, 3, 5, 6, 7, 8, 9}));
+  // Every 4th usable frame: the usable ones are 0 1 2 3 5 6 7 8 9, so 0, 5 and 9.
   ParseFusionScope("scene:4", &f);
-  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{0, 8}));
+  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{0, 5, 9}));
+  // Never none while a frame is usable: a first frame that is not (the frames at positions
+  // 0, S, 2S, ... all unusable gave an empty map, every bin unknown, without a word).
+  scene.frames[0].usable = false;
+  ParseFusionScope("scene:10", &f);
+  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{1}));
+  ParseFusionScope("scene:3", &f);
+  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{1, 5, 8}));
   EXPECT_THROW(ScopeFrameIndices(scene, 2, 10, f), InputError);
 }
 

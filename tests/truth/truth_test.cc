@@ -249,5 +249,37 @@ TEST(FuseScope, SkipsUnreadableScopeFramesAndFailsOnThePairs) {
   EXPECT_THROW(FuseScope(scene, 3, 4, o, load), InputError);  // a frame of the pair
 }
 
+// A scene scope fuses every S-th usable frame, and one with nothing left to fuse is refused
+// (it gave an empty map: every bin of every pair unknown, exit 0).
+TEST(FuseScope, SceneScopeNeverFusesNothingSilently) {
+  Scene scene = SynthScene();
+  PairTruthOptions o;
+  o.labels.min_depth_m = scene.min_depth_m;
+  o.labels.max_depth_m = scene.max_depth_m;
+  o.fusion.voxel_m = 0.1;
+  o.fusion.scope = occupancy::FusionScope::kScene;
+  o.fusion.scene_stride = 30;  // more than the 24 frames
+  scene.frames[0].usable = false;
+  const FrameLoader load = [&](size_t i) { return LoadWorkingFrame(scene.frames[i], {80, 60}); };
+  const ScopeMap m = FuseScope(scene, 2, 3, o, load);
+  EXPECT_EQ(m.fused_ids, (std::vector<std::string>{scene.frames[1].id}));
+  EXPECT_GT(m.map.stats().pixels, 0);
+  const FrameLoader broken = [&](size_t i) -> WorkingFrame {
+    if (i == 1) throw InputError("frame1.npy", "cannot open file (test)");
+    return LoadWorkingFrame(scene.frames[i], {80, 60});
+  };
+  const std::string e = ErrorOf([&] { FuseScope(scene, 2, 3, o, broken); });
+  EXPECT_EQ(e.rfind(scene.name + ": occupancy scope scene:30: no frame to fuse: none of its 1 "
+                                 "frames could be read, the first: frame1.npy",
+                    0),
+            0u)
+      << e;
+  for (Frame& f : scene.frames) f.usable = false;
+  EXPECT_EQ(ErrorOf([&] { FuseScope(scene, 2, 3, o, load); }),
+            scene.name +
+                ": occupancy scope scene:30: no frame to fuse (the scene has no usable "
+                "frame)");
+}
+
 }  // namespace
 }  // namespace gt::truth
