@@ -171,6 +171,9 @@ class _PairGroundTruthBase(TypedDict):
     T_0to1: npt.NDArray[np.float64]
     metrics01: Metrics
     metrics10: Metrics
+    # The resolved options as a shard sample's json records them: label_options,
+    # patch_options, occupancy_options (None without occupancy); pair_options gives the same.
+    options: Dict[str, Any]
 
 
 class PairGroundTruth(_PairGroundTruthBase, total=False):

@@ -15,6 +15,8 @@ import sys
 import unittest
 from typing import Any, Dict
 
+import numpy as np
+
 sys.path.insert(0, os.path.dirname(__file__))
 import common  # noqa: E402
 
@@ -78,6 +80,18 @@ class Typing(unittest.TestCase):
                         literal.append(f"{os.path.relpath(path, common.SOURCE)}:{default.lineno}: "
                                        f"{node.name}({arg.arg}={default.value!r})")
         self.assertEqual(literal, [])
+
+    def test_typed_dicts_name_every_returned_key(self) -> None:
+        """PairGroundTruth names every key pair_ground_truth returns (``options`` was
+        missing: mypy refused ``gt["options"]``), its required keys without occupancy."""
+        K = np.array([[50.0, 0.0, 31.5], [0.0, 50.0, 23.5], [0.0, 0.0, 1.0]])
+        wall = np.full((48, 64), 2.0, np.float32)
+        keys = occgt.PairGroundTruth.__required_keys__ | occgt.PairGroundTruth.__optional_keys__
+        plain = occgt.pair_ground_truth(wall, wall, K, K, np.eye(4), np.eye(4))
+        self.assertEqual(set(plain), set(occgt.PairGroundTruth.__required_keys__))
+        with_occupancy = occgt.pair_ground_truth(wall, wall, K, K, np.eye(4), np.eye(4),
+                                                 occupancy=True)
+        self.assertEqual(set(with_occupancy), set(keys))
 
     def test_defaults_are_the_bindings(self) -> None:
         """The dicts hold what the binding's signatures use, and the wrappers show them."""
