@@ -161,6 +161,25 @@ class TupleDataset(unittest.TestCase):
             with self.subTest(kwargs=kwargs), self.assertRaisesRegex(error, pattern):
                 TupleIndexDataset(self.tuples, self.root, "generic", **kwargs)
 
+    def test_seed_wraps_and_images_is_a_bool(self) -> None:
+        """Item i's track seed is (seed + i) mod 2^64, the uint64 sum of `occgt tuples
+        --shards` (seed=2**64-1 failed from item 1 on: "seed: expected an int in 0..2^64-1");
+        images="no" was truthy, now a TypeError as in TupleShardDataset."""
+        same = [self.tuples[1], self.tuples[1]]  # item 1 of `top` = item 0 of `zero`
+        top = TupleIndexDataset(same, self.root, "generic", width=96, height=72,
+                                num_tracks=40, seed=2**64 - 1, images=False)
+        zero = TupleIndexDataset(same, self.root, "generic", width=96, height=72,
+                                 num_tracks=40, seed=0, images=False)
+        wrapped, first = top[1], zero[0]
+        for key in ("tracks", "track_state", "visible_in"):
+            self.assertTrue(torch.equal(wrapped[key], first[key]), key)
+        self.assertFalse(torch.equal(wrapped["tracks"], zero[1]["tracks"]))  # seeds matter
+        for images in ("no", 0, None):
+            with self.subTest(images=images), self.assertRaisesRegex(
+                    TypeError, r"^images: expected a bool, got " + type(images).__name__):
+                self.dataset(images=images)
+        self.assertNotIn("images", self.dataset(images=np.bool_(False))[0])
+
     def test_tuple_lines_are_typed(self) -> None:
         """scene a non-empty str, frame_ids a list of str: a str is not split into one frame
         per character, numbers are not made ids, null is not the scene 'None'; bytes that are

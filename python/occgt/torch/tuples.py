@@ -87,6 +87,10 @@ TupleLike = Union[TupleRef, Tuple[str, Sequence[str]]]
 #: ``occgt.TRACK_VISIBLE``); not one of ``occgt.TRACK_STATE_NAMES``.
 TRACK_STATE_PADDED = 255
 
+#: Track seeds are uint64: item i's is (seed + i) mod 2^64, the sum `occgt tuples --shards`
+#: computes (libgt/pipeline/views_write.cc, recipe.seed + uint64 index).
+_SEEDS = 2**64
+
 
 class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     """N-view samples of a tuple index, ground truth computed on the fly.
@@ -108,10 +112,12 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             ``dataset.min_depth_m`` / ``max_depth_m`` are ``dataset_min_depth_m`` /
             ``dataset_max_depth_m``, its label overrides keep their names).
         num_tracks: tracks sampled from view ``query_view``'s valid pixels (seed
-            ``seed + index``, so an item is the same in every epoch and worker).
+            ``(seed + index) mod 2**64``, as ``occgt tuples --shards`` adds them, so an item
+            is the same in every epoch and worker).
         query_view: the view of each tuple whose pixels are the tracks' queries (a recipe's
             ``selection.tuples.query_view``); below every tuple's size (ValueError here).
-        images: read the colour images (``images``; a frame without colour raises ValueError).
+        images: read the colour images (``images``; a frame without colour raises ValueError);
+            a bool (TypeError otherwise).
         views: ``"vggt"`` (default): one dict of stacked views; ``"dust3r"``: a list of view
             dicts.
 
@@ -163,6 +169,8 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                                  f"{len(t.frame_ids)}")
         if depth_source not in ("sensor", "mesh", "fused"):
             raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")
+        if not isinstance(images, (bool, np.bool_)):  # "no" is not a bool (it was truthy)
+            raise TypeError(f"images: expected a bool, got {type(images).__name__}")
         # Fail here, not in a worker: the size, and the options as views_ground_truth resolves
         # them (a misspelt or unknown option, a bad preset or value, a negative seed).
         check_resolution(width, height)
@@ -238,7 +246,7 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                    **self.label_options}
         truth = occgt.views_ground_truth(
             depths, Ks, poses, preset=self.preset, num_tracks=self.num_tracks,
-            query_view=self.query_view, seed=self.seed + index, **options)
+            query_view=self.query_view, seed=(self.seed + index) % _SEEDS, **options)
         colors = None
         if self.images:
             colors = np.stack([scene.load_color(i, self.width, self.height)
