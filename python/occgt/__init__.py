@@ -570,7 +570,9 @@ def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"
 
     ``scope``: the frames fused for the occupancy volumes: "pair", "window:N" or "scene:S"
     (``Scene.fuse``; a scene map is fused again at each call: to share one map between the
-    pairs of a scene, call ``Scene.fuse`` once and pass ``scope_map``). ``options`` are the
+    pairs of a scene, call ``Scene.fuse`` once and pass ``scope_map``, whose scope is then
+    the pair's: a ``scope`` other than "pair" that is not the map's is a ValueError, not
+    ignored). ``options`` are the
     keyword arguments of pair_ground_truth. ``depth_source``: "sensor" (the depth files),
     "mesh" or "fused" (``Scene.mesh_path`` rendered, or fused with the files;
     docs/GROUND_TRUTH.md "Depth sources"), as ``occgt pair --depth-source``; with another
@@ -598,10 +600,32 @@ def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"
     if isinstance(scope_map, ScopeMap) and scope_map.scene != scene.name:
         raise ValueError(f"scope_map: fused from scene {scope_map.scene}; expected scene "
                          f"{scene.name} (the pair's)")
+    # The map decides what was fused: another scope asked for beside it is not dropped.
+    if isinstance(scope_map, ScopeMap) and scope != "pair" and scope_name(scope) != scope_map.scope:
+        raise ValueError(f"scope: {scope!r}, but scope_map was fused over {scope_map.scope!r}; "
+                         f"pass the map's scope or none")
     if scope != "pair" and options.get("occupancy") and "scope_map" not in options:
         options["scope_map"] = fuse_scope(scene, id0, id1, width, height, scope, preset, options)
     return pair_ground_truth(depth0, depth1, K0, K1, world_from_cam0, world_from_cam1, preset,
                              **options)
+
+
+def scope_name(scope: Any) -> str:
+    """The name ``ScopeMap.scope`` gives a fusion scope ("pair", "window:N", "scene:S" with
+    1 <= N, S < 10^9; leading zeros dropped), or TypeError / ValueError naming ``scope``. The
+    rules of occupancy::ParseFusionScope, which the binding applies only in ``Scene.fuse``
+    (it has no parser without a scene): PairIndexDataset checks its scope before any scene
+    is read."""
+    if not isinstance(scope, str):
+        raise TypeError(f"scope: expected a str, got {type(scope).__name__}")
+    kind, _, count = scope.partition(":")
+    if scope == "pair":
+        return scope
+    if (kind in ("window", "scene") and count.isascii() and count.isdigit() and len(count) <= 9
+            and int(count) >= 1):
+        return f"{kind}:{int(count)}"
+    raise ValueError(f"scope: expected 'pair', 'window:N' or 'scene:S' with N, S >= 1, got "
+                     f"{scope!r}")
 
 
 #: The keyword arguments of pair_ground_truth that Scene.fuse takes too (the map must be

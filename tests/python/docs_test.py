@@ -40,6 +40,9 @@ class Docs(unittest.TestCase):
         sys.stdout.write(printed)
         self.assertRegex(printed, r"overlap 0->1 0\.\d+, occlusion 0\.\d+")
         self.assertIn("OUT_OF_VIEW VISIBLE", printed)
+        # Scene.fuse's map read by pair_ground_truth as the text says (the scene's depth range).
+        self.assertRegex(printed, r"<occgt.ScopeMap rgbd-frames window:1 \(\d+ frames\)> "
+                                  r"known bins: [1-9]\d*")
         self.assertRegex(printed, r"view 0: 0\.\d\d of its pixels seen by all 3 others")
         self.assertRegex(printed, r"tracks \(4, 256, 2\) visible in every view: \d+")
         # Rendered depth: the TSDF mesh reproduces the sensor within millimetres, fills holes.

@@ -102,6 +102,27 @@ class Scopes(unittest.TestCase):
         with self.assertRaises(TypeError):
             occgt.pair_ground_truth(d0, d1, K0, K1, T0, T1, occupancy=True, scope_map="scene")
 
+    def test_scope_beside_a_map(self) -> None:
+        """pair_from_scene with scope_map: the map's scope (or "pair", the default) is
+        accepted, leading zeros included; another scope is a ValueError (it was ignored
+        silently: scope="scene:5" gave the window map's volumes)."""
+        window = self.scene.fuse(*PAIR, 80, 60, scope="window:1")
+        want = occgt.pair_from_scene(self.scene, *PAIR, width=80, height=60, occupancy=True,
+                                     scope="window:1")
+        for scope in ("pair", "window:1", "window:01"):
+            got = occgt.pair_from_scene(self.scene, *PAIR, width=80, height=60, occupancy=True,
+                                        scope=scope, scope_map=window)
+            self.assertTrue(np.array_equal(got["occ0"], want["occ0"]), scope)
+        for scope in ("scene:5", "window:2"):
+            with self.subTest(scope=scope), self.assertRaisesRegex(
+                    ValueError, r"^scope: '%s', but scope_map was fused over 'window:1'" % scope):
+                occgt.pair_from_scene(self.scene, *PAIR, width=80, height=60, occupancy=True,
+                                      scope=scope, scope_map=window)
+        with self.assertRaisesRegex(ValueError, r"^scope: expected 'pair', 'window:N' or "
+                                    r"'scene:S' with N, S >= 1, got 'window:x'$"):
+            occgt.pair_from_scene(self.scene, *PAIR, width=80, height=60, occupancy=True,
+                                  scope="window:x", scope_map=window)
+
 
 if __name__ == "__main__":
     unittest.main()
