@@ -2,9 +2,10 @@
 a pair index and the dataset on disk.
 
 - PairIndexDataset.from_split(split) gives, item by item, the arrays of the split's shards
-  (every .npy member bit-equal, the grey of image0/1.png), for the demo and both real samples
+  (every .npy member bit-equal, the grey of image0/1.png or .jpg, the options of the json), for
+  the demo (PNG and JPEG images, pair, window and scene scopes) and both real samples
   (7-Scenes and TartanAir from ../shared/data; the shards are read here with tarfile, not with
-  occgt's ShardDataset);
+  occgt's ShardDataset); its keyword arguments override any argument;
 - the index readers: occgt's pairs.jsonl and selection/, occgt's LoFTR test.npz (scenes.txt),
   LoFTR's real test-1500 test.npz, a scene_info folder and a list file;
 - LoFTR's keys, dtypes and layouts; a DataLoader with 2 workers, shuffled, batch 4, gives the
@@ -76,15 +77,24 @@ class FromSplit(unittest.TestCase):
     """Item i of from_split(split) has the arrays of the split's sample i."""
 
     def check_split(self, recipe: str) -> None:
-        split = built_split(recipe)
+        self.assertGreater(self.check_items(built_split(recipe), recipe), 0, recipe)
+
+    def check_items(self, split: str, recipe: str) -> int:
+        """Item i of from_split(split) against the split's sample i; returns how many images
+        were compared."""
         ds = PairIndexDataset.from_split(split)
         samples = list(shard_samples(split))
         self.assertEqual(len(ds), len(samples), recipe)
         self.assertGreater(len(samples), 0, recipe)
+        images = 0
         for i, s in enumerate(samples):
             item = ds[i]
             meta = json.loads(s["json"])
             self.assertEqual(s["__key__"].decode(), meta["key"], recipe)
+            # The options the json records, the fusion's scope included (it said 'pair').
+            self.assertEqual(ds.pair_options(i),
+                             {k: meta[k] for k in ("label_options", "patch_options",
+                                                   "occupancy_options")}, recipe)
             id0, id1 = ds.frame_ids(i)
             self.assertEqual(meta["key"], f"{item['scene_id']}/{id0}_{id1}", recipe)
             self.assertEqual(item["K0"].numpy().tolist(),
@@ -105,12 +115,14 @@ class FromSplit(unittest.TestCase):
                     self.assertEqual(got.shape, want.shape, where)
                     self.assertTrue(np.array_equal(got.astype(want.dtype), want), where)
                     arrays += 1
-                elif field in ("image0.png", "image1.png"):
+                elif field in ("image0.png", "image1.png", "image0.jpg", "image1.jpg"):
                     bgr = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
                     grey = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY).astype(np.float32) / 255
                     self.assertTrue(torch.equal(item["image" + field[5]], torch.from_numpy(grey[None])),
                                     where)
+                    images += 1
             self.assertGreaterEqual(arrays, 7, f"{recipe} sample {i}: too few arrays compared")
+        return images
 
     def test_demo(self) -> None:
         self.check_split("demo")
@@ -123,6 +135,25 @@ class FromSplit(unittest.TestCase):
         common.shared("tartanair")
         self.check_split("tartanair-sample")
 
+
+    def test_jpeg_images(self) -> None:
+        """A split of sample.image: jpg: the grey images are the shards' bit for bit (the same
+        JPEG bytes, decoded by OpenCV as ShardDataset does), not the colour before JPEG."""
+        with open(os.path.join(common.SOURCE, "recipes", "demo.yaml")) as f:
+            text = f.read()
+        self.assertIn("sample: {image: png,", text)
+        out = common.scratch("pair_dataset_jpeg")
+        recipe = os.path.join(out, "recipe.yaml")
+        with open(recipe, "w") as f:
+            f.write(text.replace("sample: {image: png,", "sample: {image: jpg,")
+                    .replace("quota_per_scene: 12", "quota_per_scene: 2"))
+        split = os.path.join(out, "split")
+        common.occgt("build", "--json", recipe, "--out", split)
+        self.assertGreaterEqual(self.check_items(split, "demo jpg"), 4)
+        jpeg = PairIndexDataset.from_split(split)
+        self.assertEqual(jpeg.image_format, "jpg")
+        lossless = PairIndexDataset.from_split(split, image_format="png")
+        self.assertFalse(torch.equal(jpeg[0]["image0"], lossless[0]["image0"]))
 
     def test_window_and_scene_scopes(self) -> None:
         """A demo recipe whose occupancy fuses a window / the scene: from_split keeps the scope
@@ -145,6 +176,11 @@ class FromSplit(unittest.TestCase):
             self.assertEqual(len(ds), len(samples))
             for i, s in enumerate(samples):
                 item = ds[i]
+                # pair_options names the scope the item fuses, as the shard's json (it said
+                # 'pair').
+                meta = json.loads(s["json"])
+                self.assertEqual(ds.pair_options(i)["occupancy_options"],
+                                 meta["occupancy_options"], f"{name} sample {i}")
                 for k in ("occ0", "known0", "occ1", "known1"):
                     want = np.load(io.BytesIO(s[k + ".npy"]))
                     self.assertTrue(np.array_equal(item[k].numpy().view(np.uint64), want),
@@ -153,6 +189,27 @@ class FromSplit(unittest.TestCase):
             pair_only = PairIndexDataset.from_split(split, scope="pair")
             self.assertFalse(all(torch.equal(pair_only[i]["occ0"], ds[i]["occ0"])
                                  for i in range(len(ds))), name)
+
+
+    def test_overrides(self) -> None:
+        """from_split's keyword arguments override any argument the recipe gives (preset,
+        width and height raised "got multiple values for keyword argument")."""
+        split = built_split("demo")
+        first = PairIndexDataset.from_split(split).pairs[:1]
+        ds = PairIndexDataset.from_split(split, preset="occ2net", width=160, height=120,
+                                         stride=4, images=False, format="generic",
+                                         device=occgt.DATASET_DEFAULTS["device"], pairs=first)
+        self.assertEqual((len(ds), ds.preset, ds.width, ds.height, ds.images, ds.format),
+                         (1, "occ2net", 160, 120, False, "generic"))
+        item = ds[0]
+        self.assertEqual(tuple(item["depth0"].shape), (120, 160))
+        self.assertNotIn("image0", item)
+        options = ds.pair_options(0)
+        self.assertEqual(options["patch_options"]["stride"], 4)
+        self.assertEqual(options["label_options"]["bounds"],
+                         occgt.pair_options("occ2net")["label_options"]["bounds"])
+        self.assertNotEqual(options["label_options"]["bounds"],
+                            occgt.pair_options("default")["label_options"]["bounds"])
 
 
 class Indices(unittest.TestCase):
@@ -343,6 +400,58 @@ class Indices(unittest.TestCase):
         for key, value in first.items():
             if isinstance(value, torch.Tensor):
                 self.assertTrue(torch.equal(value, again[key]), key)
+
+    def test_constructor_checks_scope_images_bins(self) -> None:
+        """A bad scope (it failed in the first item; 5 gave AttributeError), images that is
+        not a bool ("no" was True), an unknown image_format: TypeError / ValueError naming
+        the argument at construction. bins=None is the default, as pair_options has it (it
+        gave TypeError); the scope is named as Scene.fuse names it."""
+        split = built_split("demo")
+        data = os.path.join(split, "data")
+        expected = r"^scope: expected 'pair', 'window:N' or 'scene:S' with N, S >= 1, got "
+        for kwargs, error, pattern in [
+                ({"scope": "window:x"}, ValueError, expected + "'window:x'$"),
+                ({"scope": "scene:0"}, ValueError, expected + "'scene:0'$"),
+                ({"scope": "window:-1"}, ValueError, expected + "'window:-1'$"),
+                ({"scope": "window"}, ValueError, expected + "'window'$"),
+                ({"scope": 5}, TypeError, r"^scope: expected a str, got int$"),
+                ({"scope": None}, TypeError, r"^scope: expected a str, got NoneType$"),
+                ({"images": "no"}, TypeError, r"^images: expected a bool, got str$"),
+                ({"images": 1}, TypeError, r"^images: expected a bool, got int$"),
+                ({"image_format": "jpeg"}, ValueError,
+                 r"^image_format: expected 'png' or 'jpg', got 'jpeg'$"),
+                ({"bins": "16"}, TypeError, r"^bins: expected an int, got str$")]:
+            with self.subTest(kwargs=kwargs), self.assertRaisesRegex(error, pattern):
+                PairIndexDataset(split, data, "generic", width=80, height=60,
+                                 occupancy="words", **kwargs)
+        self.assertEqual(PairIndexDataset(split, data, "generic", occupancy="words",
+                                          scope="window:01").scope, "window:1")
+        for bins, depth in ((None, occgt.PAIR_DEFAULTS["bins"]), (16, 16)):
+            ds = PairIndexDataset(split, data, "generic", width=80, height=60,
+                                  occupancy="dense", bins=bins, images=np.bool_(False))
+            self.assertEqual(ds.bins, depth)
+            self.assertEqual(tuple(ds[0]["occupancy0"].shape), (depth, 30, 40))
+
+    def test_index_of_frame_ids_and_pair_options(self) -> None:
+        """frame_ids(i) and pair_options(i) check i as ds[i] does (a bare IndexError or
+        TypeError came from inside); negative and numpy indices work."""
+        split = built_split("demo")
+        ds = PairIndexDataset(split, os.path.join(split, "data"), "generic", width=80,
+                              height=60)
+        n = len(ds)
+        for method in (ds.frame_ids, ds.pair_options, ds.__getitem__):
+            with self.subTest(method=method.__name__):
+                with self.assertRaisesRegex(IndexError, rf"^index {n} out of range for {n} pairs$"):
+                    method(n)
+                with self.assertRaisesRegex(IndexError, rf"^index {-n - 1} out of range for "):
+                    method(-n - 1)
+                with self.assertRaisesRegex(TypeError, r"^index: expected an int, got float$"):
+                    method(1.0)  # type: ignore[arg-type]
+                with self.assertRaisesRegex(TypeError, r"^index: expected an int, got str$"):
+                    method("1")  # type: ignore[arg-type]
+        self.assertEqual(ds.frame_ids(-1), ds.frame_ids(n - 1))
+        self.assertEqual(ds.frame_ids(np.int64(1)), ds.frame_ids(1))
+        self.assertEqual(ds.pair_options(-1), ds.pair_options(n - 1))
 
     def test_bad_options_and_frames(self) -> None:
         split = built_split("demo")

@@ -18,7 +18,8 @@ A sample (a dict) has the same keys whichever dataset yields it:
   reinterpreted: torch has no uint64) or, on request, ``occupancy0``, ``occupancy1`` uint8
   [D, H/2, W/2] (0 free, 1 occupied, 255 unknown); ``metrics01``, ``metrics10`` dicts.
 - The grey images are the library's colour at the working resolution (a shard's
-  ``image0.png``) converted with ``cv2.COLOR_RGB2GRAY``, divided by 255; ``pair_names`` are
+  ``image0.png``; of a split of ``sample.image: jpg``, its ``image0.jpg`` as OpenCV decodes
+  it) converted with ``cv2.COLOR_RGB2GRAY``, divided by 255; ``pair_names`` are
   ``("<scene>/<frame id>", "<scene>/<frame id>")``.
 - On request, ``color0``, ``color1`` uint8 [3, H, W] RGB (``ShardDataset(color=True)``).
 

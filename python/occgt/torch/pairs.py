@@ -26,6 +26,11 @@ from ._json import loads_strict
 #: LoFTR's dataset_name for occgt's reader formats (its evaluation picks thresholds by it).
 _DATASET_NAMES = {"scannet": "ScanNet", "megadepth": "MegaDepth"}
 
+#: The JPEG quality of a split's ``sample.image: jpg`` (libgt/pipeline/sample.cc EncodeImage:
+#: libjpeg-turbo, libjpeg's defaults otherwise, as OpenCV's encoder): image_format="jpg"
+#: encodes with it to get a shard's pixels bit for bit (tests/python/pair_dataset_test.py).
+_SHARD_JPEG_QUALITY = 95
+
 
 @dataclasses.dataclass(frozen=True)
 class PairRef:
@@ -173,7 +178,10 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             settings); the depth range defaults to the scene's (as ``occgt pair``).
         images: also ``image0``/``image1``, grey [1, H, W] in [0, 1]: the library's colour at
             the working resolution (``Scene.load_color``, a shard's pixels) converted with
-            ``cv2.COLOR_RGB2GRAY``. A frame without colour raises ValueError.
+            ``cv2.COLOR_RGB2GRAY``. A frame without colour raises ValueError. A bool.
+        image_format: ``"png"`` (the colour as it is: a PNG split's images) or ``"jpg"`` (the
+            colour through occgt's JPEG encoding and OpenCV's decoding, as ShardDataset reads
+            a split of ``sample.image: jpg``).
         occupancy: ``None`` (none), ``"words"`` (occ0/known0/occ1/known1, int64 views of the
             uint64 words) or ``"dense"`` (occupancy0/occupancy1 uint8 [D, H/2, W/2]).
         scope: the frames fused for occupancy (``Scene.fuse``): ``"pair"``, ``"window:N"``
@@ -196,7 +204,8 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                  *, width: int = occgt.PAIR_DEFAULTS["width"],
                  height: int = occgt.PAIR_DEFAULTS["height"],
                  preset: str = occgt.PAIR_DEFAULTS["preset"],
-                 images: bool = True, occupancy: Optional[str] = None, scope: str = "pair",
+                 images: bool = True, image_format: str = "png",
+                 occupancy: Optional[str] = None, scope: str = "pair",
                  scene_names: Optional[Union[str, Sequence[str]]] = None,
                  npz_root: Optional[str] = None,
                  depth_source: str = occgt.DATASET_DEFAULTS["depth_source"],
@@ -205,6 +214,12 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                  device: str = occgt.DATASET_DEFAULTS["device"], **options: Any) -> None:
         if depth_source not in ("sensor", "mesh", "fused"):
             raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")
+        if not isinstance(images, (bool, np.bool_)):  # "no" is not a bool (it was truthy)
+            raise TypeError(f"images: expected a bool, got {type(images).__name__}")
+        if image_format not in ("png", "jpg"):
+            raise ValueError(f"image_format: expected 'png' or 'jpg', got {image_format!r}")
+        # The name Scene.fuse gives it (a bad scope failed in the first item).
+        scope = occgt.scope_name(scope)
         if depth_source != "sensor" and occupancy is not None and scope != "pair":
             raise ValueError("depth_source: a scope other than 'pair' fuses sensor depth; "
                              "use scope='pair' with depth_source " + repr(depth_source))
@@ -223,16 +238,18 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         # Fail here, not in a worker: the size, and the options as pair_ground_truth resolves
         # them (a misspelt or unknown option, a bad preset or value).
         check_resolution(width, height)
-        occgt.pair_options(preset, occupancy=occupancy is not None, **options)
+        resolved = occgt.pair_options(preset, occupancy=occupancy is not None, **options)
         self.root, self.format, self.device = root, format, device
         self.width, self.height = operator.index(width), operator.index(height)
         self.preset, self.images, self.occupancy = preset, bool(images), occupancy
-        if not (scope == "pair" or scope.startswith("window:") or scope.startswith("scene:")):
-            raise ValueError(f"scope: expected 'pair', 'window:N' or 'scene:S', got {scope!r}")
+        self.image_format = image_format
         self.scope = scope
         self._scene_map: Optional[Tuple[str, occgt.ScopeMap]] = None
         self.options = dict(options)
-        self.bins = int(self.options.get("bins", occgt.PAIR_DEFAULTS["bins"]))
+        # The bins of the dense volumes, as the C++ resolved them (bins=None: the default).
+        occupancy_options = resolved["occupancy_options"]
+        self.bins: int = (occupancy_options["bins"]["num_bins"] if occupancy_options is not None
+                          else occgt.PAIR_DEFAULTS["bins"])
         self.dataset_name = _DATASET_NAMES.get(format, format)
         self._dataset: Optional[occgt.Dataset] = None
         self._pid = -1
@@ -254,9 +271,11 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
 
         ``root`` replaces the recipe's dataset root (a synthetic recipe reads
         ``split_dir/data``). ``images`` defaults to the recipe's (``sample.image`` not
-        ``none``); ``occupancy="recipe"`` to its encoding (packed/both → ``"words"``, dense →
-        ``"dense"``, none when the recipe has no occupancy). Other keyword arguments override
-        options; the recipe's ``occupancy.scope`` is kept (``scope``).
+        ``none``) and ``image_format`` to its ``sample.image``; ``occupancy="recipe"`` to its
+        encoding (packed/both → ``"words"``, dense → ``"dense"``, none when the recipe has no
+        occupancy). Other keyword arguments override any argument of the constructor taken
+        from the recipe (``width``, ``preset``, ``scope``, ``stride``, ...); the recipe's
+        ``occupancy.scope`` is kept (``scope``).
         """
         path = os.path.join(split_dir, "recipe.json")
         try:
@@ -297,10 +316,14 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                             "near_m": occ["near_m"], "far_m": occ["far_m"], "bins": occ["bins"],
                             "spacing": occ["spacing"], "traversal": occ["traversal"],
                             "occupancy_mode": occ["mode"]})
-        options.update(overrides)
-        return cls(split_dir, root, fmt, width=width, height=height, preset=labels["preset"],
-                   images=sample["image"] != "none" if images is None else images,
-                   occupancy=occupancy, **{**depth, **options})
+        arguments: Dict[str, Any] = {
+            "pairs": split_dir, "root": root, "format": fmt, "width": width, "height": height,
+            "preset": labels["preset"],
+            "images": sample["image"] != "none" if images is None else images,
+            "image_format": "jpg" if sample["image"] == "jpg" else "png",
+            "occupancy": occupancy, **depth, **options}
+        arguments.update(overrides)  # any of them: one value per argument
+        return cls(**arguments)
 
     def __getstate__(self) -> Dict[str, Any]:
         """The readers and maps of this process stay here (a spawned DataLoader worker or a
@@ -325,8 +348,20 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             self._scenes[name] = (scene, {f.number: f.id for f in scene.frames})
         return self._scenes[name]
 
+    def _index(self, index: int) -> int:
+        """``index`` as an int in 0..len - 1 (negative ones count from the end), else
+        TypeError / IndexError."""
+        try:
+            index = operator.index(index)  # an int, a numpy or 0-d torch integer; not 1.5
+        except TypeError:
+            raise TypeError(f"index: expected an int, got {type(index).__name__}") from None
+        if not -len(self.pairs) <= index < len(self.pairs):
+            raise IndexError(f"index {index} out of range for {len(self.pairs)} pairs")
+        return index % len(self.pairs)
+
     def frame_ids(self, index: int) -> Tuple[str, str]:
         """The frame ids of pair ``index`` (an index given by numbers is resolved in its scene)."""
+        index = self._index(index)
         ref = self.pairs[index]
         scene, by_number = self._scene(ref.scene)
 
@@ -364,19 +399,17 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
 
     def pair_options(self, index: int) -> Dict[str, Any]:
         """The options item ``index`` is computed with, resolved by the C++ as for the build
-        (``occgt.pair_options``: label_options, patch_options, occupancy_options)."""
-        scene, _ = self._scene(self.pairs[index].scene)
-        return occgt.pair_options(self.preset, occupancy=self.occupancy is not None,
-                                  **self._options_for(scene))
+        (``occgt.pair_options``: label_options, patch_options, occupancy_options, whose
+        ``fusion.scope`` is the dataset's ``scope``)."""
+        scene, _ = self._scene(self.pairs[self._index(index)].scene)
+        options = occgt.pair_options(self.preset, occupancy=self.occupancy is not None,
+                                     **self._options_for(scene))
+        if options["occupancy_options"] is not None:  # pair_options takes no scope: the map's
+            options["occupancy_options"]["fusion"]["scope"] = self.scope
+        return options
 
     def __getitem__(self, index: int) -> Dict[str, Any]:
-        try:
-            index = operator.index(index)  # an int, a numpy or 0-d torch integer; not 1.5
-        except TypeError:
-            raise TypeError(f"index: expected an int, got {type(index).__name__}") from None
-        if not -len(self.pairs) <= index < len(self.pairs):
-            raise IndexError(f"index {index} out of range for {len(self.pairs)} pairs")
-        index %= len(self.pairs)
+        index = self._index(index)
         ref = self.pairs[index]
         scene, _ = self._scene(ref.scene)
         id0, id1 = self.frame_ids(index)
@@ -396,7 +429,11 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         if self.images:
             for k, frame_id in (("image0", id0), ("image1", id1)):
                 rgb = scene.load_color(frame_id, self.width, self.height)
-                grey = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
+                if self.image_format == "jpg":
+                    grey = cv2.cvtColor(_jpeg_round_trip(rgb, f"pair {index} {frame_id}"),
+                                        cv2.COLOR_BGR2GRAY).astype(np.float32) / 255.0
+                else:
+                    grey = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
                 sample[k] = to_tensor(grey[None])
         T_0to1 = truth["T_0to1"]
         sample.update({
@@ -421,3 +458,14 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                 sample["occupancy" + c] = to_tensor(
                     occgt.dense_volume(truth["occ" + c], truth["known" + c], self.bins))
         return sample
+
+
+def _jpeg_round_trip(rgb: np.ndarray, where: str) -> np.ndarray:
+    """BGR uint8 [H, W, 3]: ``rgb`` as a split of ``sample.image: jpg`` stores it (the same
+    JPEG bytes as occgt build writes: OpenCV calls the same libjpeg-turbo with the same
+    settings) decoded as ShardDataset decodes it (``cv2.imdecode``)."""
+    ok, jpeg = cv2.imencode(".jpg", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR),
+                            [cv2.IMWRITE_JPEG_QUALITY, _SHARD_JPEG_QUALITY])
+    if not ok:
+        raise ValueError(f"{where}: OpenCV could not encode the colour as JPEG")
+    return cv2.imdecode(jpeg, cv2.IMREAD_COLOR)
