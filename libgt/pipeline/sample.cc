@@ -11,6 +11,7 @@
 #include "libgt/io/gzip.h"
 #include "libgt/io/image.h"
 #include "libgt/io/npy.h"
+#include "libgt/shards/sample.h"
 #include "libgt/truth/pair_files.h"
 
 namespace gt::pipeline {
@@ -19,12 +20,10 @@ namespace {
 using nlohmann::json;
 
 std::string EncodeImage(const io::ColorImage& image, ImageFormat format, const std::string& what) {
-  const cv::Mat rgb(image.height, image.width, CV_8UC3, const_cast<uint8_t*>(image.rgb.data()));
-  if (format == ImageFormat::kJpg)
-    return io::EncodeJpegBytes(rgb, io::ChannelOrder::kRgb, 95, what);
-  GT_ASSERT(format == ImageFormat::kPng);
-  // Sub filters: the trainers decode these images every epoch (io::PngFilter).
-  return io::EncodePngBytes(rgb, io::ChannelOrder::kRgb, 1, what, io::PngFilter::kSub);
+  GT_ASSERT(format == ImageFormat::kJpg || format == ImageFormat::kPng);
+  return shards::EncodeSampleColor(
+      image.rgb.data(), image.width, image.height,
+      format == ImageFormat::kJpg ? shards::ColorMember::kJpg : shards::ColorMember::kPng, what);
 }
 
 }  // namespace
@@ -197,8 +196,8 @@ EncodedSample ComputeSample(const Scene& scene, size_t i0, size_t i1, const Sele
         {"counts0", {{"occupied", c0.occupied}, {"free", c0.free}, {"unknown", c0.unknown}}},
         {"counts1", {{"occupied", c1.occupied}, {"free", c1.free}, {"unknown", c1.unknown}}},
         {"fusion",
-         {{"stats", occ.fusion_stats ? json(truth::FusionStatsJson(*occ.fusion_stats))
-                                     : json(nullptr)}}}};
+         {{"stats",
+           occ.fusion_stats ? json(truth::FusionStatsJson(*occ.fusion_stats)) : json(nullptr)}}}};
   }
   json image_json = nullptr;
   if (with_images) {

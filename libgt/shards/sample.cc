@@ -4,10 +4,20 @@
 
 #include "libgt/core/error.h"
 #include "libgt/core/human.h"
+#include "libgt/io/codec.h"
 #include "libgt/io/gzip.h"
 #include "libgt/io/npy.h"
 
 namespace gt::shards {
+
+std::string EncodeSampleColor(const uint8_t* rgb, int width, int height, ColorMember format,
+                              const std::string& what) {
+  const cv::Mat image(height, width, CV_8UC3, const_cast<uint8_t*>(rgb));
+  if (format == ColorMember::kJpg) {
+    return io::EncodeJpegBytes(image, io::ChannelOrder::kRgb, 95, what);
+  }
+  return io::EncodePngBytes(image, io::ChannelOrder::kRgb, 1, what, io::PngFilter::kSub);
+}
 namespace {
 
 bool IsSafeKeyChar(char c) {

@@ -14,11 +14,19 @@
 // "scene0707_00/000015_000585".
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace gt::shards {
+
+// The colour member of a sample (image<c>.png / image<c>.jpg), as every writer stores it:
+// `rgb` uint8 [height, width, 3] to PNG (level 1, Sub filters: the trainers decode these
+// every epoch) or JPEG (quality 95, 4:2:0). `what` names the image in errors.
+enum class ColorMember { kPng, kJpg };
+std::string EncodeSampleColor(const uint8_t* rgb, int width, int height, ColorMember format,
+                              const std::string& what);
 
 // Longest member path a ustar header holds without the prefix field trick or pax records.
 inline constexpr size_t kMaxMemberPathBytes = 100;

@@ -612,20 +612,13 @@ def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"
 
 def scope_name(scope: Any) -> str:
     """The name ``ScopeMap.scope`` gives a fusion scope ("pair", "window:N", "scene:S" with
-    1 <= N, S < 10^9; leading zeros dropped), or TypeError / ValueError naming ``scope``. The
-    rules of occupancy::ParseFusionScope, which the binding applies only in ``Scene.fuse``
-    (it has no parser without a scene): PairIndexDataset checks its scope before any scene
-    is read."""
+    1 <= N, S < 10^9; leading zeros dropped), or TypeError / ValueError naming ``scope``
+    (occupancy::ParseFusionScope, as ``Scene.fuse`` reads it; PairIndexDataset checks its
+    scope with it before any scene is read)."""
     if not isinstance(scope, str):
         raise TypeError(f"scope: expected a str, got {type(scope).__name__}")
-    kind, _, count = scope.partition(":")
-    if scope == "pair":
-        return scope
-    if (kind in ("window", "scene") and count.isascii() and count.isdigit() and len(count) <= 9
-            and int(count) >= 1):
-        return f"{kind}:{int(count)}"
-    raise ValueError(f"scope: expected 'pair', 'window:N' or 'scene:S' with N, S >= 1, got "
-                     f"{scope!r}")
+    name: str = _occgt.scope_name(scope)
+    return name
 
 
 #: The keyword arguments of pair_ground_truth that Scene.fuse takes too (the map must be

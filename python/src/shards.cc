@@ -4,12 +4,14 @@
 // (shards::ListShardSamples: one pass over the headers with libarchive, the data is not
 // read), without the GIL. A bad index or a bad or truncated shard raises ValueError naming
 // the file (and the field, member or header byte).
+#include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "libgt/shards/sample.h"
 #include "libgt/shards/split.h"
 #include "libgt/shards/tar_shard.h"
 
@@ -19,6 +21,31 @@ namespace py = pybind11;
 using namespace pybind11::literals;
 
 void BindShards(py::module_& m) {
+  m.def(
+      "encode_sample_color",
+      [](const py::array& rgb_in, const std::string& format) {
+        if (format != "png" && format != "jpg") {
+          throw py::value_error("format: expected 'png' or 'jpg', got '" + format + "'");
+        }
+        if (rgb_in.dtype().kind() != 'u' || rgb_in.itemsize() != 1 || rgb_in.ndim() != 3 ||
+            rgb_in.shape(2) != 3 || rgb_in.shape(0) < 1 || rgb_in.shape(1) < 1) {
+          throw py::value_error("rgb: expected uint8 [H, W, 3] with H, W >= 1");
+        }
+        const auto rgb = py::array_t<uint8_t, py::array::c_style>::ensure(rgb_in);
+        std::string bytes;
+        {
+          py::gil_scoped_release no_gil;
+          bytes = gt::shards::EncodeSampleColor(
+              rgb.data(), static_cast<int>(rgb.shape(1)), static_cast<int>(rgb.shape(0)),
+              format == "jpg" ? gt::shards::ColorMember::kJpg : gt::shards::ColorMember::kPng,
+              "rgb");
+        }
+        return py::bytes(bytes);
+      },
+      "rgb"_a, "format"_a,
+      "A sample's colour member (image0.png / image0.jpg) as occgt build writes it: rgb "
+      "uint8 [H, W, 3] encoded as PNG or JPEG with the writer's settings (bytes). "
+      "ValueError for another array or format.");
   m.def(
       "shard_index",
       [](const std::string& split_dir) {

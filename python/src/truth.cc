@@ -20,6 +20,7 @@
 #include "libgt/geometry/labels.h"
 #include "libgt/geometry/patches.h"
 #include "libgt/occupancy/frustum.h"
+#include "libgt/occupancy/fusion.h"
 #include "libgt/occupancy/pair_occupancy.h"
 #include "libgt/truth/pair_files.h"
 #include "libgt/truth/pair_settings.h"
@@ -624,6 +625,20 @@ void BindTruth(py::module_& m) {
       "preset"_a = gt::truth::LabelSettings().preset,
       "The options pair_ground_truth resolves from the same arguments (its 'options' entry), "
       "without computing anything; see occgt.pair_options.");
+  m.def(
+      "scope_name",
+      [](const std::string& scope) {
+        gt::occupancy::FusionOptions o;
+        try {
+          gt::occupancy::ParseFusionScope(scope, &o);
+        } catch (const gt::InputError& e) {  // "--scope: ...": the argument is `scope` here
+          ThrowValue("scope", std::string(e.what()).substr(e.where().size() + 2));
+        }
+        return gt::occupancy::FusionScopeName(o);
+      },
+      "scope"_a,
+      "The name ScopeMap.scope gives a fusion scope ('pair', 'window:N', 'scene:S'; leading "
+      "zeros dropped), by occupancy::ParseFusionScope; ValueError naming `scope` otherwise.");
   m.attr("PAIR_DEFAULTS") = PairDefaults();
   {
     const gt::truth::ViewsTruthOptions views;

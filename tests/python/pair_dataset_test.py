@@ -154,6 +154,22 @@ class FromSplit(unittest.TestCase):
         self.assertEqual(jpeg.image_format, "jpg")
         lossless = PairIndexDataset.from_split(split, image_format="png")
         self.assertFalse(torch.equal(jpeg[0]["image0"], lossless[0]["image0"]))
+        # encode_sample_color gives the shard's member bytes themselves.
+        index = common.read_json(os.path.join(split, "index.json"))
+        scene = occgt.open_dataset(os.path.join(split, "data"), "generic")
+        with tarfile.open(os.path.join(split, index["shardlist"][0]["url"])) as tar:
+            member = next(m for m in tar.getmembers() if m.name.endswith(".image0.jpg"))
+            stored = tar.extractfile(member).read()  # type: ignore[union-attr]
+            meta = json.loads(tar.extractfile(  # type: ignore[union-attr]
+                member.name.replace(".image0.jpg", ".json")).read())
+        rgb = scene.scene(meta["scene"]).load_color(meta["frame0"]["id"], *meta["resolution"])
+        self.assertEqual(occgt._occgt.encode_sample_color(rgb, "jpg"), stored)
+        for bad, pattern in ((rgb[..., :2], r"^rgb: expected uint8 \[H, W, 3\]"),
+                             (rgb.astype(np.float32), r"^rgb: expected uint8")):
+            with self.assertRaisesRegex(ValueError, pattern):
+                occgt._occgt.encode_sample_color(bad, "jpg")
+        with self.assertRaisesRegex(ValueError, r"^format: expected 'png' or 'jpg', got 'gif'$"):
+            occgt._occgt.encode_sample_color(rgb, "gif")
 
     def test_window_and_scene_scopes(self) -> None:
         """A demo recipe whose occupancy fuses a window / the scene: from_split keeps the scope
@@ -408,12 +424,14 @@ class Indices(unittest.TestCase):
         gave TypeError); the scope is named as Scene.fuse names it."""
         split = built_split("demo")
         data = os.path.join(split, "data")
-        expected = r"^scope: expected 'pair', 'window:N' or 'scene:S' with N, S >= 1, got "
+        # The messages of occupancy::ParseFusionScope (`occgt occupancy --scope`).
+        expected = r"^scope: expected pair, window:N or scene:S with N, S >= 1, got "
         for kwargs, error, pattern in [
                 ({"scope": "window:x"}, ValueError, expected + "'window:x'$"),
-                ({"scope": "scene:0"}, ValueError, expected + "'scene:0'$"),
+                ({"scope": "scene:0"}, ValueError, r"^scope: N and S must be >= 1, got 'scene:0'$"),
                 ({"scope": "window:-1"}, ValueError, expected + "'window:-1'$"),
-                ({"scope": "window"}, ValueError, expected + "'window'$"),
+                ({"scope": "window"}, ValueError,
+                 r"^scope: expected pair, window:N or scene:S, got 'window'$"),
                 ({"scope": 5}, TypeError, r"^scope: expected a str, got int$"),
                 ({"scope": None}, TypeError, r"^scope: expected a str, got NoneType$"),
                 ({"images": "no"}, TypeError, r"^images: expected a bool, got str$"),

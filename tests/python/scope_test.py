@@ -118,8 +118,8 @@ class Scopes(unittest.TestCase):
                     ValueError, r"^scope: '%s', but scope_map was fused over 'window:1'" % scope):
                 occgt.pair_from_scene(self.scene, *PAIR, width=80, height=60, occupancy=True,
                                       scope=scope, scope_map=window)
-        with self.assertRaisesRegex(ValueError, r"^scope: expected 'pair', 'window:N' or "
-                                    r"'scene:S' with N, S >= 1, got 'window:x'$"):
+        with self.assertRaisesRegex(ValueError, r"^scope: expected pair, window:N or "
+                                    r"scene:S with N, S >= 1, got 'window:x'$"):
             occgt.pair_from_scene(self.scene, *PAIR, width=80, height=60, occupancy=True,
                                   scope="window:x", scope_map=window)
 

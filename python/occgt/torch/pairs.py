@@ -26,11 +26,6 @@ from ._json import loads_strict
 #: LoFTR's dataset_name for occgt's reader formats (its evaluation picks thresholds by it).
 _DATASET_NAMES = {"scannet": "ScanNet", "megadepth": "MegaDepth"}
 
-#: The JPEG quality of a split's ``sample.image: jpg`` (libgt/pipeline/sample.cc EncodeImage:
-#: libjpeg-turbo, libjpeg's defaults otherwise, as OpenCV's encoder): image_format="jpg"
-#: encodes with it to get a shard's pixels bit for bit (tests/python/pair_dataset_test.py).
-_SHARD_JPEG_QUALITY = 95
-
 
 @dataclasses.dataclass(frozen=True)
 class PairRef:
@@ -461,11 +456,11 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
 
 
 def _jpeg_round_trip(rgb: np.ndarray, where: str) -> np.ndarray:
-    """BGR uint8 [H, W, 3]: ``rgb`` as a split of ``sample.image: jpg`` stores it (the same
-    JPEG bytes as occgt build writes: OpenCV calls the same libjpeg-turbo with the same
-    settings) decoded as ShardDataset decodes it (``cv2.imdecode``)."""
-    ok, jpeg = cv2.imencode(".jpg", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR),
-                            [cv2.IMWRITE_JPEG_QUALITY, _SHARD_JPEG_QUALITY])
-    if not ok:
-        raise ValueError(f"{where}: OpenCV could not encode the colour as JPEG")
-    return cv2.imdecode(jpeg, cv2.IMREAD_COLOR)
+    """BGR uint8 [H, W, 3]: ``rgb`` as a split of ``sample.image: jpg`` stores it (the bytes
+    occgt build writes, ``encode_sample_color``) decoded as ShardDataset decodes it
+    (``cv2.imdecode``)."""
+    jpeg = np.frombuffer(occgt._occgt.encode_sample_color(rgb, "jpg"), np.uint8)
+    bgr = cv2.imdecode(jpeg, cv2.IMREAD_COLOR)
+    if bgr is None:
+        raise ValueError(f"{where}: OpenCV could not decode the sample's JPEG")
+    return bgr
