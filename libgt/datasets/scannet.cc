@@ -115,6 +115,11 @@ CppInfo ReadCppInfo(const std::string& path) {
         key != "m_calibrationColorIntrinsic") {
       continue;  // sensor name, version, extrinsics, frame count: not needed
     }
+    if (const auto it = info.values.find(key); it != info.values.end()) {
+      throw InputError(
+          LineWhere(path, static_cast<int>(i) + 1),
+          key + ": repeats line " + std::to_string(it->second.first) + " (expected each key once)");
+    }
     info.values[key] = {static_cast<int>(i) + 1, ParseNumbers(std::string_view(line).substr(eq + 1),
                                                               path, static_cast<int>(i) + 1)};
   }

@@ -176,7 +176,20 @@ PoseText ParsePoseText(std::string_view text, const std::string& name) {
 }
 
 bool SetPoseFromText(const std::string& path, Frame* frame) {
-  const PoseText pose = ReadPoseText(path);
+  std::string text;
+  try {
+    text = io::ReadFileBytes(path);
+  } catch (const InputError& e) {
+    MarkUnusable(frame, kReasonPoseUnreadable, e.what());
+    return false;
+  }
+  PoseText pose;
+  try {
+    pose = ParsePoseText(text, path);
+  } catch (const InputError& e) {
+    MarkUnusable(frame, kReasonPoseMalformed, e.what());
+    return false;
+  }
   return SetMatrixPose(pose.world_from_cam, pose.where, frame);
 }
 

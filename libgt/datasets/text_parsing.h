@@ -49,6 +49,8 @@ inline constexpr const char* kReasonColorUnreadable = "colour: unreadable image"
 // A frame whose depth or colour file exists but whose pose file does not (ScanNet's exports,
 // 7-Scenes: one pose file per frame); the detail is the pose file's path.
 inline constexpr const char* kReasonPoseMissing = "pose: missing file";
+inline constexpr const char* kReasonPoseUnreadable = "pose: unreadable file";
+inline constexpr const char* kReasonPoseMalformed = "pose: malformed file";
 // The pose reasons: "pose: " + the category of a PoseDefect (core/pose.h), without the
 // measured value (that goes to the detail), e.g. "pose: non-finite pose entries (lost
 // tracking)" (a 4x4 matrix), "pose: non-finite pose entries" (translation + quaternion),
@@ -101,7 +103,10 @@ struct PoseText {
 };
 PoseText ReadPoseText(const std::string& path);
 PoseText ParsePoseText(std::string_view text, const std::string& name);
-// ReadPoseText + SetMatrixPose: malformed text throws, a bad pose marks the frame.
+// ReadPoseText + SetMatrixPose for a per-frame pose file: a file that cannot be read
+// (kReasonPoseUnreadable), malformed text (kReasonPoseMalformed: not 16 numbers, a token
+// that is not a number; detail the parse error naming the file) and a bad pose all mark
+// the frame unusable (one bad frame among thousands is skipped and counted, not fatal).
 bool SetPoseFromText(const std::string& path, Frame* frame);
 
 // All numbers of a text file, row-major, with exactly rows * cols entries.

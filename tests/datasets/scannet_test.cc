@@ -11,6 +11,7 @@
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/datasets/scan.h"
+#include "libgt/datasets/text_parsing.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/depth_io.h"
 #include "tests/support/test_support.h"
@@ -127,14 +128,54 @@ void ExpectErrorWhere(const std::string& root, const std::string& where, const s
   }
 }
 
-TEST(ScanNet, ShortPoseFileIsFatal) {
-  ExpectErrorWhere(kFixtures + "/scannet_short_pose", kFixtures + "/scannet_short_pose/pose/1.txt",
-                   "expected 16 numbers (4x4 matrix), found 12");
+// A malformed per-frame pose file makes its frame unusable, the detail the parse error
+// naming the file (and line); the other frames read (it stopped the whole scene).
+void ExpectOneMalformedPose(const std::string& root, const std::string& frame_id,
+                            const std::string& detail) {
+  const Scene s = MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(root, "");
+  int malformed = 0;  // (the fixtures' other frame has no depth file)
+  for (const Frame& f : s.frames) {
+    if (f.unusable_reason != kReasonPoseMalformed) continue;
+    ++malformed;
+    EXPECT_EQ(f.id, frame_id);
+    EXPECT_EQ(f.unusable_detail, detail);
+  }
+  EXPECT_EQ(malformed, 1);
+  EXPECT_EQ(s.frames.size(), 2u);
 }
 
-TEST(ScanNet, NonNumberTokenIsFatalWithLine) {
-  ExpectErrorWhere(kFixtures + "/scannet_bad_token", kFixtures + "/scannet_bad_token/pose/3.txt:3",
-                   "'O.5'");
+TEST(ScanNet, ShortPoseFileMakesItsFrameUnusable) {
+  ExpectOneMalformedPose(kFixtures + "/scannet_short_pose", "1",
+                         kFixtures +
+                             "/scannet_short_pose/pose/1.txt: expected 16 numbers (4x4 matrix), "
+                             "found 12");
+}
+
+TEST(ScanNet, NonNumberTokenMakesItsFrameUnusableWithLine) {
+  ExpectOneMalformedPose(
+      kFixtures + "/scannet_bad_token", "3",
+      kFixtures + "/scannet_bad_token/pose/3.txt:3: expected a number, found 'O.5'");
+}
+
+TEST(ScanNet, EmptyOrUnreadablePoseFileMakesItsFrameUnusable) {
+  const std::string dir = test::ScratchDir("sn_empty_pose");
+  const std::string pose = "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  WriteFileAtomic(dir + "/intrinsic/intrinsic_depth.txt", "50 0 31.5\n0 50 23.5\n0 0 1\n");
+  fs::create_directories(dir + "/depth");
+  for (const char* n : {"0", "1", "2"}) {
+    WriteFileAtomic(dir + "/pose/" + n + ".txt", pose);
+    ASSERT_TRUE(
+        cv::imwrite(dir + "/depth/" + n + ".png", cv::Mat(48, 64, CV_16UC1, cv::Scalar(9))));
+  }
+  WriteFileAtomic(dir + "/pose/1.txt", "");  // an interrupted export
+  const Scene s = MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), 3u);
+  EXPECT_TRUE(s.frames[0].usable);
+  EXPECT_FALSE(s.frames[1].usable);
+  EXPECT_EQ(s.frames[1].unusable_reason, kReasonPoseMalformed);
+  EXPECT_EQ(s.frames[1].unusable_detail,
+            dir + "/pose/1.txt: expected 16 numbers (4x4 matrix), found 0");
+  EXPECT_TRUE(s.frames[2].usable);
 }
 
 TEST(ScanNet, EmptySceneIsFatal) {
@@ -279,6 +320,10 @@ TEST(ScanNet, CppExporterBadInfo) {
                   "m_depthWidth = 32\nm_depthHeight = 24\nm_depthShift = nan\n"
                   "m_calibrationDepthIntrinsic = 30 0 15.5 0 0 30 11.5 0 0 0 1 0\n");
   ExpectErrorWhere(dir, dir + "/_info.txt:3", "m_depthShift");
+  // A key given twice: refused, not the last value taken (a second m_depthShift scaled every
+  // depth silently).
+  WriteFileAtomic(dir + "/_info.txt", info + "m_depthShift = 5000\n");
+  ExpectErrorWhere(dir, dir + "/_info.txt:13", "m_depthShift: repeats line");
 }
 
 // A frame with depth and colour but no pose file is listed, unusable ("pose: missing

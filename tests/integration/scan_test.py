@@ -140,12 +140,18 @@ assert r.returncode == 2, (r.returncode, r.stderr)  # it names a flag: a usage e
 assert r.stderr == ("occgt: error: --frames: frame 000010 is unusable: pose: non-finite pose "
                     f"entries; {pose_file}:11: non-finite value\n"), r.stderr
 
+# A malformed per-frame pose file: its frame is unusable (counted, the detail naming the
+# file and line), the scan goes on.
+for root, frame, detail in [
+        ("scannet_short_pose", "1", "pose/1.txt: expected 16 numbers (4x4 matrix), found 12"),
+        ("scannet_bad_token", "3", "pose/3.txt:3: expected a number, found 'O.5'")]:
+    s = scan(os.path.join(fixtures, root), "scannet")["scenes"][0]
+    assert s["unusable_reasons"]["pose: malformed file"] == 1, s["unusable_reasons"]
+    assert s["unusable_examples"]["pose: malformed file"] == [
+        {"frame": frame, "detail": os.path.join(fixtures, root, detail)}], s["unusable_examples"]
+
 # Bad inputs: exit 1, one line on stderr naming the file, nothing on stdout.
 bad = [
-    (os.path.join(fixtures, "scannet_short_pose"), "scannet",
-     os.path.join(fixtures, "scannet_short_pose", "pose", "1.txt")),
-    (os.path.join(fixtures, "scannet_bad_token"), "scannet",
-     os.path.join(fixtures, "scannet_bad_token", "pose", "3.txt:3")),
     (os.path.join(fixtures, "generic_duplicate_ids"), "generic",
      os.path.join(fixtures, "generic_duplicate_ids", "scene.json")),
     (os.path.join(fixtures, "tartanair_short_pose"), "tartanair",
