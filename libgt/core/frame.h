@@ -28,8 +28,8 @@ enum class DatasetFormat {
   kScanNetPP,    // "scannetpp": ScanNet++ (DSLR or iPhone), undistorted at load
 };
 inline constexpr DatasetFormat kAllDatasetFormats[] = {
-    DatasetFormat::kScanNet, DatasetFormat::kTartanAir, DatasetFormat::kSevenScenes,
-    DatasetFormat::kTum,     DatasetFormat::kMegaDepth, DatasetFormat::kGeneric,
+    DatasetFormat::kScanNet,  DatasetFormat::kTartanAir, DatasetFormat::kSevenScenes,
+    DatasetFormat::kTum,      DatasetFormat::kMegaDepth, DatasetFormat::kGeneric,
     DatasetFormat::kScanNetPP};
 const char* DatasetFormatName(DatasetFormat format);
 // Throws InputError(field, "unknown format '<name>', expected one of: ...").
@@ -122,6 +122,9 @@ struct Scene {
   // Depth rendered from it (docs/GROUND_TRUTH.md "Depth sources") uses the frames' poses.
   std::string mesh_path;
   std::vector<Frame> frames;  // sorted by number
+  // What the reader noticed and decided without an error, one sentence each (two colour
+  // files for one frame, which one it read); `occgt scan` prints them among its warnings.
+  std::vector<std::string> reader_warnings;
 
   size_t NumUsable() const {
     size_t n = 0;

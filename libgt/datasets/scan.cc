@@ -117,6 +117,7 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
   s.max_depth_m = scene.max_depth_m;
   if (!scene.frames.empty()) s.depth_camera = scene.frames.front().depth_camera;
   s.warnings = DatasetCaveats(scene.format);
+  s.warnings.insert(s.warnings.end(), scene.reader_warnings.begin(), scene.reader_warnings.end());
   if (scene.format == DatasetFormat::kTum) {
     for (std::string& w : TumSceneWarnings(scene)) s.warnings.push_back(std::move(w));
   }

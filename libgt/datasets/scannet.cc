@@ -134,15 +134,6 @@ std::string FirstExisting(const std::string& base, std::initializer_list<const c
   return "";
 }
 
-// Colour file of frame `stem`: color/<stem>.jpg, else .png; "" when neither exists.
-std::string ColorPath(const std::string& folder, const std::string& stem) {
-  for (const char* ext : {".jpg", ".png"}) {
-    const std::string p = (fs::path(folder) / "color" / (stem + ext)).string();
-    if (io::FileExists(p)) return p;
-  }
-  return "";
-}
-
 }  // namespace
 
 std::vector<std::string> ScanNetReader::ListScenes(const std::string& root) const {
@@ -211,13 +202,39 @@ Scene ScanNetReader::ReadSceneFolder(const std::string& folder,
   if (poses.empty()) throw InputError(pose_dir, "empty scene: no <n>.txt pose files");
   // Frames: every number with a pose, depth or colour file; one without its pose file is
   // kept, unusable (kReasonPoseMissing), so that it is counted, never silently dropped.
+  // Each file is the one listed for the frame's number, whatever its zero padding
+  // (pose/54.txt with depth/0054.png).
   const std::string depth_dir = (fs::path(folder) / "depth").string();
   const std::string color_dir = (fs::path(folder) / "color").string();
-  const std::vector<NumberedFile> frames = MergeNumberedFiles(
-      {poses, ListNumberedFiles(depth_dir, "", ".png"), ListNumberedFiles(color_dir, "", ".jpg"),
-       ListNumberedFiles(color_dir, "", ".png")});
-  std::set<int64_t> with_pose;
-  for (const auto& p : poses) with_pose.insert(p.number);
+  const std::vector<NumberedFile> depths = ListNumberedFiles(depth_dir, "", ".png");
+  const std::vector<NumberedFile> jpgs = ListNumberedFiles(color_dir, "", ".jpg");
+  const std::vector<NumberedFile> pngs = ListNumberedFiles(color_dir, "", ".png");
+  const std::vector<NumberedFile> frames = MergeNumberedFiles({poses, depths, jpgs, pngs});
+  const auto by_number = [](const std::vector<NumberedFile>& files) {
+    std::map<int64_t, std::string> out;
+    for (const NumberedFile& f : files) out.emplace(f.number, f.path);
+    return out;
+  };
+  const std::map<int64_t, std::string> pose_of = by_number(poses), depth_of = by_number(depths),
+                                       jpg_of = by_number(jpgs), png_of = by_number(pngs);
+  const auto find = [](const std::map<int64_t, std::string>& m, int64_t n) {
+    const auto it = m.find(n);
+    return it == m.end() ? std::string() : it->second;
+  };
+  // A frame with both colour files reads the .jpg (the export's own format), and says so.
+  std::map<int64_t, std::string> color_of;
+  size_t both_colors = 0;
+  std::string first_both;
+  for (const auto& p : frames) {
+    const std::string jpg = find(jpg_of, p.number), png = find(png_of, p.number);
+    if (!jpg.empty() && !png.empty() && both_colors++ == 0) first_both = jpg;
+    color_of[p.number] = jpg.empty() ? png : jpg;
+  }
+  if (both_colors > 0) {
+    scene.reader_warnings.push_back(std::to_string(both_colors) +
+                                    " frame(s) have both a .jpg and a .png colour file: the " +
+                                    ".jpg is read (the first: " + first_both + ")");
+  }
 
   const std::string intrinsic_dir = (fs::path(folder) / "intrinsic").string();
   const Eigen::Matrix3d K_depth =
@@ -227,8 +244,8 @@ Scene ScanNetReader::ReadSceneFolder(const std::string& folder,
   // frame's problem (skipped and counted when it is read), not the scene's.
   int depth_w = kDefaultDepthWidth, depth_h = kDefaultDepthHeight;
   for (const auto& p : frames) {
-    const std::string d = (fs::path(folder) / "depth" / (p.stem + ".png")).string();
-    if (!io::FileExists(d)) continue;
+    const std::string d = find(depth_of, p.number);
+    if (d.empty()) continue;
     try {
       const io::ImageSize s = io::ReadImageSize(d);
       depth_w = s.width;
@@ -240,7 +257,7 @@ Scene ScanNetReader::ReadSceneFolder(const std::string& folder,
   const Camera depth_camera = Camera::FromK(K_depth, depth_w, depth_h);
   Camera color_camera;
   for (const auto& p : frames) {
-    const std::string c = ColorPath(folder, p.stem);
+    const std::string& c = color_of[p.number];
     if (c.empty()) continue;
     io::ImageSize s;
     try {
@@ -259,14 +276,16 @@ Scene ScanNetReader::ReadSceneFolder(const std::string& folder,
     Frame f;
     f.id = p.stem;
     f.number = p.number;
-    f.depth.path = (fs::path(folder) / "depth" / (p.stem + ".png")).string();
+    // A frame without a depth file names the one expected (the frame's stem).
+    f.depth.path = find(depth_of, p.number);
+    if (f.depth.path.empty()) f.depth.path = (fs::path(depth_dir) / (p.stem + ".png")).string();
     f.depth.format = DepthFormat::kPng16;
     f.depth.scale_m_per_unit = 0.001;
     f.depth_camera = depth_camera;
-    f.color_path = ColorPath(folder, p.stem);
+    f.color_path = color_of[p.number];
     if (!f.color_path.empty()) f.color_camera = color_camera;
-    if (with_pose.count(p.number) != 0) {
-      SetPoseFromText(p.path, &f);  // lost tracking (-inf) marks the frame unusable
+    if (const std::string pose = find(pose_of, p.number); !pose.empty()) {
+      SetPoseFromText(pose, &f);  // lost tracking (-inf) marks the frame unusable
     } else {
       MarkUnusable(&f, kReasonPoseMissing, (fs::path(pose_dir) / (p.stem + ".txt")).string());
     }
@@ -303,17 +322,29 @@ Scene ScanNetReader::ReadCppExport(const std::string& folder, const std::string&
   for (const char* suffix : {".depth.pgm", ".depth.png", ".color.jpg", ".color.png"}) {
     lists.push_back(ListNumberedFiles(folder, "frame-", suffix));
   }
+  // A frame with two depth or two colour files reads the first of each pair (the export's
+  // own .depth.pgm and .color.jpg), and the scene says so.
+  size_t both_depth = 0, both_color = 0;
+  std::string first_both_depth, first_both_color;
   for (const auto& p : MergeNumberedFiles(lists)) {
     const std::string base = (fs::path(folder) / ("frame-" + p.stem)).string();
     Frame f;
     f.id = p.stem;
     f.number = p.number;
     f.depth.path = FirstExisting(base, {".depth.pgm", ".depth.png"});
+    if (f.depth.path == base + ".depth.pgm" && io::FileExists(base + ".depth.png") &&
+        both_depth++ == 0) {
+      first_both_depth = f.depth.path;
+    }
     if (f.depth.path.empty()) f.depth.path = base + ".depth.pgm";
     f.depth.format = DepthFormat::kPng16;  // 16-bit greyscale image, decoded by OpenCV
     f.depth.scale_m_per_unit = 1.0 / depth_shift;
     f.depth_camera = depth_camera;
     f.color_path = FirstExisting(base, {".color.jpg", ".color.png"});
+    if (f.color_path == base + ".color.jpg" && io::FileExists(base + ".color.png") &&
+        both_color++ == 0) {
+      first_both_color = f.color_path;
+    }
     if (!f.color_path.empty()) {
       if (color_camera.width > 0) {
         f.color_camera = color_camera;
@@ -331,6 +362,18 @@ Scene ScanNetReader::ReadCppExport(const std::string& folder, const std::string&
       MarkUnusable(&f, kReasonDepthMissing);
     }
     scene.frames.push_back(std::move(f));
+  }
+  if (both_depth > 0) {
+    scene.reader_warnings.push_back(std::to_string(both_depth) +
+                                    " frame(s) have both a .depth.pgm and a .depth.png file: the "
+                                    ".depth.pgm is read (the first: " +
+                                    first_both_depth + ")");
+  }
+  if (both_color > 0) {
+    scene.reader_warnings.push_back(std::to_string(both_color) +
+                                    " frame(s) have both a .color.jpg and a .color.png file: the "
+                                    ".color.jpg is read (the first: " +
+                                    first_both_color + ")");
   }
   return scene;
 }

@@ -67,15 +67,19 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
   int width = kSevenScenesWidthPx, height = kSevenScenesHeightPx;
   for (const auto& p : frames) {
     const std::string d = (fs::path(folder) / ("frame-" + p.stem + ".depth.png")).string();
-    if (io::FileExists(d)) {
+    if (!io::FileExists(d)) continue;
+    try {  // a damaged first file is that frame's problem (when it is read), not the scene's
       const io::ImageSize s = io::ReadImageSize(d);
       width = s.width;
       height = s.height;
       break;
+    } catch (const InputError&) {
     }
   }
   const Camera camera = Camera::FromK(K, width, height);
 
+  size_t both_colors = 0;  // frames with both colour files (the .png is read)
+  std::string first_both;
   for (const auto& p : frames) {
     const std::string base = (fs::path(folder) / ("frame-" + p.stem)).string();
     Frame f;
@@ -94,6 +98,10 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
         break;
       }
     }
+    if (f.color_path == base + ".color.png" && io::FileExists(base + ".color.jpg") &&
+        both_colors++ == 0) {
+      first_both = f.color_path;
+    }
     if (with_pose.count(p.number) != 0) {
       SetPoseFromText(p.path, &f);
     } else {
@@ -103,6 +111,12 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
       MarkUnusable(&f, kReasonDepthMissing);
     }
     scene.frames.push_back(std::move(f));
+  }
+  if (both_colors > 0) {
+    scene.reader_warnings.push_back(std::to_string(both_colors) +
+                                    " frame(s) have both a .color.png and a .color.jpg file: the "
+                                    ".color.png is read (the first: " +
+                                    first_both + ")");
   }
   return scene;
 }

@@ -4,6 +4,7 @@
 // scenes for depth PNG sizes and intrinsic_color.txt.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -324,6 +325,42 @@ TEST(ScanNet, CppExporterBadInfo) {
   // depth silently).
   WriteFileAtomic(dir + "/_info.txt", info + "m_depthShift = 5000\n");
   ExpectErrorWhere(dir, dir + "/_info.txt:13", "m_depthShift: repeats line");
+}
+
+// Each frame reads the files listed for its number, whatever their zero padding (pose/54.txt
+// beside depth/0054.png and color/0054.jpg: the depth was reported missing); a frame with
+// both colour files reads the .jpg and the scene says so (it was picked silently), and the
+// scan prints it among its warnings.
+TEST(ScanNet, FilesMatchByNumberAndTwoColourFilesAreNamed) {
+  const std::string dir = test::ScratchDir("sn_padding");
+  const std::string pose = "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  WriteFileAtomic(dir + "/intrinsic/intrinsic_depth.txt", "50 0 31.5\n0 50 23.5\n0 0 1\n");
+  fs::create_directories(dir + "/depth");
+  fs::create_directories(dir + "/color");
+  for (const char* n : {"53", "54"}) {
+    WriteFileAtomic(dir + "/pose/" + n + ".txt", pose);
+    const std::string padded = std::string("00") + n;
+    ASSERT_TRUE(
+        cv::imwrite(dir + "/depth/" + padded + ".png", cv::Mat(48, 64, CV_16UC1, cv::Scalar(9))));
+    ASSERT_TRUE(
+        cv::imwrite(dir + "/color/" + padded + ".jpg", cv::Mat(48, 64, CV_8UC3, cv::Scalar(9))));
+  }
+  ASSERT_TRUE(cv::imwrite(dir + "/color/0054.png", cv::Mat(48, 64, CV_8UC3, cv::Scalar(9))));
+  const Scene s = MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(dir, "");
+  ASSERT_EQ(s.frames.size(), 2u);
+  for (const Frame& f : s.frames) {
+    EXPECT_TRUE(f.usable) << f.id << ": " << f.UnusableMessage();
+    EXPECT_EQ(f.depth.path, dir + "/depth/00" + f.id + ".png");
+    EXPECT_EQ(f.color_path, dir + "/color/00" + f.id + ".jpg");
+  }
+  ASSERT_EQ(s.reader_warnings.size(), 1u);
+  EXPECT_EQ(s.reader_warnings[0],
+            "1 frame(s) have both a .jpg and a .png colour file: the .jpg "
+            "is read (the first: " +
+                dir + "/color/0054.jpg)");
+  const SceneSummary summary = SummarizeScene(s, ScanOptions{});
+  EXPECT_NE(std::find(summary.warnings.begin(), summary.warnings.end(), s.reader_warnings[0]),
+            summary.warnings.end());
 }
 
 // A frame with depth and colour but no pose file is listed, unusable ("pose: missing

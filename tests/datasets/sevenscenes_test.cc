@@ -212,6 +212,16 @@ TEST(SevenScenes, ColourAsPngOrJpgAndFramesWithout) {
   const ColorImage c = ReadColor(s.frames[0].color_path);
   EXPECT_EQ(c.width, 640);
   EXPECT_EQ(c.height, 480);
+  EXPECT_TRUE(s.reader_warnings.empty());
+  // Both files for one frame: the .png is read, and the scene says so (it was silent).
+  WriteFileAtomic(dir + "/seq-01/frame-000151.color.jpg", std::string(jpg.begin(), jpg.end()));
+  const Scene both = MakeReader(gt::DatasetFormat::kSevenScenes)->ReadScene(dir, "seq-01");
+  EXPECT_EQ(both.frames[1].color_path, dir + "/seq-01/frame-000151.color.png");
+  ASSERT_EQ(both.reader_warnings.size(), 1u);
+  EXPECT_EQ(both.reader_warnings[0],
+            "1 frame(s) have both a .color.png and a .color.jpg file: the .color.png is read "
+            "(the first: " +
+                dir + "/seq-01/frame-000151.color.png)");
 }
 
 // One pose file per frame: a bad pose names its file and the line (1..4 of the matrix, as
