@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <sstream>
 #include <utility>
 
 #include "libgt/core/error.h"
@@ -16,6 +17,32 @@
 
 namespace gt::occupancy {
 
+namespace {
+
+std::vector<double> ComputeBinEdges(const BinOptions& o) {
+  const int D = o.num_bins;
+  std::vector<double> e(D + 1);
+  for (int k = 0; k <= D; ++k) {
+    const double f = static_cast<double>(k) / D;
+    switch (o.spacing) {
+      case BinSpacing::kLinear:
+        e[k] = o.near_m + f * (o.far_m - o.near_m);
+        break;
+      case BinSpacing::kLog:
+        e[k] = o.near_m * std::pow(o.far_m / o.near_m, f);
+        break;
+      case BinSpacing::kInverse:
+        e[k] = 1.0 / (1.0 / o.near_m + f * (1.0 / o.far_m - 1.0 / o.near_m));
+        break;
+    }
+  }
+  e.front() = o.near_m;  // exact end points despite rounding
+  e.back() = o.far_m;
+  return e;
+}
+
+}  // namespace
+
 bool BinOptions::Check(std::string* error) const {
   auto fail = [&](const std::string& m) {
     if (error) *error = m;
@@ -24,6 +51,18 @@ bool BinOptions::Check(std::string* error) const {
   if (num_bins < 1 || num_bins > 64) return fail("num_bins must be in 1..64");
   if (!(near_m > 0.0) || !std::isfinite(near_m)) return fail("near_m must be finite and > 0");
   if (!(far_m > near_m) || !std::isfinite(far_m)) return fail("far_m must be finite and > near_m");
+  // The edges themselves: finite and increasing (far/near = 1e600 gave infinite log edges,
+  // a near of 1e-309 zero inverse edges, and a bin narrower than a double's step none).
+  const std::vector<double> e = ComputeBinEdges(*this);
+  for (size_t k = 1; k < e.size(); ++k) {
+    if (!(std::isfinite(e[k]) && e[k] > e[k - 1])) {
+      std::ostringstream s;
+      s << "the " << BinSpacingName(spacing) << " bin edges of near_m " << near_m << ", far_m "
+        << far_m << " and " << num_bins << " bins are not finite and increasing (edge " << k
+        << " is " << e[k] << "): use a narrower far_m / near_m ratio";
+      return fail(s.str());
+    }
+  }
   return true;
 }
 
@@ -59,25 +98,7 @@ std::string TraversalName(Traversal traversal) {
 std::vector<double> BinEdges(const BinOptions& o) {
   std::string why;
   GT_ASSERT_MSG(o.Check(&why), why);
-  const int D = o.num_bins;
-  std::vector<double> e(D + 1);
-  for (int k = 0; k <= D; ++k) {
-    const double f = static_cast<double>(k) / D;
-    switch (o.spacing) {
-      case BinSpacing::kLinear:
-        e[k] = o.near_m + f * (o.far_m - o.near_m);
-        break;
-      case BinSpacing::kLog:
-        e[k] = o.near_m * std::pow(o.far_m / o.near_m, f);
-        break;
-      case BinSpacing::kInverse:
-        e[k] = 1.0 / (1.0 / o.near_m + f * (1.0 / o.far_m - 1.0 / o.near_m));
-        break;
-    }
-  }
-  e.front() = o.near_m;  // exact end points despite rounding
-  e.back() = o.far_m;
-  return e;
+  return ComputeBinEdges(o);
 }
 
 int BinOfDepth(const std::vector<double>& edges_m, double z_m) {
@@ -458,8 +479,10 @@ void SplatBox(const Eigen::Vector3d& lo_m, const Eigen::Vector3d& hi_m, bool occ
   constexpr double kEps = 1e-3;
   double v_min = q[0].y(), v_max = q[0].y();
   for (int i = 1; i < nh; ++i) v_min = std::min(v_min, q[i].y()), v_max = std::max(v_max, q[i].y());
-  const int v0 = static_cast<int>(std::max(std::ceil(v_min - kEps), 0.0));
-  const int v1 = static_cast<int>(std::min(std::floor(v_max + kEps), vol->height - 1.0));
+  // Every bound is clamped in double before its conversion: a voxel a hair in front of the
+  // camera (near_m ~ 1e-10) projects to ~1e10 pixels, past int's range.
+  const int v0 = static_cast<int>(std::clamp(std::ceil(v_min - kEps), 0.0, vol->height * 1.0));
+  const int v1 = static_cast<int>(std::clamp(std::floor(v_max + kEps), -1.0, vol->height - 1.0));
   if (v0 > v1) return;
   const int width = vol->width;
   const size_t rows = static_cast<size_t>(v1 - v0 + 1);
@@ -472,8 +495,8 @@ void SplatBox(const Eigen::Vector3d& lo_m, const Eigen::Vector3d& hi_m, bool occ
     const Eigen::Vector2d& p = q[i];
     const Eigen::Vector2d& r = q[i + 1 < nh ? i + 1 : 0];
     const double y_lo = std::min(p.y(), r.y()), y_hi = std::max(p.y(), r.y());
-    const int first = std::max(v0, static_cast<int>(std::ceil(y_lo - kEps)));
-    const int last = std::min(v1, static_cast<int>(std::floor(y_hi + kEps)));
+    const int first = static_cast<int>(std::clamp(std::ceil(y_lo - kEps), v0 * 1.0, v1 + 1.0));
+    const int last = static_cast<int>(std::clamp(std::floor(y_hi + kEps), v0 - 1.0, v1 * 1.0));
     if (y_hi - y_lo <= 0) {  // horizontal edge (or a single point)
       const double x_lo = std::min(p.x(), r.x()), x_hi = std::max(p.x(), r.x());
       for (int v = first; v <= last; ++v) {
@@ -493,8 +516,8 @@ void SplatBox(const Eigen::Vector3d& lo_m, const Eigen::Vector3d& hi_m, bool occ
   for (int v = v0; v <= v1; ++v) {
     const double u_lo = lo_u[v - v0], u_hi = hi_u[v - v0];
     if (!(u_lo <= u_hi)) continue;
-    const int ua = static_cast<int>(std::max(std::ceil(u_lo - kEps), 0.0));
-    const int ub = static_cast<int>(std::min(std::floor(u_hi + kEps), width - 1.0));
+    const int ua = static_cast<int>(std::clamp(std::ceil(u_lo - kEps), 0.0, width * 1.0));
+    const int ub = static_cast<int>(std::clamp(std::floor(u_hi + kEps), -1.0, width - 1.0));
     if (ua > ub) continue;
     RowArgs args{&rays, &bins, vol,     &a,    &b, e0, eD, occupied, static_cast<size_t>(v) * width,
                  ua,    ub,    k_first, k_last};

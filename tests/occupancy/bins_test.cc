@@ -73,6 +73,23 @@ TEST(Options, ChecksRejectBadValues) {
   b = BinOptions();
   b.near_m = 0;
   EXPECT_FALSE(b.Check(&why));
+  // Edges that overflow: far / near = 1e600 in log spacing (infinite edges, written as null
+  // in JSON), a near of 5e-310 in inverse spacing (1 / near is infinite).
+  b = BinOptions();
+  b.near_m = 1e-300;
+  b.far_m = 1e300;
+  b.spacing = BinSpacing::kLog;
+  EXPECT_FALSE(b.Check(&why));
+  EXPECT_NE(why.find("the log bin edges of near_m 1e-300, far_m 1e+300 and 64 bins are not "
+                     "finite and increasing"),
+            std::string::npos)
+      << why;
+  b = BinOptions();
+  b.near_m = 5e-310;
+  b.spacing = BinSpacing::kInverse;
+  EXPECT_FALSE(b.Check(&why));
+  b.near_m = 1e-10;  // tiny, but every edge finite and increasing
+  EXPECT_TRUE(b.Check(&why)) << why;
   FusionOptions f;
   EXPECT_TRUE(f.Check(&why));
   f.voxel_m = 0;
