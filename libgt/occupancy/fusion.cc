@@ -579,17 +579,29 @@ OccupancyMap FuseOccupancy(const std::vector<FusionInput>& frames, const FusionO
     Eigen::Vector3f lo, hi;
     std::vector<Eigen::Vector3f> points = BackProjectWithBounds(in, &lo, &hi);
     st.invalid_pixels += static_cast<int64_t>(in.depth->values_m.size() - points.size());
-    // Key-range clipping: drop points whose voxel index would wrap in OctoMap.
+    // Key-range clipping: a point whose voxel index would wrap in OctoMap is, when it lies
+    // beyond max_range_m, moved along its ray to just past max_range_m (a ray beyond the
+    // range marks free space up to the range and no hit, wherever its end: the same update),
+    // and dropped otherwise (or when even that point is outside the key range).
     const size_t before = points.size();
     if (!points
              .empty()) {  // per point only when the cloud's box is not inside (floor is monotonic)
       if (!InsideKeyRange(lo.cast<double>(), inv_res) ||
-          !InsideKeyRange(hi.cast<double>(), inv_res))
-        points.erase(std::remove_if(points.begin(), points.end(),
-                                    [&](const Eigen::Vector3f& p) {
-                                      return !InsideKeyRange(p.cast<double>(), inv_res);
-                                    }),
-                     points.end());
+          !InsideKeyRange(hi.cast<double>(), inv_res)) {
+        const double past_range_m = max_range > 0 ? max_range + 0.5 * options.voxel_m : 0.0;
+        size_t kept = 0;
+        for (const Eigen::Vector3f& p : points) {
+          Eigen::Vector3d q = p.cast<double>();
+          if (!InsideKeyRange(q, inv_res)) {
+            const double dist = (q - origin).norm();
+            if (!(max_range > 0) || !(dist > past_range_m)) continue;
+            q = origin + (q - origin) * (past_range_m / dist);
+            if (!InsideKeyRange(q, inv_res)) continue;
+          }
+          points[kept++] = q.cast<float>();
+        }
+        points.resize(kept);
+      }
     }
     st.out_of_key_range += static_cast<int64_t>(before - points.size());
     if (options.downsample) {

@@ -96,11 +96,22 @@ TEST(Fusion, PointsOutsideTheKeyRangeAreDroppedNotWrapped) {
   const OccupancyMap map = FuseOccupancy({{&depth, cam, world_from_cam, 0.1, 1e5}}, opt);
   EXPECT_EQ(map.stats().pixels, 25);
   EXPECT_EQ(map.stats().invalid_pixels, 23);
-  EXPECT_EQ(map.stats().out_of_key_range, 1);
-  EXPECT_EQ(map.stats().inserted_points, 1);
+  // Beyond max_range_m, the point is moved along its ray to just past the range (it marks
+  // free space up to 10 m, as the same point inside the key range does), not dropped.
+  EXPECT_EQ(map.stats().out_of_key_range, 0);
+  EXPECT_EQ(map.stats().inserted_points, 2);
   EXPECT_NE(map.StateAt({1.025, 0.0, 0.0}), 1);  // where the wrapped hit would land
   EXPECT_EQ(map.NumOccupiedVoxels(), 1);
   EXPECT_EQ(map.StateAt({3277.825, 0.0, 0.0}), -1);  // outside: unknown, no crash
+  EXPECT_EQ(map.StateAt({5.05, 0.0, 0.0}), 0);       // on the ray, within the range: free
+  DepthImage inside = depth;
+  inside.at(2, 2) = 500.0f;  // the same ray, its end inside the key range
+  const OccupancyMap reference = FuseOccupancy({{&inside, cam, world_from_cam, 0.1, 1e5}}, opt);
+  EXPECT_EQ(reference.stats().out_of_key_range, 0);
+  for (double x = 0.05; x < 12.0; x += 0.1) {
+    EXPECT_EQ(map.StateAt({x, 0.0, 0.0}), reference.StateAt({x, 0.0, 0.0})) << x;
+  }
+  EXPECT_EQ(map.NumOccupiedVoxels(), reference.NumOccupiedVoxels());
 
   // With an unlimited range the same frame could reach 1e5 m: refused before any work.
   opt.max_range_m = -1;
