@@ -1027,6 +1027,20 @@ Scene ReadRecipeScene(const Recipe& recipe, const datasets::DatasetReader& reade
                       const std::string& name) {
   Scene scene = reader.ReadScene(recipe.dataset.root, name);
   ApplyMeshPath(recipe.dataset.mesh_path, &scene);
+  // Depth from the mesh needs the mesh: without it every frame would fail to read, and the
+  // scene's selection would be saved empty (kept by a re-run after the recipe is fixed).
+  if (recipe.dataset.depth_source != render::DepthSourceMode::kSensor) {
+    const std::string source = render::DepthSourceModeName(recipe.dataset.depth_source);
+    if (scene.mesh_path.empty()) {
+      throw InputError(scene.name, "dataset.depth_source " + source +
+                                       " needs the scene's mesh, and it has none (set "
+                                       "dataset.mesh_path, or use --depth-source sensor)");
+    }
+    if (!io::FileExists(scene.mesh_path)) {
+      throw InputError(scene.mesh_path, "not found: the mesh of scene " + scene.name +
+                                            " (dataset.depth_source " + source + ")");
+    }
+  }
   return scene;
 }
 

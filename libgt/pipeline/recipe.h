@@ -172,7 +172,8 @@ render::FrameDepthOptions RecipeFrameDepthOptions(const Recipe& recipe);
 // The reader of the recipe's dataset: its format, with dataset.device for ScanNet++.
 std::unique_ptr<datasets::DatasetReader> MakeRecipeReader(const Recipe& recipe);
 // A scene read by `reader` with dataset.mesh_path applied (Scene::mesh_path, "{scene}"
-// replaced by its name).
+// replaced by its name). With dataset.depth_source mesh or fused, a scene without a mesh
+// file is an InputError naming it (not every frame a read error).
 Scene ReadRecipeScene(const Recipe& recipe, const datasets::DatasetReader& reader,
                       const std::string& name);
 // Scene::mesh_path from a dataset.mesh_path / --mesh value ("" keeps the reader's).
