@@ -126,17 +126,26 @@ std::map<std::string, SceneSelection> SelectStage(const Recipe& recipe,
   return selections;
 }
 
-// Whether every export the recipe asks for is in out_dir: gluefactory/ and dust3r/ by their
-// export.json, loftr/ as a folder that is not empty (its files depend on the kind).
+// Whether every export the recipe asks for is in out_dir, by its top files: gluefactory/
+// and dust3r/ by their export.json, loftr/ by intrinsics.npz and scenes.txt (kinds train and
+// test) and test.npz (kind test), or as a folder that is not empty (kind megadepth). A file
+// deeper in an export is restored by deleting the export's folder.
 bool RequestedExportsPresent(const Recipe& recipe, const std::string& out_dir) {
   if (recipe.gluefactory_export && !io::FileExists(out_dir + "/gluefactory/export.json")) {
     return false;
   }
   if (recipe.dust3r_export && !io::FileExists(out_dir + "/dust3r/export.json")) return false;
-  if (recipe.loftr_export != LoftrExportKind::kNone) {
+  if (recipe.loftr_export == LoftrExportKind::kMegaDepth) {
     std::error_code ec;
-    if (!std::filesystem::is_directory(out_dir + "/loftr", ec) ||
-        std::filesystem::is_empty(out_dir + "/loftr", ec)) {
+    return std::filesystem::is_directory(out_dir + "/loftr", ec) &&
+           !std::filesystem::is_empty(out_dir + "/loftr", ec);
+  }
+  if (recipe.loftr_export != LoftrExportKind::kNone) {
+    for (const char* file : {"/loftr/intrinsics.npz", "/loftr/scenes.txt"}) {
+      if (!io::FileExists(out_dir + file)) return false;
+    }
+    if (recipe.loftr_export == LoftrExportKind::kTest &&
+        !io::FileExists(out_dir + "/loftr/test.npz")) {
       return false;
     }
   }
@@ -340,9 +349,10 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
   summary["complete"] = complete;
   std::optional<io::FolderLock> lock;
   if (complete) lock.emplace(options.out_dir);
-  // An export folder deleted since is written again.
+  // An index or export deleted since is written again.
   const bool current = written.shards_written == 0 &&
                        io::FileExists(options.out_dir + "/index.json") &&
+                       io::FileExists(options.out_dir + "/pairs.jsonl") &&
                        io::FileExists(options.out_dir + "/summary.json") &&
                        RequestedExportsPresent(recipe, options.out_dir);
   if (complete && !current) {

@@ -228,6 +228,14 @@ def main():
     common.occgt("build", recipe, "--out", out)
     for f, data in exported.items():
         assert file_bytes(out, f) == data, f"{f} not restored as it was"
+    # So are a deleted pairs.jsonl and a deleted top file of the LoFTR export (they stayed
+    # missing while the re-run printed "nothing to write").
+    published = {f: file_bytes(out, f) for f in ("pairs.jsonl", "loftr/test.npz",
+                                                 "loftr/intrinsics.npz")}
+    for f in published:
+        os.remove(os.path.join(out, f))
+        common.occgt("build", recipe, "--out", out)
+        assert file_bytes(out, f) == published[f], f"{f} not restored as it was"
 
     # LoFTR train export (ScanNet style) of the same recipe: names and overlap scores.
     with open(recipe) as f:
