@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <iomanip>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -287,6 +288,18 @@ std::vector<TimedPose> ParseTimedPoses(std::string_view text, const std::string&
   }
   std::stable_sort(out.begin(), out.end(),
                    [](const TimedPose& a, const TimedPose& b) { return a.t < b.t; });
+  // One timestamp, two poses: which one is meant cannot be told (the first was taken).
+  for (size_t i = 1; i < out.size(); ++i) {
+    const TimedPose& a = out[i - 1];
+    const TimedPose& b = out[i];
+    if (a.t == b.t && (a.translation != b.translation || a.q_xyzw != b.q_xyzw)) {
+      const int first = std::min(a.line_no, b.line_no), second = std::max(a.line_no, b.line_no);
+      std::ostringstream m;
+      m << std::setprecision(17) << "timestamp " << a.t << " repeats line " << first
+        << " with another pose (expected one pose per timestamp)";
+      throw InputError(LineWhere(name, second), m.str());
+    }
+  }
   return out;
 }
 

@@ -30,11 +30,25 @@ struct FramePath {
   double t = 0;
   std::string path;
 };
+// "" or, for a file with no entry that holds carriage returns and no line feed, a hint.
+std::string LineEndingHint(const std::string& text) {
+  return text.find('\r') != std::string::npos && text.find('\n') == std::string::npos
+             ? "; its lines end in CR alone, read as one comment line: convert them to LF"
+             : "";
+}
+
+// The entries of folder/name; a file with none is an InputError naming it (`what`: the
+// entries' layout).
 std::vector<FramePath> ReadTimedPaths(const std::string& folder, const std::string& name) {
   const std::string path = (fs::path(folder) / name).string();
+  const std::string text = io::ReadFileBytes(path);
   std::vector<FramePath> out;
-  for (const TimedPath& e : ParseTimedPathList(io::ReadFileBytes(path), path)) {
+  for (const TimedPath& e : ParseTimedPathList(text, path)) {
     out.push_back({e.t, (fs::path(folder) / e.file).string()});
+  }
+  if (out.empty()) {
+    throw InputError(path,
+                     "no entries (expected 'timestamp filename' lines)" + LineEndingHint(text));
   }
   return out;
 }
@@ -127,14 +141,16 @@ Scene TumReader::ReadScene(const std::string& root, const std::string& scene_nam
   Scene scene = NewFolderScene(folder, scene_name, Format(), 0.1, 10.0);
 
   const std::vector<FramePath> depths = ReadTimedPaths(folder, "depth.txt");
-  if (depths.empty()) {
-    throw InputError((fs::path(folder) / "depth.txt").string(), "empty scene: no depth entries");
-  }
   const std::vector<FramePath> rgbs = io::FileExists((fs::path(folder) / "rgb.txt").string())
                                           ? ReadTimedPaths(folder, "rgb.txt")
                                           : std::vector<FramePath>{};
   const std::string gt_path = (fs::path(folder) / "groundtruth.txt").string();
-  const std::vector<TimedPose> poses = ParseTimedPoses(io::ReadFileBytes(gt_path), gt_path);
+  const std::string gt_text = io::ReadFileBytes(gt_path);
+  const std::vector<TimedPose> poses = ParseTimedPoses(gt_text, gt_path);
+  if (poses.empty()) {
+    throw InputError(gt_path, "no pose entries (expected 'timestamp tx ty tz qx qy qz qw' lines)" +
+                                  LineEndingHint(gt_text));
+  }
   const Camera camera = TumIntrinsicsOf(FolderName(folder)).camera;
 
   std::ostringstream no_gt;

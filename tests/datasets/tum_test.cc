@@ -223,9 +223,55 @@ TEST(Tum, BadFilesNameFileAndLine) {
       FAIL();
     } catch (const InputError& e) {
       EXPECT_EQ(e.where(), root + "/depth.txt");
-      EXPECT_NE(std::string(e.what()).find("empty scene"), std::string::npos);
+      EXPECT_NE(std::string(e.what()).find("no entries (expected 'timestamp filename' lines)"),
+                std::string::npos);
     }
   }
+}
+
+std::string ErrorOfScene(const std::string& root) {
+  try {
+    MakeReader(gt::DatasetFormat::kTum)->ReadScene(root, "");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// A groundtruth.txt or rgb.txt without an entry is named (every frame was "no groundtruth
+// within 0.02s", or had no colour, without the file named); with CR-only line endings (the
+// whole file one comment line), the message says so.
+TEST(Tum, ListsWithoutEntriesAreNamed) {
+  const std::string root = MakeSequence("tum_no_entries");
+  WriteFileAtomic(root + "/groundtruth.txt",
+                  "# timestamp tx ty tz qx qy qz qw\r10.0 1 0 0 0 0 0 1\r");
+  EXPECT_EQ(ErrorOfScene(root),
+            root +
+                "/groundtruth.txt: no pose entries (expected 'timestamp tx ty tz qx qy qz qw' "
+                "lines); its lines end in CR alone, read as one comment line: convert them "
+                "to LF");
+  WriteFileAtomic(root + "/groundtruth.txt", "# nothing yet\n");
+  EXPECT_EQ(ErrorOfScene(root), root +
+                                    "/groundtruth.txt: no pose entries (expected 'timestamp "
+                                    "tx ty tz qx qy qz qw' lines)");
+  WriteFileAtomic(root + "/groundtruth.txt", "10.0 1 0 0 0 0 0 1\n");
+  WriteFileAtomic(root + "/rgb.txt", "# colour\n");
+  EXPECT_EQ(ErrorOfScene(root),
+            root + "/rgb.txt: no entries (expected 'timestamp filename' lines)");
+}
+
+// One timestamp with two different poses is refused, naming both lines (the first was
+// taken silently); the same pose twice is accepted.
+TEST(Tum, RepeatedTimestampWithAnotherPoseIsRefused) {
+  const std::string root = MakeSequence("tum_repeated_t");
+  WriteFileAtomic(root + "/groundtruth.txt",
+                  "# t\n10.0 1 0 0 0 0 0 1\n10.1 2 0 0 0 0 0 1\n10.0 1 0 0 0 0 0 1\n");
+  EXPECT_EQ(ErrorOfScene(root), "");
+  WriteFileAtomic(root + "/groundtruth.txt",
+                  "# t\n10.0 1 0 0 0 0 0 1\n10.1 2 0 0 0 0 0 1\n10.0 9 9 9 0 0 0 1\n");
+  EXPECT_EQ(ErrorOfScene(root), root +
+                                    "/groundtruth.txt:4: timestamp 10 repeats line 2 with "
+                                    "another pose (expected one pose per timestamp)");
 }
 
 }  // namespace
