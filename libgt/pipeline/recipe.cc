@@ -483,6 +483,9 @@ bool CheckOccupancy(const truth::PairTruthOptions& t, bool max_range_given, std:
     return *error = "occupancy.max_range_m: expected a finite number (<= 0: unlimited)", false;
   std::string why;
   if (!t.fusion.Check(&why)) return *error = "occupancy: " + why, false;
+  if (!t.occupancy) return true;
+  if (!t.bins.Check(&why)) return *error = "occupancy: " + why, false;
+  if (why = truth::ModeScopeProblem(t); !why.empty()) return *error = "occupancy: " + why, false;
   return true;
 }
 

@@ -16,7 +16,21 @@ bool PairTruthOptions::Check(std::string* error) const {
   if (!occupancy) return true;
   if (!fusion.Check(error)) return *error = "occupancy: " + *error, false;
   if (!bins.Check(error)) return *error = "occupancy: " + *error, false;
+  if (std::string why = ModeScopeProblem(*this); !why.empty()) {
+    return *error = "occupancy: " + why, false;
+  }
   return true;
+}
+
+std::string ModeScopeProblem(const PairTruthOptions& options) {
+  // two_point fuses nothing: a scope of more frames would be recorded and not applied.
+  if (options.mode == occupancy::OccupancyMode::kTwoPoint &&
+      options.fusion.scope != occupancy::FusionScope::kPair) {
+    return "scope " + occupancy::FusionScopeName(options.fusion) +
+           " fuses frames for mode octomap only (mode two_point uses the pair's depth alone): "
+           "use scope pair";
+  }
+  return "";
 }
 
 occupancy::FusionInput FusionInputOf(const WorkingFrame& frame, const LabelOptions& labels) {

@@ -39,6 +39,11 @@ struct PairTruthOptions {
   bool Check(std::string* error) const;
 };
 
+// "" or why options.mode cannot use options.fusion.scope (two_point fuses nothing, so a
+// window or scene scope would be recorded and not applied); part of Check, and of a
+// recipe's check for occupancy that is enabled.
+std::string ModeScopeProblem(const PairTruthOptions& options);
+
 struct PairTruth {
   PairLabels labels;  // l01/l10, m01/m10, patches, cam1_from_cam0 (when labels_and_matches)
   std::optional<occupancy::PairOccupancy> occupancy;  // when options.occupancy

@@ -108,6 +108,17 @@ def main():
                         r"origin .* with max_range_m 10 needs \+-.* m: use voxel_m >= \S+\n",
                         r.stderr), r.stderr
     assert os.listdir(out5) == []
+    # The fusion's flags with --mode two_point, which fuses nothing: refused (they were
+    # recorded in occupancy.json and not applied).
+    for flag in (["--scope", "window:1"], ["--voxel-m", "0.1"], ["--max-range-m", "5"],
+                 ["--traversal", "center"], ["--downsample"], ["--remove-outliers"]):
+        r = common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
+                         "--frames", "000000,000020", "--out", out5, "--mode", "two_point",
+                         *flag, check=False)
+        assert r.returncode == 2, (flag, r.returncode, r.stderr)
+        assert r.stderr == (f"occgt: error: {flag[0]}: used by --mode octomap only (two_point "
+                            "fuses nothing)\n"), r.stderr
+        assert os.listdir(out5) == []
     print("occupancy integration: ok")
 
 

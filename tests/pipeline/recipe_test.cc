@@ -241,6 +241,14 @@ TEST(Recipe, KeysThatWouldBeIgnoredAreRefused) {
       LoftrExportKind::kTest);
 }
 
+// two_point fuses nothing: a wider scope would be recorded in recipe.json and not applied.
+TEST(Recipe, TwoPointWithAWiderScopeIsRefused) {
+  EXPECT_EQ(ErrorOf("name: a\ndataset: {format: generic, root: x}\n"
+                    "occupancy: {enabled: true, mode: two_point, scope: window}\n"),
+            "recipes/x.yaml: occupancy: scope window:2 fuses frames for mode octomap only (mode "
+            "two_point uses the pair's depth alone): use scope pair");
+}
+
 TEST(Recipe, MissingDatasetAndFormat) {
   EXPECT_EQ(ErrorOf("name: a\n"), "recipes/x.yaml: dataset: missing (required)");
   EXPECT_EQ(ErrorOf("name: a\ndataset: {root: x}\n"),

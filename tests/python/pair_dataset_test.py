@@ -438,7 +438,10 @@ class Indices(unittest.TestCase):
                 ({"images": 1}, TypeError, r"^images: expected a bool, got int$"),
                 ({"image_format": "jpeg"}, ValueError,
                  r"^image_format: expected 'png' or 'jpg', got 'jpeg'$"),
-                ({"bins": "16"}, TypeError, r"^bins: expected an int, got str$")]:
+                ({"bins": "16"}, TypeError, r"^bins: expected an int, got str$"),
+                # two_point fuses nothing: a wider scope failed at the first item.
+                ({"scope": "window:2", "occupancy_mode": "two_point"}, ValueError,
+                 r"^scope: 'window:2' fuses frames for occupancy_mode 'octomap' only")]:
             with self.subTest(kwargs=kwargs), self.assertRaisesRegex(error, pattern):
                 PairIndexDataset(split, data, "generic", width=80, height=60,
                                  occupancy="words", **kwargs)

@@ -234,6 +234,12 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         # them (a misspelt or unknown option, a bad preset or value).
         check_resolution(width, height)
         resolved = occgt.pair_options(preset, occupancy=occupancy is not None, **options)
+        occupancy_resolved = resolved["occupancy_options"]
+        if (scope != "pair" and occupancy_resolved is not None
+                and occupancy_resolved["mode"] != "octomap"):
+            raise ValueError(f"scope: {scope!r} fuses frames for occupancy_mode 'octomap' only "
+                             f"(mode {occupancy_resolved['mode']!r} uses the pair's depth "
+                             "alone): use scope='pair'")
         self.root, self.format, self.device = root, format, device
         self.width, self.height = operator.index(width), operator.index(height)
         self.preset, self.images, self.occupancy = preset, bool(images), occupancy
