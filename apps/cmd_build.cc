@@ -179,7 +179,7 @@ std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
         complete < num("scenes") ? std::to_string(complete) + " of " + scenes + " so far" : scenes;
     text += name + ": selected " + pairs + " in " + in + " (" +
             gt::Counted(num("scenes_selected_this_run"), "scene") +
-            " this run); nothing written yet: run --stage write" +
+            " this run); the select stage writes no shard: run --stage write" +
             (complete < num("scenes") ? " once every task has selected" : "") + took;
   } else {
     const int64_t written = num("samples_written_this_run");

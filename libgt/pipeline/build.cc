@@ -30,8 +30,9 @@ double Seconds(Clock::time_point since) {
 }
 
 // One recipe (options digest) per output folder: recipe.json is written once and a recipe
-// of another digest is refused.
-void ClaimOutputFolder(const Recipe& recipe, const BuildOptions& options) {
+// of another digest is refused. Returns false for the folder of another recipe, which only
+// a dry run may look at (its selections are then not read).
+bool ClaimOutputFolder(const Recipe& recipe, const BuildOptions& options) {
   const std::string path = options.out_dir + "/recipe.json";
   if (io::FileExists(path)) {
     json existing;
@@ -40,18 +41,22 @@ void ClaimOutputFolder(const Recipe& recipe, const BuildOptions& options) {
     } catch (const json::exception&) {
       throw InputError(path, "not valid JSON");
     }
-    if (existing.value("options_digest", "") != recipe.Digest()) {
+    // A dry run writes nothing: it may preview another recipe against the folder (its
+    // selections, of the other digest, are not reused).
+    if (existing.value("options_digest", "") != recipe.Digest() && !options.dry_run) {
       throw InputError("--out " + options.out_dir,
                        "holds outputs of another recipe (options digest " +
-                           existing.value("options_digest", "?") + "); use a fresh folder");
+                           existing.value("options_digest", "?") + ", this recipe's " +
+                           recipe.Digest() + "); use a fresh folder (--dry-run previews it here)");
     }
-    return;
+    return existing.value("options_digest", "") == recipe.Digest();
   }
-  if (options.dry_run) return;
+  if (options.dry_run) return true;
   json normalised = recipe.ToJson();
   normalised["options_digest"] = recipe.Digest();
   io::FolderLock lock(options.out_dir);
   if (!io::FileExists(path)) io::WriteFileAtomic(path, normalised.dump(2) + "\n");
+  return true;
 }
 
 // Synthetic datasets are generated into DIR/data when missing; the recipe then reads them
@@ -76,8 +81,8 @@ std::map<std::string, SceneSelection> SelectStage(const Recipe& recipe,
                                                   const datasets::DatasetReader& reader,
                                                   const std::vector<std::string>& scenes,
                                                   const BuildOptions& options,
-                                                  const ProgressFn& progress, json* summary,
-                                                  bool* complete) {
+                                                  const ProgressFn& progress, bool own_folder,
+                                                  json* summary, bool* complete) {
   std::unique_ptr<ImportList> imports;
   if (!recipe.selection.import_pairs.path.empty()) {
     imports = std::make_unique<ImportList>(
@@ -93,7 +98,9 @@ std::map<std::string, SceneSelection> SelectStage(const Recipe& recipe,
     }
     int64_t done = 0;
     for (const std::string& name : mine) {
-      if (auto s = ReadSelection(options.out_dir, name, recipe.Digest())) {
+      std::optional<SceneSelection> stored;
+      if (own_folder) stored = ReadSelection(options.out_dir, name, recipe.Digest());
+      if (auto& s = stored) {
         selections[name] = std::move(*s);
         ++reused;
       } else {
@@ -117,6 +124,10 @@ std::map<std::string, SceneSelection> SelectStage(const Recipe& recipe,
   *complete = true;
   for (const std::string& scene : scenes) {
     if (selections.count(scene)) continue;
+    if (!own_folder) {
+      *complete = false;
+      continue;
+    }
     if (auto s = ReadSelection(options.out_dir, scene, recipe.Digest())) {
       selections[scene] = std::move(*s);
     } else {
@@ -291,7 +302,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
                   {"stage", StageName(options.stage)},
                   {"dry_run", options.dry_run},
                   {"timings", json::object()}};
-  ClaimOutputFolder(recipe_in, options);
+  const bool own_folder = ClaimOutputFolder(recipe_in, options);
   // One process per task and folder: a second `occgt build` of the same task into the same
   // --out (a re-run started while the first still runs) would rename the first's temporary
   // files. Tasks of one array job hold different locks and run together.
@@ -307,7 +318,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
 
   bool all_selected = false;
   const std::map<std::string, SceneSelection> selections =
-      SelectStage(recipe, *reader, scenes, options, progress, &summary, &all_selected);
+      SelectStage(recipe, *reader, scenes, options, progress, own_folder, &summary, &all_selected);
   std::vector<const SelectedPair*> all;  // the global sample order
   for (const std::string& scene : scenes) {
     auto it = selections.find(scene);

@@ -310,8 +310,9 @@ def main():
     out_d = os.path.join(root, "d")
     r = common.occgt("build", recipe, "--out", out_d, "--tasks", "2", "--task", "0", "--stage", "select")
     # The text counts the scenes selected so far, not every scene of the split.
-    assert re.search(r": selected \d+ pairs? in 1 of 2 scenes so far \(1 scene this run\); nothing "
-                     r"written yet: run --stage write once every task has selected", r.stdout), r.stdout
+    assert re.search(r": selected \d+ pairs? in 1 of 2 scenes so far \(1 scene this run\); the "
+                     r"select stage writes no shard: run --stage write once every task has "
+                     r"selected", r.stdout), r.stdout
     r = common.occgt("build", "--json", recipe, "--out", out_d, "--stage", "write", check=False)
     assert r.returncode == 1 and "not complete" in r.stderr, r.stderr
 
@@ -350,6 +351,16 @@ def main():
     r = common.occgt("build", none_recipe, "--out", out_n)
     assert "no pair passed the selection" in r.stdout, r.stdout
     common.occgt("validate", out_n)
+    # Another recipe into a built folder is refused, naming both digests; a dry run of it
+    # there previews it (it was refused too) and changes nothing.
+    before = {f: file_bytes(out, f) for f in ("recipe.json", "index.json", "summary.json")}
+    r = common.occgt("build", none_recipe, "--out", out, check=False)
+    assert r.returncode == 2 and "holds outputs of another recipe" in r.stderr and \
+        "this recipe's" in r.stderr and "--dry-run previews it here" in r.stderr, r.stderr
+    s = json.loads(common.occgt("build", "--json", none_recipe, "--out", out,
+                                "--dry-run").stdout)
+    assert s["dry_run"] and s["samples"] == 0 and s["scenes_reused"] == 0, s
+    assert {f: file_bytes(out, f) for f in before} == before
     # A mesh depth source on scenes without a mesh: one line naming the scene, exit 1, no
     # selection saved (it published an empty split, exit 0, every frame a scan.read_error,
     # and kept that selection when the recipe was fixed and run again).
