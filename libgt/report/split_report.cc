@@ -591,8 +591,11 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
   const Stats so = Describe(ov), sc = Describe(oc), sv = Describe(vis);
   const Stats si = Describe(inconsistent), su = Describe(unknown);
   const Stats sso = Describe(score_ov), ssc = Describe(score_oc);
-  const std::string grid =
-      " (score grid, score_stride " + std::to_string(split.score_stride) + "; as summary.json)";
+  // summary.json's selected_overlap / selected_occlusion are these with the recipe's
+  // aggregate and occlusion metric: the row says which ones it used.
+  const std::string grid = " (score grid, score_stride " + std::to_string(split.score_stride) +
+                           "; " + AggregateName(options.aggregate) + ", occlusion " +
+                           OcclusionMetricName(options.occlusion_metric) + ")";
   const std::string overlap_score = "overlap" + grid, occlusion_score = "occlusion ratio" + grid;
   if (split.has_pairs) {
     h << "<table><tr><th>selected pairs (every pixel unless said)</th><th>min</th><th>median</th>"
