@@ -209,6 +209,14 @@ PairData PairFromFields(const std::map<std::string, std::string>& fields, const 
     }
     return p;
   }
+  // A split of sample.labels: false keeps the matches without the label maps: say so (it
+  // read as a damaged sample, "missing field label01.npy").
+  if (!fields.count("label01.npy") && !fields.count("label10.npy") && fields.count("matches.npy")) {
+    throw InputError(source,
+                     "holds no label maps (label01.npy, label10.npy): a split built with "
+                     "sample.labels: false; the pictures need them: compute the pair with "
+                     "occgt pair --recipe (its recipe.json's options)");
+  }
   p.labels01 = LabelsFrom(NeedArray(fields, "label01.npy", source, "|u1", 2), source);
   p.labels10 = LabelsFrom(NeedArray(fields, "label10.npy", source, "|u1", 2), source);
   p.width = p.labels01.width;

@@ -423,6 +423,23 @@ def main():
     check(r.returncode == 2 and "--scene/--frames" in r.stderr,
           f"--recipe without frames: exit {r.returncode}, {r.stderr!r}")
 
+    # --- a sample of a split built with sample.labels: false (its matches without the label
+    # maps): one line saying so, not "missing field label01.npy" as for a damaged sample.
+    first_tar = sorted(glob.glob(os.path.join(build, "*.tar")))[0]
+    nolabels = os.path.join(tmp, "nolabels.tar")
+    with tarfile.open(first_tar) as src, tarfile.open(nolabels, "w") as dst:
+        first_key = None
+        for m in src.getmembers():
+            key = m.name.split(".", 1)[0]
+            first_key = first_key or key
+            if key == first_key and ".label0" not in m.name and ".label1" not in m.name:
+                dst.addfile(m, src.extractfile(m))
+    r = common.occgt("inspect", "pair", "--shard", nolabels, "--key", first_key, "--out",
+                     os.path.join(tmp, "nolabels_pictures"), check=False)
+    check(r.returncode == 1 and r.stderr.count("\n") == 1 and
+          "holds no label maps (label01.npy, label10.npy): a split built with sample.labels: "
+          "false" in r.stderr, f"labels: false sample: exit {r.returncode}, {r.stderr!r}")
+
     # --- split written by the test: no pairs at all, and a malformed line.
     empty = os.path.join(tmp, "empty_split")
     os.makedirs(empty)
