@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <filesystem>
 
 #include "gt/core/version.h"
 #include "libgt/io/atomic_file.h"
@@ -191,6 +192,13 @@ void WriteOccupancyFolder(const std::string& dir, const PairSource& source,
     io::WriteNpy<uint8_t>(dir + "/occ1_dense.npy", {d, gh, gw}, DenseVolume(volumes.cam1));
     files.push_back("occ0_dense.npy");
     files.push_back("occ1_dense.npy");
+  } else {
+    // A folder written before with the dense volumes: theirs are now stale (of other bins
+    // or frames), and occupancy.json no longer lists them.
+    for (const char* stale : {"/occ0_dense.npy", "/occ1_dense.npy"}) {
+      std::error_code ec;
+      std::filesystem::remove(dir + stale, ec);
+    }
   }
   const occupancy::BinOptions& bo = options.bins;
   const occupancy::FusionOptions& fo = options.fusion;

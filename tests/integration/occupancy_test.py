@@ -68,6 +68,12 @@ def main():
                  "occ1_dense.npy"]:
         assert open(os.path.join(out, name), "rb").read() == \
             open(os.path.join(out2, name), "rb").read(), name
+    # A re-run into that folder without --dense leaves no stale dense volume beside its
+    # words (they stayed, of the earlier bins).
+    common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
+                 "--frames", "000000,000020", "--out", out2, "--bins", "8")
+    assert sorted(os.listdir(out2)) == ["known0.npy", "known1.npy", "occ0.npy", "occ1.npy",
+                                        "occupancy.json"], sorted(os.listdir(out2))
 
     # two_point and a window scope with other bin options also validate.
     out3 = common.scratch("occupancy_two_point")
