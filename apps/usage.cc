@@ -103,6 +103,20 @@ void ThrowOptionsError(const std::string& error, const std::string& what,
         (body.size() == field.size() || body[field.size()] == ' ' || body[field.size()] == ':');
     if (leads && f.given) throw gt::InputError(f.flag, body);
   }
+  // A value that conflicts with one the user did not give (--min-depth-m 50 above the
+  // dataset's max_depth_m 20): named after the given flag the message mentions.
+  for (const FieldFlag& f : fields) {
+    const std::string field = f.field;
+    for (size_t at = body.find(field); at != std::string::npos; at = body.find(field, at + 1)) {
+      const size_t end = at + field.size();
+      const bool word =
+          (at == 0 ||
+           !(std::isalnum(static_cast<unsigned char>(body[at - 1])) || body[at - 1] == '_')) &&
+          (end == body.size() ||
+           !(std::isalnum(static_cast<unsigned char>(body[end])) || body[end] == '_'));
+      if (word && f.given) throw gt::InputError(f.flag, body);
+    }
+  }
   throw gt::InputError(what, error);
 }
 

@@ -114,6 +114,15 @@ def main():
                         r"origin .* with max_range_m 10 needs \+-.* m: use voxel_m >= \S+\n",
                         r.stderr), r.stderr
     assert os.listdir(out5) == []
+    # A --min-depth-m above the dataset's max depth: named after that flag, exit 2 (it was
+    # "occupancy options: ...", exit 1, naming no flag).
+    for cmd in ("occupancy", "pair"):
+        r = common.occgt(cmd, "--root", root, "--format", "tartanair", "--scene", "",
+                         "--frames", "000000,000020", "--out", out5, "--min-depth-m", "5000",
+                         check=False)
+        assert r.returncode == 2 and r.stderr.startswith(
+            "occgt: error: --min-depth-m: max_depth_m must be > min_depth_m (5000)"), r.stderr
+        assert os.listdir(out5) == []
     # The fusion's flags with --mode two_point, which fuses nothing: refused (they were
     # recorded in occupancy.json and not applied).
     for flag in (["--scope", "window:1"], ["--voxel-m", "0.1"], ["--max-range-m", "5"],
