@@ -268,6 +268,8 @@ std::unique_ptr<io::FileLock> AcquireTaskLock(const std::string& out_dir,
   return lock;
 }
 
+double DeflatedDepthShare(const Recipe& recipe) { return recipe.dataset.is_synthetic ? 0.8 : 0.2; }
+
 int64_t EstimatedSampleBytes(const Recipe& r) {
   const bool deflate = r.sample.compression == SampleCompression::kDeflate;
   const double sparse = deflate ? 0.06 : 1.0;  // labels, cells, occupancy: long runs
@@ -286,7 +288,7 @@ int64_t EstimatedSampleBytes(const Recipe& r) {
   }
   if (r.sample.image == ImageFormat::kPng) bytes += 2 * 2 * px;
   if (r.sample.image == ImageFormat::kJpg) bytes += 2 * px * 3 / 10;
-  if (r.sample.depth) bytes += (deflate ? 0.2 : 1.0) * 2 * 4 * px;
+  if (r.sample.depth) bytes += (deflate ? DeflatedDepthShare(r) : 1.0) * 2 * 4 * px;
   return static_cast<int64_t>(std::ceil(bytes));
 }
 

@@ -260,8 +260,8 @@ int64_t EstimatedViewsSampleBytes(const Recipe& r, int views) {
   const double sparse = deflate ? 0.06 : 1.0;
   const double px = static_cast<double>(r.width) * r.height;
   const double tracks = r.tuples ? r.tuple_tracks.num_tracks : 0;
-  double per_view =
-      (deflate ? 0.2 : 1.0) * 4 * px + sparse * 9 * px + (deflate ? 0.9 : 1.0) * 13 * tracks;
+  double per_view = (deflate ? DeflatedDepthShare(r) : 1.0) * 4 * px + sparse * 9 * px +
+                    (deflate ? 0.9 : 1.0) * 13 * tracks;
   if (r.sample.image == ImageFormat::kPng) per_view += 2 * px;
   if (r.sample.image == ImageFormat::kJpg) per_view += px * 3 / 10;
   return static_cast<int64_t>(std::ceil(4096 + 8 * tracks + views * per_view));
