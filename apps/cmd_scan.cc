@@ -288,7 +288,8 @@ void AddScanCommand(CLI::App& app) {
   cmd->add_option("--scene", args->scene, "Only this scene (a name listed by scan)");
   cmd->add_flag("--json", args->json, "Print one JSON document (schemas/scan.schema.json)");
   cmd->add_flag("--check-depth", args->scan.check_depth,
-                "Read every depth file: size check and valid fraction");
+                "Read every depth file (size check and valid fraction) and every colour "
+                "file's header");
   cmd->add_option("--tum-max-dt", args->reader.tum_max_dt_s,
                   "TUM: max time difference for pose/colour association (s)")
       ->capture_default_str();

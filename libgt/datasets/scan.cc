@@ -8,6 +8,7 @@
 #include "libgt/io/codec.h"
 #include "libgt/io/depth_io.h"
 #include "libgt/io/file_read.h"
+#include "libgt/io/image.h"
 
 namespace gt::datasets {
 
@@ -135,6 +136,8 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
   bool have_color_camera = false;
   s.depth_checked = options.check_depth;
   double fraction_sum = 0.0;
+  size_t bad_colors = 0;  // with check_depth: colour files whose header cannot be read
+  std::string first_bad_color;
   const auto count_unusable = [&](const Frame& f, const std::string& reason,
                                   const std::string& detail) {
     if (static_cast<int>(s.unusable_reasons[reason]++) < options.max_examples_listed) {
@@ -173,7 +176,18 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
     ++s.usable;
     s.usable_ids.insert(f.id);
     if (f.color_path.empty() && first_without_color == nullptr) first_without_color = &f;
-    if (!f.color_path.empty()) {
+    // With check_depth, the colour file's header too (what a build storing images reads at
+    // its scan: a frame failing it is skipped there, scan.color_error).
+    bool color_ok = !f.color_path.empty();
+    if (color_ok && options.check_depth) {
+      try {
+        io::CheckFrameColorHeader(f);
+      } catch (const InputError& e) {
+        color_ok = false;
+        if (bad_colors++ == 0) first_bad_color = "frame " + f.id + ": " + e.what();
+      }
+    }
+    if (color_ok) {
       ++s.usable_with_color;
       if (!have_color_camera) {
         s.color_camera = f.color_camera;
@@ -184,15 +198,22 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
     }
   }
   if (s.depth_files_read > 0) s.mean_valid_fraction = fraction_sum / s.depth_files_read;
+  if (bad_colors > 0) {
+    s.warnings.push_back(std::to_string(bad_colors) +
+                         " usable frame(s) have a colour file whose header cannot be read "
+                         "(first: " +
+                         first_bad_color +
+                         "): a build that stores images skips them (drop scan.color_error)");
+  }
   if (s.usable > 0 && s.usable_with_color == 0) {
     s.warnings.emplace_back(
         "no usable frame has a colour image: a build that stores images "
         "stops (set sample.image: none)");
-  } else if (s.usable_with_color < s.usable) {
+  } else if (first_without_color != nullptr) {
     s.warnings.emplace_back(
-        std::to_string(s.usable - s.usable_with_color) + " of " + std::to_string(s.usable) +
-        " usable frames have no colour image (first: frame " + first_without_color->id +
-        "): a build that stores images skips them (drop scan.no_color)");
+        std::to_string(s.usable - s.usable_with_color - bad_colors) + " of " +
+        std::to_string(s.usable) + " usable frames have no colour image (first: frame " +
+        first_without_color->id + "): a build that stores images skips them (drop scan.no_color)");
   }
   return s;
 }

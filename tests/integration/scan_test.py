@@ -108,6 +108,32 @@ assert doc["scenes"][0]["unusable_examples"] == {
         {"frame": n, "detail": os.path.join(lost, "pose", n + ".txt") + ":1: non-finite value"}
         for n in ("7", "12")]}, doc["scenes"][0]["unusable_examples"]
 
+# --check-depth also reads each usable frame's colour header: a colour file that is not an
+# image is counted in a warning (it passed as colour, and a build storing images then
+# dropped the frame as scan.color_error); the frame stays usable (a build without images
+# can use it).
+src = common.shared("tartanair/hospital_sample")
+bad_color = os.path.join(common.scratch("scan_bad_color"), "P000")
+os.makedirs(os.path.join(bad_color, "image_left"))
+os.symlink(os.path.join(src, "depth_left"), os.path.join(bad_color, "depth_left"))
+os.symlink(os.path.join(src, "pose_left.txt"), os.path.join(bad_color, "pose_left.txt"))
+for name in sorted(os.listdir(os.path.join(src, "image_left"))):
+    os.symlink(os.path.join(src, "image_left", name), os.path.join(bad_color, "image_left", name))
+broken = os.path.join(bad_color, "image_left", "000007_left.png")
+os.remove(broken)
+with open(broken, "w") as f:
+    f.write("not an image\n")
+doc = scan(bad_color, "tartanair", "--check-depth")
+s = doc["scenes"][0]
+assert s["usable"] == 24 and s["color"]["usable_with_color"] == 23, s
+assert any(w.startswith("1 usable frame(s) have a colour file whose header cannot be read "
+                        "(first: frame 000007: " + broken) and
+           w.endswith("a build that stores images skips them (drop scan.color_error)")
+           for w in s["warnings"]), s["warnings"]
+assert not any("have no colour image" in w for w in s["warnings"]), s["warnings"]
+s = scan(bad_color, "tartanair")["scenes"][0]  # without --check-depth: not read
+assert s["color"]["usable_with_color"] == 24, s["color"]
+
 # Issue #32: a NaN on line 11 of a TartanAir pose_left.txt (frame 000010) and on the six lines
 # after it. Frames are unusable, the scene is not; scan counts one reason and lists the first
 # five frames with the file and line; `occgt pair` on frame 000010 says where.
