@@ -220,7 +220,7 @@ void AddInspectCommand(CLI::App& app) {
   pair->callback([pa, pair] {
     for (const char* flag :
          {"--recipe", "--format", "--resolution", "--min-depth-m", "--max-depth-m",
-          "--depth-source", "--device", "--mesh", "--preset", "--no-occupancy"}) {
+          "--depth-source", "--device", "--tum-max-dt", "--mesh", "--preset", "--no-occupancy"}) {
       if (pair->count(flag) > 0) pa->computed_only_given.push_back(flag);
     }
     pa->images_given = pair->count("--image0") + pair->count("--image1") > 0;

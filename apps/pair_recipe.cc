@@ -43,6 +43,17 @@ PairSetup StartPairSetup(const PairDatasetArgs& args) {
   if (args.device && s.format != gt::DatasetFormat::kScanNetPP) {
     throw gt::InputError("--device", "only for the scannetpp format");
   }
+  if (args.tum_max_dt_s) {
+    if (s.format != gt::DatasetFormat::kTum) {
+      throw gt::InputError("--tum-max-dt", "only for the tum format");
+    }
+    if (!std::isfinite(*args.tum_max_dt_s) || *args.tum_max_dt_s < 0) {
+      throw gt::InputError("--tum-max-dt", "expected a finite number of seconds >= 0");
+    }
+    s.tum_max_dt_s = *args.tum_max_dt_s;
+  } else if (s.recipe && r.dataset.tum_max_dt_s) {
+    s.tum_max_dt_s = *r.dataset.tum_max_dt_s;
+  }
   if (s.format == gt::DatasetFormat::kScanNetPP) {
     const auto [id0, id1] = gt::truth::ParseFramePair(args.frames);
     std::string device_source;
@@ -93,6 +104,9 @@ void AddPairDatasetFlags(CLI::App* cmd, PairDatasetArgs* d, const std::string& r
   cmd->add_option("--device", d->device,
                   "scannetpp: dslr or iphone (default: the recipe's dataset.device, else from "
                   "the frame ids: frame_NNNNNN = iphone)");
+  cmd->add_option("--tum-max-dt", d->tum_max_dt_s,
+                  "tum: max time difference for pose/colour association, seconds (default: the "
+                  "recipe's dataset.tum_max_dt_s, else 0.02)");
   cmd->add_option("--mesh", d->mesh,
                   "the scene's mesh (PLY, in the poses' world frame; default: the recipe's "
                   "dataset.mesh_path, else the dataset's own)");
@@ -101,6 +115,7 @@ void AddPairDatasetFlags(CLI::App* cmd, PairDatasetArgs* d, const std::string& r
 gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name) {
   gt::datasets::ReaderOptions reader_options;
   reader_options.scannetpp_device = setup.device;
+  reader_options.tum_max_dt_s = setup.tum_max_dt_s;
   gt::Scene scene =
       gt::datasets::MakeReader(setup.format, reader_options)->ReadScene(setup.root, scene_name);
   gt::pipeline::ApplyMeshPath(setup.mesh_path, &scene);

@@ -30,6 +30,7 @@ struct PairDatasetArgs {
   std::optional<std::string> depth_source;         // sensor|mesh|fused; default the recipe's
   std::string mesh;                                // the scene's mesh; default the recipe's
   std::optional<std::string> device;               // scannetpp: dslr|iphone; default the recipe's
+  std::optional<double> tum_max_dt_s;              // tum: association tolerance; the recipe's
 };
 
 struct PairSetup {
@@ -43,6 +44,8 @@ struct PairSetup {
   // ScanNet++: --device, else the recipe's dataset.device, else from the frame ids
   // (datasets::ScanNetPPDeviceOfFrameId); frame ids of the other device are refused.
   gt::datasets::ScanNetPPDevice device = gt::datasets::ScanNetPPDevice::kDslr;
+  // TUM: --tum-max-dt, else the recipe's dataset.tum_max_dt_s, else the reader's default.
+  double tum_max_dt_s = gt::datasets::ReaderOptions().tum_max_dt_s;
 };
 
 // The scene of the setup (its mesh path applied) and its frames at the working resolution

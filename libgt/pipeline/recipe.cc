@@ -586,6 +586,8 @@ json Recipe::ToJson() const {
   if (dataset.format == DatasetFormat::kScanNetPP && !dataset.is_synthetic) {
     d["device"] = datasets::ScanNetPPDeviceName(dataset.device);
   }
+  // Only when given, so that the digest of existing recipes is unchanged.
+  if (dataset.tum_max_dt_s) d["tum_max_dt_s"] = *dataset.tum_max_dt_s;
   d["min_valid_depth_fraction"] = dataset.min_valid_depth_fraction;
   d["min_depth_m"] = dataset.min_depth_m ? json(*dataset.min_depth_m) : json(nullptr);
   d["max_depth_m"] = dataset.max_depth_m ? json(*dataset.max_depth_m) : json(nullptr);
@@ -739,6 +741,19 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     }
     r.dataset.device =
         datasets::ParseScanNetPPDevice(d["device"].get<std::string>(), file + ": dataset.device");
+  }
+  if (d.contains("tum_max_dt_s")) {
+    if (r.dataset.is_synthetic || r.dataset.format != DatasetFormat::kTum) {
+      throw InputError(file,
+                       "dataset.tum_max_dt_s: expected only with format tum (TUM's time "
+                       "association), not " +
+                           format);
+    }
+    GetOpt(d, "dataset.tum_max_dt_s", &r.dataset.tum_max_dt_s, file);
+    if (r.dataset.tum_max_dt_s &&
+        (!std::isfinite(*r.dataset.tum_max_dt_s) || *r.dataset.tum_max_dt_s < 0)) {
+      throw InputError(file, "dataset.tum_max_dt_s: expected a finite number of seconds >= 0");
+    }
   }
   Get(d, "dataset.min_valid_depth_fraction", &r.dataset.min_valid_depth_fraction, file);
   GetOpt(d, "dataset.min_depth_m", &r.dataset.min_depth_m, file);
@@ -1023,6 +1038,7 @@ void ApplyMeshPath(const std::string& mesh_path, Scene* scene) {
 std::unique_ptr<datasets::DatasetReader> MakeRecipeReader(const Recipe& recipe) {
   datasets::ReaderOptions reader_options;
   reader_options.scannetpp_device = recipe.dataset.device;
+  if (recipe.dataset.tum_max_dt_s) reader_options.tum_max_dt_s = *recipe.dataset.tum_max_dt_s;
   return datasets::MakeReader(recipe.dataset.format, reader_options);
 }
 

@@ -65,12 +65,14 @@ struct DatasetOptions {
   // (is_synthetic = true), written into <out>/data and read as generic.
   DatasetFormat format = DatasetFormat::kGeneric;
   bool is_synthetic = false;
-  std::string root;                       // absolute after loading ("" = <out>/data for synthetic)
-  std::vector<std::string> scenes;        // explicit scene names ({} = every scene under root)
-  std::string split_file;                 // absolute after loading; one scene name per line
-  int frame_stride = 1;                   // keep every n-th frame of a scene
+  std::string root;                 // absolute after loading ("" = <out>/data for synthetic)
+  std::vector<std::string> scenes;  // explicit scene names ({} = every scene under root)
+  std::string split_file;           // absolute after loading; one scene name per line
+  int frame_stride = 1;             // keep every n-th frame of a scene
   // scannetpp: the camera whose frames are read (dataset.device: dslr | iphone).
   datasets::ScanNetPPDevice device = datasets::ScanNetPPDevice::kDslr;
+  // tum: the association tolerance (dataset.tum_max_dt_s; unset: ReaderOptions' default).
+  std::optional<double> tum_max_dt_s;
   double min_valid_depth_fraction = 0.1;  // frames with less valid depth are skipped
   std::optional<double> min_depth_m;      // overrides the dataset's validity range (metres)
   std::optional<double> max_depth_m;

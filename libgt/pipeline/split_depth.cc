@@ -68,6 +68,7 @@ BuildDataset ReadBuildDataset(const std::string& dir, const std::string& root_ov
     }
     b.device = datasets::ParseScanNetPPDevice(StringField(d, "device", where), where + ".device");
   }
+  if (d.contains("tum_max_dt_s")) b.tum_max_dt_s = NumberField(d, "tum_max_dt_s", where);
   if (d.contains("mesh_path")) b.mesh_path = StringField(d, "mesh_path", where);
   if (d.contains("depth_source")) {
     b.depth.source = render::ParseDepthSourceMode(StringField(d, "depth_source", where),
@@ -111,6 +112,7 @@ std::optional<report::SplitDepthShares> ComputeSplitDepthShares(const std::strin
   }
   datasets::ReaderOptions reader_options;
   reader_options.scannetpp_device = b.device;
+  reader_options.tum_max_dt_s = b.tum_max_dt_s;
   const auto reader = datasets::MakeReader(b.format, reader_options);
   std::vector<Scene> scenes;
   std::vector<std::pair<size_t, size_t>> work;  // (scene, frame index in it)

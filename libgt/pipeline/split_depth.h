@@ -23,6 +23,7 @@ struct BuildDataset {
   DatasetFormat format = DatasetFormat::kGeneric;
   std::string root;  // recipe.json's dataset.root, or the override; synthetic: DIR/data
   datasets::ScanNetPPDevice device = datasets::ScanNetPPDevice::kDslr;  // scannetpp only
+  double tum_max_dt_s = datasets::ReaderOptions().tum_max_dt_s;         // tum: dataset.tum_max_dt_s
   std::string mesh_path;            // dataset.mesh_path ("" = the reader's own)
   render::FrameDepthOptions depth;  // dataset.depth_source, fused_depth
   truth::Resolution resolution;     // resolution
@@ -34,10 +35,10 @@ struct BuildDataset {
 BuildDataset ReadBuildDataset(const std::string& dir, const std::string& root_override = "");
 
 // The split's depth-source shares when its build's depth source is mesh or fused (nullopt
-// for sensor, or when DIR has no recipe.json): every distinct frame of DIR/pairs.jsonl compared at the build's resolution
-// with truth::CompareWorkingDepthWithMesh, frames in parallel (TBB), summed in a fixed order.
-// Throws InputError when the dataset or a mesh cannot be read (naming it; the root may be
-// given again with root_override).
+// for sensor, or when DIR has no recipe.json): every distinct frame of DIR/pairs.jsonl compared at
+// the build's resolution with truth::CompareWorkingDepthWithMesh, frames in parallel (TBB), summed
+// in a fixed order. Throws InputError when the dataset or a mesh cannot be read (naming it; the
+// root may be given again with root_override).
 std::optional<report::SplitDepthShares> ComputeSplitDepthShares(
     const std::string& dir, const std::string& root_override = "");
 

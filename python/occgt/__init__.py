@@ -534,7 +534,8 @@ def render_depth(
 
 
 def open_dataset(root: Union[str, "os.PathLike[str]"], format: str, *,
-                 device: str = DATASET_DEFAULTS["device"]) -> Dataset:
+                 device: str = DATASET_DEFAULTS["device"],
+                 tum_max_dt_s: Optional[float] = None) -> Dataset:
     """A dataset read by occgt's own readers (docs/DATASETS.md).
 
     Args:
@@ -542,6 +543,8 @@ def open_dataset(root: Union[str, "os.PathLike[str]"], format: str, *,
         format: one of FORMATS: "scannet", "tartanair", "sevenscenes", "tum", "megadepth",
             "generic", "scannetpp".
         device: "scannetpp" only: "dslr" or "iphone" (the camera whose frames are read).
+        tum_max_dt_s: "tum": the association tolerance in seconds (a recipe's
+            ``dataset.tum_max_dt_s``; None: ``DATASET_DEFAULTS["tum_max_dt_s"]``).
 
     Returns:
         A Dataset: ``.scenes()`` lists the scene names, ``.scene(name)`` reads one scene
@@ -554,7 +557,7 @@ def open_dataset(root: Union[str, "os.PathLike[str]"], format: str, *,
     except TypeError:
         raise TypeError(f"root: expected a path (str or os.PathLike), got "
                         f"{type(root).__name__}") from None
-    return Dataset(path, format, device=device)
+    return Dataset(path, format, device=device, tum_max_dt_s=tum_max_dt_s)
 
 
 def pair_from_scene(scene: Scene, id0: str, id1: str, *, width: int = _D["width"],

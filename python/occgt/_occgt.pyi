@@ -189,7 +189,8 @@ class Scene:
 class Dataset:
     """A dataset root read by one of occgt's readers."""
 
-    def __init__(self, root: str, format: str, *, device: str = ...) -> None: ...
+    def __init__(self, root: str, format: str, *, device: str = ...,
+                 tum_max_dt_s: Optional[float] = ...) -> None: ...
     @property
     def root(self) -> str: ...
     @property

@@ -10,6 +10,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <string>
@@ -207,12 +208,19 @@ class PyScene {
 
 class PyDataset {
  public:
-  PyDataset(py::handle root, py::handle format, py::handle device)
+  PyDataset(py::handle root, py::handle format, py::handle device, py::handle tum_max_dt_s)
       : root_(Arg<std::string>(root, "root")), format_(Arg<std::string>(format, "format")) {
     gt::datasets::ReaderOptions options;
     const std::string device_name = Arg<std::string>(device, "device");
     options.scannetpp_device =
         Named("device", [&] { return gt::datasets::ParseScanNetPPDevice(device_name, "device"); });
+    // tum: the association tolerance (a recipe's dataset.tum_max_dt_s; None: the default).
+    if (const std::optional<double> dt = OptionalArg<double>(tum_max_dt_s, "tum_max_dt_s")) {
+      if (!std::isfinite(*dt) || *dt < 0) {
+        ThrowValue("tum_max_dt_s", "expected a finite number of seconds >= 0");
+      }
+      options.tum_max_dt_s = *dt;
+    }
     reader_ = Named("format", [&] {
       return gt::datasets::MakeReader(gt::ParseDatasetFormat(format_, "format"), options);
     });
@@ -251,6 +259,7 @@ void BindIo(py::module_& m) {
   {
     py::dict d;  // occgt.DATASET_DEFAULTS
     d["device"] = DefaultDevice();
+    d["tum_max_dt_s"] = gt::datasets::ReaderOptions().tum_max_dt_s;
     d["depth_source"] = DefaultDepthSource();
     const gt::render::FusedDepthOptions fused;  // a recipe's dataset.fused_depth
     py::dict f;
@@ -414,8 +423,8 @@ void BindIo(py::module_& m) {
       });
 
   py::class_<PyDataset>(m, "Dataset", "A dataset root read by one of occgt's readers.")
-      .def(py::init<py::handle, py::handle, py::handle>(), "root"_a, "format"_a, py::kw_only(),
-           "device"_a = DefaultDevice())
+      .def(py::init<py::handle, py::handle, py::handle, py::handle>(), "root"_a, "format"_a,
+           py::kw_only(), "device"_a = DefaultDevice(), "tum_max_dt_s"_a = py::none())
       .def_property_readonly("root", &PyDataset::root, "dataset root folder")
       .def_property_readonly("format", &PyDataset::format, "reader format")
       .def("scenes", &PyDataset::Scenes, "scene names under the root, sorted")

@@ -241,6 +241,23 @@ TEST(Recipe, KeysThatWouldBeIgnoredAreRefused) {
       LoftrExportKind::kTest);
 }
 
+// dataset.tum_max_dt_s: tum only, a finite number >= 0, in recipe.json and the digest only
+// when given (the digest of recipes without it is unchanged).
+TEST(Recipe, TumToleranceKey) {
+  const Recipe plain = ParseRecipe("name: t\ndataset: {format: tum, root: x}\n", "t.yaml", "/b");
+  const Recipe wide =
+      ParseRecipe("name: t\ndataset: {format: tum, root: x, tum_max_dt_s: 0.05}\n", "t.yaml", "/b");
+  EXPECT_FALSE(plain.dataset.tum_max_dt_s.has_value());
+  EXPECT_FALSE(plain.ToJson()["dataset"].contains("tum_max_dt_s"));
+  EXPECT_DOUBLE_EQ(*wide.dataset.tum_max_dt_s, 0.05);
+  EXPECT_DOUBLE_EQ(wide.ToJson()["dataset"]["tum_max_dt_s"].get<double>(), 0.05);
+  EXPECT_NE(plain.Digest(), wide.Digest());
+  EXPECT_EQ(ErrorOf("name: t\ndataset: {format: generic, root: x, tum_max_dt_s: 0.05}\n"),
+            "recipes/x.yaml: dataset.tum_max_dt_s: expected only with format tum (TUM's time "
+            "association), not generic");
+  EXPECT_NE(ErrorOf("name: t\ndataset: {format: tum, root: x, tum_max_dt_s: -1}\n"), "");
+}
+
 // two_point fuses nothing: a wider scope would be recorded in recipe.json and not applied.
 TEST(Recipe, TwoPointWithAWiderScopeIsRefused) {
   EXPECT_EQ(ErrorOf("name: a\ndataset: {format: generic, root: x}\n"

@@ -188,6 +188,7 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             ``{scene}`` = the scene's name; None: the reader's) and, for ``"fused"``, the
             tolerances ``fused_depth`` (None: the defaults); pair scope only.
         device: ScanNet++'s camera, ``"dslr"`` or ``"iphone"`` (``occgt.open_dataset``).
+        tum_max_dt_s: TUM's association tolerance (``occgt.open_dataset``; None: the default).
 
     Items are dicts with the keys of the sample contract (``occgt.torch``): LoFTR's keys
     (``T_0to1`` = cam1_from_cam0 computed from the two poses) and occgt's ground truth, plus
@@ -206,7 +207,8 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                  depth_source: str = occgt.DATASET_DEFAULTS["depth_source"],
                  mesh_path: Optional[str] = None,
                  fused_depth: Optional[Dict[str, float]] = None,
-                 device: str = occgt.DATASET_DEFAULTS["device"], **options: Any) -> None:
+                 device: str = occgt.DATASET_DEFAULTS["device"],
+                 tum_max_dt_s: Optional[float] = None, **options: Any) -> None:
         if depth_source not in ("sensor", "mesh", "fused"):
             raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")
         if not isinstance(images, (bool, np.bool_)):  # "no" is not a bool (it was truthy)
@@ -241,6 +243,7 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                              f"(mode {occupancy_resolved['mode']!r} uses the pair's depth "
                              "alone): use scope='pair'")
         self.root, self.format, self.device = root, format, device
+        self.tum_max_dt_s = tum_max_dt_s
         self.width, self.height = operator.index(width), operator.index(height)
         self.preset, self.images, self.occupancy = preset, bool(images), occupancy
         self.image_format = image_format
@@ -257,7 +260,7 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         self._scenes: Dict[str, Tuple[occgt.Scene, Dict[int, str]]] = {}
         # Fail here, not in a worker, on a bad root, format or device (the readers open the
         # root lazily: test it here).
-        occgt.open_dataset(root, format, device=device)
+        occgt.open_dataset(root, format, device=device, tum_max_dt_s=tum_max_dt_s)
         if not os.path.exists(root):
             raise ValueError(f"root: {root}: no such dataset folder or file")
 
@@ -297,7 +300,8 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             "depth_source": dataset.get("depth_source", occgt.DATASET_DEFAULTS["depth_source"]),
             "mesh_path": dataset.get("mesh_path"),
             "fused_depth": dataset.get("fused_depth"),
-            "device": dataset.get("device", occgt.DATASET_DEFAULTS["device"])}
+            "device": dataset.get("device", occgt.DATASET_DEFAULTS["device"]),
+            "tum_max_dt_s": dataset.get("tum_max_dt_s")}
         # The recipe's keys under pair_ground_truth's names, as they are: the C++ resolves them
         # (truth::ResolvePairTruthOptions), as for the build.
         options: Dict[str, Any] = {
@@ -338,7 +342,8 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
 
     def _scene(self, name: str) -> Tuple[occgt.Scene, Dict[int, str]]:
         if self._pid != os.getpid():  # a forked worker opens its own readers
-            self._dataset = occgt.open_dataset(self.root, self.format, device=self.device)
+            self._dataset = occgt.open_dataset(self.root, self.format, device=self.device,
+                                               tum_max_dt_s=self.tum_max_dt_s)
             self._scenes = {}
             self._pid, self._scene_map = os.getpid(), None
         if name not in self._scenes:

@@ -101,6 +101,8 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             the scene lacks raises ValueError naming the tuple and its line (or list entry).
         root, format: the dataset (``occgt.open_dataset``).
         device: ScanNet++'s camera, ``"dslr"`` or ``"iphone"`` (``occgt.open_dataset``).
+        tum_max_dt_s: TUM's association tolerance (``occgt.open_dataset``; None: the default,
+            else a recipe's ``dataset.tum_max_dt_s``).
         depth_source, mesh_path, fused_depth: the depth of every view (``Scene.load``):
             ``"sensor"``, or ``"mesh"``/``"fused"`` with the scene's mesh (``mesh_path``,
             ``{scene}`` = the scene's name, as a recipe's ``dataset.mesh_path``; None: the
@@ -145,6 +147,7 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                  query_view: int = occgt.VIEWS_DEFAULTS["query_view"], images: bool = True,
                  views: str = "vggt",
                  device: str = occgt.DATASET_DEFAULTS["device"],
+                 tum_max_dt_s: Optional[float] = None,
                  depth_source: str = occgt.DATASET_DEFAULTS["depth_source"],
                  mesh_path: Optional[str] = None,
                  fused_depth: Optional[Dict[str, float]] = None, **label_options: Any) -> None:
@@ -183,6 +186,7 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                                  f"{self.query_view}; tuples[{k}] has {len(t.frame_ids)} "
                                  f"views ({t.scene}: {', '.join(t.frame_ids)})")
         self.root, self.format, self.device = root, format, device
+        self.tum_max_dt_s = tum_max_dt_s
         self.depth_source, self.mesh_path, self.fused_depth = depth_source, mesh_path, fused_depth
         self.width, self.height = operator.index(width), operator.index(height)
         self.preset, self.num_tracks, self.seed = preset, operator.index(num_tracks), operator.index(seed)
@@ -193,7 +197,7 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         self._scenes: Dict[str, occgt.Scene] = {}
         # Fail here, not in a worker, on a bad root, format or device (the readers open the
         # root lazily: test it here).
-        occgt.open_dataset(root, format, device=device)
+        occgt.open_dataset(root, format, device=device, tum_max_dt_s=tum_max_dt_s)
         if not os.path.exists(root):
             raise ValueError(f"root: {root}: no such dataset folder or file")
 
@@ -209,7 +213,8 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
 
     def _scene(self, name: str) -> occgt.Scene:
         if self._pid != os.getpid():  # a forked worker opens its own readers
-            self._dataset = occgt.open_dataset(self.root, self.format, device=self.device)
+            self._dataset = occgt.open_dataset(self.root, self.format, device=self.device,
+                                               tum_max_dt_s=self.tum_max_dt_s)
             self._scenes, self._pid = {}, os.getpid()
         if name not in self._scenes:
             assert self._dataset is not None
