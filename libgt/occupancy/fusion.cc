@@ -187,8 +187,17 @@ void CheckKeyRange(const FusionInput& frame, const FusionOptions& options,
   const double needed = NeededHalfExtentM(c, reach_m);
   const double held = KeyRangeHalfExtentM(options.voxel_m);
   if (held >= needed) return;  // false for NaN
+  // The extents at 3 digits, or at as many as tell them apart (1638.3 against 1640.6 read
+  // "holds +-1.64e+03 m ... needs +-1.64e+03 m").
+  int digits = 3;
+  const auto at = [](double v, int d) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.*g", d, v == 0 ? 0.0 : v);
+    return std::string(buf);
+  };
+  while (digits < 12 && at(held, digits) == at(needed, digits)) ++digits;
   std::ostringstream m;
-  m << Significant3(options.voxel_m) << " m holds +-" << Significant3(held)
+  m << Significant3(options.voxel_m) << " m holds +-" << at(held, digits)
     << " m around the world origin (OctoMap's 16-bit keys); " << frame_name << "'s camera at ("
     << Significant3(c.x()) << ", " << Significant3(c.y()) << ", " << Significant3(c.z())
     << ") with ";
@@ -198,7 +207,7 @@ void CheckKeyRange(const FusionInput& frame, const FusionOptions& options,
     m << "unlimited max_range_m and max_depth_m " << Significant3(frame.max_depth_m)
       << " (rays up to " << Significant3(reach_m) << " m through the image corners)";
   }
-  m << " needs +-" << Significant3(needed) << " m";
+  m << " needs +-" << at(needed, digits) << " m";
   const double smallest = MinVoxelSizeM(c, reach_m);
   if (std::isfinite(smallest)) {
     m << ": use voxel_m >= " << Significant3Up(smallest);

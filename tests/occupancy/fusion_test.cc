@@ -185,6 +185,17 @@ TEST(KeyRange, VoxelTooSmallForTheRangeIsRefusedWithTheSmallestThatWorks) {
   EXPECT_EQ(map.StateAt({-0.01875, -0.01875, 0.15}), 0);
 }
 
+// When the held and the needed extents agree to 3 digits, the message gives as many as
+// tell them apart ("holds +-1.64e+03 m ... needs +-1.64e+03 m" read as no problem).
+TEST(KeyRange, CloseExtentsAreToldApart) {
+  const Camera cam = SmallCamera(20, 16);
+  DepthImage depth(20, 16, 3.0f);
+  const FusionInput in{&depth, cam, At({1630.6, 0.0, 0.0}), 0.1, 20.0};
+  const std::string e = KeyRangeError(in, FusionOptions{});  // 5 cm holds +-1638.3 m
+  EXPECT_NE(e.find("0.05 m holds +-1638 m"), std::string::npos) << e;
+  EXPECT_NE(e.find("needs +-1641 m"), std::string::npos) << e;
+}
+
 TEST(KeyRange, CameraFarFromTheOriginNeedsItsOffsetToo) {
   const Camera cam = SmallCamera(20, 16);
   DepthImage depth(20, 16, 3.0f);
