@@ -7,35 +7,10 @@ import json
 import os
 import sys
 
-import cv2
-import numpy as np
-
 sys.path.insert(0, os.path.dirname(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "support"))
 import common  # noqa: E402
-
-
-def make_sequence(folder):
-    """8 depth frames 0.1 s apart; a groundtruth entry at each even frame's time and 0.03 s
-    after each odd frame's: a camera moving along x in front of a wall at 3 m."""
-    seq = os.path.join(folder, "rgbd_dataset_freiburg1_test")
-    os.makedirs(os.path.join(seq, "depth"), exist_ok=True)
-    os.makedirs(os.path.join(seq, "rgb"), exist_ok=True)
-    depth_lines, rgb_lines, gt_lines = [], [], []
-    wall = np.full((480, 640), 3 * 5000, np.uint16)  # 3 m at TUM's 5000 units per metre
-    colour = np.random.default_rng(0).integers(0, 255, (480, 640, 3), dtype=np.uint8)
-    for i in range(8):
-        t = 100.0 + 0.1 * i
-        name = f"{t:.6f}"
-        cv2.imwrite(os.path.join(seq, "depth", name + ".png"), wall)
-        cv2.imwrite(os.path.join(seq, "rgb", name + ".png"), colour)
-        depth_lines.append(f"{name} depth/{name}.png")
-        rgb_lines.append(f"{name} rgb/{name}.png")
-        gt_lines.append(f"{t + (0.03 if i % 2 else 0.0):.4f} {0.05 * i} 0 0 0 0 0 1")
-    for name, lines in (("depth.txt", depth_lines), ("rgb.txt", rgb_lines),
-                        ("groundtruth.txt", gt_lines)):
-        with open(os.path.join(seq, name), "w") as f:
-            f.write("# test\n" + "\n".join(lines) + "\n")
-    return seq
+from tum_sequence import make_sequence  # noqa: E402
 
 
 def main():
