@@ -51,18 +51,21 @@ WorkingFrame LoadWorkingFrame(const Frame& frame, const Resolution& resolution) 
 }
 
 DepthImage LoadWorkingDepth(const Scene& scene, const Frame& frame, const Resolution& resolution,
-                            const render::FrameDepthOptions& depth, render::DepthAgreement* agreement) {
+                            const render::FrameDepthOptions& depth,
+                            render::DepthAgreement* agreement) {
   if (depth.source == render::DepthSourceMode::kSensor && agreement == nullptr) {
     return LoadWorkingDepth(frame, resolution);
   }
   if (depth.source == render::DepthSourceMode::kMesh && agreement == nullptr) {
-    return render::LoadFrameDepth(scene, frame, WorkingCamera(frame, resolution), depth);  // no sensor read
+    return render::LoadFrameDepth(scene, frame, WorkingCamera(frame, resolution),
+                                  depth);  // no sensor read
   }
   // A frame without a depth file (ScanNet++ DSLR) has no sensor depth anywhere.
   const DepthImage sensor = frame.depth.path.empty()
                                 ? DepthImage(resolution.width, resolution.height)
                                 : LoadWorkingDepth(frame, resolution);
-  return render::LoadFrameDepth(scene, frame, WorkingCamera(frame, resolution), depth, agreement, &sensor);
+  return render::LoadFrameDepth(scene, frame, WorkingCamera(frame, resolution), depth, agreement,
+                                &sensor);
 }
 
 render::DepthAgreement CompareWorkingDepthWithMesh(const Scene& scene, const Frame& frame,
@@ -113,6 +116,11 @@ std::pair<std::string, std::string> ParseFramePair(const std::string& text,
   if (comma == std::string::npos || comma == 0 || comma + 1 == text.size() ||
       text.find(',', comma + 1) != std::string::npos) {
     throw InputError(field, "expected two frame ids ID0,ID1, got '" + text + "'");
+  }
+  // A frame with itself is every pixel VISIBLE: a typo, not a pair (as render's --frames).
+  if (text.compare(0, comma, text, comma + 1) == 0) {
+    throw InputError(field, "'" + text.substr(0, comma) + "' given twice in '" + text +
+                                "': expected two different frames");
   }
   return {text.substr(0, comma), text.substr(comma + 1)};
 }

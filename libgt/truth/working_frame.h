@@ -66,7 +66,7 @@ render::DepthAgreement CompareWorkingDepthWithMesh(const Scene& scene, const Fra
 // Index into scene.frames of the frame with id `id`; throws InputError(field, ...) when
 // there is none or it is unusable (with the reader's reason).
 size_t FindFrame(const Scene& scene, const std::string& id, const std::string& field = "--frames");
-// "ID0,ID1" → the two ids; throws InputError(field, ...).
+// "ID0,ID1" → the two ids; throws InputError(field, ...), also for one id given twice.
 std::pair<std::string, std::string> ParseFramePair(const std::string& text,
                                                    const std::string& field = "--frames");
 

@@ -69,6 +69,11 @@ TEST(ParseFramePair, TwoIdsOrAnError) {
               std::string::npos)
         << bad;
   }
+  // A frame with itself (every pixel VISIBLE) is a typo, refused as render's --frames is.
+  EXPECT_EQ(ErrorOf([] { ParseFramePair("000150,000150"); }),
+            "--frames: '000150' given twice in '000150,000150': expected two different frames");
+  EXPECT_EQ(ParseFramePair("000150,0001500"),
+            std::make_pair(std::string("000150"), std::string("0001500")));
 }
 
 TEST(FindFrame, NamesUnknownAndUnusableFramesAndSuggestsTheIdOfANumber) {
