@@ -126,14 +126,6 @@ CppInfo ReadCppInfo(const std::string& path) {
   return info;
 }
 
-// First existing path of base + each suffix; "" when none exists.
-std::string FirstExisting(const std::string& base, std::initializer_list<const char*> suffixes) {
-  for (const char* suffix : suffixes) {
-    if (io::FileExists(base + suffix)) return base + suffix;
-  }
-  return "";
-}
-
 }  // namespace
 
 std::vector<std::string> ScanNetReader::ListScenes(const std::string& root) const {
@@ -223,18 +215,11 @@ Scene ScanNetReader::ReadSceneFolder(const std::string& folder,
   };
   // A frame with both colour files reads the .jpg (the export's own format), and says so.
   std::map<int64_t, std::string> color_of;
-  size_t both_colors = 0;
-  std::string first_both;
+  PreferredFile colour("colour");
   for (const auto& p : frames) {
-    const std::string jpg = find(jpg_of, p.number), png = find(png_of, p.number);
-    if (!jpg.empty() && !png.empty() && both_colors++ == 0) first_both = jpg;
-    color_of[p.number] = jpg.empty() ? png : jpg;
+    color_of[p.number] = colour.Pick({find(jpg_of, p.number), find(png_of, p.number)});
   }
-  if (both_colors > 0) {
-    scene.reader_warnings.push_back(std::to_string(both_colors) +
-                                    " frame(s) have both a .jpg and a .png colour file: the " +
-                                    ".jpg is read (the first: " + first_both + ")");
-  }
+  colour.Note(&scene);
 
   const std::string intrinsic_dir = (fs::path(folder) / "intrinsic").string();
   const Eigen::Matrix3d K_depth =
@@ -324,27 +309,18 @@ Scene ScanNetReader::ReadCppExport(const std::string& folder, const std::string&
   }
   // A frame with two depth or two colour files reads the first of each pair (the export's
   // own .depth.pgm and .color.jpg), and the scene says so.
-  size_t both_depth = 0, both_color = 0;
-  std::string first_both_depth, first_both_color;
+  PreferredFile depth("depth"), colour("colour");
   for (const auto& p : MergeNumberedFiles(lists)) {
     const std::string base = (fs::path(folder) / ("frame-" + p.stem)).string();
     Frame f;
     f.id = p.stem;
     f.number = p.number;
-    f.depth.path = FirstExisting(base, {".depth.pgm", ".depth.png"});
-    if (f.depth.path == base + ".depth.pgm" && io::FileExists(base + ".depth.png") &&
-        both_depth++ == 0) {
-      first_both_depth = f.depth.path;
-    }
+    f.depth.path = depth.Pick({base + ".depth.pgm", base + ".depth.png"});
     if (f.depth.path.empty()) f.depth.path = base + ".depth.pgm";
     f.depth.format = DepthFormat::kPng16;  // 16-bit greyscale image, decoded by OpenCV
     f.depth.scale_m_per_unit = 1.0 / depth_shift;
     f.depth_camera = depth_camera;
-    f.color_path = FirstExisting(base, {".color.jpg", ".color.png"});
-    if (f.color_path == base + ".color.jpg" && io::FileExists(base + ".color.png") &&
-        both_color++ == 0) {
-      first_both_color = f.color_path;
-    }
+    f.color_path = colour.Pick({base + ".color.jpg", base + ".color.png"});
     if (!f.color_path.empty()) {
       if (color_camera.width > 0) {
         f.color_camera = color_camera;
@@ -363,18 +339,8 @@ Scene ScanNetReader::ReadCppExport(const std::string& folder, const std::string&
     }
     scene.frames.push_back(std::move(f));
   }
-  if (both_depth > 0) {
-    scene.reader_warnings.push_back(std::to_string(both_depth) +
-                                    " frame(s) have both a .depth.pgm and a .depth.png file: the "
-                                    ".depth.pgm is read (the first: " +
-                                    first_both_depth + ")");
-  }
-  if (both_color > 0) {
-    scene.reader_warnings.push_back(std::to_string(both_color) +
-                                    " frame(s) have both a .color.jpg and a .color.png file: the "
-                                    ".color.jpg is read (the first: " +
-                                    first_both_color + ")");
-  }
+  depth.Note(&scene);
+  colour.Note(&scene);
   return scene;
 }
 

@@ -78,8 +78,7 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
   }
   const Camera camera = Camera::FromK(K, width, height);
 
-  size_t both_colors = 0;  // frames with both colour files (the .png is read)
-  std::string first_both;
+  PreferredFile colour("colour");  // the releases' .color.png, else .color.jpg
   for (const auto& p : frames) {
     const std::string base = (fs::path(folder) / ("frame-" + p.stem)).string();
     Frame f;
@@ -91,17 +90,8 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
     f.depth.invalid_value = kInvalidRaw;
     f.depth_camera = camera;
     // Colour as the releases have it: frame-NNNNNN.color.png, or .color.jpg.
-    for (const char* ext : {".color.png", ".color.jpg"}) {
-      if (io::FileExists(base + ext)) {
-        f.color_path = base + ext;
-        f.color_camera = camera;
-        break;
-      }
-    }
-    if (f.color_path == base + ".color.png" && io::FileExists(base + ".color.jpg") &&
-        both_colors++ == 0) {
-      first_both = f.color_path;
-    }
+    f.color_path = colour.Pick({base + ".color.png", base + ".color.jpg"});
+    if (!f.color_path.empty()) f.color_camera = camera;
     if (with_pose.count(p.number) != 0) {
       SetPoseFromText(p.path, &f);
     } else {
@@ -112,12 +102,7 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
     }
     scene.frames.push_back(std::move(f));
   }
-  if (both_colors > 0) {
-    scene.reader_warnings.push_back(std::to_string(both_colors) +
-                                    " frame(s) have both a .color.png and a .color.jpg file: the "
-                                    ".color.png is read (the first: " +
-                                    first_both + ")");
-  }
+  colour.Note(&scene);
   return scene;
 }
 

@@ -176,6 +176,27 @@ PoseText ParsePoseText(std::string_view text, const std::string& name) {
   return out;
 }
 
+std::string PreferredFile::Pick(std::initializer_list<std::string> candidates) {
+  std::string kept;
+  for (const std::string& path : candidates) {
+    if (path.empty() || !io::FileExists(path)) continue;
+    if (kept.empty()) {
+      kept = path;
+    } else {
+      if (frames_++ == 0) kept_ = kept, other_ = path;
+      break;
+    }
+  }
+  return kept;
+}
+
+void PreferredFile::Note(Scene* scene) const {
+  if (frames_ == 0) return;
+  scene->reader_warnings.push_back(std::to_string(frames_) + " frame(s) have two " + role_ +
+                                   " files, and each reads the first (the first frame: " + kept_ +
+                                   ", not " + other_ + ")");
+}
+
 bool SetPoseFromText(const std::string& path, Frame* frame) {
   std::string text;
   try {

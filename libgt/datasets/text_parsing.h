@@ -15,9 +15,11 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "libgt/core/frame.h"
@@ -199,6 +201,23 @@ Scene NewFolderScene(const std::string& folder, const std::string& scene_name, D
 // Marks a frame unusable with `reason` (and `detail`) unless it already is (the first
 // reason wins).
 void MarkUnusable(Frame* frame, const std::string& reason, const std::string& detail = "");
+
+// The file of one role of a frame (its colour, its depth) among candidate paths in order of
+// preference: Pick gives the first that exists ("" for none; empty candidates are skipped)
+// and counts the frames where a later one exists too; Note adds one scene warning for all
+// of them, naming the first ("2 frame(s) have two colour files, and each reads the first
+// (the first frame: .../0054.jpg, not .../0054.png)"), so that no choice is silent.
+class PreferredFile {
+ public:
+  explicit PreferredFile(std::string role) : role_(std::move(role)) {}
+  std::string Pick(std::initializer_list<std::string> candidates);
+  void Note(Scene* scene) const;
+
+ private:
+  std::string role_;
+  size_t frames_ = 0;         // frames with more than one candidate on disk
+  std::string kept_, other_;  // those of the first such frame
+};
 void MarkUnusable(Frame* frame, const Unusable& why);
 
 }  // namespace gt::datasets

@@ -299,6 +299,28 @@ TEST(ScanNet, CppExporterLayout) {
   EXPECT_EQ(d.at(7, 2), 0.0f);
 }
 
+// Two depth (or colour) files for one frame of the C++ export: the export's own .depth.pgm
+// (.color.jpg) is read, and the scene says so once for each role.
+TEST(ScanNet, CppExporterTwoFilesForAFrameAreNamed) {
+  const std::string dir = test::ScratchDir("sn_cpp_two") + "/scene0001_00";
+  WriteCppExport(dir, kCppInfo);
+  EXPECT_TRUE(MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(dir, "").reader_warnings.empty());
+  ASSERT_TRUE(
+      cv::imwrite(dir + "/frame-000000.depth.png", cv::Mat(24, 32, CV_16UC1, cv::Scalar(1))));
+  ASSERT_TRUE(
+      cv::imwrite(dir + "/frame-000000.color.png", cv::Mat(48, 64, CV_8UC3, cv::Scalar(1))));
+  const Scene s = MakeReader(gt::DatasetFormat::kScanNet)->ReadScene(dir, "");
+  EXPECT_EQ(s.frames[0].depth.path, dir + "/frame-000000.depth.pgm");
+  EXPECT_EQ(s.frames[0].color_path, dir + "/frame-000000.color.jpg");
+  EXPECT_EQ(
+      s.reader_warnings,
+      (std::vector<std::string>{
+          "1 frame(s) have two depth files, and each reads the first (the first frame: " + dir +
+              "/frame-000000.depth.pgm, not " + dir + "/frame-000000.depth.png)",
+          "1 frame(s) have two colour files, and each reads the first (the first frame: " + dir +
+              "/frame-000000.color.jpg, not " + dir + "/frame-000000.color.png)"}));
+}
+
 TEST(ScanNet, CppExporterBadInfo) {
   const std::string dir = test::ScratchDir("sn_cpp_bad");
   std::string info = kCppInfo;
@@ -355,9 +377,8 @@ TEST(ScanNet, FilesMatchByNumberAndTwoColourFilesAreNamed) {
   }
   ASSERT_EQ(s.reader_warnings.size(), 1u);
   EXPECT_EQ(s.reader_warnings[0],
-            "1 frame(s) have both a .jpg and a .png colour file: the .jpg "
-            "is read (the first: " +
-                dir + "/color/0054.jpg)");
+            "1 frame(s) have two colour files, and each reads the first (the first frame: " + dir +
+                "/color/0054.jpg, not " + dir + "/color/0054.png)");
   const SceneSummary summary = SummarizeScene(s, ScanOptions{});
   EXPECT_NE(std::find(summary.warnings.begin(), summary.warnings.end(), s.reader_warnings[0]),
             summary.warnings.end());

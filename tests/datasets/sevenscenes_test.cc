@@ -219,9 +219,8 @@ TEST(SevenScenes, ColourAsPngOrJpgAndFramesWithout) {
   EXPECT_EQ(both.frames[1].color_path, dir + "/seq-01/frame-000151.color.png");
   ASSERT_EQ(both.reader_warnings.size(), 1u);
   EXPECT_EQ(both.reader_warnings[0],
-            "1 frame(s) have both a .color.png and a .color.jpg file: the .color.png is read "
-            "(the first: " +
-                dir + "/seq-01/frame-000151.color.png)");
+            "1 frame(s) have two colour files, and each reads the first (the first frame: " + dir +
+                "/seq-01/frame-000151.color.png, not " + dir + "/seq-01/frame-000151.color.jpg)");
 }
 
 // One pose file per frame: a bad pose names its file and the line (1..4 of the matrix, as
