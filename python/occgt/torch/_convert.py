@@ -1,6 +1,8 @@
-"""NumPy values of a sample -> torch values (shared by the datasets of occgt.torch)."""
+"""NumPy values of a sample -> torch values, and the item index check (shared by the
+datasets of occgt.torch)."""
 from __future__ import annotations
 
+import operator
 from typing import Any
 
 import numpy as np
@@ -28,3 +30,15 @@ def to_tensor(value: Any) -> Any:
     if not value.flags.writeable or not value.flags.c_contiguous:
         value = np.ascontiguousarray(value).copy()
     return torch.from_numpy(value)
+
+
+def item_index(index: Any, count: int, noun: str, name: str = "index") -> int:
+    """``index`` as an int in 0..count - 1, a negative one counting from the end (as a list
+    index); else TypeError / IndexError naming ``name`` ("index 9 out of range for 4 pairs")."""
+    try:
+        i = operator.index(index)  # an int, a numpy or 0-d torch integer; not 1.5 or "1"
+    except TypeError:
+        raise TypeError(f"{name}: expected an int, got {type(index).__name__}") from None
+    if not -count <= i < count:
+        raise IndexError(f"{name} {i} out of range for {count} {noun}")
+    return i % count

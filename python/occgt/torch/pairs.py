@@ -20,7 +20,7 @@ import torch
 import occgt
 
 from .._occgt import check_resolution
-from ._convert import to_tensor
+from ._convert import item_index, to_tensor
 from ._json import loads_strict
 
 #: LoFTR's dataset_name for occgt's reader formats (its evaluation picks thresholds by it).
@@ -357,13 +357,7 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     def _index(self, index: int) -> int:
         """``index`` as an int in 0..len - 1 (negative ones count from the end), else
         TypeError / IndexError."""
-        try:
-            index = operator.index(index)  # an int, a numpy or 0-d torch integer; not 1.5
-        except TypeError:
-            raise TypeError(f"index: expected an int, got {type(index).__name__}") from None
-        if not -len(self.pairs) <= index < len(self.pairs):
-            raise IndexError(f"index {index} out of range for {len(self.pairs)} pairs")
-        return index % len(self.pairs)
+        return item_index(index, len(self.pairs), "pairs")
 
     def frame_ids(self, index: int) -> Tuple[str, str]:
         """The frame ids of pair ``index`` (an index given by numbers is resolved in its scene)."""

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import json
 import math
-import operator
 import os
 from typing import Any, Dict, List, Optional, Tuple, Union
 
@@ -25,7 +24,7 @@ import numpy as np
 import torch.utils.data
 
 from .._occgt import check_pair_sample, gunzip_npy, npy_header, shard_index, shard_samples
-from ._convert import to_tensor
+from ._convert import item_index, to_tensor
 
 __all__ = ["ShardDataset"]
 
@@ -143,16 +142,7 @@ class _ShardSplit(torch.utils.data.Dataset):  # type: ignore[type-arg]
         return len(self._samples)
 
     def _index(self, i: int) -> int:
-        n = len(self._samples)
-        try:
-            j = operator.index(i)  # an int, a numpy or 0-d torch integer; not 1.5 or "1"
-        except TypeError:
-            raise TypeError(f"sample index: expected an int, got {type(i).__name__}") from None
-        if j < 0:
-            j += n
-        if not 0 <= j < n:
-            raise IndexError(f"sample index {i} out of range for {n} samples")
-        return j
+        return item_index(i, len(self._samples), "samples", "sample index")
 
     def key(self, i: int) -> str:
         """The sample key (``<scene>/<frame0>_<frame1>``) of sample i."""

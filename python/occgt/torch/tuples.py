@@ -20,7 +20,7 @@ import torch
 import occgt
 
 from .._occgt import check_resolution, views_options
-from ._convert import to_tensor
+from ._convert import item_index, to_tensor
 from ._json import loads_strict
 
 
@@ -225,13 +225,7 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         return self._scenes[name]
 
     def __getitem__(self, index: int) -> Any:
-        try:
-            index = operator.index(index)  # an int, a numpy or 0-d torch integer; not 1.5
-        except TypeError:
-            raise TypeError(f"index: expected an int, got {type(index).__name__}") from None
-        if not -len(self.tuples) <= index < len(self.tuples):
-            raise IndexError(f"index {index} out of range for {len(self.tuples)} tuples")
-        index %= len(self.tuples)
+        index = item_index(index, len(self.tuples), "tuples")
         ref = self.tuples[index]
         try:
             scene = self._scene(ref.scene)
