@@ -63,7 +63,7 @@ void RunPair(const PairArgs& args) {
   gt::truth::PairSource source{
       setup.format, d.scene, "", "", 0, 0, ls.preset, setup.resolution, "", setup.depth.source};
   if (setup.format == gt::DatasetFormat::kScanNetPP) {
-    source.device = gt::datasets::ScanNetPPDeviceName(setup.device);
+    source.device = gt::datasets::ScanNetPPDeviceName(setup.reader.scannetpp_device);
   }
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 

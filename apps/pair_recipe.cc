@@ -43,6 +43,7 @@ PairSetup StartPairSetup(const PairDatasetArgs& args) {
   if (args.device && s.format != gt::DatasetFormat::kScanNetPP) {
     throw gt::InputError("--device", "only for the scannetpp format");
   }
+  s.reader = gt::pipeline::RecipeReaderOptions(r);
   if (args.tum_max_dt_s) {
     if (s.format != gt::DatasetFormat::kTum) {
       throw gt::InputError("--tum-max-dt", "only for the tum format");
@@ -50,32 +51,29 @@ PairSetup StartPairSetup(const PairDatasetArgs& args) {
     if (!std::isfinite(*args.tum_max_dt_s) || *args.tum_max_dt_s < 0) {
       throw gt::InputError("--tum-max-dt", "expected a finite number of seconds >= 0");
     }
-    s.tum_max_dt_s = *args.tum_max_dt_s;
-  } else if (s.recipe && r.dataset.tum_max_dt_s) {
-    s.tum_max_dt_s = *r.dataset.tum_max_dt_s;
+    s.reader.tum_max_dt_s = *args.tum_max_dt_s;
   }
   if (s.format == gt::DatasetFormat::kScanNetPP) {
     const auto [id0, id1] = gt::truth::ParseFramePair(args.frames);
     std::string device_source;
     if (args.device) {
-      s.device = gt::datasets::ParseScanNetPPDevice(*args.device, "--device");
+      s.reader.scannetpp_device = gt::datasets::ParseScanNetPPDevice(*args.device, "--device");
       device_source = "--device";
       if (s.recipe && s.recipe->dataset.format == gt::DatasetFormat::kScanNetPP &&
-          s.recipe->dataset.device != s.device) {
+          s.recipe->dataset.device != s.reader.scannetpp_device) {
         throw gt::InputError("--device",
                              std::string(*args.device) + " differs from " + args.recipe +
                                  "'s dataset.device " +
                                  gt::datasets::ScanNetPPDeviceName(s.recipe->dataset.device));
       }
     } else if (s.recipe && s.recipe->dataset.format == gt::DatasetFormat::kScanNetPP) {
-      s.device = s.recipe->dataset.device;
-      device_source = args.recipe + ": dataset.device";
+      device_source = args.recipe + ": dataset.device";  // RecipeReaderOptions gave it
     } else {
-      s.device = gt::datasets::ScanNetPPDeviceOfFrameId(id0);
+      s.reader.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(id0);
       device_source = "the frame id '" + id0 + "'";
     }
     for (const std::string& id : {id0, id1}) {
-      gt::datasets::CheckScanNetPPFrameId(s.device, id, "--frames", device_source);
+      gt::datasets::CheckScanNetPPFrameId(s.reader.scannetpp_device, id, "--frames", device_source);
     }
   }
   return s;
@@ -113,11 +111,8 @@ void AddPairDatasetFlags(CLI::App* cmd, PairDatasetArgs* d, const std::string& r
 }
 
 gt::Scene ReadSetupScene(const PairSetup& setup, const std::string& scene_name) {
-  gt::datasets::ReaderOptions reader_options;
-  reader_options.scannetpp_device = setup.device;
-  reader_options.tum_max_dt_s = setup.tum_max_dt_s;
   gt::Scene scene =
-      gt::datasets::MakeReader(setup.format, reader_options)->ReadScene(setup.root, scene_name);
+      gt::datasets::MakeReader(setup.format, setup.reader)->ReadScene(setup.root, scene_name);
   gt::pipeline::ApplyMeshPath(setup.mesh_path, &scene);
   return scene;
 }

@@ -41,11 +41,11 @@ struct PairSetup {
   gt::truth::PairSettings settings;     // the recipe's (or the defaults), then the depth flags
   gt::render::FrameDepthOptions depth;  // the recipe's depth source, then --depth-source
   std::string mesh_path;                // --mesh, else the recipe's dataset.mesh_path
-  // ScanNet++: --device, else the recipe's dataset.device, else from the frame ids
-  // (datasets::ScanNetPPDeviceOfFrameId); frame ids of the other device are refused.
-  gt::datasets::ScanNetPPDevice device = gt::datasets::ScanNetPPDevice::kDslr;
-  // TUM: --tum-max-dt, else the recipe's dataset.tum_max_dt_s, else the reader's default.
-  double tum_max_dt_s = gt::datasets::ReaderOptions().tum_max_dt_s;
+  // The recipe's reader options (pipeline::RecipeReaderOptions), then the flags.
+  // ScanNet++ (scannetpp_device): --device, else the recipe's dataset.device, else from the
+  // frame ids (datasets::ScanNetPPDeviceOfFrameId); frame ids of the other device are refused.
+  // TUM (tum_max_dt_s): --tum-max-dt, else the recipe's dataset.tum_max_dt_s.
+  gt::datasets::ReaderOptions reader;
 };
 
 // The scene of the setup (its mesh path applied) and its frames at the working resolution

@@ -1035,11 +1035,15 @@ void ApplyMeshPath(const std::string& mesh_path, Scene* scene) {
   scene->mesh_path = path;
 }
 
+datasets::ReaderOptions RecipeReaderOptions(const Recipe& recipe) {
+  datasets::ReaderOptions options;
+  options.scannetpp_device = recipe.dataset.device;
+  if (recipe.dataset.tum_max_dt_s) options.tum_max_dt_s = *recipe.dataset.tum_max_dt_s;
+  return options;
+}
+
 std::unique_ptr<datasets::DatasetReader> MakeRecipeReader(const Recipe& recipe) {
-  datasets::ReaderOptions reader_options;
-  reader_options.scannetpp_device = recipe.dataset.device;
-  if (recipe.dataset.tum_max_dt_s) reader_options.tum_max_dt_s = *recipe.dataset.tum_max_dt_s;
-  return datasets::MakeReader(recipe.dataset.format, reader_options);
+  return datasets::MakeReader(recipe.dataset.format, RecipeReaderOptions(recipe));
 }
 
 Scene ReadRecipeScene(const Recipe& recipe, const datasets::DatasetReader& reader,

@@ -171,7 +171,10 @@ SampleOptions RecipeSampleOptions(const Recipe& recipe);
 // The recipe's depth source as the frame-depth options of every scene (render range: the
 // defaults of render::FrameDepthOptions).
 render::FrameDepthOptions RecipeFrameDepthOptions(const Recipe& recipe);
-// The reader of the recipe's dataset: its format, with dataset.device for ScanNet++.
+// The reader options a recipe's dataset keys give (dataset.device for ScanNet++,
+// dataset.tum_max_dt_s for TUM; the defaults otherwise).
+datasets::ReaderOptions RecipeReaderOptions(const Recipe& recipe);
+// The reader of the recipe's dataset: its format, with RecipeReaderOptions.
 std::unique_ptr<datasets::DatasetReader> MakeRecipeReader(const Recipe& recipe);
 // A scene read by `reader` with dataset.mesh_path applied (Scene::mesh_path, "{scene}"
 // replaced by its name). With dataset.depth_source mesh or fused, a scene without a mesh

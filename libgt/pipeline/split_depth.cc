@@ -66,9 +66,10 @@ BuildDataset ReadBuildDataset(const std::string& dir, const std::string& root_ov
                        "missing: a ScanNet++ build records the device (dslr or iphone) it read; "
                        "rebuild with a recipe that names dataset.device");
     }
-    b.device = datasets::ParseScanNetPPDevice(StringField(d, "device", where), where + ".device");
+    b.reader.scannetpp_device =
+        datasets::ParseScanNetPPDevice(StringField(d, "device", where), where + ".device");
   }
-  if (d.contains("tum_max_dt_s")) b.tum_max_dt_s = NumberField(d, "tum_max_dt_s", where);
+  if (d.contains("tum_max_dt_s")) b.reader.tum_max_dt_s = NumberField(d, "tum_max_dt_s", where);
   if (d.contains("mesh_path")) b.mesh_path = StringField(d, "mesh_path", where);
   if (d.contains("depth_source")) {
     b.depth.source = render::ParseDepthSourceMode(StringField(d, "depth_source", where),
@@ -105,15 +106,12 @@ std::optional<report::SplitDepthShares> ComputeSplitDepthShares(const std::strin
   if (b.format == DatasetFormat::kScanNetPP) {
     for (const auto& [name, ids] : frames_by_scene) {
       for (const auto& [id, unused] : ids) {
-        datasets::CheckScanNetPPFrameId(b.device, id, dir + "/pairs.jsonl",
+        datasets::CheckScanNetPPFrameId(b.reader.scannetpp_device, id, dir + "/pairs.jsonl",
                                         dir + "/recipe.json: dataset.device");
       }
     }
   }
-  datasets::ReaderOptions reader_options;
-  reader_options.scannetpp_device = b.device;
-  reader_options.tum_max_dt_s = b.tum_max_dt_s;
-  const auto reader = datasets::MakeReader(b.format, reader_options);
+  const auto reader = datasets::MakeReader(b.format, b.reader);
   std::vector<Scene> scenes;
   std::vector<std::pair<size_t, size_t>> work;  // (scene, frame index in it)
   for (const auto& [name, ids] : frames_by_scene) {

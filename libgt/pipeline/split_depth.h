@@ -22,8 +22,8 @@ namespace gt::pipeline {
 struct BuildDataset {
   DatasetFormat format = DatasetFormat::kGeneric;
   std::string root;  // recipe.json's dataset.root, or the override; synthetic: DIR/data
-  datasets::ScanNetPPDevice device = datasets::ScanNetPPDevice::kDslr;  // scannetpp only
-  double tum_max_dt_s = datasets::ReaderOptions().tum_max_dt_s;         // tum: dataset.tum_max_dt_s
+  // dataset.device (scannetpp), dataset.tum_max_dt_s (tum), as RecipeReaderOptions reads them
+  datasets::ReaderOptions reader;
   std::string mesh_path;            // dataset.mesh_path ("" = the reader's own)
   render::FrameDepthOptions depth;  // dataset.depth_source, fused_depth
   truth::Resolution resolution;     // resolution
