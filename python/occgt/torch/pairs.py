@@ -236,11 +236,11 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         # them (a misspelt or unknown option, a bad preset or value).
         check_resolution(width, height)
         resolved = occgt.pair_options(preset, occupancy=occupancy is not None, **options)
-        occupancy_resolved = resolved["occupancy_options"]
-        if (scope != "pair" and occupancy_resolved is not None
-                and occupancy_resolved["mode"] != "octomap"):
+        occupancy_options = resolved["occupancy_options"]
+        if (scope != "pair" and occupancy_options is not None
+                and occupancy_options["mode"] != "octomap"):
             raise ValueError(f"scope: {scope!r} fuses frames for occupancy_mode 'octomap' only "
-                             f"(mode {occupancy_resolved['mode']!r} uses the pair's depth "
+                             f"(mode {occupancy_options['mode']!r} uses the pair's depth "
                              "alone): use scope='pair'")
         self.root, self.format, self.device = root, format, device
         self.tum_max_dt_s = tum_max_dt_s
@@ -251,7 +251,6 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         self._scene_map: Optional[Tuple[str, occgt.ScopeMap]] = None
         self.options = dict(options)
         # The bins of the dense volumes, as the C++ resolved them (bins=None: the default).
-        occupancy_options = resolved["occupancy_options"]
         self.bins: int = (occupancy_options["bins"]["num_bins"] if occupancy_options is not None
                           else occgt.PAIR_DEFAULTS["bins"])
         self.dataset_name = _DATASET_NAMES.get(format, format)
