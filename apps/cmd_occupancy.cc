@@ -28,7 +28,8 @@ struct OccupancyArgs {
   PairDatasetArgs data;
   // Unset: the recipe's value (--recipe), else the defaults of a recipe without the key.
   std::optional<double> voxel_m, max_range_m, near_m, far_m;
-  std::optional<int> bins;
+  std::optional<int> bins, outlier_k;
+  std::optional<double> outlier_stddev;
   std::optional<std::string> spacing, traversal, scope, mode;
   bool dense = false, downsample = false, no_downsample = false, remove_outliers = false;
   std::string save_octree;
@@ -49,8 +50,18 @@ void RunOccupancy(const OccupancyArgs& args) {
   if (args.mode) os.mode = occ::ParseOccupancyMode(*args.mode);
   if (args.downsample && args.no_downsample)
     throw gt::InputError("--downsample", "conflicts with --no-downsample");
-  os.downsample = args.downsample;  // off by default, as in the library and `build`
-  os.remove_outliers = args.remove_outliers;
+  // Given flags win over a --recipe's keys; the filters are off by default, as in the
+  // library and `build`.
+  if (args.downsample) os.downsample = true;
+  if (args.no_downsample) os.downsample = false;
+  if (args.remove_outliers) os.remove_outliers = true;
+  if (args.outlier_k) os.outlier_k = *args.outlier_k;
+  if (args.outlier_stddev) os.outlier_stddev = *args.outlier_stddev;
+  if (!gt::truth::OccupancySettingsProblem(os).empty()) {  // a recipe's keys were checked
+    throw gt::InputError(args.outlier_k ? "--outlier-k" : "--outlier-stddev",
+                         "used with --remove-outliers (or a --recipe's "
+                         "occupancy.remove_outliers: true) only");
+  }
   if (args.scope) {
     occ::FusionOptions scope;
     occ::ParseFusionScope(*args.scope, &scope);
@@ -61,13 +72,15 @@ void RunOccupancy(const OccupancyArgs& args) {
   // The fusion's flags do nothing in two_point (they were recorded in occupancy.json and
   // not applied).
   if (os.mode == occ::OccupancyMode::kTwoPoint) {
-    for (const auto& [flag, given] :
-         std::vector<std::pair<const char*, bool>>{{"--voxel-m", args.voxel_m.has_value()},
-                                                   {"--max-range-m", args.max_range_m.has_value()},
-                                                   {"--scope", args.scope.has_value()},
-                                                   {"--traversal", args.traversal.has_value()},
-                                                   {"--downsample", args.downsample},
-                                                   {"--remove-outliers", args.remove_outliers}}) {
+    for (const auto& [flag, given] : std::vector<std::pair<const char*, bool>>{
+             {"--voxel-m", args.voxel_m.has_value()},
+             {"--max-range-m", args.max_range_m.has_value()},
+             {"--scope", args.scope.has_value()},
+             {"--traversal", args.traversal.has_value()},
+             {"--downsample", args.downsample},
+             {"--remove-outliers", args.remove_outliers},
+             {"--outlier-k", args.outlier_k.has_value()},
+             {"--outlier-stddev", args.outlier_stddev.has_value()}}) {
       if (given)
         throw gt::InputError(flag, "used by --mode octomap only (two_point fuses nothing)");
     }
@@ -81,6 +94,8 @@ void RunOccupancy(const OccupancyArgs& args) {
       {"scene", "--scope", args.scope.has_value()},
       {"num_bins", "--bins", args.bins.has_value()},
       {"near_m", "--near-m", args.near_m.has_value()},
+      {"outlier_k", "--outlier-k", args.outlier_k.has_value()},
+      {"outlier_stddev", "--outlier-stddev", args.outlier_stddev.has_value()},
       {"far_m", "--far-m", args.far_m.has_value() || args.near_m.has_value()}};
   gt::truth::PairTruthOptions o = ResolveSettings(setup, args.data, PairOutputs::kOccupancyOnly,
                                                   "occupancy options", occupancy_flags);
@@ -186,7 +201,15 @@ void AddOccupancyCommand(CLI::App& app) {
                     (def.fusion.downsample ? "on" : "off") + ")");
   cmd->add_flag("--no-downsample", args->no_downsample,
                 "insert every point (the default; kept for old command lines)");
-  cmd->add_flag("--remove-outliers", args->remove_outliers, "statistical outlier removal");
+  cmd->add_flag("--remove-outliers", args->remove_outliers,
+                std::string("statistical outlier removal after the downsampling (default ") +
+                    (def.fusion.remove_outliers ? "on" : "off") + ")");
+  cmd->add_option("--outlier-k", args->outlier_k,
+                  "neighbours of the outlier removal (default " + Num(def.fusion.outlier_k) + ")");
+  cmd->add_option("--outlier-stddev", args->outlier_stddev,
+                  "outlier removal: drop points whose mean neighbour distance exceeds the mean "
+                  "by this many standard deviations (default " +
+                      Num(def.fusion.outlier_stddev) + ")");
   cmd->add_option("--save-octree", args->save_octree, "also write the fused map (.bt)");
   cmd->callback([args] { RunOccupancy(*args); });
 }

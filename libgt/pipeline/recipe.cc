@@ -671,6 +671,13 @@ json Recipe::ToJson() const {
                     {"mode", occupancy::OccupancyModeName(t.mode)},
                     {"encoding", VolumeEncodingName(occupancy.encoding)}};
   if (occupancy.settings.max_range_m) j["occupancy"]["max_range_m"] = t.fusion.max_range_m;
+  // The point filters only when on (recipes without them keep their digest).
+  if (t.fusion.downsample) j["occupancy"]["downsample"] = true;
+  if (t.fusion.remove_outliers) {
+    j["occupancy"]["remove_outliers"] = true;
+    j["occupancy"]["outlier_k"] = t.fusion.outlier_k;
+    j["occupancy"]["outlier_stddev"] = t.fusion.outlier_stddev;
+  }
   j["sample"] = {{"image", ImageFormatName(sample.image)},
                  {"depth", sample.depth},
                  {"labels", sample.labels},
@@ -899,6 +906,12 @@ Recipe ParseRecipe(const std::string& yaml_text, const std::string& file,
     GetOpt(o, "occupancy.window", &os.window, file);
     GetOpt(o, "occupancy.scene_stride", &os.scene_stride, file);
     if (o.contains("mode")) os.mode = occupancy::ParseOccupancyMode(o["mode"].get<std::string>());
+    GetOpt(o, "occupancy.downsample", &os.downsample, file);
+    GetOpt(o, "occupancy.remove_outliers", &os.remove_outliers, file);
+    GetOpt(o, "occupancy.outlier_k", &os.outlier_k, file);
+    GetOpt(o, "occupancy.outlier_stddev", &os.outlier_stddev, file);
+    if (std::string why = truth::OccupancySettingsProblem(os); !why.empty())
+      throw InputError(file, "occupancy." + why);
     if (o.contains("encoding")) {
       r.occupancy.encoding =
           ParseVolumeEncoding(o["encoding"].get<std::string>(), file + ": occupancy.encoding");

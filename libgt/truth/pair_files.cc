@@ -109,19 +109,25 @@ nlohmann::ordered_json PatchOptionsJson(const PatchOptions& po) {
 nlohmann::ordered_json OccupancyOptionsJson(const PairTruthOptions& o) {
   const occupancy::BinOptions& bo = o.bins;
   const occupancy::FusionOptions& fo = o.fusion;
-  return {{"mode", occupancy::OccupancyModeName(o.mode)},
-          {"bins",
-           {{"num_bins", bo.num_bins},
-            {"near_m", bo.near_m},
-            {"far_m", bo.far_m},
-            {"spacing", occupancy::BinSpacingName(bo.spacing)},
-            {"traversal", occupancy::TraversalName(bo.traversal)}}},
-          {"fusion",
-           {{"scope", occupancy::FusionScopeName(fo)},
-            {"voxel_m", fo.voxel_m},
-            {"max_range_m", fo.max_range_m},
-            {"downsample", fo.downsample},
-            {"remove_outliers", fo.remove_outliers}}}};
+  nlohmann::ordered_json j = {{"mode", occupancy::OccupancyModeName(o.mode)},
+                              {"bins",
+                               {{"num_bins", bo.num_bins},
+                                {"near_m", bo.near_m},
+                                {"far_m", bo.far_m},
+                                {"spacing", occupancy::BinSpacingName(bo.spacing)},
+                                {"traversal", occupancy::TraversalName(bo.traversal)}}},
+                              {"fusion",
+                               {{"scope", occupancy::FusionScopeName(fo)},
+                                {"voxel_m", fo.voxel_m},
+                                {"max_range_m", fo.max_range_m},
+                                {"downsample", fo.downsample},
+                                {"remove_outliers", fo.remove_outliers}}}};
+  // The filter's parameters only when it is on (the samples of other options keep their bytes).
+  if (fo.remove_outliers) {
+    j["fusion"]["outlier_k"] = fo.outlier_k;
+    j["fusion"]["outlier_stddev"] = fo.outlier_stddev;
+  }
+  return j;
 }
 
 nlohmann::ordered_json FusionStatsJson(const occupancy::FusionStats& s) {

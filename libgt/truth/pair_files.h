@@ -51,7 +51,8 @@ nlohmann::ordered_json LabelOptionsJson(const LabelOptions& lo);
 nlohmann::ordered_json PatchOptionsJson(const PatchOptions& po);
 // The occupancy options ("occupancy_options"): {mode, bins: {num_bins, near_m, far_m,
 // spacing, traversal}, fusion: {scope, voxel_m, max_range_m, downsample,
-// remove_outliers}}; occupancy.json's "mode", "bins" and "fusion" use the same names.
+// remove_outliers[, outlier_k, outlier_stddev when remove_outliers]}}; occupancy.json's "mode",
+// "bins" and "fusion" use the same names.
 nlohmann::ordered_json OccupancyOptionsJson(const PairTruthOptions& o);
 // What happened to the points of a fusion (occupancy::FusionStats, summed over its frames):
 // {frames, pixels, invalid_pixels, out_of_key_range, after_downsample, downsample_fallbacks,

@@ -11,6 +11,13 @@ void Set(const std::optional<T>& value, T* field) {
 
 }  // namespace
 
+std::string OccupancySettingsProblem(const OccupancySettings& settings) {
+  if (settings.remove_outliers.value_or(occupancy::FusionOptions().remove_outliers)) return "";
+  if (settings.outlier_k) return "outlier_k: used with remove_outliers on only";
+  if (settings.outlier_stddev) return "outlier_stddev: used with remove_outliers on only";
+  return "";
+}
+
 DatasetDepthRange DepthRangeOf(const Scene& scene) {
   DatasetDepthRange r;
   r.min_depth_m = scene.min_depth_m;
@@ -55,6 +62,8 @@ PairTruthOptions ResolvePairTruthOptions(const PairSettings& settings,
   Set(os.scene_stride, &fo.scene_stride);
   Set(os.downsample, &fo.downsample);
   Set(os.remove_outliers, &fo.remove_outliers);
+  Set(os.outlier_k, &fo.outlier_k);
+  Set(os.outlier_stddev, &fo.outlier_stddev);
   return o;
 }
 

@@ -59,7 +59,14 @@ struct OccupancySettings {
   std::optional<int> window, scene_stride;      // FusionOptions (used by their scope only)
   std::optional<occupancy::OccupancyMode> mode;
   std::optional<bool> downsample, remove_outliers;  // FusionOptions
+  std::optional<int> outlier_k;                     // FusionOptions (remove_outliers only)
+  std::optional<double> outlier_stddev;             // FusionOptions (remove_outliers only)
 };
+
+// A setting given that its own switch leaves unused ("outlier_k: ..." when remove_outliers
+// is not on), else "". Every entry point refuses such settings (they were recorded and not
+// applied); the values themselves are checked on the resolved options.
+std::string OccupancySettingsProblem(const OccupancySettings& settings);
 
 struct PairSettings {
   LabelSettings labels;

@@ -30,6 +30,11 @@ std::string ModeScopeProblem(const PairTruthOptions& options) {
            " fuses frames for mode octomap only (mode two_point uses the pair's depth alone): "
            "use scope pair";
   }
+  if (options.mode == occupancy::OccupancyMode::kTwoPoint &&
+      (options.fusion.downsample || options.fusion.remove_outliers)) {
+    return std::string(options.fusion.downsample ? "downsample" : "remove_outliers") +
+           " filters the fused points for mode octomap only (mode two_point fuses nothing)";
+  }
   return "";
 }
 

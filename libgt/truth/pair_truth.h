@@ -39,9 +39,9 @@ struct PairTruthOptions {
   bool Check(std::string* error) const;
 };
 
-// "" or why options.mode cannot use options.fusion.scope (two_point fuses nothing, so a
-// window or scene scope would be recorded and not applied); part of Check, and of a
-// recipe's check for occupancy that is enabled.
+// "" or why options.mode cannot use options.fusion's scope or point filters (two_point fuses
+// nothing, so a window or scene scope, downsample or remove_outliers would be recorded and
+// not applied); part of Check, and of a recipe's check for occupancy that is enabled.
 std::string ModeScopeProblem(const PairTruthOptions& options);
 
 struct PairTruth {

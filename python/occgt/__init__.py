@@ -216,6 +216,10 @@ def pair_ground_truth(
     spacing: str = _D["spacing"],
     traversal: str = _D["traversal"],
     occupancy_mode: str = _D["occupancy_mode"],
+    downsample: bool = _D["downsample"],
+    remove_outliers: bool = _D["remove_outliers"],
+    outlier_k: Optional[int] = None,
+    outlier_stddev: Optional[float] = None,
     dataset_depth_range: Optional[Tuple[float, float]] = None,
     dataset_min_depth_m: Optional[float] = None,
     dataset_max_depth_m: Optional[float] = None,
@@ -265,6 +269,13 @@ def pair_ground_truth(
         spacing: "linear" | "log" | "inverse": the bin edges.
         traversal: "exact" | "center": which voxels a bin's ray segment looks at.
         occupancy_mode: "octomap" (fused map) | "two_point" (the released Occ²Net target).
+        downsample: one centroid per voxel before insertion (``occgt occupancy --downsample``,
+            a recipe's ``occupancy.downsample``).
+        remove_outliers: statistical outlier removal of the fused points (PCL's, after the
+            downsampling; ``--remove-outliers``, ``occupancy.remove_outliers``).
+        outlier_k, outlier_stddev: its neighbour count and threshold in standard deviations;
+            None = ``PAIR_DEFAULTS["outlier_k"]`` / ``["outlier_stddev"]``; given only with
+            remove_outliers=True (else ValueError).
         dataset_depth_range: (min, max) valid depth of the dataset the frames come from (a
             reader's ``Scene.min_depth_m``, ``Scene.max_depth_m``; pair_from_scene passes it):
             it replaces the preset's range unless the preset ignores datasets' ranges
@@ -274,7 +285,7 @@ def pair_ground_truth(
             min_depth_m/max_depth_m still win over it. The order of all of these is
             docs/GROUND_TRUTH.md's (libgt/truth/pair_settings.h).
         scope_map: a map fused over a window of frames or the whole scene (``Scene.fuse``;
-            its voxel_m and max_range_m must be the ones given here): the volumes are read
+            its voxel_m, max_range_m and point filters must be the ones given here): the volumes are read
             from it instead of fusing the two depth maps. None = fuse the pair.
 
     Returns:
@@ -308,7 +319,9 @@ def pair_ground_truth(
         missing_target=missing_target, stride=stride, anchor=anchor, mutual=mutual,
         occupancy=occupancy, voxel_m=voxel_m, max_range_m=max_range_m, near_m=near_m,
         far_m=far_m, bins=bins, spacing=spacing, traversal=traversal,
-        occupancy_mode=occupancy_mode, dataset_depth_range=dataset_depth_range,
+        occupancy_mode=occupancy_mode, downsample=downsample, remove_outliers=remove_outliers,
+        outlier_k=outlier_k, outlier_stddev=outlier_stddev,
+        dataset_depth_range=dataset_depth_range,
         dataset_min_depth_m=dataset_min_depth_m, dataset_max_depth_m=dataset_max_depth_m,
         scope_map=scope_map)
     return result
@@ -627,7 +640,8 @@ def scope_name(scope: Any) -> str:
 #: The keyword arguments of pair_ground_truth that Scene.fuse takes too (the map must be
 #: fused with the options the pair uses).
 FUSE_OPTIONS = ("voxel_m", "max_range_m", "far_m", "min_depth_m", "max_depth_m",
-                "dataset_min_depth_m", "dataset_max_depth_m")
+                "dataset_min_depth_m", "dataset_max_depth_m", "downsample", "remove_outliers",
+                "outlier_k", "outlier_stddev")
 
 
 def fuse_scope(scene: Scene, id0: str, id1: str, width: int, height: int, scope: str,

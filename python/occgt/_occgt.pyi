@@ -173,7 +173,9 @@ class Scene:
         voxel_m: Optional[float] = None, max_range_m: Optional[float] = None,
         far_m: Optional[float] = None, min_depth_m: Optional[float] = None,
         max_depth_m: Optional[float] = None, preset: str = ...,
-        dataset_min_depth_m: Optional[float] = None, dataset_max_depth_m: Optional[float] = None
+        dataset_min_depth_m: Optional[float] = None, dataset_max_depth_m: Optional[float] = None,
+        downsample: Optional[bool] = None, remove_outliers: Optional[bool] = None,
+        outlier_k: Optional[int] = None, outlier_stddev: Optional[float] = None
     ) -> ScopeMap:
         """The occupancy map of the pair fused over scope ("pair", "window:N", "scene:S"), for
         pair_ground_truth(..., occupancy=True, scope_map=...)."""

@@ -75,6 +75,15 @@ std::string Arg<std::string>(py::handle value, const std::string& argument) {
 }
 
 template <>
+bool Arg<bool>(py::handle value, const std::string& argument) {
+  // True/False or numpy.bool_, not 0/1 (mutual=0 passed as False).
+  if (!PyBool_Check(value.ptr()) && TypeName(value) != "bool_") {
+    throw py::type_error(argument + ": expected a bool, got " + TypeName(value));
+  }
+  return PyObject_IsTrue(value.ptr()) == 1;
+}
+
+template <>
 double Arg<double>(py::handle value, const std::string& argument) {
   PyObject* v = value.ptr();
   const bool number =

@@ -57,6 +57,9 @@ template <>
 uint64_t Arg<uint64_t>(py::handle value, const std::string& argument);
 template <>
 std::string Arg<std::string>(py::handle value, const std::string& argument);
+// True/False or numpy.bool_ (not 0/1): TypeError("<argument>: expected a bool, got int").
+template <>
+bool Arg<bool>(py::handle value, const std::string& argument);
 // A real number: a Python int or float, a NumPy or 0-d torch scalar (anything with
 // __float__ but str, bytes, bool and numpy.bool_): TypeError("<argument>: expected a number, got
 // str").

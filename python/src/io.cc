@@ -144,7 +144,9 @@ class PyScene {
                   py::handle height_arg, py::handle scope_arg, py::handle voxel_arg,
                   py::handle max_range_arg, py::handle far_arg, py::handle min_depth_arg,
                   py::handle max_depth_arg, py::handle preset_arg, py::handle dataset_min_depth_arg,
-                  py::handle dataset_max_depth_arg) const {
+                  py::handle dataset_max_depth_arg, py::handle downsample_arg,
+                  py::handle remove_outliers_arg, py::handle outlier_k_arg,
+                  py::handle outlier_stddev_arg) const {
     const std::optional<double> voxel_m = OptionalArg<double>(voxel_arg, "voxel_m");
     const std::optional<double> max_range_m = OptionalArg<double>(max_range_arg, "max_range_m");
     const std::optional<double> far_m = OptionalArg<double>(far_arg, "far_m");
@@ -170,6 +172,14 @@ class PyScene {
     settings.occupancy.voxel_m = voxel_m;
     settings.occupancy.max_range_m = max_range_m;
     settings.occupancy.far_m = far_m;
+    gt::truth::OccupancySettings& os = settings.occupancy;
+    os.downsample = OptionalArg<bool>(downsample_arg, "downsample");
+    os.remove_outliers = OptionalArg<bool>(remove_outliers_arg, "remove_outliers");
+    os.outlier_k = OptionalArg<int>(outlier_k_arg, "outlier_k");
+    os.outlier_stddev = OptionalArg<double>(outlier_stddev_arg, "outlier_stddev");
+    if (std::string why = gt::truth::OccupancySettingsProblem(os); !why.empty()) {
+      ThrowValue(why.substr(0, why.find(':')), why.substr(why.find(':') + 2));
+    }
     gt::occupancy::FusionOptions parsed;
     Named("scope", [&] { gt::occupancy::ParseFusionScope(scope, &parsed); });
     settings.occupancy.scope = parsed.scope;
@@ -195,6 +205,7 @@ class PyScene {
     out.scope = gt::occupancy::FusionScopeName(o.fusion);
     out.voxel_m = o.fusion.voxel_m;
     out.max_range_m = o.fusion.max_range_m;
+    out.fusion = o.fusion;
     out.min_depth_m = o.labels.min_depth_m;
     out.max_depth_m = o.labels.max_depth_m;
     out.width = width;
@@ -401,13 +412,17 @@ void BindIo(py::module_& m) {
            "voxel_m"_a = py::none(), "max_range_m"_a = py::none(), "far_m"_a = py::none(),
            "min_depth_m"_a = py::none(), "max_depth_m"_a = py::none(),
            "preset"_a = gt::truth::LabelSettings().preset, "dataset_min_depth_m"_a = py::none(),
-           "dataset_max_depth_m"_a = py::none(),
+           "dataset_max_depth_m"_a = py::none(), "downsample"_a = py::none(),
+           "remove_outliers"_a = py::none(), "outlier_k"_a = py::none(),
+           "outlier_stddev"_a = py::none(),
            "ScopeMap: the occupancy map of the pair (id0, id1) fused over a scope (truth::"
            "FuseScope, `occgt occupancy --scope`): 'pair', 'window:N' (the usable frames within "
            "N positions of either frame) or 'scene:S' (every S-th usable frame: one map for all "
            "pairs of the scene), depth at width x height, voxel_m and max_range_m in metres, "
            "the depth range the scene's (as `preset` takes it) unless given; None: the defaults of "
-           "pair_ground_truth (PAIR_DEFAULTS; max_range_m: far_m). Frames of the scope that cannot "
+           "pair_ground_truth (PAIR_DEFAULTS; max_range_m: far_m), and so are the point filters "
+           "(downsample, remove_outliers, outlier_k, outlier_stddev). Frames of the scope that "
+           "cannot "
            "be read "
            "are skipped and listed in ScopeMap.skipped. Pass it to "
            "pair_ground_truth(..., occupancy=True, scope_map=...).")

@@ -17,7 +17,8 @@ struct PyScopeMap {
   std::string scene;
   std::string scope;  // FusionScopeName: "pair", "window:N", "scene:S"
   double voxel_m = 0.0, max_range_m = 0.0, min_depth_m = 0.0, max_depth_m = 0.0;
-  int width = 0, height = 0;  // working resolution of the fused depth maps
+  gt::occupancy::FusionOptions fusion;  // the options it was fused with (its point filters)
+  int width = 0, height = 0;            // working resolution of the fused depth maps
 };
 
 }  // namespace occgt_py

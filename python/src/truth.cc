@@ -64,14 +64,9 @@ std::optional<T> Take(py::dict* kwargs, const char* name) {
   PyDict_DelItemString(kwargs->ptr(), name);
   if (value.is_none()) return std::nullopt;
   if constexpr (std::is_same_v<T, int> || std::is_same_v<T, std::string> ||
-                std::is_same_v<T, double>) {
+                std::is_same_v<T, double> || std::is_same_v<T, bool>) {
     return Arg<T>(value, name);  // an int out of range is a ValueError, not "got int"; a bool
-                                 // is not a number (abs_tol_m=True was 1.0)
-  }
-  if constexpr (std::is_same_v<T, bool>) {  // True/False or numpy.bool_, not 0/1 (mutual=0)
-    if (!PyBool_Check(value.ptr()) && TypeName(value) != "bool_") {
-      throw py::type_error(std::string(name) + ": expected a bool, got " + TypeName(value));
-    }
+                                 // is not a number (abs_tol_m=True was 1.0), nor 0 a bool
   }
   try {
     return value.cast<T>();
@@ -110,6 +105,17 @@ void TakeLabelArguments(const std::string& preset, py::dict* kw_ptr, PairArgumen
   a.range.set_max_depth_m = Take<double>(&kw, "dataset_max_depth_m");
 }
 
+// The point filters of a fusion, as a ScopeMap check compares them.
+std::string FiltersText(const gt::occupancy::FusionOptions& f) {
+  std::ostringstream s;
+  s << "downsample " << (f.downsample ? "on" : "off") << ", remove_outliers ";
+  if (f.remove_outliers)
+    s << "on (outlier_k " << f.outlier_k << ", outlier_stddev " << f.outlier_stddev << ")";
+  else
+    s << "off";
+  return s.str();
+}
+
 void RejectUnknownKeywords(const py::dict& kw) {
   for (const auto& item : kw) {
     throw py::type_error("got an unexpected keyword argument '" + std::string(py::str(item.first)) +
@@ -140,6 +146,13 @@ PairArguments ArgumentsFromKwargs(const std::string& preset, const py::kwargs& g
   }
   if (auto v = Take<std::string>(&kw, "occupancy_mode")) {
     os.mode = Named("occupancy_mode", [&] { return gt::occupancy::ParseOccupancyMode(*v); });
+  }
+  os.downsample = Take<bool>(&kw, "downsample");
+  os.remove_outliers = Take<bool>(&kw, "remove_outliers");
+  os.outlier_k = Take<int>(&kw, "outlier_k");
+  os.outlier_stddev = Take<double>(&kw, "outlier_stddev");
+  if (std::string why = gt::truth::OccupancySettingsProblem(os); !why.empty()) {
+    ThrowValue(why.substr(0, why.find(':')), why.substr(why.find(':') + 2));
   }
   if (kw.contains("scope_map")) {
     const py::object m = kw["scope_map"];
@@ -208,6 +221,9 @@ py::dict PairGroundTruth(py::handle depth0, py::handle depth1, py::handle K0, py
       problem << "given without occupancy=True";
     else if (options.mode != gt::occupancy::OccupancyMode::kOctomap)
       problem << "used by occupancy_mode 'octomap' only";
+    else if (FiltersText(scope->fusion) != FiltersText(options.fusion))
+      problem << "fused with " << FiltersText(scope->fusion) << "; expected the same here, got "
+              << FiltersText(options.fusion);
     else if (scope->voxel_m != options.fusion.voxel_m ||
              scope->max_range_m != options.fusion.max_range_m)
       problem << "fused with voxel_m " << scope->voxel_m << ", max_range_m " << scope->max_range_m
@@ -560,6 +576,10 @@ py::dict PairDefaults() {
   d["spacing"] = gt::occupancy::BinSpacingName(o.bins.spacing);
   d["traversal"] = gt::occupancy::TraversalName(o.bins.traversal);
   d["occupancy_mode"] = gt::occupancy::OccupancyModeName(o.mode);
+  d["downsample"] = o.fusion.downsample;
+  d["remove_outliers"] = o.fusion.remove_outliers;
+  d["outlier_k"] = o.fusion.outlier_k;
+  d["outlier_stddev"] = o.fusion.outlier_stddev;
   d["min_depth_m"] = gt::kDefaultMinDepthM;
   d["max_depth_m"] = gt::kDefaultMaxDepthM;
   const gt::truth::Resolution resolution;

@@ -126,13 +126,37 @@ def main():
     # The fusion's flags with --mode two_point, which fuses nothing: refused (they were
     # recorded in occupancy.json and not applied).
     for flag in (["--scope", "window:1"], ["--voxel-m", "0.1"], ["--max-range-m", "5"],
-                 ["--traversal", "center"], ["--downsample"], ["--remove-outliers"]):
+                 ["--traversal", "center"], ["--downsample"], ["--remove-outliers"],
+                 ["--remove-outliers", "--outlier-k", "5"]):
         r = common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
                          "--frames", "000000,000020", "--out", out5, "--mode", "two_point",
                          *flag, check=False)
         assert r.returncode == 2, (flag, r.returncode, r.stderr)
         assert r.stderr == (f"occgt: error: {flag[0]}: used by --mode octomap only (two_point "
                             "fuses nothing)\n"), r.stderr
+        assert os.listdir(out5) == []
+    # The outlier removal's parameters: recorded when it is on, refused without it.
+    out6 = common.scratch("occupancy_outliers")
+    common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
+                 "--frames", "000000,000020", "--out", out6, "--resolution", "320x240",
+                 "--remove-outliers", "--outlier-k", "6", "--outlier-stddev", "0.5")
+    meta6 = json.load(open(os.path.join(out6, "occupancy.json")))
+    jsonschema.validate(meta6, schema)
+    fusion = meta6["fusion"]
+    assert (fusion["remove_outliers"], fusion["outlier_k"], fusion["outlier_stddev"]) == (
+        True, 6, 0.5), fusion
+    assert fusion["stats"]["outliers_removed"] > 0, fusion["stats"]
+    for flags, message in (
+            (["--outlier-k", "6"], "--outlier-k: used with --remove-outliers (or a --recipe's "
+                                   "occupancy.remove_outliers: true) only"),
+            (["--outlier-stddev", "1"], "--outlier-stddev: used with --remove-outliers"),
+            (["--remove-outliers", "--outlier-k", "0"], "--outlier-k: outlier_k must be >= 1"),
+            (["--remove-outliers", "--outlier-stddev", "-1"],
+             "--outlier-stddev: outlier_stddev must be > 0")):
+        r = common.occgt("occupancy", "--root", root, "--format", "tartanair", "--scene", "",
+                         "--frames", "000000,000020", "--out", out5, *flags, check=False)
+        assert r.returncode == 2 and r.stderr.startswith("occgt: error: " + message), (
+            flags, r.returncode, r.stderr)
         assert os.listdir(out5) == []
     print("occupancy integration: ok")
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import glob
 import gzip
+import io
 import json
 import os
 import subprocess
@@ -22,6 +23,7 @@ import tarfile
 import unittest
 from typing import Any, Dict, Iterator, List, Optional, Tuple
 
+import numpy as np
 import yaml
 
 sys.path.insert(0, os.path.dirname(__file__))
@@ -71,7 +73,9 @@ def recipe_kwargs(recipe: Dict[str, Any]) -> Tuple[str, Dict[str, Any], str]:
     kwargs["occupancy"] = bool(occ.get("enabled", True) and sample.get("occupancy", True))
     names = {"voxel_m": "voxel_m", "bins": "bins", "near_m": "near_m", "far_m": "far_m",
              "max_range_m": "max_range_m", "spacing": "spacing", "traversal": "traversal",
-             "mode": "occupancy_mode"}
+             "mode": "occupancy_mode", "downsample": "downsample",
+             "remove_outliers": "remove_outliers", "outlier_k": "outlier_k",
+             "outlier_stddev": "outlier_stddev"}
     kwargs.update({names[k]: v for k, v in occ.items() if k in names})
     scope = occ.get("scope", "pair")
     if scope == "window":
@@ -86,6 +90,8 @@ def occupancy_options_of(occupancy_json: Dict[str, Any]) -> Dict[str, Any]:
     bins = {k: v for k, v in occupancy_json["bins"].items() if k != "edges_m"}
     fusion = {k: v for k, v in occupancy_json["fusion"].items()
               if k in ("scope", "voxel_m", "max_range_m", "downsample", "remove_outliers")}
+    if fusion["remove_outliers"]:  # a sample records the filter's parameters only when on
+        fusion.update({k: occupancy_json["fusion"][k] for k in ("outlier_k", "outlier_stddev")})
     return {"mode": occupancy_json["mode"], "bins": bins, "fusion": fusion}
 
 
@@ -194,6 +200,89 @@ class ResolvedOptions(unittest.TestCase):
                              occgt.pair_options(preset)["label_options"]["abs_tol_m"]
                              if "abs_tol_m" not in kwargs else kwargs["abs_tol_m"], path)
         self.assertIn("megadepth", presets)  # a preset other than the default is exercised
+
+    def test_point_filters(self) -> None:
+        """occupancy.downsample / remove_outliers / outlier_k / outlier_stddev: a recipe's keys
+        reach the build's samples, recipe.json, `occgt pair/occupancy --recipe`,
+        pair_from_scene and PairIndexDataset.from_split alike; the parameters of a filter that
+        is off, and the filters under two_point, are refused everywhere."""
+        with open(os.path.join(common.SOURCE, "recipes", "demo.yaml")) as f:
+            recipe = yaml.safe_load(f)
+        recipe["dataset"]["synthetic"].update({"scenes": 1, "frames": 10})
+        recipe["selection"]["quota_per_scene"] = 2
+        for k in ("loftr_export", "gluefactory_export", "dust3r_export"):
+            recipe.pop(k)
+        recipe["occupancy"].update({"downsample": True, "remove_outliers": True,
+                                    "outlier_k": 8, "outlier_stddev": 1.5})
+        folder = common.scratch("pair_options_filters")
+        path = os.path.join(folder, "filters.yaml")
+        with open(path, "w") as f:
+            yaml.safe_dump(recipe, f)
+        split = os.path.join(folder, "out")
+        common.occgt("build", path, "--out", split)
+        occ = common.read_json(os.path.join(split, "recipe.json"))["occupancy"]
+        self.assertEqual({k: occ[k] for k in ("downsample", "remove_outliers", "outlier_k",
+                                              "outlier_stddev")},
+                         {"downsample": True, "remove_outliers": True, "outlier_k": 8,
+                          "outlier_stddev": 1.5})
+        ds = PairIndexDataset.from_split(split)
+        line = read_jsonl(os.path.join(split, "pairs.jsonl"))[0]
+        id0, id1 = line["frame0"]["id"], line["frame1"]["id"]
+        meta = {m["key"]: m for m in sample_jsons(split)}[f"{line['scene']}/{id0}_{id1}"]
+        want = {k: meta[k] for k in ("label_options", "patch_options", "occupancy_options")}
+        self.assertEqual(want["occupancy_options"]["fusion"],
+                         {"scope": "pair", "voxel_m": 0.05, "max_range_m": 8.0,
+                          "downsample": True, "remove_outliers": True, "outlier_k": 8,
+                          "outlier_stddev": 1.5})
+        self.assertGreater(meta["occupancy"]["fusion"]["stats"]["outliers_removed"], 0)
+        root = os.path.join(split, "data")
+        self.assertEqual(ds.pair_options(0), want)
+        self.assertEqual(self.cli_options(path, True, line["scene"], id0, id1, ["--root", root]),
+                         want)
+        self.assertEqual(self.python_options(recipe, root, "generic", line["scene"], id0, id1),
+                         want)
+        # The item's volumes are the shard's (the filters applied on the fly too), and
+        # differ from the unfiltered ones (else the comparison proves nothing).
+        members: Dict[str, bytes] = {}
+        for shard in common.read_json(os.path.join(split, "index.json"))["shardlist"]:
+            with tarfile.open(os.path.join(split, shard["url"]), "r:") as tar:
+                for m in tar:
+                    data = tar.extractfile(m)
+                    if data is not None:  # members may be gzipped (sample.compression)
+                        raw = data.read()
+                        members[m.name.removesuffix(".gz")] = (
+                            gzip.decompress(raw) if m.name.endswith(".gz") else raw)
+        key = f"{line['scene']}/{id0}_{id1}"
+        unfiltered = PairIndexDataset.from_split(split, downsample=False, remove_outliers=False,
+                                                 outlier_k=None, outlier_stddev=None)
+        differ = 0
+        for k in ("occ0", "known0", "occ1", "known1"):
+            shard = np.load(io.BytesIO(members[f"{key}.{k}.npy"]))
+            self.assertTrue(np.array_equal(ds[0][k].numpy().view(np.uint64), shard), k)
+            differ += int((unfiltered[0][k].numpy().view(np.uint64) != shard).sum())
+        self.assertGreater(differ, 0)
+        # A filter's parameter without the filter, and a filter under two_point: refused.
+        bad = dict(recipe, occupancy=dict(recipe["occupancy"], remove_outliers=False))
+        with open(path, "w") as f:
+            yaml.safe_dump(bad, f)
+        r = subprocess.run([common.BINARY, "build", path, "--out", split, "--dry-run"],
+                           capture_output=True, text=True)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("occupancy.outlier_k: used with remove_outliers on only", r.stderr)
+        with self.assertRaisesRegex(ValueError, "^outlier_stddev: used with remove_outliers"):
+            occgt.pair_options(occupancy=True, outlier_stddev=1.0)
+        with self.assertRaisesRegex(ValueError, "downsample filters the fused points for mode "
+                                                "octomap only"):
+            occgt.pair_options(occupancy=True, occupancy_mode="two_point", downsample=True)
+        # A scope map fused without the filters is refused by a pair that asks for them.
+        scene = occgt.open_dataset(root, "generic").scene(line["scene"])
+        fused = scene.fuse(id0, id1, 320, 240, scope="window:1")
+        depth0, K0, pose0 = scene.load(id0, 320, 240)
+        depth1, K1, pose1 = scene.load(id1, 320, 240)
+        with self.assertRaisesRegex(ValueError, "^scope_map: fused with downsample off, "
+                                                "remove_outliers off; expected the same here"):
+            occgt.pair_ground_truth(depth0, depth1, K0, K1, pose0, pose1, occupancy=True,
+                                    remove_outliers=True, scope_map=fused)
 
     def test_defaults_come_from_the_cpp(self) -> None:
         """PAIR_DEFAULTS are the options of default settings, and pair_options() is them."""

@@ -320,6 +320,9 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                             "near_m": occ["near_m"], "far_m": occ["far_m"], "bins": occ["bins"],
                             "spacing": occ["spacing"], "traversal": occ["traversal"],
                             "occupancy_mode": occ["mode"]})
+            # The point filters: recipe.json has them only when on.
+            options.update({k: occ[k] for k in ("downsample", "remove_outliers", "outlier_k",
+                                                "outlier_stddev") if k in occ})
         arguments: Dict[str, Any] = {
             "pairs": split_dir, "root": root, "format": fmt, "width": width, "height": height,
             "preset": labels["preset"],
