@@ -383,8 +383,10 @@ std::vector<size_t> FilterAndSample(const std::vector<ScoredPair>& scored,
       options.quota_per_scene > 0 ? static_cast<size_t>(options.quota_per_scene) : passed.size();
   if (options.balance_bins > 0 && !passed.empty()) {
     // Equal bins over [overlap_lo, overlap_hi]; each bin shuffled; round robin over bins
-    // until the quota is met. Without a quota every bin is capped at the smallest non-empty
-    // bin's size.
+    // until the quota is met, each round visiting its bins in a seeded order (a quota met
+    // part way through a round takes that round's last pairs from random bins: in a fixed
+    // order they all came from the lowest-overlap bins). Without a quota every bin is capped
+    // at the smallest non-empty bin's size.
     const int nb = options.balance_bins;
     std::vector<std::vector<size_t>> bins(nb);
     const double width = options.overlap_hi - options.overlap_lo;
@@ -400,9 +402,15 @@ std::vector<size_t> FilterAndSample(const std::vector<ScoredPair>& scored,
     }
     const size_t cap = options.quota_per_scene > 0 ? passed.size() : smallest;
     const size_t target = std::min(quota, passed.size());
+    std::vector<size_t> order;
     for (size_t round = 0; round < cap && chosen.size() < target; ++round) {
-      for (auto& bin : bins) {
-        if (round < bin.size() && chosen.size() < target) chosen.push_back(bin[round]);
+      order.clear();
+      for (size_t b = 0; b < bins.size(); ++b) {
+        if (round < bins[b].size()) order.push_back(b);
+      }
+      if (order.size() > target - chosen.size()) SeededShuffle(&order, &rng);  // a partial round
+      for (size_t b : order) {
+        if (chosen.size() < target) chosen.push_back(bins[b][round]);
       }
     }
     const int64_t balanced_out = static_cast<int64_t>(passed.size() - chosen.size());

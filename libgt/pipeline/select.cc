@@ -298,6 +298,7 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
       by_id[scene.frames[i].id] = i;
     }
     auto it = imports->find(scene_name);
+    std::set<std::pair<size_t, size_t>> listed;  // a row given twice would make one key twice
     if (it != imports->end()) {
       for (const ImportedPair& p : it->second) {
         // A pair by id (LoFTR's MegaDepth) or by number (LoFTR's test.npz), as its frame index.
@@ -312,6 +313,10 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
         const std::optional<size_t> a = index(p.number0, p.id0), b = index(p.number1, p.id1);
         if (!a || !b) {
           ++drops["import.missing_frame"];
+        } else if (*a == *b) {
+          ++drops["import.same_frame"];
+        } else if (!listed.insert({*a, *b}).second) {
+          ++drops["import.duplicate"];
         } else if (!scene.frames[*a].usable || !scene.frames[*b].usable) {
           ++drops["import.unusable_frame"];
         } else if (need_color && (!has_color(*a) || !has_color(*b))) {

@@ -122,6 +122,24 @@ def main():
     assert f"  first score.read_error: {example}" in r.stdout, r.stdout
     validate(s, "summary.schema.json")
 
+    # 1c. A row given twice and a frame paired with itself: skipped and counted (the repeat
+    # stopped the build with "two pairs map to the same key after sanitising"); the reversed
+    # pair is another pair and stays.
+    s0, sub0, a0, b0 = expected[0]
+    rows = [i for i in range(len(names)) if f"scene{names[i][0]:04d}_{names[i][1]:02d}" == scene0]
+    extra = np.array([[s0, sub0, a0, b0], [s0, sub0, a0, a0], [s0, sub0, b0, a0]], np.int64)
+    dup_npz = os.path.join(broken, "repeats.npz")
+    np.savez(dup_npz, name=np.concatenate([names[rows], extra]))
+    doc["selection"]["import_pairs"]["path"] = dup_npz
+    dup_recipe = os.path.join(broken, "repeats.yaml")
+    with open(dup_recipe, "w") as f:
+        yaml.safe_dump(doc, f)
+    s = json.loads(common.occgt("build", "--json", dup_recipe, "--out", os.path.join(broken, "out3"),
+                                "--root", data, "--stage", "select", env=env).stdout)
+    assert s["drops"] == {"import.duplicate": 1, "import.same_frame": 1}, s["drops"]
+    assert s["counts"]["selected"] == len(rows) + 1, s["counts"]
+    validate(s, "summary.schema.json")
+
     # 2. The same recipe at 80x60 without images/occupancy: a full build and the export.
     # Under a sanitizer (common.SANITIZER) on the pairs of the first 10 scenes only (150 of
     # the 1500, a test.npz of those rows): the same code on a tenth of the work.

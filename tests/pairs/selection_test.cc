@@ -350,6 +350,55 @@ TEST(Filters, BalancingTakesEquallyFromOverlapBins) {
   EXPECT_EQ(high, 5);
 }
 
+TEST(Filters, APartialBalancingRoundTakesRandomBins) {
+  // 3 bins of 10 pairs and a quota of 7: two full rounds (6), and the 7th pair from one bin,
+  // any of the three depending on the seed (it was always the lowest-overlap bin). With as
+  // many bins as the quota allows one pair each (100 bins, quota 20, pairs in every bin),
+  // the pairs spread over the whole range.
+  std::vector<ScoredPair> s;
+  for (int b = 0; b < 3; ++b) {
+    for (int k = 0; k < 10; ++k) {
+      const double ov = 0.1 + b * 0.3 + k * 0.01;
+      s.push_back(Fake(b * 100 + k, b * 100 + k + 1, ov, ov));
+    }
+  }
+  SelectionOptions o;
+  o.overlap_lo = 0.1;
+  o.overlap_hi = 1.0;
+  o.balance_bins = 3;
+  o.quota_per_scene = 7;
+  std::set<int> extra_bins;
+  for (uint64_t seed = 0; seed < 30; ++seed) {
+    DropCounts d;
+    const auto chosen = FilterAndSample(s, o, seed, &d);
+    ASSERT_EQ(chosen.size(), 7u);
+    int count[3] = {0, 0, 0};
+    for (size_t k : chosen) count[k / 10]++;
+    for (int b = 0; b < 3; ++b) {
+      EXPECT_GE(count[b], 2) << seed;
+      if (count[b] == 3) extra_bins.insert(b);
+    }
+    EXPECT_EQ(d["sample.quota"], 23);
+  }
+  EXPECT_EQ(extra_bins.size(), 3u);  // each bin got the 7th pair for some seed
+
+  std::vector<ScoredPair> spread;
+  for (int k = 0; k < 200; ++k) {
+    const double ov = 0.1 + 0.8 * (k + 0.5) / 200.0;
+    spread.push_back(Fake(k, k + 1, ov, ov));
+  }
+  o.overlap_hi = 0.9;
+  o.balance_bins = 100;
+  o.quota_per_scene = 20;
+  DropCounts d;
+  const auto chosen = FilterAndSample(spread, o, 5, &d);
+  ASSERT_EQ(chosen.size(), 20u);
+  int above_half = 0;
+  for (size_t k : chosen) above_half += PairOverlap(spread[k], o.aggregate) > 0.5;
+  EXPECT_GT(above_half, 3);  // all 20 had overlap <= 0.2 before
+  EXPECT_LT(above_half, 17);
+}
+
 TEST(Scoring, IdenticalResultsOnOneAndManyThreads) {
   const std::string dir = test::ScratchDir("pairs_threads");
   std::vector<double> xs;
