@@ -276,6 +276,21 @@ class Cursor {
 
   size_t position() const { return pos_; }
 
+  // ASCII: the row of `element` just read must end its line (PLY writes one row per line).
+  // A header count larger than the file's rows otherwise read the next element's first line
+  // as this row, and failed later naming something else ("face 0 has 2 vertices").
+  void EndAsciiRow(const std::string& element, uint64_t row) {
+    if (encoding_ != Encoding::kAscii) return;
+    while (pos_ < data_.size() &&
+           (data_[pos_] == ' ' || data_[pos_] == '\t' || data_[pos_] == '\r'))
+      ++pos_;
+    if (pos_ == data_.size() || data_[pos_] == '\n') return;
+    throw InputError(where_, element + " " + std::to_string(row) +
+                                 ": more values on its line than the header's properties (a " +
+                                 element + " count in the header larger than the file's " +
+                                 element + " rows?)");
+  }
+
  private:
   [[noreturn]] void Truncated() const {
     throw InputError(where_,
@@ -416,6 +431,7 @@ TriangleMesh ParsePlyMesh(std::string_view bytes, const std::string& where) {
           cursor.Skip(p);
         }
       }
+      cursor.EndAsciiRow(element.name, row);
     }
   }
   // Data after the last element: a header count too small (the rows past it would be

@@ -172,6 +172,18 @@ TEST(Ply, WrongCountsAreRefused) {
       "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
       "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n";
   EXPECT_NE(ErrorOf(neg).find("vertex index -1"), std::string::npos);
+  // ASCII: a vertex count larger than the vertex rows reads the first face line as a vertex;
+  // the message names the count (it was "face 0 has 2 vertices").
+  const std::string more =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+      "end_header\n0.000000 0.000000 0.000000\n1.000000 0.000000 0.000000\n"
+      "0.000000 1.000000 0.000000\n3 0 1 2\n";
+  EXPECT_NE(ErrorOf(more).find("vertex 3: more values on its line than the header's properties "
+                               "(a vertex count in the header larger than the file's vertex "
+                               "rows?)"),
+            std::string::npos)
+      << ErrorOf(more);
   // Fewer faces in the header than in the data, or bytes after the last element: refused
   // (the rows past the count were dropped without a word). ASCII may end in white space.
   EXPECT_NE(ErrorOf(Replace(good, "element face 3", "element face 2"))
