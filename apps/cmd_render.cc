@@ -21,6 +21,7 @@
 #include "libgt/datasets/reader.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
+#include "libgt/io/depth_io.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
 #include "libgt/pipeline/recipe.h"
@@ -59,7 +60,8 @@ void RunRender(const RenderArgs& args) {
       gt::datasets::MakeReader(format, reader_options)->ReadScene(args.root, args.scene);
   gt::pipeline::ApplyMeshPath(args.mesh, &scene);
   if (scene.mesh_path.empty()) {
-    throw gt::InputError("--mesh", "scene " + scene.name + " has no mesh of its own: give one");
+    throw gt::InputError("--mesh", "scene " + scene.name + " has no mesh of its own" +
+                                       scene.MissingMeshNote() + ": give one");
   }
   std::vector<size_t> frames;
   if (!args.frames.empty()) {
@@ -70,6 +72,21 @@ void RunRender(const RenderArgs& args) {
     int k = 0;
     for (size_t i = 0; i < scene.frames.size(); ++i) {
       if (scene.frames[i].usable && k++ % args.stride == 0) frames.push_back(i);
+    }
+    if (frames.empty()) {  // nothing to render: say why (an empty render.json said nothing)
+      const gt::Frame* first = nullptr;
+      for (const gt::Frame& f : scene.frames) {
+        if (!f.usable) {
+          first = &f;
+          break;
+        }
+      }
+      throw gt::InputError(
+          scene.name, scene.frames.empty()
+                          ? std::string("no frames to render")
+                          : "no usable frame to render (" + std::to_string(scene.frames.size()) +
+                                " unusable; the first, " + first->id + ": " +
+                                first->UnusableMessage() + "; occgt scan lists them all)");
     }
   }
   const auto renderer = gt::render::SharedMeshRenderer(scene.mesh_path);
@@ -113,7 +130,13 @@ void RunRender(const RenderArgs& args) {
       const gt::render::RenderedDepth r = renderer->Render(camera, frame.world_from_cam, options);
       gt::DepthImage mesh(camera.width, camera.height);
       mesh.values_m.assign(r.depth_m.begin(), r.depth_m.end());
+      // A pixel without image (anonymised, outside a distorted camera's image) has no depth
+      // and no triangle, as the frame's depth everywhere else (Scene.load, pair, exports).
+      gt::io::ApplyFrameMask(frame, &mesh);
       std::vector<int32_t> ids(r.triangle_id.begin(), r.triangle_id.end());
+      for (size_t k = 0; k < ids.size(); ++k) {
+        if (mesh.values_m[k] == 0.0f) ids[k] = -1;
+      }
       std::vector<uint16_t> mm(mesh.values_m.size());
       for (size_t k = 0; k < mm.size(); ++k) {
         const double v = std::round(mesh.values_m[k] * 1000.0);

@@ -121,10 +121,20 @@ struct Scene {
   // ScanNet++'s scans/mesh_aligned_0.05.ply, or a path from the recipe); "" when none.
   // Depth rendered from it (docs/GROUND_TRUTH.md "Depth sources") uses the frames' poses.
   std::string mesh_path;
+  // Where the reader looked for the scene's own mesh when it found none (ScanNet++'s
+  // <scene>/scans/mesh_aligned_0.05.ply), for messages; "" when found or when the format
+  // has no mesh of its own.
+  std::string mesh_expected_path;
   std::vector<Frame> frames;  // sorted by number
   // What the reader noticed and decided without an error, one sentence each (two colour
   // files for one frame, which one it read); `occgt scan` prints them among its warnings.
   std::vector<std::string> reader_warnings;
+
+  // " (<mesh_expected_path> is missing)" or "": the end of a message that the scene has no
+  // mesh.
+  std::string MissingMeshNote() const {
+    return mesh_expected_path.empty() ? "" : " (" + mesh_expected_path + " is missing)";
+  }
 
   size_t NumUsable() const {
     size_t n = 0;

@@ -177,6 +177,10 @@ Scene ScanNetReader::ReadScene(const std::string& root, const std::string& scene
   const std::string folder = ResolveSceneFolder(root, scene_name, IsScanNetScene(root));
   Scene scene = ReadSceneFolder(folder, scene_name);
   scene.mesh_path = ScanNetMeshPath(folder);
+  if (scene.mesh_path.empty()) {
+    const fs::path dir(folder);
+    scene.mesh_expected_path = (dir / (dir.filename().string() + "_vh_clean_2.ply")).string();
+  }
   return scene;
 }
 

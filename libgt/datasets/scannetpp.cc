@@ -156,7 +156,11 @@ Scene ScanNetPPReader::ReadScene(const std::string& root, const std::string& sce
                                                 scene_name, root_is_scene);
   Scene scene = NewFolderScene(folder, scene_name, Format(), kMinDepthM, kMaxDepthM);
   const fs::path dir(folder);
-  if (io::FileExists((dir / kMeshPath).string())) scene.mesh_path = (dir / kMeshPath).string();
+  if (io::FileExists((dir / kMeshPath).string())) {
+    scene.mesh_path = (dir / kMeshPath).string();
+  } else {
+    scene.mesh_expected_path = (dir / kMeshPath).string();
+  }
 
   const bool dslr = options_.scannetpp_device == ScanNetPPDevice::kDslr;
   const DeviceLayout& layout = dslr ? kDslr : kIphone;

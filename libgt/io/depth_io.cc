@@ -369,12 +369,7 @@ void PrefetchDepth(const DepthSource& source) {
 }
 
 void ApplyFrameMask(const Frame& frame, DepthImage* depth) {
-  if (frame.mask_path.empty()) return;
-  const cv::Mat m =
-      DecodeImageBytes(ReadFileBytes(frame.mask_path), ChannelOrder::kRgb, frame.mask_path);
-  if (m.type() != CV_8UC1) {
-    throw InputError(frame.mask_path, "mask: expected an 8-bit grey image");
-  }
+  if (frame.mask_path.empty() && !frame.color_lens) return;
   // The mask's camera: the distorted colour camera, else the colour camera.
   LensCamera lens;
   if (frame.color_lens) {
@@ -382,13 +377,34 @@ void ApplyFrameMask(const Frame& frame, DepthImage* depth) {
   } else {
     lens.pinhole = frame.color_camera;
   }
+  const Camera target = frame.depth_camera.Resized(depth->width, depth->height);
+  if (frame.color_lens) {
+    // A pixel of the undistorted camera whose ray leaves the distorted image has no image
+    // (the undistorted colour there is a reflection of the border): no depth either, whatever
+    // its source (a mesh covers it). The nearest distorted pixel, floor(x + 0.5), as the
+    // sensor depth's lookup (ReadFrameDepth).
+    const UndistortMaps& maps = GetUndistortMaps(lens, target);
+    const int w = lens.pinhole.width, h = lens.pinhole.height;
+    for (int v = 0; v < depth->height; ++v) {
+      for (int u = 0; u < depth->width; ++u) {
+        const double x = std::floor(static_cast<double>(maps.map_x(v, u)) + 0.5);
+        const double y = std::floor(static_cast<double>(maps.map_y(v, u)) + 0.5);
+        if (!(x >= 0 && y >= 0 && x < w && y < h)) depth->at(u, v) = 0.0f;
+      }
+    }
+  }
+  if (frame.mask_path.empty()) return;
+  const cv::Mat m =
+      DecodeImageBytes(ReadFileBytes(frame.mask_path), ChannelOrder::kRgb, frame.mask_path);
+  if (m.type() != CV_8UC1) {
+    throw InputError(frame.mask_path, "mask: expected an 8-bit grey image");
+  }
   if (m.cols != lens.pinhole.width || m.rows != lens.pinhole.height) {
     throw InputError(frame.mask_path, "mask is " + std::to_string(m.cols) + "x" +
                                           std::to_string(m.rows) + ", expected " +
                                           std::to_string(lens.pinhole.width) + "x" +
                                           std::to_string(lens.pinhole.height));
   }
-  const Camera target = frame.depth_camera.Resized(depth->width, depth->height);
   const cv::Mat1b valid = UndistortMask(m, lens, target);
   for (int v = 0; v < depth->height; ++v) {
     const uint8_t* row = valid.ptr<uint8_t>(v);

@@ -22,7 +22,9 @@ DepthImage ReadDepth(const DepthSource& source, int expected_width = 0, int expe
 // zeroed where frame.mask_path's mask, remapped into depth_camera, is anonymised.
 DepthImage ReadFrameDepth(const Frame& frame);
 // Zeroes the depth (in frame.depth_camera, any size: the mask is remapped into that camera
-// resized to the depth's size) where frame.mask_path is anonymised; nothing without a mask.
+// resized to the depth's size) where the frame has no image: where frame.mask_path is
+// anonymised, and, for a distorted colour camera (frame.color_lens), where the undistorted
+// pixel's ray leaves the distorted image. Nothing for a frame with neither.
 // InputError naming the mask when it is missing, not 8-bit grey or of the wrong size.
 void ApplyFrameMask(const Frame& frame, DepthImage* depth);
 // Asks the kernel to read a frame's depth file (or its payload inside a container) ahead

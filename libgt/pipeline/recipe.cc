@@ -1069,8 +1069,9 @@ Scene ReadRecipeScene(const Recipe& recipe, const datasets::DatasetReader& reade
     const std::string source = render::DepthSourceModeName(recipe.dataset.depth_source);
     if (scene.mesh_path.empty()) {
       throw InputError(scene.name, "dataset.depth_source " + source +
-                                       " needs the scene's mesh, and it has none (set "
-                                       "dataset.mesh_path, or use --depth-source sensor)");
+                                       " needs the scene's mesh, and it has none" +
+                                       scene.MissingMeshNote() +
+                                       " (set dataset.mesh_path, or use --depth-source sensor)");
     }
     if (!io::FileExists(scene.mesh_path)) {
       throw InputError(scene.mesh_path, "not found: the mesh of scene " + scene.name +

@@ -172,7 +172,8 @@ DepthImage RenderFrameDepth(const Scene& scene, const Frame& frame, const Camera
   if (scene.mesh_path.empty()) {
     throw InputError(scene.name, "depth source '" +
                                      std::string(DepthSourceModeName(options.source)) +
-                                     "' needs a mesh, and the scene has none (dataset.mesh_path)");
+                                     "' needs a mesh, and the scene has none" +
+                                     scene.MissingMeshNote() + " (dataset.mesh_path)");
   }
   const auto renderer = SharedMeshRenderer(scene.mesh_path);
   RenderOptions render;

@@ -12,6 +12,7 @@ import gzip
 import io
 import json
 import os
+import re
 import shutil
 import struct
 import sys
@@ -132,6 +133,27 @@ def main():
     doc = scan(nomesh, "dslr", validator)
     assert any(w.startswith("no mesh (scans/mesh_aligned_0.05.ply is missing)")
                for w in doc["scenes"][0]["warnings"]), doc["scenes"][0]["warnings"]
+    # render and a pair from the mesh name the file that is missing.
+    missing = os.path.join(nomesh, "data", "synthpp_000", "scans", "mesh_aligned_0.05.ply")
+    r = common.occgt("render", "--root", nomesh, "--format", "scannetpp", "--scene",
+                     "synthpp_000", "--out", os.path.join(nomesh, "render"), check=False)
+    assert r.returncode == 2 and r.stderr == (
+        f"occgt: error: --mesh: scene synthpp_000 has no mesh of its own ({missing} is "
+        "missing): give one\n"), r.stderr
+    r = common.occgt("pair", "--root", nomesh, "--format", "scannetpp", "--scene", "synthpp_000",
+                     "--frames", "DSC00010,DSC00020", "--depth-source", "mesh", "--out",
+                     os.path.join(nomesh, "pair"), check=False)
+    assert r.returncode == 1 and f"({missing} is missing)" in r.stderr, r.stderr
+    # A scene without a usable frame: render says why (it wrote an empty render.json, exit 0).
+    shutil.rmtree(os.path.join(nomesh, "data", "synthpp_000", "dslr", "resized_images"))
+    r = common.occgt("render", "--root", nomesh, "--format", "scannetpp", "--scene",
+                     "synthpp_000", "--mesh", os.path.join(scene, "scans", "mesh_aligned_0.05.ply"),
+                     "--out", os.path.join(nomesh, "render"), check=False)
+    assert r.returncode == 1 and re.match(
+        r"occgt: error: synthpp_000: no usable frame to render \(\d+ unusable; the first, "
+        r"DSC00010: colour: missing file; .*DSC00010.JPG; occgt scan lists them all\)\n$",
+        r.stderr), r.stderr
+    assert not os.path.exists(os.path.join(nomesh, "render", "render.json"))
     # A DSLR pair with sensor depth (there is none): the frame is named, with what to do.
     r = common.occgt("pair", "--root", root, "--format", "scannetpp", "--scene", "synthpp_000",
                      "--frames", "DSC00010,DSC00020", "--out", os.path.join(root, "pair_dslr"),
@@ -149,6 +171,7 @@ def main():
     out = build_and_check(root, "dslr", "[160, 120]", "  depth_source: mesh\n", export=True)
     check_dslr_export_depth(scene, os.path.join(out, "dust3r"))
     check_selected_pairs(os.path.join(out, "dust3r"))
+    check_render_equals_export(root, os.path.join(out, "dust3r", "synthpp_000", "depth"))
     # The shipped recipe (DSLR, depth_source mesh) on the fixture: it builds, and its DUSt3R
     # export reads back.
     shipped = os.path.join(root, "out_shipped")
@@ -283,6 +306,24 @@ def check_dslr_export_depth(scene, dust3r):
     assert anonymised_total > 0, anonymised_total
     print("scannetpp dslr export depth:", compared_total, "pixels equal to the exact depth,",
           anonymised_total, "anonymised pixels 0")
+
+
+def check_render_equals_export(root, depth_dir):
+    """`occgt render` of the exported frames at the export's size writes the export's depth
+    PNGs (EXPORTS.md): anonymised pixels 0 in both (render kept the mesh's depth there)."""
+    names = sorted(n[:-4] for n in os.listdir(depth_dir))
+    out = os.path.join(root, "render_dslr")
+    common.occgt("render", "--root", root, "--format", "scannetpp", "--scene", "synthpp_000",
+                 "--frames", ",".join(names), "--resolution", "160x120", "--out", out)
+    zeros = 0
+    for name in names:
+        want = cv2.imread(os.path.join(depth_dir, name + ".png"), cv2.IMREAD_UNCHANGED)
+        got = cv2.imread(os.path.join(out, name + "_depth.png"), cv2.IMREAD_UNCHANGED)
+        assert got is not None and np.array_equal(got, want), name
+        ids = np.load(os.path.join(out, name + "_triangles.npy"))
+        assert np.array_equal(ids < 0, got == 0), name  # no depth, no triangle
+        zeros += int((got == 0).sum())
+    assert zeros > 0, zeros
 
 
 def check_selected_pairs(dust3r):

@@ -74,6 +74,39 @@ class ScanNetPP(unittest.TestCase):
         self.assertEqual(rgb.shape, (96, 128, 3))
         self.assertGreater(float(rgb.std()), 5.0)
 
+    def test_iphone_depth_only_where_the_image_is(self) -> None:
+        """The undistorted iPhone camera (getOptimalNewCameraMatrix, alpha 1) has pixels whose
+        ray leaves the distorted image: no colour there (a reflection of the border), so no
+        depth from any source. The mesh covered them (8.5 % of the pixels of a 256x192 frame
+        had mesh depth, and labels, on a mirrored image)."""
+        scene = occgt.open_dataset(self.root, "scannetpp", device="iphone").scene("synthpp_000")
+        frame = [f for f in scene.frames if f.usable][0]
+        with open(os.path.join(self.root, "data", "synthpp_000", "iphone", "colmap",
+                               "cameras.txt")) as f:
+            fields = [line.split() for line in f if line.strip() and not line.startswith("#")][0]
+        self.assertEqual(fields[1], "OPENCV")
+        w0, h0 = int(fields[2]), int(fields[3])
+        fx, fy, cx, cy, k1, k2, p1, p2 = map(float, fields[4:12])
+        w, h = 256, 192
+        depth = {s: scene.load(frame.id, w, h, depth_source=s)[0] for s in ("sensor", "mesh", "fused")}
+        K = scene.load(frame.id, w, h)[1]
+        # Each pixel's ray through the OPENCV model into the distorted image (COLMAP's pixel
+        # centres at +0.5), independently of the library's maps.
+        u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+        x, y = (u - K[0, 2]) / K[0, 0], (v - K[1, 2]) / K[1, 1]
+        r2 = x * x + y * y
+        radial = 1 + k1 * r2 + k2 * r2 * r2
+        xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+        yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+        px, py = fx * xd + cx - 0.5, fy * yd + cy - 0.5
+        outside = (px < -1.5) | (py < -1.5) | (px > w0 + 0.5) | (py > h0 + 0.5)
+        inside = (px > 1) & (py > 1) & (px < w0 - 2) & (py < h0 - 2)
+        self.assertGreater(int(outside.sum()), 100)  # the fixture has such pixels
+        for source, d in depth.items():
+            self.assertEqual(int((d[outside] > 0).sum()), 0, source)
+        # Inside the image the mesh still gives depth (only anonymised pixels lack it).
+        self.assertGreater(float((depth["mesh"][inside] > 0).mean()), 0.8)
+
     def test_dslr_frames_and_bad_device(self) -> None:
         scene = occgt.open_dataset(self.root, "scannetpp").scene("synthpp_000")
         self.assertEqual(len(scene.frames), 6)
