@@ -7,7 +7,9 @@ a pair index and the dataset on disk.
   (7-Scenes and TartanAir from ../shared/data; the shards are read here with tarfile, not with
   occgt's ShardDataset); its keyword arguments override any argument;
 - the index readers: occgt's pairs.jsonl and selection/, occgt's LoFTR test.npz (scenes.txt),
-  LoFTR's real test-1500 test.npz, a scene_info folder and a list file;
+  occgt's LoFTR train and test exports of a ScanNet-layout root mixing a ScanNet-named scene
+  with another (and the export's refusal of two scenes on one LoFTR folder), LoFTR's real
+  test-1500 test.npz, a scene_info folder and a list file;
 - LoFTR's keys, dtypes and layouts; a DataLoader with 2 workers, shuffled, batch 4, gives the
   tensors of direct reads, in both collate layouts;
 - bad indices and options raise ValueError naming the file and what was expected.
@@ -20,6 +22,8 @@ import json
 import os
 import pickle
 import re
+import shutil
+import subprocess
 import sys
 import tarfile
 import unittest
@@ -37,6 +41,28 @@ import occgt  # noqa: E402
 from occgt.torch import Collate, PairIndexDataset, PairRef, collate, read_pair_index  # noqa: E402
 
 _SPLITS: Dict[str, str] = {}
+
+#: A build of a ScanNet-layout root with a LoFTR export of kind {kind}.
+MIXED_RECIPE = """name: mixed
+split: mixed
+seed: 0
+resolution: [320, 240]
+dataset: {{format: scannet, root: {root}, min_valid_depth_fraction: 0.3}}
+labels: {{preset: default}}
+patches: {{stride: 8, anchor: center, mutual: true}}
+selection:
+  max_frame_gap: 6
+  pruning: {{max_distance_m: 3.0, max_view_angle_deg: 90, frustum: true}}
+  score_stride: 4
+  overlap: [0.3, 0.95]
+  occlusion: [0.0, 1.0]
+  aggregate: mean
+  quota_per_scene: 5
+occupancy: {{enabled: false}}
+sample: {{image: none, depth: true, labels: false, occupancy: false}}
+shards: {{samples_per_shard: 8}}
+loftr_export: {{kind: {kind}}}
+"""
 
 
 def built_split(recipe: str) -> str:
@@ -259,6 +285,71 @@ class Indices(unittest.TestCase):
             self.assertTrue(torch.equal(a["label01"], b["label01"]))
             self.assertTrue(torch.equal(a["matches"], b["matches"]))
 
+    def test_loftr_export_of_mixed_scannet_scenes(self) -> None:
+        """A ScanNet-layout root (the demo's LoFTR tree, ScanNet's exported layout) holding
+        scene0707_01 and myroom, built with both LoFTR export kinds: scenes.txt lists only
+        myroom (row (0, 0)); scene0707_01's rows keep (707, 1) and are read as ScanNet's
+        name, so the index reads back as pairs.jsonl's pairs (it failed: "(707, 1) is not in
+        the scene list"). scenes.txt is in loftr/, two folders above scene_data/{split}/ for
+        kind train and beside test.npz for kind test; statistics.json keys occgt's names."""
+        tree = os.path.join(built_split("demo"), "loftr", "data")
+        work = common.scratch("pair_dataset_mixed")
+        root = os.path.join(work, "root")
+        shutil.copytree(os.path.join(tree, "scene0000_00"), os.path.join(root, "scene0707_01"))
+        shutil.copytree(os.path.join(tree, "scene0001_00"), os.path.join(root, "myroom"))
+        outs = {}
+        for kind in ("train", "test"):
+            recipe = os.path.join(work, kind + ".yaml")
+            with open(recipe, "w") as f:
+                f.write(MIXED_RECIPE.format(root=root, kind=kind))
+            outs[kind] = os.path.join(work, kind)
+            common.occgt("build", recipe, "--out", outs[kind])
+        npz_root = os.path.join(outs["train"], "loftr", "scene_data", "mixed")
+        for kind, index in (("train", npz_root), ("train", "mixed_list.txt"),
+                            ("test", "test.npz")):
+            with self.subTest(kind=kind, index=index):
+                loftr = os.path.join(outs[kind], "loftr")
+                self.assertEqual(common.read_bytes(os.path.join(loftr, "scenes.txt")), b"myroom\n")
+                refs = read_pair_index(os.path.join(loftr, index), npz_root=npz_root)
+                jsonl = read_pair_index(os.path.join(outs[kind], "pairs.jsonl"))
+                self.assertEqual(sorted((r.scene, r.number0, r.number1) for r in refs),
+                                 sorted((r.scene, r.number0, r.number1) for r in jsonl))
+                self.assertEqual({r.scene for r in refs}, {"scene0707_01", "myroom"})
+        names = np.load(os.path.join(outs["train"], "loftr", "scene_data", "mixed",
+                                     "scene0707_01.npz"))["name"]
+        self.assertEqual(set(map(tuple, names[:, :2].tolist())), {(707, 1)})
+        self.assertFalse(os.path.exists(os.path.join(outs["train"], "loftr", "scene_data",
+                                                     "mixed", "scenes.txt")))
+        self.assertEqual(set(common.read_json(os.path.join(outs["test"], "loftr",
+                                                           "statistics.json"))),
+                         {"scene0707_01", "myroom"})
+        # The same pairs through PairIndexDataset: the pair ground truth of pairs.jsonl's.
+        ds = PairIndexDataset(os.path.join(outs["train"], "loftr", "mixed_list.txt"), root,
+                              "scannet", width=320, height=240, images=False, npz_root=npz_root)
+        again = PairIndexDataset(outs["train"], root, "scannet", width=320, height=240,
+                                 images=False)
+        by_names = {(again.pairs[i].scene, again.frame_ids(i)): i for i in range(len(again))}
+        self.assertEqual(len(by_names), len(ds))
+        for i in (0, len(ds) - 1):
+            a = ds[i]
+            b = again[by_names[(ds.pairs[i].scene, ds.frame_ids(i))]]
+            self.assertEqual(a["pair_names"], b["pair_names"])
+            self.assertTrue(torch.equal(a["matches"], b["matches"]))
+        # A non-ScanNet scene whose folder scene%04d_00 is a ScanNet scene's: refused.
+        clash = os.path.join(work, "clash")
+        shutil.copytree(os.path.join(tree, "scene0000_00"), os.path.join(clash, "scene0000_00"))
+        shutil.copytree(os.path.join(tree, "scene0001_00"), os.path.join(clash, "myroom"))
+        recipe = os.path.join(work, "clash.yaml")
+        with open(recipe, "w") as f:
+            f.write(MIXED_RECIPE.format(root=clash, kind="train"))
+        r = subprocess.run([common.BINARY, "build", recipe, "--out", os.path.join(work, "c")],
+                           capture_output=True, text=True)
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertEqual(r.stderr.splitlines()[-1],
+                         "occgt: error: loftr export: scenes myroom and scene0000_00 both map to "
+                         "LoFTR's folder scene0000_00")
+        self.assertFalse(os.path.exists(os.path.join(work, "c", "loftr")))
+
     def test_loftr_test_1500(self) -> None:
         path = common.shared("loftr_scannet_test_1500/test.npz")
         refs = read_pair_index(path)
@@ -287,6 +378,13 @@ class Indices(unittest.TestCase):
                          want_sorted[2:] + want_sorted[:2])
         self.assertEqual([r.scene for r in read_pair_index(os.path.join(out, "scene0001_00.npz"),
                                                            scene_names=["a", "b"])], ["b", "b"])
+        # Names apply to rows (s, 0) with s < len(names); other rows are ScanNet's.
+        self.assertEqual([r.scene for r in read_pair_index(out, scene_names=["a", "b"])],
+                         ["b", "b", "scene0002_01"])
+        np.savez(os.path.join(out, "scene0005_00.npz"), name=np.array([[5, 0, 1, 2]]))
+        self.assertEqual([r.scene for r in read_pair_index(os.path.join(out, "scene0005_00.npz"),
+                                                           scene_names=["a", "b"])],
+                         ["scene0005_00"])
 
     def test_bad_indices(self) -> None:
         out = common.scratch("pair_dataset_bad")

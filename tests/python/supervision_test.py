@@ -7,7 +7,10 @@ coarse supervision in torch (written here from the facts of LoFTR's `spvs_coarse
   exactly those without depth, behind the other camera or out of the grid (plus cell 0,
   which LoFTR ignores);
 - mode="occ2net": the vv/vo/ov matches of occgt.pair_ground_truth, from padded and from
-  concatenated batches (occgt.torch.collate) and computed on the fly, with their fine targets.
+  concatenated batches (occgt.torch.collate) and computed on the fly, with their fine targets;
+  K in COLMAP's convention (LoFTR's MegaDepth batches) gives the matches of occgt's K;
+  stored matches refuse the options that compute matches, and a coarse_stride or anchor
+  other than theirs (also over ShardDataset batches of built 7-Scenes splits).
 The reference runs in float64 (LoFTR's float32 depends on the BLAS's summation order; occgt
 computes in double), then rounds the warped points to float32 as LoFTR's tensors are; run in
 float32 (LoFTR's arithmetic) its cells may differ only next to a rounding boundary."""
@@ -160,6 +163,33 @@ def scene_pairs(scene: occgt.Scene, pairs: Sequence[Tuple[str, str]], width: int
         d1, K1, P1 = scene.load(b, width, height)
         out.append((d0, K0, P0, d1, K1, P1))
     return out
+
+
+def colmap_k(batch: Dict[str, torch.Tensor]) -> Dict[str, torch.Tensor]:
+    """The batch with K0/K1 in COLMAP's pixel convention (pixel centres at +0.5: cx, cy
+    0.5 higher), as LoFTR's MegaDepth loader gives them."""
+    out = dict(batch)
+    for key in ("K0", "K1"):
+        out[key] = batch[key].clone()
+        out[key][:, :2, 2] += 0.5
+    return out
+
+
+def stored_samples(frames: Sequence[Tuple[np.ndarray, ...]], **options: Any
+                   ) -> Tuple[List[Dict[str, torch.Tensor]], List[Dict[str, Any]]]:
+    """Samples of the sample contract holding occgt.pair_ground_truth's matches of each pair
+    (preset occ2net, `options`), and the results."""
+    samples, results = [], []
+    for d0, K0, P0, d1, K1, P1 in frames:
+        r = occgt.pair_ground_truth(d0, d1, K0, K1, P0, P1, "occ2net", **options)
+        results.append(r)
+        samples.append({"depth0": torch.from_numpy(d0), "depth1": torch.from_numpy(d1),
+                        "K0": torch.from_numpy(K0).float(), "K1": torch.from_numpy(K1).float(),
+                        "T_0to1": torch.from_numpy(r["T_0to1"]).float(),
+                        "matches": torch.from_numpy(r["matches"]).long(),
+                        "match_type": torch.from_numpy(r["match_type"]).long(),
+                        "match_xy": torch.from_numpy(r["match_xy"])})
+    return samples, results
 
 
 def ids(out: Dict[str, Any]) -> List[Tuple[int, int, int]]:
@@ -369,23 +399,31 @@ class SevenScenes(unittest.TestCase, Checks):
             loftr_supervision(only)
 
     def test_occ2net_resized_and_padded(self) -> None:
-        """mode="occ2net" on LoFTR's resized (scale 2) and padded (MegaDepth-style) batches:
-        the matches of occgt.pair_ground_truth on the frames loaded at the image's size by
-        the dataset reader (Scene.load at 320x240, another path to the same resampling),
-        with the cells placed on the padded grids."""
+        """mode="occ2net" on LoFTR's resized (scale 2) and padded (MegaDepth-style) batches,
+        whose K0/K1 are in COLMAP's pixel convention (LoFTR's MegaDepth loader): the matches
+        of occgt.pair_ground_truth on the frames loaded at the image's size by the dataset
+        reader (Scene.load at 320x240, another path to the same resampling), with the cells
+        placed on the padded grids; occgt's K with k_convention="occgt" gives the same."""
         pairs = self.pairs[:2]
         small = scene_pairs(self.scene, pairs, 320, 240)
         rs = [occgt.pair_ground_truth(d0, d1, K0, K1, P0, P1, "occ2net")
               for d0, K0, P0, d1, K1, P1 in small]
         n = 2
-        batch = make_batch(self.frames[:2])  # depth 640x480
-        batch["image0"] = torch.zeros(n, 1, 240, 320)
-        batch["image1"] = torch.zeros(n, 1, 240, 320)
-        batch["scale0"] = torch.full((n, 2), 2.0)
-        batch["scale1"] = torch.full((n, 2), 2.0)
+        plain = make_batch(self.frames[:2])  # depth 640x480, occgt's K
+        plain["image0"] = torch.zeros(n, 1, 240, 320)
+        plain["image1"] = torch.zeros(n, 1, 240, 320)
+        plain["scale0"] = torch.full((n, 2), 2.0)
+        plain["scale1"] = torch.full((n, 2), 2.0)
+        batch = colmap_k(plain)
         out = loftr_supervision(batch, "occ2net", preset="occ2net")
         want = [(b, i, j) for b, r in enumerate(rs) for i, j in r["matches"].tolist()]
         self.assertEqual(ids(out), want)
+        occgt_k = loftr_supervision(plain, "occ2net", preset="occ2net", k_convention="occgt")
+        self.assertEqual(ids(occgt_k), want)
+        self.assertTrue(torch.equal(occgt_k["spv_xy"], out["spv_xy"]))
+        # COLMAP's K read as occgt's (the default before k_convention): other matches.
+        shifted = loftr_supervision(batch, "occ2net", preset="occ2net", k_convention="occgt")
+        self.assertNotEqual(ids(shifted), want)
         self.assertGreater(len(want), 500)
         types = np.concatenate([r["match_type"] for r in rs])
         self.assertTrue(np.array_equal(out["spv_type"].numpy(), types))
@@ -408,7 +446,10 @@ class SevenScenes(unittest.TestCase, Checks):
         mask1 = torch.zeros(n, 30, 44, dtype=torch.bool)
         mask1[:, :, :40] = True
         padded["mask0"], padded["mask1"] = mask0, mask1
-        got = loftr_supervision(padded, "occ2net", preset="occ2net")
+        got = loftr_supervision(padded, "occ2net", preset="occ2net")  # K: COLMAP's (mask0)
+        self.assertTrue(torch.equal(
+            loftr_supervision({**padded, **{k: plain[k] for k in ("K0", "K1")}}, "occ2net",
+                              preset="occ2net", k_convention="occgt")["spv_xy"], got["spv_xy"]))
         self.assertEqual(ids(got), [(b, i, j // 40 * 44 + j % 40) for b, i, j in want])
         self.assertTrue(torch.equal(got["spv_xy"], out["spv_xy"]))
         self.assertTrue(torch.equal(got["expec_f_gt"], out["expec_f_gt"]))
@@ -544,18 +585,105 @@ class SevenScenes(unittest.TestCase, Checks):
                     loftr_supervision(b, **kwargs)
                 self.assertIn(name, str(e.exception))
 
+    def test_occ2net_colmap_k(self) -> None:
+        """A LoFTR-MegaDepth-like batch of a pair whose answer is known: depth and images at
+        640x480, scale (1, 1), K in COLMAP's convention (occgt's + 0.5 in cx, cy): the
+        matches of occgt.pair_ground_truth with occgt's K, bit for bit; given as
+        k_convention="occgt", other matches."""
+        plain = make_batch(self.frames[:2])
+        n = 2
+        plain["image0"] = plain["image1"] = torch.zeros(n, 1, 480, 640)
+        plain["scale0"] = plain["scale1"] = torch.ones(n, 2)
+        rs = [occgt.pair_ground_truth(
+            plain["depth0"][b].numpy(), plain["depth1"][b].numpy(), plain["K0"][b].numpy(),
+            plain["K1"][b].numpy(), np.eye(4),
+            np.linalg.inv(plain["T_0to1"][b].numpy().astype(np.float64)), "occ2net")
+            for b in range(n)]
+        want = [(b, i, j) for b, r in enumerate(rs) for i, j in r["matches"].tolist()]
+        self.assertGreater(len(want), 1000)
+        batch = colmap_k(plain)
+        for k_convention in (None, "colmap"):
+            with self.subTest(k_convention=k_convention):
+                out = loftr_supervision(batch, "occ2net", preset="occ2net",
+                                        k_convention=k_convention)
+                self.assertEqual(ids(out), want)
+                self.assertTrue(np.array_equal(out["spv_xy"].numpy(),
+                                               np.concatenate([r["match_xy"] for r in rs])))
+                self.assertTrue(np.array_equal(out["spv_cells0"].numpy(),
+                                               np.stack([r["cells0"].ravel() for r in rs])))
+        wrong = loftr_supervision(batch, "occ2net", preset="occ2net", k_convention="occgt")
+        self.assertNotEqual(ids(wrong), want)
+        # Without scale0/mask0 (not LoFTR's MegaDepth loader) K is occgt's unless told.
+        for key in ("scale0", "scale1"):
+            del plain[key], batch[key]
+        self.assertEqual(ids(loftr_supervision(plain, "occ2net", preset="occ2net")), want)
+        self.assertEqual(ids(loftr_supervision(batch, "occ2net", preset="occ2net",
+                                               k_convention="colmap")), want)
+        with self.assertRaisesRegex(ValueError, r"^k_convention: expected 'occgt', 'colmap' or "
+                                    r"None, got 'opencv'$"):
+            loftr_supervision(batch, "occ2net", k_convention="opencv")
+        with self.assertRaisesRegex(ValueError, r"^k_convention: not an option of mode 'loftr' "
+                                    r"\(got 'colmap'\)$"):
+            loftr_supervision(batch, k_convention="colmap")
+
+    def test_occ2net_stored_matches_take_no_options(self) -> None:
+        """Stored matches (a split's, PairIndexDataset's) were computed with their own
+        options: a preset, a label option or k_convention given here is refused (it was
+        ignored); a coarse_stride or anchor other than theirs is refused from match_xy."""
+        samples, _ = stored_samples(self.frames[:3])
+        batch = Collate("pad")(samples)
+        plain = loftr_supervision(batch, "occ2net")
+        self.assertTrue(torch.equal(
+            loftr_supervision(batch, "occ2net", preset="default")["spv_xy"], plain["spv_xy"]))
+        for kwargs in (dict(preset="occ2net"), dict(preset="nonsense"), dict(min_depth_m=-5),
+                       dict(bogus=1), dict(k_convention="colmap"), dict(k_convention="occgt"),
+                       dict(mutual=False, preset="superglue")):
+            name = next(iter(kwargs)) if "preset" not in kwargs else "preset"
+            for layout in ("pad", "concat"):
+                with self.subTest(kwargs=kwargs, layout=layout):
+                    with self.assertRaisesRegex(
+                            ValueError, "^" + name + r": the batch's matches were computed with "
+                            r"the split's options .* drop 'matches' from the batch"):
+                        loftr_supervision(Collate(layout)(samples), "occ2net", **kwargs)
+        # Without 'matches' the options apply.
+        computed = {k: v for k, v in batch.items()
+                    if k not in ("matches", "match_type", "match_xy", "match_mask")}
+        self.assertNotEqual(
+            ids(loftr_supervision(computed, "occ2net", preset="occ2net", min_depth_m=2.5)),
+            ids(plain))
+        # coarse_stride and anchor: each match_xy lies in its target cell by the split's.
+        for kwargs, text in ((dict(coarse_stride=4), r"coarse_stride=4, anchor='center'"),
+                             (dict(anchor="corner"), r"coarse_stride=8, anchor='corner'"),
+                             (dict(coarse_stride=16), r"coarse_stride=16")):
+            with self.subTest(kwargs=kwargs):
+                with self.assertRaisesRegex(ValueError, r"^batch\['(match_xy|matches)'\]: row "
+                                            r"\d+ .*" + text):
+                    loftr_supervision(batch, "occ2net", **kwargs)
+        corner, rs = stored_samples(self.frames[:3], stride=16, anchor="corner")
+        out = loftr_supervision(Collate("concat")(corner), "occ2net", coarse_stride=16,
+                                anchor="corner")
+        self.assertTrue(np.array_equal(out["spv_xy"].numpy(),
+                                       np.concatenate([r["match_xy"] for r in rs])))
+        with self.assertRaisesRegex(ValueError, r"^batch\['match_xy'\]: row \d+ \((vv|vo|ov)\)"
+                                    r" at .* is not in its target cell \d+ of image [01] with "
+                                    r"coarse_stride=16, anchor='center'"):
+            loftr_supervision(Collate("concat")(corner), "occ2net", coarse_stride=16)
+        # A match_xy moved by a cell: refused; by 5e-4 px across a border: kept.
+        moved = Collate("pad")(samples)
+        moved["match_xy"] = moved["match_xy"].clone()
+        moved["match_xy"][0, 0, 0] += 8.0
+        with self.assertRaisesRegex(ValueError, r"^batch\['match_xy'\]: row 0 "):
+            loftr_supervision(moved, "occ2net")
+        border = Collate("pad")(samples)
+        j = int(border["matches"][0, 0, 1])
+        border["match_xy"] = border["match_xy"].clone()
+        x = np.float32((j % 80) * 8 - 0.5 - 5e-4)  # center: cell c starts at 8c - 0.5
+        self.assertEqual(np.floor((np.float64(x) + 0.5) / 8), j % 80 - 1)
+        border["match_xy"][0, 0, 0] = float(x)
+        loftr_supervision(border, "occ2net")
+
     def test_occ2net_mode(self) -> None:
-        samples, results = [], []
-        for d0, K0, P0, d1, K1, P1 in self.frames[:3]:
-            r = occgt.pair_ground_truth(d0, d1, K0, K1, P0, P1, "occ2net")
-            results.append(r)
-            s = {"depth0": torch.from_numpy(d0), "depth1": torch.from_numpy(d1),
-                 "K0": torch.from_numpy(K0).float(), "K1": torch.from_numpy(K1).float(),
-                 "T_0to1": torch.from_numpy(r["T_0to1"]).float(),
-                 "matches": torch.from_numpy(r["matches"]).long(),
-                 "match_type": torch.from_numpy(r["match_type"]).long(),
-                 "match_xy": torch.from_numpy(r["match_xy"])}
-            samples.append(s)
+        samples, results = stored_samples(self.frames[:3])
         want_b = np.concatenate([np.full(len(r["match_type"]), b) for b, r in enumerate(results)])
         want_m = np.concatenate([r["matches"] for r in results])
         want_t = np.concatenate([r["match_type"] for r in results])
@@ -607,7 +735,7 @@ class SevenScenes(unittest.TestCase, Checks):
         damaged["matches"] = damaged["matches"].clone()
         damaged["matches"][0, 0, 0] = 10**6
         with self.assertRaisesRegex(ValueError, r"^batch\['matches'\]: row 0 names cell 1000000 "
-                                    r"of image 0, which has \d+ cells$"):
+                                    r"of image 0, which has \d+ cells with coarse_stride=8$"):
             loftr_supervision(damaged, "occ2net")
         damaged = Collate("pad")(samples)
         damaged["match_type"] = damaged["match_type"].clone()
@@ -641,6 +769,67 @@ class SevenScenes(unittest.TestCase, Checks):
                                                       m[:, 1].tolist()))))
         self.assertTrue(bool((conf[torch.from_numpy(b), torch.from_numpy(m[:, 0]).long(),
                                    torch.from_numpy(m[:, 1]).long()] == 1).all()))
+
+
+SPLIT_RECIPE = """name: supervision-{name}
+split: supervision-{name}
+seed: 0
+resolution: [640, 480]
+dataset: {{format: sevenscenes, root: {root}, frame_stride: 2, min_valid_depth_fraction: 0.3}}
+labels: {{preset: default}}
+patches: {{stride: {stride}, anchor: {anchor}, mutual: true}}
+selection:
+  max_frame_gap: 6
+  pruning: {{max_distance_m: 2.0, max_view_angle_deg: 60, frustum: true}}
+  score_stride: 8
+  overlap: [0.4, 0.9]
+  occlusion: [0.0, 1.0]
+  aggregate: mean
+  quota_per_scene: 12
+occupancy: {{enabled: false}}
+sample: {{image: none, depth: true, labels: false, occupancy: false}}
+shards: {{samples_per_shard: 4}}
+"""
+
+
+class BuiltSplits(unittest.TestCase):
+    def test_stored_matches_of_real_shards(self) -> None:
+        """mode="occ2net" over ShardDataset batches of 7-Scenes splits built with
+        (stride, anchor) = (8, center) and (16, corner): with the split's coarse_stride and
+        anchor, the stored matches as they are (every match_xy in its target cell, which the
+        stride check relies on); with the other split's, refused."""
+        from torch.utils.data import DataLoader
+
+        from occgt.torch import ShardDataset, collate
+
+        work = common.scratch("supervision_splits")
+        variants = [(8, "center"), (16, "corner")]
+        splits = []
+        for stride, anchor in variants:
+            recipe = os.path.join(work, f"s{stride}.yaml")
+            with open(recipe, "w") as f:
+                f.write(SPLIT_RECIPE.format(name=f"s{stride}", root=common.shared("sevenscenes"),
+                                            stride=stride, anchor=anchor))
+            out = os.path.join(work, f"s{stride}")
+            common.occgt("build", recipe, "--out", out)
+            splits.append(ShardDataset(out, occupancy="none", images=False, labels=False))
+        for k, (stride, anchor) in enumerate(variants):
+            rows = 0
+            for batch in DataLoader(splits[k], batch_size=4, collate_fn=collate):
+                out = loftr_supervision(batch, "occ2net", coarse_stride=stride, anchor=anchor)
+                mask = batch["match_mask"]
+                self.assertTrue(torch.equal(out["spv_xy"], batch["match_xy"][mask]))
+                self.assertTrue(torch.equal(out["spv_j_ids"], batch["matches"][mask][:, 1]))
+                rows += int(mask.sum())
+                other_stride, other_anchor = variants[1 - k]
+                with self.assertRaisesRegex(ValueError, r"^batch\['(match_xy|matches)'\]: row "
+                                            r"\d+ .*coarse_stride=" + str(other_stride)):
+                    loftr_supervision(batch, "occ2net", coarse_stride=other_stride,
+                                      anchor=other_anchor)
+                with self.assertRaisesRegex(ValueError, "anchor=" + repr(other_anchor)):
+                    loftr_supervision(batch, "occ2net", coarse_stride=stride,
+                                      anchor=other_anchor)
+            self.assertGreater(rows, 2000, (stride, anchor))
 
 
 class TartanAir(unittest.TestCase, Checks):

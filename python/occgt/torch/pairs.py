@@ -58,7 +58,12 @@ def _read_lines(path: str) -> List[str]:
 
 def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> List[PairRef]:
     """LoFTR's scene_info npz (``name`` [N, 4], ``score``) or test.npz (``name``,
-    ``rel_pose``): name = (scene number, sub-scene, frame number 0, frame number 1)."""
+    ``rel_pose``): name = (scene number, sub-scene, frame number 0, frame number 1).
+
+    Row (s, sub) names scene_names[s] when sub == 0 and s < len(scene_names), else ScanNet's
+    scene{s:04d}_{sub:02d}: occgt's export numbers its non-ScanNet scenes 0, 1, ... (sub-scene
+    0, scenes.txt) beside ScanNet scenes that keep their own numbers, and refuses a build
+    where both would name one folder scene%04d_00 (loftr_export.cc, LoftrSceneFolders)."""
     try:
         with np.load(path, allow_pickle=False) as z:
             if "name" not in z.files:
@@ -84,10 +89,7 @@ def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> List[PairRef]:
         scene_names = _read_lines(names_file) if names_file else None
     refs = []
     for r, (s, sub, n0, n1) in enumerate(name.tolist()):  # Python ints: uint64 stays exact
-        if scene_names is not None:
-            if not 0 <= s < len(scene_names) or sub != 0:
-                raise ValueError(f"{path}:name[{r}]: scene ({s}, {sub}) is not in the scene list "
-                                 f"({len(scene_names)} names, sub-scene 0)")
+        if scene_names is not None and sub == 0 and s < len(scene_names):
             scene = scene_names[s]
         else:
             scene = f"scene{s:04d}_{sub:02d}"
@@ -129,9 +131,11 @@ def read_pair_index(pairs: Union[str, os.PathLike],
     folder (its ``pairs.jsonl``, else its ``selection/*.jsonl``); a LoFTR ``.npz`` (scene_info
     with ``name`` and ``score``, or test-1500's ``test.npz``); a folder of such npz files (LoFTR's
     ``scene_data/{split}``, sorted); a LoFTR list ``.txt`` (one npz name per line, in
-    ``npz_root``, default the list's folder). LoFTR names scenes by number: ``scene_names`` (a
-    list, or a file with one name per line: line i = scene i) maps them; default: occgt's
-    export's ``scenes.txt`` when found next to the npz, else ScanNet's ``sceneXXXX_YY``.
+    ``npz_root``, default the list's folder). LoFTR names scenes by number (s, sub):
+    ``scene_names`` (a list, or a file with one name per line: line i = scene i; default
+    occgt's export's ``scenes.txt`` when found beside the npz or two folders above it) names
+    rows (s, 0) with s < len(scene_names); every other row is ScanNet's
+    ``scene{s:04d}_{sub:02d}`` (occgt's export of ScanNet scenes mixed with others).
     """
     path = os.fspath(pairs)
     names = _read_lines(scene_names) if isinstance(scene_names, str) else scene_names

@@ -17,6 +17,10 @@ from .. import _occgt
 from .. import pair_ground_truth
 
 Mode = Literal["loftr", "occ2net"]
+#: The pixel convention of a batch's K0/K1 (mode "occ2net"): occgt's (pixel centre at
+#: integer coordinates) or COLMAP's (at +0.5: LoFTR's MegaDepth loader, occgt's MegaDepth
+#: export).
+KConvention = Literal["occgt", "colmap"]
 
 #: Codes of spv_status0/spv_status1 (uint8): WARP_STATUS_NAMES[code] is the name.
 WARP_STATUS_NAMES: Tuple[str, ...] = tuple(_occgt.WARP_STATUS_NAMES)
@@ -99,6 +103,7 @@ def loftr_supervision(
     dense_conf_matrix: bool = True,
     preset: str = _occgt.PAIR_DEFAULTS["preset"],
     anchor: str = _occgt.PAIR_DEFAULTS["anchor"],
+    k_convention: Optional[KConvention] = None,
     **label_options: Any,
 ) -> Dict[str, torch.Tensor]:
     """Coarse and fine supervision of a collated batch (docs/PYTHON.md, "Supervision").
@@ -149,7 +154,19 @@ def loftr_supervision(
     top-left block of ones the unpadded part) from the depth map's top-left
     round(w·sx) × round(h·sy) pixels resampled to it with K (occgt.depth_at_image_size,
     pixel-centre rules), and its cells are placed on the padded grid; matches stored in the
-    batch are refused there (they are at the depth maps' size).
+    batch are refused there (they are at the depth maps' size). ``k_convention``: the pixel
+    convention of K0/K1, "occgt" (pixel centre at integer coordinates) or "colmap" (at
+    +0.5; its cx, cy are taken 0.5 lower); None = "colmap" for a batch with ``scale0`` or
+    ``mask0`` (only LoFTR's MegaDepth loader gives those keys, with COLMAP's K), else
+    "occgt".
+
+    Stored matches were computed with the options of the split (or PairIndexDataset) that
+    made them: a non-default ``preset``, any ``label_options`` or a ``k_convention`` is
+    then refused (drop ``matches`` from the batch to compute them here), and every match_xy
+    must lie in its target cell by ``coarse_stride`` and ``anchor`` (occgt's target-cell
+    rule), so a wrong ``coarse_stride`` is refused; a wrong ``anchor`` is refused only where
+    a match lies where the two anchors' rules differ: pass the split's (recipe.json
+    ``patches.anchor``).
 
     Raises:
         ValueError: a missing key or a tensor of the wrong shape, a bad option, ``mask0``
@@ -171,19 +188,30 @@ def loftr_supervision(
     _require(batch, ["depth0", "depth1", "K0", "K1", "T_0to1"], mode)
     device: Union[torch.device, str] = (batch["depth0"].device
                                         if isinstance(batch["depth0"], torch.Tensor) else "cpu")
+    if k_convention not in (None, "occgt", "colmap"):
+        raise ValueError(f"k_convention: expected 'occgt', 'colmap' or None, got "
+                         f"{k_convention!r}")
     if mode == "loftr":
         if label_options:
             raise ValueError(f"{sorted(label_options)[0]}: not an option of mode 'loftr'")
-        # LoFTR's targets take no label preset or anchor: a value given would be ignored.
+        # LoFTR's targets take no label preset, anchor or K convention (they use K as LoFTR
+        # does): a value given would be ignored.
         for name, value in (("preset", preset), ("anchor", anchor)):
             if value != _occgt.PAIR_DEFAULTS[name]:
                 raise ValueError(f"{name}: not an option of mode 'loftr' (got {value!r})")
+        if k_convention is not None:
+            raise ValueError(f"k_convention: not an option of mode 'loftr' (got "
+                             f"{k_convention!r})")
         out = _loftr(batch, coarse_stride, fine_stride, fine_window, compat, dense_conf_matrix)
     else:
         if compat:
             raise ValueError("compat: an option of mode 'loftr' (use preset='occ2net-compat')")
+        if "matches" in batch:
+            _refuse_label_options(preset, k_convention, label_options)
+        elif k_convention is None:
+            k_convention = "colmap" if "scale0" in batch or "mask0" in batch else "occgt"
         out = _occ2net(batch, coarse_stride, fine_stride, fine_window, dense_conf_matrix, preset,
-                       anchor, label_options)
+                       anchor, k_convention == "colmap", label_options)
     return {k: v.to(device) for k, v in out.items()}
 
 
@@ -285,6 +313,45 @@ def _batch_matches(batch: Mapping[str, Any], n: int) -> Tuple[torch.Tensor, ...]
                      "(concatenated) with it (occgt.torch.collate)")
 
 
+def _refuse_label_options(preset: str, k_convention: Optional[str],
+                          label_options: Dict[str, Any]) -> None:
+    """Stored matches take none of the options that compute matches: a value given would be
+    ignored."""
+    given = sorted(label_options.items())
+    if k_convention is not None:
+        given.insert(0, ("k_convention", k_convention))
+    if preset != _occgt.PAIR_DEFAULTS["preset"]:
+        given.insert(0, ("preset", preset))
+    if given:
+        name, value = given[0]
+        raise ValueError(f"{name}: the batch's matches were computed with the split's options "
+                         f"(recipe.json; PairIndexDataset: its own), got {value!r}; drop "
+                         f"'matches' from the batch to compute them with other options")
+
+
+def _check_target_cells(xy: torch.Tensor, cell: torch.Tensor, width: torch.Tensor,
+                        types: torch.Tensor, stride: int, anchor: str) -> None:
+    """Every stored match_xy lies in its target cell (j in image 1 for vv/vo, i in image 0 for
+    ov) by occgt's rule (geometry/patches.h: center floor((x + 0.5) / s), corner
+    floor(x / s + 0.5)), so matches of another coarse_stride are refused; 1e-3 px of
+    tolerance at the cell borders."""
+    u = xy.to(torch.float64)
+    u = (u + 0.5) / stride if anchor == "center" else u / stride + 0.5
+    want = torch.stack([cell % width, cell // width], 1).to(torch.float64)
+    tol = 1e-3 / stride
+    inside = ((u >= want - tol) & (u < want + 1 + tol)).all(1)  # NaN: outside
+    if bool(inside.all()):
+        return
+    k = int(torch.nonzero(~inside)[0, 0])
+    kind = ("vv", "vo", "ov")[int(types[k])]
+    image = 0 if kind == "ov" else 1
+    raise ValueError(f"batch['match_xy']: row {k} ({kind}) at ({float(xy[k, 0]):.3f}, "
+                     f"{float(xy[k, 1]):.3f}) is not in its target cell {int(cell[k])} of image "
+                     f"{image} with coarse_stride={stride}, anchor={anchor!r}: the batch's "
+                     f"matches were computed with another coarse_stride or anchor (pass the "
+                     f"split's, recipe.json patches.stride and patches.anchor)")
+
+
 def _valid_cells(mask: np.ndarray, key: str) -> Tuple[int, int]:
     """(rows, cols) of the unpadded top-left block of a LoFTR coarse mask [h_c, w_c]."""
     m = mask != 0
@@ -297,7 +364,7 @@ def _valid_cells(mask: np.ndarray, key: str) -> Tuple[int, int]:
 
 
 def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_window: int,
-             dense: bool, preset: str, anchor: str,
+             dense: bool, preset: str, anchor: str, colmap_k: bool,
              label_options: Dict[str, Any]) -> Dict[str, torch.Tensor]:
     if anchor not in ("center", "corner"):
         raise ValueError(f"anchor: expected 'center' or 'corner', got {anchor!r}")
@@ -322,11 +389,16 @@ def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_windo
     w0, w1 = grid0[1], grid1[1]
     l0, l1 = grid0[0] * w0, grid1[0] * w1
     out: Dict[str, torch.Tensor] = {}
-    if "matches" in batch:
+    stored = "matches" in batch
+    if stored:
         b_ids, matches, types, xy = _batch_matches(batch, n)
     else:
         K0 = _batched(batch, "K0", (3, 3))
         K1 = _batched(batch, "K1", (3, 3))
+        if colmap_k:  # COLMAP's pixel centres are at +0.5, occgt's at integers
+            K0, K1 = K0.astype(np.float64), K1.astype(np.float64)
+            K0[:, :2, 2] -= 0.5
+            K1[:, :2, 2] -= 0.5
         T01 = _batched(batch, "T_0to1", (4, 4)).astype(np.float64)
         scale0, scale1 = _scales(batch, n)
         masks = None
@@ -384,7 +456,7 @@ def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_windo
         if bool(outside.any()):
             k = int(torch.nonzero(outside)[0, 0])
             raise ValueError(f"batch['matches']: row {k} names cell {int(ids[k])} of {name}, "
-                             f"which has {count} cells")
+                             f"which has {count} cells with coarse_stride={stride}")
     if bool(((types < 0) | (types > 2)).any()):
         raise ValueError("batch['match_type']: expected 0 (vv), 1 (vo) or 2 (ov)")
     xy = xy.to(torch.float32)
@@ -394,6 +466,8 @@ def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_windo
     ov = types == 2
     cell = torch.where(ov, i_ids, j_ids)
     width = torch.where(ov, torch.tensor(w0), torch.tensor(w1))
+    if stored:
+        _check_target_cells(xy, cell, width, types, stride, anchor)
     anchor_xy = torch.stack([(cell % width) * stride + half, (cell // width) * stride + half], 1)
     expec_f_gt = (xy - anchor_xy.to(torch.float32)) / fine_stride / (fine_window // 2)
     out.update({
