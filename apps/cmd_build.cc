@@ -3,7 +3,7 @@
 // Turns a dataset and a YAML recipe into a filtered pair index and WebDataset shards
 // (docs/USER_GUIDE.md, docs/RECIPES.md, docs/CLI.md). The job is libgt/pipeline/build.h;
 // this file parses flags, prints progress on stderr and a short human summary on stdout
-// (--json: the summary JSON, the content of DIR/summary.json, instead). Without
+// (--json: this run's summary JSON, with the fields of DIR/summary.json, instead). Without
 // --task/--tasks, a Slurm array task takes its place from SLURM_ARRAY_TASK_{ID,MIN,MAX,COUNT}
 // (docs/SCALE.md).
 #include <tbb/global_control.h>
@@ -177,9 +177,14 @@ std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
     const int64_t complete = num("scenes_complete");
     const std::string in =
         complete < num("scenes") ? std::to_string(complete) + " of " + scenes + " so far" : scenes;
+    // A task of more tasks than scenes may own none.
+    const bool owns_none =
+        num("scenes_selected_this_run") == 0 && num("scenes_reused") == 0 && num("tasks") > 1;
     text += name + ": selected " + pairs + " in " + in + " (" +
-            gt::Counted(num("scenes_selected_this_run"), "scene") +
-            " this run); the select stage writes no shard: run --stage write" +
+            (owns_none ? "task " + std::to_string(num("task")) + " of " +
+                             std::to_string(num("tasks")) + " owns none of the scenes"
+                       : gt::Counted(num("scenes_selected_this_run"), "scene") + " this run") +
+            "); the select stage writes no shard: run --stage write" +
             (complete < num("scenes") ? " once every task has selected" : "") + took;
   } else {
     const int64_t written = num("samples_written_this_run");
@@ -187,6 +192,9 @@ std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
         name + ": " + pairs + " in " + scenes + ", " + gt::Counted(num("shards_planned"), "shard");
     if (num("samples") == 0) {
       text += "; no pair passed the selection (the drops below say why)";
+    } else if (written == 0 && num("shards_skipped_complete") == 0) {
+      text += "; nothing to write: task " + std::to_string(num("task")) + " of " +
+              std::to_string(num("tasks")) + " owns none of the shards";
     } else if (written == 0) {
       text += "; nothing to write: every shard of this task was complete already";
     } else {
@@ -254,8 +262,8 @@ void AddBuildCommand(CLI::App& app) {
                 "Select in memory, print the plan and statistics, write nothing");
   AddThreadsFlag(cmd, &args->threads, "Worker threads");
   cmd->add_flag("--json", args->json,
-                "Print the summary as JSON (the content of DIR/summary.json) instead of a short "
-                "human summary");
+                "Print this run's summary as JSON (the fields of DIR/summary.json, which the run "
+                "that published the split wrote) instead of a short human summary");
   const TaskFlags task_flags = AddTaskFlags(cmd, &args->build.task, &args->build.tasks);
   cmd->add_option("--stage", args->stage, "select | write | all (default all)");
   AddDepthCacheFlag(cmd, &args->build.depth_cache_mb);

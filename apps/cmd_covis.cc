@@ -56,6 +56,11 @@ void Run(const CovisArgs& args_in) {
   if (args.json) {
     std::cout << s.dump(2) << std::endl;
   } else {
+    // A task of several writes its share of the scenes only: say so where the counts are.
+    if (args.options.tasks > 1) {
+      std::printf("task %d of %d (%s): its share of the scenes only; ", args.options.task,
+                  args.options.tasks, from_slurm ? "from the Slurm array" : "--task/--tasks");
+    }
     std::printf(
         "%lld scenes written, %lld already complete; %lld of %lld candidate pairs scored "
         "(%.1f s); graphs in %s/covisibility/\n",

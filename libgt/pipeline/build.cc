@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "libgt/core/error.h"
+#include "libgt/core/stats.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/file_read.h"
@@ -202,7 +203,7 @@ void AddSelectionStatistics(const Recipe& recipe,
     double sum = 0;
     for (double x : v) sum += x;
     return json{{"min", v.front()},
-                {"median", v[v.size() / 2]},
+                {"median", SortedMedian(v)},
                 {"mean", sum / v.size()},
                 {"max", v.back()},
                 {"score_stride", s.score_stride}};

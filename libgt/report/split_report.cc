@@ -12,6 +12,7 @@
 
 #include "libgt/core/error.h"
 #include "libgt/core/human.h"
+#include "libgt/core/stats.h"
 #include "libgt/datasets/scan.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/codec.h"
@@ -85,7 +86,7 @@ Stats Describe(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   s.min = v.front();
   s.max = v.back();
-  s.median = v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+  s.median = SortedMedian(v);
   double sum = 0;
   for (double x : v) sum += x;
   s.mean = sum / v.size();

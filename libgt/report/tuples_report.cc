@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "libgt/core/error.h"
+#include "libgt/core/stats.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
@@ -69,7 +70,7 @@ json Describe(std::vector<double> v, int bins) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   out["min"] = v.front();
-  out["median"] = n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  out["median"] = SortedMedian(v);
   out["mean"] = sum / static_cast<double>(n);
   out["max"] = v.back();
   return out;

@@ -207,6 +207,14 @@ def main():
     keys, metas, lines, summary = read_split(out, "demo", width, height)
     assert len(keys) == 24, len(keys)  # 2 scenes, quota 12
     assert summary["pairs_per_scene"] == {"synth_000": 12, "synth_001": 12}
+    # selected_overlap: of the pairs' score_metrics with the recipe's aggregate (mean); the
+    # median numpy's (24 pairs: the mean of the two middle values; it was the upper one).
+    overlaps = np.array([0.5 * (l["score_metrics"]["01"]["overlap"] +
+                                l["score_metrics"]["10"]["overlap"]) for l in lines])
+    st = summary["selected_overlap"]
+    assert np.isclose(st["median"], np.median(overlaps), rtol=0, atol=1e-12), (st, overlaps)
+    assert np.isclose(st["mean"], overlaps.mean(), rtol=0, atol=1e-12), st
+    assert (st["min"], st["max"]) == (overlaps.min(), overlaps.max()), st
     # The size estimate behind shards.target_mb errs on the large side for the synthetic
     # depth too (it counted it at sensor depth's deflate ratio: the demo's shards were 1.2x
     # the estimate, over a target), as build_samples checks on the real samples.
@@ -322,6 +330,18 @@ def main():
                      r"selected", r.stdout), r.stdout
     r = common.occgt("build", "--json", recipe, "--out", out_d, "--stage", "write", check=False)
     assert r.returncode == 1 and "not complete" in r.stderr, r.stderr
+    # More tasks than scenes, or than shards: a task that owns none says so (it said "0 scenes
+    # this run" and "every shard of this task was complete already").
+    out_t = os.path.join(root, "e_tasks")
+    for task in range(5):
+        common.occgt("build", recipe, "--out", out_t, "--tasks", "5", "--task", str(task),
+                     "--stage", "select")
+    r = common.occgt("build", recipe, "--out", out_t, "--tasks", "5", "--task", "4", "--stage",
+                     "select")
+    assert "(task 4 of 5 owns none of the scenes)" in r.stdout, r.stdout
+    r = common.occgt("build", recipe, "--out", out_t, "--tasks", "5", "--task", "4", "--stage",
+                     "write")
+    assert "nothing to write: task 4 of 5 owns none of the shards" in r.stdout, r.stdout
 
     # Dry run: plan and statistics, no shards, nothing written except the synthetic data.
     out_e = os.path.join(root, "e")

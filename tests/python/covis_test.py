@@ -125,8 +125,11 @@ class Covis(unittest.TestCase):
                      "--root", self.data)
         split = os.path.join(self.dir, "split")
         for k in range(2):
-            common.occgt("covis", self.recipe, "--out", split, "--threads", 2, "--dense",
-                         "--task", k, "--tasks", 2, "--root", self.data)
+            r = common.occgt("covis", self.recipe, "--out", split, "--threads", 2, "--dense",
+                             "--task", k, "--tasks", 2, "--root", self.data)
+            # The text says that a task wrote its share only (exit 0 for half the scenes).
+            self.assertTrue(r.stdout.startswith(f"task {k} of 2 (--task/--tasks): its share of "
+                                                "the scenes only; "), r.stdout)
         # A first run without --dense, then --dense on the complete folder: the matrices are
         # written from the stored graphs, the same bytes.
         later = os.path.join(self.dir, "later")
