@@ -55,7 +55,10 @@ void AddThreadsFlag(CLI::App* cmd, int* threads, const std::string& what) {
 }
 
 std::unique_ptr<tbb::global_control> LimitThreads(int threads) {
-  if (threads < 0) throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores)");
+  if (threads < 0) {
+    throw gt::InputError("--threads", "expected an integer >= 0 (0 = all cores), got '" +
+                                          std::to_string(threads) + "'");
+  }
   if (threads == 0) return nullptr;
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                threads);

@@ -283,6 +283,16 @@ std::string DescribeParseError(const CLI::App& app, const std::vector<std::strin
   }
   std::string what = error.what();
   if (const size_t newline = what.find('\n'); newline != std::string::npos) what.resize(newline);
+  // CLI11: "A subcommand is required" (`occgt`, `occgt inspect` alone).
+  if (dynamic_cast<const CLI::RequiredError*>(&error) != nullptr &&
+      what.find("subcommand") != std::string::npos) {
+    std::vector<std::string> names;
+    for (const CLI::App* child : sub->get_subcommands({})) names.push_back(child->get_name());
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    return "a command is required after `" + path + "` (one of " + list + "; `" + path +
+           " --help` describes them)";
+  }
   // CLI11: "Could not convert: --threads = abc".
   const std::string convert = "Could not convert: ";
   if (what.rfind(convert, 0) == 0) {
