@@ -231,10 +231,18 @@ const json& SchemaJson() {
 // that the value fits T (frame_stride: 4294967297 became 1 through get<int>()).
 template <typename T>
 T CheckedInteger(const json& v, const std::string& field, const std::string& file) {
+  // The side the value is past (the schema's own bounds were checked before: a field with
+  // minimum 0 said "expected an integer in [-2147483648, 2147483647]" of 2147483648).
   const auto fail = [&]() -> T {
-    throw InputError(
-        file, field + ": expected an integer in [" + std::to_string(std::numeric_limits<T>::min()) +
-                  ", " + std::to_string(std::numeric_limits<T>::max()) + "], got " + v.dump());
+    const bool negative = v.is_number_integer() ? v.get<int64_t>() < 0
+                          : v.is_number_float() ? v.get<double>() < 0
+                                                : false;
+    const std::string expected =
+        !v.is_number() || (v.is_number_float() && v.get<double>() != std::floor(v.get<double>()))
+            ? "an integer"
+        : negative ? "an integer >= " + std::to_string(std::numeric_limits<T>::min())
+                   : "an integer <= " + std::to_string(std::numeric_limits<T>::max());
+    throw InputError(file, field + ": expected " + expected + ", got " + v.dump());
   };
   if (v.is_number_unsigned()) {
     const uint64_t u = v.get<uint64_t>();
