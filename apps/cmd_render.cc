@@ -217,6 +217,14 @@ void RunRender(const RenderArgs& args) {
   }
   if (unreadable > 1)
     std::printf("  ... and %d more frame(s) (render.json: sensor_error)\n", unreadable - 1);
+  // A mesh in other units (millimetres) or another world frame renders nothing, silently.
+  bool any_hit = false;
+  for (const auto& fj : report["frames"]) any_hit |= fj["rendered_fraction"].get<double>() > 0;
+  if (!frames.empty() && !any_hit) {
+    std::printf(
+        "  warning: the mesh covers no pixel of any frame: is it in metres and in the "
+        "frames' world frame (the poses')?\n");
+  }
 }
 
 }  // namespace

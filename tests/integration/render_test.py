@@ -70,6 +70,18 @@ def test_render():
     common.occgt("render", *ARGS, "--mesh", MESH, "--frames", "000160", "--resolution", "320x240",
                  "--out", half)
     assert np.load(os.path.join(half, "000160_depth.npy")).shape == (240, 320)
+    assert "warning" not in r.stdout, r.stdout
+    # A mesh that covers no pixel of any frame (in millimetres, or another world frame: here
+    # one triangle 5 km away) is said so (it rendered nothing without a word).
+    far = os.path.join(half, "far.ply")
+    with open(far, "w") as f:
+        f.write("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                "end_header\n5000 0 0\n5001 0 0\n5000 1 0\n3 0 1 2\n")
+    r = common.occgt("render", *ARGS, "--mesh", far, "--frames", "000160", "--resolution",
+                     "320x240", "--out", os.path.join(half, "far"))
+    assert ("warning: the mesh covers no pixel of any frame: is it in metres and in the frames' "
+            "world frame (the poses')?") in r.stdout, r.stdout
 
 
 def meta_counts(folder):
