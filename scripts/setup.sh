@@ -10,7 +10,7 @@
 #   scripts/setup.sh --install  then `cmake --install` into $OCCGT_PREFIX (default ~/.local),
 #                               which puts bin/occgt on PATH when PREFIX/bin is on it
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+here="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"  # through a symlink too
 # ccache keyed on paths relative to the checkout (and not on the build folder), so a
 # second clone of the same sources (CI's fresh clone, a worktree) reuses the cache.
 export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$here}" CCACHE_NOHASHDIR="${CCACHE_NOHASHDIR:-1}"
