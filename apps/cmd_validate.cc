@@ -40,6 +40,7 @@ void AddValidateCommand(CLI::App& app) {
     }
     const std::vector<std::string> problems = gt::shards::ValidateSplit(args->dir, options);
     for (const std::string& p : problems) std::printf("%s\n", p.c_str());
+    std::fflush(stdout);  // the lines before the error line on stderr, also through one pipe
     if (!problems.empty()) {
       throw gt::InputError(args->dir, std::to_string(problems.size()) + " problem(s) found");
     }

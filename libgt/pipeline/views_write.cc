@@ -314,7 +314,8 @@ json WriteViewsShards(const Recipe& recipe, const datasets::DatasetReader& reade
       ++skipped;
       continue;
     }
-    shards::SplitShardWriter writer(options.out_dir, recipe.split, s);
+    shards::SplitShardWriter writer(options.out_dir, recipe.split, s,
+                                    RecipeSampleOptions(recipe).digest);
     for (int64_t c = start; c < start + sizes[s]; c += chunk) {
       const int64_t end = std::min(c + chunk, start + sizes[s]);
       std::vector<std::shared_ptr<ViewsScene>> data(end - c);

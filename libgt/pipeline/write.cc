@@ -237,6 +237,7 @@ WriteResult WriteShards(const Recipe& recipe, const datasets::DatasetReader& rea
   size_t next_job = 0;
   std::unique_ptr<shards::SplitShardWriter> writer;  // the shard being filled
   int64_t in_writer = 0;                             // its samples so far
+  const std::string digest = recipe.Digest();        // recorded with each shard
   ShardFinisher finisher;
   int64_t finishing_samples = 0;
   auto collect_finished = [&] {
@@ -292,7 +293,7 @@ WriteResult WriteShards(const Recipe& recipe, const datasets::DatasetReader& rea
   auto collect = [&](size_t j) {
     const int64_t s = jobs[j].shard;
     if (!writer) {
-      writer = std::make_unique<shards::SplitShardWriter>(options.out_dir, recipe.split, s);
+      writer = std::make_unique<shards::SplitShardWriter>(options.out_dir, recipe.split, s, digest);
     }
     EncodedSample& e = items[j]->sample;
     writer->Add(std::move(e.sample), e.pair_line);

@@ -194,7 +194,8 @@ std::string SceneOfLine(const json& line, const std::string& key) {
 // validates sample JSON with `sample_schema` (may be null) and parses every .npy header.
 // Returns problems, each "<member>: <problem>"; `keys_out` gets the keys in order.
 std::vector<std::string> CheckTarContents(const std::string& tar_path, const SplitSchemas& schemas,
-                                          std::vector<std::string>* keys_out) {
+                                          std::vector<std::string>* keys_out,
+                                          std::set<std::string>* digests_out = nullptr) {
   std::vector<std::string> problems;
   std::vector<std::string> keys;
   std::set<std::string> seen_keys;
@@ -240,12 +241,22 @@ std::vector<std::string> CheckTarContents(const std::string& tar_path, const Spl
         problems.push_back(name + ": bad .npy: " + e.what());
       }
     } else if (ext == "json") {
-      json doc = json::parse(data, nullptr, false);
+      json doc = json::parse(plain, nullptr, false);  // a .json.gz member: its JSON
       if (doc.is_discarded()) {
         problems.push_back(name + ": not valid JSON");
-      } else if (field == "json") {
+      } else if (plain_field == "json") {
         const std::string p = schemas.CheckSample(doc);
         if (!p.empty()) problems.push_back(name + ": " + p);
+        // The sample's own key (a member renamed or moved to another sample kept its json).
+        if (doc.is_object() && doc.contains("key") && doc["key"].is_string() &&
+            doc["key"].get<std::string>() != key) {
+          problems.push_back(name + ": its \"key\" is " + doc["key"].dump() +
+                             ", not the member's " + key);
+        }
+        if (digests_out != nullptr && doc.is_object() && doc.contains("options_digest") &&
+            doc["options_digest"].is_string()) {
+          digests_out->insert(doc["options_digest"].get<std::string>());
+        }
       }
     } else if (ext == "pyd" || ext == "pth" || ext == "pickle") {
       problems.push_back(name + ": pickle fields are not allowed");
@@ -375,6 +386,12 @@ PartRecord ReadPartRecordAndScenes(const std::string& dir, const std::string& sp
     throw InputError(path, "field \"md5sum\": expected 32 lower-case hex digits");
   }
   r.info.filesize = IntMember(doc, "filesize", path);
+  if (doc.contains("options_digest")) {  // records written before it have none
+    r.options_digest = StringMember(doc, "options_digest", path);
+    if (!IsMd5Hex(r.options_digest)) {
+      throw InputError(path, "field \"options_digest\": expected 32 lower-case hex digits");
+    }
+  }
   const json& keys = Member(doc, "keys", path);
   const json& pairs = Member(doc, "pairs", path);
   if (!keys.is_array() || !pairs.is_array() ||
@@ -412,10 +429,11 @@ PartRecord ReadPartRecord(const std::string& dir, const std::string& split, int6
 }
 
 SplitShardWriter::SplitShardWriter(const std::string& dir, const std::string& split,
-                                   int64_t shard_index)
+                                   int64_t shard_index, const std::string& options_digest)
     : dir_(dir) {
   if (std::string e = CheckSplitName(split); !e.empty()) throw InputError(dir, e);
   record_.split = split;
+  record_.options_digest = options_digest;
   record_.shard_index = shard_index;
   record_.url = ShardFileName(split, shard_index);
   tar_ = std::make_unique<TarShardWriter>(ShardPath(dir, split, shard_index));
@@ -461,6 +479,7 @@ PartRecord SplitShardWriter::Finish() {
   doc["nsamples"] = record_.info.nsamples;
   doc["md5sum"] = record_.info.md5sum;
   doc["filesize"] = record_.info.filesize;
+  if (!record_.options_digest.empty()) doc["options_digest"] = record_.options_digest;
   doc["keys"] = record_.keys;
   json pairs = json::array();
   for (const std::string& l : record_.pair_lines) pairs.push_back(json::parse(l));
@@ -640,6 +659,46 @@ std::string VerifyShard(const std::string& shard, const PartRecord& r,
 // lines naming their keys and shard, against their schema in `schemas`), the stat of its
 // tar, the plan's sample count. `error` holds the shard's first problem (an InputError
 // naming the shard); needs no other shard, so shards load in parallel.
+// The options digest of the split in DIR: DIR/recipe.json's "options_digest" (the build's
+// recipe), "" when the folder has none (the N-view shards of DIR/views).
+std::string RecipeDigestOf(const std::string& dir) {
+  const std::string path = (fs::path(dir) / "recipe.json").string();
+  if (!io::FileExists(path)) return "";
+  try {
+    const json doc = ParseJsonFile(path);
+    return doc.is_object() && doc.contains("options_digest") && doc["options_digest"].is_string()
+               ? doc["options_digest"].get<std::string>()
+               : "";
+  } catch (const InputError&) {
+    return "";  // not this check's to report: the shards are compared among themselves
+  }
+}
+
+// Shards written by two builds in one folder (a shard and its record copied from another
+// split of the same name): the first digest that differs from the split's, as a problem.
+class DigestCheck {
+ public:
+  explicit DigestCheck(const std::string& dir)
+      : digest_(RecipeDigestOf(dir)), from_(digest_.empty() ? "" : "recipe.json") {}
+  // "" or the problem of a shard whose samples carry `digest` ("" = not recorded).
+  std::string Check(const std::string& digest, const std::string& shard_name) {
+    if (digest.empty()) return "";
+    if (digest_.empty()) {
+      digest_ = digest;
+      from_ = shard_name;
+      return "";
+    }
+    if (digest == digest_) return "";
+    return "written by another build: options digest " + digest + ", the split's is " + digest_ +
+           " (" + from_ +
+           "); its samples are of other data or options (remove the shard and its part record "
+           "and run the build again)";
+  }
+
+ private:
+  std::string digest_, from_;
+};
+
 struct LoadedShard {
   PartRecord record;
   std::vector<std::string> scenes;  // scene of every pair line
@@ -769,6 +828,7 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
   const size_t nshards = plan.shard_nsamples.size();
   StreamedFile pairs_jsonl((fs::path(dir) / "pairs.jsonl").string());
   std::unordered_map<std::string, int64_t> shard_of_key;
+  DigestCheck digests(dir);
   // 1. Trusted checks, shards loaded in parallel by chunk, then taken in shard order: the
   //    first problem in shard order is the error, whatever the thread count.
   for (size_t begin = 0; begin < nshards; begin += kMergeChunkShards) {
@@ -781,6 +841,9 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
     for (LoadedShard& loaded : chunk) {
       if (loaded.error) std::rethrow_exception(loaded.error);
       PartRecord& r = loaded.record;
+      if (const std::string p = digests.Check(r.options_digest, r.url); !p.empty()) {
+        throw InputError(r.info.path, p);
+      }
       std::string text;
       for (size_t i = 0; i < r.keys.size(); ++i) {
         const std::string& key = r.keys[i];
@@ -858,6 +921,7 @@ namespace {
 // What ValidateSplit finds in one shard of index.json's shardlist.
 struct ShardProblems {
   std::vector<std::string> problems;  // "<file>: <problem>", in the order found
+  std::set<std::string> digests;      // the options_digest of its samples
   std::string url;                    // as listed
   std::string shard;                  // DIR/url
   bool read = false;                  // the tar was read through: `keys` are its keys
@@ -903,7 +967,7 @@ ShardProblems CheckListedShard(const std::string& dir, const std::string& index_
     return out;
   }
   try {
-    for (const std::string& p : CheckTarContents(shard, schemas, &out.keys)) {
+    for (const std::string& p : CheckTarContents(shard, schemas, &out.keys, &out.digests)) {
       problem(shard, p);
     }
   } catch (const InputError& err) {
@@ -977,6 +1041,7 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
   std::set<std::string> unread;           // listed shards that could not be read through
   std::vector<std::string> sample_order;  // the keys of the read shards, in shard order
   int64_t total = 0;
+  DigestCheck digests(dir);
   for (size_t i = 0; i < checked.size(); ++i) {
     ShardProblems& c = checked[i];
     if (const std::string repeated = c.url.empty() ? "" : RepeatedUrl(c.url, i, &entry_of_url);
@@ -989,6 +1054,12 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
     if (!c.read) {
       unread.insert(c.url);  // its problem is reported; its keys are unknown
       continue;
+    }
+    for (const std::string& d : c.digests) {
+      if (const std::string p = digests.Check(d, c.url); !p.empty()) {
+        problem(c.shard, p);
+        break;
+      }
     }
     for (const std::string& k : c.keys) {
       if (!shard_of_key.emplace(k, c.url).second) problem(c.shard, "sample " + k + " repeats");

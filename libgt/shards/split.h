@@ -66,6 +66,10 @@ struct PartRecord {
   ShardInfo info;
   std::vector<std::string> keys;        // sample keys in tar order
   std::vector<std::string> pair_lines;  // compact JSON objects, one per key, same order
+  // The options digest of the build that wrote the shard (its samples' "options_digest");
+  // "" in records written before it was recorded. The merge refuses a split whose records
+  // name two digests, or another than DIR/recipe.json's.
+  std::string options_digest;
 };
 // Parses DIR/parts/S-{s:06d}.json; throws InputError("<record path>", ...) unless it names
 // shard s of the split, has a 32-digit lower-case hex md5sum, non-negative sizes, and one
@@ -73,14 +77,15 @@ struct PartRecord {
 PartRecord ReadPartRecord(const std::string& dir, const std::string& split, int64_t shard_index);
 
 // Writes shard s of a split and then its part record. Usage (one per shard, any thread):
-//   SplitShardWriter w(dir, split, s);
+//   SplitShardWriter w(dir, split, s, recipe.Digest());
 //   for (...) w.Add(sample, pair_line_json);
 //   PartRecord r = w.Finish();
 // `pair_line_json` must be one JSON object (the pairs.jsonl line of this sample: scene,
 // frame ids, directional metrics); the writer sets its "shard" and "key" members.
 class SplitShardWriter {
  public:
-  SplitShardWriter(const std::string& dir, const std::string& split, int64_t shard_index);
+  SplitShardWriter(const std::string& dir, const std::string& split, int64_t shard_index,
+                   const std::string& options_digest = "");
   ~SplitShardWriter();
   void Add(const Sample& sample, const std::string& pair_line_json);
   // The same, taking the sample (its buffers are released when Add returns).

@@ -67,10 +67,14 @@ std::string PermissiveSchemasDir() {
 
 // A sample like the ones `occgt build` writes (small arrays).
 Sample PairSample(const std::string& scene, int f0, int f1, std::mt19937* rng, int w = 16,
-                  int h = 12) {
+                  int h = 12, const std::string& digest = "") {
   Sample s;
   s.key = MakeSampleKey(scene, std::to_string(f0), std::to_string(f1));
   json meta;
+  if (!digest.empty()) {
+    meta["key"] = s.key;
+    meta["options_digest"] = digest;
+  }
   meta["scene"] = scene;
   meta["frame0"] = f0;
   meta["frame1"] = f1;
@@ -117,7 +121,7 @@ std::vector<DemoPair> DemoPairs() {
 // Writes a 3-shard split (4 + 4 + 3 samples; 11 shards with samples_per_shard 1) with plan
 // and part records.
 void WriteSplit(const std::string& dir, const std::string& split = "train",
-                int64_t samples_per_shard = 4) {
+                int64_t samples_per_shard = 4, const std::string& digest = "") {
   const auto pairs = DemoPairs();
   const SplitPlan plan =
       PlanEqualShards(split, static_cast<int64_t>(pairs.size()), samples_per_shard);
@@ -125,10 +129,10 @@ void WriteSplit(const std::string& dir, const std::string& split = "train",
   std::mt19937 rng(5);
   size_t next = 0;
   for (size_t s = 0; s < plan.shard_nsamples.size(); ++s) {
-    SplitShardWriter writer(dir, split, static_cast<int64_t>(s));
+    SplitShardWriter writer(dir, split, static_cast<int64_t>(s), digest);
     for (int64_t k = 0; k < plan.shard_nsamples[s]; ++k, ++next) {
       const DemoPair& p = pairs[next];
-      writer.Add(PairSample(p.scene, p.f0, p.f1, &rng),
+      writer.Add(PairSample(p.scene, p.f0, p.f1, &rng, 16, 12, digest),
                  PairLine(p.scene, p.f0, p.f1, 0.1 * static_cast<double>(next % 9)));
     }
     writer.Finish();
@@ -406,6 +410,55 @@ TEST(Split, MergeTrustsRecordedDigestsAndVerifyAndValidateDoNot) {
       ExpectMergeFails(dir, "train-000001.tar: md5", true);
     }
   }
+}
+
+TEST(Split, AShardOfAnotherBuildIsRefusedByMergeAndValidate) {
+  // Two builds of one split name into two folders (other data or options, so another
+  // options digest); shard 1 and its part record copied from the second into the first: the
+  // merge and validate named nothing and published a split of mixed data.
+  const std::string a = test::ScratchDir("shards_digest_a");
+  const std::string b = test::ScratchDir("shards_digest_b");
+  const std::string da(32, 'a'), db(32, 'b');
+  WriteSplit(a, "train", 4, da);
+  WriteSplit(b, "train", 4, db);
+  ExpectMergeSucceeds(a);
+  ASSERT_TRUE(ValidateSplit(a, ValidateOptions{SchemasDir()}).empty());
+  EXPECT_EQ(ReadRecord(a, 1)["options_digest"], da);
+  for (const char* f : {"/train-000001.tar", "/parts/train-000001.json"}) {
+    fs::copy_file(b + f, a + f, fs::copy_options::overwrite_existing);
+  }
+  const std::string want = "written by another build: options digest " + db + ", the split's is " +
+                           da + " (train-000000.tar)";
+  // validate reads the samples' digests (index.json names the copied shard's size and MD5).
+  json index = json::parse(io::ReadFileBytes(a + "/index.json"));
+  index["shardlist"][1]["md5sum"] = io::Md5HexOfFile(a + "/train-000001.tar");
+  index["shardlist"][1]["filesize"] = fs::file_size(a + "/train-000001.tar");
+  io::WriteFileAtomic(a + "/index.json", index.dump(2) + "\n");
+  std::string all;
+  for (const auto& p : ValidateSplit(a, ValidateOptions{SchemasDir()})) all += p + "\n";
+  EXPECT_NE(all.find(a + "/train-000001.tar: " + want), std::string::npos) << all;
+  ExpectMergeFails(a, "train-000001.tar: " + want);
+  // With a recipe.json, its digest is the split's.
+  io::WriteFileAtomic(a + "/recipe.json", json{{"options_digest", db}}.dump());
+  all.clear();
+  ExpectMergeFails(a, "train-000000.tar: written by another build: options digest " + da +
+                          ", the split's is " + db + " (recipe.json)");
+  // A sample json whose key is not its member's (a sample's members renamed).
+  const std::string c = test::ScratchDir("shards_digest_key");
+  WritePlan(c, PlanEqualShards("train", 1, 4));
+  std::mt19937 rng(3);
+  Sample s = PairSample("scene0707_00", 0, 15, &rng, 16, 12, da);
+  s.key = MakeSampleKey("scene0707_00", "0", "30");
+  {
+    SplitShardWriter writer(c, "train", 0, da);
+    writer.Add(std::move(s), PairLine("scene0707_00", 0, 30, 0.5));
+    writer.Finish();
+  }
+  ExpectMergeSucceeds(c);
+  const auto problems = ValidateSplit(c, ValidateOptions{SchemasDir()});
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0], c + "/train-000000.tar: scene0707_00/0_30.json: its \"key\" is "
+                             "\"scene0707_00/0_15\", not the member's scene0707_00/0_30");
 }
 
 TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {

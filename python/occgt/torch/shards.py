@@ -415,8 +415,8 @@ class ShardDataset(_ShardSplit):
         rows = matches.shape[0]
         match_type = member("match_type.npy", "u1", (rows,))
         # Cells of the floor(W/s) x floor(H/s) grid and the three types (geometry/patches.h),
-        # as loftr_supervision and occgt validate require: a damaged index never reaches a
-        # trainer's index arithmetic.
+        # as loftr_supervision requires: a damaged index never reaches a trainer's index
+        # arithmetic (occgt validate checks the .npy headers, not these values).
         cells = (W // stride) * (H // stride)
         outside = (matches < 0) | (matches >= cells)
         if outside.any():
