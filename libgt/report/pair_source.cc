@@ -599,8 +599,13 @@ std::vector<std::string> WritePairPictures(const PairPictures& pictures,
                                            const std::string& out_dir) {
   std::vector<std::string> written;
   auto write = [&](const cv::Mat& m, const char* name) {
-    if (m.empty()) return;
     const std::string path = (fs::path(out_dir) / name).string();
+    if (m.empty()) {
+      // A picture of an earlier pair in the same folder would pass for this pair's.
+      std::error_code ec;
+      fs::remove(path, ec);
+      return;
+    }
     gt::io::WriteFileAtomic(path, EncodePng(m));
     written.push_back(path);
   };

@@ -419,6 +419,16 @@ def main():
                  "320x240", "--no-occupancy", *frames, "--out", defaults)
     check(not np.array_equal(recipe_labels, png(os.path.join(defaults, "labels.png"))),
           "inspect pair --recipe: the recipe's labels changed nothing")
+    # A folder holding an earlier pair's occupancy.png: a pair without occupancy removes it
+    # (it stayed beside the new labels.png, as if it were this pair's).
+    stale = os.path.join(tmp, "stale_pictures")
+    common.occgt("inspect", "pair", "--root", root, "--format", "tartanair", "--resolution",
+                 "320x240", *frames, "--out", stale)
+    check(os.path.exists(os.path.join(stale, "occupancy.png")), "no occupancy.png to begin with")
+    common.occgt("inspect", "pair", "--root", root, "--format", "tartanair", "--resolution",
+                 "320x240", "--no-occupancy", *frames, "--out", stale)
+    check(sorted(os.listdir(stale)) == ["labels.png", "matches.png"],
+          f"an earlier pair's picture left: {sorted(os.listdir(stale))}")
     r = common.occgt("inspect", "pair", "--recipe", recipe, "--out", computed, check=False)
     check(r.returncode == 2 and "--scene/--frames" in r.stderr,
           f"--recipe without frames: exit {r.returncode}, {r.stderr!r}")
