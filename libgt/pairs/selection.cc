@@ -340,15 +340,12 @@ uint64_t UniformBelow(uint64_t n, std::mt19937_64* rng) {
   return x % n;
 }
 
-namespace {
-// Fisher-Yates with UniformBelow: a portable seeded permutation.
 void SeededShuffle(std::vector<size_t>* v, std::mt19937_64* rng) {
   for (size_t i = v->size(); i > 1; --i) {
     const size_t j = static_cast<size_t>(UniformBelow(i, rng));
     std::swap((*v)[i - 1], (*v)[j]);
   }
 }
-}  // namespace
 
 std::vector<size_t> FilterAndSample(const std::vector<ScoredPair>& scored,
                                     const SelectionOptions& options, uint64_t scene_seed,

@@ -190,6 +190,8 @@ double PairVisibleOverlap(const ScoredPair& p, Aggregate aggregate);
 uint64_t SceneSeed(uint64_t recipe_seed, const std::string& scene_name);
 // Uniform integer in [0, n) from raw engine outputs (rejection sampling; portable).
 uint64_t UniformBelow(uint64_t n, std::mt19937_64* rng);
+// Fisher-Yates with UniformBelow: a portable seeded permutation.
+void SeededShuffle(std::vector<size_t>* v, std::mt19937_64* rng);
 
 // Filters (overlap range "filter.overlap", visible overlap range "filter.visible_overlap",
 // occlusion range "filter.occlusion", in this order), then

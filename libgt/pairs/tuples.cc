@@ -1,6 +1,7 @@
 #include "libgt/pairs/tuples.h"
 
 #include <algorithm>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -40,17 +41,22 @@ bool TupleOptions::Check(std::string* error) const {
   return true;
 }
 
-std::vector<float> PairScores(const CovisibilityPairs& g) {
+std::vector<int32_t> PairIndexMatrix(const CovisibilityPairs& g) {
   const size_t f = static_cast<size_t>(g.num_frames);
-  std::vector<float> s(f * f, 0.0f);
+  GT_ASSERT(g.i.size() <= static_cast<size_t>(std::numeric_limits<int32_t>::max()));
+  std::vector<int32_t> at(f * f, -1);
   for (size_t p = 0; p < g.i.size(); ++p) {
     const size_t i = static_cast<size_t>(g.i[p]), j = static_cast<size_t>(g.j[p]);
     GT_ASSERT(i < f && j < f && i != j);
-    const float v = 0.5f * (g.c_ij[p] + g.c_ji[p]);
-    s[i * f + j] = v;
-    s[j * f + i] = v;
+    at[i * f + j] = static_cast<int32_t>(p);
+    at[j * f + i] = static_cast<int32_t>(p);
   }
-  return s;
+  return at;
+}
+
+double PairScore(const CovisibilityPairs& g, size_t p) {
+  // Exact: the sum of two float32 values is exact in double, and so is its half.
+  return 0.5 * (static_cast<double>(g.c_ij[p]) + static_cast<double>(g.c_ji[p]));
 }
 
 double TupleOcclusion(const CovisibilityPairs& g, const std::vector<int32_t>& frames) {
@@ -110,9 +116,16 @@ std::vector<Tuple> SampleTuples(const CovisibilityPairs& g, const TupleOptions& 
     }
     std::vector<Tuple> out;
     const size_t target = std::min(pool.size(), static_cast<size_t>(o.quota));
+    std::mt19937_64 order_rng(seed + 1);  // a stream of its own: the pool's draws are seed's
+    std::vector<size_t> order;
     for (size_t round = 0; out.size() < target; ++round) {
-      for (const std::vector<size_t>& bin : bins) {
-        if (round < bin.size() && out.size() < target) out.push_back(pool[bin[round]]);
+      order.clear();
+      for (size_t b = 0; b < bins.size(); ++b) {
+        if (round < bins[b].size()) order.push_back(b);
+      }
+      if (order.size() > target - out.size()) SeededShuffle(&order, &order_rng);
+      for (size_t b : order) {
+        if (out.size() < target) out.push_back(pool[bins[b][round]]);
       }
     }
     if (pool.size() > out.size()) {
@@ -128,13 +141,16 @@ namespace {
 std::vector<Tuple> DrawTuples(const CovisibilityPairs& g, const TupleOptions& o, int64_t quota,
                               uint64_t seed, DropCounts* drops) {
   const int f = g.num_frames;
-  const std::vector<float> score = PairScores(g);
-  const auto sc = [&](int a, int b) { return score[static_cast<size_t>(a) * f + b]; };
+  const std::vector<int32_t> at = PairIndexMatrix(g);
+  const auto sc = [&](int a, int b) {
+    const int32_t p = at[static_cast<size_t>(a) * f + b];
+    return p < 0 ? 0.0 : PairScore(g, static_cast<size_t>(p));
+  };
   // Neighbours are pairs of the graph only: a pair it lacks (pruned) scores 0 but is not one,
   // even at edge_threshold 0. Each list in increasing frame index.
   std::vector<std::vector<int>> neighbours(f);
   for (size_t p = 0; p < g.i.size(); ++p) {
-    if (sc(g.i[p], g.j[p]) >= o.edge_threshold) {
+    if (PairScore(g, p) >= o.edge_threshold) {
       neighbours[g.i[p]].push_back(g.j[p]);
       neighbours[g.j[p]].push_back(g.i[p]);
     }
@@ -174,7 +190,7 @@ std::vector<Tuple> DrawTuples(const CovisibilityPairs& g, const TupleOptions& o,
           if (in[b]) continue;
           bool ok = true;
           for (int c : chosen) {
-            const float s = sc(b, c);
+            const double s = sc(b, c);
             ok = ok && s >= o.pair_lo && s <= o.pair_hi;
           }
           if (ok) next.push_back(b);

@@ -2,8 +2,9 @@
 // a walk with backtracking on the thresholded graph, as MapAnything samples its views.
 //
 // Graph: F frames, pairs (i, j) with both directions' visible overlap c_ij, c_ji
-// (pipeline/covisibility.h). The score of a pair is (c_ij + c_ji) / 2 (0 for a pair not in the
-// graph); two frames are neighbours when their pair is in the graph and its score >=
+// (pipeline/covisibility.h). The score of a pair is (c_ij + c_ji) / 2, computed in double from
+// the graph's float32 values (exact: a bound equal to a pair's mean keeps the pair), 0 for a
+// pair not in the graph; two frames are neighbours when their pair is in the graph and its score >=
 // edge_threshold (a pair the pruning dropped is never one, even at edge_threshold 0).
 //
 // One tuple: its size N is drawn in [min_views, max_views]; a start frame is drawn among the
@@ -16,7 +17,9 @@
 // min_views frames, else none (counted). The spread bound: the tuple's smallest pair score
 // must be >= min_spread_score (0 = off; every pair then sees every other pair's views).
 // A tuple equal (as a set) to one drawn before is dropped and counted. `quota` tuples per
-// scene at most, from at most 4·quota + 16 draws.
+// scene at most, from at most 4·quota + 16 draws. With balance_occlusion, 4·quota tuples are
+// drawn and taken round robin from equal occlusion bins; a round that the quota ends part way
+// takes its tuples from bins in a seeded order (no occlusion range favoured).
 //
 // Determinism: std::mt19937_64(seed) raw outputs only (UniformBelow of selection.h),
 // candidate lists in increasing frame index; no threads. Frames of a tuple are listed in the
@@ -79,7 +82,10 @@ double TupleOcclusion(const CovisibilityPairs& graph, const std::vector<int32_t>
 std::vector<Tuple> SampleTuples(const CovisibilityPairs& graph, const TupleOptions& options,
                                 uint64_t seed, DropCounts* drops);
 
-// The pair score (c_ij + c_ji) / 2 of every pair of frames, dense [F, F] (diagonal 0).
-std::vector<float> PairScores(const CovisibilityPairs& graph);
+// The graph's pair index of every pair of frames, dense [F, F]: (a, b) and (b, a) -> p, -1
+// for a pair the graph lacks and on the diagonal.
+std::vector<int32_t> PairIndexMatrix(const CovisibilityPairs& graph);
+// The score of the graph's pair p: (c_ij + c_ji) / 2 in double.
+double PairScore(const CovisibilityPairs& graph, size_t p);
 
 }  // namespace gt::pairs

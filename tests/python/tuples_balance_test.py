@@ -1,7 +1,8 @@
 """selection.tuples.balance_occlusion (libgt/pairs/tuples.h, docs/MULTIVIEW.md "Balancing on
 occlusion"): the tuples are those a NumPy reference picks from the candidates (the tuples of the
 same recipe unbalanced with quota 4·quota) — the occlusion estimated from the graph, equal
-bins over the candidates' range, round robin — the run is seeded and repeatable, the occlusion spread grows, and the graph
+bins over the candidates' range, round robin, a last partial round from bins in a seeded
+order — the run is seeded and repeatable, the occlusion spread grows, and the graph
 estimate orders tuples as the shards' exact occluded fraction does (positive rank
 correlation)."""
 from __future__ import annotations
@@ -112,15 +113,29 @@ class Balance(unittest.TestCase):
             bins: List[List[int]] = [[] for _ in range(BINS)]
             for k, q in enumerate(occ):
                 bins[bin_of(q)].append(k)
+            # Whole rounds in bin order; a round the quota ends part way gives its tuples from
+            # bins in a seeded order (one each, of that round's candidates).
             want: List[int] = []
+            target = min(QUOTA, len(cands))
             rnd = 0
-            while len(want) < min(QUOTA, len(cands)):
-                for b in bins:
-                    if rnd < len(b) and len(want) < QUOTA:
-                        want.append(b[rnd])
+            partial: List[int] = []
+            while len(want) < target:
+                round_ks = [b[rnd] for b in bins if rnd < len(b)]
+                if len(want) + len(round_ks) > target:
+                    partial = round_ks
+                    break
+                want += round_ks
                 rnd += 1
             got = [t for t in balanced if t["scene"] == scene]
-            self.assertEqual([t["frame_ids"] for t in got], [cands[k]["frame_ids"] for k in want])
+            self.assertEqual([t["frame_ids"] for t in got[:len(want)]],
+                             [cands[k]["frame_ids"] for k in want])
+            rest = [t["frame_ids"] for t in got[len(want):]]
+            self.assertEqual(len(rest), target - len(want))
+            for ids_ in rest:
+                matches = [k for k in partial if cands[k]["frame_ids"] == ids_]
+                self.assertEqual(len(matches), 1, (ids_, partial))
+                want.append(matches[0])
+            self.assertEqual(len(set(want)), len(want))
             for t, k in zip(got, want):
                 jsonschema.validate(t, schema)
                 self.assertAlmostEqual(t["occlusion"], occ[k], places=9)
