@@ -15,6 +15,7 @@
 #include <tuple>
 
 #include "libgt/core/error.h"
+#include "libgt/core/stats.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
 #include "libgt/shards/loftr_tree.h"
@@ -372,11 +373,10 @@ std::string ProcessSample(const std::string& tar, const SampleData& s, const Spl
     }
     if (missing.empty()) {
       r.quality = ScoreMatches(truth, p.kpts0, p.kpts1, options.quality);
-      if (r.matches > 0) {
-        r.occluded_share = static_cast<double>(r.quality.types[kClassVO].predicted +
-                                               r.quality.types[kClassOV].predicted) /
-                           static_cast<double>(r.matches);
-      }
+      r.occluded_share = r.matches > 0 ? static_cast<double>(r.quality.types[kClassVO].predicted +
+                                                             r.quality.types[kClassOV].predicted) /
+                                             static_cast<double>(r.matches)
+                                       : std::nan("");  // 0 / 0: null in eval.json
     } else {
       r.quality = PairQuality();
     }
@@ -587,8 +587,7 @@ json Number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 double Median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
   std::sort(v.begin(), v.end());
-  const size_t m = v.size() / 2;
-  return v.size() % 2 ? v[m] : (v[m - 1] + v[m]) / 2.0;
+  return SortedMedian(v);
 }
 
 // The pose errors of estimator e over `pairs` (a non-finite error is a failure) and their
@@ -632,7 +631,9 @@ json Stats(const EvalResult& r, size_t set, const std::vector<size_t>& pairs) {
     const PoseErrors pe = SummarisePoseErrors(r, set, e, pairs);
     json p;
     json auc = json::array();
-    for (const double a : PoseAuc(pe.errors, o.auc_thresholds_deg)) auc.push_back(a * 100.0);
+    for (const double a : PoseAuc(pe.errors, o.auc_thresholds_deg)) {
+      auc.push_back(pairs.empty() ? json(nullptr) : json(a * 100.0));  // no pair, no AUC
+    }
     p["auc_percent"] = auc;
     p["failures"] = pe.failures;
     p["mean_error_deg"] = pe.mean;
@@ -933,7 +934,7 @@ std::string EvalJson(const EvalResult& r) {
         }
         t["unscored"] = s.quality.unscored;
         x["types"] = t;
-        x["occluded_share"] = s.occluded_share;
+        x["occluded_share"] = Number(s.occluded_share);  // null without matches (0 / 0)
       } else {
         x["types"] = nullptr;
         x["occluded_share"] = nullptr;
@@ -1009,6 +1010,10 @@ std::string EvalSummary(const EvalResult& r) {
     for (size_t e = 0; e < o.estimators.size(); ++e) {
       s << "  " << PoseEstimatorName(o.estimators[e]) << ": AUC";
       for (const json& a : st["pose"][e]["auc_percent"]) {
+        if (a.is_null()) {
+          s << " -";
+          continue;
+        }
         std::snprintf(buf, sizeof buf, " %.2f", a.get<double>());
         s << buf;
       }
@@ -1019,6 +1024,10 @@ std::string EvalSummary(const EvalResult& r) {
       s << "  best of sweep by mean AUC (optimistic: chosen on these pairs): "
         << PoseEstimatorName(o.estimators[sel.best]) << ": AUC";
       for (const json& a : st["pose"][sel.best]["auc_percent"]) {
+        if (a.is_null()) {
+          s << " -";
+          continue;
+        }
         std::snprintf(buf, sizeof buf, " %.2f", a.get<double>());
         s << buf;
       }

@@ -94,7 +94,8 @@ struct SetPairResult {
   std::vector<int> inliers;       // one per estimator (0 without pose)
   double epipolar_precision = 0;  // share of matches under the threshold (0 without matches)
   PairQuality quality;
-  double occluded_share = 0;  // (vo + ov) / matches: Occ²Net's test-time statistic
+  double occluded_share = 0;  // (vo + ov) / matches: Occ²Net's test-time statistic; NaN
+                              // without matches (null in eval.json)
 };
 
 struct PairInfo {

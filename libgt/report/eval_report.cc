@@ -513,7 +513,7 @@ std::string EstimatorMatrix(const EvalReportData& data) {
         std::string cells;
         for (size_t t = 0; t < auc.size(); ++t) {
           cells += (t ? " / " : "") + Cell(auc[t], 2);
-          sum += auc[t].get<double>();
+          sum += auc[t].is_number() ? auc[t].get<double>() : 0.0;
         }
         const bool starred = static_cast<int64_t>(e) == best;
         h << "<tr data-set=\"" << HtmlEscape(v.label) << "\"" << (starred ? " class=\"best\"" : "")

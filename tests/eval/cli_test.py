@@ -74,6 +74,14 @@ def main():
     for b in bins:
         close = "]" if b["hi"] == doc["sets"][0]["by_occlusion"]["image"][-1]["hi"] else ")"
         assert f"[{b['lo']:.4g},{b['hi']:.4g}{close} " in line, (b, line)
+    # A bin without pairs has no AUC (it said 0.0, as if scored), no mean; counts are 0.
+    empty = [b for b in doc["sets"][0]["by_occlusion"]["image"] if not b["pairs"]]
+    assert empty, "the demo fills every occlusion bin: the check proves nothing"
+    for b in empty:
+        for pose in b["pose"]:
+            assert pose["auc_percent"] == [None, None, None], b
+            assert pose["mean_error_deg"] is None and pose["failures"] == 0, b
+        assert b["matches_mean"] is None and b["epipolar_precision_percent"] is None, b
     overall = doc["sets"][0]["overall"]
     for t in ("vv", "vo", "ov"):
         x = overall["types"][t]
@@ -184,6 +192,17 @@ def main():
     b = predictions.load_json(out)["sets"][0]["overall"]
     assert b["types"]["vv"]["precision_percent"] == 100.0
     assert np.allclose(a["pose"][0]["auc_percent"], b["pose"][0]["auc_percent"], atol=0.5)
+
+    # 4b. A pair predicted without matches: its occluded_share is null (0 / 0; it was 0.0).
+    first_key = sorted(truth)[0]
+    none_path = save("no_matches", {**truth, first_key: (np.zeros((0, 2)), np.zeros((0, 2)))})
+    out = os.path.join(work, "no_matches.json")
+    run_eval(split, out, "--predictions", none_path)
+    doc = predictions.load_json(out)
+    predictions.check_eval_schema(doc, common.SOURCE)
+    shares = {p["key"]: p["sets"][0]["occluded_share"] for p in doc["pairs"]}
+    assert shares[first_key] is None, shares[first_key]
+    assert all(v is not None for k, v in shares.items() if k != first_key), shares
 
     # 5. Two sets, two estimators: the same bytes at 1 and 2 threads; a folder layout.
     folder = os.path.join(work, "gt_folder")
