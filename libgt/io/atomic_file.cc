@@ -96,17 +96,25 @@ void WriteFileAtomic(const std::string& path, std::string_view bytes) {
     throw InputError(path, problem);
   }
   std::error_code ec;
-  // A link is written through: its target is the file replaced (the link stays).
-  std::string target = path;
-  if (fs::is_symlink(fs::symlink_status(path, ec))) {
-    target = fs::weakly_canonical(path, ec).string();
+  // A link is written through: its target is the file replaced (the link stays), also a
+  // target that does not exist yet (weakly_canonical leaves a dangling link unresolved, so
+  // the link itself was replaced). Links to links are followed, up to 40 as the kernel does.
+  fs::path target = path;
+  for (int hops = 0; fs::is_symlink(fs::symlink_status(target, ec)); ++hops) {
+    if (hops == 40) throw InputError(path, "cannot resolve the symbolic link: too many levels");
+    const fs::path next = fs::read_symlink(target, ec);
+    if (ec) throw InputError(path, "cannot resolve the symbolic link: " + ec.message());
+    target = next.is_absolute() ? next : target.parent_path() / next;
+  }
+  if (target != fs::path(path)) {
+    target = fs::weakly_canonical(target, ec);
     if (ec) throw InputError(path, "cannot resolve the symbolic link: " + ec.message());
   }
-  if (std::string problem = StageTemporary(target, bytes); !problem.empty()) {
+  if (std::string problem = StageTemporary(target.string(), bytes); !problem.empty()) {
     throw InputError(path, problem);
   }
-  PublishTemporary(target);
-  SyncFolder(ParentFolder(target));
+  PublishTemporary(target.string());
+  SyncFolder(ParentFolder(target.string()));
 }
 
 void WriteFilesAtomic(const std::vector<FileToWrite>& files) {

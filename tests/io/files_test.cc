@@ -279,6 +279,19 @@ TEST(WriteFileAtomic, RefusesFoldersAndSpecialFilesAndWritesThroughLinks) {
   EXPECT_TRUE(fs::is_symlink(dir + "/link2.json"));
   EXPECT_EQ(ReadFileBytes(dir + "/target.json"), "new");
   EXPECT_FALSE(fs::exists(dir + "/target.json.tmp"));
+  // A link to a file that does not exist yet (relative, into a subfolder), through a link:
+  // the target is created and the links stay (the link itself was replaced).
+  fs::create_directories(dir + "/sub");
+  fs::create_symlink("sub/later.json", dir + "/dangling.json");
+  fs::create_symlink("dangling.json", dir + "/dangling2.json");
+  WriteFileAtomic(dir + "/dangling2.json", "created");
+  EXPECT_TRUE(fs::is_symlink(dir + "/dangling.json"));
+  EXPECT_TRUE(fs::is_symlink(dir + "/dangling2.json"));
+  EXPECT_EQ(ReadFileBytes(dir + "/sub/later.json"), "created");
+  // A loop of links: refused, naming the path.
+  fs::create_symlink("loop_b.json", dir + "/loop_a.json");
+  fs::create_symlink("loop_a.json", dir + "/loop_b.json");
+  EXPECT_THROW(WriteFileAtomic(dir + "/loop_a.json", "x"), InputError);
 }
 
 TEST(WriteFilesAtomic, WritesEveryFileAndLeavesNoTemporary) {
