@@ -135,6 +135,15 @@ std::unique_ptr<SchemaChecker> LoadSchema(const std::string& dir, const std::str
   return std::make_unique<SchemaChecker>(path, ParseJsonFile(path));
 }
 
+// The reason of an error without its place (the caller's line names the shard and member
+// already: "<shard>: <member>: <shard>:<member>: bad gzip data" said the place twice).
+std::string ReasonOf(const InputError& e, const std::string& place = "") {
+  const std::string what = e.what();
+  if (!place.empty() && e.where() != place) return what;  // another place: keep it
+  const std::string prefix = e.where() + ": ";
+  return what.compare(0, prefix.size(), prefix) == 0 ? what.substr(prefix.size()) : what;
+}
+
 std::string FirstLines(const std::vector<std::string>& problems) {
   std::string out;
   for (size_t i = 0; i < problems.size() && i < 3; ++i) out += (i ? "; " : "") + problems[i];
@@ -229,7 +238,7 @@ std::vector<std::string> CheckTarContents(const std::string& tar_path, const Spl
     try {
       plain = DecodeMember(&plain_field, data, tar_path + ":" + name);
     } catch (const InputError& e) {
-      problems.push_back(name + ": " + e.what());
+      problems.push_back(name + ": " + ReasonOf(e));
       return;
     }
     if (!fields_of_key.insert(plain_field).second) problems.push_back(name + ": duplicate member");
@@ -238,7 +247,7 @@ std::vector<std::string> CheckTarContents(const std::string& tar_path, const Spl
       try {
         io::ParseNpy(plain, tar_path + ":" + name);
       } catch (const InputError& e) {
-        problems.push_back(name + ": bad .npy: " + e.what());
+        problems.push_back(name + ": bad .npy: " + ReasonOf(e));
       }
     } else if (ext == "json") {
       json doc = json::parse(plain, nullptr, false);  // a .json.gz member: its JSON
@@ -641,14 +650,14 @@ std::string VerifyShard(const std::string& shard, const PartRecord& r,
     const std::string md5 = io::Md5HexOfFile(shard);
     if (md5 != r.info.md5sum) return "md5 " + md5 + " differs from the recorded " + r.info.md5sum;
   } catch (const InputError& e) {
-    return std::string("unreadable: ") + e.what();
+    return "unreadable: " + ReasonOf(e, shard);
   }
   std::vector<std::string> keys;
   std::vector<std::string> problems;
   try {
     problems = CheckTarContents(shard, schemas, &keys);
   } catch (const InputError& e) {
-    return std::string("unreadable: ") + e.what();
+    return "unreadable: " + ReasonOf(e, shard);
   }
   if (!problems.empty()) return FirstLines(problems);
   if (keys != r.keys) return "sample keys in the tar differ from " + record_path;
@@ -963,7 +972,7 @@ ShardProblems CheckListedShard(const std::string& dir, const std::string& index_
       problem(shard, "md5 " + md5 + " differs from index.json's " + entry.md5sum);
     }
   } catch (const InputError& err) {
-    problem(shard, std::string("unreadable: ") + err.what());
+    problem(shard, "unreadable: " + ReasonOf(err, shard));
     return out;
   }
   try {
@@ -971,7 +980,7 @@ ShardProblems CheckListedShard(const std::string& dir, const std::string& index_
       problem(shard, p);
     }
   } catch (const InputError& err) {
-    problem(shard, std::string("unreadable: ") + err.what());
+    problem(shard, "unreadable: " + ReasonOf(err, shard));
     return out;
   }
   if (static_cast<int64_t>(out.keys.size()) != entry.nsamples) {
@@ -1019,8 +1028,9 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
                               : ""));
     return problems;
   }
-  for (const std::string& p : index_schema->Check(index)) {
-    problem(index_path, "index.schema.json: " + p);
+  // One line for the document, as for a sample or a line (valijson gives one per level).
+  if (const std::vector<std::string> p = index_schema->Check(index); !p.empty()) {
+    problem(index_path, "index.schema.json: " + FirstLines(p));
   }
   if (!index.is_object() || index.value("__kind__", "") != "wids-shard-index-v1" ||
       index.value("wids_version", 0) != 1 || !index.contains("shardlist") ||

@@ -500,6 +500,8 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   const auto p2 = ValidateSplit(dir2, ValidateOptions{SchemasDir()});
   ASSERT_EQ(p2.size(), 1u);
   EXPECT_NE(p2[0].find("bad .npy"), std::string::npos) << p2[0];
+  // The shard's path once (the member's error repeated "<shard>:<member>" after it).
+  EXPECT_EQ(p2[0].find(shard, 1), std::string::npos) << p2[0];
 
   // A shard the index does not list, a leftover temporary file, and a pair line whose
   // key is not a string: each one problem line, never an exception.
@@ -620,6 +622,14 @@ TEST(Split, ReadShardIndexGivesTheMergedShardsAndNamesBadEntries) {
                              "the split's folder (the folder holding index.json)");
   EXPECT_EQ(problems[1], index.path + ": shardlist[2].md5sum: missing");
   EXPECT_EQ(problems[2], dir + "/train-000001.tar: shard not listed in index.json");
+  // With the real index schema, its violations of one document are one line (valijson gave
+  // one per level: four lines for one bad url), beside the hand-written line.
+  const std::vector<std::string> with_schema = ValidateSplit(dir, ValidateOptions{SchemasDir()});
+  size_t schema_lines = 0;
+  for (const std::string& p : with_schema) {
+    schema_lines += p.find("index.schema.json: ") != std::string::npos ? 1 : 0;
+  }
+  EXPECT_EQ(schema_lines, 1u) << with_schema.size();
   // A shard listed twice: one line, not one "repeats" line per sample.
   edited = good;
   edited["shardlist"].push_back(good["shardlist"][1]);
