@@ -145,8 +145,16 @@ class TupleDataset(unittest.TestCase):
             read_tuples(path)
         with self.assertRaisesRegex(ValueError, "views: expected 'vggt' or 'dust3r'"):
             self.dataset(views="mast3r")
-        with self.assertRaisesRegex(ValueError, r"tuples\[0\]: expected 1..32 frame ids"):
+        with self.assertRaisesRegex(ValueError, r"tuples\[0\]: .*expected 2..32 frame ids"):
             TupleIndexDataset([(self.scene_name, [])], self.root, "generic")
+        # One view is not a tuple (tuples_line.schema.json: 2..32), from a list or a line.
+        with self.assertRaisesRegex(ValueError, r"tuples\[0\]: .*expected 2..32 frame ids, got 1"):
+            TupleIndexDataset([(self.scene_name, ["000001"])], self.root, "generic")
+        one = os.path.join(os.path.dirname(path), "one_view.jsonl")
+        with open(one, "w") as f:
+            f.write(json.dumps({"scene": self.scene_name, "frame_ids": ["000001"]}) + "\n")
+        with self.assertRaisesRegex(ValueError, r"one_view.jsonl:1: .*2..32 frame ids, got 1"):
+            read_tuples(one)
         # Options are checked here, as views_ground_truth resolves them, not in the first
         # worker's first item: a misspelt or pair-only option, a bad preset, a negative track
         # count or seed (item 0 failed, items >= 1 worked: seed + index), a size not an int.

@@ -46,6 +46,8 @@ def _tuple_ref(scene: Any, frame_ids: Any) -> TupleRef:
     repeated = [i for n, i in enumerate(ids) if i in ids[:n]]
     if repeated:  # schemas/tuples_line.schema.json: uniqueItems
         raise ValueError(f"frame_ids: expected distinct frame ids, {repeated[0]!r} repeats")
+    if not 2 <= len(ids) <= 32:  # schemas/tuples_line.schema.json: 2..32 views
+        raise ValueError(f"frame_ids: expected 2..32 frame ids, got {len(ids)}")
     return TupleRef(str(scene), tuple(str(i) for i in ids))
 
 
@@ -167,8 +169,8 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                     raise ValueError(f"tuples[{k}]: expected a TupleRef or (scene, [frame ids]) "
                                      f"({type(e).__name__}: {e})") from None
         for k, t in enumerate(self.tuples):
-            if not 1 <= len(t.frame_ids) <= 32:
-                raise ValueError(f"tuples[{k}]: expected 1..32 frame ids, got "
+            if not 2 <= len(t.frame_ids) <= 32:
+                raise ValueError(f"tuples[{k}]: expected 2..32 frame ids, got "
                                  f"{len(t.frame_ids)}")
         if depth_source not in ("sensor", "mesh", "fused"):
             raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")
