@@ -665,7 +665,9 @@ class ShardDatasetTest(unittest.TestCase):
                 self.assertTrue(torch.equal(ds[i]["occupancy" + c], both[i]["occupancy" + c]))
         with self.assertRaisesRegex(ValueError, r"has no occ0\.npy member \(asked for by "
                                     r"occupancy='words'\)"):
-            ShardDataset(z, images=False, depth=False)
+            ShardDataset(z, occupancy="words", images=False, depth=False)
+        # Unset: the dense volumes the split stores.
+        self.assertEqual(ShardDataset(z).occupancy, "dense")
 
     def test_views_split_is_named(self) -> None:
         """An N-view split (occgt tuples --shards) is refused as such, not as a pair sample
@@ -771,10 +773,24 @@ class ShardDatasetTest(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, r"sd-dense-000000.tar: sample " +
                                     re.escape(first) + r" has no image0.png or image0.jpg "
                                     r"member \(asked for by images=True / color=True\)"):
-            ShardDataset(self.dense, depth=False)
+            ShardDataset(self.dense, images=True)
         with self.assertRaisesRegex(ValueError, r"has no depth0.npy member \(asked for by "
                                     r"depth=True\)"):
-            ShardDataset(self.dense, images=False)
+            ShardDataset(self.dense, depth=True)
+        # Unset, the options are what the split stores: the defaults read a split of the
+        # recipes' default sample.depth: false (they raised "has no depth0.npy member").
+        stored = ShardDataset(self.dense)
+        self.assertEqual((stored.occupancy, stored.images, stored.depth, stored.labels),
+                         ("words", False, False, True))
+        self.assertNotIn("depth0", stored[0])
+        self.assertNotIn("image0", stored[0])
+        self.assertIn("occ0", stored[0])
+        full = ShardDataset(self.full)
+        self.assertEqual((full.occupancy, full.images, full.depth, full.labels),
+                         ("words", True, True, True))
+        explicit = ShardDataset(self.full, occupancy="words", images=True, depth=True,
+                                labels=True)
+        self.assert_same(full[1], explicit[1], "defaults")
 
 
 if __name__ == "__main__":

@@ -261,6 +261,10 @@ class ShardDataset(_ShardSplit):
     Args:
         split_dir: the split folder written by ``occgt build`` / ``occgt merge`` (holds
             ``index.json``, the ``.tar`` shards and ``pairs.jsonl``).
+        occupancy, images, depth, labels: None (the default): what the split stores (its first
+            sample's members: a split built with ``sample.depth: false``, the recipes'
+            default, gives no depth; one without occupancy gives ``"none"``); a value asks for
+            it, and a sample without it raises ValueError.
         occupancy: ``"words"``: ``occ0``, ``known0``, ``occ1``, ``known1`` int64 [H/2, W/2]
             (the uint64 words' bits); ``"dense"``: ``occupancy0``, ``occupancy1`` uint8
             [D, H/2, W/2] (0 free, 1 occupied, 255 unknown), the ``occ*_dense.npy`` member when
@@ -287,25 +291,32 @@ class ShardDataset(_ShardSplit):
     """
 
     def __init__(self, split_dir: Union[str, "os.PathLike[str]"], *,
-                 occupancy: str = "words", images: bool = True, color: bool = False,
-                 depth: bool = True, labels: bool = True, dataset_name: str = "occgt") -> None:
-        if occupancy not in _OCCUPANCY_MODES:
+                 occupancy: Optional[str] = None, images: Optional[bool] = None,
+                 color: bool = False, depth: Optional[bool] = None,
+                 labels: Optional[bool] = None, dataset_name: str = "occgt") -> None:
+        if occupancy is not None and occupancy not in _OCCUPANCY_MODES:
             raise ValueError(f"occupancy: expected one of {', '.join(_OCCUPANCY_MODES)}, got "
                              f"{occupancy!r}")
         # As TupleShardDataset: a str such as "no" is not a bool (it was truthy).
         for name, flag in (("images", images), ("color", color), ("depth", depth),
                            ("labels", labels)):
-            if not isinstance(flag, (bool, np.bool_)):
+            if not isinstance(flag, (bool, np.bool_)) and not (flag is None and name != "color"):
                 raise TypeError(f"{name}: expected a bool, got {type(flag).__name__}")
         if not isinstance(dataset_name, str):
             raise TypeError(f"dataset_name: expected a str, got {type(dataset_name).__name__}")
-        self.occupancy = occupancy
-        self.images = bool(images)
         self.color = bool(color)
-        self.depth = bool(depth)
-        self.labels = bool(labels)
         self.dataset_name = dataset_name
         super().__init__(split_dir)
+        # Unset options: what the split stores (every sample of a split has the members its
+        # recipe's `sample` section asks for: the first one's tell).
+        first = self._samples[0].members if self._samples else {}
+        self.occupancy = occupancy if occupancy is not None else (
+            "words" if _has(first, "occ0.npy") else
+            "dense" if _has(first, "occ0_dense.npy") else "none")
+        self.images = bool(images) if images is not None else (
+            "image0.png" in first or "image0.jpg" in first)
+        self.depth = bool(depth) if depth is not None else _has(first, "depth0.npy")
+        self.labels = bool(labels) if labels is not None else _has(first, "label01.npy")
         for i, sample in enumerate(self._samples):
             missing = self._missing(sample.members)
             if missing and _has(sample.members, "visible_in.npy"):
