@@ -569,6 +569,12 @@ ShardIndex ReadShardIndex(const std::string& dir) {
   if (!doc.is_object() || !doc.contains("shardlist") || !doc["shardlist"].is_array()) {
     throw InputError(index.path, "expected an object with a \"shardlist\" array");
   }
+  // The kind validate checks too: every reader takes the same files.
+  if (!doc.contains("__kind__") || doc["__kind__"] != "wids-shard-index-v1") {
+    throw InputError(index.path,
+                     "__kind__: expected \"wids-shard-index-v1\", got " +
+                         (doc.contains("__kind__") ? doc["__kind__"].dump() : std::string("none")));
+  }
   if (doc.contains("name")) {
     if (!doc["name"].is_string()) throw InputError(index.path, "name: expected a string");
     index.name = doc["name"].get<std::string>();
@@ -1072,7 +1078,9 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
       }
     }
     for (const std::string& k : c.keys) {
-      if (!shard_of_key.emplace(k, c.url).second) problem(c.shard, "sample " + k + " repeats");
+      if (const auto [it, added] = shard_of_key.emplace(k, c.url); !added) {
+        problem(c.shard, "sample " + k + " repeats (first in " + it->second + ")");
+      }
       sample_order.push_back(k);
     }
     total += static_cast<int64_t>(c.keys.size());

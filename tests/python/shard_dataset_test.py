@@ -681,7 +681,8 @@ class ShardDatasetTest(unittest.TestCase):
                 info.size = len(data)
                 tf.addfile(info, io.BytesIO(data))
         with open(os.path.join(folder, "index.json"), "w") as f:
-            json.dump({"shardlist": [{"url": "v-000000.tar", "nsamples": 1,
+            json.dump({"__kind__": "wids-shard-index-v1",
+                       "shardlist": [{"url": "v-000000.tar", "nsamples": 1,
                                       "filesize": os.path.getsize(tar)}]}, f)
         with self.assertRaisesRegex(ValueError, re.escape(tar) + r": sample s/tuple_000000 is "
                                     r"an N-view sample \(occgt tuples --shards"):
@@ -697,13 +698,20 @@ class ShardDatasetTest(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, r"index.json: expected an object with a "
                                     r"\"shardlist\" array"):
             ShardDataset(empty)
+        # An index of another kind (validate refused it, ShardDataset read it).
+        with open(os.path.join(empty, "index.json"), "w") as f:
+            f.write('{"__kind__": "foo", "shardlist": []}')
+        with self.assertRaisesRegex(ValueError, r"index.json: __kind__: expected "
+                                    r"\"wids-shard-index-v1\", got \"foo\""):
+            ShardDataset(empty)
         # A url that leaves the folder (or names a subfolder) is refused before any file is
         # opened: an edited index cannot point the reader at other tars.
         outside = os.path.join(self.full, "sd-full-000000.tar")
         for url in ["../" + os.path.basename(self.full) + "/sd-full-000000.tar", outside,
                     "sub/x-000000.tar", "..", ""]:
             with open(os.path.join(empty, "index.json"), "w") as f:
-                json.dump({"shardlist": [{"url": url, "nsamples": 1,
+                json.dump({"__kind__": "wids-shard-index-v1",
+                           "shardlist": [{"url": url, "nsamples": 1,
                                           "filesize": os.path.getsize(outside)}]}, f)
             with self.subTest(url=url), self.assertRaisesRegex(
                     ValueError, r"index\.json: shardlist\[0\]\.url: " + re.escape(json.dumps(url)) +
