@@ -249,6 +249,30 @@ std::string NormalizeLoftrPairName(const std::string& name) {
   return out;
 }
 
+namespace {
+
+// The name of the pair in the other order, when the split holds that one: "s/b_a" for
+// "s/a_b" (ids may hold '_': every cut is tried), "y#x" for "x#y"; "" otherwise.
+std::string ReversedPairOfSplit(const std::string& name, const std::set<std::string>& split_keys,
+                                const std::map<std::string, std::string>& pair_names) {
+  if (const size_t hash = name.find('#'); hash != std::string::npos) {
+    const std::string reversed = name.substr(hash + 1) + "#" + name.substr(0, hash);
+    if (pair_names.count(reversed)) return reversed;
+    const std::string loftr = NormalizeLoftrPairName(reversed);
+    return !loftr.empty() && pair_names.count(loftr) ? reversed : "";
+  }
+  const size_t slash = name.rfind('/');
+  const std::string scene = slash == std::string::npos ? "" : name.substr(0, slash + 1);
+  const std::string base = name.substr(scene.size());
+  for (size_t cut = base.find('_'); cut != std::string::npos; cut = base.find('_', cut + 1)) {
+    const std::string reversed = scene + base.substr(cut + 1) + "_" + base.substr(0, cut);
+    if (split_keys.count(reversed)) return reversed;
+  }
+  return "";
+}
+
+}  // namespace
+
 PredictionSet ReadPredictions(const std::string& name, const std::string& path,
                               const std::set<std::string>& split_keys, int width, int height,
                               std::vector<std::string>* problems,
@@ -272,9 +296,14 @@ PredictionSet ReadPredictions(const std::string& name, const std::string& path,
       const std::string loftr = NormalizeLoftrPairName(name);
       const auto it = loftr.empty() ? pair_names.end() : pair_names.find(loftr);
       if (it == pair_names.end()) {
+        const std::string reversed = ReversedPairOfSplit(name, split_keys, pair_names);
         problems->push_back(label + ": pair " + name +
                             (loftr.empty() ? " is not a sample of the split"
-                                           : " (a LoFTR pair name) is not a pair of the split"));
+                                           : " (a LoFTR pair name) is not a pair of the split") +
+                            (reversed.empty()
+                                 ? ""
+                                 : " (it holds the pair in the other order, " + reversed +
+                                       ": give it under that name with kpts0 and kpts1 swapped)"));
         return;
       }
       key = it->second;

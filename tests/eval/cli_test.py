@@ -312,7 +312,13 @@ def main():
     assert sum(b["pairs"] for b in d["sets"][0]["by_consistent_overlap"]) == len(truth)
 
     # 6. Bad prediction files: one line, exit 1, nothing written.
+    import re
     first = next(iter(truth))
+    scene_, ids_ = first.rsplit("/", 1)
+    id0_, id1_ = ids_.split("_")
+    reversed_key = f"{scene_}/{id1_}_{id0_}"
+    side0, side1 = dataset_name[first].split("#")
+    reversed_dataset = f"{side1}#{side0}"
     k0, k1 = truth[first]
     nan = k0.copy()
     nan[3, 1] = np.nan
@@ -334,6 +340,14 @@ def main():
                             r"pair synth_000/000000#synth_000/999999 is not a sample of the split"),
         "dtype": ({first: (k0, k1)}, {first + "/confidence": np.ones(len(k0), np.int32)},
                   r"confidence: expected dtype float32"),
+        # The pair in the other order: named as such, with the split's name for it.
+        "reversed": ({reversed_key: (k1, k0)}, None,
+                     rf"pair {re.escape(reversed_key)} is not a sample of the split \(it holds "
+                     rf"the pair in the other order, {re.escape(first)}: give it under that "
+                     r"name with kpts0 and kpts1 swapped\)"),
+        "reversed_dataset": ({reversed_dataset: (k1, k0)}, None,
+                             rf"it holds the pair in the other order, "
+                             rf"{re.escape(dataset_name[first])}:"),
     }
     import re
     for name, (pairs, extra, pattern) in bad.items():
