@@ -347,6 +347,23 @@ void SeededShuffle(std::vector<size_t>* v, std::mt19937_64* rng) {
   }
 }
 
+std::vector<size_t> TakeRoundRobin(const std::vector<std::vector<size_t>>& bins, size_t target,
+                                   size_t max_rounds, std::mt19937_64* rng) {
+  std::vector<size_t> taken, order;
+  for (size_t round = 0; round < max_rounds && taken.size() < target; ++round) {
+    order.clear();
+    for (size_t b = 0; b < bins.size(); ++b) {
+      if (round < bins[b].size()) order.push_back(b);
+    }
+    if (order.empty()) break;                                              // every bin is used up
+    if (order.size() > target - taken.size()) SeededShuffle(&order, rng);  // a partial round
+    for (size_t b : order) {
+      if (taken.size() < target) taken.push_back(bins[b][round]);
+    }
+  }
+  return taken;
+}
+
 std::vector<size_t> FilterAndSample(const std::vector<ScoredPair>& scored,
                                     const SelectionOptions& options, uint64_t scene_seed,
                                     DropCounts* drops) {
@@ -398,18 +415,7 @@ std::vector<size_t> FilterAndSample(const std::vector<ScoredPair>& scored,
       if (!bin.empty()) smallest = std::min(smallest, bin.size());
     }
     const size_t cap = options.quota_per_scene > 0 ? passed.size() : smallest;
-    const size_t target = std::min(quota, passed.size());
-    std::vector<size_t> order;
-    for (size_t round = 0; round < cap && chosen.size() < target; ++round) {
-      order.clear();
-      for (size_t b = 0; b < bins.size(); ++b) {
-        if (round < bins[b].size()) order.push_back(b);
-      }
-      if (order.size() > target - chosen.size()) SeededShuffle(&order, &rng);  // a partial round
-      for (size_t b : order) {
-        if (chosen.size() < target) chosen.push_back(bins[b][round]);
-      }
-    }
+    chosen = TakeRoundRobin(bins, std::min(quota, passed.size()), cap, &rng);
     const int64_t balanced_out = static_cast<int64_t>(passed.size() - chosen.size());
     if (balanced_out) {
       // Attribute the drop to balancing, or to the quota when the quota alone was binding.

@@ -192,6 +192,12 @@ uint64_t SceneSeed(uint64_t recipe_seed, const std::string& scene_name);
 uint64_t UniformBelow(uint64_t n, std::mt19937_64* rng);
 // Fisher-Yates with UniformBelow: a portable seeded permutation.
 void SeededShuffle(std::vector<size_t>* v, std::mt19937_64* rng);
+// Round robin over bins (the balancing of pairs and of tuples): round k takes item k of
+// every bin that has one, in bin order, until `target` items or `max_rounds` rounds; a
+// round that the target ends part way takes its items from bins in a seeded order
+// (SeededShuffle of that round's bins), so that no bin is favoured. The items, in order.
+std::vector<size_t> TakeRoundRobin(const std::vector<std::vector<size_t>>& bins, size_t target,
+                                   size_t max_rounds, std::mt19937_64* rng);
 
 // Filters (overlap range "filter.overlap", visible overlap range "filter.visible_overlap",
 // occlusion range "filter.occlusion", in this order), then

@@ -115,18 +115,10 @@ std::vector<Tuple> SampleTuples(const CovisibilityPairs& g, const TupleOptions& 
       bins[std::clamp(b, 0, nb - 1)].push_back(k);
     }
     std::vector<Tuple> out;
-    const size_t target = std::min(pool.size(), static_cast<size_t>(o.quota));
     std::mt19937_64 order_rng(seed + 1);  // a stream of its own: the pool's draws are seed's
-    std::vector<size_t> order;
-    for (size_t round = 0; out.size() < target; ++round) {
-      order.clear();
-      for (size_t b = 0; b < bins.size(); ++b) {
-        if (round < bins[b].size()) order.push_back(b);
-      }
-      if (order.size() > target - out.size()) SeededShuffle(&order, &order_rng);
-      for (size_t b : order) {
-        if (out.size() < target) out.push_back(pool[bins[b][round]]);
-      }
+    for (size_t k : TakeRoundRobin(bins, std::min(pool.size(), static_cast<size_t>(o.quota)),
+                                   pool.size(), &order_rng)) {
+      out.push_back(pool[k]);
     }
     if (pool.size() > out.size()) {
       (*drops)["tuples.balance"] += static_cast<int64_t>(pool.size() - out.size());
