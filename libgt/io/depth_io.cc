@@ -368,6 +368,23 @@ void PrefetchDepth(const DepthSource& source) {
   }
 }
 
+namespace {
+
+// The distorted pixel whose area holds the ray of undistorted pixel (u, v) of `maps`:
+// floor(x + 0.5) (explicit: cv::remap's INTER_NEAREST rounds its fixed-point maps its own
+// way); false when it lies outside a width x height distorted image.
+bool NearestDistortedPixel(const UndistortMaps& maps, int u, int v, int width, int height, int* x,
+                           int* y) {
+  const double fx = std::floor(static_cast<double>(maps.map_x(v, u)) + 0.5);
+  const double fy = std::floor(static_cast<double>(maps.map_y(v, u)) + 0.5);
+  if (!(fx >= 0 && fy >= 0 && fx < width && fy < height)) return false;
+  *x = static_cast<int>(fx);
+  *y = static_cast<int>(fy);
+  return true;
+}
+
+}  // namespace
+
 void ApplyFrameMask(const Frame& frame, DepthImage* depth) {
   if (frame.mask_path.empty() && !frame.color_lens) return;
   // The mask's camera: the distorted colour camera, else the colour camera.
@@ -381,15 +398,14 @@ void ApplyFrameMask(const Frame& frame, DepthImage* depth) {
   if (frame.color_lens) {
     // A pixel of the undistorted camera whose ray leaves the distorted image has no image
     // (the undistorted colour there is a reflection of the border): no depth either, whatever
-    // its source (a mesh covers it). The nearest distorted pixel, floor(x + 0.5), as the
-    // sensor depth's lookup (ReadFrameDepth).
+    // its source (a mesh covers it). The sensor depth's lookup rule (ReadFrameDepth).
     const UndistortMaps& maps = GetUndistortMaps(lens, target);
-    const int w = lens.pinhole.width, h = lens.pinhole.height;
+    int x = 0, y = 0;
     for (int v = 0; v < depth->height; ++v) {
       for (int u = 0; u < depth->width; ++u) {
-        const double x = std::floor(static_cast<double>(maps.map_x(v, u)) + 0.5);
-        const double y = std::floor(static_cast<double>(maps.map_y(v, u)) + 0.5);
-        if (!(x >= 0 && y >= 0 && x < w && y < h)) depth->at(u, v) = 0.0f;
+        if (!NearestDistortedPixel(maps, u, v, lens.pinhole.width, lens.pinhole.height, &x, &y)) {
+          depth->at(u, v) = 0.0f;
+        }
       }
     }
   }
@@ -434,16 +450,14 @@ DepthImage ReadFrameDepth(const Frame& frame) {
   }
   const LensCamera& lens = *frame.depth_lens;
   const DepthImage raw = ReadDepth(frame.depth, lens.pinhole.width, lens.pinhole.height);
-  // Nearest neighbour, the distorted pixel whose area holds the ray's point: floor(x + 0.5)
-  // (explicit: cv::remap's INTER_NEAREST rounds its fixed-point maps its own way).
+  // Nearest neighbour: the distorted pixel whose area holds the ray's point.
   const UndistortMaps& maps = GetUndistortMaps(lens, frame.depth_camera);
   DepthImage d(frame.depth_camera.width, frame.depth_camera.height);
+  int x = 0, y = 0;
   for (int v = 0; v < d.height; ++v) {
     for (int u = 0; u < d.width; ++u) {
-      const double x = std::floor(static_cast<double>(maps.map_x(v, u)) + 0.5);
-      const double y = std::floor(static_cast<double>(maps.map_y(v, u)) + 0.5);
-      if (x >= 0 && y >= 0 && x < raw.width && y < raw.height) {
-        d.at(u, v) = raw.at(static_cast<int>(x), static_cast<int>(y));
+      if (NearestDistortedPixel(maps, u, v, raw.width, raw.height, &x, &y)) {
+        d.at(u, v) = raw.at(x, y);
       }
     }
   }
