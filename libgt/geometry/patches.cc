@@ -12,23 +12,6 @@ struct Grid {
   int cells_w = 0, cells_h = 0;
 };
 
-// Cell of the other image that contains / is nearest to the continuous point (x, y), or
-// -1 when the point is not finite or falls outside the grid.
-int32_t TargetCell(float x, float y, const Grid& grid, int stride, Anchor anchor) {
-  if (!std::isfinite(x) || !std::isfinite(y)) return -1;
-  const double s = stride;
-  double c, r;
-  if (anchor == Anchor::kCenter) {
-    c = std::floor((static_cast<double>(x) + 0.5) / s);
-    r = std::floor((static_cast<double>(y) + 0.5) / s);
-  } else {
-    c = std::floor(static_cast<double>(x) / s + 0.5);
-    r = std::floor(static_cast<double>(y) / s + 0.5);
-  }
-  if (!(c >= 0 && c < grid.cells_w && r >= 0 && r < grid.cells_h)) return -1;
-  return static_cast<int32_t>(r) * grid.cells_w + static_cast<int32_t>(c);
-}
-
 Grid CheckLabels(const DirectionLabels& l, int stride, const char* name) {
   const size_t n = static_cast<size_t>(l.width) * l.height;
   if (l.width <= 0 || l.height <= 0 || l.labels.size() != n || l.warped_xy.size() != 2 * n) {
@@ -59,8 +42,8 @@ void CellsOf(const DirectionLabels& l, const Grid& own, const Grid& other, const
                        AnchorPixel(c, o.stride, o.anchor);
       (*labels)[i] = l.labels[p];
       (*anchor_index)[i] = p;
-      (*targets)[i] =
-          TargetCell(l.warped_xy[2 * p], l.warped_xy[2 * p + 1], other, o.stride, o.anchor);
+      (*targets)[i] = TargetCell(l.warped_xy[2 * p], l.warped_xy[2 * p + 1], other.cells_w,
+                                 other.cells_h, o.stride, o.anchor);
     }
   }
 }
@@ -68,6 +51,21 @@ void CellsOf(const DirectionLabels& l, const Grid& own, const Grid& other, const
 }  // namespace
 
 const char* AnchorName(Anchor a) { return a == Anchor::kCenter ? "center" : "corner"; }
+
+int32_t TargetCell(float x, float y, int cells_w, int cells_h, int stride, Anchor anchor) {
+  if (!std::isfinite(x) || !std::isfinite(y)) return -1;
+  const double s = stride;
+  double c, r;
+  if (anchor == Anchor::kCenter) {
+    c = std::floor((static_cast<double>(x) + 0.5) / s);
+    r = std::floor((static_cast<double>(y) + 0.5) / s);
+  } else {
+    c = std::floor(static_cast<double>(x) / s + 0.5);
+    r = std::floor(static_cast<double>(y) / s + 0.5);
+  }
+  if (!(c >= 0 && c < cells_w && r >= 0 && r < cells_h)) return -1;
+  return static_cast<int32_t>(r) * cells_w + static_cast<int32_t>(c);
+}
 
 Anchor ParseAnchor(const std::string& name, const std::string& field) {
   if (name == "center") return Anchor::kCenter;

@@ -70,6 +70,10 @@ MatchTypeCounts CountMatchTypes(const PatchMatches& matches);
 PatchMatches ComputePatchMatches(const DirectionLabels& l01, const DirectionLabels& l10,
                                  const PatchOptions& options);
 
+// The target cell (rule above) of the continuous point (x, y) in a cells_w × cells_h grid of
+// cells of `stride` pixels, row-major; -1 when the point is not finite or outside the grid.
+int32_t TargetCell(float x, float y, int cells_w, int cells_h, int stride, Anchor anchor);
+
 // Anchor pixel coordinate (column or row) of cell index `c` along one axis.
 inline int AnchorPixel(int c, int stride, Anchor anchor) {
   return anchor == Anchor::kCenter ? stride * c + stride / 2 : stride * c;

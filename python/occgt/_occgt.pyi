@@ -96,6 +96,13 @@ def depth_at_image_size(
     """(depth, K) at the size of LoFTR's resized image; see occgt.depth_at_image_size."""
     ...
 
+def target_cells(
+    xy: npt.ArrayLike, cells_w: int, cells_h: int, stride: int, anchor: str
+) -> npt.NDArray[np.int32]:
+    """The target cell of each point of xy [M, 2] in a cells_w x cells_h grid (the patch
+    matches' rule), -1 outside the grid or not finite."""
+    ...
+
 class Frame:
     """One frame of a scene as its reader lists it (metadata only)."""
 

@@ -18,6 +18,7 @@
 #include "libgt/core/depth.h"
 #include "libgt/core/error.h"
 #include "libgt/core/pose.h"
+#include "libgt/geometry/patches.h"
 #include "libgt/truth/loftr_supervision.h"
 #include "libgt/truth/working_frame.h"
 #include "python/src/convert.h"
@@ -244,6 +245,31 @@ py::tuple DepthAtImageSize(py::handle depth, py::handle K, py::handle scale_arg,
                         MatrixToArray(camera.Resized(width, height).K()));
 }
 
+// The target cells (geometry/patches.h TargetCell) of points xy [M, 2] in a cells_w x
+// cells_h grid: int32 [M], -1 outside the grid or not finite.
+py::array_t<int32_t> TargetCells(py::handle xy_arg, py::handle cells_w_arg, py::handle cells_h_arg,
+                                 py::handle stride_arg, py::handle anchor_arg) {
+  py::array a = AsArray(xy_arg, "xy");
+  if (a.dtype().kind() != 'f' || a.ndim() != 2 || a.shape(1) != 2) {
+    ThrowValue("xy", "expected a float array [M, 2], got dtype " + DtypeText(a) + " shape " +
+                         ShapeText(a));
+  }
+  const auto xy = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(a);
+  if (!xy) throw py::error_already_set();
+  const int cells_w = Arg<int>(cells_w_arg, "cells_w"), cells_h = Arg<int>(cells_h_arg, "cells_h");
+  const int stride = Arg<int>(stride_arg, "stride");
+  if (stride < 1) ThrowValue("stride", "expected an int >= 1, got " + std::to_string(stride));
+  const gt::Anchor anchor =
+      Named("anchor", [&] { return gt::ParseAnchor(Arg<std::string>(anchor_arg, "anchor")); });
+  const py::ssize_t m = xy.shape(0);
+  std::vector<int32_t> cells(static_cast<size_t>(m));
+  for (py::ssize_t k = 0; k < m; ++k) {
+    cells[static_cast<size_t>(k)] =
+        gt::TargetCell(xy.at(k, 0), xy.at(k, 1), cells_w, cells_h, stride, anchor);
+  }
+  return ToArray(std::move(cells), {m});
+}
+
 }  // namespace
 
 void BindSupervision(py::module_& m) {
@@ -265,6 +291,10 @@ void BindSupervision(py::module_& m) {
         "mask1"_a = py::none(),
         "LoFTR's coarse supervision of one pair (truth::ComputeLoftrSupervision); see "
         "occgt.torch.loftr_supervision and docs/PYTHON.md, \"Supervision\".");
+  m.def("target_cells", &TargetCells, "xy"_a, "cells_w"_a, "cells_h"_a, "stride"_a, "anchor"_a,
+        "int32 [M]: the cell of a cells_w x cells_h grid (row-major) each point of xy [M, 2] "
+        "falls to by the target-cell rule of the patch matches (geometry/patches.h "
+        "TargetCell), -1 outside the grid or not finite.");
   m.def("depth_at_image_size", &DepthAtImageSize, "depth"_a, "K"_a, "scale"_a, "width"_a,
         "height"_a,
         "(depth, K) at the size of LoFTR's resized image: the top-left round(width * sx) x "

@@ -329,20 +329,27 @@ def _refuse_label_options(preset: str, k_convention: Optional[str],
                          f"'matches' from the batch to compute them with other options")
 
 
-def _check_target_cells(xy: torch.Tensor, cell: torch.Tensor, width: torch.Tensor,
-                        types: torch.Tensor, stride: int, anchor: str) -> None:
+def _check_target_cells(xy: torch.Tensor, cell: torch.Tensor, types: torch.Tensor,
+                        grids: Tuple[Tuple[int, int], Tuple[int, int]], stride: int,
+                        anchor: str) -> None:
     """Every stored match_xy lies in its target cell (j in image 1 for vv/vo, i in image 0 for
-    ov) by occgt's rule (geometry/patches.h: center floor((x + 0.5) / s), corner
-    floor(x / s + 0.5)), so matches of another coarse_stride are refused; 1e-3 px of
-    tolerance at the cell borders."""
-    u = xy.to(torch.float64)
-    u = (u + 0.5) / stride if anchor == "center" else u / stride + 0.5
-    want = torch.stack([cell % width, cell // width], 1).to(torch.float64)
-    tol = 1e-3 / stride
-    inside = ((u >= want - tol) & (u < want + 1 + tol)).all(1)  # NaN: outside
+    ov; grids: (rows, cols) of images 0 and 1) by the C++ rule (_occgt.target_cells), within
+    1e-3 px of it on each axis (the point or one of its four diagonal neighbours at 1e-3 px
+    falls there), so matches of another coarse_stride are refused."""
+    ov = (types == 2).detach().cpu().numpy()
+    points = xy.detach().cpu().numpy().astype(np.float32)
+    want = cell.detach().cpu().numpy()
+    inside = np.zeros(len(points), bool)
+    tol = 1e-3
+    for dx, dy in ((0.0, 0.0), (-tol, -tol), (-tol, tol), (tol, -tol), (tol, tol)):
+        moved = points + np.array([dx, dy], np.float32)
+        for image, rows in ((0, ov), (1, ~ov)):
+            h, w = grids[image]
+            got = _occgt.target_cells(moved[rows].reshape(-1, 2), w, h, stride, anchor)
+            inside[rows] |= got == want[rows]
     if bool(inside.all()):
         return
-    k = int(torch.nonzero(~inside)[0, 0])
+    k = int(np.nonzero(~inside)[0][0])
     kind = ("vv", "vo", "ov")[int(types[k])]
     image = 0 if kind == "ov" else 1
     raise ValueError(f"batch['match_xy']: row {k} ({kind}) at ({float(xy[k, 0]):.3f}, "
@@ -467,7 +474,7 @@ def _occ2net(batch: Mapping[str, Any], stride: int, fine_stride: int, fine_windo
     cell = torch.where(ov, i_ids, j_ids)
     width = torch.where(ov, torch.tensor(w0), torch.tensor(w1))
     if stored:
-        _check_target_cells(xy, cell, width, types, stride, anchor)
+        _check_target_cells(xy, cell, types, (grid0, grid1), stride, anchor)
     anchor_xy = torch.stack([(cell % width) * stride + half, (cell // width) * stride + half], 1)
     expec_f_gt = (xy - anchor_xy.to(torch.float32)) / fine_stride / (fine_window // 2)
     out.update({
