@@ -72,15 +72,13 @@ void RunOccupancy(const OccupancyArgs& args) {
   // The fusion's flags do nothing in two_point (they were recorded in occupancy.json and
   // not applied).
   if (os.mode == occ::OccupancyMode::kTwoPoint) {
-    for (const auto& [flag, given] : std::vector<std::pair<const char*, bool>>{
-             {"--voxel-m", args.voxel_m.has_value()},
-             {"--max-range-m", args.max_range_m.has_value()},
-             {"--scope", args.scope.has_value()},
-             {"--traversal", args.traversal.has_value()},
-             {"--downsample", args.downsample},
-             {"--remove-outliers", args.remove_outliers},
-             {"--outlier-k", args.outlier_k.has_value()},
-             {"--outlier-stddev", args.outlier_stddev.has_value()}}) {
+    for (const auto& [flag, given] :
+         std::vector<std::pair<const char*, bool>>{{"--voxel-m", args.voxel_m.has_value()},
+                                                   {"--max-range-m", args.max_range_m.has_value()},
+                                                   {"--scope", args.scope.has_value()},
+                                                   {"--traversal", args.traversal.has_value()},
+                                                   {"--downsample", args.downsample},
+                                                   {"--remove-outliers", args.remove_outliers}}) {
       if (given)
         throw gt::InputError(flag, "used by --mode octomap only (two_point fuses nothing)");
     }

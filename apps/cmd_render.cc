@@ -109,7 +109,7 @@ void RunRender(const RenderArgs& args) {
                          {"rel_tol", args.depth.fused.rel_tol}};
   report["frames"] = nlohmann::ordered_json::array();
   gt::render::DepthAgreement total;
-  bool any_sensor = false;
+  bool any_sensor = false, any_hit = false;
   // Every file is written under "<name>.part" first and renamed once every frame is done,
   // so that a frame failing halfway leaves no file of this run (and replaces none of an
   // earlier one); render.json comes last.
@@ -156,6 +156,7 @@ void RunRender(const RenderArgs& args) {
       fj["size"] = {camera.width, camera.height};
       int64_t hits = 0;
       for (float d : mesh.values_m) hits += d > 0;
+      any_hit = any_hit || hits > 0;
       fj["rendered_fraction"] =
           static_cast<double>(hits) / std::max<size_t>(1, mesh.values_m.size());
       if (sensor) {
@@ -218,8 +219,6 @@ void RunRender(const RenderArgs& args) {
   if (unreadable > 1)
     std::printf("  ... and %d more frame(s) (render.json: sensor_error)\n", unreadable - 1);
   // A mesh in other units (millimetres) or another world frame renders nothing, silently.
-  bool any_hit = false;
-  for (const auto& fj : report["frames"]) any_hit |= fj["rendered_fraction"].get<double>() > 0;
   if (!frames.empty() && !any_hit) {
     std::printf(
         "  warning: the mesh covers no pixel of any frame: is it in metres and in the "

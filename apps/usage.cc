@@ -286,10 +286,10 @@ std::string DescribeParseError(const CLI::App& app, const std::vector<std::strin
   // CLI11: "A subcommand is required" (`occgt`, `occgt inspect` alone).
   if (dynamic_cast<const CLI::RequiredError*>(&error) != nullptr &&
       what.find("subcommand") != std::string::npos) {
-    std::vector<std::string> names;
-    for (const CLI::App* child : sub->get_subcommands({})) names.push_back(child->get_name());
     std::string list;
-    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    for (const CLI::App* child : sub->get_subcommands({})) {
+      list += (list.empty() ? "" : ", ") + child->get_name();
+    }
     return "a command is required after `" + path + "` (one of " + list + "; `" + path +
            " --help` describes them)";
   }

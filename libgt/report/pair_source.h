@@ -112,6 +112,7 @@ struct PairPictures {
   cv::Mat depth;      // PairData::depth_sources; empty when the pair has none
 };
 PairPictures RenderPair(const PairData& pair, const PairPictureOptions& options);
+
 // Writes matches.png, labels.png and (when present) occupancy.png and depth.png into out_dir
 // atomically, and removes those of them an earlier run left there that this pair has not
 // (they would pass for this pair's); returns the paths written.

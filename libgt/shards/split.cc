@@ -670,10 +670,6 @@ std::string VerifyShard(const std::string& shard, const PartRecord& r,
   return "";
 }
 
-// One shard of the plan as the trusted merge reads it: its part record (parsed, its pair
-// lines naming their keys and shard, against their schema in `schemas`), the stat of its
-// tar, the plan's sample count. `error` holds the shard's first problem (an InputError
-// naming the shard); needs no other shard, so shards load in parallel.
 // The options digest of the split in DIR: DIR/recipe.json's "options_digest" (the build's
 // recipe), "" when the folder has none (the N-view shards of DIR/views).
 std::string RecipeDigestOf(const std::string& dir) {
@@ -714,6 +710,10 @@ class DigestCheck {
   std::string digest_, from_;
 };
 
+// One shard of the plan as the trusted merge reads it: its part record (parsed, its pair
+// lines naming their keys and shard, against their schema in `schemas`), the stat of its
+// tar, the plan's sample count. `error` holds the shard's first problem (an InputError
+// naming the shard); needs no other shard, so shards load in parallel.
 struct LoadedShard {
   PartRecord record;
   std::vector<std::string> scenes;  // scene of every pair line

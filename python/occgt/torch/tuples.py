@@ -168,10 +168,6 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                 except (TypeError, ValueError) as e:
                     raise ValueError(f"tuples[{k}]: expected a TupleRef or (scene, [frame ids]) "
                                      f"({type(e).__name__}: {e})") from None
-        for k, t in enumerate(self.tuples):
-            if not 2 <= len(t.frame_ids) <= 32:
-                raise ValueError(f"tuples[{k}]: expected 2..32 frame ids, got "
-                                 f"{len(t.frame_ids)}")
         if depth_source not in ("sensor", "mesh", "fused"):
             raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")
         if not isinstance(images, (bool, np.bool_)):  # "no" is not a bool (it was truthy)
