@@ -348,6 +348,7 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
 
   const auto t_write = Clock::now();
   const std::vector<std::string> keys = SampleKeys(all);
+  CheckExportFolders(recipe, all);
   WritePlan(options, recipe.split, shard_sizes);
   const WriteResult written =
       WriteShards(recipe, *reader, options, all, keys, shard_sizes, progress);

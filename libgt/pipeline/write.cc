@@ -427,6 +427,16 @@ void PublishMegaDepthIndex(const Recipe& recipe, const BuildOptions& options,
 
 }  // namespace
 
+void CheckExportFolders(const Recipe& recipe, const std::vector<const SelectedPair*>& all) {
+  std::set<std::string> names;
+  for (const SelectedPair* p : all) names.insert(p->scene);
+  if (recipe.loftr_export == LoftrExportKind::kTrain ||
+      recipe.loftr_export == LoftrExportKind::kTest) {
+    shards::LoftrSceneFolders(names);
+  }
+  if (recipe.gluefactory_export || recipe.dust3r_export) shards::PosedSceneFolders(names);
+}
+
 void PublishIndices(const Recipe& recipe, const datasets::DatasetReader& reader,
                     const BuildOptions& options, const std::vector<const SelectedPair*>& all) {
   shards::MergeOptions merge;

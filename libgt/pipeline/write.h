@@ -21,10 +21,10 @@
 #include <string>
 #include <vector>
 
+#include "libgt/datasets/reader.h"
 #include "libgt/pipeline/build.h"
 #include "libgt/pipeline/recipe.h"
 #include "libgt/pipeline/sample.h"
-#include "libgt/datasets/reader.h"
 
 namespace gt::pipeline {
 
@@ -41,6 +41,12 @@ std::vector<int64_t> PlanShards(const Recipe& recipe, int64_t total);
 // The sample key of every pair (shards::MakeSampleKey); two pairs with one key after
 // sanitising are an InputError naming both scenes.
 std::vector<std::string> SampleKeys(const std::vector<const SelectedPair*>& all);
+
+// Refuses, before anything is written, an export the recipe asks for whose folders the
+// selected scenes cannot all have: two scenes mapping to one LoFTR folder
+// (shards::LoftrSceneFolders) or to one glue-factory/DUSt3R folder
+// (shards::PosedSceneFolders). The same InputError the export would throw.
+void CheckExportFolders(const Recipe& recipe, const std::vector<const SelectedPair*>& all);
 
 // Publishes the plan (DIR/parts/<split>.plan.json) once, under the folder lock; refuses a
 // different existing plan.

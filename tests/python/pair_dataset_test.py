@@ -259,7 +259,8 @@ class Indices(unittest.TestCase):
         split = built_split("demo")
         from_pairs = read_pair_index(os.path.join(split, "pairs.jsonl"))
         self.assertEqual(read_pair_index(split), from_pairs)
-        lines = [json.loads(line) for line in open(os.path.join(split, "pairs.jsonl"))]
+        with open(os.path.join(split, "pairs.jsonl"), encoding="utf-8") as f:
+            lines = [json.loads(line) for line in f]
         self.assertEqual([(r.scene, r.frame0, r.frame1) for r in from_pairs],
                          [(p["scene"], p["frame0"]["id"], p["frame1"]["id"]) for p in lines])
         # selection/ holds the same pairs (scene by scene).
@@ -348,7 +349,11 @@ class Indices(unittest.TestCase):
         self.assertEqual(r.stderr.splitlines()[-1],
                          "occgt: error: loftr export: scenes myroom and scene0000_00 both map to "
                          "LoFTR's folder scene0000_00")
-        self.assertFalse(os.path.exists(os.path.join(work, "c", "loftr")))
+        # Refused before the write stage: no shard, index or export was written.
+        written = [os.path.relpath(os.path.join(d, f), os.path.join(work, "c"))
+                   for d, _, files in os.walk(os.path.join(work, "c")) for f in files]
+        self.assertEqual(sorted(w for w in written if not w.startswith("selection" + os.sep)),
+                         [".lock", ".tasks.lock", "recipe.json"])
 
     def test_loftr_test_1500(self) -> None:
         path = common.shared("loftr_scannet_test_1500/test.npz")
