@@ -126,17 +126,23 @@ namespace {
 
 void PrintProgress(const gt::pipeline::Progress& p) {
   static const bool tty = ::isatty(STDERR_FILENO);
-  const double rate = p.elapsed_s > 0 ? p.done / p.elapsed_s : 0.0;
+  // Units found complete (resume) took no time: the rate is of this run's work only.
+  const int64_t computed = p.done - p.resumed;
+  const double rate = p.elapsed_s > 0 && computed > 0 ? computed / p.elapsed_s : 0.0;
   const double eta = rate > 0 ? (p.total - p.done) / rate : 0.0;
   const char* unit = p.stage == gt::pipeline::Stage::kSelect ? "scenes" : "pairs";
   const char* stage = gt::pipeline::StageName(p.stage);
+  const std::string resumed =
+      p.resumed > 0 ? " (" + std::to_string(p.resumed) + " resumed)" : std::string();
   if (tty) {
-    std::fprintf(stderr, "\r[%s] %lld/%lld %s  %.2f/s  ETA %.0fs   ", stage,
-                 static_cast<long long>(p.done), static_cast<long long>(p.total), unit, rate, eta);
+    std::fprintf(stderr, "\r[%s] %lld/%lld %s%s  %.2f/s  ETA %.0fs   ", stage,
+                 static_cast<long long>(p.done), static_cast<long long>(p.total), unit,
+                 resumed.c_str(), rate, eta);
     if (p.done == p.total) std::fprintf(stderr, "\n");
   } else {
-    std::fprintf(stderr, "[%s] %lld/%lld %s %.2f/s ETA %.0fs\n", stage,
-                 static_cast<long long>(p.done), static_cast<long long>(p.total), unit, rate, eta);
+    std::fprintf(stderr, "[%s] %lld/%lld %s%s %.2f/s ETA %.0fs\n", stage,
+                 static_cast<long long>(p.done), static_cast<long long>(p.total), unit,
+                 resumed.c_str(), rate, eta);
   }
   std::fflush(stderr);
 }

@@ -114,7 +114,8 @@ std::map<std::string, SceneSelection> SelectStage(const Recipe& recipe,
         ++selected;
       }
       if (progress) {
-        progress({Stage::kSelect, ++done, static_cast<int64_t>(mine.size()), Seconds(t_select)});
+        progress(
+            {Stage::kSelect, ++done, static_cast<int64_t>(mine.size()), Seconds(t_select), reused});
       }
     }
   }

@@ -51,6 +51,9 @@ struct Progress {
   int64_t done = 0;
   int64_t total = 0;
   double elapsed_s = 0;  // since the stage started
+  // Of `done`, the units found complete (a resumed run's stored selections and shards):
+  // they took no time, so a rate is (done - resumed) / elapsed_s.
+  int64_t resumed = 0;
 };
 using ProgressFn = std::function<void(const Progress&)>;
 

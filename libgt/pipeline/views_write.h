@@ -49,9 +49,9 @@ struct TupleLine {
 
 // Estimated bytes of one N-view sample of `views` views, so that shards.target_mb bounds a
 // shard: per view its image (PNG 2 bytes/pixel, JPG 0.3),
-// depth (4 bytes/pixel, × DeflatedDepthShare deflated: build.h), visible_in + occluded_in (8) and valid (1) (×0.06
-// deflated, long runs), its tracks (13 bytes per track, ×0.9 deflated); plus 8 bytes per
-// track (queries) and 4096 (json). Zero tracks when selection.tuples is unset.
+// depth (4 bytes/pixel, × DeflatedDepthShare deflated: build.h), visible_in + occluded_in (8) and
+// valid (1) (×0.06 deflated, long runs), its tracks (13 bytes per track, ×0.9 deflated); plus 8
+// bytes per track (queries) and 4096 (json). Zero tracks when selection.tuples is unset.
 int64_t EstimatedViewsSampleBytes(const Recipe& recipe, int views);
 
 // Samples per N-view shard for the tuples `lines` (the rule above), in order.

@@ -185,7 +185,7 @@ WriteResult WriteShards(const Recipe& recipe, const datasets::DatasetReader& rea
   };
   std::vector<Job> jobs;
   int64_t my_samples = 0, done_samples = 0;  // progress unit of the write stage: samples
-  std::vector<int64_t> skipped_sizes;
+  int64_t resumed_samples = 0;               // of those, in shards found complete
   const int64_t nshards = static_cast<int64_t>(shard_sizes.size());
   // Byte s of DIR/.shards.lock while this task may write shard s: the task lock keeps out a
   // second run of task K, this one a task of another --tasks count that owns the same shard
@@ -209,14 +209,14 @@ WriteResult WriteShards(const Recipe& recipe, const datasets::DatasetReader& rea
     my_samples += shard_sizes[s];
     if (shards::IsShardComplete(options.out_dir, recipe.split, s)) {
       ++result.shards_skipped;
-      skipped_sizes.push_back(shard_sizes[s]);
+      resumed_samples += shard_sizes[s];
     } else {
       for (int64_t k = start; k < start + shard_sizes[s]; ++k) jobs.push_back({s, k});
     }
   }
-  for (int64_t n : skipped_sizes) {
-    done_samples += n;
-    if (progress) progress({Stage::kWrite, done_samples, my_samples, Seconds(t_write)});
+  done_samples = resumed_samples;
+  if (progress && resumed_samples > 0) {
+    progress({Stage::kWrite, done_samples, my_samples, Seconds(t_write), resumed_samples});
   }
   if (jobs.empty()) return result;
 
@@ -305,7 +305,9 @@ WriteResult WriteShards(const Recipe& recipe, const datasets::DatasetReader& rea
     finisher.Start(std::move(writer));
     in_writer = 0;
     done_samples += n;
-    if (progress) progress({Stage::kWrite, done_samples, my_samples, Seconds(t_write)});
+    if (progress) {
+      progress({Stage::kWrite, done_samples, my_samples, Seconds(t_write), resumed_samples});
+    }
   };
   const size_t threads = std::max<size_t>(
       1, tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));

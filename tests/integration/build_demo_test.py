@@ -307,6 +307,13 @@ def main():
     before = tree_state(out)
     r = common.occgt("build", "--json", recipe, "--out", out)
     assert json.loads(r.stdout)["shards_written_this_run"] == 1
+    # Progress counts what was found complete as resumed, once, and rates this run's work
+    # only: both scenes' selections and shards 0 and 2 (16 pairs) were there.
+    lines = [l for l in r.stderr.splitlines() if l.startswith("[")]
+    assert [re.sub(r" [0-9.]+/s ETA \d+s$", "", l) for l in lines] == [
+        "[select] 1/2 scenes (1 resumed)", "[select] 2/2 scenes (2 resumed)",
+        "[write] 16/24 pairs (16 resumed)", "[write] 24/24 pairs (16 resumed)"], lines
+    assert lines[2].endswith(" 0.00/s ETA 0s"), lines
     after = tree_state(out)
     assert open(victim, "rb").read() == victim_bytes
     for k, v in before.items():
