@@ -9,6 +9,7 @@
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/io/atomic_file.h"
+#include "libgt/io/file_read.h"
 #include "libgt/pipeline/build.h"
 #include "libgt/pipeline/covisibility.h"
 #include "libgt/pipeline/select.h"
@@ -90,7 +91,11 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
   // N-view shards of other tuples in DIR/views would no longer match tuples.jsonl: refused
   // before it is replaced.
   CheckViewsShards(recipe, out_dir, rows);
-  io::WriteFileAtomic(out_dir + "/tuples.jsonl", lines);
+  // The same tuples as the file holds (a re-run): left alone, no new inode or mtime.
+  const std::string tuples_path = out_dir + "/tuples.jsonl";
+  if (!io::FileExists(tuples_path) || io::ReadFileBytes(tuples_path) != lines) {
+    io::WriteFileAtomic(tuples_path, lines);
+  }
   json summary = {{"scenes", static_cast<int64_t>(scenes.size())},
                   {"tuples", total},
                   {"sizes", sizes},  // report.json's name for the same counts

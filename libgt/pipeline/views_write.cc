@@ -354,9 +354,14 @@ json WriteViewsShards(const Recipe& recipe, const datasets::DatasetReader& reade
     writer.Finish();
     ++written;
   }
-  shards::MergeOptions merge;
-  merge.split = recipe.split;
-  shards::MergeSplit(options.out_dir, merge);
+  // A re-run that wrote no shard leaves the published indices alone (no new inodes or
+  // mtimes), as `occgt build` does; one deleted since is written again.
+  if (written > 0 || !io::FileExists(options.out_dir + "/index.json") ||
+      !io::FileExists(options.out_dir + "/pairs.jsonl")) {
+    shards::MergeOptions merge;
+    merge.split = recipe.split;
+    shards::MergeSplit(options.out_dir, merge);
+  }
   return {{"dir", options.out_dir},
           {"shards", static_cast<int64_t>(sizes.size())},
           {"shards_written", written},

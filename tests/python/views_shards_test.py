@@ -14,7 +14,7 @@ import os
 import shutil
 import subprocess
 import unittest
-from typing import Dict
+from typing import Dict, Tuple
 
 import jsonschema
 import numpy as np
@@ -46,6 +46,16 @@ occupancy: {enabled: false}
 shards: {samples_per_shard: 3}
 sample: {image: png, depth: true, labels: true, occupancy: false}
 """
+
+
+def file_ids(root: str) -> Dict[str, Tuple[int, int]]:
+    """{relative path: (inode, mtime_ns)} of every file under root."""
+    out = {}
+    for p in glob.glob(os.path.join(root, "**", "*"), recursive=True):
+        if os.path.isfile(p):
+            st = os.stat(p)
+            out[os.path.relpath(p, root)] = (st.st_ino, st.st_mtime_ns)
+    return out
 
 
 def read_tree(root: str) -> Dict[str, bytes]:
@@ -213,11 +223,14 @@ class ViewsShards(unittest.TestCase):
         one = read_tree(self.views)
         self.assertEqual(one, read_tree(os.path.join(self.out2, "views")))
         self.assertTrue(any(p.endswith(".tar") for p in one))
+        ids = file_ids(self.out1)
         again = json.loads(common.occgt("tuples", self.recipe, "--out", self.out1, "--shards",
                                         "--json", "--root", self.data).stdout)
         self.assertEqual(again["shards"]["shards_written"], 0)
         self.assertEqual(again["shards"]["shards_skipped"], again["shards"]["shards"])
         self.assertEqual(read_tree(self.views), one)
+        # Nothing to do: no file rewritten (tuples.jsonl, the indices, the shards).
+        self.assertEqual(file_ids(self.out1), ids)
         os.remove(os.path.join(self.views, "views-000001.tar"))
         os.remove(os.path.join(self.views, "parts", "views-000001.json"))
         third = json.loads(common.occgt("tuples", self.recipe, "--out", self.out1, "--shards",
