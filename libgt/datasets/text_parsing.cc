@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <iomanip>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -283,11 +282,26 @@ std::vector<TimedPath> ParseTimedPathList(std::string_view text, const std::stri
     if (v.size() != 1 || !std::isfinite(v[0])) {
       throw InputError(LineWhere(name, rec.line_no), "expected a finite timestamp");
     }
-    out.push_back({v[0], rec.tokens[1]});
+    out.push_back({v[0], rec.tokens[1], rec.line_no});
   }
   std::stable_sort(out.begin(), out.end(),
                    [](const TimedPath& a, const TimedPath& b) { return a.t < b.t; });
-  return out;
+  // One timestamp, two files: which frame is meant cannot be told. The same entry twice is
+  // one frame.
+  std::vector<TimedPath> kept;
+  for (TimedPath& e : out) {
+    if (!kept.empty() && kept.back().t == e.t) {
+      if (kept.back().file == e.file) continue;
+      const int first = std::min(kept.back().line_no, e.line_no);
+      const int second = std::max(kept.back().line_no, e.line_no);
+      const std::string& later = e.line_no == second ? e.file : kept.back().file;
+      throw InputError(LineWhere(name, second), "timestamp repeats line " + std::to_string(first) +
+                                                    " with another file (" + later +
+                                                    "; expected one file per timestamp)");
+    }
+    kept.push_back(std::move(e));
+  }
+  return kept;
 }
 
 std::vector<TimedPose> ParseTimedPoses(std::string_view text, const std::string& name) {
@@ -304,7 +318,7 @@ std::vector<TimedPose> ParseTimedPoses(std::string_view text, const std::string&
     if (!std::isfinite(v[0])) {
       throw InputError(LineWhere(name, rec.line_no), "expected a finite timestamp");
     }
-    out.push_back({rec.line_no, v[0], Eigen::Vector3d(v[1], v[2], v[3]),
+    out.push_back({rec.line_no, v[0], rec.tokens[0], Eigen::Vector3d(v[1], v[2], v[3]),
                    Eigen::Vector4d(v[4], v[5], v[6], v[7])});
   }
   std::stable_sort(out.begin(), out.end(),
@@ -315,10 +329,10 @@ std::vector<TimedPose> ParseTimedPoses(std::string_view text, const std::string&
     const TimedPose& b = out[i];
     if (a.t == b.t && (a.translation != b.translation || a.q_xyzw != b.q_xyzw)) {
       const int first = std::min(a.line_no, b.line_no), second = std::max(a.line_no, b.line_no);
-      std::ostringstream m;
-      m << std::setprecision(17) << "timestamp " << a.t << " repeats line " << first
-        << " with another pose (expected one pose per timestamp)";
-      throw InputError(LineWhere(name, second), m.str());
+      throw InputError(LineWhere(name, second),
+                       "timestamp " + (b.line_no == second ? b.t_text : a.t_text) +
+                           " repeats line " + std::to_string(first) +
+                           " with another pose (expected one pose per timestamp)");
     }
   }
   return out;

@@ -135,10 +135,12 @@ std::vector<TextRecord> ParseRecords(std::string_view text);
 
 // TUM "timestamp filename" lists (rgb.txt, depth.txt), sorted by time (stable). `file` is
 // the name as written in the list (relative to the sequence folder). A line without
-// exactly two fields or with a non-finite timestamp is InputError("<name>:<line>", ...).
+// exactly two fields or with a non-finite timestamp is InputError("<name>:<line>", ...), and
+// so is a timestamp given twice with two files (the same line twice is kept once).
 struct TimedPath {
   double t = 0;
   std::string file;
+  int line_no = 0;
 };
 std::vector<TimedPath> ParseTimedPathList(std::string_view text, const std::string& name);
 
@@ -148,6 +150,7 @@ std::vector<TimedPath> ParseTimedPathList(std::string_view text, const std::stri
 struct TimedPose {
   int line_no = 0;
   double t = 0;
+  std::string t_text;  // the timestamp as written
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   Eigen::Vector4d q_xyzw = Eigen::Vector4d(0, 0, 0, 1);
 };

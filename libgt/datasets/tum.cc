@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <set>
+#include <map>
 #include <sstream>
 
 #include "libgt/core/error.h"
@@ -29,6 +29,7 @@ bool IsTumSequence(const std::string& folder) {
 struct FramePath {
   double t = 0;
   std::string path;
+  int line_no = 0;  // in its list
 };
 // "" or, for a file with no entry that holds carriage returns and no line feed, a hint.
 std::string LineEndingHint(const std::string& text) {
@@ -44,7 +45,7 @@ std::vector<FramePath> ReadTimedPaths(const std::string& folder, const std::stri
   const std::string text = io::ReadFileBytes(path);
   std::vector<FramePath> out;
   for (const TimedPath& e : ParseTimedPathList(text, path)) {
-    out.push_back({e.t, (fs::path(folder) / e.file).string()});
+    out.push_back({e.t, (fs::path(folder) / e.file).string(), e.line_no});
   }
   if (out.empty()) {
     throw InputError(path,
@@ -141,9 +142,14 @@ Scene TumReader::ReadScene(const std::string& root, const std::string& scene_nam
   Scene scene = NewFolderScene(folder, scene_name, Format(), 0.1, 10.0);
 
   const std::vector<FramePath> depths = ReadTimedPaths(folder, "depth.txt");
-  const std::vector<FramePath> rgbs = io::FileExists((fs::path(folder) / "rgb.txt").string())
-                                          ? ReadTimedPaths(folder, "rgb.txt")
-                                          : std::vector<FramePath>{};
+  // Colour: the rgb.txt entries whose image exists (a missing image gives way to the next
+  // nearest entry within the tolerance).
+  std::vector<FramePath> rgbs;
+  if (io::FileExists((fs::path(folder) / "rgb.txt").string())) {
+    for (FramePath& e : ReadTimedPaths(folder, "rgb.txt")) {
+      if (io::FileExists(e.path)) rgbs.push_back(std::move(e));
+    }
+  }
   const std::string gt_path = (fs::path(folder) / "groundtruth.txt").string();
   const std::string gt_text = io::ReadFileBytes(gt_path);
   const std::vector<TimedPose> poses = ParseTimedPoses(gt_text, gt_path);
@@ -164,10 +170,10 @@ Scene TumReader::ReadScene(const std::string& root, const std::string& scene_nam
     f.depth.format = DepthFormat::kPng16;
     f.depth.scale_m_per_unit = 1.0 / 5000.0;
     f.depth_camera = camera;
-    // Colour: the nearest rgb.txt entry; an entry whose image does not exist gives no
-    // colour, as in the folder readers (`occgt scan` counts the usable frames without).
+    // Colour: the nearest existing rgb.txt image within the tolerance; none gives no colour,
+    // as in the folder readers (`occgt scan` counts the usable frames without).
     const int rgb = Nearest(rgbs, depths[i].t, options_.tum_max_dt_s);
-    if (rgb >= 0 && io::FileExists(rgbs[static_cast<size_t>(rgb)].path)) {
+    if (rgb >= 0) {
       f.color_path = rgbs[static_cast<size_t>(rgb)].path;
       f.color_camera = camera;
     }
@@ -184,11 +190,15 @@ Scene TumReader::ReadScene(const std::string& root, const std::string& scene_nam
     scene.frames.push_back(std::move(f));
   }
   // Duplicate ids (two depth files with the same name) would break pair bookkeeping.
-  std::set<std::string> ids;
-  for (const Frame& f : scene.frames) {
-    if (!ids.insert(f.id).second) {
-      throw InputError((fs::path(folder) / "depth.txt").string(),
-                       "duplicate depth file name '" + f.id + "'");
+  std::map<std::string, int> line_of_id;
+  for (size_t i = 0; i < depths.size(); ++i) {
+    const auto [it, fresh] = line_of_id.emplace(scene.frames[i].id, depths[i].line_no);
+    if (!fresh) {
+      const int first = std::min(it->second, depths[i].line_no);
+      const int second = std::max(it->second, depths[i].line_no);
+      throw InputError(LineWhere((fs::path(folder) / "depth.txt").string(), second),
+                       "depth file name '" + it->first + "' repeats line " + std::to_string(first) +
+                           " (expected one name per frame: the frame id)");
     }
   }
   return scene;

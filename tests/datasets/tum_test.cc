@@ -270,8 +270,53 @@ TEST(Tum, RepeatedTimestampWithAnotherPoseIsRefused) {
   WriteFileAtomic(root + "/groundtruth.txt",
                   "# t\n10.0 1 0 0 0 0 0 1\n10.1 2 0 0 0 0 0 1\n10.0 9 9 9 0 0 0 1\n");
   EXPECT_EQ(ErrorOfScene(root), root +
-                                    "/groundtruth.txt:4: timestamp 10 repeats line 2 with "
+                                    "/groundtruth.txt:4: timestamp 10.0 repeats line 2 with "
                                     "another pose (expected one pose per timestamp)");
+}
+
+// The nearest rgb.txt entry whose image exists gives the colour: a missing image 1 ms from
+// the depth time gives way to an existing one 3 ms away (DATASETS.md). Before, the frame had
+// no colour.
+TEST(Tum, MissingColourImageGivesWayToTheNextNearest) {
+  const std::string root = MakeSequence("rgbd_dataset_freiburg1_rgb_next");
+  WriteFileAtomic(root + "/rgb.txt",
+                  "# color images\n10.001 rgb/missing.png\n10.003 rgb/10.005.png\n"
+                  "10.101 rgb/gone.png\n10.490 rgb/10.490.png\n");
+  const auto reader = MakeReader(gt::DatasetFormat::kTum);
+  const Scene s = reader->ReadScene(root, "");
+  ASSERT_EQ(s.frames.size(), 4u);
+  EXPECT_EQ(s.frames[0].color_path, root + "/rgb/10.005.png");  // t = 10.00
+  EXPECT_EQ(s.frames[0].color_camera.width, 640);
+  EXPECT_TRUE(s.frames[1].color_path.empty());  // t = 10.10: only a missing image near
+  EXPECT_EQ(s.frames[3].color_path, root + "/rgb/10.490.png");
+}
+
+// depth.txt or rgb.txt giving one timestamp two files is refused, naming both lines; the
+// same entry twice is one frame. Two entries naming one depth file name the lines too.
+TEST(Tum, RepeatedListEntries) {
+  const std::string root = MakeSequence("tum_repeated_list");
+  WriteFileAtomic(root + "/depth.txt",
+                  "# d\n10.0 depth/10.000000.png\n10.1 depth/10.100000.png\n"
+                  "10.0 depth/10.000000.png\n");
+  EXPECT_EQ(ErrorOfScene(root), "");
+  const auto reader = MakeReader(gt::DatasetFormat::kTum);
+  EXPECT_EQ(reader->ReadScene(root, "").frames.size(), 2u);
+  WriteFileAtomic(root + "/depth.txt",
+                  "# d\n10.0 depth/10.000000.png\n10.1 depth/10.100000.png\n"
+                  "10.0 depth/10.500000.png\n");
+  EXPECT_EQ(ErrorOfScene(root), root +
+                                    "/depth.txt:4: timestamp repeats line 2 with another file "
+                                    "(depth/10.500000.png; expected one file per timestamp)");
+  WriteFileAtomic(root + "/depth.txt", "# d\n10.0 depth/10.000000.png\n10.1 depth/10.100000.png\n");
+  WriteFileAtomic(root + "/rgb.txt", "10.3 rgb/10.490.png\n10.2 rgb/10.005.png\n10.3 x.png\n");
+  EXPECT_EQ(ErrorOfScene(root), root +
+                                    "/rgb.txt:3: timestamp repeats line 1 with another file "
+                                    "(x.png; expected one file per timestamp)");
+  WriteFileAtomic(root + "/rgb.txt", "10.0 rgb/10.005.png\n");
+  WriteFileAtomic(root + "/depth.txt", "# d\n10.0 depth/10.000000.png\n10.1 other/10.000000.png\n");
+  EXPECT_EQ(ErrorOfScene(root), root +
+                                    "/depth.txt:3: depth file name '10.000000' repeats line 2 "
+                                    "(expected one name per frame: the frame id)");
 }
 
 }  // namespace
