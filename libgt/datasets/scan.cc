@@ -1,5 +1,6 @@
 #include "libgt/datasets/scan.h"
 
+#include <cmath>
 #include <sstream>
 
 #include "libgt/core/depth.h"
@@ -61,10 +62,10 @@ bool PrincipalPointInImage(const Camera& c) {
   return c.cx >= -0.5 && c.cx <= c.width - 0.5 && c.cy >= -0.5 && c.cy <= c.height - 0.5;
 }
 
-// A colour K whose principal point lies outside its image: intrinsics of another image size
-// (ScanNet's intrinsic_color.txt of the 1296x968 original beside colour resized to 640x480).
-// One line naming the K's file when the reader knows it, the sizes and the frames; "" when
-// every frame with colour is consistent.
+// A K whose principal point lies outside its image: intrinsics of another image size
+// (ScanNet's intrinsic_color.txt of the 1296x968 original beside colour resized to 640x480;
+// a 7-Scenes depth map at 320x240 beside the 640x480 K). One line naming the K's file when
+// the reader knows it, the sizes and the frames; "" when every frame is consistent.
 std::string ColorPrincipalPointWarning(const Scene& scene) {
   size_t with_color = 0, outside = 0;
   const Frame* first = nullptr;
@@ -86,6 +87,37 @@ std::string ColorPrincipalPointWarning(const Scene& scene) {
     << c.width << "x" << c.height
     << " images (intrinsics of the original size beside resized images?); colour pixels will "
        "not line up with depth";
+  return s.str();
+}
+
+// The principal point lies within the central half of the image (a quarter of the size
+// from the centre at most). A K of twice the size has it at the far edge, still inside.
+bool PrincipalPointCentral(const Camera& c) {
+  return std::abs(c.cx - 0.5 * (c.width - 1)) <= 0.25 * c.width &&
+         std::abs(c.cy - 0.5 * (c.height - 1)) <= 0.25 * c.height;
+}
+
+// The same for the depth K at the depth size the reader found (a wrong depth K misplaces
+// every label, not only the colour), by the stricter rule above: a depth map at half the
+// size of its K (a 7-Scenes depth PNG at 320x240 beside the 640x480 K) is caught too.
+std::string DepthPrincipalPointWarning(const Scene& scene) {
+  size_t outside = 0;
+  const Frame* first = nullptr;
+  for (const Frame& f : scene.frames) {
+    if (f.depth_camera.width <= 0 || f.depth_camera.height <= 0) continue;
+    if (PrincipalPointCentral(f.depth_camera)) continue;
+    if (first == nullptr) first = &f;
+    ++outside;
+  }
+  if (first == nullptr) return "";
+  const Camera& c = first->depth_camera;
+  std::ostringstream s;
+  s << "depth K: principal point (" << c.cx << ", " << c.cy
+    << ") lies outside the central half of the " << c.width << "x" << c.height << " depth map ("
+    << outside << " of " << scene.frames.size() << " frames; first: frame " << first->id
+    << "): expected a K for " << c.width << "x" << c.height
+    << " depth maps (intrinsics of another size?); every label of these frames would be "
+       "misplaced";
   return s.str();
 }
 
@@ -122,8 +154,8 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
   if (scene.format == DatasetFormat::kTum) {
     for (std::string& w : TumSceneWarnings(scene)) s.warnings.push_back(std::move(w));
   }
-  if (std::string w = ColorPrincipalPointWarning(scene); !w.empty()) {
-    s.warnings.push_back(std::move(w));
+  for (std::string w : {DepthPrincipalPointWarning(scene), ColorPrincipalPointWarning(scene)}) {
+    if (!w.empty()) s.warnings.push_back(std::move(w));
   }
   // ScanNet++ renders the DSLR's depth from the scene's mesh: without it those frames have
   // none (a build drops every one as scan.read_error).

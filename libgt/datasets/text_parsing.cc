@@ -242,8 +242,9 @@ Eigen::Matrix3d ParseIntrinsicsText(std::string_view text, const std::string& na
 }
 
 Eigen::Matrix3d CheckedIntrinsics(const Eigen::Matrix3d& K, const std::string& where) {
-  if (!K.allFinite() || !(K(0, 0) > 0) || !(K(1, 1) > 0) || K(2, 0) != 0 || K(2, 1) != 0 ||
-      K(2, 2) != 1) {
+  // A skew (K(0,1)) or K(1,0) has no place in occgt's pinhole camera: refused, not dropped.
+  if (!K.allFinite() || !(K(0, 0) > 0) || !(K(1, 1) > 0) || K(0, 1) != 0 || K(1, 0) != 0 ||
+      K(2, 0) != 0 || K(2, 1) != 0 || K(2, 2) != 1) {
     throw InputError(where, "expected K = [[fx 0 cx] [0 fy cy] [0 0 1]] with finite fx, fy > 0");
   }
   return K;

@@ -472,5 +472,31 @@ TEST(ScanNet, ColourKOutsideTheColourImageIsReported) {
       "");
 }
 
+// A depth K of another size than the depth maps (a 64x48 K beside 32x24 depth): the depth
+// K's principal point (31.5, 23.5) is at the far edge of the 32x24 depth map, outside its
+// central half, which `occgt scan` says in one line (only the colour K was checked).
+TEST(ScanNet, DepthKOutsideTheDepthMapIsReported) {
+  const std::string dir = test::ScratchDir("sn_depth_k");
+  WriteFileAtomic(dir + "/intrinsic/intrinsic_depth.txt", "50 0 31.5\n0 50 23.5\n0 0 1\n");
+  WriteFileAtomic(dir + "/pose/0.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  fs::create_directories(dir + "/depth");
+  ASSERT_TRUE(cv::imwrite(dir + "/depth/0.png", cv::Mat(24, 32, CV_16UC1, cv::Scalar(9))));
+  const auto reader = MakeReader(gt::DatasetFormat::kScanNet);
+  const std::vector<std::string> warnings =
+      SummarizeScene(reader->ReadScene(dir, ""), ScanOptions()).warnings;
+  const std::string want =
+      "depth K: principal point (31.5, 23.5) lies outside the central half of the 32x24 depth "
+      "map (1 of 1 frames; "
+      "first: frame 0): expected a K for 32x24 depth maps (intrinsics of another size?); every "
+      "label of these frames would be misplaced";
+  EXPECT_NE(std::find(warnings.begin(), warnings.end(), want), warnings.end())
+      << ::testing::PrintToString(warnings);
+  // The same K beside 64x48 depth maps is consistent.
+  ASSERT_TRUE(cv::imwrite(dir + "/depth/0.png", cv::Mat(48, 64, CV_16UC1, cv::Scalar(9))));
+  for (const std::string& w : SummarizeScene(reader->ReadScene(dir, ""), ScanOptions()).warnings) {
+    EXPECT_EQ(w.find("principal point"), std::string::npos) << w;
+  }
+}
+
 }  // namespace
 }  // namespace gt::datasets
