@@ -54,6 +54,20 @@ bool IsScanNetScene(const std::string& folder) {
   return IsPythonExport(folder) || IsCppExport(folder) || IsSensScene(folder);
 }
 
+// A folder holding depth/ or color/ is meant as an exported scene: without pose/ (or the
+// C++ exporter's files, or a .sens) it is an error, never silently skipped.
+void RequirePosesIfSceneLike(const std::string& folder) {
+  if (IsScanNetScene(folder)) return;
+  std::error_code ec;
+  for (const char* sub : {"depth", "color"}) {
+    if (fs::is_directory(fs::path(folder) / sub, ec)) {
+      throw InputError((fs::path(folder) / "pose").string(),
+                       std::string("missing (the folder holds ") + sub +
+                           "/: an exported ScanNet scene needs pose/)");
+    }
+  }
+}
+
 // The C++ exporter's _info.txt: every "key = value" line, values as numbers.
 struct CppInfo {
   std::string path;
@@ -131,8 +145,10 @@ CppInfo ReadCppInfo(const std::string& path) {
 std::vector<std::string> ScanNetReader::ListScenes(const std::string& root) const {
   RequireRoot(root);
   if (IsScanNetScene(root)) return {FolderName(root)};
+  RequirePosesIfSceneLike(root);
   std::vector<std::string> out;
   for (const auto& name : ListSubfolders(root)) {
+    RequirePosesIfSceneLike((fs::path(root) / name).string());
     if (IsScanNetScene((fs::path(root) / name).string())) out.push_back(name);
   }
   if (out.empty()) {

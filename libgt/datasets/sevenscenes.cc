@@ -23,15 +23,40 @@ bool IsSequence(const std::string& folder) {
   return !ListNumberedFiles(folder, "frame-", ".pose.txt").empty();
 }
 
+// A folder holding frame depth or colour files is meant as a sequence: without any pose
+// file it is an error, never silently skipped (one frame without its pose file is an
+// unusable frame of its sequence).
+void RequirePosesIfSequenceLike(const std::string& folder) {
+  if (IsSequence(folder)) return;
+  for (const char* suffix : {".depth.png", ".color.png", ".color.jpg"}) {
+    const auto files = ListNumberedFiles(folder, "frame-", suffix);
+    if (!files.empty()) {
+      throw InputError(folder, "holds " + std::to_string(files.size()) + " frame-NNNNNN" + suffix +
+                                   " files and no frame-NNNNNN.pose.txt (a 7-Scenes sequence "
+                                   "needs its pose files)");
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<std::string> SevenScenesReader::ListScenes(const std::string& root) const {
   RequireRoot(root);
-  if (IsSequence(root)) return {FolderName(root)};
   std::vector<std::string> out;
   for (const auto& name : ListSubfolders(root)) {
+    RequirePosesIfSequenceLike((fs::path(root) / name).string());
     if (IsSequence((fs::path(root) / name).string())) out.push_back(name);
   }
+  if (IsSequence(root)) {
+    // Frames of its own beside sequence folders: which is meant cannot be told.
+    if (!out.empty()) {
+      throw InputError(root, "holds frame-NNNNNN.pose.txt files and sequence folders (" +
+                                 out.front() +
+                                 "): expected a sequence folder or a folder of sequences");
+    }
+    return {FolderName(root)};
+  }
+  RequirePosesIfSequenceLike(root);
   if (out.empty()) {
     throw InputError(root, "no 7-Scenes sequence found (expected frame-NNNNNN.pose.txt files)");
   }

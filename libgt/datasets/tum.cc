@@ -126,11 +126,28 @@ std::vector<std::string> TumSceneWarnings(const Scene& scene) {
   return out;
 }
 
+namespace {
+// A folder holding groundtruth.txt or rgb.txt is meant as a sequence: without depth.txt (its
+// frames) it is an error, never silently skipped (as TartanAir's trajectories).
+void RequireDepthListIfSequenceLike(const std::string& folder) {
+  if (IsTumSequence(folder)) return;
+  for (const char* name : {"groundtruth.txt", "rgb.txt"}) {
+    if (io::FileExists((fs::path(folder) / name).string())) {
+      throw InputError((fs::path(folder) / "depth.txt").string(),
+                       std::string("missing (the folder holds ") + name +
+                           ": a TUM sequence needs depth.txt, its frames)");
+    }
+  }
+}
+}  // namespace
+
 std::vector<std::string> TumReader::ListScenes(const std::string& root) const {
   RequireRoot(root);
   if (IsTumSequence(root)) return {FolderName(root)};
+  RequireDepthListIfSequenceLike(root);
   std::vector<std::string> out;
   for (const auto& name : ListSubfolders(root)) {
+    RequireDepthListIfSequenceLike((fs::path(root) / name).string());
     if (IsTumSequence((fs::path(root) / name).string())) out.push_back(name);
   }
   if (out.empty()) throw InputError(root, "no TUM sequence found (expected depth.txt)");
