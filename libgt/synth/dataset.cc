@@ -130,6 +130,41 @@ void ApplyHoles(const std::vector<HoleRect>& holes, DepthImage* depth) {
   }
 }
 
+void ClaimSynthFolder(const std::string& out_dir, const std::string& claim,
+                      const std::string& legacy_options) {
+  namespace fs = std::filesystem;
+  const std::string claim_path = (fs::path(out_dir) / ".occgt-synth.json").string();
+  const std::string dataset_path = (fs::path(out_dir) / "dataset.json").string();
+  const std::string remedy =
+      ": write into an empty folder, or delete this one, so that the two "
+      "do not mix";
+  if (io::FileExists(claim_path)) {
+    const ojson have = ojson::parse(io::ReadFileBytes(claim_path), nullptr, false);
+    if (have.is_discarded() || have != ojson::parse(claim)) {
+      throw InputError(claim_path, "holds a synthetic dataset of other options " +
+                                       (have.is_discarded() ? "(unreadable)" : have.dump()) +
+                                       remedy);
+    }
+    return;
+  }
+  if (io::FileExists(dataset_path)) {  // written by a run before the claim existed
+    const ojson have = ojson::parse(io::ReadFileBytes(dataset_path), nullptr, false);
+    if (have.is_discarded() || !have.is_object() || !have.contains("options")) {
+      throw InputError(dataset_path, "is not the dataset.json of occgt synth" + remedy);
+    }
+    if (legacy_options.empty() || have["options"] != ojson::parse(legacy_options)) {
+      throw InputError(dataset_path, "holds a synthetic dataset of other options " +
+                                         have["options"].dump() + remedy);
+    }
+  } else {
+    std::error_code ec;
+    if (fs::exists(out_dir, ec) && !fs::is_empty(out_dir, ec)) {
+      throw InputError(out_dir, "holds files and no occgt synth dataset" + remedy);
+    }
+  }
+  io::WriteFileAtomic(claim_path, claim + "\n");
+}
+
 SynthSummary WriteSyntheticDataset(const std::string& out_dir, const SynthOptions& options) {
   std::string error;
   if (!options.Check(&error)) throw InputError("synth options", error);
@@ -151,23 +186,11 @@ SynthSummary WriteSyntheticDataset(const std::string& out_dir, const SynthOption
                         {"holes", options.holes},
                         {"max_holes_per_frame", options.max_holes_per_frame},
                         {"focal_px", options.focal_px}};
-  // A folder holding a synthetic dataset of other options is refused: the frames and scenes
-  // this run does not write would stay beside the new ones (a scan finds both).
-  const std::string dataset_path = (fs::path(out_dir) / "dataset.json").string();
-  if (io::FileExists(dataset_path)) {
-    const ojson have = ojson::parse(io::ReadFileBytes(dataset_path), nullptr, false);
-    if (have.is_discarded() || !have.is_object() || !have.contains("options")) {
-      throw InputError(dataset_path,
-                       "is not the dataset.json of occgt synth: write into an "
-                       "empty folder");
-    }
-    if (have["options"] != dataset["options"]) {
-      throw InputError(dataset_path, "holds a synthetic dataset of other options " +
-                                         have["options"].dump() +
-                                         ": write into an empty folder, or delete this one, so "
-                                         "that the two do not mix");
-    }
-  }
+  // A folder holding a synthetic dataset of other options (or anything else) is refused: the
+  // frames and scenes this run does not write would stay beside the new ones.
+  ClaimSynthFolder(out_dir, ojson{{"layout", "generic"}, {"options", dataset["options"]}}.dump(),
+                   dataset["options"].dump());
+  summary.files += 1;
   dataset["scenes"] = ojson::array();
 
   for (int s = 0; s < options.scenes; ++s) {

@@ -23,6 +23,16 @@
 
 namespace gt::synth {
 
+// Claims out_dir for one synthetic dataset before anything is written, so that the scenes
+// and frames of two runs never mix: `claim` (the layout and its options, a JSON text) is
+// written to out_dir/.occgt-synth.json first. A folder whose claim differs, or that holds
+// files without a claim (another run's that predates it, a killed run's, anything else),
+// is an InputError naming it; the same claim (a re-run, a killed run resumed) passes.
+// `legacy_options` is checked against the "options" of a dataset.json written before the
+// claim existed ("" for none).
+void ClaimSynthFolder(const std::string& out_dir, const std::string& claim,
+                      const std::string& legacy_options);
+
 struct SynthOptions {
   int scenes = 2;                // rooms
   int frames_per_scene = 24;     // poses on each room's camera loop

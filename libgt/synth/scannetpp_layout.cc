@@ -248,6 +248,15 @@ ScanNetPPSynthSummary WriteScanNetPPSynth(const std::string& out_dir,
     io::WriteFileAtomic(path.string(), bytes);
     ++summary.files;
   };
+  // Two runs' scenes and frames never mix (dataset.h ClaimSynthFolder).
+  std::ostringstream claim;
+  claim << "{\"layout\":\"scannetpp\",\"options\":{\"scenes\":" << options.scenes
+        << ",\"frames\":" << options.frames << ",\"dslr_width\":" << options.dslr_width
+        << ",\"dslr_height\":" << options.dslr_height
+        << ",\"iphone_width\":" << options.iphone_width
+        << ",\"iphone_height\":" << options.iphone_height << ",\"seed\":" << options.seed << "}}";
+  ClaimSynthFolder(out_dir, claim.str(), "");
+  ++summary.files;
   for (int s = 0; s < options.scenes; ++s) {
     const ScanNetPPSynthScene truth = MakeScanNetPPSynthScene(options, s);
     const fs::path dir = fs::path(out_dir) / "data" / truth.scene.name;

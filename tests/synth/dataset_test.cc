@@ -52,7 +52,7 @@ TEST(SynthDataset, RerunsAreByteIdenticalAndSeedsDiffer) {
   EXPECT_EQ(s.frames, 8);
   const auto ta = Tree(a), tb = Tree(b);
   EXPECT_EQ(ta.size(), static_cast<size_t>(s.files));
-  EXPECT_EQ(ta.size(), 1u + 2 * (1 + 4 * 2));
+  EXPECT_EQ(ta.size(), 2u + 2 * (1 + 4 * 2));  // .occgt-synth.json, dataset.json, 2 scenes
   EXPECT_TRUE(ta == tb);
   for (const auto& [path, bytes] : ta) EXPECT_EQ(path.find(".tmp"), std::string::npos) << path;
   SynthOptions other = Small();
@@ -73,7 +73,7 @@ TEST(SynthDataset, RerunsAreByteIdenticalAndSeedsDiffer) {
     WriteSyntheticDataset(a, fewer);
     ADD_FAILURE() << "other options into the same folder";
   } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), a + "/dataset.json");
+    EXPECT_EQ(e.where(), a + "/.occgt-synth.json");
     EXPECT_NE(std::string(e.what()).find("holds a synthetic dataset of other options"),
               std::string::npos)
         << e.what();
@@ -83,6 +83,33 @@ TEST(SynthDataset, RerunsAreByteIdenticalAndSeedsDiffer) {
   io::WriteFileAtomic(d + "/dataset.json", "{\"name\": \"mine\"}\n");
   EXPECT_THROW(WriteSyntheticDataset(d, Small()), InputError);
   EXPECT_EQ(Tree(d).size(), 1u);
+
+  // A dataset.json of the same options written before the claim existed: accepted, claimed.
+  fs::remove(a + "/.occgt-synth.json");
+  WriteSyntheticDataset(a, Small());
+  EXPECT_TRUE(Tree(a) == ta);
+  // A folder holding other files and no claim (a user's folder, or a run killed before
+  // the claim existed): refused, naming it, nothing written.
+  const std::string e = test::ScratchDir("synth_e");
+  io::WriteFileAtomic(e + "/notes.txt", "mine\n");
+  try {
+    WriteSyntheticDataset(e, Small());
+    ADD_FAILURE() << "a folder of other files";
+  } catch (const InputError& err) {
+    EXPECT_EQ(std::string(err.what()),
+              e + ": holds files and no occgt synth dataset: write into an empty folder, or "
+                  "delete this one, so that the two do not mix");
+  }
+  EXPECT_EQ(Tree(e).size(), 1u);
+  // A run killed after its claim (some frames written, no dataset.json): the same options
+  // resume and give the same files as one run.
+  const std::string k = test::ScratchDir("synth_k");
+  WriteSyntheticDataset(k, Small());
+  fs::remove(k + "/dataset.json");
+  fs::remove_all(k + "/synth_001");
+  fs::remove(k + "/synth_000/depth/000003.npy");
+  WriteSyntheticDataset(k, Small());
+  EXPECT_TRUE(Tree(k) == ta);
 }
 
 TEST(SynthDataset, FilesMatchManifestRenderAndRecordedHoles) {

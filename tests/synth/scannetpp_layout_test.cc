@@ -14,6 +14,7 @@
 #include "libgt/core/error.h"
 #include "libgt/datasets/colmap.h"
 #include "libgt/io/file_read.h"
+#include "libgt/synth/dataset.h"
 #include "libgt/synth/render.h"
 
 namespace gt::synth {
@@ -143,8 +144,42 @@ TEST(ScanNetPPLayout, MeshIsTheExactSceneAndFilesHoldTheTruth) {
     const fs::path other = again / fs::relative(e.path(), out);
     ASSERT_EQ(io::ReadFileBytes(e.path().string()), io::ReadFileBytes(other.string())) << e.path();
   }
+  // Other options into the same folder (fewer frames, another size: stale images and a
+  // scene of the other run would stay beside the new ones), or into a folder of the generic
+  // layout: refused, naming the claim or the folder, nothing written.
+  ScanNetPPSynthOptions fewer = o;
+  fewer.frames = 2;
+  fewer.dslr_width = 48;
+  fewer.dslr_height = 32;
+  fewer.seed = 3;
+  const std::string count_before = std::to_string(
+      std::distance(fs::recursive_directory_iterator(again), fs::recursive_directory_iterator()));
+  try {
+    WriteScanNetPPSynth(again.string(), fewer);
+    ADD_FAILURE() << "other options into the same folder";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), (again / ".occgt-synth.json").string());
+    EXPECT_NE(std::string(e.what()).find("holds a synthetic dataset of other options"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(std::to_string(std::distance(fs::recursive_directory_iterator(again),
+                                         fs::recursive_directory_iterator())),
+            count_before);
+  WriteScanNetPPSynth(again.string(), o);  // the same options: a re-run
+  const fs::path generic = out.string() + "_generic";
+  fs::remove_all(generic);
+  SynthOptions g;
+  g.scenes = 1;
+  g.frames_per_scene = 2;
+  g.width = 32;
+  g.height = 24;
+  WriteSyntheticDataset(generic.string(), g);
+  EXPECT_THROW(WriteScanNetPPSynth(generic.string(), o), InputError);
+  EXPECT_THROW(WriteSyntheticDataset(again.string(), g), InputError);
   fs::remove_all(out);
   fs::remove_all(again);
+  fs::remove_all(generic);
   EXPECT_THROW(WriteScanNetPPSynth(out.string(), ScanNetPPSynthOptions{1, 1}), InputError);
 }
 
