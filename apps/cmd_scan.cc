@@ -205,7 +205,7 @@ void RunScan(const ScanArgs& args) {
   if (!args.scene.empty()) {
     names.push_back(args.scene);
   } else {
-    names = reader->ListScenes(args.root);
+    names = gt::datasets::ListSceneNames(*reader, args.root);
   }
   if (args.mesh_stride < 1) throw gt::InputError("--mesh-stride", "expected an integer >= 1");
   std::string error;

@@ -3,7 +3,9 @@
 #include <cmath>
 
 #include "libgt/core/error.h"
+#include "libgt/core/utf8.h"
 #include "libgt/datasets/readers.h"
+#include "libgt/datasets/text_parsing.h"
 
 namespace gt::datasets {
 
@@ -43,6 +45,19 @@ void CheckScanNetPPFrameId(ScanNetPPDevice device, std::string_view frame_id,
 std::vector<std::string> KnownFormats() {
   std::vector<std::string> names;
   for (const DatasetFormat f : kAllDatasetFormats) names.emplace_back(DatasetFormatName(f));
+  return names;
+}
+
+std::vector<std::string> ListSceneNames(const DatasetReader& reader, const std::string& root) {
+  std::vector<std::string> names = reader.ListScenes(root);
+  for (const std::string& name : names) {
+    if (!IsUtf8(name)) {
+      const std::string folder = FolderName(root) == name ? root : root + "/" + name;
+      throw InputError(folder,
+                       "the scene's folder name is not UTF-8 text (occgt names each "
+                       "scene by it in JSON and Python): rename the folder");
+    }
+  }
   return names;
 }
 

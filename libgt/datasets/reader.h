@@ -50,6 +50,12 @@ class DatasetReader {
   virtual Scene ReadScene(const std::string& root, const std::string& scene_name) const = 0;
 };
 
+// reader.ListScenes(root), each name checked to be UTF-8 text: occgt's JSON outputs
+// (pairs.jsonl, summaries, `scan --json`) and Python's str name every scene by it, so a
+// folder name that is not is an InputError naming the folder (before any work), not a
+// failure at the first JSON line.
+std::vector<std::string> ListSceneNames(const DatasetReader& reader, const std::string& root);
+
 // The names of every format (DatasetFormatName of kAllDatasetFormats, in that order).
 std::vector<std::string> KnownFormats();
 // The reader of a format (core/frame.h ParseDatasetFormat turns a name into one); throws

@@ -158,7 +158,7 @@ std::vector<std::string> ResolveScenes(const Recipe& r, const datasets::DatasetR
   } else if (imports) {
     for (const auto& [scene, pairs] : *imports) scenes.push_back(scene);
   }
-  const std::vector<std::string> available = reader.ListScenes(r.dataset.root);
+  const std::vector<std::string> available = datasets::ListSceneNames(reader, r.dataset.root);
   if (scenes.empty()) scenes = available;
   std::sort(scenes.begin(), scenes.end());
   scenes.erase(std::unique(scenes.begin(), scenes.end()), scenes.end());

@@ -242,7 +242,7 @@ class PyDataset {
 
   std::vector<std::string> Scenes() const {
     py::gil_scoped_release no_gil;
-    return reader_->ListScenes(root_);
+    return gt::datasets::ListSceneNames(*reader_, root_);
   }
   PyScene Scene(py::handle name_arg) const {
     const std::string name = Arg<std::string>(name_arg, "name");

@@ -498,5 +498,31 @@ TEST(ScanNet, DepthKOutsideTheDepthMapIsReported) {
   }
 }
 
+// A scene folder whose name is not UTF-8 is refused when the scenes are listed, naming the
+// folder: `occgt build` failed at its first JSON line with nlohmann's "invalid UTF-8 byte",
+// naming no file, and `scan --json` likewise.
+TEST(ScanNet, SceneFolderNameThatIsNotUtf8IsRefused) {
+  const std::string root = test::ScratchDir("sn_utf8");
+  for (const std::string name : {std::string("scene0000_00"), std::string("sc\xff")}) {
+    WriteFileAtomic(root + "/" + name + "/pose/0.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  }
+  const auto reader = MakeReader(gt::DatasetFormat::kScanNet);
+  EXPECT_EQ(reader->ListScenes(root).size(), 2u);
+  try {
+    ListSceneNames(*reader, root);
+    ADD_FAILURE() << "a name that is not UTF-8";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              root +
+                  "/sc\xff: the scene's folder name is not UTF-8 text (occgt names each "
+                  "scene by it in JSON and Python): rename the folder");
+  }
+  fs::remove_all(root + "/sc\xff");
+  WriteFileAtomic(root + "/sc\xc3\xa9ne/pose/0.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  // UTF-8: accepted (sorted by bytes).
+  EXPECT_EQ(ListSceneNames(*reader, root),
+            (std::vector<std::string>{"scene0000_00", "sc\xc3\xa9ne"}));
+}
+
 }  // namespace
 }  // namespace gt::datasets
