@@ -28,6 +28,9 @@ using nlohmann::json;
 
 std::string JsonScalar(const json& v);
 
+// A statistic that has no value (null in report.json and summary.json) on the page.
+constexpr const char* kNoValue = "—";
+
 double NeedNumber(const json& j, const char* key, const std::string& where) {
   if (!j.is_object() || !j.contains(key) || !j.at(key).is_number()) {
     throw InputError(where, std::string("expected a number \"") + key + "\"");
@@ -80,9 +83,10 @@ std::string JsonScalar(const json& v) {
 struct Stats {
   double min = 0, median = 0, mean = 0, max = 0;
 };
-Stats Describe(std::vector<double> v) {
+// nullopt without a value (report.json's null): no pair, no statistic.
+std::optional<Stats> Describe(std::vector<double> v) {
+  if (v.empty()) return std::nullopt;
   Stats s;
-  if (v.empty()) return s;
   std::sort(v.begin(), v.end());
   s.min = v.front();
   s.max = v.back();
@@ -223,6 +227,19 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options) {
   };
   split.summary = optional_object("summary.json", "expected a JSON object");
   split.recipe = optional_object("recipe.json", "expected a JSON object (the resolved recipe)");
+  // Without a line (no pair selected), the stride of the selection's grid is the recipe's.
+  if (split.score_stride == 0 && split.recipe.is_object()) {
+    const json selection = split.recipe.value("selection", json());
+    if (selection.is_object() && selection.contains("score_stride")) {
+      const json& stride = selection["score_stride"];
+      if (!stride.is_number_integer() || stride.get<int64_t>() < 1) {
+        throw InputError(
+            (fs::path(dir) / "recipe.json").string(),
+            "selection.score_stride: expected a positive integer, got " + JsonScalar(stride));
+      }
+      split.score_stride = static_cast<int>(stride.get<int64_t>());
+    }
+  }
   split.drops = json::object();
   if (split.summary.is_object() && split.summary.contains("drops")) {
     split.drops = split.summary["drops"];
@@ -359,6 +376,13 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
 
   std::map<std::string, int64_t> per_scene;
   for (const auto& p : split.pairs) ++per_scene[p.scene];
+  // The scenes that gave no pair, from summary.json's pairs_per_scene (a bar of 0).
+  if (split.summary.is_object() && split.summary.contains("pairs_per_scene") &&
+      split.summary["pairs_per_scene"].is_object()) {
+    for (const auto& entry : split.summary["pairs_per_scene"].items()) {
+      per_scene.emplace(entry.key(), 0);
+    }
+  }
   std::vector<std::pair<std::string, int64_t>> scenes(per_scene.begin(), per_scene.end());
   const size_t kMaxScenes = 60;
   const size_t total_scenes = scenes.size();
@@ -589,29 +613,35 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
     inconsistent.push_back(p.inconsistent_share);
     unknown.push_back(p.unknown_share);
   }
-  const Stats so = Describe(ov), sc = Describe(oc), sv = Describe(vis);
-  const Stats si = Describe(inconsistent), su = Describe(unknown);
-  const Stats sso = Describe(score_ov), ssc = Describe(score_oc);
+  using Described = std::optional<Stats>;
+  const Described so = Describe(ov), sc = Describe(oc), sv = Describe(vis);
+  const Described si = Describe(inconsistent), su = Describe(unknown);
+  const Described sso = Describe(score_ov), ssc = Describe(score_oc);
   // summary.json's selected_overlap / selected_occlusion are these with the recipe's
   // aggregate and occlusion metric: the row says which ones it used.
-  const std::string grid = " (score grid, score_stride " + std::to_string(split.score_stride) +
-                           "; " + AggregateName(options.aggregate) + ", occlusion " +
-                           OcclusionMetricName(options.occlusion_metric) + ")";
+  const std::string grid =
+      " (score grid, " +
+      (split.score_stride > 0 ? "score_stride " + std::to_string(split.score_stride) + "; "
+                              : std::string()) +
+      AggregateName(options.aggregate) + ", occlusion " +
+      OcclusionMetricName(options.occlusion_metric) + ")";
   const std::string overlap_score = "overlap" + grid, occlusion_score = "occlusion ratio" + grid;
   if (split.has_pairs) {
     h << "<table><tr><th>selected pairs (every pixel unless said)</th><th>min</th><th>median</th>"
          "<th>mean</th><th>max</th></tr>\n";
     for (const auto& [label, s] :
-         {std::pair<const char*, Stats>{"overlap", so},
+         {std::pair<const char*, Described>{"overlap", so},
           {"visible overlap (weaker direction)", sv},
           {"occlusion ratio", sc},
           {overlap_score.c_str(), sso},
           {occlusion_score.c_str(), ssc},
           {"INCONSISTENT share of valid-depth pixels (both directions)", si},
           {"UNKNOWN share of valid-depth pixels (both directions)", su}}) {
-      h << "<tr><td>" << label << "</td><td class=\"n\">" << Num(s.min) << "</td><td class=\"n\">"
-        << Num(s.median) << "</td><td class=\"n\">" << Num(s.mean) << "</td><td class=\"n\">"
-        << Num(s.max) << "</td></tr>\n";
+      h << "<tr><td>" << label << "</td>";
+      for (const double Stats::*field : {&Stats::min, &Stats::median, &Stats::mean, &Stats::max}) {
+        h << "<td class=\"n\">" << (s ? Num((*s).*field) : kNoValue) << "</td>";
+      }
+      h << "</tr>\n";
     }
     h << "</table>\n";
   }
@@ -619,6 +649,7 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
     h << "<table><tr><th>summary.json</th><th>value</th></tr>\n";
     // Byte counts also in decimal units: "79.2 MB (79234567)".
     auto shown = [](const std::string& key, const json& v) {
+      if (v.is_null()) return std::string(kNoValue);  // e.g. selected_overlap without pairs
       std::string value = JsonScalar(v);
       if (v.is_number() && key.find("bytes") != std::string::npos) {
         value = gt::HumanBytes(v.get<double>()) + " (" + value + ")";
@@ -722,11 +753,11 @@ json ReportJson(const SplitData& split, const SplitReportOptions& options,
       vis.push_back(p.visible_min);
     }
     auto stats = [](const std::vector<double>& v) {
-      if (v.empty()) {  // no pair, no statistic (as the tuples' distributions at count 0)
+      const std::optional<Stats> s = Describe(v);
+      if (!s) {  // no pair, no statistic (as the tuples' distributions at count 0)
         return json{{"min", nullptr}, {"median", nullptr}, {"mean", nullptr}, {"max", nullptr}};
       }
-      const Stats s = Describe(v);
-      return json{{"min", s.min}, {"median", s.median}, {"mean", s.mean}, {"max", s.max}};
+      return json{{"min", s->min}, {"median", s->median}, {"mean", s->mean}, {"max", s->max}};
     };
     out["pairs"] = {{"count", static_cast<int64_t>(split.pairs.size())},
                     {"aggregate", AggregateName(options.aggregate)},

@@ -62,9 +62,11 @@ struct SplitPair {
 
 struct SplitData {
   std::string dir;
-  std::vector<SplitPair> pairs;    // pairs.jsonl order
-  int score_stride = 0;            // of every line's score_metrics (0: no pairs)
-  nlohmann::json summary;          // summary.json, null when absent
+  std::vector<SplitPair> pairs;  // pairs.jsonl order
+  // Of every line's score_metrics; without a line, recipe.json's selection.score_stride
+  // (0: neither).
+  int score_stride = 0;
+  nlohmann::json summary;  // summary.json, null when absent
   // Drops by reason: summary.json's, else (the summary `occgt merge` writes has none) summed
   // over selection/<scene>.json; an empty object when neither has them.
   nlohmann::json drops;

@@ -6,9 +6,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
+#include <sstream>
 
+#include "libgt/core/error.h"
+#include "libgt/io/file_read.h"
 #include "libgt/report/eval_report.h"
+#include "tests/support/test_support.h"
 
 namespace gt::report {
 namespace {
@@ -103,6 +109,78 @@ TEST(SplitWarnings, SaysWhatMustBeKnown) {
   ASSERT_EQ(w.size(), 2u);
   EXPECT_NE(w[0].find("unregistered"), std::string::npos);
   EXPECT_EQ(w[1].rfind("4 frames were skipped", 0), 0u) << w[1];
+}
+
+void WriteText(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+// The pairs' table rows of the page: "<tr><td>label</td><td class="n">..</td>...</tr>".
+std::vector<std::string> TableRowsAfter(const std::string& html, const std::string& heading) {
+  std::vector<std::string> rows;
+  size_t at = html.find(heading);
+  const size_t end = html.find("</table>", at);
+  while (at != std::string::npos && (at = html.find("<tr><td>", at)) < end) {
+    const size_t stop = html.find("</tr>", at);
+    rows.push_back(html.substr(at, stop - at));
+    at = stop;
+  }
+  return rows;
+}
+
+// A build whose selection kept no pair (occgt build writes an empty pairs.jsonl, its
+// summary.json and recipe.json): no statistic is shown as a number, the score grid's stride
+// is the recipe's, summary.json's nulls read as such and the scenes without pairs count.
+TEST(EmptySplit, ShowsNoValueWhereReportJsonHasNullAndTheRecipesCounts) {
+  const std::string dir = test::ScratchDir("report_empty_split");
+  WriteText(dir + "/pairs.jsonl", "");
+  WriteText(dir + "/summary.json",
+            R"({"split": "e", "scenes": 2, "pairs_per_scene": {"s0": 0, "s1": 0},)"
+            R"( "selected_overlap": null, "selected_occlusion": null, "drops": {}})");
+  WriteText(dir + "/recipe.json", R"({"selection": {"score_stride": 4}})");
+  SplitReportOptions o;
+  const SplitData split = LoadSplit(dir, o);
+  EXPECT_TRUE(split.pairs.empty());
+  EXPECT_EQ(split.score_stride, 4);
+  const std::string html = RenderHtmlReport(split, o, {}, {});
+  const std::vector<std::string> rows = TableRowsAfter(html, "<th>selected pairs");
+  ASSERT_EQ(rows.size(), 7u);
+  const nlohmann::json report = ReportJson(split, o, nullptr, {});
+  for (const char* field : {"overlap", "occlusion", "consistent_overlap_min"}) {
+    for (const char* stat : {"min", "median", "mean", "max"}) {
+      EXPECT_TRUE(report["pairs"][field][stat].is_null()) << field << "." << stat;
+    }
+  }
+  for (const std::string& row : rows) {
+    EXPECT_EQ(row.find("<td class=\"n\">0</td>"), std::string::npos) << row;
+    size_t dashes = 0;
+    for (size_t at = 0; (at = row.find("<td class=\"n\">—</td>", at)) != std::string::npos; ++at) {
+      ++dashes;
+    }
+    EXPECT_EQ(dashes, 4u) << row;
+  }
+  EXPECT_NE(rows[3].find("score_stride 4;"), std::string::npos) << rows[3];
+  for (const char* key : {"selected_overlap", "selected_occlusion"}) {
+    EXPECT_NE(html.find(std::string("<tr><td>") + key + "</td><td class=\"n\">—</td>"),
+              std::string::npos)
+        << key;
+  }
+  EXPECT_EQ(html.find(">null<"), std::string::npos);
+  // The plots: every scene of summary.json's pairs_per_scene, with its 0 pairs.
+  const std::string scratch = dir + "/plots";
+  MakeSplitPlots(split, o, scratch);
+  const std::string script = io::ReadFileBytes(scratch + "/plots.gp");
+  EXPECT_NE(script.find("Pairs per scene (2 of 2 scenes)"), std::string::npos);
+  EXPECT_EQ(io::ReadFileBytes(scratch + "/scenes.dat"), "0 0 \"s0\"\n1 0 \"s1\"\n");
+  // A recipe whose stride is not a positive integer: named.
+  WriteText(dir + "/recipe.json", R"({"selection": {"score_stride": "4"}})");
+  try {
+    LoadSplit(dir, o);
+    ADD_FAILURE() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("recipe.json: selection.score_stride: expected a "
+                                         "positive integer"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(PickWorstPairs, FailuresFirstThenLargestErrorThenLowestEpipolarPrecision) {
