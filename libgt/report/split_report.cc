@@ -303,8 +303,11 @@ std::vector<std::string> SplitWarnings(const SplitData& split) {
   return w;
 }
 
+namespace {
+constexpr int kStepsPerUnit = 20;  // HistogramRange's step: 1 / 20 = 0.05
+}  // namespace
+
 std::pair<double, double> HistogramRange(const std::vector<double>& values) {
-  constexpr double kStep = 0.05;
   double lo = 1.0, hi = 0.0;
   for (double v : values) {
     if (!std::isfinite(v)) continue;
@@ -312,12 +315,39 @@ std::pair<double, double> HistogramRange(const std::vector<double>& values) {
     hi = std::max(hi, std::clamp(v, 0.0, 1.0));
   }
   if (lo > hi) return {0.0, 1.0};
-  // Multiples of the step, computed on integers so that 0.35 stays 0.35.
-  int a = static_cast<int>(std::floor(lo / kStep + 1e-9));
-  int b = static_cast<int>(std::ceil(hi / kStep - 1e-9));
+  // Multiples of the step as integers, divided last, so that 0.35 stays 0.35 (7 * 0.05 is
+  // 0.35000000000000003, 7 / 20.0 the double nearest 0.35).
+  int a = static_cast<int>(std::floor(lo * kStepsPerUnit + 1e-9));
+  int b = static_cast<int>(std::ceil(hi * kStepsPerUnit - 1e-9));
   if (b <= a) b = a + 1;
-  if (b > 20) a -= b - 20, b = 20;
-  return {a * kStep, b * kStep};
+  if (b > kStepsPerUnit) a -= b - kStepsPerUnit, b = kStepsPerUnit;
+  return {a / static_cast<double>(kStepsPerUnit), b / static_cast<double>(kStepsPerUnit)};
+}
+
+std::vector<double> HistogramEdges(std::pair<double, double> range, int bins) {
+  GT_ASSERT(bins >= 1);
+  const long a = std::lround(range.first * kStepsPerUnit);
+  const long b = std::lround(range.second * kStepsPerUnit);
+  GT_ASSERT_MSG(std::abs(range.first * kStepsPerUnit - a) < 1e-6 &&
+                    std::abs(range.second * kStepsPerUnit - b) < 1e-6 && b > a,
+                "HistogramEdges: expected a HistogramRange (multiples of 0.05)");
+  // Edge k is (a·bins + k·(b − a)) / (20·bins): integers divided once, the double nearest
+  // the exact edge (0.35 + 0.05 = 0.4 is the literal 0.4, not 0.39999999999999997).
+  std::vector<double> edges(static_cast<size_t>(bins) + 1);
+  for (int k = 0; k <= bins; ++k) {
+    edges[static_cast<size_t>(k)] = static_cast<double>(a * bins + k * (b - a)) /
+                                    static_cast<double>(static_cast<long>(kStepsPerUnit) * bins);
+  }
+  return edges;
+}
+
+int HistogramBin(double v, const std::vector<double>& edges) {
+  GT_ASSERT(edges.size() >= 2);
+  const int bins = static_cast<int>(edges.size()) - 1;
+  if (!(v > edges.front())) return 0;  // below the range, on its first edge, or NaN
+  // The last edge e with e <= v: left-closed bins, the last one closed.
+  const int k = static_cast<int>(std::upper_bound(edges.begin(), edges.end(), v) - edges.begin());
+  return std::min(bins - 1, k - 1);
 }
 
 std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReportOptions& options,
@@ -332,16 +362,12 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
   const int bins = options.histogram_bins;
   // Histograms over the range of the data (HistogramRange), `bins` bins.
   auto histogram = [&](const std::vector<double>& values, std::pair<double, double> range) {
+    const std::vector<double> edges = HistogramEdges(range, bins);
     std::vector<int64_t> counts(bins, 0);
-    const double width = range.second - range.first;
-    for (double raw : values) {
-      const double v = std::clamp(std::isfinite(raw) ? raw : 0.0, range.first, range.second);
-      ++counts[std::min(bins - 1, static_cast<int>(std::floor((v - range.first) / width * bins)))];
-    }
+    for (double v : values) ++counts[HistogramBin(std::isfinite(v) ? v : 0.0, edges)];
     std::string text;
     for (int b = 0; b < bins; ++b) {
-      text +=
-          Num(range.first + (b + 0.5) * width / bins, 8) + " " + std::to_string(counts[b]) + "\n";
+      text += Num(0.5 * (edges[b] + edges[b + 1]), 8) + " " + std::to_string(counts[b]) + "\n";
     }
     return text;
   };

@@ -115,6 +115,13 @@ SplitData LoadSplit(const std::string& dir, const SplitReportOptions& options);
 // The x range of a histogram that fits the data: [min, max] of the finite values widened
 // to multiples of 0.05 inside [0, 1], at least 0.05 wide; [0, 1] when there is no value.
 std::pair<double, double> HistogramRange(const std::vector<double>& values);
+// The bins + 1 edges of `bins` equal bins over a HistogramRange, each the double nearest its
+// exact value (over [0.35, 0.6] with 5 bins: 0.35, 0.4, 0.45, 0.5, 0.55, 0.6 as written).
+std::vector<double> HistogramEdges(std::pair<double, double> range, int bins);
+// The bin of v among those edges: bins are left-closed, [e_k, e_k+1), the last one closed,
+// so that a value on an inner edge lands in the bin whose left edge it is; values outside
+// the range (and NaN) go to the first or last bin.
+int HistogramBin(double v, const std::vector<double>& edges);
 
 // Runs gnuplot once; returns the plots in the order listed above. Throws
 // InputError("gnuplot", ...) when gnuplot is missing or fails (its first error line).

@@ -28,10 +28,15 @@ TEST(HistogramRange, WidensToMultiplesOfTheStepAroundTheData) {
   std::tie(lo, hi) = HistogramRange({0.41, 0.88});
   EXPECT_DOUBLE_EQ(lo, 0.40);
   EXPECT_DOUBLE_EQ(hi, 0.90);
-  // Exactly on a multiple: kept, not widened by a step.
+  // Exactly on a multiple: kept, not widened by a step, and the very double written 0.35
+  // (7 * 0.05 is 0.35000000000000003).
   std::tie(lo, hi) = HistogramRange({0.35, 0.6});
-  EXPECT_DOUBLE_EQ(lo, 0.35);
-  EXPECT_DOUBLE_EQ(hi, 0.60);
+  EXPECT_EQ(lo, 0.35);
+  EXPECT_EQ(hi, 0.6);
+  for (int k = 0; k <= 20; ++k) {
+    const double x = k / 20.0;  // the double nearest k·0.05
+    EXPECT_EQ(HistogramRange({x}).first, std::min(x, 0.95)) << k;
+  }
   // One value (or equal values): one step wide, inside [0, 1].
   std::tie(lo, hi) = HistogramRange({1.0, 1.0});
   EXPECT_DOUBLE_EQ(lo, 0.95);
@@ -64,6 +69,37 @@ TEST(HistogramRange, AlwaysHoldsEveryValue) {
       ASSERT_LT(hi - *mx, 0.05);
     }
   }
+}
+
+TEST(HistogramBin, ValuesOnEdgesLandInTheBinWhoseLeftEdgeTheyAre) {
+  // [0.35, 0.6] in 5 bins of 0.05: every edge is the double written as that decimal.
+  const std::vector<double> edges = HistogramEdges(HistogramRange({0.35, 0.6}), 5);
+  EXPECT_EQ(edges, (std::vector<double>{0.35, 0.4, 0.45, 0.5, 0.55, 0.6}));
+  EXPECT_EQ(HistogramBin(0.35, edges), 0);
+  EXPECT_EQ(HistogramBin(0.4, edges), 1);  // was bin 0: (0.4 - 0.35) / 0.25 * 5 < 1
+  EXPECT_EQ(HistogramBin(0.45, edges), 2);
+  EXPECT_EQ(HistogramBin(0.5, edges), 3);
+  EXPECT_EQ(HistogramBin(0.55, edges), 4);
+  EXPECT_EQ(HistogramBin(0.6, edges), 4);  // the last bin is closed
+  EXPECT_EQ(HistogramBin(std::nextafter(0.4, 0.0), edges), 0);
+  EXPECT_EQ(HistogramBin(0.42, edges), 1);
+  EXPECT_EQ(HistogramBin(0.1, edges), 0);  // outside: the first or last bin
+  EXPECT_EQ(HistogramBin(0.9, edges), 4);
+  EXPECT_EQ(HistogramBin(NAN, edges), 0);
+  // Every multiple of 0.05 in [0, 1] with 20 bins: bin k for k·0.05 (the last one 19).
+  const std::vector<double> unit = HistogramEdges({0.0, 1.0}, 20);
+  for (int k = 0; k <= 20; ++k) {
+    EXPECT_EQ(unit[k], k / 20.0);
+    EXPECT_EQ(HistogramBin(k / 20.0, unit), std::min(k, 19)) << k;
+    // Written as a decimal literal of that multiple ("0.35"), parsed as a reader would.
+    const double parsed = std::stod(std::to_string(k * 5 / 100) + "." +
+                                    (k * 5 % 100 < 10 ? "0" : "") + std::to_string(k * 5 % 100));
+    EXPECT_EQ(HistogramBin(parsed, unit), std::min(k, 19)) << parsed;
+  }
+  // 40 bins over [0, 1]: inner edges on 0.025 multiples too.
+  const std::vector<double> fine = HistogramEdges({0.0, 1.0}, 40);
+  EXPECT_EQ(HistogramBin(0.075, fine), 3);
+  EXPECT_EQ(HistogramBin(0.7, fine), 28);
 }
 
 SplitPair Pair(const std::string& key, double occlusion) {
