@@ -173,6 +173,7 @@ void RunInspectSplit(const InspectSplitArgs& a) {
         shares->total.mesh_only / n, shares->total.agree / n, shares->total.disagree / n);
   }
   for (const auto& p : files.written) std::printf("  wrote %s\n", p.c_str());
+  for (const auto& p : files.removed) std::printf("  removed %s (an earlier run's)\n", p.c_str());
   // Shown on the page too; said here so that a script sees it (the report is still written).
   if (!files.unreadable.empty()) {
     std::fprintf(stderr, "occgt: warning: %zu gallery entries could not be read (first: %s)\n",

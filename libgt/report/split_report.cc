@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <opencv2/imgproc.hpp>
+#include <set>
 #include <sstream>
 #include <unordered_map>
 
@@ -810,6 +811,25 @@ json ReportJson(const SplitData& split, const SplitReportOptions& options,
   return out;
 }
 
+const std::vector<std::string>& SplitReportFileNames() {
+  static const std::vector<std::string> names = {"overlap_hist.png",
+                                                 "occlusion_hist.png",
+                                                 "occlusion_cumulative.png",
+                                                 "overlap_vs_occlusion.png",
+                                                 "pairs_per_scene.png",
+                                                 "eval_cumulative.png",
+                                                 "eval_auc_by_occlusion.png",
+                                                 "eval_auc_by_overlap.png",
+                                                 "eval_estimator_disagreement.png",
+                                                 "tuple_sizes.png",
+                                                 "tuple_covisibility_hist.png",
+                                                 "tuple_occlusion_hist.png",
+                                                 "depth_sources.json",
+                                                 "report.html",
+                                                 "report.json"};
+  return names;
+}
+
 SplitReportFiles WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
                                   const SplitReportOptions& options,
                                   const SplitDepthShares* depth_shares) {
@@ -914,6 +934,22 @@ SplitReportFiles WriteSplitReport(const std::string& split_dir, const std::strin
   gt::io::WriteFileAtomic(
       json_path, ReportJson(split, options, tuples_summary, gallery_tuples).dump(1) + "\n");
   written.push_back(json_path);
+  // An earlier run's files that this one does not write (fewer sections: no tuples.jsonl
+  // any more, no --eval) would pass for this run's: the report's own names only.
+  std::set<std::string> written_names;
+  for (const std::string& path : written) {
+    written_names.insert(fs::path(path).filename().string());
+    GT_ASSERT_MSG(std::count(SplitReportFileNames().begin(), SplitReportFileNames().end(),
+                             fs::path(path).filename().string()) == 1,
+                  "SplitReportFileNames: a written file is not listed");
+  }
+  for (const std::string& name : SplitReportFileNames()) {
+    if (written_names.count(name) > 0) continue;
+    const fs::path path = fs::path(out_dir) / name;
+    std::error_code ec;
+    if (!fs::is_regular_file(fs::symlink_status(path, ec))) continue;
+    if (fs::remove(path, ec)) files.removed.push_back(path.string());
+  }
   return files;
 }
 

@@ -182,8 +182,14 @@ nlohmann::json ReportJson(const SplitData& split, const SplitReportOptions& opti
 // listed in `unreadable` (the report is still written).
 struct SplitReportFiles {
   std::vector<std::string> written;     // paths written
+  std::vector<std::string> removed;     // an earlier run's files this run does not write
   std::vector<std::string> unreadable;  // "<pair key>: <error>", "tuple <k>: <error>"
 };
+// Every file name WriteSplitReport may write into out_dir (plots of the pairs, of the eval
+// section and of the tuples, depth_sources.json, report.html, report.json). A run removes
+// those of this list it did not write (an earlier run's tuple or eval plots would pass for
+// this run's); no other file of out_dir is touched.
+const std::vector<std::string>& SplitReportFileNames();
 SplitReportFiles WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
                                   const SplitReportOptions& options,
                                   const SplitDepthShares* depth_shares = nullptr);

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -216,6 +217,47 @@ TEST(EmptySplit, ShowsNoValueWhereReportJsonHasNullAndTheRecipesCounts) {
                                          "positive integer"),
               std::string::npos)
         << e.what();
+  }
+}
+
+// A re-run with fewer sections (tuples.jsonl gone, no --eval) removes the report's own files
+// it does not write, and no other file of the folder.
+TEST(WriteSplitReport, RemovesItsOwnFilesThatThisRunDoesNotWrite) {
+  const std::string dir = test::ScratchDir("report_stale_files");
+  const std::string out = dir + "/report";
+  WriteText(dir + "/pairs.jsonl", "");
+  WriteText(dir + "/tuples.jsonl",
+            R"({"scene": "s", "frame_ids": ["a", "b"], "covisibility": [[1, 0.5], [0.4, 1]],)"
+            R"( "occlusion": 0.2})"
+            "\n");
+  SplitReportOptions o;
+  const SplitReportFiles first = WriteSplitReport(dir, out, o);
+  for (const char* name :
+       {"tuple_sizes.png", "tuple_covisibility_hist.png", "tuple_occlusion_hist.png"}) {
+    ASSERT_TRUE(io::FileExists(out + "/" + name)) << name;
+  }
+  EXPECT_TRUE(first.removed.empty());
+  // An earlier run's eval plot and depth shares, and the user's own files.
+  for (const char* name : {"eval_cumulative.png", "depth_sources.json", "notes.txt", "mine.png"}) {
+    WriteText(out + "/" + name, "x");
+  }
+  std::filesystem::remove(dir + "/tuples.jsonl");
+  const SplitReportFiles second = WriteSplitReport(dir, out, o);
+  std::vector<std::string> left;
+  for (const auto& e : std::filesystem::directory_iterator(out)) {
+    left.push_back(e.path().filename().string());
+  }
+  std::sort(left.begin(), left.end());
+  EXPECT_EQ(left, (std::vector<std::string>{"mine.png", "notes.txt", "occlusion_cumulative.png",
+                                            "occlusion_hist.png", "overlap_hist.png",
+                                            "overlap_vs_occlusion.png", "pairs_per_scene.png",
+                                            "report.html", "report.json"}));
+  EXPECT_EQ(second.removed.size(), 5u);
+  // Every file written is one of the report's names.
+  for (const std::string& path : second.written) {
+    const std::string name = std::filesystem::path(path).filename().string();
+    EXPECT_EQ(std::count(SplitReportFileNames().begin(), SplitReportFileNames().end(), name), 1)
+        << name;
   }
 }
 
