@@ -22,11 +22,16 @@ void PutText(cv::Mat& image, const std::string& text, int x, int y, double scale
 cv::Mat SideBySide(const cv::Mat& a, const cv::Mat& b, int gap = kPanelGap);
 // Images one above the other, left-aligned, narrower ones padded white on the right.
 cv::Mat StackVertical(const std::vector<cv::Mat>& images);
+// The Hershey simplex scale at most `font` at which `text` is at most max_width pixels wide
+// (cv::getTextSize): titles and legends of narrow pictures shrink rather than being cut.
+double FittingFontScale(const std::string& text, double font, int max_width);
 // A 22-pixel white strip with `title` above the image. text_scale enlarges the text and
-// the strip (pictures that are shown downscaled stay readable: 1 / the display scale).
+// the strip (pictures that are shown downscaled stay readable: 1 / the display scale); a
+// title wider than the image is drawn smaller (FittingFontScale), never cut.
 cv::Mat TitleAbove(const cv::Mat& image, const std::string& title, double text_scale = 1.0);
 // A white strip `width` wide: colour swatches with their text, `per_row` entries a row,
-// and an optional note on a last line; text_scale as above.
+// and an optional note on a last line; text_scale as above; fewer entries a row when the
+// widest does not fit its cell, and a smaller font when even one a row does not.
 cv::Mat LegendStrip(const std::vector<LegendEntry>& entries, int width, int per_row,
                     const std::string& note, double text_scale = 1.0);
 

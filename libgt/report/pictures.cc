@@ -431,7 +431,7 @@ cv::Mat RenderFirstOccupied(const gt::occupancy::FrustumVolume& volume,
   PutText(bar, Metres(volume.edges_m.back()), bar_w + 8, h - 4);
   cv::Mat row = SideBySide(depth, bar, 0);
   std::vector<LegendEntry> entries = {
-      {kNoOccupiedSeenColor, "no occupied bin (free seen)"},
+      {kNoOccupiedSeenColor, "no occupied bin, free seen"},
       {kNothingKnownColor, "nothing known"},
   };
   return StackVertical({row, LegendStrip(entries, row.cols, 1, "", options.text_scale)});
@@ -461,8 +461,8 @@ cv::Mat RenderOccupancySlice(const gt::occupancy::FrustumVolume& volume,
   PutText(axis, Metres(volume.edges_m[volume.edges_m.size() / 2]), 2, slice.rows / 2 + 4);
   PutText(axis, Metres(volume.edges_m.back()), 2, slice.rows - 4);
   cv::Mat body = SideBySide(axis, slice, 0);
-  body = TitleAbove(body, "row v=" + std::to_string(row) + ": depth (down) x column u",
-                    options.text_scale);
+  body =
+      TitleAbove(body, "row v=" + std::to_string(row) + ": depth (down) x u", options.text_scale);
   std::vector<LegendEntry> entries = {
       {kOccupiedColor, "occupied"}, {kFreeColor, "free"}, {kUnknownColor, "unknown"}};
   return StackVertical({body, LegendStrip(entries, body.cols, 3, "", options.text_scale)});

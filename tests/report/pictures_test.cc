@@ -7,10 +7,12 @@
 
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <set>
 
 #include "libgt/core/error.h"
+#include "libgt/report/canvas.h"
 
 namespace gt::report {
 namespace {
@@ -399,6 +401,74 @@ TEST(Legends, TextScaleEnlargesTitlesAndLegendsForDownscaledPictures) {
   EXPECT_EQ(two.rows - h, 2 * (one.rows - h));
   o.text_scale = 5.0;
   EXPECT_THROW(RenderLabels(img0, labels, img1, labels, o), InputError);
+}
+
+// Dark pixels in the last `margin` columns of rows [y0, y1) of columns [x0, x1): text that
+// ran past the panel's right edge and was cut there.
+int DarkAtRightEdge(const cv::Mat& m, int x0, int x1, int y0, int y1, int margin = 6) {
+  int n = 0;
+  for (int y = y0; y < y1; ++y) {
+    for (int x = x1 - margin; x < x1; ++x) {
+      const cv::Vec3b p = At(m, x, y);
+      n += (p[0] < 200 || p[1] < 200 || p[2] < 200) ? 1 : 0;
+    }
+  }
+  (void)x0;
+  return n;
+}
+
+TEST(Legends, TitlesAndLegendsFitTheirPanelsAt320x240InTheGallery) {
+  // The demo recipe's 320x240, drawn at twice the text size for the gallery's half size.
+  const double ts = 2.0;
+  const int title_h = static_cast<int>(std::lround(22 * ts));
+  // A title wider than the panel is drawn at a smaller scale whose measured width fits.
+  for (const std::string title : {"image 1: labels 1->0", "camera 0: first occupied bin",
+                                  "row v=60: depth (down) x u", "no occupied bin, free seen"}) {
+    const int width = 250;
+    const double font = FittingFontScale(title, 0.45 * ts, width);
+    int baseline = 0;
+    EXPECT_LE(cv::getTextSize(title, cv::FONT_HERSHEY_SIMPLEX, font, 1, &baseline).width, width)
+        << title;
+    EXPECT_GT(cv::getTextSize(title, cv::FONT_HERSHEY_SIMPLEX, font / 0.9, 1, &baseline).width,
+              width)
+        << title << ": shrunk more than needed";
+  }
+  EXPECT_EQ(FittingFontScale("short", 0.9, 300), 0.9);  // fits: unchanged
+
+  const int w = 320, h = 240;
+  const cv::Mat img = Checker(w, h);
+  LabelMap labels{w, h, std::vector<uint8_t>(w * h, 2)};
+  for (int k = 0; k < w * h; ++k) labels.codes[k] = static_cast<uint8_t>(k % 6);
+  LabelPictureOptions lo;
+  lo.text_scale = ts;
+  const cv::Mat lab = RenderLabels(img, labels, img, labels, lo);
+  // Both titles end inside their panel; the legend inside the picture.
+  EXPECT_EQ(DarkAtRightEdge(lab, 0, w, 0, title_h), 0);
+  EXPECT_EQ(DarkAtRightEdge(lab, w + kPanelGap, 2 * w + kPanelGap, 0, title_h), 0);
+  EXPECT_EQ(DarkAtRightEdge(lab, 0, lab.cols, title_h + h, lab.rows), 0);
+  // Each title is drawn: dark pixels in its strip.
+  EXPECT_GT(DarkAtRightEdge(lab, 0, w, 0, title_h, w / 2), 0);
+
+  // The occupancy of the half grid (160x120 rays, 2 pixels each) of both cameras.
+  auto v = TestVolume(w / 2, h / 2, 64);
+  for (size_t r = 0; r < v.occ.size(); ++r) {
+    v.known[r] = (r % 3 == 0) ? ~0ULL : 0;
+    v.occ[r] = (r % 3 == 0 && r % 2 == 0) ? 1ULL << (r % 64) : 0;
+  }
+  OccupancyPictureOptions oo;
+  oo.text_scale = ts;
+  const cv::Mat first = RenderFirstOccupied(v, oo), slice = RenderOccupancySlice(v, oo);
+  const cv::Mat occ = RenderOccupancy(v, &v, oo);
+  // Top row: "camera k: first occupied bin" over the depth picture with its colour bar and
+  // legend (white right margin from top to bottom); bottom row: "camera k: slice" over the
+  // slice, whose own title and legend end inside it.
+  for (int k = 0; k < 2; ++k) {
+    const int x0 = k * (first.cols + kPanelGap), top = title_h + first.rows;
+    EXPECT_EQ(DarkAtRightEdge(occ, x0, x0 + first.cols, 0, top), 0) << "camera " << k;
+    const int s0 = k * (slice.cols + kPanelGap);
+    EXPECT_EQ(DarkAtRightEdge(occ, s0, s0 + slice.cols, top, top + 2 * title_h), 0);
+    EXPECT_EQ(DarkAtRightEdge(occ, s0, s0 + slice.cols, top + 2 * title_h + 64 * 4, occ.rows), 0);
+  }
 }
 
 }  // namespace
