@@ -271,9 +271,31 @@ std::vector<NamedImage> MakeEvalPlots(const EvalReportData& data, const SplitRep
      << " font \"DejaVu Sans,11\" noenhanced\n"
      << "set encoding utf8\nset grid ytics lc rgb '#dddddd'\nset border 3\n"
      << "set xtics nomirror\nset ytics nomirror\nset key below horizontal\n";
+  // The curve of eval.json is sampled at --curve-step of `occgt eval` up to the largest ratio:
+  // with a step not below the data's largest ratio it is one point, which the title says
+  // (with the step that would give 10 points); x spans the points, not [0, 1].
+  size_t curve_points = 0;
+  double curve_end = 0, largest = 0;
+  for (const EvalSetView& v : data.sets) {
+    const json& cum = v.set.at("cumulative").at(def);
+    curve_points = std::max(curve_points, cum.size());
+    for (const json& pt : cum)
+      curve_end = std::max(curve_end, pt.at("max_occlusion").get<double>());
+    for (const double r : v.occlusion) largest = std::max(largest, r);
+  }
+  std::string curve_note;
+  if (curve_points < 3 && !data.sets.empty()) {
+    const double step = data.sets[0].options.value("curve_step", 0.0);
+    curve_note =
+        "; " + std::to_string(curve_points) + (curve_points == 1 ? " point" : " points") +
+        ": occgt eval --curve-step " + Num(step) + ", largest ratio " + Num(largest, 3) +
+        (largest > 0 ? "; --curve-step " + Num(std::max(0.001, largest / 10), 1) + " gives about 10"
+                     : std::string());
+  }
   gp << "set output 'eval_cumulative.png'\nset title "
      << GnuplotString("Mean pose error of the pairs with occlusion ratio <= x (" + def + ", " +
-                      estimator + ")")
+                      estimator + ")" + curve_note)
+     << "\nset xrange [0:" << Num(curve_end > 0 ? curve_end : 1, 8) << "]"
      << "\nset xlabel " << GnuplotString("occlusion ratio (" + def + ")")
      << "\nset ylabel 'mean pose error (deg)'\nset y2label 'pairs'\nset y2tics\n"
      << "set yrange [0:*]\nset y2range [0:*]\n"

@@ -390,10 +390,12 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
   std::vector<double> occ;
   for (const auto& p : split.pairs) occ.push_back(p.occlusion);
   std::sort(occ.begin(), occ.end());
-  std::string cumulative = "0 0\n";
+  // Over the range of the data as the histograms (demo ratios lie in [0, 0.06]: over [0, 1]
+  // the curve is a vertical line at the left).
+  std::string cumulative = Num(occlusion_range.first, 8) + " 0\n";
   for (size_t i = 0; i < occ.size(); ++i)
     cumulative += Num(occ[i], 8) + " " + std::to_string(i + 1) + "\n";
-  cumulative += "1 " + std::to_string(occ.size()) + "\n";
+  cumulative += Num(occlusion_range.second, 8) + " " + std::to_string(occ.size()) + "\n";
   write("cumulative.dat", cumulative);
 
   std::string scatter;
@@ -451,15 +453,17 @@ std::vector<NamedImage> MakeSplitPlots(const SplitData& split, const SplitReport
      << "\nset xlabel " << GnuplotString(occ_name) << "\nset xrange " << range_text(occlusion_range)
      << "\nset boxwidth " << Num(0.9 * (occlusion_range.second - occlusion_range.first) / bins, 8)
      << "\nplot 'occlusion_hist.dat' using 1:2 with boxes lc rgb '#d8503b' notitle\n";
-  gp << "set output 'occlusion_cumulative.png'\nset xrange [0:1]\nset title "
-     << GnuplotString("Pairs with occlusion ratio <= x, " + count) << "\nset xlabel "
-     << GnuplotString(occ_name) << "\nset ylabel 'cumulative number of pairs'\n"
+  gp << "set output 'occlusion_cumulative.png'\nset xrange " << range_text(occlusion_range)
+     << "\nset title "
+     << GnuplotString("Pairs with occlusion ratio <= x, " + count + ", over " +
+                      range_title(occlusion_range))
+     << "\nset xlabel " << GnuplotString(occ_name) << "\nset ylabel 'cumulative number of pairs'\n"
      << "set yrange [0:" << std::max<size_t>(n, 1) << "]\n"
      << "plot 'cumulative.dat' using 1:2 with steps lw 2 lc rgb '#d8503b' notitle\n";
   gp << "set output 'overlap_vs_occlusion.png'\nset title "
      << GnuplotString("Overlap vs occlusion ratio, " + count)
      << "\nset xlabel 'overlap'\nset ylabel " << GnuplotString(occ_name)
-     << "\nset yrange [0:" << (n == 0 ? "1" : "*") << "]\nset grid xtics ytics\n"
+     << "\nset xrange [0:1]\nset yrange [0:" << (n == 0 ? "1" : "*") << "]\nset grid xtics ytics\n"
      << "plot 'scatter.dat' using 1:2 with points pt 7 ps 0.6 lc rgb '#3b7dd8' notitle\n";
   gp << "set output 'pairs_per_scene.png'\nunset grid\nset grid ytics lc rgb '#dddddd'\n"
      << "set title "

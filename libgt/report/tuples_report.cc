@@ -14,6 +14,7 @@
 #include "libgt/io/codec.h"
 #include "libgt/io/file_read.h"
 #include "libgt/io/npy.h"
+#include "libgt/report/split_report.h"
 #include "libgt/shards/tar_shard.h"
 
 namespace gt::report {
@@ -266,10 +267,25 @@ std::vector<NamedImage> MakeTuplePlots(const TupleSet& set, int bins, const std:
     write(name, d.str());
   };
   hist_file("tuple_covisibility.dat", s["covisibility"]);
+  // The occlusion over the range of its data, as the pairs' histograms (HistogramRange):
+  // tuples' ratios of a few percent are one bar over [0, 1].
   std::vector<std::string> sources;
-  for (auto it = s["occlusion"].begin(); it != s["occlusion"].end(); ++it) {
-    hist_file("tuple_occlusion_" + it.key() + ".dat", it.value());
-    sources.push_back(it.key());
+  std::vector<double> all_occlusion;
+  for (const auto& [source, values] : OcclusionSources(set)) {
+    all_occlusion.insert(all_occlusion.end(), values.begin(), values.end());
+  }
+  const std::pair<double, double> occ_range = HistogramRange(all_occlusion);
+  const std::vector<double> occ_edges = HistogramEdges(occ_range, bins);
+  const double occ_width = (occ_range.second - occ_range.first) / bins;
+  for (const auto& [source, values] : OcclusionSources(set)) {
+    std::vector<int64_t> counts(static_cast<size_t>(bins), 0);
+    for (double v : values) ++counts[static_cast<size_t>(HistogramBin(v, occ_edges))];
+    std::ostringstream d;
+    for (int b = 0; b < bins; ++b) {
+      d << Num(0.5 * (occ_edges[b] + occ_edges[b + 1]), 8) << " " << counts[b] << "\n";
+    }
+    write("tuple_occlusion_" + source + ".dat", d.str());
+    sources.push_back(source);
   }
   const std::string count = std::to_string(set.tuples.size()) + " tuples";
   std::ostringstream gp;
@@ -293,13 +309,16 @@ std::vector<NamedImage> MakeTuplePlots(const TupleSet& set, int bins, const std:
   std::vector<std::string> outputs = {"tuple_sizes.png", "tuple_covisibility_hist.png"};
   if (!sources.empty()) {
     gp << "set output 'tuple_occlusion_hist.png'\nset title "
-       << GnuplotString("Occlusion of the tuples, " + count + ", " + std::to_string(bins) + " bins")
-       << "\nset xlabel 'occluded fraction'\nset ylabel 'tuples'\nset key top right\n"
-       << "set boxwidth " << Num(0.9 / bins / static_cast<double>(sources.size()), 8) << "\n"
+       << GnuplotString("Occlusion of the tuples, " + count + ", " + std::to_string(bins) +
+                        " bins over [" + Num(occ_range.first, 2) + ", " + Num(occ_range.second, 2) +
+                        "]")
+       << "\nset xlabel 'occlusion_ratio_visible'\nset ylabel 'tuples'\nset key top right\n"
+       << "set xrange [" << Num(occ_range.first, 2) << ":" << Num(occ_range.second, 2) << "]\n"
+       << "set boxwidth " << Num(0.9 * occ_width / static_cast<double>(sources.size()), 8) << "\n"
        << "plot ";
     const char* colours[] = {"#d8503b", "#8a5fbf"};
     for (size_t k = 0; k < sources.size(); ++k) {
-      const double shift = (k - 0.5 * (sources.size() - 1)) * 0.9 / bins / sources.size();
+      const double shift = (k - 0.5 * (sources.size() - 1)) * 0.9 * occ_width / sources.size();
       gp << (k ? ", " : "") << "'tuple_occlusion_" << sources[k] << ".dat' using ($1+("
          << Num(shift, 8) << ")):2 with boxes lc rgb '" << colours[k % 2] << "' title "
          << GnuplotString(sources[k] == "ground_truth" ? "N-view ground truth (views/pairs.jsonl)"

@@ -261,6 +261,89 @@ TEST(WriteSplitReport, RemovesItsOwnFilesThatThisRunDoesNotWrite) {
   }
 }
 
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) out.push_back(line);
+  return out;
+}
+
+// Occlusion ratios of a few percent (the demo's lie in [0, 0.06]): the cumulative curve and
+// the tuples' occlusion histogram span the data's range (HistogramRange), not [0, 1].
+TEST(Charts, OcclusionChartsSpanTheRangeOfTheData) {
+  const std::string dir = test::ScratchDir("report_chart_ranges");
+  SplitData split;
+  split.dir = dir;
+  split.pairs = {Pair("a", 0.01), Pair("b", 0.057)};
+  SplitReportOptions o;
+  MakeSplitPlots(split, o, dir + "/pairs");
+  const std::string script = io::ReadFileBytes(dir + "/pairs/plots.gp");
+  EXPECT_NE(script.find("set output 'occlusion_cumulative.png'\nset xrange [0:0.1]\n"),
+            std::string::npos)
+      << script;
+  const std::vector<std::string> curve = Lines(io::ReadFileBytes(dir + "/pairs/cumulative.dat"));
+  EXPECT_EQ(curve, (std::vector<std::string>{"0 0", "0.01 1", "0.057 2", "0.1 2"}));
+  // The scatter's x is the overlap: [0, 1] again.
+  EXPECT_NE(script.find("set xlabel 'overlap'\nset ylabel \"occlusion ratio (OCCLUDED / W*H)\"\n"
+                        "set xrange [0:1]"),
+            std::string::npos);
+
+  TupleSet tuples;
+  tuples.dir = dir;
+  for (double occ : {0.02, 0.07}) {
+    SplitTuple t;
+    t.scene = "s";
+    t.frame_ids = {"a", "b"};
+    t.covisibility = {1, 0.5, 0.4, 1};
+    t.graph_estimate = occ;
+    tuples.tuples.push_back(t);
+  }
+  MakeTuplePlots(tuples, 20, "gnuplot", 800, 480, dir + "/tuples");
+  const std::string tscript = io::ReadFileBytes(dir + "/tuples/tuples.gp");
+  EXPECT_NE(tscript.find("set xlabel 'occlusion_ratio_visible'"), std::string::npos) << tscript;
+  EXPECT_NE(tscript.find("20 bins over [0, 0.1]"), std::string::npos) << tscript;
+  EXPECT_NE(tscript.find("set xrange [0:0.1]"), std::string::npos) << tscript;
+  // 20 bins of 0.005 over [0, 0.1]: 0.02 starts bin 4, 0.07 bin 14.
+  const std::vector<std::string> hist =
+      Lines(io::ReadFileBytes(dir + "/tuples/tuple_occlusion_graph_estimate.dat"));
+  ASSERT_EQ(hist.size(), 20u);
+  for (size_t b = 0; b < hist.size(); ++b) {
+    const std::string count = hist[b].substr(hist[b].find(' ') + 1);
+    EXPECT_EQ(count, b == 4 || b == 14 ? "1" : "0") << hist[b];
+  }
+}
+
+// The eval's cumulative curve sampled at a --curve-step not below the largest ratio is one
+// point: the plot says so, with the step that would show the data, and spans the points.
+TEST(Charts, EvalCurveOfOnePointSaysWhy) {
+  const std::string dir = test::ScratchDir("report_eval_curve");
+  EvalReportData data;
+  data.auc_thresholds_deg = {5, 10, 20};
+  data.occlusion_definition = "image";
+  data.occlusion_bins = {0, 0.5, 1};
+  data.consistent_overlap_bins = {0, 1};
+  data.estimator_names = {"opencv-ransac"};
+  EvalSetView v;
+  v.label = "m";
+  v.eval_path = dir + "/eval.json";
+  const nlohmann::json bin = {{"pairs", 2}, {"pose", {{{"auc_percent", {1.0, 2.0, 3.0}}}}}};
+  v.set = {{"cumulative",
+            {{"image", {{{"max_occlusion", 0.05}, {"mean_error_deg", {2.5}}, {"pairs", 2}}}}}},
+           {"by_occlusion", {{"image", {bin, bin}}}},
+           {"by_consistent_overlap", {bin}}};
+  v.options = {{"curve_step", 0.05}, {"estimators", {{{"name", "opencv-ransac"}}}}};
+  v.occlusion = {0.01, 0.04};
+  data.sets = {v};
+  SplitReportOptions o;
+  MakeEvalPlots(data, o, dir);
+  const std::string script = io::ReadFileBytes(dir + "/eval.gp");
+  EXPECT_NE(script.find("1 point: occgt eval --curve-step 0.05, largest ratio 0.04; "
+                        "--curve-step 0.004 gives about 10"),
+            std::string::npos)
+      << script;
+  EXPECT_NE(script.find("set xrange [0:0.05]"), std::string::npos) << script;
+}
+
 TEST(PickWorstPairs, FailuresFirstThenLargestErrorThenLowestEpipolarPrecision) {
   EvalSetView v;
   const double inf = INFINITY;
