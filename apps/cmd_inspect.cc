@@ -167,10 +167,11 @@ void RunInspectSplit(const InspectSplitArgs& a) {
     const double n = static_cast<double>(std::max<int64_t>(1, shares->total.Total()));
     std::printf(
         "  depth source %s, %lld frames vs mesh (within %g m + %g of depth): sensor only "
-        "%.4f, mesh only %.4f, agree %.4f, disagree %.4f\n",
+        "%.4f, mesh only %.4f, agree %.4f, disagree %.4f, neither %.4f\n",
         gt::render::DepthSourceModeName(shares->source), static_cast<long long>(shares->frames),
         shares->tolerance.abs_tol_m, shares->tolerance.rel_tol, shares->total.sensor_only / n,
-        shares->total.mesh_only / n, shares->total.agree / n, shares->total.disagree / n);
+        shares->total.mesh_only / n, shares->total.agree / n, shares->total.disagree / n,
+        shares->total.neither / n);
   }
   for (const auto& p : files.written) std::printf("  wrote %s\n", p.c_str());
   for (const auto& p : files.removed) std::printf("  removed %s (an earlier run's)\n", p.c_str());

@@ -541,20 +541,27 @@ std::string DepthSharesSection(const SplitDepthShares& d) {
   std::snprintf(line, sizeof(line),
                 "<h2>Depth sources</h2>\n<p class=\"muted\">Depth source <b>%s</b>: every pixel "
                 "of the %lld frames of this split's pairs at %dx%d, sensor against the mesh "
-                "rendered, agreeing within %g m + %g of the depth (depth_sources.json).</p>\n",
+                "rendered, agreeing within %g m + %g of the depth (depth_sources.json): pixel "
+                "counts and, in brackets, their share of the pixels.</p>\n",
                 render::DepthSourceModeName(d.source), static_cast<long long>(d.frames), d.width,
                 d.height, d.tolerance.abs_tol_m, d.tolerance.rel_tol);
   h << line;
-  h << "<table><tr><th>scene</th><th>frames</th><th>sensor only</th><th>mesh only</th>"
-       "<th>agree</th><th>disagree</th></tr>\n";
+  // Every category of depth_sources.json (its names), pixel count and share of the pixels.
+  h << "<table class=\"depth-sources\"><tr><th>scene</th><th>frames</th><th>pixels</th>";
+  for (const char* name : {"sensor_only", "mesh_only", "agree", "disagree", "neither"}) {
+    h << "<th>" << name << "</th>";
+  }
+  h << "</tr>\n";
   auto row = [&](const std::string& name, int64_t frames, const render::DepthAgreement& a) {
     const double n = static_cast<double>(std::max<int64_t>(1, a.Total()));
-    std::snprintf(line, sizeof(line),
-                  "<td class=\"n\">%lld</td><td class=\"n\">%.4f</td><td class=\"n\">%.4f</td>"
-                  "<td class=\"n\">%.4f</td><td class=\"n\">%.4f</td></tr>\n",
-                  static_cast<long long>(frames), a.sensor_only / n, a.mesh_only / n, a.agree / n,
-                  a.disagree / n);
-    h << "<tr><td>" << HtmlEscape(name) << "</td>" << line;
+    h << "<tr><td>" << HtmlEscape(name) << "</td><td class=\"n\">" << frames
+      << "</td><td class=\"n\">" << a.Total() << "</td>";
+    for (const int64_t count : {a.sensor_only, a.mesh_only, a.agree, a.disagree, a.neither}) {
+      std::snprintf(line, sizeof(line), "<td class=\"n\">%lld (%.4f)</td>",
+                    static_cast<long long>(count), count / n);
+      h << line;
+    }
+    h << "</tr>\n";
   };
   row("all (split)", d.frames, d.total);
   constexpr size_t kMaxScenes = 60;

@@ -344,6 +344,44 @@ TEST(Charts, EvalCurveOfOnePointSaysWhy) {
   EXPECT_NE(script.find("set xrange [0:0.05]"), std::string::npos) << script;
 }
 
+// The depth sources table shows every category of depth_sources.json (neither too: the
+// shares add up to 1) with its pixel count.
+TEST(DepthSources, TableShowsEveryCategoryWithItsCountAndShare) {
+  SplitDepthShares d;
+  d.frames = 2;
+  d.width = 4;
+  d.height = 5;
+  d.total.sensor_only = 3;
+  d.total.mesh_only = 5;
+  d.total.agree = 20;
+  d.total.disagree = 4;
+  d.total.neither = 8;  // 40 pixels
+  d.scenes = {{"s", 2, d.total}};
+  SplitData split;
+  split.pairs = {Pair("a", 0.1)};
+  const std::string html = RenderHtmlReport(split, SplitReportOptions(), {}, {}, "", "", &d);
+  const nlohmann::ordered_json j = SplitDepthSharesJson(d);
+  std::string header = "<tr><th>scene</th><th>frames</th><th>pixels</th>";
+  std::string row = "<tr><td>all (split)</td><td class=\"n\">2</td><td class=\"n\">" +
+                    std::to_string(j["total"]["pixels"].get<int64_t>()) + "</td>";
+  double shares = 0;
+  for (const char* name : {"sensor_only", "mesh_only", "agree", "disagree", "neither"}) {
+    ASSERT_TRUE(j["total"].contains(name)) << name;
+    header += std::string("<th>") + name + "</th>";
+    const int64_t count = j["total"][name].get<int64_t>();
+    const double share = static_cast<double>(count) / j["total"]["pixels"].get<int64_t>();
+    char cell[64];
+    std::snprintf(cell, sizeof(cell), "<td class=\"n\">%lld (%.4f)</td>",
+                  static_cast<long long>(count), share);
+    row += cell;
+    shares += share;
+  }
+  EXPECT_NEAR(shares, 1.0, 1e-12);
+  EXPECT_NE(html.find(header + "</tr>"), std::string::npos) << html;
+  EXPECT_NE(html.find(row + "</tr>"), std::string::npos) << row;
+  EXPECT_NE(html.find("<tr><td>s</td>"), std::string::npos);
+}
+
 TEST(PickWorstPairs, FailuresFirstThenLargestErrorThenLowestEpipolarPrecision) {
   EvalSetView v;
   const double inf = INFINITY;
