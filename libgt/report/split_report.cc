@@ -32,9 +32,24 @@ std::string JsonScalar(const json& v);
 // A statistic that has no value (null in report.json and summary.json) on the page.
 constexpr const char* kNoValue = "—";
 
+// Where a field is: "<file>:<line>: <field path>", the path joined with dots
+// ("pairs.jsonl:3: metrics.01.overlap"); `where` is "<file>:<line>" or already holds a path.
+std::string FieldWhere(const std::string& where, const char* key) {
+  return where + (where.rfind(": ") == std::string::npos ? ": " : ".") + key;
+}
+
+// "expected <what>, got a string" (null, an object, ...), or "missing: expected <what>".
+std::string Expected(const json& j, const char* key, const std::string& what) {
+  if (!j.is_object() || !j.contains(key)) return "missing: expected " + what;
+  const json& v = j.at(key);
+  const std::string type = v.type_name();
+  return "expected " + what + ", got " +
+         (v.is_null() ? type : (v.is_object() || v.is_array() ? "an " : "a ") + type);
+}
+
 double NeedNumber(const json& j, const char* key, const std::string& where) {
   if (!j.is_object() || !j.contains(key) || !j.at(key).is_number()) {
-    throw InputError(where, std::string("expected a number \"") + key + "\"");
+    throw InputError(FieldWhere(where, key), Expected(j, key, "a number"));
   }
   return j.at(key).get<double>();
 }
@@ -43,8 +58,8 @@ double NeedNumber(const json& j, const char* key, const std::string& where) {
 double NeedFraction(const json& j, const char* key, const std::string& where) {
   const double v = NeedNumber(j, key, where);
   if (!(v >= 0 && v <= 1)) {
-    throw InputError(where, std::string("\"") + key + "\": expected a number in [0, 1], got " +
-                                JsonScalar(j.at(key)));
+    throw InputError(FieldWhere(where, key),
+                     "expected a number in [0, 1], got " + JsonScalar(j.at(key)));
   }
   return v;
 }
@@ -53,15 +68,14 @@ double NeedFraction(const json& j, const char* key, const std::string& where) {
 std::string OptionalString(const json& j, const char* key, const std::string& where) {
   if (!j.contains(key)) return "";
   if (!j.at(key).is_string()) {
-    throw InputError(
-        where, std::string("\"") + key + "\": expected a string, got " + JsonScalar(j.at(key)));
+    throw InputError(FieldWhere(where, key), "expected a string, got " + JsonScalar(j.at(key)));
   }
   return j.at(key).get<std::string>();
 }
 
 std::string NeedString(const json& j, const char* key, const std::string& where) {
-  if (!j.contains(key) || !j.at(key).is_string()) {
-    throw InputError(where, std::string("expected a string \"") + key + "\"");
+  if (!j.is_object() || !j.contains(key) || !j.at(key).is_string()) {
+    throw InputError(FieldWhere(where, key), Expected(j, key, "a string"));
   }
   return j.at(key).get<std::string>();
 }
@@ -69,10 +83,10 @@ std::string NeedString(const json& j, const char* key, const std::string& where)
 // A frame record {"id": "...", "number": n}: its id.
 std::string NeedFrameId(const json& j, const char* key, const std::string& where) {
   if (!j.contains(key) || !j.at(key).is_object()) {
-    throw InputError(where, std::string("expected a frame record \"") + key +
-                                "\": {\"id\": ..., \"number\": ...}");
+    throw InputError(FieldWhere(where, key),
+                     Expected(j, key, "a frame record {\"id\": ..., \"number\": ...}"));
   }
-  return NeedString(j.at(key), "id", where + ": " + key);
+  return NeedString(j.at(key), "id", FieldWhere(where, key));
 }
 
 std::string JsonScalar(const json& v) {

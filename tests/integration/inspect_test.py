@@ -480,9 +480,14 @@ def main():
     with open(os.path.join(build, "pairs.jsonl")) as f:
         real = [json.loads(x) for x in f]
     edits = [
-        (lambda ls: ls[1].update(key=5), r"pairs\.jsonl:2: \"key\": expected a string, got 5"),
+        (lambda ls: ls[1].update(key=5), r"pairs\.jsonl:2: key: expected a string, got 5"),
         (lambda ls: ls[2]["metrics"]["01"].update(overlap=7.5),
-         r"pairs\.jsonl:3: metrics\.01: \"overlap\": expected a number in \[0, 1\], got 7\.5"),
+         r"pairs\.jsonl:3: metrics\.01\.overlap: expected a number in \[0, 1\], got 7\.5"),
+        # The field named by its path, and what it held instead.
+        (lambda ls: ls[2]["metrics"]["01"].update(overlap="0.5"),
+         r"pairs\.jsonl:3: metrics\.01\.overlap: expected a number, got a string$"),
+        (lambda ls: ls[2]["metrics"]["10"]["counts"].pop("UNKNOWN"),
+         r"pairs\.jsonl:3: metrics\.10\.counts\.UNKNOWN: missing: expected a number$"),
         (lambda ls: ls.extend(ls[:1]),
          r"pairs\.jsonl:%d: key \S+ repeats \S+pairs\.jsonl:1 " % (len(real) + 1)),
     ]
@@ -498,7 +503,7 @@ def main():
             f.write("".join(json.dumps(x) + "\n" for x in lines_e))
         r = common.occgt("inspect", "split", edited, check=False)
         check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and
-              re.search(pattern, r.stderr) is not None,
+              re.search(pattern, r.stderr.strip()) is not None,
               f"edited pairs.jsonl /{pattern}/: exit {r.returncode}, stderr {r.stderr!r}")
     r = common.occgt("inspect", "pair", "--shard", os.path.join(build, line["shard"]), "--key",
                      "no/such_key", "--out", os.path.join(tmp, "x"), check=False)
