@@ -307,10 +307,13 @@ std::vector<std::string> SplitWarnings(const SplitData& split) {
       for (const char* reason : {"scan.no_color", "import.no_color"}) {
         if (drops.contains(reason) && drops[reason].is_number() &&
             drops[reason].get<double>() > 0) {
-          w.push_back(JsonScalar(drops[reason]) +
-                      (std::string(reason) == "scan.no_color" ? " frames were skipped"
-                                                              : " imported pairs were skipped") +
-                      " for lack of a colour image (" + reason + ").");
+          const bool one = drops[reason].get<double>() == 1;
+          const std::string what =
+              std::string(reason) == "scan.no_color"
+                  ? (one ? " frame was skipped" : " frames were skipped")
+                  : (one ? " imported pair was skipped" : " imported pairs were skipped");
+          w.push_back(JsonScalar(drops[reason]) + what + " for lack of a colour image (" + reason +
+                      ").");
         }
       }
     }
@@ -683,7 +686,7 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
          "<th>mean</th><th>max</th></tr>\n";
     for (const auto& [label, s] :
          {std::pair<const char*, Described>{"overlap", so},
-          {"visible overlap (weaker direction)", sv},
+          {"consistent_overlap_min (visible overlap, weaker direction)", sv},
           {"occlusion ratio", sc},
           {overlap_score.c_str(), sso},
           {occlusion_score.c_str(), ssc},

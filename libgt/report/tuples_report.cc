@@ -53,6 +53,17 @@ std::optional<double> OptionalFraction(const json& j, const char* key, const std
   return j[key].get<double>();
 }
 
+// A value in [0, 1] at 3 significant digits, with more when those would read as the exact
+// bound 0 or 1 that it is not (0.99958 is not "1").
+std::string RangeEnd(double v) {
+  std::string text = Num(v, 3);
+  for (int digits = 4; digits <= 17 && (text == "1" || text == "0") && v != std::stod(text);
+       ++digits) {
+    text = Num(v, digits);
+  }
+  return text;
+}
+
 json Describe(std::vector<double> v, int bins) {
   json hist = json::array();
   std::vector<int64_t> counts(static_cast<size_t>(bins), 0);
@@ -349,7 +360,7 @@ std::vector<TupleGalleryItem> MakeTupleGallery(const TupleSet& set,
           lo = std::min(lo, t.covisibility[a * n + b]);
           hi = std::max(hi, t.covisibility[a * n + b]);
         }
-    caption << " (covisibility " << Num(lo, 3) << ".." << Num(hi, 3);
+    caption << " (covisibility " << RangeEnd(lo) << ".." << RangeEnd(hi);
     if (t.ground_truth) caption << ", occluded " << Num(*t.ground_truth, 3);
     if (t.graph_estimate) caption << ", graph estimate " << Num(*t.graph_estimate, 3);
     caption << ")";
@@ -426,8 +437,10 @@ std::string RenderTuplesSection(const TupleSet& set, const json& s,
                                 const std::vector<TupleGalleryItem>& gallery, uint64_t seed) {
   std::ostringstream h;
   auto cell = [](const json& v) { return v.is_number() ? Num(v.get<double>()) : std::string("-"); };
-  h << "<h2>Tuples</h2>\n<p class=\"muted\">" << s["count"].get<int64_t>() << " N-view tuples of "
-    << s["scenes"].get<int64_t>() << " scenes (tuples.jsonl of occgt tuples)"
+  const int64_t tuple_count = s["count"].get<int64_t>(), scenes = s["scenes"].get<int64_t>();
+  h << "<h2>Tuples</h2>\n<p class=\"muted\">" << tuple_count
+    << (tuple_count == 1 ? " N-view tuple of " : " N-view tuples of ") << scenes
+    << (scenes == 1 ? " scene" : " scenes") << " (tuples.jsonl of occgt tuples)"
     << (set.has_shards ? "; their N-view shards in views/" : "; no N-view shards (views/)")
     << ". Covisibility: every entry [a][b], a &ne; b, of the tuples' matrices (visible overlap of "
        "view a in view b). Occlusion per tuple: ground truth = OCCLUDED / (VISIBLE + OCCLUDED) "

@@ -138,7 +138,7 @@ def main():
     check(text.count("data:image/jpeg;base64,") >= 3 * 2, "gallery images missing")
     # The visible overlap of the weaker direction (selection.visible_overlap's default
     # aggregate), from pairs.jsonl: its min, median, max.
-    row = re.search(r"<tr><td>visible overlap \(weaker direction\)</td>" +
+    row = re.search(r"<tr><td>consistent_overlap_min \(visible overlap, weaker direction\)</td>" +
                     r"<td class=\"n\">([^<]*)</td>" * 4, text)
     check(row is not None, "report has no visible overlap row")
     if row:

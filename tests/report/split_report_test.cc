@@ -146,6 +146,32 @@ TEST(SplitWarnings, SaysWhatMustBeKnown) {
   ASSERT_EQ(w.size(), 2u);
   EXPECT_NE(w[0].find("unregistered"), std::string::npos);
   EXPECT_EQ(w[1].rfind("4 frames were skipped", 0), 0u) << w[1];
+  split.drops = {{"scan.no_color", 1}, {"import.no_color", 1}};
+  const auto one = SplitWarnings(split);
+  ASSERT_EQ(one.size(), 3u);
+  EXPECT_EQ(one[1].rfind("1 frame was skipped for lack", 0), 0u) << one[1];
+  EXPECT_EQ(one[2].rfind("1 imported pair was skipped for lack", 0), 0u) << one[2];
+}
+
+// The tuples' words: one tuple of one scene in the singular, and a covisibility range whose
+// end is not 1 does not read as 1.
+TEST(TuplesSection, SingularAndRangeEndsThatDoNotRoundToTheBound) {
+  TupleSet set;
+  SplitTuple t;
+  t.scene = "s";
+  t.frame_ids = {"a", "b"};
+  t.covisibility = {1, 0.0704, 0.99958, 1};
+  set.tuples = {t};
+  const std::vector<TupleGalleryItem> gallery = MakeTupleGallery(set, {0}, 240);
+  ASSERT_EQ(gallery.size(), 1u);
+  EXPECT_NE(gallery[0].caption.find("(covisibility 0.0704..0.9996)"), std::string::npos)
+      << gallery[0].caption;
+  const std::string html =
+      RenderTuplesSection(set, SummarizeTuples(set, 20), {}, gallery, /*seed=*/0);
+  EXPECT_NE(html.find(">1 N-view tuple of 1 scene ("), std::string::npos) << html;
+  set.tuples[0].covisibility = {1, 0.5, 1.0, 1};
+  EXPECT_NE(MakeTupleGallery(set, {0}, 240)[0].caption.find("(covisibility 0.5..1)"),
+            std::string::npos);
 }
 
 void WriteText(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
