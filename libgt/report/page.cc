@@ -156,7 +156,8 @@ std::vector<NamedImage> RunGnuplot(const std::string& gnuplot, const std::string
       throw InputError("gnuplot",
                        "'" + gnuplot + "' not found: install gnuplot-nox (scripts/setup.sh)");
     }
-    throw InputError("gnuplot", "failed on " + (fs::path(scratch_dir) / script).string() +
+    // The script and its folder are removed with the scratch folder: not named as a path.
+    throw InputError("gnuplot", "failed on the generated " + script + " script" +
                                     (first.empty() ? "" : ": " + first));
   }
   std::vector<NamedImage> plots;

@@ -866,6 +866,7 @@ SplitReportFiles WriteSplitReport(const std::string& split_dir, const std::strin
   EvalReportData eval;
   if (!options.eval_paths.empty()) eval = LoadEvalReport(options.eval_paths, split);
   std::error_code ec;
+  const bool out_existed = fs::exists(out_dir, ec);
   fs::create_directories(out_dir, ec);
   if (ec) throw InputError(out_dir, "cannot create the report folder: " + ec.message());
   const std::string scratch = (fs::path(out_dir) / ".plots.tmp").string();
@@ -879,7 +880,9 @@ SplitReportFiles WriteSplitReport(const std::string& split_dir, const std::strin
                                    options.plot_width_px, options.plot_height_px, scratch);
     }
   } catch (...) {
-    fs::remove_all(scratch);
+    // Nothing published: no scratch files, and no empty report folder this run created.
+    fs::remove_all(scratch, ec);
+    if (!out_existed) fs::remove(out_dir, ec);  // only when empty
     throw;
   }
   fs::remove_all(scratch);

@@ -408,6 +408,31 @@ TEST(DepthSources, TableShowsEveryCategoryWithItsCountAndShare) {
   EXPECT_NE(html.find("<tr><td>s</td>"), std::string::npos);
 }
 
+// gnuplot missing or failing: an InputError that names no deleted file, and no empty report
+// folder left behind (an existing one stays, without the scratch folder).
+TEST(WriteSplitReport, GnuplotFailureLeavesNoNewFolderAndNamesNoDeletedScript) {
+  const std::string dir = test::ScratchDir("report_gnuplot_fails");
+  WriteText(dir + "/pairs.jsonl", "");
+  for (const char* gnuplot : {"/bin/false", "no-such-gnuplot-for-occgt-tests"}) {
+    SplitReportOptions o;
+    o.gnuplot = gnuplot;
+    const std::string out = dir + "/report";
+    try {
+      WriteSplitReport(dir, out, o);
+      ADD_FAILURE() << "expected an InputError with " << gnuplot;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).find(".plots.tmp"), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind("gnuplot: ", 0), 0u) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(out)) << gnuplot;
+    std::filesystem::create_directories(out);
+    EXPECT_THROW(WriteSplitReport(dir, out, o), InputError);
+    EXPECT_TRUE(std::filesystem::is_directory(out));
+    EXPECT_TRUE(std::filesystem::is_empty(out));
+    std::filesystem::remove(out);
+  }
+}
+
 TEST(PickWorstPairs, FailuresFirstThenLargestErrorThenLowestEpipolarPrecision) {
   EvalSetView v;
   const double inf = INFINITY;
