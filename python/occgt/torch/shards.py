@@ -7,8 +7,10 @@ without the GIL) and gives the byte range of every member of every sample; nothi
 kept. A sample's members are consecutive in its tar, so ``ds[i]`` reads them with one
 ``os.preadv`` into one buffer, parses the ``.npy`` members in place (the header by the C++,
 ``occgt._occgt.npy_header`` = libgt/io ``ParseNpyHeader``; the dtype by numpy; the data
-``np.frombuffer``, no copy; a compressed ``.npy.gz`` member of ``sample.compression:
-deflate``, the default, is inflated first by libdeflate in C++), the ``json`` member with
+``np.frombuffer``; a compressed ``.npy.gz`` member of ``sample.compression: deflate``, the
+default, is inflated first by libdeflate in C++ into its own buffer, an uncompressed one is
+copied out of the sample's buffer, so that a tensor kept from an item holds its own bytes,
+not the whole sample's), the ``json`` member with
 ``json`` and the images with OpenCV (``python3-opencv``), and yields the sample contract of
 ``occgt.torch`` (see its docstring). Files are opened lazily in each process, so a
 ``DataLoader`` with worker processes never shares a file handle across ``fork``.
@@ -219,7 +221,9 @@ class _ShardSplit(torch.utils.data.Dataset):  # type: ignore[type-arg]
         shape comes from."""
         if field in members:
             offset, size = members[field]
-            a = _npy(buf, offset, size, f"{where}.{field}")
+            # A copy: a view would keep the whole sample's buffer (images, depth, occupancy)
+            # alive as long as any tensor of the item is kept (a trainer caching targets).
+            a = _npy(buf, offset, size, f"{where}.{field}").copy()
             name = field
         else:  # a compressed member (recipe sample.compression: deflate): "<field>.gz"
             name = field + ".gz"
