@@ -286,6 +286,32 @@ class Indices(unittest.TestCase):
             self.assertTrue(torch.equal(a["label01"], b["label01"]))
             self.assertTrue(torch.equal(a["matches"], b["matches"]))
 
+    def test_loftr_tree_with_loftr_folder_names(self) -> None:
+        """occgt's own LoFTR tree (DIR/loftr/data: folders scene0000_00, ...) read with its
+        test.npz: scene_names=[] names every row by LoFTR's folder, and the items are the
+        split's pairs (the tree's depth is whole millimetres at 640x480, so the labels agree
+        but for a few boundary pixels; scenes.txt names the build's folders, synth_000, which
+        the tree does not have: that is an error naming the item and the folder)."""
+        split = built_split("demo")
+        index, tree = os.path.join(split, "loftr", "test.npz"), os.path.join(split, "loftr", "data")
+        ds = PairIndexDataset(index, tree, "scannet", width=320, height=240, images=False,
+                              scene_names=[])
+        again = PairIndexDataset(split, os.path.join(split, "data"), "generic", width=320,
+                                 height=240, images=False)
+        self.assertEqual(len(ds), len(again))
+        self.assertEqual({p.scene for p in ds.pairs}, {"scene0000_00", "scene0001_00"})
+        for i in (0, len(ds) - 1):
+            a, b = ds[i], again[i]
+            self.assertEqual([int(n.split("/")[1]) for n in a["pair_names"]],
+                             [int(n.split("/")[1]) for n in b["pair_names"]])
+            agree = (a["label01"] == b["label01"]).double().mean().item()
+            self.assertGreater(agree, 0.999, i)
+        named = PairIndexDataset(index, tree, "scannet", width=320, height=240, images=False)
+        with self.assertRaisesRegex(ValueError, r"^pair 0 \(synth_000: \d+, \d+\): " +
+                                    re.escape(os.path.join(tree, "synth_000")) +
+                                    r": scene folder not found$"):
+            named[0]
+
     def test_loftr_export_of_mixed_scannet_scenes(self) -> None:
         """A ScanNet-layout root (the demo's LoFTR tree, ScanNet's exported layout) holding
         scene0707_01 and myroom, built with both LoFTR export kinds: scenes.txt lists only
@@ -688,8 +714,26 @@ class CollateRules(unittest.TestCase):
             collate([self.sample(1), bad])
         other = self.sample(1)
         del other["x"]
-        with self.assertRaisesRegex(ValueError, r"samples\[1\]: expected the keys"):
+        with self.assertRaisesRegex(ValueError, r"samples\[1\]: expected the keys of samples\[0\]; "
+                                                r"missing \['x'\], extra \[\]$"):
             collate([self.sample(1), other])
+        # Tensors of other shapes: named by sample and key (was torch's bare "stack expects
+        # each tensor to be equal size").
+        wide = self.sample(1)
+        wide["x"] = torch.ones(3)
+        with self.assertRaisesRegex(ValueError, r"samples\[1\]\['x'\]: expected the shape of "
+                                                r"samples\[0\] \[2\], got \[3\]"):
+            collate([self.sample(1), wide])
+
+    def test_key_order_does_not_matter(self) -> None:
+        """The same keys in another order (a ShardDataset and a PairIndexDataset item in one
+        ConcatDataset) batch as samples[0]'s order; they were refused."""
+        a = self.sample(2)
+        b = dict(reversed(list(self.sample(1).items())))
+        self.assertNotEqual(list(a), list(b))
+        batch = collate([a, b])
+        self.assertEqual(list(batch), list(a) + ["match_mask"])
+        self.assertEqual(batch["match_mask"].tolist(), [[True, True], [True, False]])
 
 
 if __name__ == "__main__":

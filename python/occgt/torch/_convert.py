@@ -34,7 +34,10 @@ def to_tensor(value: Any) -> Any:
 
 def item_index(index: Any, count: int, noun: str, name: str = "index") -> int:
     """``index`` as an int in 0..count - 1, a negative one counting from the end (as a list
-    index); else TypeError / IndexError naming ``name`` ("index 9 out of range for 4 pairs")."""
+    index); else TypeError / IndexError naming ``name`` ("index 9 out of range for 4 pairs").
+    A bool is not an int here (as everywhere in occgt: ``ds[True]`` is a mistake, not item 1)."""
+    if isinstance(index, bool):
+        raise TypeError(f"{name}: expected an int, got bool")
     try:
         i = operator.index(index)  # an int, a numpy or 0-d torch integer; not 1.5 or "1"
     except TypeError:

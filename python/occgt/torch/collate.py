@@ -36,16 +36,26 @@ class Collate:
     def __call__(self, samples: Sequence[Dict[str, Any]]) -> Dict[str, Any]:
         if not samples:
             raise ValueError("samples: expected at least one sample")
+        # The same keys in any order (ShardDataset and PairIndexDataset items in one
+        # ConcatDataset); the batch has samples[0]'s order.
         keys = list(samples[0].keys())
         for i, s in enumerate(samples):
-            if list(s.keys()) != keys:
-                raise ValueError(
-                    f"samples[{i}]: expected the keys of samples[0] {keys}, got {list(s.keys())}")
+            if s.keys() != samples[0].keys():
+                missing = [k for k in keys if k not in s]
+                extra = [k for k in s if k not in samples[0]]
+                raise ValueError(f"samples[{i}]: expected the keys of samples[0]; missing "
+                                 f"{missing}, extra {extra}")
         batch: Dict[str, Any] = {}
         for key in keys:
             values = [s[key] for s in samples]
             if key in VARIABLE_KEYS:
                 continue
+            shapes = [tuple(v.shape) for v in values if isinstance(v, torch.Tensor)]
+            if len(shapes) == len(values) and len(set(shapes)) > 1:
+                i = next(k for k, shape in enumerate(shapes) if shape != shapes[0])
+                raise ValueError(f"samples[{i}][{key!r}]: expected the shape of samples[0] "
+                                 f"{list(shapes[0])}, got {list(shapes[i])} (samples of "
+                                 f"other sizes: resize them to one size in the datasets)")
             batch[key] = default_collate(values)
         present = [k for k in VARIABLE_KEYS if k in keys]
         if present:

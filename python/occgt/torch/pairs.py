@@ -184,8 +184,9 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         occupancy: ``None`` (none), ``"words"`` (occ0/known0/occ1/known1, int64 views of the
             uint64 words) or ``"dense"`` (occupancy0/occupancy1 uint8 [D, H/2, W/2]).
         scope: the frames fused for occupancy (``Scene.fuse``): ``"pair"``, ``"window:N"``
-            (fused for each item) or ``"scene:S"`` (fused once per scene and process, then
-            shared by the scene's pairs, as ``occgt build`` does).
+            (fused for each item) or ``"scene:S"`` (fused when an item's scene is not the
+            previous item's in this process, then shared by the scene's next pairs, as
+            ``occgt build`` does; one map is kept: take items scene by scene).
         scene_names, npz_root: see ``read_pair_index``.
         depth_source, mesh_path, fused_depth: the frames' depth (``Scene.load``):
             ``"sensor"``, or ``"mesh"``/``"fused"`` with the scene's mesh (``mesh_path``,
@@ -416,6 +417,17 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
 
     def __getitem__(self, index: int) -> Dict[str, Any]:
         index = self._index(index)
+        try:
+            return self._item(index)
+        except ValueError as e:  # a bad frame in a worker: which item of the index it was
+            if str(e).startswith(f"pair {index}:"):  # the index's own problem, named already
+                raise
+            ref = self.pairs[index]
+            frames = [f if f is not None else str(n)
+                      for f, n in ((ref.frame0, ref.number0), (ref.frame1, ref.number1))]
+            raise ValueError(f"pair {index} ({ref.scene}: {frames[0]}, {frames[1]}): {e}") from None
+
+    def _item(self, index: int) -> Dict[str, Any]:
         ref = self.pairs[index]
         scene, _ = self._scene(ref.scene)
         id0, id1 = self.frame_ids(index)
