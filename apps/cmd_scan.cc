@@ -16,6 +16,7 @@
 #include "apps/job_flags.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
+#include "libgt/core/human.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/datasets/scan.h"
 #include "libgt/pipeline/recipe.h"
@@ -117,8 +118,14 @@ nlohmann::ordered_json SceneJson(const gt::datasets::SceneSummary& s) {
   j["unusable"] = s.unusable();
   j["unusable_reasons"] = ReasonsJson(s.unusable_reasons);
   j["unusable_examples"] = ExamplesJson(s.unusable_examples);
-  j["depth_size"] = {s.depth_camera.width, s.depth_camera.height};
-  j["K"] = gt::truth::MatrixJson(s.depth_camera.K());
+  // No frame with a depth camera (a MegaDepth scene without its model): null, as colour's.
+  if (s.depth_camera.width > 0 && s.depth_camera.height > 0) {
+    j["depth_size"] = {s.depth_camera.width, s.depth_camera.height};
+    j["K"] = gt::truth::MatrixJson(s.depth_camera.K());
+  } else {
+    j["depth_size"] = nullptr;
+    j["K"] = nullptr;
+  }
   j["uniform_depth_camera"] = s.uniform_depth_camera;
   j["depth_range_m"] = {s.min_depth_m, s.max_depth_m};
   if (s.usable_with_color > 0) {
@@ -147,19 +154,25 @@ nlohmann::ordered_json SceneJson(const gt::datasets::SceneSummary& s) {
 void PrintSceneText(const gt::datasets::SceneSummary& s) {
   std::ostringstream out;
   const gt::Camera& c = s.depth_camera;
-  out << "scene " << s.name << "  (" << s.path << ")\n"
+  out << "scene " << gt::OneLine(s.name) << "  (" << gt::OneLine(s.path) << ")\n"
       << "  frames " << s.frames << ", usable " << s.usable << ", unusable " << s.unusable() << "\n"
-      << "  depth " << c.width << "x" << c.height << ", K fx=" << c.fx << " fy=" << c.fy
-      << " cx=" << c.cx << " cy=" << c.cy
-      << (s.uniform_depth_camera ? "" : " (first frame; varies)") << ", valid range ["
-      << s.min_depth_m << ", " << s.max_depth_m << "] m\n";
+      << "  depth ";
+  if (c.width > 0 && c.height > 0) {
+    out << c.width << "x" << c.height << ", K fx=" << c.fx << " fy=" << c.fy << " cx=" << c.cx
+        << " cy=" << c.cy << (s.uniform_depth_camera ? "" : " (first frame; varies)");
+  } else {
+    out << "camera unknown (no frame has one)";
+  }
+  out << ", valid range [" << s.min_depth_m << ", " << s.max_depth_m << "] m\n";
   for (const auto& [reason, count] : s.unusable_reasons) {
     out << "  unusable " << count << ": " << reason << "\n";
     const auto it = s.unusable_examples.find(reason);
     const size_t listed = it == s.unusable_examples.end() ? 0 : it->second.size();
     for (size_t i = 0; i < listed; ++i) {
       const gt::datasets::UnusableExample& e = it->second[i];
-      out << "    frame " << e.frame << (e.detail.empty() ? "" : ": " + e.detail) << "\n";
+      // One line each, whatever a path holds (a newline in a folder name as \x0a).
+      out << "    frame " << gt::OneLine(e.frame)
+          << (e.detail.empty() ? "" : ": " + gt::OneLine(e.detail)) << "\n";
     }
     if (listed > 0 && listed < count) out << "    ... and " << count - listed << " more\n";
   }
@@ -171,19 +184,21 @@ void PrintSceneText(const gt::datasets::SceneSummary& s) {
         << (s.uniform_color_camera ? "" : " (first frame; varies)");
   }
   out << "\n";
-  for (const auto& w : s.warnings) out << "  warning: " << w << "\n";
+  for (const auto& w : s.warnings) out << "  warning: " << gt::OneLine(w) << "\n";
   if (s.depth_checked) {
     out << "  depth check: " << s.depth_files_read << " read, " << s.depth_files_bad
         << " bad, mean valid fraction " << s.mean_valid_fraction << "\n";
-    for (const auto& e : s.depth_errors) out << "    " << e << "\n";
+    for (const auto& e : s.depth_errors) out << "    " << gt::OneLine(e) << "\n";
   }
   std::cout << out.str();
 }
 
 void RunScan(const ScanArgs& args) {
   if (!std::isfinite(args.reader.tum_max_dt_s) || args.reader.tum_max_dt_s < 0) {
-    throw gt::InputError("--tum-max-dt", "expected a finite number of seconds >= 0, got " +
-                                             std::to_string(args.reader.tum_max_dt_s));
+    std::ostringstream given;  // as written: -1, inf, nan (not to_string's -1.000000)
+    given << args.reader.tum_max_dt_s;
+    throw gt::InputError("--tum-max-dt",
+                         "expected a finite number of seconds >= 0, got '" + given.str() + "'");
   }
   const gt::DatasetFormat format = gt::ParseDatasetFormat(args.format, "--format");
   gt::datasets::ReaderOptions reader_options = args.reader;

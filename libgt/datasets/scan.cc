@@ -168,7 +168,7 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
   bool have_color_camera = false;
   s.depth_checked = options.check_depth;
   double fraction_sum = 0.0;
-  size_t bad_colors = 0;  // with check_depth: colour files whose header cannot be read
+  size_t bad_colors = 0;  // with check_depth: colour headers unreadable or of another size
   std::string first_bad_color;
   const auto count_unusable = [&](const Frame& f, const std::string& reason,
                                   const std::string& detail) {
@@ -232,8 +232,8 @@ SceneSummary SummarizeScene(const Scene& scene, const ScanOptions& options) {
   if (s.depth_files_read > 0) s.mean_valid_fraction = fraction_sum / s.depth_files_read;
   if (bad_colors > 0) {
     s.warnings.push_back(std::to_string(bad_colors) +
-                         " usable frame(s) have a colour file whose header cannot be read "
-                         "(first: " +
+                         " usable frame(s) have a colour file whose header cannot be read or "
+                         "gives another size than its K's (first: " +
                          first_bad_color +
                          "): a build that stores images skips them (drop scan.color_error)");
   }

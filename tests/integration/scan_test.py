@@ -126,8 +126,8 @@ with open(broken, "w") as f:
 doc = scan(bad_color, "tartanair", "--check-depth")
 s = doc["scenes"][0]
 assert s["usable"] == 24 and s["color"]["usable_with_color"] == 23, s
-assert any(w.startswith("1 usable frame(s) have a colour file whose header cannot be read "
-                        "(first: frame 000007: " + broken) and
+assert any(w.startswith("1 usable frame(s) have a colour file whose header cannot be read or "
+                        "gives another size than its K's (first: frame 000007: " + broken) and
            w.endswith("a build that stores images skips them (drop scan.color_error)")
            for w in s["warnings"]), s["warnings"]
 assert not any("have no colour image" in w for w in s["warnings"]), s["warnings"]
@@ -251,3 +251,38 @@ assert [u["id"] for u in s["unreadable"]] == [frame], s["unreadable"]
 assert "truncated PNG" in s["unreadable"][0]["error"], s["unreadable"]
 assert frame not in {f["id"] for f in s["frames"]} and len(s["frames"]) == len(depths) - 1, s["frames"]
 print("scan integration: OK")
+
+# MegaDepth, a scene without a sparse model beside one with it: its depth camera is unknown,
+# so depth_size and K are null (they were [0, 0] and a zero K, against the schema), and the
+# text says so ("depth 0x0, K fx=0 ...").
+md = common.scratch("scan_megadepth_no_model")
+for scene in ("0001", "0002"):
+    for sub in ("depths", "imgs"):
+        os.makedirs(os.path.join(md, scene, "dense0", sub), exist_ok=True)
+    open(os.path.join(md, scene, "dense0", "depths", "a.h5"), "wb").close()
+os.makedirs(os.path.join(md, "0001", "dense0", "sparse"), exist_ok=True)
+with open(os.path.join(md, "0001", "dense0", "sparse", "cameras.txt"), "w") as f:
+    f.write("1 PINHOLE 64 48 50 50 32 24\n")
+with open(os.path.join(md, "0001", "dense0", "sparse", "images.txt"), "w") as f:
+    f.write("1 1 0 0 0 0 0 0 1 a.jpg\n\n")
+doc = scan(md, "megadepth")
+got = {s["name"]: (s["depth_size"], s["K"]) for s in doc["scenes"]}
+assert got == {"0001": ([64, 48], [[50, 0, 31.5], [0, 50, 23.5], [0, 0, 1]]),
+               "0002": (None, None)}, got
+text = common.occgt("scan", md, "--format", "megadepth").stdout
+assert "  depth camera unknown (no frame has one), valid range" in text, text
+
+# A newline in a folder name stays on one line in the text output (as \x0a): a scene's
+# detail lines were split in two.
+nl = os.path.join(common.scratch("scan_newline"), "nl\nx")
+os.makedirs(os.path.join(nl, "pose"), exist_ok=True)
+with open(os.path.join(nl, "intrinsic_depth.txt"), "w") as f:
+    f.write("50 0 31.5\n0 50 23.5\n0 0 1\n")
+os.makedirs(os.path.join(nl, "intrinsic"), exist_ok=True)
+os.replace(os.path.join(nl, "intrinsic_depth.txt"), os.path.join(nl, "intrinsic", "intrinsic_depth.txt"))
+with open(os.path.join(nl, "pose", "0.txt"), "w") as f:
+    f.write("1 0 0 0\n0 1 0 0\n0 0 1 0\n")  # 12 of 16 numbers
+text = common.occgt("scan", nl, "--format", "scannet").stdout
+detail = [line for line in text.splitlines() if line.startswith("    frame 0: ")]
+assert len(detail) == 1 and "nl\\x0ax/pose/0.txt: expected 16 numbers" in detail[0], text
+assert not any(line.startswith("x/") for line in text.splitlines()), text
