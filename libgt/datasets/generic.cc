@@ -21,6 +21,18 @@ namespace {
 
 constexpr const char* kManifestName = "scene.json";
 
+// "" when `path` is a regular file or nothing is there; else what is there instead, naming
+// it ("<path>: a folder, expected a file"; a dangling link), as the folder readers say.
+std::string NotAFileProblem(const std::string& path) {
+  std::error_code ec;
+  const fs::file_status link = fs::symlink_status(path, ec);
+  if (ec || !fs::exists(link) || fs::is_regular_file(fs::status(path, ec))) return "";
+  if (fs::is_symlink(link) && !fs::exists(path, ec)) {
+    return path + ": dangling symbolic link (expected a readable file)";
+  }
+  return path + ": expected a regular file, found a folder or special file";
+}
+
 // Validation context: the manifest path and helpers that throw with the field path.
 class Validator {
  public:
@@ -277,7 +289,8 @@ Scene ParseGenericManifest(std::string_view text, const std::string& manifest,
                  "width and height go together");
       }
       int cw = 0, ch = 0;
-      std::string unreadable;  // a colour file whose header cannot be read: its error
+      // A colour file whose header cannot be read, or a path that is no file: the problem.
+      std::string unreadable = NotAFileProblem(f.color_path);
       if (cj.contains("width")) {
         cw = static_cast<int>(val.Integer(cj["width"], cp + ".width", 1, 1 << 16));
         ch = static_cast<int>(val.Integer(cj["height"], cp + ".height", 1, 1 << 16));
@@ -309,7 +322,9 @@ Scene ParseGenericManifest(std::string_view text, const std::string& manifest,
     }
 
     if (options.check_depth_files && !io::FileExists(f.depth.path)) {
-      MarkUnusable(&f, kReasonDepthMissing, f.depth.path);  // any path: not named by the id
+      // Any path (not named by the id); a folder or a dangling link there says so.
+      const std::string problem = NotAFileProblem(f.depth.path);
+      MarkUnusable(&f, kReasonDepthMissing, problem.empty() ? f.depth.path : problem);
     }
     scene.frames.push_back(std::move(f));
   }
