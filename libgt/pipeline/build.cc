@@ -78,17 +78,10 @@ Recipe ResolveDataset(const Recipe& in, const BuildOptions& options) {
 
 // The select stage of this task (its scenes not selected yet), then every completed scene's
 // selection. `complete`: every scene of the recipe is selected.
-std::map<std::string, SceneSelection> SelectStage(const Recipe& recipe,
-                                                  const datasets::DatasetReader& reader,
-                                                  const std::vector<std::string>& scenes,
-                                                  const BuildOptions& options,
-                                                  const ProgressFn& progress, bool own_folder,
-                                                  json* summary, bool* complete) {
-  std::unique_ptr<ImportList> imports;
-  if (!recipe.selection.import_pairs.path.empty()) {
-    imports = std::make_unique<ImportList>(
-        ReadImportList(recipe.selection.import_pairs.path, recipe.selection.import_pairs.format));
-  }
+std::map<std::string, SceneSelection> SelectStage(
+    const Recipe& recipe, const datasets::DatasetReader& reader,
+    const std::vector<std::string>& scenes, const ImportList* imports, const BuildOptions& options,
+    const ProgressFn& progress, bool own_folder, json* summary, bool* complete) {
   const auto t_select = Clock::now();
   std::map<std::string, SceneSelection> selections;
   int64_t selected = 0, reused = 0, bytes = 0;
@@ -109,7 +102,7 @@ std::map<std::string, SceneSelection> SelectStage(const Recipe& recipe,
         pairs::DepthCache cache(scene, recipe.width, recipe.height, options.depth_cache_mb << 20,
                                 RecipeFrameDepthOptions(recipe));
         SceneSelection& sel = selections[name];
-        sel = SelectScene(recipe, scene, &cache, imports.get());  // scene.name == name
+        sel = SelectScene(recipe, scene, &cache, imports);  // scene.name == name
         if (!options.dry_run) bytes += WriteSelection(options.out_dir, sel);
         ++selected;
       }
@@ -317,12 +310,20 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
   }
   const Recipe recipe = ResolveDataset(recipe_in, options);
   const std::unique_ptr<datasets::DatasetReader> reader = MakeRecipeReader(recipe);
-  const std::vector<std::string> scenes = ResolveScenes(recipe, *reader, nullptr);
+  // An imported pair list names the scenes (unless dataset.scenes or split_file does): each
+  // must be under the root, as a listed scene (its pairs were dropped without a count).
+  std::unique_ptr<ImportList> imports;
+  if (!recipe.selection.import_pairs.path.empty()) {
+    imports = std::make_unique<ImportList>(
+        ReadImportList(recipe.selection.import_pairs.path, recipe.selection.import_pairs.format));
+  }
+  const std::vector<std::string> scenes = ResolveScenes(recipe, *reader, imports.get());
   summary["scenes"] = static_cast<int64_t>(scenes.size());
 
   bool all_selected = false;
   const std::map<std::string, SceneSelection> selections =
-      SelectStage(recipe, *reader, scenes, options, progress, own_folder, &summary, &all_selected);
+      SelectStage(recipe, *reader, scenes, imports.get(), options, progress, own_folder, &summary,
+                  &all_selected);
   std::vector<const SelectedPair*> all;  // the global sample order
   for (const std::string& scene : scenes) {
     auto it = selections.find(scene);

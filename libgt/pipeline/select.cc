@@ -163,10 +163,21 @@ std::vector<std::string> ResolveScenes(const Recipe& r, const datasets::DatasetR
   std::sort(scenes.begin(), scenes.end());
   scenes.erase(std::unique(scenes.begin(), scenes.end()), scenes.end());
   const std::set<std::string> have(available.begin(), available.end());
+  std::vector<std::string> missing;
   for (const auto& s : scenes) {
-    if (!have.count(s)) {
-      throw InputError(r.file, "dataset: scene '" + s + "' not found under " + r.dataset.root);
-    }
+    if (!have.count(s)) missing.push_back(s);
+  }
+  if (!missing.empty()) {
+    // Where the list came from, and how many are missing (a partial download, another root).
+    const std::string source = !r.dataset.scenes.empty() ? "dataset.scenes"
+                               : !r.dataset.split_file.empty()
+                                   ? "dataset.split_file " + r.dataset.split_file
+                                   : "selection.import_pairs.path " + r.selection.import_pairs.path;
+    throw InputError(r.file, "dataset: scene '" + missing.front() + "' (of " + source +
+                                 ") not found under " + r.dataset.root + " (" +
+                                 std::to_string(missing.size()) + " of " +
+                                 std::to_string(scenes.size()) +
+                                 " scenes missing; list the scenes to build in dataset.scenes)");
   }
   if (scenes.empty())
     throw InputError(r.file, "dataset.root: no scenes found under " + r.dataset.root);
