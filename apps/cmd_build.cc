@@ -177,7 +177,8 @@ std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
   if (s.value("dry_run", false)) {
     text += name + ": dry run: " + pairs + " in " + scenes + " would be written as " +
             gt::Counted(num("shards_planned"), "shard") + ", about " +
-            HumanBytes(static_cast<double>(num("estimated_bytes"))) + "; nothing written" + took;
+            HumanBytes(static_cast<double>(num("estimated_bytes"))) +
+            "; no selection, shard or index written" + took;
   } else if (s.value("stage", "all") == "select") {
     // The pairs of the scenes selected so far (a task of several selects its own).
     const int64_t complete = num("scenes_complete");

@@ -738,10 +738,14 @@ LoadedShard LoadShard(const std::string& dir, const std::string& split, int64_t 
     }
     const PartRecord& r = out.record;
     const int64_t size = FileSize(shard);
-    if (size < 0) throw InputError(shard, "missing shard");
+    // What to do: the build (or `occgt tuples --shards`) writes a missing shard again.
+    const std::string remedy =
+        " (re-run the occgt build or tuples command that wrote the split: "
+        "it writes a missing shard again)";
+    if (size < 0) throw InputError(shard, "missing shard" + remedy);
     if (size != r.info.filesize) {
       throw InputError(shard, "size " + std::to_string(size) + " differs from the recorded " +
-                                  std::to_string(r.info.filesize));
+                                  std::to_string(r.info.filesize) + "; delete it" + remedy);
     }
     if (r.info.nsamples != planned_nsamples) {
       throw InputError(shard, "holds " + std::to_string(r.info.nsamples) +

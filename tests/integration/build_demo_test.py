@@ -361,6 +361,11 @@ def main():
     s = json.loads(r.stdout)
     assert s["dry_run"] and s["samples"] == 24 and s["shards_planned"] == 3
     assert not glob.glob(os.path.join(out_e, "*.tar")) and not os.path.exists(os.path.join(out_e, "selection"))
+    # The text says what is not written (it said "nothing written" while the folder gets its
+    # lock file and a synthetic recipe its data).
+    text = common.occgt("build", recipe, "--out", out_e, "--dry-run").stdout
+    assert re.search(r": dry run: 24 pairs in 2 scenes would be written as 3 shards, about .*; "
+                     r"no selection, shard or index written \(\d+\.\d s\)$", text.splitlines()[0]), text
 
     # A recipe that selects no pair publishes an empty split with every export (the LoFTR
     # export's intrinsics.npz without members used to fail: libzip writes no empty archive).

@@ -266,7 +266,9 @@ TEST(Split, MergeFailsNamingAMissingOrCorruptShard) {
     const std::string dir = test::ScratchDir("shards_merge_missing_tar");
     WriteSplit(dir);
     fs::remove(dir + "/train-000001.tar");
-    ExpectMergeFails(dir, "train-000001.tar: missing shard");
+    ExpectMergeFails(dir,
+                     "train-000001.tar: missing shard (re-run the occgt build or tuples "
+                     "command that wrote the split: it writes a missing shard again)");
   }
   {
     const std::string dir = test::ScratchDir("shards_merge_missing_part");
@@ -325,6 +327,7 @@ TEST(Split, MergeFailsNamingAMissingOrCorruptShard) {
     const std::string path = dir + "/train-000000.tar";
     io::WriteFileAtomic(path, io::ReadFileBytes(path).substr(0, 2048));
     ExpectMergeFails(dir, "train-000000.tar: size 2048 differs from the recorded");
+    ExpectMergeFails(dir, "; delete it (re-run the occgt build or tuples command");
     // One byte more is caught as well.
     WriteSplit(dir);
     io::WriteFileAtomic(path, io::ReadFileBytes(path) + "x");
