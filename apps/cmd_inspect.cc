@@ -180,6 +180,7 @@ void RunInspectSplit(const InspectSplitArgs& a) {
     std::fprintf(stderr, "occgt: warning: %zu gallery entries could not be read (first: %s)\n",
                  files.unreadable.size(), files.unreadable.front().c_str());
   }
+  for (const auto& w : files.warnings) std::fprintf(stderr, "occgt: warning: %s\n", w.c_str());
 }
 
 }  // namespace

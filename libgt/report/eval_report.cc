@@ -622,7 +622,7 @@ std::string RenderEvalSection(const EvalReportData& data, const std::vector<Name
   }
   h << "</table>\n<div class=\"plots\">\n";
   for (const auto& p : plots) {
-    h << "<figure>" << ImgTag(p, p.name) << "<figcaption>" << HtmlEscape(p.name)
+    h << "<figure>" << ImgTag(p, PlotAlt(p.name)) << "<figcaption>" << HtmlEscape(p.name)
       << "</figcaption></figure>\n";
   }
   h << "</div>\n";
@@ -640,8 +640,8 @@ std::string RenderEvalSection(const EvalReportData& data, const std::vector<Name
     for (const GalleryItem& item : g.items) {
       h << "<div class=\"pair eval-pair\"><h4>" << HtmlEscape(item.caption) << "</h4>\n";
       for (const auto& im : item.images) {
-        h << "<figure>" << ImgTag(im, im.name) << "<figcaption>" << HtmlEscape(im.name)
-          << "</figcaption></figure>\n";
+        h << "<figure>" << ImgTag(im, item.caption + ": " + im.name) << "<figcaption>"
+          << HtmlEscape(im.name) << "</figcaption></figure>\n";
       }
       h << "</div>\n";
     }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 
 #include "libgt/core/error.h"
 #include "libgt/io/file_read.h"
@@ -102,6 +103,25 @@ std::string HtmlEscape(const std::string& s) {
 std::string ImgTag(const NamedImage& im, const std::string& alt) {
   return "<img alt=\"" + HtmlEscape(alt) + "\" src=\"data:" + im.mime + ";base64," +
          Base64(im.bytes) + "\">";
+}
+
+std::string PlotAlt(const std::string& name) {
+  static const std::map<std::string, std::string> kAlt = {
+      {"overlap_hist.png", "Histogram of the selected pairs' overlap"},
+      {"occlusion_hist.png", "Histogram of the selected pairs' occlusion ratio"},
+      {"occlusion_cumulative.png", "Cumulative share of pairs by occlusion ratio"},
+      {"overlap_vs_occlusion.png",
+       "Scatter plot of overlap against occlusion ratio, one point a pair"},
+      {"pairs_per_scene.png", "Bar chart of the selected pairs per scene"},
+      {"eval_cumulative.png", "Mean pose error of the pairs up to each occlusion ratio"},
+      {"eval_auc_by_occlusion.png", "Pose AUC per occlusion-ratio bin, one bar a prediction set"},
+      {"eval_auc_by_overlap.png", "Pose AUC per overlap bin, one bar a prediction set"},
+      {"eval_estimator_disagreement.png", "Pose error of two estimators on each pair"},
+      {"tuple_sizes.png", "Bar chart of the tuples by number of views"},
+      {"tuple_covisibility_hist.png", "Histogram of the covisibility of the tuples' view pairs"},
+      {"tuple_occlusion_hist.png", "Histogram of the tuples' occlusion ratio"}};
+  const auto it = kAlt.find(name);
+  return it == kAlt.end() ? name : it->second;
 }
 
 std::string Base64(std::string_view bytes) {

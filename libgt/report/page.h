@@ -38,6 +38,9 @@ std::string Num(double v, int digits = 4);
 std::string GnuplotString(const std::string& s);
 // <img> with the image embedded as a data URI.
 std::string ImgTag(const NamedImage& image, const std::string& alt);
+// The alt text of a report plot: what it shows, by its file name (the name itself for one
+// not listed).
+std::string PlotAlt(const std::string& name);
 
 // Runs `gnuplot script` inside scratch_dir (the script and its data files written there
 // by the caller) and reads back `outputs` (PNG files it wrote) in that order. Throws

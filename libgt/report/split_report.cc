@@ -746,7 +746,7 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
 
   if (split.has_pairs) h << "<h2>Plots</h2>\n<div class=\"plots\">\n";
   for (const auto& p : plots) {
-    h << "<figure>" << ImgTag(p, p.name) << "<figcaption>" << HtmlEscape(p.name)
+    h << "<figure>" << ImgTag(p, PlotAlt(p.name)) << "<figcaption>" << HtmlEscape(p.name)
       << "</figcaption></figure>\n";
   }
   if (split.has_pairs) h << "</div>\n";
@@ -765,8 +765,8 @@ std::string RenderHtmlReport(const SplitData& split, const SplitReportOptions& o
     for (const auto& g : gallery) {
       h << "<div class=\"pair\"><h3>" << HtmlEscape(g.caption) << "</h3>\n";
       for (const auto& im : g.images) {
-        h << "<figure>" << ImgTag(im, im.name) << "<figcaption>" << HtmlEscape(im.name)
-          << "</figcaption></figure>\n";
+        h << "<figure>" << ImgTag(im, g.caption + ": " + im.name) << "<figcaption>"
+          << HtmlEscape(im.name) << "</figcaption></figure>\n";
       }
       h << "</div>\n";
     }
@@ -888,7 +888,14 @@ SplitReportFiles WriteSplitReport(const std::string& split_dir, const std::strin
   fs::remove_all(scratch);
   std::string eval_section;
   if (!eval.sets.empty()) {
-    eval_section = RenderEvalSection(eval, eval_plots, MakeEvalGalleries(eval, split, options));
+    const std::vector<EvalGallery> galleries = MakeEvalGalleries(eval, split, options);
+    // A gallery that could not be drawn is said on the page and to the caller (stderr).
+    for (const EvalGallery& g : galleries) {
+      for (const std::string& w : g.warnings) {
+        if (w.rfind("No gallery:", 0) == 0) files.warnings.push_back(g.set_label + ": " + w);
+      }
+    }
+    eval_section = RenderEvalSection(eval, eval_plots, galleries);
   }
 
   std::vector<GalleryItem> gallery;

@@ -184,6 +184,7 @@ struct SplitReportFiles {
   std::vector<std::string> written;     // paths written
   std::vector<std::string> removed;     // an earlier run's files this run does not write
   std::vector<std::string> unreadable;  // "<pair key>: <error>", "tuple <k>: <error>"
+  std::vector<std::string> warnings;    // "<eval set>: No gallery: ..." (also on the page)
 };
 // Every file name WriteSplitReport may write into out_dir (plots of the pairs, of the eval
 // section and of the tuples, depth_sources.json, report.html, report.json). A run removes

@@ -477,7 +477,7 @@ std::string RenderTuplesSection(const TupleSet& set, const json& s,
   }
   h << "<div class=\"plots\">\n";
   for (const auto& p : plots) {
-    h << "<figure>" << ImgTag(p, p.name) << "<figcaption>" << HtmlEscape(p.name)
+    h << "<figure>" << ImgTag(p, PlotAlt(p.name)) << "<figcaption>" << HtmlEscape(p.name)
       << "</figcaption></figure>\n";
   }
   h << "</div>\n<h3>Tuple gallery</h3>\n<p class=\"muted\">" << gallery.size()
@@ -488,8 +488,8 @@ std::string RenderTuplesSection(const TupleSet& set, const json& s,
     if (!g.note.empty()) h << "<p class=\"muted\">" << HtmlEscape(g.note) << "</p>\n";
     h << "<div class=\"views\">";
     for (const auto& im : g.views) {
-      h << "<figure>" << ImgTag(im, im.name) << "<figcaption>" << HtmlEscape(im.name)
-        << "</figcaption></figure>";
+      h << "<figure>" << ImgTag(im, g.caption + ": " + im.name) << "<figcaption>"
+        << HtmlEscape(im.name) << "</figcaption></figure>";
     }
     h << "</div></div>\n";
   }

@@ -195,6 +195,10 @@ def main():
     with open(os.path.join(work, "report3", "report.html"), encoding="utf-8") as f:
         p3 = f.read()
     assert "were not found" in p3 and "shifted.npz" in p3, "no warning for the missing predictions"
+    # ... and stderr (a script sees it; it was on the page only).
+    said = [l for l in r.stderr.splitlines() if l.startswith("occgt: warning: ")]
+    assert any(": No gallery: the predictions '" in l and "shifted.npz" in l and
+               "were not found" in l for l in said), r.stderr
     os.rename(os.path.join(preds, "shifted.gone"), os.path.join(preds, "shifted.npz"))
     # ... found next to the eval.json when the path is relative.
     rel = os.path.join(work, "rel")

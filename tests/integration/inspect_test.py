@@ -136,6 +136,13 @@ def main():
     check("http://" not in text and "https://" not in text, "report.html refers to the network")
     check("@media print" in text, "report.html has no print stylesheet")
     check(text.count("data:image/jpeg;base64,") >= 3 * 2, "gallery images missing")
+    # Alt texts: a gallery image names its pair, a plot what it shows (they were "labels",
+    # "overlap_hist.png").
+    gallery_alts = re.findall(r'<img alt="([^"]+) \(overlap [0-9.]+, occlusion [0-9.]+\): ', text)
+    check(len(gallery_alts) >= 3 * 2, f"gallery alt texts without the pair key: {gallery_alts}")
+    check('<img alt="Histogram of the selected pairs&#39; overlap"' in text or
+          "<img alt=\"Histogram of the selected pairs' overlap\"" in text,
+          "overlap_hist.png's alt text")
     # The visible overlap of the weaker direction (selection.visible_overlap's default
     # aggregate), from pairs.jsonl: its min, median, max.
     row = re.search(r"<tr><td>consistent_overlap_min \(visible overlap, weaker direction\)</td>" +

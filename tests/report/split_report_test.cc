@@ -15,6 +15,7 @@
 #include "libgt/core/error.h"
 #include "libgt/io/file_read.h"
 #include "libgt/report/eval_report.h"
+#include "libgt/report/page.h"
 #include "tests/support/test_support.h"
 
 namespace gt::report {
@@ -431,6 +432,19 @@ TEST(WriteSplitReport, GnuplotFailureLeavesNoNewFolderAndNamesNoDeletedScript) {
     EXPECT_TRUE(std::filesystem::is_empty(out));
     std::filesystem::remove(out);
   }
+}
+
+// Every plot the report can write has an alt text saying what it shows (the file name was
+// the alt text).
+TEST(SplitReportFileNames, EveryPlotHasADescription) {
+  int plots = 0;
+  for (const std::string& name : SplitReportFileNames()) {
+    if (name.size() < 4 || name.compare(name.size() - 4, 4, ".png") != 0) continue;
+    EXPECT_NE(PlotAlt(name), name) << name;
+    ++plots;
+  }
+  EXPECT_EQ(plots, 12);
+  EXPECT_EQ(PlotAlt("other.png"), "other.png");
 }
 
 TEST(PickWorstPairs, FailuresFirstThenLargestErrorThenLowestEpipolarPrecision) {
