@@ -111,6 +111,7 @@ void RunOccupancy(const OccupancyArgs& args) {
   if (setup.format == gt::DatasetFormat::kScanNetPP) {
     source.device = gt::datasets::ScanNetPPDeviceName(setup.reader.scannetpp_device);
   }
+  if (setup.format == gt::DatasetFormat::kTum) source.tum_max_dt_s = setup.reader.tum_max_dt_s;
   std::tie(source.id0, source.id1) = gt::truth::ParseFramePair(d.frames);
 
   const gt::Scene scene = ReadSetupScene(setup, d.scene);

@@ -442,6 +442,12 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
         reader_options.scannetpp_device = gt::datasets::ScanNetPPDeviceOfFrameId(id0);
       }
     }
+    if (meta.contains("tum_max_dt_s")) {  // TUM: the pair's tolerance (absent: the default)
+      if (!meta["tum_max_dt_s"].is_number() || !(meta["tum_max_dt_s"].get<double>() >= 0)) {
+        throw InputError(meta_path + ": tum_max_dt_s", "expected a number of seconds >= 0");
+      }
+      reader_options.tum_max_dt_s = meta["tum_max_dt_s"].get<double>();
+    }
     const auto reader = gt::datasets::MakeReader(format, reader_options);
     const gt::Scene scene = reader->ReadScene(dataset_root, meta["scene"].get<std::string>());
     for (int k = 0; k < 2; ++k) {

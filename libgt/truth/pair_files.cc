@@ -34,6 +34,7 @@ ordered_json SourceJson(const char* tool, const PairSource& s) {
   j["frame1"] = {{"id", s.id1}, {"number", s.number1}};
   j["resolution"] = {s.resolution.width, s.resolution.height};
   if (!s.device.empty()) j["device"] = s.device;
+  if (s.tum_max_dt_s >= 0) j["tum_max_dt_s"] = s.tum_max_dt_s;
   if (s.depth_source != render::DepthSourceMode::kSensor) {
     j["depth_source"] = render::DepthSourceModeName(s.depth_source);
   }

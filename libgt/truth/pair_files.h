@@ -80,6 +80,10 @@ struct PairSource {
   // The frames' depth source (render/frame_depth.h), recorded as "depth_source" when not the
   // sensor's (files of sensor-depth runs unchanged).
   render::DepthSourceMode depth_source = render::DepthSourceMode::kSensor;
+  // TUM: the tolerance that associated the frames' poses and colour images, recorded as
+  // "tum_max_dt_s" so that a command re-reading the folder opens the same colour images;
+  // negative for other formats.
+  double tum_max_dt_s = -1;
 };
 
 // Writes the `occgt pair` folder. meta.json's "metrics" are the labels' own (every pixel of

@@ -31,6 +31,20 @@ def main():
     common.occgt("pair", "--root", seq, "--format", "tum", *frames, "--tum-max-dt", "0.05",
                  "--out", out)
     assert os.path.isfile(os.path.join(out, "label01.npy"))
+    # meta.json records the tolerance, so `inspect pair --pair-dir` opens the colour images
+    # the pair's frames had: with the odd frames' images 0.03 s away, the default found none
+    # for frame 100.1 ("missing field image1.png").
+    with open(os.path.join(out, "meta.json")) as f:
+        assert json.load(f)["tum_max_dt_s"] == 0.05
+    with open(os.path.join(seq, "rgb.txt")) as f:
+        rgb = f.read()
+    with open(os.path.join(seq, "rgb.txt"), "w") as f:
+        f.write(rgb.replace("100.100000 rgb/", "100.130000 rgb/"))
+    pics = os.path.join(root, "pics")
+    common.occgt("inspect", "pair", "--pair-dir", out, "--root", seq, "--out", pics)
+    assert os.path.isfile(os.path.join(pics, "labels.png")), os.listdir(pics)
+    with open(os.path.join(seq, "rgb.txt"), "w") as f:
+        f.write(rgb)
     r = common.occgt("pair", "--root", seq, "--format", "generic", *frames, "--tum-max-dt",
                      "0.05", "--out", out, check=False)
     assert r.returncode == 2 and r.stderr.startswith("occgt: error: --tum-max-dt: only for the "
