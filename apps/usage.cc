@@ -314,6 +314,12 @@ std::string DescribeParseError(const CLI::App& app, const std::vector<std::strin
       }
     }
   }
+  // CLI11: "--frames: At Most 1 required but received 2" (a flag given twice).
+  const std::string at_most = ": At Most 1 required but received ";
+  if (const size_t at = what.find(at_most); at != std::string::npos) {
+    what = what.substr(0, at) + ": given " + what.substr(at + at_most.size()) +
+           " times (expected once)";
+  }
   return what + " (`" + path + " --help` lists the flags)";
 }
 
