@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <set>
+#include <map>
 
 #include "libgt/core/camera.h"
 #include "libgt/core/error.h"
@@ -280,6 +280,10 @@ std::map<int64_t, ColmapCamera> ParseColmapCamerasText(std::string_view text,
   return out;
 }
 
+std::string ColmapImageWhere(const std::string& images_path, const ColmapImage& image) {
+  return image.line_no > 0 ? images_path + ":" + std::to_string(image.line_no) : images_path;
+}
+
 std::vector<ColmapImage> ParseColmapImagesText(std::string_view text, const std::string& path) {
   std::vector<ColmapImage> out;
   const std::vector<std::string> lines = io::SplitLines(text);
@@ -300,6 +304,7 @@ std::vector<ColmapImage> ParseColmapImagesText(std::string_view text, const std:
     im.tvec = Eigen::Vector3d(v[4], v[5], v[6]);
     im.camera_id = ParseInteger(t[8], where, "CAMERA_ID");
     im.name = t[9];
+    im.line_no = static_cast<int>(i) + 1;
     out.push_back(std::move(im));
     // The POINTS2D line that follows (X Y POINT3D_ID triples, possibly empty) is not read.
     // A model written without those lines has the next image's line there: 10 fields, never
@@ -344,10 +349,15 @@ ColmapModel ReadColmapModel(const std::string& folder) {
                      "no COLMAP model (expected cameras.bin + images.bin or cameras.txt + "
                      "images.txt)");
   }
-  std::set<int64_t> ids;
+  std::map<int64_t, const ColmapImage*> by_id;
   for (const ColmapImage& im : model.images) {
-    if (!ids.insert(im.id).second) {
-      throw InputError(model.images_path, "image id " + std::to_string(im.id) + " appears twice");
+    const auto [it, fresh] = by_id.emplace(im.id, &im);
+    if (!fresh) {
+      throw InputError(
+          ColmapImageWhere(model.images_path, im),
+          "image id " + std::to_string(im.id) +
+              (it->second->line_no > 0 ? " repeats line " + std::to_string(it->second->line_no)
+                                       : std::string(" appears twice")));
     }
     if (model.cameras.count(im.camera_id) == 0) {
       throw InputError(model.images_path, "image " + std::to_string(im.id) + " (" + im.name +

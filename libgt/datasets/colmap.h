@@ -45,7 +45,10 @@ struct ColmapImage {
   Eigen::Vector3d tvec = Eigen::Vector3d::Zero();           // cam_from_world translation
   int64_t camera_id = 0;
   std::string name;  // relative to the image folder, as COLMAP wrote it
+  int line_no = 0;   // its line in images.txt (1-based); 0 when read from images.bin
 };
+// "<images path>:<line>" of an image read from images.txt, else the images path.
+std::string ColmapImageWhere(const std::string& images_path, const ColmapImage& image);
 
 struct ColmapModel {
   std::string cameras_path;  // the files read (named in messages)

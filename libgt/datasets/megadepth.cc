@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <filesystem>
 #include <map>
-#include <set>
 
 #include "libgt/core/error.h"
 #include "libgt/datasets/colmap.h"
@@ -201,16 +200,23 @@ Scene MegaDepthReader::ReadScene(const std::string& root, const std::string& sce
   for (const ColmapImage& im : model.images) images.push_back(&im);
   std::sort(images.begin(), images.end(),
             [](const ColmapImage* a, const ColmapImage* b) { return a->name < b->name; });
-  std::set<std::string> ids;
+  std::map<std::string, const ColmapImage*> image_of_id;
   const fs::path depths = fs::path(folder) / "dense0" / "depths";
   for (size_t i = 0; i < images.size(); ++i) {
     const ColmapImage& im = *images[i];
     Frame f;
     f.id = StemKeepingFolders(im.name);
-    if (!ids.insert(f.id).second) {
-      throw InputError(model.images_path, "two images share the name " + f.id +
-                                              " without extension (their depth files would "
-                                              "be the same)");
+    if (const auto [it, fresh] = image_of_id.emplace(f.id, &im); !fresh) {
+      // Named where the later of the two is, with the other's image id (and line).
+      const ColmapImage& a = *it->second;
+      const ColmapImage& later = a.line_no > im.line_no ? a : im;
+      const ColmapImage& other = &later == &im ? a : im;
+      throw InputError(ColmapImageWhere(model.images_path, later),
+                       "image " + later.name + " shares the name " + f.id +
+                           " without extension with image id " + std::to_string(other.id) +
+                           (other.line_no > 0 ? " (line " + std::to_string(other.line_no) + ")"
+                                              : std::string()) +
+                           " (their depth files would be the same)");
     }
     f.number = static_cast<int64_t>(i);
     f.depth.path = (depths / (f.id + ".h5")).string();

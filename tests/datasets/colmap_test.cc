@@ -256,5 +256,20 @@ TEST(Colmap, ImagesWithoutPointLinesAreAllRead) {
             "name without spaces), found 2 fields");
 }
 
+// An image id given twice names both lines of images.txt (it named the file only).
+TEST(Colmap, RepeatedImageIdNamesBothLines) {
+  const std::string dir = WriteModel("repeated_id", "1 PINHOLE 64 48 50 50 32 24\n",
+                                     "# images\n"
+                                     "1 1 0 0 0 0 0 0 1 a.jpg\n"
+                                     "\n"
+                                     "2 1 0 0 0 1 0 0 1 b.jpg\n"
+                                     "\n"
+                                     "1 1 0 0 0 2 0 0 1 c.jpg\n"
+                                     "\n",
+                                     "txt");
+  EXPECT_EQ(ErrorOf([&] { ReadColmapModel(dir); }),
+            dir + "/images.txt:6: image id 1 repeats line 2");
+}
+
 }  // namespace
 }  // namespace gt::datasets

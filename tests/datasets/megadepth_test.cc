@@ -185,6 +185,27 @@ TEST(MegaDepth, SceneWithoutAModelIsCountedNotDropped) {
   EXPECT_EQ(j["totals"]["unusable_reasons"]["pose: no COLMAP model of the scene"], 2);
 }
 
+// Two images whose names differ only by extension (one depth file) name the later image's
+// line and the other image (it named the file only).
+TEST(MegaDepth, ImagesSharingANameNameTheirLines) {
+  const fs::path root = test::ScratchDir("megadepth_shared_name");
+  const fs::path d = root / "0001" / "dense0";
+  WriteText(d / "sparse/cameras.txt", "1 PINHOLE 64 48 50 50 32.5 24.5\n");
+  WriteText(d / "sparse/images.txt",
+            "1 1 0 0 0 0 0 0 1 a.jpg\n\n2 1 0 0 0 1 0 0 1 b.jpg\n\n3 1 0 0 0 2 0 0 1 a.png\n\n");
+  fs::create_directories(d / "depths");
+  WriteText(d / "depths/a.h5", "");
+  try {
+    MakeReader(gt::DatasetFormat::kMegaDepth)->ReadScene(root.string(), "0001");
+    ADD_FAILURE() << "two images with one depth file";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (d / "sparse/images.txt").string() +
+                  ":5: image a.png shares the name a without extension with image id 1 (line "
+                  "1) (their depth files would be the same)");
+  }
+}
+
 json Meta(const std::string& frames, const std::string& extra) {
   const std::string out =
       test::ScratchDir("megadepth_pair_" + frames.substr(0, 1) + frames.substr(2, 1));
