@@ -21,16 +21,11 @@ namespace {
 
 constexpr const char* kManifestName = "scene.json";
 
-// "" when `path` is a regular file or nothing is there; else what is there instead, naming
-// it ("<path>: a folder, expected a file"; a dangling link), as the folder readers say.
-std::string NotAFileProblem(const std::string& path) {
-  std::error_code ec;
-  const fs::file_status link = fs::symlink_status(path, ec);
-  if (ec || !fs::exists(link) || fs::is_regular_file(fs::status(path, ec))) return "";
-  if (fs::is_symlink(link) && !fs::exists(path, ec)) {
-    return path + ": dangling symbolic link (expected a readable file)";
-  }
-  return path + ": expected a regular file, found a folder or special file";
+// "" when `path` is a regular file or nothing is there; else "<path>: <what is there>", in
+// the folder readers' words (text_parsing.h NotAFileProblem).
+std::string NotAFileDetail(const std::string& path) {
+  const std::string problem = NotAFileProblem(path);
+  return problem.empty() ? "" : path + ": " + problem;
 }
 
 // Validation context: the manifest path and helpers that throw with the field path.
@@ -290,7 +285,7 @@ Scene ParseGenericManifest(std::string_view text, const std::string& manifest,
       }
       int cw = 0, ch = 0;
       // A colour file whose header cannot be read, or a path that is no file: the problem.
-      std::string unreadable = NotAFileProblem(f.color_path);
+      std::string unreadable = NotAFileDetail(f.color_path);
       if (cj.contains("width")) {
         cw = static_cast<int>(val.Integer(cj["width"], cp + ".width", 1, 1 << 16));
         ch = static_cast<int>(val.Integer(cj["height"], cp + ".height", 1, 1 << 16));
@@ -323,7 +318,7 @@ Scene ParseGenericManifest(std::string_view text, const std::string& manifest,
 
     if (options.check_depth_files && !io::FileExists(f.depth.path)) {
       // Any path (not named by the id); a folder or a dangling link there says so.
-      const std::string problem = NotAFileProblem(f.depth.path);
+      const std::string problem = NotAFileDetail(f.depth.path);
       MarkUnusable(&f, kReasonDepthMissing, problem.empty() ? f.depth.path : problem);
     }
     scene.frames.push_back(std::move(f));

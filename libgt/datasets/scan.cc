@@ -62,10 +62,10 @@ bool PrincipalPointInImage(const Camera& c) {
   return c.cx >= -0.5 && c.cx <= c.width - 0.5 && c.cy >= -0.5 && c.cy <= c.height - 0.5;
 }
 
-// A K whose principal point lies outside its image: intrinsics of another image size
-// (ScanNet's intrinsic_color.txt of the 1296x968 original beside colour resized to 640x480;
-// a 7-Scenes depth map at 320x240 beside the 640x480 K). One line naming the K's file when
-// the reader knows it, the sizes and the frames; "" when every frame is consistent.
+// A colour K whose principal point lies outside its image: intrinsics of another image size
+// (ScanNet's intrinsic_color.txt of the 1296x968 original beside colour resized to 640x480).
+// One line naming the K's file when the reader knows it, the sizes and the frames; "" when
+// every frame with colour is consistent.
 std::string ColorPrincipalPointWarning(const Scene& scene) {
   size_t with_color = 0, outside = 0;
   const Frame* first = nullptr;

@@ -376,12 +376,8 @@ std::vector<NumberedFile> ListNumberedFiles(const std::string& folder, const std
     }
     // A frame file that cannot be read (a folder, a dangling or looping link, a socket) is
     // an error, never a silently missing frame.
-    if (!entry.is_regular_file(ec)) {
-      std::error_code lec;
-      const bool dangling = entry.is_symlink(lec) && !fs::exists(entry.path(), lec);
-      throw InputError(entry.path().string(),
-                       dangling ? "dangling symbolic link (expected a readable file)"
-                                : "expected a regular file, found a folder or special file");
+    if (const std::string problem = NotAFileProblem(entry.path().string()); !problem.empty()) {
+      throw InputError(entry.path().string(), problem);
     }
     NumberedFile f;
     f.number = std::stoll(digits);
@@ -425,6 +421,16 @@ std::vector<std::string> ListSubfolders(const std::string& folder) {
   }
   std::sort(out.begin(), out.end());
   return out;
+}
+
+std::string NotAFileProblem(const std::string& path) {
+  std::error_code ec;
+  const fs::file_status link = fs::symlink_status(path, ec);
+  if (ec || !fs::exists(link) || fs::is_regular_file(fs::status(path, ec))) return "";
+  if (fs::is_symlink(link) && !fs::exists(path, ec)) {
+    return "dangling symbolic link (expected a readable file)";
+  }
+  return "expected a regular file, found a folder or special file";
 }
 
 void RequireRoot(const std::string& root) {

@@ -183,6 +183,10 @@ std::vector<NumberedFile> MergeNumberedFiles(const std::vector<std::vector<Numbe
 
 // Immediate subfolders of `folder`, sorted by name, hidden and "._*" entries ignored.
 std::vector<std::string> ListSubfolders(const std::string& folder);
+// "" when `path` is a regular file (through links) or nothing is there; else what is there
+// instead: "dangling symbolic link (expected a readable file)" (a dangling or looping link),
+// "expected a regular file, found a folder or special file".
+std::string NotAFileProblem(const std::string& path);
 
 // Throws InputError(root, "dataset root not found") when root does not exist.
 void RequireRoot(const std::string& root);

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <sstream>
 
@@ -249,13 +250,16 @@ ScanNetPPSynthSummary WriteScanNetPPSynth(const std::string& out_dir,
     ++summary.files;
   };
   // Two runs' scenes and frames never mix (dataset.h ClaimSynthFolder).
-  std::ostringstream claim;
-  claim << "{\"layout\":\"scannetpp\",\"options\":{\"scenes\":" << options.scenes
-        << ",\"frames\":" << options.frames << ",\"dslr_width\":" << options.dslr_width
-        << ",\"dslr_height\":" << options.dslr_height
-        << ",\"iphone_width\":" << options.iphone_width
-        << ",\"iphone_height\":" << options.iphone_height << ",\"seed\":" << options.seed << "}}";
-  ClaimSynthFolder(out_dir, claim.str(), "");
+  const nlohmann::ordered_json claim = {{"layout", "scannetpp"},
+                                        {"options",
+                                         {{"scenes", options.scenes},
+                                          {"frames", options.frames},
+                                          {"dslr_width", options.dslr_width},
+                                          {"dslr_height", options.dslr_height},
+                                          {"iphone_width", options.iphone_width},
+                                          {"iphone_height", options.iphone_height},
+                                          {"seed", options.seed}}}};
+  ClaimSynthFolder(out_dir, claim.dump(), "");
   ++summary.files;
   for (int s = 0; s < options.scenes; ++s) {
     const ScanNetPPSynthScene truth = MakeScanNetPPSynthScene(options, s);
