@@ -4,6 +4,8 @@
 // Colour and depth are not registered: the colour camera gets the same K (documented).
 #include <filesystem>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "libgt/core/error.h"
 #include "libgt/datasets/readers.h"
@@ -40,27 +42,47 @@ void RequirePosesIfSequenceLike(const std::string& folder) {
 
 }  // namespace
 
+// Three shapes of root (docs/DATASETS.md "7-Scenes"): a sequence folder (one scene, named
+// after it); a scene folder of sequences (`chess`: scenes `seq-01`, ...); the dataset root, a
+// folder of scene folders (scenes `chess/seq-01`, ..., unambiguous across scenes). A root
+// that mixes the last two cannot be told apart and is refused, as one with frames of its own
+// beside sequence folders.
 std::vector<std::string> SevenScenesReader::ListScenes(const std::string& root) const {
   RequireRoot(root);
-  std::vector<std::string> out;
+  std::vector<std::string> sequences;        // root/seq-XX
+  std::vector<std::string> scene_sequences;  // root/SCENE/seq-XX
   for (const auto& name : ListSubfolders(root)) {
-    RequirePosesIfSequenceLike((fs::path(root) / name).string());
-    if (IsSequence((fs::path(root) / name).string())) out.push_back(name);
+    const fs::path sub = fs::path(root) / name;
+    RequirePosesIfSequenceLike(sub.string());
+    if (IsSequence(sub.string())) {
+      sequences.push_back(name);
+      continue;
+    }
+    for (const auto& seq : ListSubfolders(sub.string())) {
+      RequirePosesIfSequenceLike((sub / seq).string());
+      if (IsSequence((sub / seq).string())) scene_sequences.push_back(name + "/" + seq);
+    }
   }
   if (IsSequence(root)) {
     // Frames of its own beside sequence folders: which is meant cannot be told.
-    if (!out.empty()) {
+    if (!sequences.empty() || !scene_sequences.empty()) {
       throw InputError(root, "holds frame-NNNNNN.pose.txt files and sequence folders (" +
-                                 out.front() +
+                                 (sequences.empty() ? scene_sequences : sequences).front() +
                                  "): expected a sequence folder or a folder of sequences");
     }
     return {FolderName(root)};
   }
   RequirePosesIfSequenceLike(root);
-  if (out.empty()) {
+  if (!sequences.empty() && !scene_sequences.empty()) {
+    throw InputError(root, "holds sequence folders (" + sequences.front() +
+                               ") beside scene folders of sequences (" + scene_sequences.front() +
+                               "): expected a scene folder (chess) or the dataset root holding "
+                               "scene folders");
+  }
+  if (sequences.empty() && scene_sequences.empty()) {
     throw InputError(root, "no 7-Scenes sequence found (expected frame-NNNNNN.pose.txt files)");
   }
-  return out;
+  return sequences.empty() ? scene_sequences : sequences;
 }
 
 Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& scene_name) const {
@@ -82,7 +104,11 @@ Scene SevenScenesReader::ReadScene(const std::string& root, const std::string& s
   Eigen::Matrix3d K;
   K << 585, 0, 320, 0, 585, 240, 0, 0, 1;
   const fs::path abs_folder = fs::absolute(folder).lexically_normal();
-  for (const fs::path& dir : {abs_folder, abs_folder.parent_path()}) {
+  // camera-intrinsics.txt in the sequence folder, its scene folder, or the dataset root.
+  std::vector<fs::path> k_dirs = {abs_folder, abs_folder.parent_path()};
+  if (scene_name.find('/') != std::string::npos)
+    k_dirs.push_back(abs_folder.parent_path().parent_path());
+  for (const fs::path& dir : k_dirs) {
     const std::string p = (dir / "camera-intrinsics.txt").string();
     if (io::FileExists(p)) {
       K = ReadIntrinsicsText(p);

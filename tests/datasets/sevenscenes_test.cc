@@ -261,5 +261,58 @@ TEST(SevenScenes, BadPoseValuesNameFileAndLine) {
   }
 }
 
+// The dataset root as the release unzips it (7scenes/chess/seq-01, 7scenes/fire/seq-01):
+// every sequence of every scene, named <scene>/<sequence> so that the two seq-01 do not
+// collide; camera-intrinsics.txt found at the dataset root. A root mixing sequence folders
+// with scene folders of sequences, or holding no sequence at any depth, is refused.
+TEST(SevenScenes, DatasetRootNamesSceneAndSequence) {
+  const std::string root = test::ScratchDir("7s_dataset_root");
+  const auto sequence = [](const std::string& dir, const std::string& translation) {
+    WriteFileAtomic(dir + "/frame-000000.pose.txt",
+                    "1 0 0 " + translation + "\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  };
+  sequence(root + "/chess/seq-01", "1");
+  sequence(root + "/chess/seq-02", "2");
+  sequence(root + "/fire/seq-01", "3");
+  WriteFileAtomic(root + "/fire/TestSplit.txt", "sequence1\n");  // files beside are ignored
+  WriteFileAtomic(root + "/camera-intrinsics.txt", "500 0 321\n0 501 239\n0 0 1\n");
+  ReaderOptions options;
+  options.check_depth_files = false;
+  const auto reader = MakeReader(gt::DatasetFormat::kSevenScenes, options);
+  const std::vector<std::string> names = ListSceneNames(*reader, root);
+  EXPECT_EQ(names, (std::vector<std::string>{"chess/seq-01", "chess/seq-02", "fire/seq-01"}));
+  const std::vector<double> tx = {1, 2, 3};
+  for (size_t i = 0; i < names.size(); ++i) {
+    const Scene s = reader->ReadScene(root, names[i]);
+    EXPECT_EQ(s.name, names[i]);
+    ASSERT_EQ(s.frames.size(), 1u);
+    EXPECT_DOUBLE_EQ(s.frames[0].world_from_cam.translation().x(), tx[i]) << names[i];
+    EXPECT_EQ(s.frames[0].depth_camera.fx, 500.0);  // the dataset root's K
+    EXPECT_EQ(s.frames[0].depth_camera.cy, 239.0);
+  }
+  // A scene folder's own K comes first.
+  WriteFileAtomic(root + "/fire/camera-intrinsics.txt", "400 0 320\n0 400 240\n0 0 1\n");
+  EXPECT_EQ(reader->ReadScene(root, "fire/seq-01").frames[0].depth_camera.fx, 400.0);
+  EXPECT_EQ(reader->ReadScene(root, "chess/seq-01").frames[0].depth_camera.fx, 500.0);
+  // The scene folder as root keeps its names.
+  EXPECT_EQ(ListSceneNames(*reader, root + "/chess"),
+            (std::vector<std::string>{"seq-01", "seq-02"}));
+
+  sequence(root + "/seq-09", "0");  // a sequence beside the scene folders
+  try {
+    reader->ListScenes(root);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), root);
+    EXPECT_NE(std::string(e.what()).find("sequence folders (seq-09) beside scene folders of "
+                                         "sequences (chess/seq-01)"),
+              std::string::npos)
+        << e.what();
+  }
+  const std::string none = test::ScratchDir("7s_dataset_root_none");
+  WriteFileAtomic(none + "/chess/notes.txt", "x\n");
+  EXPECT_THROW(reader->ListScenes(none), InputError);
+}
+
 }  // namespace
 }  // namespace gt::datasets
