@@ -38,7 +38,8 @@ sys.path.insert(0, os.path.dirname(__file__))
 import common  # noqa: E402
 
 import occgt  # noqa: E402
-from occgt.torch import Collate, PairIndexDataset, PairRef, collate, read_pair_index  # noqa: E402
+from occgt.torch import (Collate, PairIndex, PairIndexDataset, PairRef, collate,  # noqa: E402
+                         read_pair_index)
 
 _SPLITS: Dict[str, str] = {}
 
@@ -258,7 +259,7 @@ class Indices(unittest.TestCase):
     def test_jsonl_selection_and_loftr_export_agree(self) -> None:
         split = built_split("demo")
         from_pairs = read_pair_index(os.path.join(split, "pairs.jsonl"))
-        self.assertEqual(read_pair_index(split), from_pairs)
+        self.assertEqual(list(read_pair_index(split)), list(from_pairs))
         with open(os.path.join(split, "pairs.jsonl"), encoding="utf-8") as f:
             lines = [json.loads(line) for line in f]
         self.assertEqual([(r.scene, r.frame0, r.frame1) for r in from_pairs],
@@ -404,8 +405,8 @@ class Indices(unittest.TestCase):
         want_sorted = [PairRef("scene0001_00", None, None, 0, 15, 0.4),
                        PairRef("scene0001_00", None, None, 15, 45, 0.7),
                        PairRef("scene0002_01", None, None, 30, 60, 0.5)]
-        self.assertEqual(read_pair_index(out), want_sorted)
-        self.assertEqual(read_pair_index(os.path.join(out, "train_list.txt")),
+        self.assertEqual(list(read_pair_index(out)), want_sorted)
+        self.assertEqual(list(read_pair_index(os.path.join(out, "train_list.txt"))),
                          want_sorted[2:] + want_sorted[:2])
         self.assertEqual([r.scene for r in read_pair_index(os.path.join(out, "scene0001_00.npz"),
                                                            scene_names=["a", "b"])], ["b", "b"])
@@ -416,6 +417,61 @@ class Indices(unittest.TestCase):
         self.assertEqual([r.scene for r in read_pair_index(os.path.join(out, "scene0005_00.npz"),
                                                            scene_names=["a", "b"])],
                          ["scene0005_00"])
+
+    def test_pair_index_columns(self) -> None:
+        """PairIndex holds an index as NumPy columns (the paper's 230 M pairs as a list of
+        PairRef took ~430 bytes a pair and were copied into every forked worker): item i,
+        slices, iteration, concatenation and PairRef lists round-trip exactly, and a LoFTR
+        npz costs at most 20 bytes a pair whatever its length."""
+        refs = [PairRef("a", "f1", "f2", 1, 2, 0.5), PairRef("b", None, None, 7, 2**40, None),
+                PairRef("a", "f2", None, None, 3, -1.25), PairRef("c", "f1", "f9")]
+        index = PairIndex.from_refs(refs)
+        self.assertEqual(list(index), refs)
+        self.assertEqual([index[k] for k in range(-4, 4)], refs + refs)
+        self.assertEqual(list(index[1:3]), refs[1:3])
+        self.assertEqual(list(index[::-2]), refs[::-2])
+        self.assertEqual((index.scenes, index.scene.tolist()), (["a", "b", "c"], [0, 1, 0, 2]))
+        self.assertEqual(index.frame_ids, ["f1", "f2", "f9"])
+        with self.assertRaisesRegex(IndexError, "pairs"):
+            index[4]  # pylint: disable=pointless-statement
+        with self.assertRaises(ValueError):  # the columns are shared, not to be written
+            index.scene[0] = 1
+        joined = PairIndex.concatenate([index, PairIndex.from_refs(refs[::-1]),
+                                        PairIndex.from_refs([PairRef("d", None, None, 4, 5)])])
+        self.assertEqual(list(joined), refs + refs[::-1] + [PairRef("d", None, None, 4, 5)])
+        self.assertEqual(joined.scenes, ["a", "b", "c", "d"])
+        with self.assertRaisesRegex(ValueError, r"pairs\[0\]: frame number 9223372036854775808 "
+                                    "is not an int64"):
+            PairIndex.from_refs([PairRef("a", None, None, 2**63, 1)])
+        # A LoFTR npz: each row's scene as the list reader named it, numbers exact.
+        out = common.scratch("pair_dataset_columns")
+        rng = np.random.default_rng(3)
+        n = 200_000
+        name = np.stack([rng.integers(0, 40, n), rng.integers(0, 3, n),
+                         rng.integers(0, 6000, n), rng.integers(0, 6000, n)], 1)
+        score = rng.random(n).astype(np.float32)
+        path = os.path.join(out, "big.npz")
+        np.savez(path, name=name, score=score)
+        names = [f"room{k}" for k in range(10)]
+        big = read_pair_index(path, scene_names=names)
+        self.assertEqual(len(big), n)
+        columns = (big.scene, big.number0, big.number1, big.score)
+        self.assertLessEqual(sum(c.nbytes for c in columns if c is not None), 16 * n)
+        self.assertIsNone(big.frame_ids)
+        want = [names[s] if sub == 0 and s < 10 else f"scene{s:04d}_{sub:02d}"
+                for s, sub in name[:, :2].tolist()]
+        self.assertEqual([big.scenes[k] for k in big.scene.tolist()], want)
+        self.assertEqual(big.scenes, list(dict.fromkeys(want)))  # each once, first seen first
+        self.assertEqual(big.number0.tolist(), name[:, 2].tolist())
+        self.assertEqual(big.number1.tolist(), name[:, 3].tolist())
+        for k in (0, 1, n // 2, n - 1):
+            self.assertEqual(big[k], PairRef(want[k], None, None, int(name[k, 2]),
+                                             int(name[k, 3]), float(score[k])))
+        # Two (s, sub) naming one scene (scenes.txt names scene 0 as ScanNet's row (7, 1)).
+        path = os.path.join(out, "alias.npz")
+        np.savez(path, name=np.array([[7, 1, 0, 1], [0, 0, 2, 3]]))
+        alias = read_pair_index(path, scene_names=["scene0007_01"])
+        self.assertEqual((alias.scenes, alias.scene.tolist()), (["scene0007_01"], [0, 0]))
 
     def test_bad_indices(self) -> None:
         out = common.scratch("pair_dataset_bad")
@@ -490,12 +546,14 @@ class Indices(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, "^" + path + r":name\[1\]: expected scene, "
                                     r"sub-scene and frame numbers >= 0, got \[-1, 0, 3, 4\]"):
             read_pair_index(path)
-        # uint64 names beyond int64 stay what they are (they wrapped to negative numbers).
+        # uint64 names beyond int64 are refused (they wrapped to negative numbers; no frame
+        # of a scene has such a number).
         path = os.path.join(out, "uint64.npz")
-        np.savez(path, name=np.array([[2**63, 0, 2**63 + 1, 4]], np.uint64))
-        ref = read_pair_index(path)[0]
-        self.assertEqual((ref.scene, ref.number0, ref.number1),
-                         (f"scene{2**63:04d}_00", 2**63 + 1, 4))
+        np.savez(path, name=np.array([[1, 0, 2, 4], [2**63, 0, 2**63 + 1, 4]], np.uint64))
+        with self.assertRaisesRegex(ValueError, "^" + path + r":name\[1\]: expected numbers "
+                                    r"below 2\^63, got \[9223372036854775808, 0, "
+                                    r"9223372036854775809, 4\]$"):
+            read_pair_index(path)
 
     def test_refs_root_index_and_pickle(self) -> None:
         """A list of tuples instead of PairRef, a missing root (the readers open it lazily:

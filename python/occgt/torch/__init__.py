@@ -33,7 +33,7 @@ from __future__ import annotations
 
 from ._convert import to_tensor
 from .collate import VARIABLE_KEYS, Collate, collate
-from .pairs import PairIndexDataset, PairRef, read_pair_index
+from .pairs import PairIndex, PairIndexDataset, PairRef, read_pair_index
 from .shards import ShardDataset
 from .supervision import loftr_supervision
 from .tuple_shards import TupleShardDataset
@@ -43,6 +43,7 @@ __all__ = [
     "TRACK_STATE_PADDED",
     "VARIABLE_KEYS",
     "Collate",
+    "PairIndex",
     "PairIndexDataset",
     "PairRef",
     "ShardDataset",

@@ -11,7 +11,8 @@ import dataclasses
 import json
 import operator
 import os
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import (Any, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple, Union,
+                    overload)
 
 import cv2
 import numpy as np
@@ -56,7 +57,181 @@ def _read_lines(path: str) -> List[str]:
         return [line.strip() for line in f if line.strip() and not line.startswith("#")]
 
 
-def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> List[PairRef]:
+# A frame number the index does not give (a PairRef's None) in an int64 number column.
+_NO_NUMBER = int(np.iinfo(np.int64).min)
+
+
+def _number_column(values: np.ndarray) -> np.ndarray:
+    """Frame numbers as int32 when they fit (8 bytes a pair, not 16), else int64."""
+    if values.size and int(values.min()) >= 0 and int(values.max()) < 2**31:
+        return values.astype(np.int32)
+    return values.astype(np.int64)
+
+
+class PairIndex(Sequence[PairRef]):
+    """The pairs of an index as NumPy columns, in the index's order; item i is a PairRef, made
+    when asked (a slice is a PairIndex).
+
+    At the paper's scale (230 M pairs) a list of Python objects does not fit in memory (about
+    430 bytes a PairRef) and a forked DataLoader worker copies it page by page as it touches
+    reference counts; the columns take 16 to 20 bytes a pair for a LoFTR npz index (scene
+    int32, two frame numbers int32 when they fit, the file's float score), 20 for pairs.jsonl
+    (scene, two frame-id indices, two numbers; each frame id is stored once), and forked
+    workers share them. Columns (read-only arrays, one entry a pair):
+
+    - ``scenes``: the scene names, each once, in order of first appearance; ``scene``: int32
+      index into ``scenes`` (a sampler that takes pairs scene by scene groups on it);
+    - ``frame_ids`` (a list of the frame ids, each once) with ``id0``/``id1`` int32 indices
+      into it (-1: the pair names that frame by number), or None when no pair names a frame
+      by id;
+    - ``number0``/``number1``: frame numbers (int64 min: not given), or None when no pair
+      gives numbers;
+    - ``score``: the index's float scores (float64 for integer ones), NaN for a pair without
+      one, or None when no pair has a score.
+    """
+
+    def __init__(self, scenes: Sequence[str], scene: np.ndarray, *,
+                 frame_ids: Optional[Sequence[str]] = None, id0: Optional[np.ndarray] = None,
+                 id1: Optional[np.ndarray] = None, number0: Optional[np.ndarray] = None,
+                 number1: Optional[np.ndarray] = None,
+                 score: Optional[np.ndarray] = None) -> None:
+        self.scenes: List[str] = list(scenes)
+        self.scene = np.asarray(scene, dtype=np.int32)
+        self.frame_ids = None if frame_ids is None else list(frame_ids)
+        self.id0, self.id1 = id0, id1
+        self.number0, self.number1, self.score = number0, number1, score
+        n = len(self.scene)
+        for name in ("id0", "id1", "number0", "number1", "score"):
+            column = getattr(self, name)
+            if column is not None and len(column) != n:
+                raise ValueError(f"PairIndex.{name}: {len(column)} entries for {n} pairs")
+        if (id0 is None) != (frame_ids is None) or (id0 is None) != (id1 is None):
+            raise ValueError("PairIndex: frame_ids, id0 and id1 go together")
+        if (number0 is None) != (number1 is None):
+            raise ValueError("PairIndex: number0 and number1 go together")
+        for column in (self.scene, id0, id1, number0, number1, score):
+            if column is not None:
+                column.flags.writeable = False
+
+    @classmethod
+    def from_refs(cls, refs: Iterable[PairRef]) -> "PairIndex":
+        """The columns of a sequence of PairRef (TypeError naming the first other item)."""
+        scenes: Dict[str, int] = {}
+        frames: Dict[str, int] = {}
+        scene: List[int] = []
+        id0: List[int] = []
+        id1: List[int] = []
+        number0: List[int] = []
+        number1: List[int] = []
+        score: List[float] = []
+        for k, ref in enumerate(refs):
+            if not isinstance(ref, PairRef):
+                raise TypeError(f"pairs[{k}]: expected an occgt.torch.PairRef, got "
+                                f"{type(ref).__name__}")
+            scene.append(scenes.setdefault(ref.scene, len(scenes)))
+            id0.append(-1 if ref.frame0 is None else frames.setdefault(ref.frame0, len(frames)))
+            id1.append(-1 if ref.frame1 is None else frames.setdefault(ref.frame1, len(frames)))
+            for out, number in ((number0, ref.number0), (number1, ref.number1)):
+                if number is not None and not -2**63 < number < 2**63:
+                    raise ValueError(f"pairs[{k}]: frame number {number} is not an int64")
+                out.append(_NO_NUMBER if number is None else number)
+            score.append(np.nan if ref.score is None else ref.score)
+        any_ids = any(i >= 0 for i in id0) or any(i >= 0 for i in id1)
+        any_numbers = any(n != _NO_NUMBER for n in number0 + number1)
+        return cls(list(scenes), np.array(scene, dtype=np.int32),
+                   frame_ids=list(frames) if any_ids else None,
+                   id0=np.array(id0, dtype=np.int32) if any_ids else None,
+                   id1=np.array(id1, dtype=np.int32) if any_ids else None,
+                   number0=np.array(number0, dtype=np.int64) if any_numbers else None,
+                   number1=np.array(number1, dtype=np.int64) if any_numbers else None,
+                   score=(np.array(score, dtype=np.float64)
+                          if any(x == x for x in score) else None))
+
+    @classmethod
+    def concatenate(cls, parts: Sequence["PairIndex"]) -> "PairIndex":
+        """The pairs of ``parts`` one after the other (scenes and frame ids merged by name)."""
+        if len(parts) == 1:
+            return parts[0]
+        scenes: Dict[str, int] = {}
+        frames: Dict[str, int] = {}
+        scene: List[np.ndarray] = []
+        ids0: List[np.ndarray] = []
+        ids1: List[np.ndarray] = []
+        numbers0: List[np.ndarray] = []
+        numbers1: List[np.ndarray] = []
+        scores: List[np.ndarray] = []
+        any_ids = any(p.frame_ids is not None for p in parts)
+        any_numbers = any(p.number0 is not None for p in parts)
+        any_score = any(p.score is not None for p in parts)
+        for p in parts:
+            n = len(p)
+            remap = np.array([scenes.setdefault(name, len(scenes)) for name in p.scenes],
+                             dtype=np.int32)
+            scene.append(remap[p.scene] if n else p.scene)
+            if any_ids:
+                if p.frame_ids is None or p.id0 is None or p.id1 is None:
+                    ids0.append(np.full(n, -1, np.int32))
+                    ids1.append(np.full(n, -1, np.int32))
+                else:
+                    # -1 (no id) maps to -1: the table's last entry.
+                    table = np.array([frames.setdefault(f, len(frames)) for f in p.frame_ids]
+                                     + [-1], dtype=np.int32)
+                    ids0.append(table[p.id0])
+                    ids1.append(table[p.id1])
+            if any_numbers:
+                for out, column in ((numbers0, p.number0), (numbers1, p.number1)):
+                    out.append(np.full(n, _NO_NUMBER, np.int64) if column is None
+                               else column.astype(np.int64))
+            if any_score:
+                scores.append(np.full(n, np.nan) if p.score is None else p.score)
+        numbers = (_number_column(np.concatenate(numbers0 + numbers1)) if any_numbers
+                   else None)
+        total = sum(len(p) for p in parts)
+        return cls(list(scenes), np.concatenate(scene) if scene else np.zeros(0, np.int32),
+                   frame_ids=list(frames) if any_ids else None,
+                   id0=np.concatenate(ids0) if any_ids else None,
+                   id1=np.concatenate(ids1) if any_ids else None,
+                   number0=None if numbers is None else numbers[:total],
+                   number1=None if numbers is None else numbers[total:],
+                   score=np.concatenate(scores) if any_score else None)
+
+    def __len__(self) -> int:
+        return len(self.scene)
+
+    @overload
+    def __getitem__(self, i: int) -> PairRef: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> "PairIndex": ...
+
+    def __getitem__(self, i: Union[int, slice]) -> Union[PairRef, "PairIndex"]:
+        if isinstance(i, slice):
+            def cut(column: Optional[np.ndarray]) -> Optional[np.ndarray]:
+                return None if column is None else column[i]
+            return PairIndex(self.scenes, self.scene[i], frame_ids=self.frame_ids,
+                             id0=cut(self.id0), id1=cut(self.id1), number0=cut(self.number0),
+                             number1=cut(self.number1), score=cut(self.score))
+        k = item_index(i, len(self), "pairs")
+        frames: List[Optional[str]] = [None, None]
+        if self.frame_ids is not None and self.id0 is not None and self.id1 is not None:
+            frames = [None if j < 0 else self.frame_ids[j]
+                      for j in (int(self.id0[k]), int(self.id1[k]))]
+        numbers: List[Optional[int]] = [None, None]
+        if self.number0 is not None and self.number1 is not None:
+            numbers = [None if n == _NO_NUMBER else n
+                       for n in (int(self.number0[k]), int(self.number1[k]))]
+        score = None if self.score is None else float(self.score[k])
+        return PairRef(self.scenes[int(self.scene[k])], frames[0], frames[1], numbers[0],
+                       numbers[1], None if score is None or score != score else score)
+
+    def __iter__(self) -> Iterator[PairRef]:
+        return (self[k] for k in range(len(self)))
+
+    def __repr__(self) -> str:
+        return f"PairIndex({len(self)} pairs in {len(self.scenes)} scenes)"
+
+
+def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> PairIndex:
     """LoFTR's scene_info npz (``name`` [N, 4], ``score``) or test.npz (``name``,
     ``rel_pose``): name = (scene number, sub-scene, frame number 0, frame number 1).
 
@@ -84,23 +259,48 @@ def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> List[PairRef]:
         r = int(np.argwhere(name < 0)[0][0])
         raise ValueError(f"{path}:name[{r}]: expected scene, sub-scene and frame numbers >= 0, "
                          f"got {name[r].tolist()}")
+    if name.size and int(name.max()) >= 2**63:  # uint64 beyond int64: not a frame number
+        r = int(np.argwhere(name >= np.uint64(2**63))[0][0])
+        raise ValueError(f"{path}:name[{r}]: expected numbers below 2^63, got {name[r].tolist()}")
     if scene_names is None:
         names_file = _scene_names_file(path)
         scene_names = _read_lines(names_file) if names_file else None
-    refs = []
-    for r, (s, sub, n0, n1) in enumerate(name.tolist()):  # Python ints: uint64 stays exact
+    # Each (s, sub) once, in order of first appearance.
+    scene_sub = name[:, :2].astype(np.int64)
+    if not name.size or int(scene_sub.max()) < 2**31:  # one int64 key a row: a faster unique
+        packed, first, inverse = np.unique((scene_sub[:, 0] << 32) | scene_sub[:, 1],
+                                           return_index=True, return_inverse=True)
+        keys = np.stack([packed >> 32, packed & (2**32 - 1)], axis=1)
+    else:
+        keys, first, inverse = np.unique(scene_sub, axis=0, return_index=True,
+                                         return_inverse=True)
+    order = np.argsort(first, kind="stable")
+    rank = np.empty(len(order), np.int32)
+    rank[order] = np.arange(len(order), dtype=np.int32)
+    scenes: Dict[str, int] = {}  # two keys may name one scene (scenes.txt and ScanNet's name)
+    scene_of_key = np.empty(len(order), np.int32)
+    for k, (s, sub) in enumerate(keys[order].tolist()):
         if scene_names is not None and sub == 0 and s < len(scene_names):
             scene = scene_names[s]
         else:
             scene = f"scene{s:04d}_{sub:02d}"
-        refs.append(PairRef(scene, None, None, int(n0), int(n1),
-                            None if score is None else float(score[r])))
-    return refs
+        scene_of_key[k] = scenes.setdefault(scene, len(scenes))
+    numbers = _number_column(name[:, 2:].astype(np.int64))
+    if score is not None and score.dtype.kind != "f":
+        score = score.astype(np.float64)
+    return PairIndex(list(scenes), scene_of_key[rank[inverse.reshape(-1)]],
+                     number0=numbers[:, 0].copy(), number1=numbers[:, 1].copy(), score=score)
 
 
-def _read_jsonl(path: str) -> List[PairRef]:
+def _read_jsonl(path: str) -> PairIndex:
     """occgt's pairs.jsonl or selection/<scene>.jsonl lines (schemas/pairs_line.schema.json)."""
-    refs = []
+    scenes: Dict[str, int] = {}
+    frames: Dict[str, int] = {}
+    scene: List[int] = []
+    id0: List[int] = []
+    id1: List[int] = []
+    number0: List[int] = []
+    number1: List[int] = []
     with open(path, "rb") as f:
         for number, raw in enumerate(f, 1):
             try:
@@ -115,17 +315,28 @@ def _read_jsonl(path: str) -> List[PairRef]:
                                           ("frame1.number", f1["number"], int)):
                     if not isinstance(value, kind) or isinstance(value, bool):
                         raise TypeError(f"{what}: expected {kind.__name__}, got {value!r}")
-                refs.append(PairRef(p["scene"], f0["id"], f1["id"], f0["number"], f1["number"]))
+                for what, value in (("frame0.number", f0["number"]),
+                                    ("frame1.number", f1["number"])):
+                    if not -2**63 < value < 2**63:
+                        raise TypeError(f"{what}: expected an int64, got {value!r}")
             except (ValueError, KeyError, TypeError) as e:
                 raise ValueError(f"{path}:{number}: expected a pair line with scene, frame0, "
                                  f"frame1 as {{id, number}} ({type(e).__name__}: {e})") from None
-    return refs
+            scene.append(scenes.setdefault(p["scene"], len(scenes)))
+            id0.append(frames.setdefault(f0["id"], len(frames)))
+            id1.append(frames.setdefault(f1["id"], len(frames)))
+            number0.append(f0["number"])
+            number1.append(f1["number"])
+    numbers = _number_column(np.array(number0 + number1, dtype=np.int64))
+    return PairIndex(list(scenes), np.array(scene, dtype=np.int32), frame_ids=list(frames),
+                     id0=np.array(id0, dtype=np.int32), id1=np.array(id1, dtype=np.int32),
+                     number0=numbers[:len(number0)], number1=numbers[len(number0):])
 
 
 def read_pair_index(pairs: Union[str, os.PathLike],
                     scene_names: Optional[Union[str, Sequence[str]]] = None,
-                    npz_root: Optional[str] = None) -> List[PairRef]:
-    """The pairs of an index, in its order.
+                    npz_root: Optional[str] = None) -> PairIndex:
+    """The pairs of an index, in its order, as a PairIndex (NumPy columns; item i a PairRef).
 
     ``pairs`` is one of: occgt's ``pairs.jsonl`` or a selection ``<scene>.jsonl``; a split
     folder (its ``pairs.jsonl``, else its ``selection/*.jsonl``); a LoFTR ``.npz`` (scene_info
@@ -146,20 +357,22 @@ def read_pair_index(pairs: Union[str, os.PathLike],
         selection = os.path.join(path, "selection")
         if os.path.isdir(selection):
             files = sorted(f for f in os.listdir(selection) if f.endswith(".jsonl"))
-            return [r for f in files for r in _read_jsonl(os.path.join(selection, f))]
+            return PairIndex.concatenate([_read_jsonl(os.path.join(selection, f))
+                                          for f in files])
         npz = sorted(f for f in os.listdir(path) if f.endswith(".npz"))
         if not npz:
             raise ValueError(f"{path}: expected pairs.jsonl, selection/*.jsonl or LoFTR *.npz files")
-        return [r for f in npz for r in _read_npz(os.path.join(path, f), names)]
+        return PairIndex.concatenate([_read_npz(os.path.join(path, f), names) for f in npz])
     if not os.path.isfile(path):
-        raise ValueError(f"{path}: no such pair index (expected a .jsonl, .npz, .txt or a folder)")
+        raise ValueError(f"{path}: no such pair index (expected a .jsonl, .npz or .txt)")
     if path.endswith(".jsonl"):
         return _read_jsonl(path)
     if path.endswith(".npz"):
         return _read_npz(path, names)
     if path.endswith(".txt"):
         root = npz_root if npz_root is not None else os.path.dirname(path)
-        return [r for f in _read_lines(path) for r in _read_npz(os.path.join(root, f), names)]
+        return PairIndex.concatenate([_read_npz(os.path.join(root, f), names)
+                                      for f in _read_lines(path)])
     raise ValueError(f"{path}: unknown pair index type (expected .jsonl, .npz or .txt)")
 
 
@@ -231,12 +444,10 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         if occupancy is None and scope != "pair":
             raise ValueError(f"scope: {scope!r} is the frames fused for occupancy, which is off "
                              f"(occupancy=None); pass occupancy='words' or 'dense'")
-        self.pairs: List[PairRef] = (read_pair_index(pairs, scene_names, npz_root)
-                                     if isinstance(pairs, (str, os.PathLike)) else list(pairs))
-        for k, ref in enumerate(self.pairs):
-            if not isinstance(ref, PairRef):
-                raise TypeError(f"pairs[{k}]: expected an occgt.torch.PairRef, got "
-                                f"{type(ref).__name__}")
+        self.pairs: PairIndex = (read_pair_index(pairs, scene_names, npz_root)
+                                 if isinstance(pairs, (str, os.PathLike))
+                                 else pairs if isinstance(pairs, PairIndex)
+                                 else PairIndex.from_refs(pairs))
         # Fail here, not in a worker: the size, and the options as pair_ground_truth resolves
         # them (a misspelt or unknown option, a bad preset or value).
         check_resolution(width, height)
