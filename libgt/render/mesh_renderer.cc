@@ -48,6 +48,10 @@ struct MeshRenderer::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   size_t num_triangles = 0;
+  // The mesh as Embree holds it (its geometry buffers, alive with the scene): the hit
+  // triangle's corners, to compute the depth of a hit from them.
+  const float* vertices = nullptr;
+  const uint32_t* triangles = nullptr;
   std::string error;  // Embree's first error message
   std::atomic<int64_t> embree_bytes{0};
 
@@ -61,6 +65,23 @@ struct MeshRenderer::Impl {
       throw std::runtime_error(std::string("Embree ") + what + ": " +
                                (error.empty() ? "failed" : error));
     }
+  }
+
+  // The distance along `direction` (world frame) from `origin` to the plane of triangle
+  // `triangle`, in units of `direction`: with direction R (x, y, 1), the planar depth z of
+  // the hit in the camera. NaN when the ray runs parallel to the plane.
+  double PlanarDepthOnTriangle(uint32_t triangle, const Eigen::Vector3d& direction,
+                               const Eigen::Vector3d& origin) const {
+    const uint32_t* corner = triangles + 3 * static_cast<size_t>(triangle);
+    auto vertex = [&](int k) {
+      const float* p = vertices + 3 * static_cast<size_t>(corner[k]);
+      return Eigen::Vector3d(p[0], p[1], p[2]);
+    };
+    const Eigen::Vector3d a = vertex(0);
+    const Eigen::Vector3d normal = (vertex(1) - a).cross(vertex(2) - a);
+    const double along = normal.dot(direction);
+    if (along == 0.0) return std::numeric_limits<double>::quiet_NaN();
+    return normal.dot(a - origin) / along;
   }
 
   // Casts the rays of every pixel. DirectionFn(u, v, &x, &y) gives the ray's normalised
@@ -107,6 +128,8 @@ MeshRenderer::MeshRenderer(const TriangleMesh& mesh) : impl_(std::make_unique<Im
     }
     std::copy(mesh.vertices_m.begin(), mesh.vertices_m.end(), vertices);
     std::copy(mesh.triangles.begin(), mesh.triangles.end(), indices);
+    impl_->vertices = vertices;
+    impl_->triangles = indices;
     rtcSetGeometryMask(geometry, 0xFFFFFFFFu);
     rtcCommitGeometry(geometry);
     rtcAttachGeometryByID(impl_->scene, geometry, 0);
@@ -163,11 +186,17 @@ RenderedDepth MeshRenderer::Impl::Cast(int width, int height, const Rigid3d& wor
     rh->hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   };
-  auto store = [&](const RTCRayHit& rh, int u, int v) {
+  // Embree decides which triangle a ray hits; the depth is that triangle's plane along the
+  // ray, computed here in double from the triangle's corners and the ray (x, y, 1): Embree's
+  // own distance comes from kernels chosen by the CPU's instruction set (SSE, AVX2,
+  // AVX-512), whose float results differ in the last bits, so that a build with mesh depth
+  // differed between machines (docs/GROUND_TRUTH.md "Depth sources").
+  auto store = [&](const RTCRayHit& rh, int u, int v, double x, double y) {
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return;
-    const float t = rh.ray.tfar;
-    if (!(t >= near) || !(t <= far)) return;
-    out.depth_m(v, u) = t;
+    const double t =
+        PlanarDepthOnTriangle(rh.hit.primID, rotation * Eigen::Vector3d(x, y, 1.0), origin);
+    if (!(t >= near) || !(t <= options.far_m)) return;
+    out.depth_m(v, u) = static_cast<float>(t);
     if (options.triangle_ids) out.triangle_id(v, u) = static_cast<int>(rh.hit.primID);
   };
 
@@ -176,6 +205,7 @@ RenderedDepth MeshRenderer::Impl::Cast(int width, int height, const Rigid3d& wor
       tbb::blocked_range<int>(0, tiles_x * tiles_y), [&](const tbb::blocked_range<int>& r) {
         alignas(64) RTCRayHit rays[kTile * kTile];
         int pixel_u[kTile * kTile], pixel_v[kTile * kTile];
+        double ray_x[kTile * kTile], ray_y[kTile * kTile];
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
         if (options.batching == RayBatching::kCoherent)
@@ -190,6 +220,8 @@ RenderedDepth MeshRenderer::Impl::Cast(int width, int height, const Rigid3d& wor
               make_ray(&rays[n], x, y);
               pixel_u[n] = u;
               pixel_v[n] = v;
+              ray_x[n] = x;
+              ray_y[n] = y;
               ++n;
             }
           }
@@ -198,7 +230,7 @@ RenderedDepth MeshRenderer::Impl::Cast(int width, int height, const Rigid3d& wor
           } else {
             for (int i = 0; i < n; ++i) rtcIntersect1(scene, &context, &rays[i]);
           }
-          for (int i = 0; i < n; ++i) store(rays[i], pixel_u[i], pixel_v[i]);
+          for (int i = 0; i < n; ++i) store(rays[i], pixel_u[i], pixel_v[i], ray_x[i], ray_y[i]);
         }
       });
   return out;

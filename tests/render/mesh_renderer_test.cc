@@ -470,6 +470,60 @@ TEST(MeshRenderer, MatchesBruteForceReferenceOnTsdfMesh) {
   EXPECT_LE(ambiguous, 36);
 }
 
+// The depth of every hit is the float nearest to the exact (double) distance from the
+// camera centre to the hit triangle's plane along the pixel's ray (x, y, 1), computed here
+// with Moller-Trumbore's formula: a function of the triangle and the ray alone. Embree's own
+// float distance comes from a kernel picked by the CPU's instruction set (AVX-512 here, AVX2
+// or SSE elsewhere), and its last bits differed between machines: it was within 1e-4 m of
+// this distance, but not its nearest float (and a build with mesh depth was not the same on
+// every machine).
+TEST(MeshRenderer, DepthIsTheNearestFloatToTheHitTrianglesPlane) {
+  const std::string path = gt::test::SharedData(kTsdfMesh);
+  ASSERT_FALSE(path.empty());
+  const TriangleMesh mesh = ReadPlyMesh(path);
+  const MeshRenderer renderer(mesh);
+  const Scene scene = SevenScenesSample();
+  RenderOptions options;
+  options.triangle_ids = true;
+  int64_t hits = 0, midpoints = 0;
+  for (int i : {0, 25, 49}) {
+    const Frame& f = scene.frames[i];
+    const Camera& c = f.depth_camera;
+    const RenderedDepth got = renderer.Render(c, f.world_from_cam, options);
+    const Vector3d o = f.world_from_cam.translation();
+    for (int v = 0; v < c.height; ++v) {
+      for (int u = 0; u < c.width; ++u) {
+        const int t = got.triangle_id(v, u);
+        if (t < 0) {
+          EXPECT_EQ(got.depth_m(v, u), 0.0f);
+          continue;
+        }
+        ++hits;
+        const Vector3d d =
+            f.world_from_cam.linear() * Vector3d((u - c.cx) / c.fx, (v - c.cy) / c.fy, 1);
+        auto vertex = [&](int k) {
+          const float* p = &mesh.vertices_m[3 * mesh.triangles[3 * t + k]];
+          return Vector3d(p[0], p[1], p[2]);
+        };
+        const Vector3d a = vertex(0), e1 = vertex(1) - a, e2 = vertex(2) - a;
+        const Vector3d s = o - a, q = s.cross(e1);
+        const double exact = e2.dot(q) / e1.dot(d.cross(e2));
+        const float nearest = static_cast<float>(exact);
+        if (got.depth_m(v, u) == nearest) continue;
+        // Only where the exact distance lies on a rounding midpoint of two floats, within the
+        // double rounding of two formulas of the same plane.
+        const float other = got.depth_m(v, u);
+        const double midpoint = (static_cast<double>(nearest) + other) / 2;
+        EXPECT_LE(std::abs(exact - midpoint), 1e-12 * exact)
+            << "frame " << i << " pixel " << u << "," << v << ": " << other << " vs " << nearest;
+        ++midpoints;
+      }
+    }
+  }
+  EXPECT_GT(hits, 300000);
+  EXPECT_LE(midpoints, 3);
+}
+
 TEST(MeshRenderer, TsdfMeshAtSevenScenesPosesReproducesSensorDepth) {
   const std::string path = gt::test::SharedData(kTsdfMesh);
   ASSERT_FALSE(path.empty());
