@@ -849,44 +849,53 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
   std::unordered_map<std::string, int64_t> shard_of_key;
   DigestCheck digests(dir);
   // 1. Trusted checks, shards loaded in parallel by chunk, then taken in shard order: the
-  //    first problem in shard order is the error, whatever the thread count.
-  for (size_t begin = 0; begin < nshards; begin += kMergeChunkShards) {
-    const size_t end = std::min(nshards, begin + kMergeChunkShards);
-    std::vector<LoadedShard> chunk(end - begin);
-    tbb::parallel_for(begin, end, size_t{1}, [&](size_t s) {
-      chunk[s - begin] =
-          LoadShard(dir, result.split, static_cast<int64_t>(s), plan.shard_nsamples[s], schemas);
-    });
-    for (LoadedShard& loaded : chunk) {
-      if (loaded.error) std::rethrow_exception(loaded.error);
-      PartRecord& r = loaded.record;
-      if (const std::string p = digests.Check(r.options_digest, r.url); !p.empty()) {
-        throw InputError(r.info.path, p);
-      }
-      std::string text;
-      for (size_t i = 0; i < r.keys.size(); ++i) {
-        const std::string& key = r.keys[i];
-        if (const auto [it, inserted] = shard_of_key.emplace(key, r.shard_index); !inserted) {
-          throw InputError(r.info.path, "sample key " + key +
-                                            (it->second == r.shard_index
-                                                 ? " appears twice in the shard"
-                                                 : " appears in an earlier shard, " +
-                                                       ShardFileName(result.split, it->second)));
+  //    first problem in shard order is the error, whatever the thread count. With `verify`,
+  //    a problem found here at shard s is held while the shards before s are verified
+  //    (step 2), so that the error is the first problem in shard order of either kind (a
+  //    corrupt shard 0 before a truncated shard 2); the shards after s are not read.
+  std::exception_ptr trusted_problem;
+  try {
+    for (size_t begin = 0; begin < nshards; begin += kMergeChunkShards) {
+      const size_t end = std::min(nshards, begin + kMergeChunkShards);
+      std::vector<LoadedShard> chunk(end - begin);
+      tbb::parallel_for(begin, end, size_t{1}, [&](size_t s) {
+        chunk[s - begin] =
+            LoadShard(dir, result.split, static_cast<int64_t>(s), plan.shard_nsamples[s], schemas);
+      });
+      for (LoadedShard& loaded : chunk) {
+        if (loaded.error) std::rethrow_exception(loaded.error);
+        PartRecord& r = loaded.record;
+        if (const std::string p = digests.Check(r.options_digest, r.url); !p.empty()) {
+          throw InputError(r.info.path, p);
         }
-        GT_ASSERT_MSG(r.pair_lines[i].find('\n') == std::string::npos,
-                      "JSONL line contains a newline");
-        text += r.pair_lines[i];
-        text += '\n';
-        ++result.samples_per_scene[loaded.scenes[i]];
+        std::string text;
+        for (size_t i = 0; i < r.keys.size(); ++i) {
+          const std::string& key = r.keys[i];
+          if (const auto [it, inserted] = shard_of_key.emplace(key, r.shard_index); !inserted) {
+            throw InputError(r.info.path, "sample key " + key +
+                                              (it->second == r.shard_index
+                                                   ? " appears twice in the shard"
+                                                   : " appears in an earlier shard, " +
+                                                         ShardFileName(result.split, it->second)));
+          }
+          GT_ASSERT_MSG(r.pair_lines[i].find('\n') == std::string::npos,
+                        "JSONL line contains a newline");
+          text += r.pair_lines[i];
+          text += '\n';
+          ++result.samples_per_scene[loaded.scenes[i]];
+        }
+        result.tuples = result.tuples || loaded.tuple_lines;
+        pairs_jsonl.Append(text);
+        r.pair_lines.clear();  // in pairs.jsonl now
+        r.pair_lines.shrink_to_fit();
+        result.nsamples += r.info.nsamples;
+        result.total_bytes += r.info.filesize;
+        result.parts.push_back(std::move(r));
       }
-      result.tuples = result.tuples || loaded.tuple_lines;
-      pairs_jsonl.Append(text);
-      r.pair_lines.clear();  // in pairs.jsonl now
-      r.pair_lines.shrink_to_fit();
-      result.nsamples += r.info.nsamples;
-      result.total_bytes += r.info.filesize;
-      result.parts.push_back(std::move(r));
     }
+  } catch (const InputError&) {  // a shard's problem (not, say, pairs.jsonl's disk full)
+    if (!options.verify) throw;
+    trusted_problem = std::current_exception();  // result.parts: the shards before it
   }
   result.nshards = static_cast<int64_t>(result.parts.size());
   // 2. Opt-in full check of every byte, shards in parallel; the first problem in shard order.
@@ -900,6 +909,7 @@ MergeResult MergeSplit(const std::string& dir, const MergeOptions& options) {
     for (size_t s = 0; s < problem.size(); ++s) {
       if (!problem[s].empty()) throw InputError(result.parts[s].info.path, problem[s]);
     }
+    if (trusted_problem) std::rethrow_exception(trusted_problem);
   }
   // pairs.jsonl first; index.json, which names the shards, is published second (its
   // atomic write also makes the folder, and so both renames, durable).

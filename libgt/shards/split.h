@@ -166,8 +166,10 @@ struct MergeResult {
 // here; ValidateSplit and `verify` (MD5 of every shard, tars read back) catch it.
 // The first missing or corrupt shard throws InputError("<shard path>", reason) (a pair line
 // breaking pairs_line.schema.json: "<record path>: pairs[i]: ..."), the first in shard
-// order whatever the thread count (with `verify`, the record checks of every shard come
-// before the tar reads); nothing is published then.
+// order whatever the thread count and whatever the kind of problem (with `verify`, a
+// truncated shard 2 found by the record checks does not hide an MD5 mismatch of shard 0:
+// the shards before the first record problem are read through before it is reported);
+// nothing is published then.
 MergeResult MergeSplit(const std::string& dir, const MergeOptions& options);
 // summary.json content of a merge: {"kind": "occgt-merge-summary", "split", "shards",
 // "samples" (the build summary's name), "bytes", "pairs_per_scene": {scene: n} (from the pair

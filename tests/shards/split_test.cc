@@ -413,6 +413,23 @@ TEST(Split, MergeTrustsRecordedDigestsAndVerifyAndValidateDoNot) {
       ExpectMergeFails(dir, "train-000001.tar: md5", true);
     }
   }
+  {
+    // Problems of two kinds: shard 0's bytes changed (an MD5 only --verify sees) and shard
+    // 2 truncated (a size the record checks see): the first in shard order is named, shard
+    // 0, not the one the cheaper check found first (it named shard 2).
+    const std::string dir = test::ScratchDir("shards_merge_verify_order");
+    WriteSplit(dir);
+    std::string bytes = io::ReadFileBytes(dir + "/train-000000.tar");
+    bytes[1000] ^= 0x10;
+    io::WriteFileAtomic(dir + "/train-000000.tar", bytes);
+    fs::resize_file(dir + "/train-000002.tar", 1000);
+    for (int threads : {1, 2}) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+      ExpectMergeFails(dir, "train-000000.tar: md5", true);
+    }
+    // Without --verify the record checks alone see shard 2.
+    ExpectMergeFails(dir, "train-000002.tar: size 1000 differs from the recorded");
+  }
 }
 
 TEST(Split, AShardOfAnotherBuildIsRefusedByMergeAndValidate) {
