@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "libgt/core/error.h"
+#include "libgt/core/human.h"
 #include "libgt/core/stats.h"
 #include "libgt/datasets/reader.h"
 #include "libgt/io/atomic_file.h"
@@ -299,6 +300,16 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
                   {"stage", StageName(options.stage)},
                   {"dry_run", options.dry_run},
                   {"timings", json::object()}};
+  // The write stage writes the shards of a selection made before: a folder where nothing
+  // was selected (no recipe.json, which the select stage writes first) is refused before
+  // anything is written (recipe.json, a synthetic recipe's data/).
+  if (options.stage == Stage::kWrite && !options.dry_run &&
+      !io::FileExists(options.out_dir + "/recipe.json")) {
+    throw InputError(SelectionDir(options.out_dir),
+                     "no scene is selected in this folder (the write stage selects nothing: run "
+                     "--stage select for every task, or a build without --stage, first); "
+                     "nothing written");
+  }
   const bool own_folder = ClaimOutputFolder(recipe_in, options);
   // One process per task and folder: a second `occgt build` of the same task into the same
   // --out (a re-run started while the first still runs) would rename the first's temporary
@@ -343,9 +354,23 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
     return summary;
   }
   if (!all_selected) {
-    throw InputError(SelectionDir(options.out_dir),
-                     "the selection of some scenes is not complete (run every task with --stage "
-                     "select first, then --stage write; this task's selection is kept)");
+    std::vector<std::string> missing;
+    for (const std::string& scene : scenes) {
+      if (!selections.count(scene)) missing.push_back(scene);
+    }
+    std::string names;
+    for (size_t i = 0; i < missing.size() && i < 5; ++i) names += (i ? ", " : "") + missing[i];
+    if (missing.size() > 5) names += ", ...";
+    throw InputError(
+        SelectionDir(options.out_dir),
+        std::to_string(missing.size()) + " of " +
+            Counted(static_cast<long long>(scenes.size()), "scene") +
+            (missing.size() == 1 ? " has" : " have") + " no selection yet (" + names + "): " +
+            (options.stage == Stage::kWrite
+                 ? "the write stage selects nothing: run --stage select for every task, or a "
+                   "build without --stage, first"
+                 : "run every task with --stage select first, then --stage write; this task's "
+                   "selection is kept"));
   }
 
   const auto t_write = Clock::now();
