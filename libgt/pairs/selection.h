@@ -133,6 +133,9 @@ struct ScanResult {
   // The same for "scan.color_error" (ScanRecipeFrames: a colour image whose header cannot
   // be read or gives another size, when the recipe stores images).
   std::string first_color_error;
+  // The same for "scan.no_color" (a frame without a colour image when the recipe stores
+  // images; the readers keep no path of a missing file): "<frame id>: no colour image ...".
+  std::string first_no_color;
 };
 // Decodes each frame after the stride (through the cache). A frame whose depth cannot be
 // read is skipped and counted, never fatal.

@@ -22,6 +22,11 @@ namespace {
 
 using nlohmann::json;
 
+// What drop_examples says of a frame without a colour image (scan.no_color, import.no_color):
+// the readers keep no path of a colour file that is missing (occgt scan counts them).
+constexpr char kNoColorExample[] =
+    "no colour image (the dataset lists none, or its file is missing)";
+
 std::vector<int64_t> IntegerValues(const io::NpyArray& a, const std::string& what) {
   std::vector<int64_t> out(static_cast<size_t>(a.NumElements()));
   auto copy = [&](auto tag) {
@@ -240,13 +245,18 @@ pairs::ScanResult ScanRecipeFrames(const Recipe& r, const Scene& scene, const La
   scan.max_depth_m = labels.max_depth_m;
   pairs::ScanResult scanned = pairs::ScanFrames(scene, scan, cache);
   if (NeedsColor(r, scene)) {
-    const size_t before = scanned.kept.size();
-    scanned.kept.erase(std::remove_if(scanned.kept.begin(), scanned.kept.end(),
-                                      [&](size_t i) { return scene.frames[i].color_path.empty(); }),
-                       scanned.kept.end());
-    if (scanned.kept.size() < before) {
-      scanned.drops["scan.no_color"] += static_cast<int64_t>(before - scanned.kept.size());
+    std::vector<size_t> with_color;
+    for (const size_t i : scanned.kept) {
+      if (!scene.frames[i].color_path.empty()) {
+        with_color.push_back(i);
+        continue;
+      }
+      ++scanned.drops["scan.no_color"];
+      if (scanned.first_no_color.empty()) {
+        scanned.first_no_color = scene.frames[i].id + ": " + kNoColorExample;
+      }
     }
+    scanned.kept = std::move(with_color);
     // A colour file that cannot be stored (not an image, another size) is that frame's
     // problem, found here from its header rather than when a sample is written.
     std::vector<size_t> kept;
@@ -332,6 +342,11 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
           ++drops["import.unusable_frame"];
         } else if (need_color && (!has_color(*a) || !has_color(*b))) {
           ++drops["import.no_color"];
+          if (!drop_examples.contains("import.no_color")) {
+            drop_examples["import.no_color"] = scene_name + "/" +
+                                               scene.frames[has_color(*a) ? *b : *a].id + ": " +
+                                               kNoColorExample;
+          }
         } else if (const std::string e = need_color ? ColorHeaderError(*a, *b) : std::string();
                    !e.empty()) {
           ++drops["import.color_error"];
@@ -353,6 +368,9 @@ SceneSelection SelectScene(const Recipe& r, const Scene& scene, pairs::DepthCach
     }
     if (!scanned.first_color_error.empty()) {
       drop_examples["scan.color_error"] = scene_name + "/" + scanned.first_color_error;
+    }
+    if (!scanned.first_no_color.empty()) {
+      drop_examples["scan.no_color"] = scene_name + "/" + scanned.first_no_color;
     }
     frames_kept = static_cast<int64_t>(scanned.kept.size());
     candidates = GenerateCandidates(scanned.kept, r.selection.max_frame_gap);
