@@ -11,7 +11,6 @@
 
 #include <cctype>
 #include <cerrno>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -21,6 +20,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/interrupt.h"
 #include "apps/job_flags.h"
 #include "libgt/core/error.h"
 #include "libgt/core/human.h"
@@ -147,18 +147,6 @@ void PrintProgress(const gt::pipeline::Progress& p) {
   std::fflush(stderr);
 }
 
-// SIGINT/SIGTERM during a build: one line saying how to go on, then the default action (the
-// exit status stays "killed by the signal": 130 for Ctrl-C in a shell). Finished shards and
-// selections are complete files (temporary name, then rename), so a re-run resumes.
-extern "C" void OnInterrupt(int signal_number) {
-  static const char kMessage[] =
-      "\noccgt: interrupted; re-run the same command to resume (finished shards are kept)\n";
-  ssize_t ignored = ::write(STDERR_FILENO, kMessage, sizeof(kMessage) - 1);
-  (void)ignored;
-  std::signal(signal_number, SIG_DFL);
-  std::raise(signal_number);
-}
-
 using gt::HumanBytes;
 
 // A few lines for a person: what was selected and written, what was dropped and why, where
@@ -247,8 +235,9 @@ void Run(const BuildArgs& args_in) {
     std::fprintf(stderr, "[build] task %d of %d (from SLURM_ARRAY_TASK_ID %s)\n", args.build.task,
                  args.build.tasks, std::getenv("SLURM_ARRAY_TASK_ID"));
   }
-  std::signal(SIGINT, OnInterrupt);
-  std::signal(SIGTERM, OnInterrupt);
+  // Finished shards and selections are complete files (temporary name, then rename), so a
+  // re-run resumes (apps/interrupt.h: one line, then the end by the signal).
+  ExitOnInterrupt("re-run the same command to resume (finished shards are kept)");
   const nlohmann::json summary = gt::pipeline::RunBuild(recipe, args.build, PrintProgress);
   if (args.json) {
     std::cout << summary.dump(2) << std::endl;

@@ -15,8 +15,10 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/interrupt.h"
 #include "apps/job_flags.h"
 #include "libgt/core/error.h"
+#include "libgt/core/human.h"
 #include "libgt/pipeline/covisibility.h"
 #include "libgt/pipeline/recipe.h"
 
@@ -32,6 +34,7 @@ struct CovisArgs {
 };
 
 void Run(const CovisArgs& args_in) {
+  ExitOnInterrupt("re-run the same command to resume (finished scenes are kept)");
   CovisArgs args = args_in;
   const bool from_slurm =
       !args.task_given && TaskFromSlurm(&args.options.task, &args.options.tasks);

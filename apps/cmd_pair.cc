@@ -8,6 +8,7 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/interrupt.h"
 #include "apps/pair_recipe.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
@@ -32,6 +33,8 @@ struct PairArgs {
 };
 
 void RunPair(const PairArgs& args) {
+  ExitOnInterrupt(
+      "--out may hold some files of this run beside an earlier run's: re-run the same command");
   // Settings first: bad flags fail before any file is read.
   const PairDatasetArgs& d = args.data;
   PairSetup setup = StartPairSetup(d);

@@ -9,12 +9,14 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "apps/commands.h"
+#include "apps/interrupt.h"
 #include "apps/job_flags.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
@@ -23,6 +25,7 @@
 #include "libgt/io/codec.h"
 #include "libgt/io/depth_io.h"
 #include "libgt/io/file_read.h"
+#include "libgt/io/folder_lock.h"
 #include "libgt/io/npy.h"
 #include "libgt/pipeline/recipe.h"
 #include "libgt/render/depth_picture.h"
@@ -41,7 +44,23 @@ struct RenderArgs {
   gt::render::FrameDepthOptions depth;
 };
 
+// The temporary names of render's own files in DIR: "<id>_depth.npy.part" (and the other
+// three per frame) until every frame is done, "<name>.part.tmp" and "render.json.tmp" while
+// one is written (io::WriteFileAtomic). Removed on Ctrl-C or SIGTERM, and as stale by the
+// next run into DIR (one that was killed left them); no other file is.
+TemporaryNames RenderTemporaries(const std::string& out_dir) {
+  TemporaryNames names;
+  names.dir = out_dir;
+  for (const char* file : {"_depth.npy", "_depth.png", "_triangles.npy", "_picture.png"}) {
+    names.suffixes.push_back(std::string(file) + ".part");
+    names.suffixes.push_back(std::string(file) + ".part.tmp");
+  }
+  names.names = {"render.json.tmp"};
+  return names;
+}
+
 void RunRender(const RenderArgs& args) {
+  ExitOnInterrupt("the files of this run are removed, earlier ones kept; re-run the same command");
   std::string error;
   if (!args.depth.Check(&error)) {
     ThrowOptionsError(error, "render options",
@@ -93,6 +112,18 @@ void RunRender(const RenderArgs& args) {
   std::error_code ec;
   std::filesystem::create_directories(args.out, ec);
   if (ec) throw gt::InputError(args.out, "cannot create the folder: " + ec.message());
+  // One render per folder at a time (a second one would remove the first one's temporaries
+  // as stale): byte 0 of DIR/.render.lock, released when the process ends.
+  const std::unique_ptr<gt::io::FileLock> lock =
+      gt::io::FileLock::TryAcquire(args.out + "/.render.lock", 0);
+  if (!lock) {
+    throw gt::InputError(args.out,
+                         "another occgt render is writing this folder now; wait for "
+                         "it to end or use another --out");
+  }
+  const TemporaryNames temporaries = RenderTemporaries(args.out);
+  RemoveTemporaries(temporaries);  // of an earlier run that was killed (SIGKILL, a crash)
+  RemoveOnInterrupt(temporaries);
   gt::render::RenderOptions options;
   options.near_m = args.depth.near_m;
   options.far_m = args.depth.far_m;
@@ -183,18 +214,20 @@ void RunRender(const RenderArgs& args) {
             gt::io::EncodePngBytes(picture, gt::io::ChannelOrder::kRgb, 6, base + "_picture.png"));
       report["frames"].push_back(fj);
     }
+    // Published as a whole: an interrupt now waits for the renames and render.json.
+    const HoldInterrupts hold;
     for (const std::string& path : staged) {
       std::error_code ec;
       std::filesystem::rename(path + ".part", path, ec);
       if (ec) throw gt::InputError(path, "cannot rename " + path + ".part: " + ec.message());
     }
+    report["total"] =
+        any_sensor ? gt::truth::DepthAgreementJson(total) : nlohmann::ordered_json(nullptr);
+    gt::io::WriteFileAtomic(args.out + "/render.json", report.dump(2) + "\n");
   } catch (...) {
     unstage();
     throw;
   }
-  report["total"] =
-      any_sensor ? gt::truth::DepthAgreementJson(total) : nlohmann::ordered_json(nullptr);
-  gt::io::WriteFileAtomic(args.out + "/render.json", report.dump(2) + "\n");
   std::printf("render %s: %zu frames of %s (%zu triangles)", scene.name.c_str(), frames.size(),
               scene.mesh_path.c_str(), renderer->NumTriangles());
   if (any_sensor) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "apps/commands.h"
+#include "apps/interrupt.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/core/human.h"
@@ -61,6 +62,7 @@ void RunScanNetPPSynth(const SynthArgs& args) {
 }
 
 void RunSynth(SynthArgs& args) {
+  ExitOnInterrupt("the dataset in --out is incomplete: re-run the same command");
   static const std::regex kResolution("([0-9]{1,5})x([0-9]{1,5})");
   std::smatch m;
   if (!std::regex_match(args.resolution, m, kResolution)) {

@@ -12,8 +12,10 @@
 #include <string>
 
 #include "apps/commands.h"
+#include "apps/interrupt.h"
 #include "apps/job_flags.h"
 #include "libgt/core/error.h"
+#include "libgt/core/human.h"
 #include "libgt/pipeline/recipe.h"
 #include "libgt/pipeline/tuple_stage.h"
 
@@ -27,6 +29,8 @@ struct TuplesArgs {
 };
 
 void Run(const TuplesArgs& args) {
+  ExitOnInterrupt(
+      "re-run the same command to resume (tuples.jsonl comes last; finished shards are kept)");
   const std::unique_ptr<tbb::global_control> limit = LimitThreads(args.threads);
   gt::pipeline::RecipeOverrides overrides;
   overrides.root = args.root;

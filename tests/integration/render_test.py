@@ -6,7 +6,10 @@ fills sensor holes), `occgt scan --mesh` (schemas/scan.schema.json, the shares),
 flags (exit 2 with one line naming the flag)."""
 import json
 import os
+import signal
+import subprocess
 import sys
+import time
 
 import cv2
 import jsonschema
@@ -229,13 +232,53 @@ def test_render_bad_sensor_and_nothing_half_written():
         f.write("an earlier run's file")
     r = common.occgt("render", *args, "--out", out2, check=False)
     assert r.returncode == 1 and r.stderr.count("\n") == 1, (r.returncode, r.stderr)
-    left = sorted(os.listdir(out2))
+    left = sorted(n for n in os.listdir(out2) if n != ".render.lock")
     assert left == ["000150_depth.npy", "000160_depth.npy.part"], left
     with open(os.path.join(out2, "000150_depth.npy")) as f:
         assert f.read() == "an earlier run's file"
 
 
+def test_render_interrupted_and_stale_temporaries():
+    # A run removes the temporaries an earlier, killed run left under render's own names
+    # (and no other file); Ctrl-C or SIGTERM prints one line, removes this run's temporary
+    # files, keeps the earlier run's files and ends by the signal (they stayed, ~14 MB).
+    out = common.scratch("render_interrupted")
+    stale = ["000160_depth.npy.part", "000170_picture.png.part", "000180_triangles.npy.part.tmp",
+             "render.json.tmp"]
+    others = ["notes.part", "000160_depth.npy.partial", "my_render.json.tmp"]
+    for name in stale + others:
+        with open(os.path.join(out, name), "w") as f:
+            f.write("x")
+    common.occgt("render", *ARGS, "--mesh", MESH, "--frames", "000150", "--out", out)
+    left = sorted(n for n in os.listdir(out) if n != ".render.lock")
+    assert left == sorted(others + ["000150_depth.npy", "000150_depth.png", "000150_picture.png",
+                                    "000150_triangles.npy", "render.json"]), left
+    with open(os.path.join(out, "render.json"), "rb") as f:
+        earlier = f.read()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        p = subprocess.Popen([common.BINARY, "render", *ARGS, "--mesh", MESH,
+                              "--out", out], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                             text=True, start_new_session=True)
+        deadline = time.time() + 60
+        while p.poll() is None and time.time() < deadline and \
+                not any(n.endswith(".part") for n in os.listdir(out)):
+            time.sleep(0.01)
+        assert p.poll() is None, "render ended before it could be interrupted"
+        time.sleep(0.2)
+        os.killpg(p.pid, sig)  # as a terminal's Ctrl-C does (the process group)
+        _, err = p.communicate(timeout=60)
+        assert p.returncode == -sig, (sig, p.returncode, err)
+        lines = [x for x in err.splitlines() if x]
+        assert lines == ["occgt: interrupted; the files of this run are removed, earlier ones "
+                         "kept; re-run the same command"], (sig, err)
+        now = sorted(n for n in os.listdir(out) if n != ".render.lock")
+        assert now == left, (sig, now)
+        with open(os.path.join(out, "render.json"), "rb") as f:
+            assert f.read() == earlier, sig
+
+
 if __name__ == "__main__":
+    test_render_interrupted_and_stale_temporaries()
     test_render()
     test_render_bad_sensor_and_nothing_half_written()
     test_pair_depth_source()

@@ -1,0 +1,44 @@
+// Ctrl-C (SIGINT) and SIGTERM during a long command (build, render, covis, tuples, ...):
+// one line on stderr, "occgt: interrupted; <advice>", the temporary files the command
+// registered removed, then the process ends by the signal as if it had not been caught
+// (exit status 130 for Ctrl-C in a shell, 143 for SIGTERM). One mechanism for every
+// command (docs/CLI.md "Interrupts"). Nothing here allocates or locks in the handler: the
+// message and the names to remove are fixed before the handler can read them.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace occgt {
+
+// Files of one folder that a command names while it writes them and removes on an
+// interrupt (and that its next run removes as stale): names ending with one of `suffixes`
+// (with at least one byte before it) or equal to one of `names`. Folders are never removed.
+struct TemporaryNames {
+  std::string dir;
+  std::vector<std::string> suffixes;
+  std::vector<std::string> names;
+};
+
+// Installs the SIGINT/SIGTERM handler that prints "\noccgt: interrupted; <advice>\n". Call
+// once per process, before the work starts.
+void ExitOnInterrupt(const std::string& advice);
+// From now on the handler also removes the files of `names.dir` that `names` matches (the
+// folder must exist; call once, after ExitOnInterrupt).
+void RemoveOnInterrupt(const TemporaryNames& names);
+// Removes the files of names.dir that `names` matches now (a crashed or killed earlier run's
+// temporaries); a folder that does not exist has none. Returns how many were removed.
+int RemoveTemporaries(const TemporaryNames& names);
+
+// While one of these lives, SIGINT/SIGTERM wait: a batch of renames that publishes a
+// command's files completes (or does not start) as a whole; a signal that came meanwhile
+// is acted on when it ends (the handler's line, cleanup, end by the signal).
+class HoldInterrupts {
+ public:
+  HoldInterrupts();
+  ~HoldInterrupts();
+  HoldInterrupts(const HoldInterrupts&) = delete;
+  HoldInterrupts& operator=(const HoldInterrupts&) = delete;
+};
+
+}  // namespace occgt
