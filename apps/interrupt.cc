@@ -117,4 +117,9 @@ HoldInterrupts::~HoldInterrupts() {
   if (state < 0) Act(-state);
 }
 
+void EndInterrupted(int signal_number, const std::string& detail) {
+  if (g_message.empty()) g_message = "occgt: interrupted (" + detail + ")\n";
+  Act(signal_number);
+}
+
 }  // namespace occgt

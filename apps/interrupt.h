@@ -41,4 +41,10 @@ class HoldInterrupts {
   HoldInterrupts& operator=(const HoldInterrupts&) = delete;
 };
 
+// The end of a command whose child process was interrupted (gt::Interrupted, `detail` its
+// what()): the handler's line when ExitOnInterrupt was called, else "occgt: interrupted
+// (<detail>)"; then the registered temporaries are removed and the process ends by
+// `signal_number`.
+[[noreturn]] void EndInterrupted(int signal_number, const std::string& detail);
+
 }  // namespace occgt

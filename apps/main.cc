@@ -14,10 +14,12 @@
 #endif
 
 #include "apps/commands.h"
+#include "apps/interrupt.h"
 #include "apps/usage.h"
 #include "gt/core/version.h"
 #include "libgt/core/error.h"
 #include "libgt/core/human.h"
+#include "libgt/core/interrupted.h"
 
 namespace {
 
@@ -80,6 +82,8 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     return occgt::UsageError(occgt::DescribeParseError(app, args, e));
+  } catch (const gt::Interrupted& e) {  // a child process (gnuplot) ended by Ctrl-C, SIGTERM
+    occgt::EndInterrupted(e.signal_number(), e.what());
   } catch (const gt::InputError& e) {
     std::fprintf(stderr, "occgt: error: %s\n", gt::OneLine(e.what()).c_str());
     return e.where().rfind("--", 0) == 0 ? occgt::kUsageExit : 1;  // a flag's value

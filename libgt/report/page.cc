@@ -2,13 +2,16 @@
 
 #include <sys/wait.h>
 
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <map>
 
 #include "libgt/core/error.h"
+#include "libgt/core/interrupted.h"
 #include "libgt/io/file_read.h"
 
 namespace gt::report {
@@ -171,6 +174,22 @@ std::vector<NamedImage> RunGnuplot(const std::string& gnuplot, const std::string
           first = l;  // the last error line wins ("plots.gp" line N: ...)
         }
       }
+    }
+    // gnuplot (or its shell) ended by a signal: Ctrl-C reaches the whole process group, and
+    // std::system ignores SIGINT in occgt meanwhile. Interrupted, not a script's fault; the
+    // shell reports a child killed by signal S as exit status 128 + S.
+    const int signal_number = WIFSIGNALED(rc) ? WTERMSIG(rc)
+                              : WIFEXITED(rc) && WEXITSTATUS(rc) > 128 && WEXITSTATUS(rc) < 160
+                                  ? WEXITSTATUS(rc) - 128
+                                  : 0;
+    if (signal_number == SIGINT || signal_number == SIGTERM || signal_number == SIGHUP ||
+        signal_number == SIGQUIT) {
+      throw Interrupted("gnuplot", signal_number);
+    }
+    if (signal_number != 0) {
+      throw InputError("gnuplot", "'" + gnuplot + "' was killed by signal " +
+                                      std::to_string(signal_number) + " (" +
+                                      strsignal(signal_number) + ")");
     }
     if (WIFEXITED(rc) && WEXITSTATUS(rc) == 127) {
       throw InputError("gnuplot",

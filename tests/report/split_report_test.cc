@@ -7,12 +7,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
 
 #include "libgt/core/error.h"
+#include "libgt/core/interrupted.h"
 #include "libgt/io/file_read.h"
 #include "libgt/report/eval_report.h"
 #include "libgt/report/page.h"
@@ -431,6 +433,38 @@ TEST(WriteSplitReport, GnuplotFailureLeavesNoNewFolderAndNamesNoDeletedScript) {
     EXPECT_TRUE(std::filesystem::is_directory(out));
     EXPECT_TRUE(std::filesystem::is_empty(out));
     std::filesystem::remove(out);
+  }
+}
+
+// gnuplot ended by a signal: Ctrl-C (SIGINT to the process group, which std::system ignores
+// in occgt meanwhile) or SIGTERM is gt::Interrupted, not a broken script (it was "failed on
+// the generated plots.gp script", exit 1); another signal (a crash) names the signal. No
+// report folder is left either way.
+TEST(WriteSplitReport, GnuplotEndedByASignalIsInterruptedNotAScriptFailure) {
+  const std::string dir = test::ScratchDir("report_gnuplot_signal");
+  WriteText(dir + "/pairs.jsonl", "");
+  for (const int signal_number : {SIGINT, SIGTERM, SIGSEGV}) {
+    const std::string gnuplot = dir + "/gnuplot-" + std::to_string(signal_number);
+    WriteText(gnuplot, "#!/bin/sh\nkill -" + std::to_string(signal_number) + " $$\n");
+    std::filesystem::permissions(gnuplot, std::filesystem::perms::owner_all);
+    SplitReportOptions o;
+    o.gnuplot = gnuplot;
+    const std::string out = dir + "/report";
+    try {
+      WriteSplitReport(dir, out, o);
+      ADD_FAILURE() << "expected an exception with signal " << signal_number;
+    } catch (const Interrupted& e) {
+      EXPECT_NE(signal_number, SIGSEGV) << e.what();
+      EXPECT_EQ(e.signal_number(), signal_number);
+      EXPECT_EQ(std::string(e.what()),
+                "gnuplot ended by " + std::string(signal_number == SIGINT ? "SIGINT" : "SIGTERM"));
+    } catch (const InputError& e) {
+      EXPECT_EQ(signal_number, SIGSEGV) << e.what();
+      EXPECT_NE(std::string(e.what()).find("was killed by signal 11"), std::string::npos)
+          << e.what();
+      EXPECT_EQ(std::string(e.what()).find("script"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(out)) << signal_number;
   }
 }
 
