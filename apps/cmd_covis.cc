@@ -65,13 +65,13 @@ void Run(const CovisArgs& args_in) {
                   args.options.tasks, from_slurm ? "from the Slurm array" : "--task/--tasks");
     }
     std::printf(
-        "%lld scenes written, %lld already complete; %lld of %lld candidate pairs scored "
-        "(%.1f s); graphs in %s/covisibility/\n",
-        static_cast<long long>(s["written"].get<int64_t>()),
+        "%s written, %lld already complete; %lld of %s scored (%.1f s); graphs in "
+        "%s/covisibility/\n",
+        gt::Counted(s["written"].get<int64_t>(), "scene").c_str(),
         static_cast<long long>(s["skipped_complete"].get<int64_t>()),
         static_cast<long long>(s["pairs_scored"].get<int64_t>()),
-        static_cast<long long>(s["candidates"].get<int64_t>()), s["seconds"].get<double>(),
-        args.options.out_dir.c_str());
+        gt::Counted(s["candidates"].get<int64_t>(), "candidate pair").c_str(),
+        s["seconds"].get<double>(), args.options.out_dir.c_str());
     std::fputs(DropsText(s).c_str(), stdout);
   }
 }

@@ -39,9 +39,9 @@ void Run(const TuplesArgs& args) {
   if (args.json) {
     std::cout << s.dump(2) << std::endl;
   } else {
-    std::printf("%lld tuples from %lld scenes written to %s/tuples.jsonl\n",
-                static_cast<long long>(s["tuples"].get<int64_t>()),
-                static_cast<long long>(s["scenes"].get<int64_t>()), args.out_dir.c_str());
+    std::printf("%s from %s written to %s/tuples.jsonl\n",
+                gt::Counted(s["tuples"].get<int64_t>(), "tuple").c_str(),
+                gt::Counted(s["scenes"].get<int64_t>(), "scene").c_str(), args.out_dir.c_str());
     const nlohmann::json& empty = s["scenes_without_tuples"];
     if (!empty.empty()) {
       std::string names;
@@ -53,9 +53,9 @@ void Run(const TuplesArgs& args) {
     }
     std::fputs(DropsText(s).c_str(), stdout);
     if (s.contains("shards")) {
-      std::printf("%lld N-view samples in %lld shards in %s (%lld written, %lld complete)\n",
-                  static_cast<long long>(s["shards"]["samples"].get<int64_t>()),
-                  static_cast<long long>(s["shards"]["shards"].get<int64_t>()),
+      std::printf("%s in %s in %s (%lld written, %lld complete)\n",
+                  gt::Counted(s["shards"]["samples"].get<int64_t>(), "N-view sample").c_str(),
+                  gt::Counted(s["shards"]["shards"].get<int64_t>(), "shard").c_str(),
                   s["shards"]["dir"].get<std::string>().c_str(),
                   static_cast<long long>(s["shards"]["shards_written"].get<int64_t>()),
                   static_cast<long long>(s["shards"]["shards_skipped"].get<int64_t>()));

@@ -145,8 +145,13 @@ def main():
             "selection:\n", "selection:\n  views: 3\n  tuples: {edge_threshold: 0.1, "
             "quota_per_scene: 4}\n"))
     out_t = os.path.join(tmp, "out_tuples")
-    common.occgt("covis", recipe_t, "--out", out_t)
-    common.occgt("tuples", recipe_t, "--out", out_t)
+    r = common.occgt("covis", recipe_t, "--out", out_t)
+    assert r.stdout.startswith("1 scene written, 0 already complete; "), r.stdout  # not "1 scenes"
+    r = common.occgt("tuples", recipe_t, "--out", out_t)
+    with open(os.path.join(out_t, "tuples.jsonl")) as f:
+        count = sum(1 for _ in f)
+    expected = f"{count} tuple{'' if count == 1 else 's'} from 1 scene written to {out_t}/tuples.jsonl"
+    assert r.stdout.startswith(expected + "\n"), r.stdout
     with open(os.path.join(out_t, "tuples.jsonl")) as f:
         view = json.loads(f.readline())["frame_ids"][0]
     png = os.path.join(tup, "P000", "image_left", f"{view}_left.png")
