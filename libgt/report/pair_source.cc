@@ -325,6 +325,25 @@ PairData LoadPairFromDir(const std::string& dir, const std::string& image0_path,
     const std::string path = (fs::path(dir) / name).string();
     if (gt::io::FileExists(path)) fields[name] = gt::io::ReadFileBytes(path);
   }
+  // A folder whose arrays no meta.json / occupancy.json names (they are written last, after
+  // an earlier pair's is removed): an `occgt pair` or `occgt occupancy` run that did not
+  // finish; drawn, its arrays could be another pair's than the images'.
+  const auto missing_index = [&](const std::vector<std::string>& arrays, const char* index,
+                                 const char* command) {
+    if (gt::io::FileExists((fs::path(dir) / index).string())) return;
+    for (const std::string& a : arrays) {
+      if (fields.count(a)) {
+        throw InputError((fs::path(dir) / index).string(),
+                         "missing, while the folder holds " + a + ": an `" + command +
+                             "` run into it did not finish (re-run it)");
+      }
+    }
+  };
+  missing_index({"label01.npy", "label10.npy", "matches.npy", "match_type.npy", "match_xy.npy",
+                 "cells0.npy", "cells1.npy"},
+                "meta.json", "occgt pair");
+  missing_index({"occ0.npy", "known0.npy", "occ1.npy", "known1.npy"}, "occupancy.json",
+                "occgt occupancy");
   // `occgt occupancy` files: its dense volumes (occ0/1_dense.npy, read above; a folder
   // written before they took the shard's names has occupancy0/1.npy), and occupancy.json
   // (the bin edges) as meta.json's "occupancy" entry, or as the metadata of a folder without

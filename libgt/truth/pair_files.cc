@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "gt/core/version.h"
+#include "libgt/core/error.h"
 #include "libgt/io/atomic_file.h"
 #include "libgt/io/npy.h"
 
@@ -142,6 +143,16 @@ nlohmann::ordered_json FusionStatsJson(const occupancy::FusionStats& s) {
           {"inserted_points", s.inserted_points}};
 }
 
+namespace {
+// Removes the file that names a folder's pair before its arrays are written again (a
+// missing one is fine; one that cannot be removed stops the write).
+void RemoveIndexFile(const std::string& path) {
+  std::error_code ec;
+  std::filesystem::remove(path, ec);
+  if (ec) throw InputError(path, "cannot remove the earlier pair's file: " + ec.message());
+}
+}  // namespace
+
 void WritePairFolder(const std::string& dir, const PairSource& source, const WorkingFrame& frame0,
                      const WorkingFrame& frame1, const PairTruthOptions& options,
                      const PairTruth& truth, int score_stride) {
@@ -149,6 +160,10 @@ void WritePairFolder(const std::string& dir, const PairSource& source, const Wor
   const PatchMatches& pm = p.patches;
   const int64_t w = source.resolution.width, h = source.resolution.height;
   const int64_t m = static_cast<int64_t>(pm.size());
+  // meta.json says which pair the arrays are, and is written last: an earlier pair's goes
+  // first, so that a run killed among the arrays leaves a folder that names no pair rather
+  // than this pair's arrays under the other pair's meta.json.
+  RemoveIndexFile(dir + "/meta.json");
   io::WriteNpy<uint8_t>(dir + "/label01.npy", {h, w}, p.l01.labels);
   io::WriteNpy<uint8_t>(dir + "/label10.npy", {h, w}, p.l10.labels);
   io::WriteNpy<int32_t>(dir + "/matches.npy", {m, 2}, pm.matches);
@@ -187,6 +202,7 @@ void WriteOccupancyFolder(const std::string& dir, const PairSource& source,
                           const ScopeMap* scope, bool dense) {
   const occupancy::FrustumVolume& v0 = volumes.cam0;
   const int64_t gw = v0.width, gh = v0.height;
+  RemoveIndexFile(dir + "/occupancy.json");  // written last, as meta.json (WritePairFolder)
   io::WriteNpy<uint64_t>(dir + "/occ0.npy", {gh, gw}, volumes.cam0.occ);
   io::WriteNpy<uint64_t>(dir + "/known0.npy", {gh, gw}, volumes.cam0.known);
   io::WriteNpy<uint64_t>(dir + "/occ1.npy", {gh, gw}, volumes.cam1.occ);

@@ -92,6 +92,36 @@ def main():
         with open(os.path.join(out, name), "rb") as f1, open(os.path.join(out_again, name), "rb") as f2:
             assert f1.read() == f2.read(), name
 
+    # A re-run of other frames into the folder that stops among its arrays (here: matches.npy
+    # cannot be written, a folder is in its way; a kill does the same) leaves no meta.json
+    # naming the earlier pair beside this pair's label maps, and `inspect pair` refuses the
+    # folder (it drew the new arrays over the old pair's images, exit 0). The same for
+    # `occgt occupancy` and occupancy.json.
+    mixed = common.scratch("pair_7s_mixed")
+    args = ["--root", root7, "--format", "sevenscenes", "--scene", "rgbd-frames", "--out", mixed]
+    common.occgt("pair", *args, "--frames", "000150,000190")
+    common.occgt("occupancy", *args, "--frames", "000150,000190")
+    os.remove(os.path.join(mixed, "matches.npy"))
+    os.mkdir(os.path.join(mixed, "matches.npy"))
+    r = common.occgt("pair", *args, "--frames", "000160,000170", check=False)
+    assert r.returncode != 0 and "matches.npy" in r.stderr, (r.returncode, r.stderr)
+    assert not os.path.exists(os.path.join(mixed, "meta.json")), os.listdir(mixed)
+    os.rmdir(os.path.join(mixed, "matches.npy"))
+    os.mkdir(os.path.join(mixed, "occ1.npy.tmp"))  # in the way of occ1.npy's temporary
+    r = common.occgt("occupancy", *args, "--frames", "000160,000170", check=False)
+    assert r.returncode != 0, r.stderr
+    assert not os.path.exists(os.path.join(mixed, "occupancy.json")), os.listdir(mixed)
+    os.rmdir(os.path.join(mixed, "occ1.npy.tmp"))
+    r = common.occgt("inspect", "pair", "--pair-dir", mixed, "--out", common.scratch("pair_mixed_pic"),
+                     check=False)
+    assert r.returncode == 1 and "meta.json: missing, while the folder holds label01.npy: an " \
+        "`occgt pair` run into it did not finish (re-run it)" in r.stderr, r.stderr
+    common.occgt("pair", *args, "--frames", "000160,000170")
+    r = common.occgt("inspect", "pair", "--pair-dir", mixed, "--out", common.scratch("pair_mixed_pic"),
+                     check=False)
+    assert r.returncode == 1 and "occupancy.json: missing, while the folder holds occ0.npy" \
+        in r.stderr, r.stderr
+
     # TartanAir at another resolution and stride, corner anchors.
     roott = common.shared("tartanair/hospital_sample")
     out_t = common.scratch("pair_ta")
