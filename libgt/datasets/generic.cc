@@ -150,6 +150,7 @@ std::string ManifestSceneName(const std::string& path) {
 
 std::vector<std::string> GenericReader::ListScenes(const std::string& root) const {
   RequireRoot(root);
+  RequireFinishedSynth(root);
   const std::string single = SingleManifest(root);
   if (!single.empty()) return {ManifestSceneName(single)};
   std::vector<std::string> out;
@@ -166,6 +167,7 @@ std::vector<std::string> GenericReader::ListScenes(const std::string& root) cons
 
 Scene GenericReader::ReadScene(const std::string& root, const std::string& scene_name) const {
   RequireRoot(root);
+  RequireFinishedSynth(root);
   if (std::string e = CheckSceneName(scene_name); !e.empty()) {
     throw InputError("scene '" + scene_name + "'", e);
   }

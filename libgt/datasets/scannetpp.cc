@@ -136,6 +136,7 @@ int64_t IphoneFrameNumber(const std::string& stem) {
 
 std::vector<std::string> ScanNetPPReader::ListScenes(const std::string& root) const {
   RequireRoot(root);
+  RequireFinishedSynth(root);
   if (IsSceneFolder(root)) return {FolderName(root)};
   const fs::path dir = ScenesDir(root);
   std::vector<std::string> out;
@@ -151,6 +152,8 @@ std::vector<std::string> ScanNetPPReader::ListScenes(const std::string& root) co
 }
 
 Scene ScanNetPPReader::ReadScene(const std::string& root, const std::string& scene_name) const {
+  RequireRoot(root);
+  RequireFinishedSynth(root);
   const bool root_is_scene = IsSceneFolder(root);
   const std::string folder = ResolveSceneFolder(root_is_scene ? root : ScenesDir(root).string(),
                                                 scene_name, root_is_scene);

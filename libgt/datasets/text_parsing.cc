@@ -438,6 +438,22 @@ void RequireRoot(const std::string& root) {
   if (root.empty() || !fs::exists(root, ec)) throw InputError(root, "dataset root not found");
 }
 
+void RequireFinishedSynth(const std::string& root) {
+  fs::path dir = fs::absolute(root).lexically_normal();
+  if (!dir.has_filename()) dir = dir.parent_path();  // a trailing '/'
+  for (int up = 0; up < 3 && !dir.empty(); ++up, dir = dir.parent_path()) {
+    if (!io::FileExists((dir / ".occgt-synth.json").string())) continue;
+    const std::string dataset = (dir / "dataset.json").string();
+    if (!io::FileExists(dataset)) {
+      throw InputError(dataset,
+                       "missing: the folder is an `occgt synth` dataset whose run did not "
+                       "finish (.occgt-synth.json is written first, dataset.json last): re-run "
+                       "the same occgt synth command to complete it");
+    }
+    return;
+  }
+}
+
 std::string FolderName(const std::string& path) {
   fs::path p(path);
   if (!p.has_filename()) p = p.parent_path();  // trailing '/'

@@ -190,6 +190,11 @@ std::string NotAFileProblem(const std::string& path);
 
 // Throws InputError(root, "dataset root not found") when root does not exist.
 void RequireRoot(const std::string& root);
+// Throws InputError naming DIR/dataset.json when root, its parent or its grandparent is the
+// folder DIR of an `occgt synth` run that did not finish: its claim .occgt-synth.json (written
+// first) without dataset.json (written last). A killed run's folder read as a smaller
+// dataset, without a word (docs/SYNTH.md).
+void RequireFinishedSynth(const std::string& root);
 // "" when `name` is a usable scene name: relative, no ".." component (scene names select
 // folders under the root; they never leave it). Output names are sanitised separately.
 std::string CheckSceneName(const std::string& name);

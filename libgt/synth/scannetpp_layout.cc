@@ -333,6 +333,10 @@ ScanNetPPSynthSummary WriteScanNetPPSynth(const std::string& out_dir,
     write(p / "colmap" / "points3D.txt", kPointsHeader);
     summary.scene_names.push_back(truth.scene.name);
   }
+  // Last: the run is complete (the readers refuse a claimed folder without it).
+  nlohmann::ordered_json dataset = claim;
+  dataset["scenes"] = summary.scene_names;
+  write(fs::path(out_dir) / "dataset.json", dataset.dump(2) + "\n");
   return summary;
 }
 

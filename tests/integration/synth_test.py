@@ -98,6 +98,31 @@ def main():
         assert s["depth_check"]["files_bad"] == 0
         assert 0.8 < s["depth_check"]["mean_valid_fraction"] < 1.0
 
+    # A run that did not finish (killed before dataset.json, which is written last) is not
+    # read as a smaller dataset: every reader entry refuses the folder, naming dataset.json,
+    # for the generic and the ScanNet++ layouts (a scene folder as root too); a re-run of the
+    # same command completes it.
+    cut = common.scratch("synth_cut")
+    common.occgt("synth", "--out", cut, "--scenes", 2, "--frames", 3, "--resolution", "160x120")
+    pp = common.scratch("synth_cut_pp")
+    common.occgt("synth", "--out", pp, "--layout", "scannetpp", "--scenes", 1, "--frames", 4)
+    with open(os.path.join(pp, "dataset.json")) as f:
+        assert json.load(f)["scenes"] == ["synthpp_000"]
+    for folder in (cut, pp):
+        os.remove(os.path.join(folder, "dataset.json"))
+    want = "dataset.json: missing: the folder is an `occgt synth` dataset whose run did not finish"
+    for argv in (["scan", cut, "--format", "generic"],
+                 ["scan", os.path.join(cut, "synth_001"), "--format", "generic"],
+                 ["pair", "--root", cut, "--format", "generic", "--scene", "synth_000",
+                  "--frames", "000000,000001", "--out", common.scratch("synth_cut_pair")],
+                 ["scan", pp, "--format", "scannetpp"],
+                 ["scan", os.path.join(pp, "data"), "--format", "scannetpp"],
+                 ["scan", os.path.join(pp, "data", "synthpp_000"), "--format", "scannetpp"]):
+        r = common.occgt(*argv, check=False)
+        assert r.returncode == 1 and want in r.stderr, (argv, r.returncode, r.stderr)
+    common.occgt("synth", "--out", cut, "--scenes", 2, "--frames", 3, "--resolution", "160x120")
+    assert "2 scene(s)" in common.occgt("scan", cut, "--format", "generic").stdout
+
     # Usage errors (docs/CLI.md): one `occgt: error: --flag` line on stderr, exit 2.
     bad = common.occgt("synth", "--out", out, "--resolution", "160", check=False)
     assert bad.returncode == 2 and bad.stderr.startswith("occgt: error: --resolution: "), bad.stderr
