@@ -38,6 +38,40 @@ std::string StoredDigest(const std::string& path) {
   return io::ParseNpy(it->second, path + ":options_digest.npy").data;
 }
 
+// Graphs of scenes this recipe does not have, written into the folder under another recipe
+// (another dataset, or the same one with other options): one recipe per folder, as a build's,
+// so that the graphs of two recipes never mix. A graph of one of `scenes` is checked where it
+// is read (the loop of RunCovisibility).
+void RequireOneRecipe(const std::string& out_dir, const std::vector<std::string>& scenes,
+                      const std::string& digest) {
+  std::set<std::string> ours;
+  for (const std::string& name : scenes) {
+    ours.insert(fs::path(CovisibilityPath(out_dir, name)).filename().string());
+  }
+  const fs::path dir = fs::path(out_dir) / "covisibility";
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return;
+  std::vector<std::string> others;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const fs::path& p = entry.path();
+    if (p.extension() == ".npz" && entry.is_regular_file(ec) &&
+        !ours.count(p.filename().string())) {
+      others.push_back(p.string());
+    }
+  }
+  std::sort(others.begin(), others.end());
+  for (const std::string& path : others) {
+    const std::string stored = StoredDigest(path);
+    if (stored != digest) {
+      throw InputError(path, "written under another recipe (options digest " + stored +
+                                 ", this one " + digest + ", which has no scene of this name; " +
+                                 std::to_string(others.size()) +
+                                 " such graph(s)): one recipe per --out, so that their graphs "
+                                 "do not mix; write into another --out");
+    }
+  }
+}
+
 }  // namespace
 
 std::string CovisibilityDigest(const Recipe& recipe) {
@@ -387,6 +421,7 @@ nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOption
   for (size_t s = 0; s < scenes.size(); ++s) {
     if (static_cast<int>(s % options.tasks) == options.task) mine.push_back(scenes[s]);
   }
+  RequireOneRecipe(options.out_dir, scenes, digest);
   int64_t written = 0, skipped = 0, scored = 0, candidates = 0, done = 0;
   pairs::DropCounts drops;
   // --dense: the F×F matrix of a scene's graph, DIR/covisibility/<scene>/...--FxF.npy.

@@ -147,6 +147,25 @@ def main():
     out_t = os.path.join(tmp, "out_tuples")
     r = common.occgt("covis", recipe_t, "--out", out_t)
     assert r.stdout.startswith("1 scene written, 0 already complete; "), r.stdout  # not "1 scenes"
+    # Graphs of another recipe in the folder (other options: another resolution; no scene of
+    # these names) are refused before anything is written; they and this recipe's used to
+    # mix. Graphs of the same options for other scenes (a recipe's scene subset) are not.
+    other = os.path.join(tmp, "other.yaml")
+    with open(other, "w") as f:
+        f.write(RECIPE.format(root=make_root(sample, tmp, "tuples_other", (("P007", 0),)),
+                              scene="P007").replace("[320, 240]", "[160, 120]"))
+    r = common.occgt("covis", other, "--out", out_t, check=False)
+    assert r.returncode == 1 and f"{out_t}/covisibility/P000.npz: written under another recipe " \
+        "(options digest " in r.stderr and "one recipe per --out" in r.stderr, r.stderr
+    assert sorted(os.listdir(os.path.join(out_t, "covisibility"))) == ["P000.npz"]
+    subset = os.path.join(tmp, "subset.yaml")
+    with open(subset, "w") as f:
+        f.write(RECIPE.format(root=make_root(sample, tmp, "tuples_subset", (("P008", 0),)),
+                              scene="P008").replace(
+            "selection:\n", "selection:\n  views: 3\n  tuples: {edge_threshold: 0.1, "
+            "quota_per_scene: 4}\n"))
+    common.occgt("covis", subset, "--out", out_t)
+    os.remove(os.path.join(out_t, "covisibility", "P008.npz"))
     r = common.occgt("tuples", recipe_t, "--out", out_t)
     with open(os.path.join(out_t, "tuples.jsonl")) as f:
         count = sum(1 for _ in f)
