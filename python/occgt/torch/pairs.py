@@ -137,13 +137,14 @@ class PairIndex(Sequence[PairRef]):
                 out.append(_NO_NUMBER if number is None else number)
             score.append(np.nan if ref.score is None else ref.score)
         any_ids = any(i >= 0 for i in id0) or any(i >= 0 for i in id1)
-        any_numbers = any(n != _NO_NUMBER for n in number0 + number1)
+        numbers = _number_column(np.array(number0 + number1, dtype=np.int64))
+        any_numbers = bool(numbers.size) and int(numbers.max()) != _NO_NUMBER
         return cls(list(scenes), np.array(scene, dtype=np.int32),
                    frame_ids=list(frames) if any_ids else None,
                    id0=np.array(id0, dtype=np.int32) if any_ids else None,
                    id1=np.array(id1, dtype=np.int32) if any_ids else None,
-                   number0=np.array(number0, dtype=np.int64) if any_numbers else None,
-                   number1=np.array(number1, dtype=np.int64) if any_numbers else None,
+                   number0=numbers[:len(number0)] if any_numbers else None,
+                   number1=numbers[len(number0):] if any_numbers else None,
                    score=(np.array(score, dtype=np.float64)
                           if any(x == x for x in score) else None))
 
@@ -292,15 +293,9 @@ def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> PairIndex:
                      number0=numbers[:, 0].copy(), number1=numbers[:, 1].copy(), score=score)
 
 
-def _read_jsonl(path: str) -> PairIndex:
-    """occgt's pairs.jsonl or selection/<scene>.jsonl lines (schemas/pairs_line.schema.json)."""
-    scenes: Dict[str, int] = {}
-    frames: Dict[str, int] = {}
-    scene: List[int] = []
-    id0: List[int] = []
-    id1: List[int] = []
-    number0: List[int] = []
-    number1: List[int] = []
+def _jsonl_refs(path: str) -> Iterator[PairRef]:
+    """The pairs of occgt's pairs.jsonl or selection/<scene>.jsonl lines
+    (schemas/pairs_line.schema.json), checked line by line."""
     with open(path, "rb") as f:
         for number, raw in enumerate(f, 1):
             try:
@@ -322,15 +317,11 @@ def _read_jsonl(path: str) -> PairIndex:
             except (ValueError, KeyError, TypeError) as e:
                 raise ValueError(f"{path}:{number}: expected a pair line with scene, frame0, "
                                  f"frame1 as {{id, number}} ({type(e).__name__}: {e})") from None
-            scene.append(scenes.setdefault(p["scene"], len(scenes)))
-            id0.append(frames.setdefault(f0["id"], len(frames)))
-            id1.append(frames.setdefault(f1["id"], len(frames)))
-            number0.append(f0["number"])
-            number1.append(f1["number"])
-    numbers = _number_column(np.array(number0 + number1, dtype=np.int64))
-    return PairIndex(list(scenes), np.array(scene, dtype=np.int32), frame_ids=list(frames),
-                     id0=np.array(id0, dtype=np.int32), id1=np.array(id1, dtype=np.int32),
-                     number0=numbers[:len(number0)], number1=numbers[len(number0):])
+            yield PairRef(p["scene"], f0["id"], f1["id"], f0["number"], f1["number"])
+
+
+def _read_jsonl(path: str) -> PairIndex:
+    return PairIndex.from_refs(_jsonl_refs(path))
 
 
 def read_pair_index(pairs: Union[str, os.PathLike],
