@@ -356,11 +356,14 @@ json WriteViewsShards(const Recipe& recipe, const datasets::DatasetReader& reade
   }
   // A re-run that wrote no shard leaves the published indices alone (no new inodes or
   // mtimes), as `occgt build` does; one deleted since is written again.
+  // summary.json as `occgt merge` writes it (the split's counts, tuples per scene), so that
+  // the folder is the same whichever made it.
   if (written > 0 || !io::FileExists(options.out_dir + "/index.json") ||
-      !io::FileExists(options.out_dir + "/pairs.jsonl")) {
+      !io::FileExists(options.out_dir + "/pairs.jsonl") ||
+      !io::FileExists(options.out_dir + "/summary.json")) {
     shards::MergeOptions merge;
     merge.split = recipe.split;
-    shards::MergeSplit(options.out_dir, merge);
+    shards::WriteMergeSummary(options.out_dir, shards::MergeSplit(options.out_dir, merge));
   }
   return {{"dir", options.out_dir},
           {"shards", static_cast<int64_t>(sizes.size())},
