@@ -134,8 +134,9 @@ std::map<std::string, SceneSelection> SelectStage(
 }
 
 // Whether every export the recipe asks for is in out_dir, by its top files: gluefactory/
-// and dust3r/ by their export.json, loftr/ by intrinsics.npz and scenes.txt (kinds train and
-// test) and test.npz (kind test), or as a folder that is not empty (kind megadepth). A file
+// and dust3r/ by their export.json, loftr/ by intrinsics.npz, scenes.txt and its list file
+// (kinds train and test; `{split}_list.txt`, `test_list.txt`), test.npz (kind test) and
+// tree.json (loftr_export.tree), or as a folder that is not empty (kind megadepth). A file
 // deeper in an export is restored by deleting the export's folder.
 bool RequestedExportsPresent(const Recipe& recipe, const std::string& out_dir) {
   if (recipe.gluefactory_export && !io::FileExists(out_dir + "/gluefactory/export.json")) {
@@ -148,13 +149,16 @@ bool RequestedExportsPresent(const Recipe& recipe, const std::string& out_dir) {
            !std::filesystem::is_empty(out_dir + "/loftr", ec);
   }
   if (recipe.loftr_export != LoftrExportKind::kNone) {
-    for (const char* file : {"/loftr/intrinsics.npz", "/loftr/scenes.txt"}) {
+    const bool test = recipe.loftr_export == LoftrExportKind::kTest;
+    for (const std::string file : {"/loftr/intrinsics.npz", "/loftr/scenes.txt"}) {
       if (!io::FileExists(out_dir + file)) return false;
     }
-    if (recipe.loftr_export == LoftrExportKind::kTest &&
-        !io::FileExists(out_dir + "/loftr/test.npz")) {
+    // The list file as shards::WriteLoftr*Export names it (LoftrExportOptions::list_name "").
+    if (!io::FileExists(out_dir + "/loftr/" + (test ? "test" : recipe.split) + "_list.txt")) {
       return false;
     }
+    if (test && !io::FileExists(out_dir + "/loftr/test.npz")) return false;
+    if (recipe.loftr_tree && !io::FileExists(out_dir + "/loftr/tree.json")) return false;
   }
   return true;
 }
