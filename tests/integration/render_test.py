@@ -261,7 +261,7 @@ def test_render_interrupted_and_stale_temporaries():
                              text=True, start_new_session=True)
         deadline = time.time() + 60
         while p.poll() is None and time.time() < deadline and \
-                not any(n.endswith(".part") for n in os.listdir(out)):
+                not any(n.endswith(".part") and n not in others for n in os.listdir(out)):
             time.sleep(0.01)
         assert p.poll() is None, "render ended before it could be interrupted"
         time.sleep(0.2)
