@@ -100,6 +100,7 @@ std::map<std::string, SceneSelection> SelectStage(
         ++reused;
       } else {
         const Scene scene = ReadRecipeScene(recipe, reader, name);
+        RequireSceneMesh(recipe, scene);
         pairs::DepthCache cache(scene, recipe.width, recipe.height, options.depth_cache_mb << 20,
                                 RecipeFrameDepthOptions(recipe));
         SceneSelection& sel = selections[name];

@@ -471,6 +471,7 @@ nlohmann::json RunCovisibility(const Recipe& recipe_in, const CovisibilityOption
       }
     } else {
       const Scene scene = ReadRecipeScene(recipe, *reader, name);
+      RequireSceneMesh(recipe, scene);
       pairs::DepthCache cache(scene, recipe.width, recipe.height, options.depth_cache_mb << 20,
                               RecipeFrameDepthOptions(recipe));
       const SceneCovisibility g = ComputeSceneCovisibility(recipe, scene, &cache);

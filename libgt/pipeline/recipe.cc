@@ -1067,6 +1067,16 @@ std::unique_ptr<datasets::DatasetReader> MakeRecipeReader(const Recipe& recipe) 
   return datasets::MakeReader(recipe.dataset.format, RecipeReaderOptions(recipe));
 }
 
+void RequireSceneMesh(const Recipe& recipe, const Scene& scene) {
+  if (recipe.dataset.depth_source == render::DepthSourceMode::kSensor) return;
+  try {
+    render::SharedMeshRenderer(scene.mesh_path);
+  } catch (const InputError& e) {
+    if (e.where() == scene.mesh_path) throw;      // the PLY reader names the file
+    throw InputError(scene.mesh_path, e.what());  // the renderer's checks name "mesh"
+  }
+}
+
 Scene ReadRecipeScene(const Recipe& recipe, const datasets::DatasetReader& reader,
                       const std::string& name) {
   Scene scene = reader.ReadScene(recipe.dataset.root, name);

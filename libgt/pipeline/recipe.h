@@ -181,6 +181,12 @@ std::unique_ptr<datasets::DatasetReader> MakeRecipeReader(const Recipe& recipe);
 // file is an InputError naming it (not every frame a read error).
 Scene ReadRecipeScene(const Recipe& recipe, const datasets::DatasetReader& reader,
                       const std::string& name);
+// With dataset.depth_source mesh or fused, the scene's mesh parsed and its ray-casting
+// structure built (render::SharedMeshRenderer, kept for the frames' renders that follow): a
+// mesh that cannot be parsed is an InputError naming it before a scene's frames are scanned
+// (every frame was a scan.read_error, and the empty selection was kept by a re-run after the
+// mesh was mended). For the stages that render the scene's frames (select, covis).
+void RequireSceneMesh(const Recipe& recipe, const Scene& scene);
 // Scene::mesh_path from a dataset.mesh_path / --mesh value ("" keeps the reader's).
 void ApplyMeshPath(const std::string& mesh_path, Scene* scene);
 

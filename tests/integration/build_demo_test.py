@@ -419,6 +419,31 @@ def main():
                         "sensor)\n"), r.stderr
     assert not os.path.exists(os.path.join(nomesh, "selection", "synth_000.jsonl"))
     assert not os.path.exists(os.path.join(nomesh, "index.json"))
+    # A mesh that cannot be parsed, or whose triangles name missing vertices: the same, one
+    # line naming the mesh file (every frame was a scan.read_error, exit 0, and the empty
+    # selection was kept after the mesh was mended). covis stops the same way.
+    for name, text in (("cut.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"),
+                       ("bad_index.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty "
+                        "float x\nproperty float y\nproperty float z\nelement face 1\nproperty "
+                        "list uchar int vertex_indices\nend_header\n0 0 1\n1 0 1\n0 1 1\n"
+                        "3 0 1 7\n")):
+        mesh = os.path.join(root, name)
+        with open(mesh, "w") as f:
+            f.write(text)
+        with open(recipe) as f:
+            doc = yaml.safe_load(f)
+        doc["dataset"].update(depth_source="mesh", mesh_path=mesh)
+        mesh_recipe = os.path.join(root, "demo-" + name + ".yaml")
+        with open(mesh_recipe, "w") as f:
+            yaml.safe_dump(doc, f)
+        badmesh = os.path.join(root, "badmesh_" + name)
+        for command in ("build", "covis"):
+            r = common.occgt(command, mesh_recipe, "--out", badmesh, check=False)
+            assert r.returncode == 1 and r.stderr.startswith(f"occgt: error: {mesh}: ") and \
+                r.stderr.count("\n") == 1, (command, r.returncode, r.stderr)
+        assert "vertex index 7" in r.stderr or name == "cut.ply", r.stderr
+        assert not os.path.exists(os.path.join(badmesh, "selection", "synth_000.jsonl"))
+        assert not os.path.exists(os.path.join(badmesh, "covisibility", "synth_000.npz"))
 
     # Bad recipes: one line naming the file and field, exit 1, nothing created.
     bad_dir = common.scratch("build_demo_bad")
