@@ -151,7 +151,7 @@ bool RequestedExportsPresent(const Recipe& recipe, const std::string& out_dir) {
   }
   if (recipe.loftr_export != LoftrExportKind::kNone) {
     const bool test = recipe.loftr_export == LoftrExportKind::kTest;
-    for (const std::string file : {"/loftr/intrinsics.npz", "/loftr/scenes.txt"}) {
+    for (const char* file : {"/loftr/intrinsics.npz", "/loftr/scenes.txt"}) {
       if (!io::FileExists(out_dir + file)) return false;
     }
     // The list file as shards::WriteLoftr*Export names it (LoftrExportOptions::list_name "").

@@ -165,10 +165,9 @@ RenderedDepth MeshRenderer::Impl::Cast(int width, int height, const Rigid3d& wor
   const int tiles_x = (width + kTile - 1) / kTile;
   const int tiles_y = (height + kTile - 1) / kTile;
 
-  // One ray in Embree's layout: origin at the camera centre, direction R (x, y, 1), so that
-  // the hit distance tfar is the planar depth z.
-  auto make_ray = [&](RTCRayHit* rh, double x, double y) {
-    const Eigen::Vector3d d = rotation * Eigen::Vector3d(x, y, 1.0);
+  // One ray in Embree's layout: origin at the camera centre, direction d = R (x, y, 1), so
+  // that the hit distance tfar is the planar depth z.
+  auto make_ray = [&](RTCRayHit* rh, const Eigen::Vector3d& d) {
     RTCRay& ray = rh->ray;
     ray.org_x = static_cast<float>(origin.x());
     ray.org_y = static_cast<float>(origin.y());
@@ -191,10 +190,9 @@ RenderedDepth MeshRenderer::Impl::Cast(int width, int height, const Rigid3d& wor
   // own distance comes from kernels chosen by the CPU's instruction set (SSE, AVX2,
   // AVX-512), whose float results differ in the last bits, so that a build with mesh depth
   // differed between machines (docs/GROUND_TRUTH.md "Depth sources").
-  auto store = [&](const RTCRayHit& rh, int u, int v, double x, double y) {
+  auto store = [&](const RTCRayHit& rh, int u, int v, const Eigen::Vector3d& d) {
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return;
-    const double t =
-        PlanarDepthOnTriangle(rh.hit.primID, rotation * Eigen::Vector3d(x, y, 1.0), origin);
+    const double t = PlanarDepthOnTriangle(rh.hit.primID, d, origin);
     if (!(t >= near) || !(t <= options.far_m)) return;
     out.depth_m(v, u) = static_cast<float>(t);
     if (options.triangle_ids) out.triangle_id(v, u) = static_cast<int>(rh.hit.primID);
@@ -205,7 +203,7 @@ RenderedDepth MeshRenderer::Impl::Cast(int width, int height, const Rigid3d& wor
       tbb::blocked_range<int>(0, tiles_x * tiles_y), [&](const tbb::blocked_range<int>& r) {
         alignas(64) RTCRayHit rays[kTile * kTile];
         int pixel_u[kTile * kTile], pixel_v[kTile * kTile];
-        double ray_x[kTile * kTile], ray_y[kTile * kTile];
+        Eigen::Vector3d direction_of[kTile * kTile];  // each ray's d, in double
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
         if (options.batching == RayBatching::kCoherent)
@@ -217,11 +215,10 @@ RenderedDepth MeshRenderer::Impl::Cast(int width, int height, const Rigid3d& wor
             for (int u = u0; u < std::min(u0 + kTile, width); ++u) {
               double x = 0, y = 0;
               if (!direction(u, v, &x, &y)) continue;
-              make_ray(&rays[n], x, y);
+              direction_of[n] = rotation * Eigen::Vector3d(x, y, 1.0);
+              make_ray(&rays[n], direction_of[n]);
               pixel_u[n] = u;
               pixel_v[n] = v;
-              ray_x[n] = x;
-              ray_y[n] = y;
               ++n;
             }
           }
@@ -230,7 +227,7 @@ RenderedDepth MeshRenderer::Impl::Cast(int width, int height, const Rigid3d& wor
           } else {
             for (int i = 0; i < n; ++i) rtcIntersect1(scene, &context, &rays[i]);
           }
-          for (int i = 0; i < n; ++i) store(rays[i], pixel_u[i], pixel_v[i], ray_x[i], ray_y[i]);
+          for (int i = 0; i < n; ++i) store(rays[i], pixel_u[i], pixel_v[i], direction_of[i]);
         }
       });
   return out;
