@@ -88,16 +88,17 @@ MissingTarget ParseMissingTarget(const std::string& name,
                                  const std::string& field = "--missing-target");
 
 struct LabelOptions {
-  double min_depth_m = kDefaultMinDepthM;  // depths below are invalid (core/depth.h IsValidDepth); also
-                                // the cheirality threshold: z <= min_depth_m is OUT_OF_VIEW
+  double min_depth_m =
+      kDefaultMinDepthM;  // depths below are invalid (core/depth.h IsValidDepth); also
+                          // the cheirality threshold: z <= min_depth_m is OUT_OF_VIEW
   double max_depth_m = kDefaultMaxDepthM;  // depths above are invalid (core/depth.h)
-  double abs_tol_m = 0.1;       // absolute depth tolerance (metres)
-  double rel_tol = 0.05;        // relative tolerance (fraction of z or d_B)
+  double abs_tol_m = 0.1;                  // absolute depth tolerance (metres)
+  double rel_tol = 0.05;                   // relative tolerance (fraction of z or d_B)
   RelativeTo relative_to = RelativeTo::kProjected;
   Bounds bounds = Bounds::kPixelArea;
   TargetLookup target_lookup = TargetLookup::kNearest;
   MissingTarget missing_target = MissingTarget::kUnknown;
-  bool cheirality = true;         // test z > min_depth_m before dividing (off: compat only)
+  bool cheirality = true;  // test z > min_depth_m before dividing (off: compat only)
   // The dataset's valid depth range (Scene::min/max_depth_m) replaces min/max_depth_m
   // (ApplyDatasetDepthRange). false: occ2net-compat, which, like the released code, compares
   // every finite depth > 0 (TartanAir's sky too); an explicit range still applies.
@@ -206,6 +207,10 @@ DirectionMetrics ScoreDirection(const DepthImage& depth_a, const Camera& cam_a,
                                 const Rigid3d& b_from_a, const LabelOptions& options,
                                 int score_stride = 1);
 DirectionMetrics MetricsFromLabels(const DirectionLabels& labels, int score_stride = 1);
+// The same over a [height, width] row-major map of PixelLabel codes held elsewhere (a stored
+// sample's label01.npy); InputError("labels") for a code past kUnknown.
+DirectionMetrics MetricsFromLabelCodes(const uint8_t* labels, int width, int height,
+                                       int score_stride = 1);
 // Fills the ratios from sampled and counts (used by both functions above).
 void FinishMetrics(DirectionMetrics* metrics);
 

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <utility>
 
+#include "libgt/core/bits.h"
 #include "libgt/core/error.h"
 #include "libgt/occupancy/edge_index.h"
 #include "libgt/occupancy/splat_row.h"
@@ -124,22 +125,8 @@ FrustumVolume EmptyVolume(const Camera& camera_full_res, const BinOptions& optio
   return vol;
 }
 
-// Number of set bits in words[0, n). Without -mpopcnt, __builtin_popcountll is a call into
-// libgcc per word; the POPCNT instruction is used where the CPU has it (same result).
-__attribute__((target("popcnt"))) int64_t SetBitsPopcnt(const uint64_t* words, size_t n) {
-  int64_t bits = 0;
-  for (size_t i = 0; i < n; ++i) bits += __builtin_popcountll(words[i]);
-  return bits;
-}
-int64_t SetBitsGeneric(const uint64_t* words, size_t n) {
-  int64_t bits = 0;
-  for (size_t i = 0; i < n; ++i) bits += __builtin_popcountll(words[i]);
-  return bits;
-}
 int64_t SetBits(const std::vector<uint64_t>& words) {
-  static const bool has_popcnt = __builtin_cpu_supports("popcnt");
-  return has_popcnt ? SetBitsPopcnt(words.data(), words.size())
-                    : SetBitsGeneric(words.data(), words.size());
+  return CountSetBits(words.data(), words.size());
 }
 
 }  // namespace

@@ -7,6 +7,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include "libgt/core/error.h"
 #include "tests/geometry/reference.h"
@@ -415,6 +417,29 @@ TEST(Metrics, CountsOfAHandMadeLabelMap) {
   EXPECT_THROW(MetricsFromLabels(l, 1), InputError);
   EXPECT_NO_THROW(MetricsFromLabels(l, 2));  // (2, 1) is not sampled at stride 2
   EXPECT_THROW(MetricsFromLabels(l, 0), InputError);
+}
+
+TEST(Metrics, CountsOfLargeMapsEqualAPixelByPixelCount) {
+  // Sizes around the contiguous counter's 16-byte lanes and 255-chunk flushes (4080 bytes),
+  // with long runs of one code (a uint8 lane counter would wrap at 256 without the flush).
+  for (const auto& [w, h] : {std::pair{1, 1}, {15, 1}, {17, 3}, {4080, 1}, {4081, 2}, {640, 480}}) {
+    std::vector<uint8_t> codes(static_cast<size_t>(w) * h);
+    uint32_t state = 12345;
+    for (size_t p = 0; p < codes.size(); ++p) {
+      state = state * 1664525u + 1013904223u;
+      codes[p] = p < codes.size() / 2 ? 2 : static_cast<uint8_t>((state >> 24) % 6);
+    }
+    std::array<int64_t, kNumPixelLabels> expect{};
+    for (uint8_t c : codes) ++expect[c];
+    const DirectionMetrics m = MetricsFromLabelCodes(codes.data(), w, h, 1);
+    EXPECT_EQ(m.sampled, static_cast<int64_t>(codes.size())) << w << "x" << h;
+    for (int k = 0; k < kNumPixelLabels; ++k) EXPECT_EQ(m.counts[k], expect[k]) << w << "x" << h;
+    for (size_t bad : {size_t{0}, codes.size() / 2, codes.size() - 1}) {  // lanes and tail
+      std::vector<uint8_t> damaged = codes;
+      damaged[bad] = 200;
+      EXPECT_THROW(MetricsFromLabelCodes(damaged.data(), w, h, 1), InputError) << bad;
+    }
+  }
 }
 
 TEST(Symmetry, MirroredCamerasGiveMirroredLabels) {

@@ -1,0 +1,25 @@
+#include "libgt/core/bits.h"
+
+namespace gt {
+namespace {
+
+__attribute__((target("popcnt"))) int64_t CountSetBitsPopcnt(const uint64_t* words, size_t n) {
+  int64_t bits = 0;
+  for (size_t i = 0; i < n; ++i) bits += __builtin_popcountll(words[i]);
+  return bits;
+}
+
+int64_t CountSetBitsGeneric(const uint64_t* words, size_t n) {
+  int64_t bits = 0;
+  for (size_t i = 0; i < n; ++i) bits += __builtin_popcountll(words[i]);
+  return bits;
+}
+
+}  // namespace
+
+int64_t CountSetBits(const uint64_t* words, size_t n) {
+  static const bool has_popcnt = __builtin_cpu_supports("popcnt");
+  return has_popcnt ? CountSetBitsPopcnt(words, n) : CountSetBitsGeneric(words, n);
+}
+
+}  // namespace gt
