@@ -1,6 +1,7 @@
 // occgt validate DIR [--threads N]: re-checks a published split from DIR/index.json (MD5
 // and size of every shard, sample counts and member names read back from the tars, .npy
-// headers, JSON against the schemas built in from schemas/) and prints one line per problem; exit
+// headers, JSON against the schemas built in from schemas/, each pair sample's values against
+// its json unless --structure-only) and prints one line per problem; exit
 // code 1 when any. Reads every byte; shards are checked in parallel on N threads (0 = all cores),
 // and the output is the same for every N.
 #include <tbb/global_control.h>
@@ -29,6 +30,9 @@ void AddValidateCommand(CLI::App& app) {
   cmd->add_option("--schemas", args->options.schemas_dir,
                   "Folder of the split's JSON Schemas (default: the copies of schemas/ built "
                   "into occgt)");
+  cmd->add_flag("--structure-only{false}", args->options.values,
+                "Check the tars, names, .npy headers, schemas, counts and keys, not the pair "
+                "samples' values against their json (a split of other WebDataset samples)");
   AddThreadsFlag(cmd, &args->threads, "Threads checking shards");
   cmd->callback([args] {
     gt::shards::ValidateOptions options = args->options;

@@ -6,11 +6,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <exception>
 #include <filesystem>
+#include <functional>
 #include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -31,6 +33,7 @@
 #include "libgt/io/file_read.h"
 #include "libgt/io/md5.h"
 #include "libgt/io/npy.h"
+#include "libgt/shards/sample_check.h"
 
 namespace gt::shards {
 namespace {
@@ -199,16 +202,98 @@ std::string SceneOfLine(const json& line, const std::string& key) {
   return slash == std::string::npos ? std::string() : key.substr(0, slash);
 }
 
+// The fields a pairs.jsonl line shares with its sample's json (everything but "shard"), in
+// a fixed order, each as the hash of its JSON text: a pair line's fields are the json's own
+// (libgt/pipeline/sample.cc); an N-view line's frame_ids are the json's frames' ids and its
+// occlusion_ratio_visible the json's metrics' (views_write.cc). Kept per sample (80 bytes)
+// rather than the json, so that a split of millions of samples is checked in little memory.
+constexpr size_t kLineFields = 9;
+using LineDigest = std::array<uint64_t, kLineFields>;
+constexpr const char* kPairLineFields[kLineFields] = {"key",           "scene",   "frame0",
+                                                      "frame1",        "metrics", "score_stride",
+                                                      "score_metrics", "matches", "T_0to1"};
+constexpr const char* kViewsLineFields[kLineFields] = {
+    "key", "scene", "tuple_index", "frame_ids", "options_digest", "occlusion_ratio_visible", "",
+    "",    ""};
+
+uint64_t JsonHash(const json& j) { return std::hash<std::string>()(j.dump()); }
+
+bool IsViewsLine(const json& line) { return line.is_object() && line.contains("frame_ids"); }
+
+// The digest of the line a sample json implies; nullopt when the json lacks a field.
+std::optional<LineDigest> LineDigestOfSample(const json& doc) {
+  LineDigest d{};
+  try {
+    if (doc.value("kind", "") == "occgt-views-sample") {
+      json ids = json::array();
+      for (const json& f : doc.at("frames")) ids.push_back(f.at("id"));
+      const json values[] = {
+          doc.at("key"), doc.at("scene"),          doc.at("tuple_index"),
+          ids,           doc.at("options_digest"), doc.at("metrics").at("occlusion_ratio_visible")};
+      for (size_t i = 0; i < std::size(values); ++i) d[i] = JsonHash(values[i]);
+    } else {
+      for (size_t i = 0; i < kLineFields; ++i) d[i] = JsonHash(doc.at(kPairLineFields[i]));
+    }
+  } catch (const json::exception&) {
+    return std::nullopt;
+  }
+  return d;
+}
+
+// The first field of `line` (a JSON object) whose value differs from its sample's, or "".
+std::string LineFieldDiffering(const json& line, const LineDigest& sample) {
+  const char* const* names = IsViewsLine(line) ? kViewsLineFields : kPairLineFields;
+  for (size_t i = 0; i < kLineFields && *names[i] != '\0'; ++i) {
+    if (!line.contains(names[i]) || JsonHash(line[names[i]]) != sample[i]) return names[i];
+  }
+  return "";
+}
+
+// One sample read back: what the value checks (sample_check.h) need.
+struct SampleRead {
+  std::string key;
+  std::optional<json> doc;  // its json member, when it parsed and matched its schema
+  std::set<std::string> fields;
+  std::map<std::string, io::NpyArray> arrays;
+  std::map<std::string, std::string> images;
+};
+
+// The value problems of a pair sample read through, each "<key>.<field>: <problem>".
+void CheckSampleValues(const SampleRead& s, std::vector<std::string>* problems) {
+  if (!s.doc || s.doc->value("kind", "") == "occgt-views-sample") return;
+  std::vector<std::string> found = CheckPairSampleMembers(*s.doc, s.fields);
+  std::map<std::string, StoredArray> arrays;
+  for (const auto& [field, a] : s.arrays) {
+    arrays[field] = StoredArray{a.descr, a.shape, a.data.data()};
+  }
+  std::map<std::string, std::string_view> images(s.images.begin(), s.images.end());
+  for (std::string& p : CheckPairSampleValues(*s.doc, arrays, images)) {
+    found.push_back(std::move(p));
+  }
+  for (const std::string& p : found) problems->push_back(s.key + "." + p);
+}
+
 // Checks that a tar holds exactly `expected_keys` (when given) with valid member names;
-// validates sample JSON with `sample_schema` (may be null) and parses every .npy header.
-// Returns problems, each "<member>: <problem>"; `keys_out` gets the keys in order.
-std::vector<std::string> CheckTarContents(const std::string& tar_path, const SplitSchemas& schemas,
-                                          std::vector<std::string>* keys_out,
-                                          std::set<std::string>* digests_out = nullptr) {
+// validates sample JSON with `sample_schema` (may be null), parses every .npy member and,
+// when `lines_out` is given, checks each pair sample's values against its json
+// (CheckSampleValues) and gives the line digest of each sample (nullopt: its json is
+// unusable). Returns problems, each "<member>: <problem>"; `keys_out` gets the keys in order.
+std::vector<std::string> CheckTarContents(
+    const std::string& tar_path, const SplitSchemas& schemas, std::vector<std::string>* keys_out,
+    std::set<std::string>* digests_out = nullptr,
+    std::vector<std::optional<LineDigest>>* lines_out = nullptr) {
+  const bool values = lines_out != nullptr;
   std::vector<std::string> problems;
   std::vector<std::string> keys;
   std::set<std::string> seen_keys;
   std::set<std::string> fields_of_key;
+  std::vector<std::optional<LineDigest>> lines;
+  SampleRead current;
+  auto finish_sample = [&] {
+    if (current.key.empty()) return;
+    if (values) CheckSampleValues(current, &problems);
+    current = SampleRead();
+  };
   ForEachTarMember(tar_path, [&](const TarMemberInfo& info, std::string_view data) {
     const std::string& name = info.path;
     if (!info.regular_file) {
@@ -230,7 +315,10 @@ std::vector<std::string> CheckTarContents(const std::string& tar_path, const Spl
       if (!seen_keys.insert(key).second) {
         problems.push_back(name + ": members of sample " + key + " are not contiguous");
       }
+      finish_sample();
+      current.key = key;
       keys.push_back(key);
+      lines.emplace_back();
       fields_of_key.clear();
     }
     std::string plain_field = field;
@@ -242,13 +330,18 @@ std::vector<std::string> CheckTarContents(const std::string& tar_path, const Spl
       return;
     }
     if (!fields_of_key.insert(plain_field).second) problems.push_back(name + ": duplicate member");
+    current.fields.insert(plain_field);
     const std::string ext = plain_field.substr(plain_field.rfind('.') + 1);
+    const std::string_view bytes = plain;
     if (ext == "npy") {
       try {
-        io::ParseNpy(plain, tar_path + ":" + name);
+        io::NpyArray array = io::ParseNpy(bytes, tar_path + ":" + name);
+        if (values) current.arrays[plain_field] = std::move(array);
       } catch (const InputError& e) {
         problems.push_back(name + ": bad .npy: " + ReasonOf(e));
       }
+    } else if (values && (ext == "png" || ext == "jpg")) {
+      current.images[plain_field] = std::string(bytes);
     } else if (ext == "json") {
       json doc = json::parse(plain, nullptr, false);  // a .json.gz member: its JSON
       if (doc.is_discarded()) {
@@ -256,6 +349,8 @@ std::vector<std::string> CheckTarContents(const std::string& tar_path, const Spl
       } else if (plain_field == "json") {
         const std::string p = schemas.CheckSample(doc);
         if (!p.empty()) problems.push_back(name + ": " + p);
+        lines.back() = LineDigestOfSample(doc);
+        if (p.empty()) current.doc = doc;
         // The sample's own key (a member renamed or moved to another sample kept its json).
         if (doc.is_object() && doc.contains("key") && doc["key"].is_string() &&
             doc["key"].get<std::string>() != key) {
@@ -271,7 +366,9 @@ std::vector<std::string> CheckTarContents(const std::string& tar_path, const Spl
       problems.push_back(name + ": pickle fields are not allowed");
     }
   });
+  finish_sample();
   if (keys_out != nullptr) *keys_out = std::move(keys);
+  if (lines_out != nullptr) *lines_out = std::move(lines);
   return problems;
 }
 
@@ -955,12 +1052,13 @@ struct ShardProblems {
   std::string shard;                  // DIR/url
   bool read = false;                  // the tar was read through: `keys` are its keys
   std::vector<std::string> keys;
+  std::vector<std::optional<LineDigest>> lines;  // per key: the pairs.jsonl line it implies
 };
 
 // Checks shardlist[i] (`e`) against its file: size, MD5, contents (CheckTarContents) and
 // sample count. Reads the whole shard twice (MD5, then libarchive); never throws.
 ShardProblems CheckListedShard(const std::string& dir, const std::string& index_path, size_t i,
-                               const json& e, const SplitSchemas& schemas) {
+                               const json& e, const SplitSchemas& schemas, bool values) {
   ShardProblems out;
   auto problem = [&](const std::string& where, const std::string& what) {
     out.problems.push_back(where + ": " + what);
@@ -996,7 +1094,8 @@ ShardProblems CheckListedShard(const std::string& dir, const std::string& index_
     return out;
   }
   try {
-    for (const std::string& p : CheckTarContents(shard, schemas, &out.keys, &out.digests)) {
+    for (const std::string& p :
+         CheckTarContents(shard, schemas, &out.keys, &out.digests, values ? &out.lines : nullptr)) {
       problem(shard, p);
     }
   } catch (const InputError& err) {
@@ -1062,11 +1161,12 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
   const json& shardlist = index["shardlist"];
   std::vector<ShardProblems> checked(shardlist.size());
   tbb::parallel_for(size_t{0}, shardlist.size(), size_t{1}, [&](size_t i) {
-    checked[i] = CheckListedShard(dir, index_path, i, shardlist[i], *schemas);
+    checked[i] = CheckListedShard(dir, index_path, i, shardlist[i], *schemas, options.values);
   });
   // Then in shard order, the same whatever the thread count: key -> shard url, for the
   // repeat and the pairs.jsonl checks.
   std::map<std::string, std::string> shard_of_key;
+  std::map<std::string, const std::optional<LineDigest>*> line_of_key;
   std::map<std::string, size_t> entry_of_url;
   std::set<std::string> unread;           // listed shards that could not be read through
   std::vector<std::string> sample_order;  // the keys of the read shards, in shard order
@@ -1091,9 +1191,12 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
         break;
       }
     }
-    for (const std::string& k : c.keys) {
+    for (size_t s = 0; s < c.keys.size(); ++s) {
+      const std::string& k = c.keys[s];
       if (const auto [it, added] = shard_of_key.emplace(k, c.url); !added) {
         problem(c.shard, "sample " + k + " repeats (first in " + it->second + ")");
+      } else {
+        if (options.values) line_of_key.emplace(k, &c.lines[s]);
       }
       sample_order.push_back(k);
     }
@@ -1156,8 +1259,15 @@ std::vector<std::string> ValidateSplit(const std::string& dir, const ValidateOpt
     const auto it = shard_of_key.find(key);
     if (it == shard_of_key.end() || it->second != shard) {
       problem(where, "key \"" + key + "\" is not in shard \"" + shard + "\"");
-    } else if (position < sample_order.size() && sample_order[position] != key &&
-               !order_reported) {  // the first line out of order only, not every one after
+    } else if (const auto l = line_of_key.find(key);
+               l != line_of_key.end() && *l->second &&
+               !LineFieldDiffering(line, **l->second).empty()) {
+      problem(where, "field \"" + LineFieldDiffering(line, **l->second) +
+                         "\" differs from the sample's json (" + shard + ", " + key + ")");
+    }
+    if (it != shard_of_key.end() && it->second == shard && position < sample_order.size() &&
+        sample_order[position] != key && !order_reported) {
+      // The first line out of order only, not every one after.
       problem(where, "key \"" + key + "\" is out of order: the shards hold \"" +
                          sample_order[position] + "\" here (one line per sample, in shard order)");
       order_reported = true;

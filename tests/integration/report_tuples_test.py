@@ -232,6 +232,26 @@ def main():
     truth = shard_occlusion(os.path.join(out, "views"))
     check(sorted(truth) == list(range(len(lines))), "shards do not hold one sample per tuple")
     check(any(v > 0 for v in truth.values()), "no tuple has occluded pixels")
+    # validate: each views/pairs.jsonl line's values are its sample json's (a frame id or
+    # the occlusion ratio edited in the line was passed before).
+    views = os.path.join(out, "views")
+    common.occgt("validate", views)
+    edited = os.path.join(tmp, "views_edited")
+    shutil.rmtree(edited, ignore_errors=True)
+    shutil.copytree(views, edited)
+    with open(os.path.join(edited, "pairs.jsonl")) as f:
+        view_lines = [json.loads(x) for x in f]
+    view_lines[1]["frame_ids"][0] = "x" + view_lines[1]["frame_ids"][0]
+    view_lines[2]["occlusion_ratio_visible"] = 0.5
+    with open(os.path.join(edited, "pairs.jsonl"), "w") as f:
+        f.write("".join(json.dumps(x) + "\n" for x in view_lines))
+    r = common.occgt("validate", edited, check=False)
+    got = [x.split(": ", 1)[1] for x in r.stdout.splitlines()]
+    check(r.returncode == 1 and got == [
+        f'field "frame_ids" differs from the sample\'s json ({view_lines[1]["shard"]}, '
+        f'{view_lines[1]["key"]})',
+        f'field "occlusion_ratio_visible" differs from the sample\'s json '
+        f'({view_lines[2]["shard"]}, {view_lines[2]["key"]})'], f"validate of edited lines: {r.stdout}")
 
     # --- a folder with pairs and tuples (and shards).
     report = os.path.join(tmp, "report")

@@ -98,6 +98,15 @@ Sample PairSample(const std::string& scene, int f0, int f1, std::mt19937* rng, i
   return s;
 }
 
+// Validation of the splits of this file, whose samples are not `occgt build`'s: the structure
+// only (a pair sample's value checks are tested in sample_check_test.cc and with real builds).
+ValidateOptions StructureOnly(const std::string& schemas_dir) {
+  ValidateOptions o;
+  o.schemas_dir = schemas_dir;
+  o.values = false;
+  return o;
+}
+
 std::string PairLine(const std::string& scene, int f0, int f1, double overlap) {
   json line;
   line["scene"] = scene;
@@ -212,7 +221,7 @@ TEST(Split, MergeWritesIndexAndPairsMatchingTheFiles) {
   EXPECT_EQ(summary["pairs_per_scene"]["scene0707_00"], 7);
   EXPECT_EQ(summary["pairs_per_scene"]["hospital/Easy/P036"], 4);
 
-  EXPECT_TRUE(ValidateSplit(dir, ValidateOptions{SchemasDir()}).empty());
+  EXPECT_TRUE(ValidateSplit(dir, StructureOnly(SchemasDir())).empty());
 
   // Deterministic: the same samples in another folder give identical bytes.
   const std::string dir2 = test::ScratchDir("shards_split_merge_again");
@@ -366,7 +375,7 @@ TEST(Split, MergeTrustsRecordedDigestsAndVerifyAndValidateDoNot) {
     EXPECT_EQ(index["shardlist"][1]["md5sum"], recorded_md5);
     EXPECT_NE(recorded_md5, io::Md5Hex(bytes));
     std::string all;
-    for (const auto& p : ValidateSplit(dir, ValidateOptions{SchemasDir()})) all += p + "\n";
+    for (const auto& p : ValidateSplit(dir, StructureOnly(SchemasDir()))) all += p + "\n";
     EXPECT_NE(all.find(path + ": md5 " + io::Md5Hex(bytes) + " differs from index.json's " +
                        recorded_md5),
               std::string::npos)
@@ -388,7 +397,7 @@ TEST(Split, MergeTrustsRecordedDigestsAndVerifyAndValidateDoNot) {
     rec["filesize"] = fs::file_size(dir + "/train-000001.tar");
     WriteRecord(dir, 1, rec);
     ExpectMergeSucceeds(dir);
-    EXPECT_FALSE(ValidateSplit(dir, ValidateOptions{SchemasDir()}).empty());
+    EXPECT_FALSE(ValidateSplit(dir, StructureOnly(SchemasDir())).empty());
     ExpectMergeFails(dir, "train-000001.tar: sample keys in the tar differ from", true);
   }
   {
@@ -442,7 +451,7 @@ TEST(Split, AShardOfAnotherBuildIsRefusedByMergeAndValidate) {
   WriteSplit(a, "train", 4, da);
   WriteSplit(b, "train", 4, db);
   ExpectMergeSucceeds(a);
-  ASSERT_TRUE(ValidateSplit(a, ValidateOptions{SchemasDir()}).empty());
+  ASSERT_TRUE(ValidateSplit(a, StructureOnly(SchemasDir())).empty());
   EXPECT_EQ(ReadRecord(a, 1)["options_digest"], da);
   for (const char* f : {"/train-000001.tar", "/parts/train-000001.json"}) {
     fs::copy_file(b + f, a + f, fs::copy_options::overwrite_existing);
@@ -455,7 +464,7 @@ TEST(Split, AShardOfAnotherBuildIsRefusedByMergeAndValidate) {
   index["shardlist"][1]["filesize"] = fs::file_size(a + "/train-000001.tar");
   io::WriteFileAtomic(a + "/index.json", index.dump(2) + "\n");
   std::string all;
-  for (const auto& p : ValidateSplit(a, ValidateOptions{SchemasDir()})) all += p + "\n";
+  for (const auto& p : ValidateSplit(a, StructureOnly(SchemasDir()))) all += p + "\n";
   EXPECT_NE(all.find(a + "/train-000001.tar: " + want), std::string::npos) << all;
   ExpectMergeFails(a, "train-000001.tar: " + want);
   // With a recipe.json, its digest is the split's.
@@ -475,7 +484,7 @@ TEST(Split, AShardOfAnotherBuildIsRefusedByMergeAndValidate) {
     writer.Finish();
   }
   ExpectMergeSucceeds(c);
-  const auto problems = ValidateSplit(c, ValidateOptions{SchemasDir()});
+  const auto problems = ValidateSplit(c, StructureOnly(SchemasDir()));
   ASSERT_EQ(problems.size(), 1u);
   EXPECT_EQ(problems[0], c + "/train-000000.tar: scene0707_00/0_30.json: its \"key\" is "
                              "\"scene0707_00/0_15\", not the member's scene0707_00/0_30");
@@ -485,13 +494,13 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   const std::string dir = test::ScratchDir("shards_validate_problems");
   WriteSplit(dir);
   MergeSplit(dir, MergeOptions{});
-  ASSERT_TRUE(ValidateSplit(dir, ValidateOptions{SchemasDir()}).empty());
+  ASSERT_TRUE(ValidateSplit(dir, StructureOnly(SchemasDir())).empty());
 
   std::string bytes = io::ReadFileBytes(dir + "/train-000000.tar");
   bytes[900] ^= 0x20;
   io::WriteFileAtomic(dir + "/train-000000.tar", bytes);
   fs::remove(dir + "/train-000002.tar");
-  const auto problems = ValidateSplit(dir, ValidateOptions{SchemasDir()});
+  const auto problems = ValidateSplit(dir, StructureOnly(SchemasDir()));
   std::string all;
   for (const auto& p : problems) {
     EXPECT_EQ(p.find('\n'), std::string::npos);
@@ -517,7 +526,7 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   json index = json::parse(io::ReadFileBytes(dir2 + "/index.json"));
   index["shardlist"][1]["md5sum"] = io::Md5Hex(tar);
   io::WriteFileAtomic(dir2 + "/index.json", index.dump(2));
-  const auto p2 = ValidateSplit(dir2, ValidateOptions{SchemasDir()});
+  const auto p2 = ValidateSplit(dir2, StructureOnly(SchemasDir()));
   ASSERT_EQ(p2.size(), 1u);
   EXPECT_NE(p2[0].find("bad .npy"), std::string::npos) << p2[0];
   // The shard's path once (the member's error repeated "<shard>:<member>" after it).
@@ -537,7 +546,7 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   lines[0] = first.dump();
   WriteJsonLines(dir3 + "/pairs.jsonl", lines);
   std::string all3;
-  for (const auto& p : ValidateSplit(dir3, ValidateOptions{SchemasDir()})) all3 += p + "\n";
+  for (const auto& p : ValidateSplit(dir3, StructureOnly(SchemasDir()))) all3 += p + "\n";
   EXPECT_NE(all3.find("train-000099.tar: shard not listed in index.json"), std::string::npos)
       << all3;
   EXPECT_NE(all3.find("stale.tar.tmp: temporary file left"), std::string::npos) << all3;
@@ -555,7 +564,7 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   WriteJsonLines(dir3 + "/pairs.jsonl", lines);
   fs::remove(dir3 + "/train-000099.tar");
   fs::remove(dir3 + "/stale.tar.tmp");
-  EXPECT_EQ(ValidateSplit(dir3, ValidateOptions{SchemasDir()}),
+  EXPECT_EQ(ValidateSplit(dir3, StructureOnly(SchemasDir())),
             std::vector<std::string>{dir3 + "/pairs.jsonl:2: key \"" + key2 +
                                      "\" is out of order: the shards hold \"" + key1 +
                                      "\" here (one line per sample, in shard order)"});
@@ -563,7 +572,7 @@ TEST(Split, ValidateReportsEveryProblemOnItsOwnLine) {
   // index.json that breaks the schema.
   index["__kind__"] = "something-else";
   io::WriteFileAtomic(dir2 + "/index.json", index.dump(2));
-  const auto p3 = ValidateSplit(dir2, ValidateOptions{SchemasDir()});
+  const auto p3 = ValidateSplit(dir2, StructureOnly(SchemasDir()));
   ASSERT_FALSE(p3.empty());
   EXPECT_NE(p3[0].find("index.schema.json"), std::string::npos) << p3[0];
 }
@@ -635,7 +644,7 @@ TEST(Split, ReadShardIndexGivesTheMergedShardsAndNamesBadEntries) {
   edited["shardlist"][2].erase("md5sum");
   io::WriteFileAtomic(index.path, edited.dump(2));
   const std::vector<std::string> problems =
-      ValidateSplit(dir, ValidateOptions{PermissiveSchemasDir()});
+      ValidateSplit(dir, StructureOnly(PermissiveSchemasDir()));
   ASSERT_GE(problems.size(), 3u);
   EXPECT_EQ(problems[0], index.path +
                              ": shardlist[1].url: \"../train-000001.tar\" is not a file name in "
@@ -644,7 +653,7 @@ TEST(Split, ReadShardIndexGivesTheMergedShardsAndNamesBadEntries) {
   EXPECT_EQ(problems[2], dir + "/train-000001.tar: shard not listed in index.json");
   // With the real index schema, its violations of one document are one line (valijson gave
   // one per level: four lines for one bad url), beside the hand-written line.
-  const std::vector<std::string> with_schema = ValidateSplit(dir, ValidateOptions{SchemasDir()});
+  const std::vector<std::string> with_schema = ValidateSplit(dir, StructureOnly(SchemasDir()));
   size_t schema_lines = 0;
   for (const std::string& p : with_schema) {
     schema_lines += p.find("index.schema.json: ") != std::string::npos ? 1 : 0;
@@ -654,8 +663,7 @@ TEST(Split, ReadShardIndexGivesTheMergedShardsAndNamesBadEntries) {
   edited = good;
   edited["shardlist"].push_back(good["shardlist"][1]);
   io::WriteFileAtomic(index.path, edited.dump(2));
-  const std::vector<std::string> twice =
-      ValidateSplit(dir, ValidateOptions{PermissiveSchemasDir()});
+  const std::vector<std::string> twice = ValidateSplit(dir, StructureOnly(PermissiveSchemasDir()));
   ASSERT_FALSE(twice.empty());
   EXPECT_EQ(twice[0], index.path + ": shardlist[" + std::to_string(good["shardlist"].size()) +
                           "].url: \"train-000001.tar\" repeats shardlist[1]");
@@ -693,7 +701,7 @@ TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasByVerifyAndValidate) {
   verify.verify = true;
   EXPECT_NO_THROW(MergeSplit(dir, options));
   EXPECT_NO_THROW(MergeSplit(dir, verify));
-  EXPECT_TRUE(ValidateSplit(dir, ValidateOptions{schemas}).empty());
+  EXPECT_TRUE(ValidateSplit(dir, StructureOnly(schemas)).empty());
 
   // Content against the schemas is checked by --verify and validate; the default merge
   // trusts what the tasks wrote (it reads no tar and checks no line against a schema).
@@ -708,7 +716,7 @@ TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasByVerifyAndValidate) {
               std::string::npos)
         << e.what();
   }
-  auto problems = ValidateSplit(dir, ValidateOptions{schemas});
+  auto problems = ValidateSplit(dir, StructureOnly(schemas));
   EXPECT_EQ(problems.size(), 11u);  // one per sample
 
   write_schema("sample.schema.json", "integer");
@@ -723,7 +731,7 @@ TEST(Split, SampleJsonAndPairLinesAreCheckedAgainstSchemasByVerifyAndValidate) {
               std::string::npos)
         << e.what();
   }
-  problems = ValidateSplit(dir, ValidateOptions{schemas});
+  problems = ValidateSplit(dir, StructureOnly(schemas));
   ASSERT_EQ(problems.size(), 11u);
   EXPECT_NE(problems[0].find("pairs.jsonl:1: pairs_line.schema.json"), std::string::npos)
       << problems[0];
@@ -753,13 +761,13 @@ TEST(Split, CommandsMergeAndValidate) {
   r = test::RunOccgt("merge --schemas '" + SchemasDir() + "' '" + dir + "'");
   ASSERT_EQ(r.exit_code, 0) << r.stderr_text;
   EXPECT_EQ(io::ReadFileBytes(dir + "/summary.json"), "{\"recipe\": \"x.yaml\"}\n");
-  r = test::RunOccgt("validate --schemas '" + SchemasDir() + "' '" + dir + "'");
+  r = test::RunOccgt("validate --structure-only --schemas '" + SchemasDir() + "' '" + dir + "'");
   EXPECT_EQ(r.exit_code, 0) << r.stdout_text << r.stderr_text;
 
   std::string bytes = io::ReadFileBytes(dir + "/train-000002.tar");
   bytes[1000] ^= 0x04;
   io::WriteFileAtomic(dir + "/train-000002.tar", bytes);
-  r = test::RunOccgt("validate --schemas '" + SchemasDir() + "' '" + dir + "'");
+  r = test::RunOccgt("validate --structure-only --schemas '" + SchemasDir() + "' '" + dir + "'");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.stdout_text.find("train-000002.tar: md5"), std::string::npos) << r.stdout_text;
   // The default merge trusts the recorded digest (same size): it passes; --verify fails
@@ -811,7 +819,7 @@ TEST(Split, ValidateOutputDoesNotDependOnTheThreadCount) {
   std::vector<std::vector<std::string>> runs;
   for (int threads : {1, 2, 1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    runs.push_back(ValidateSplit(dir, ValidateOptions{SchemasDir()}));
+    runs.push_back(ValidateSplit(dir, StructureOnly(SchemasDir())));
   }
   ASSERT_GE(runs[0].size(), 7u);
   for (size_t k = 1; k < runs.size(); ++k) EXPECT_EQ(runs[k], runs[0]) << "run " << k;
@@ -828,10 +836,10 @@ TEST(Split, ValidateOutputDoesNotDependOnTheThreadCount) {
   EXPECT_NE(all.find("train-000007.tar: sample scene0707_00/0_300 repeats"), std::string::npos)
       << all;
   // The command: the same stdout with 1 and 2 threads.
-  const auto one =
-      test::RunOccgt("validate --threads 1 --schemas '" + SchemasDir() + "' '" + dir + "'");
-  const auto two =
-      test::RunOccgt("validate --threads 2 --schemas '" + SchemasDir() + "' '" + dir + "'");
+  const auto one = test::RunOccgt("validate --threads 1 --structure-only --schemas '" +
+                                  SchemasDir() + "' '" + dir + "'");
+  const auto two = test::RunOccgt("validate --threads 2 --structure-only --schemas '" +
+                                  SchemasDir() + "' '" + dir + "'");
   EXPECT_EQ(one.exit_code, 1);
   EXPECT_EQ(two.exit_code, 1);
   EXPECT_EQ(one.stdout_text, two.stdout_text);
