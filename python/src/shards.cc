@@ -7,11 +7,14 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "libgt/shards/sample.h"
+#include "libgt/shards/sample_check.h"
 #include "libgt/shards/split.h"
 #include "libgt/shards/tar_shard.h"
 
@@ -87,6 +90,43 @@ void BindShards(py::module_& m) {
       "over the tar headers (libarchive; the data is skipped). ValueError naming the file and "
       "the member or header for a bad or truncated tar, a sample whose members are not "
       "consecutive or a field that repeats.");
+  m.def(
+      "check_pair_sample",
+      [](const std::string& meta_text, const py::dict& arrays, const std::string& where) {
+        const nlohmann::json meta = nlohmann::json::parse(meta_text, nullptr, false);
+        if (meta.is_discarded()) throw py::value_error(where + ".json: not valid JSON");
+        std::vector<py::array> kept;  // alive while the check reads them
+        std::map<std::string, gt::shards::StoredArray> views;
+        for (const auto& [name, value] : arrays) {
+          py::array a = py::array::ensure(value, py::array::c_style);
+          if (!a)
+            throw py::value_error(where + "." + py::str(name).cast<std::string>() +
+                                  ": expected a NumPy array");
+          if (a.dtype().attr("byteorder").cast<std::string>() == ">") {  // as stored: either
+            a = py::array::ensure(a.attr("astype")(a.dtype().attr("newbyteorder")("<")),
+                                  py::array::c_style);
+          }
+          gt::shards::StoredArray view;
+          view.descr = a.dtype().attr("str").cast<std::string>();  // "<f4", "|u1"
+          view.shape.assign(a.shape(), a.shape() + a.ndim());
+          view.data = a.data();
+          views[py::str(name).cast<std::string>()] = std::move(view);
+          kept.push_back(std::move(a));
+        }
+        std::vector<std::string> problems;
+        {
+          py::gil_scoped_release no_gil;
+          problems = gt::shards::CheckPairSampleValues(meta, views, {});
+        }
+        if (!problems.empty()) throw py::value_error(where + "." + problems.front());
+      },
+      "meta"_a, "arrays"_a, "where"_a,
+      "None once a stored pair sample's json (`meta`, its text) and the arrays read from it "
+      "(`arrays`: member field name -> array, e.g. 'label01.npy') agree "
+      "(shards::CheckPairSampleValues: poses and K, label codes and counts against metrics, "
+      "depth against NO_DEPTH, cells, matches by their rules, occupancy words); else "
+      "ValueError '<where>.<field>: <problem>' naming the first problem. Arrays not given are "
+      "not checked (ShardDataset).");
 }
 
 }  // namespace occgt_py

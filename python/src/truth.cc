@@ -725,17 +725,6 @@ void BindTruth(py::module_& m) {
         "seen_by uint8 [N, H, W] of a stored N-view sample (TupleShardDataset) once it passes "
         "views_ground_truth's checks of depths, Ks and poses and truth::CheckStoredViewsTruth "
         "of the bitmasks and tracks; else ValueError naming the argument at fault.");
-  m.def(
-      "check_pair_sample",
-      [](py::handle T_0to1, py::handle K0, py::handle K1, int width, int height) {
-        PoseFromArray(T_0to1, "T_0to1");
-        CameraFromArray(K0, width, height, "K0");
-        CameraFromArray(K1, width, height, "K1");
-      },
-      "T_0to1"_a, "K0"_a, "K1"_a, "width"_a, "height"_a,
-      "None once a stored pair sample's T_0to1 and K0/K1 pass pair_ground_truth's checks "
-      "(rigid within 1e-3, K of the sample's resolution; ShardDataset); else ValueError naming "
-      "the field.");
   m.def("dense_volume", &DenseVolume, "occ"_a, "known"_a,
         "bins"_a = gt::occupancy::BinOptions().num_bins,
         "uint8 [bins, H/2, W/2] (0 free, 1 occupied, 255 unknown) of occupancy words "

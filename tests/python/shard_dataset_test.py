@@ -613,6 +613,12 @@ class ShardDatasetTest(unittest.TestCase):
         scaled_T = json.dumps({**self.plain[0]["json"], "T_0to1": scaled.tolist()})
         bad_K = json.dumps({**self.plain[0]["json"],
                             "K0": [[-1.0, 0, 0], [0, -1.0, 0], [0, 0, 0]]})
+        label9 = self.plain[0]["label01.npy"].copy()
+        label9[0, 3] = 9
+        nan_depth = self.plain[0]["depth1.npy"].copy()
+        nan_depth[1, 0] = np.nan
+        moved_xy = self.plain[0]["match_xy.npy"].copy()
+        moved_xy[0, 0] += 8  # one cell to the right (or off the grid)
         cases = [
             ("label01.npy", common.npy_bytes(self.plain[0]["label01.npy"].astype(np.float64)),
              r"label01\.npy: expected uint8 \[120, 160\] \(sample resolution 160x120\), got "
@@ -635,14 +641,20 @@ class ShardDatasetTest(unittest.TestCase):
             ("match_type.npy", common.npy_bytes(np.full(len(self.plain[0]["matches.npy"]), 5,
                                                         np.uint8)),
              r"match_type\.npy: row 0 is 5; expected 0 \(vv\), 1 \(vo\) or 2 \(ov\)"),
-            ("json", singular.encode(), r"json: expected the sample fields .*T_0to1: last row "
-                                        r"of the pose is not \[0 0 0 1\]"),
-            ("json", nan_T.encode(), r"json: expected the sample fields .*T_0to1: non-finite "
-                                     r"pose entries"),
-            ("json", scaled_T.encode(), r"json: expected the sample fields .*T_0to1: rotation "
-                                        r"is not orthonormal"),
-            ("json", bad_K.encode(), r"json: expected the sample fields .*K0: expected "
-                                     r"\[\[fx, 0, cx\]"),
+            ("json", singular.encode(), r"json: T_0to1: last row of the pose is not "
+                                        r"\[0 0 0 1\]"),
+            # NaN is not a JSON token (Python's json writes it; no JSON reader takes it).
+            ("json", nan_T.encode(), r"json: not valid JSON"),
+            ("json", scaled_T.encode(), r"json: T_0to1: rotation is not orthonormal"),
+            ("json", bad_K.encode(), r"json: K0: expected \[\[fx, 0, cx\]"),
+            # Values against the json and each other (shards::CheckPairSampleValues): a label
+            # code past 5 and a NaN depth reached the trainer before.
+            ("label01.npy", common.npy_bytes(label9),
+             r"label01\.npy: pixel \(3, 0\) holds 9; expected a label code 0\.\.5"),
+            ("depth1.npy", common.npy_bytes(nan_depth),
+             r"depth1\.npy: pixel \(0, 1\) holds nan; expected metres >= 0 \(0 = invalid\)"),
+            ("match_xy.npy", common.npy_bytes(moved_xy),
+             r"match_xy\.npy: row 0 \(.*\) lies in cell .* of image 1, matches\.npy says "),
         ]
         for field, data, pattern in cases:
             split = copy_split(self.full, "sd_contract")

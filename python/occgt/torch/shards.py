@@ -291,7 +291,10 @@ class ShardDataset(_ShardSplit):
             malformed, a shard is missing, has another size than index.json says, is not a
             readable tar (the C++ reader's message: the header byte or member, e.g. a checksum
             mismatch or a truncated member) or holds another number of samples, or a sample
-            lacks a member the options ask for.
+            lacks a member the options ask for; when an item is read, naming the sample and
+            member, when a member has another dtype or shape than the contract's or its
+            values disagree with the json or with each other (``occgt validate``'s value
+            rules, in C++).
     """
 
     def __init__(self, split_dir: Union[str, "os.PathLike[str]"], *,
@@ -373,29 +376,50 @@ class ShardDataset(_ShardSplit):
             K0 = np.asarray(meta["K0"], dtype=np.float32).reshape(3, 3)
             K1 = np.asarray(meta["K1"], dtype=np.float32).reshape(3, 3)
             W, H = (int(n) for n in meta["resolution"])
-            # pair_ground_truth's checks, in C++: rigid within 1e-3, K of the resolution.
-            check_pair_sample(T_0to1, K0, K1, W, H)
             scene = str(meta["scene"])
             names = (f"{scene}/{meta['frame0']['id']}", f"{scene}/{meta['frame1']['id']}")
             metrics01, metrics10 = meta["metrics"]["01"], meta["metrics"]["10"]
             bins = (len(_bin_edges(meta["occupancy"])) - 1 if self.occupancy == "dense"
                     else 0)
-            stride = int(meta["patch_options"]["stride"])
-            if stride < 1:
-                raise ValueError(f"patch_options.stride {stride} < 1")
         except (KeyError, TypeError, ValueError) as e:
             raise ValueError(f"{where}.json: expected the sample fields of "
                              f"schemas/sample.schema.json (T_0to1 4x4, K0/K1 3x3, resolution, "
-                             f"scene, frame0/frame1 id, metrics 01/10, patch_options.stride, "
+                             f"scene, frame0/frame1 id, metrics 01/10, "
                              f"occupancy bins.edges_m for occupancy='dense'): "
                              f"{type(e).__name__}: {e}") from None
         grid = _grid(meta)
 
+        read: Dict[str, np.ndarray] = {}  # the members read, checked below
+
         def member(field: str, dtype: str, shape: Tuple[Optional[int], ...]) -> np.ndarray:
             """The member, checked against the contract (schemas/sample.schema.json, the
             arrays of libgt/pipeline/sample.cc)."""
-            return self._array(buf, members, field, where, dtype, shape,
-                               f"sample resolution {W}x{H}")
+            read[field] = self._array(buf, members, field, where, dtype, shape,
+                                      f"sample resolution {W}x{H}")
+            return read[field]
+
+        if self.depth:
+            for c in "01":
+                member(f"depth{c}.npy", "f4", (H, W))
+        if self.labels:
+            for name in ("label01", "label10"):
+                member(name + ".npy", "u1", (H, W))
+            for name in ("cells0", "cells1"):
+                member(name + ".npy", "u1", (None, None))
+        rows = member("matches.npy", "i4", (None, 2)).shape[0]
+        member("match_type.npy", "u1", (rows,))
+        member("match_xy.npy", "f4", (rows, 2))
+        if self.occupancy == "words" or (self.occupancy == "dense" and
+                                         not _has(members, "occ0_dense.npy")):
+            for name in ("occ0", "known0", "occ1", "known1"):
+                member(name + ".npy", "u8", grid)
+        elif self.occupancy == "dense":
+            for c in "01":
+                member(f"occ{c}_dense.npy", "u1", (bins,) + grid)
+        # The json and these arrays against each other, in C++ (shards::CheckPairSampleValues:
+        # poses and K, label codes and counts, depth against NO_DEPTH, cells, matches by their
+        # rules, occupancy), so that a damaged sample never reaches a trainer.
+        check_pair_sample(meta_bytes.decode("utf-8", "replace"), read, where)
 
         out: Dict[str, Any] = {}
         if self.images or self.color:
@@ -411,8 +435,8 @@ class ShardDataset(_ShardSplit):
                     out["color" + c] = to_tensor(np.ascontiguousarray(
                         bgr[:, :, ::-1].transpose(2, 0, 1)))
         if self.depth:
-            out["depth0"] = to_tensor(member("depth0.npy", "f4", (H, W)))
-            out["depth1"] = to_tensor(member("depth1.npy", "f4", (H, W)))
+            out["depth0"] = to_tensor(read["depth0.npy"])
+            out["depth1"] = to_tensor(read["depth1.npy"])
         out["K0"] = to_tensor(K0)
         out["K1"] = to_tensor(K1)
         out["T_0to1"] = to_tensor(T_0to1.astype(np.float32))
@@ -422,42 +446,22 @@ class ShardDataset(_ShardSplit):
         out["pair_id"] = j
         out["pair_names"] = names
         if self.labels:
-            for name in ("label01", "label10"):
-                out[name] = to_tensor(member(name + ".npy", "u1", (H, W)))
-            for name in ("cells0", "cells1"):
-                out[name] = to_tensor(member(name + ".npy", "u1", (None, None)))
-        matches = member("matches.npy", "i4", (None, 2))
-        rows = matches.shape[0]
-        match_type = member("match_type.npy", "u1", (rows,))
-        # Cells of the floor(W/s) x floor(H/s) grid and the three types (geometry/patches.h),
-        # as loftr_supervision requires: a damaged index never reaches a trainer's index
-        # arithmetic (occgt validate checks the .npy headers, not these values).
-        cells = (W // stride) * (H // stride)
-        outside = (matches < 0) | (matches >= cells)
-        if outside.any():
-            row, side = (int(x) for x in np.argwhere(outside)[0])
-            raise ValueError(f"{where}.matches.npy: row {row} names cell "
-                             f"{int(matches[row, side])} of image {side}, which has {cells} "
-                             f"cells ({W}x{H}, stride {stride})")
-        if (match_type > 2).any():
-            k = int(np.argmax(match_type > 2))
-            raise ValueError(f"{where}.match_type.npy: row {k} is {int(match_type[k])}; "
-                             f"expected 0 (vv), 1 (vo) or 2 (ov)")
-        out["matches"] = to_tensor(matches.astype(np.int64))
-        out["match_type"] = to_tensor(match_type.astype(np.int64))
-        out["match_xy"] = to_tensor(member("match_xy.npy", "f4", (rows, 2)))
+            for name in ("label01", "label10", "cells0", "cells1"):
+                out[name] = to_tensor(read[name + ".npy"])
+        out["matches"] = to_tensor(read["matches.npy"].astype(np.int64))
+        out["match_type"] = to_tensor(read["match_type.npy"].astype(np.int64))
+        out["match_xy"] = to_tensor(read["match_xy.npy"])
         if self.occupancy == "words":
             for name in ("occ0", "known0", "occ1", "known1"):
-                out[name] = to_tensor(member(name + ".npy", "u8", grid))
+                out[name] = to_tensor(read[name + ".npy"])
         elif self.occupancy == "dense":
             for c in "01":
-                if _has(members, f"occ{c}_dense.npy"):
-                    volume = member(f"occ{c}_dense.npy", "u1", (bins,) + grid)
+                if f"occ{c}_dense.npy" in read:
+                    volume = read[f"occ{c}_dense.npy"]
                 else:
                     from .. import dense_volume  # the C++ unpacking
 
-                    volume = dense_volume(member(f"occ{c}.npy", "u8", grid),
-                                          member(f"known{c}.npy", "u8", grid), bins)
+                    volume = dense_volume(read[f"occ{c}.npy"], read[f"known{c}.npy"], bins)
                 out["occupancy" + c] = to_tensor(volume)
         out["metrics01"] = metrics01
         out["metrics10"] = metrics10
