@@ -6,12 +6,14 @@
 //   occgt inspect split DIR [--out OUT] [--eval eval.json ...]
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "apps/commands.h"
+#include "apps/interrupt.h"
 #include "apps/pair_recipe.h"
 #include "apps/usage.h"
 #include "libgt/core/error.h"
@@ -138,6 +140,9 @@ void RunInspectPair(const InspectPairArgs& a) {
 }
 
 void RunInspectSplit(const InspectSplitArgs& a) {
+  ExitOnInterrupt(
+      "the report folder may hold some files of this run beside an earlier run's: re-run the "
+      "same command");
   gt::report::SplitReportOptions o;
   o.aggregate = gt::ParseAggregate(a.aggregate, "--aggregate");
   o.occlusion_metric = gt::ParseOcclusionMetric(a.occlusion_metric, "--occlusion-metric");
@@ -157,6 +162,18 @@ void RunInspectSplit(const InspectSplitArgs& a) {
                        {"gallery_tuples", "--gallery-tuples", true}});
   }
   const std::string out = a.out.empty() ? a.dir + "/inspect" : a.out;
+  // An interrupt removes the report's temporaries: "<name>.tmp" of its own files, the
+  // gnuplot scratch folder, and the report folder when this run created it and published
+  // nothing into it (every file is published whole, by a rename).
+  TemporaryNames temporaries;
+  temporaries.dir = out;
+  for (const std::string& name : gt::report::SplitReportFileNames()) {
+    temporaries.names.push_back(name + ".tmp");
+  }
+  temporaries.folders = {gt::report::kSplitReportScratch};
+  std::error_code ec;
+  temporaries.remove_dir_if_empty = !std::filesystem::exists(out, ec);
+  RemoveOnInterrupt(temporaries);
   // A build with rendered depth (mesh or fused): the sensor-vs-mesh shares of its frames.
   const std::optional<gt::report::SplitDepthShares> shares =
       gt::pipeline::ComputeSplitDepthShares(a.dir, a.root);

@@ -14,11 +14,11 @@
 namespace occgt {
 namespace {
 
-// Fixed before the handler is installed (the message) or before g_dir_fd is set (the
+// Fixed before the handler is installed (the message) or before g_registered is set (the
 // names), never changed after: the handler only reads them.
 std::string g_message;  // "\noccgt: interrupted; <advice>\n"
 TemporaryNames g_names;
-std::atomic<int> g_dir_fd{-1};
+std::atomic<bool> g_registered{false};
 // 0: signals act at once; 1: held (HoldInterrupts); -S: signal S came while held.
 std::atomic<int> g_hold{0};
 static_assert(std::atomic<int>::is_always_lock_free, "the handler needs lock-free atomics");
@@ -37,10 +37,10 @@ bool Matches(const char* name, const TemporaryNames& names) {
   return false;
 }
 
-// Removes the matching files of the folder open as `dir_fd`; async-signal-safe (getdents64
-// and unlinkat are system calls). Entries removed while the folder is listed may make the
-// listing skip others: passes repeat until one removes nothing.
-int RemoveMatching(int dir_fd, const TemporaryNames& names) {
+// Removes the files of the folder open as `dir_fd` that `names` matches (null: every file);
+// async-signal-safe (getdents64 and unlinkat are system calls). Entries removed while the
+// folder is listed may make the listing skip others: passes repeat until one removes nothing.
+int RemoveMatching(int dir_fd, const TemporaryNames* names) {
   int removed = 0;
   for (int pass = 0; pass < 8; ++pass) {
     int this_pass = 0;
@@ -52,12 +52,29 @@ int RemoveMatching(int dir_fd, const TemporaryNames& names) {
       for (ssize_t at = 0; at < got;) {
         const auto* entry = reinterpret_cast<const struct dirent64*>(buffer + at);
         at += entry->d_reclen;
-        if (entry->d_type == DT_DIR || !Matches(entry->d_name, names)) continue;
+        if (entry->d_type == DT_DIR || (names != nullptr && !Matches(entry->d_name, *names))) {
+          continue;
+        }
         if (::unlinkat(dir_fd, entry->d_name, 0) == 0) ++this_pass;
       }
     }
     removed += this_pass;
     if (this_pass == 0) break;
+  }
+  return removed;
+}
+
+// The matching files of the folder open as `dir_fd`, then its scratch folders with their
+// files; async-signal-safe.
+int RemoveNamed(int dir_fd, const TemporaryNames& names) {
+  int removed = RemoveMatching(dir_fd, &names);
+  for (const std::string& folder : names.folders) {
+    const int fd =
+        ::openat(dir_fd, folder.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0) continue;
+    removed += RemoveMatching(fd, nullptr);
+    ::close(fd);
+    if (::unlinkat(dir_fd, folder.c_str(), AT_REMOVEDIR) == 0) ++removed;
   }
   return removed;
 }
@@ -70,7 +87,13 @@ void WriteMessage() {
 
 [[noreturn]] void Act(int signal_number) {
   WriteMessage();
-  if (const int fd = g_dir_fd.load(); fd >= 0) RemoveMatching(fd, g_names);
+  if (g_registered.load()) {
+    if (const int fd = ::open(g_names.dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); fd >= 0) {
+      RemoveNamed(fd, g_names);
+      ::close(fd);
+    }
+    if (g_names.remove_dir_if_empty) ::rmdir(g_names.dir.c_str());  // fails when not empty
+  }
   std::signal(signal_number, SIG_DFL);
   // Inside the handler the signal is blocked until it returns, which Act never does.
   sigset_t unblock;
@@ -98,14 +121,13 @@ void ExitOnInterrupt(const std::string& advice) {
 
 void RemoveOnInterrupt(const TemporaryNames& names) {
   g_names = names;
-  const int fd = ::open(names.dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd >= 0) g_dir_fd.store(fd);  // kept open to the end of the process
+  g_registered.store(true);
 }
 
 int RemoveTemporaries(const TemporaryNames& names) {
   const int fd = ::open(names.dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd < 0) return 0;
-  const int removed = RemoveMatching(fd, names);
+  const int removed = RemoveNamed(fd, names);
   ::close(fd);
   return removed;
 }

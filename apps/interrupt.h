@@ -13,21 +13,27 @@ namespace occgt {
 
 // Files of one folder that a command names while it writes them and removes on an
 // interrupt (and that its next run removes as stale): names ending with one of `suffixes`
-// (with at least one byte before it) or equal to one of `names`. Folders are never removed.
+// (with at least one byte before it) or equal to one of `names`. A folder is removed only
+// when named in `folders` (a scratch folder of dir, removed with every file in it, one
+// level) or, on an interrupt, `dir` itself when `remove_dir_if_empty` (a folder the command
+// created) and nothing is left in it.
 struct TemporaryNames {
   std::string dir;
   std::vector<std::string> suffixes;
   std::vector<std::string> names;
+  std::vector<std::string> folders;
+  bool remove_dir_if_empty = false;
 };
 
 // Installs the SIGINT/SIGTERM handler that prints "\noccgt: interrupted; <advice>\n". Call
 // once per process, before the work starts.
 void ExitOnInterrupt(const std::string& advice);
-// From now on the handler also removes the files of `names.dir` that `names` matches (the
-// folder must exist; call once, after ExitOnInterrupt).
+// From now on the handler also removes what `names` matches in `names.dir` (the folder
+// need not exist yet: the handler opens it by its path; call once, after ExitOnInterrupt).
 void RemoveOnInterrupt(const TemporaryNames& names);
-// Removes the files of names.dir that `names` matches now (a crashed or killed earlier run's
-// temporaries); a folder that does not exist has none. Returns how many were removed.
+// Removes the files of names.dir that `names` matches now, and its `folders` (a crashed or
+// killed earlier run's temporaries); a folder that does not exist has none. Returns how
+// many files and folders were removed.
 int RemoveTemporaries(const TemporaryNames& names);
 
 // While one of these lives, SIGINT/SIGTERM wait: a batch of renames that publishes a

@@ -869,7 +869,7 @@ SplitReportFiles WriteSplitReport(const std::string& split_dir, const std::strin
   const bool out_existed = fs::exists(out_dir, ec);
   fs::create_directories(out_dir, ec);
   if (ec) throw InputError(out_dir, "cannot create the report folder: " + ec.message());
-  const std::string scratch = (fs::path(out_dir) / ".plots.tmp").string();
+  const std::string scratch = (fs::path(out_dir) / kSplitReportScratch).string();
   fs::remove_all(scratch);
   std::vector<NamedImage> plots, eval_plots, tuple_plots;
   try {

@@ -191,6 +191,10 @@ struct SplitReportFiles {
 // those of this list it did not write (an earlier run's tuple or eval plots would pass for
 // this run's); no other file of out_dir is touched.
 const std::vector<std::string>& SplitReportFileNames();
+// The folder of out_dir that holds gnuplot's data, script and plots while they are made
+// (removed, with its files, before the report's files are written, and when a run fails).
+// Besides it a run writes only the files above, each through "<name>.tmp".
+inline constexpr char kSplitReportScratch[] = ".plots.tmp";
 SplitReportFiles WriteSplitReport(const std::string& split_dir, const std::string& out_dir,
                                   const SplitReportOptions& options,
                                   const SplitDepthShares* depth_shares = nullptr);
