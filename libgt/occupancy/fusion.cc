@@ -271,9 +271,10 @@ std::string FusionScopeName(const FusionOptions& options) {
 }
 
 std::vector<size_t> ScopeFrameIndices(const Scene& scene, size_t i0, size_t i1,
-                                      const FusionOptions& options) {
+                                      const FusionOptions& options, std::vector<size_t>* unusable) {
   const size_t n = scene.frames.size();
   if (i0 >= n || i1 >= n) throw InputError("--frames", "frame index outside the scene");
+  if (unusable != nullptr) unusable->clear();
   std::vector<size_t> out;
   size_t usable = 0;  // usable frames before i
   for (size_t i = 0; i < n; ++i) {
@@ -292,7 +293,13 @@ std::vector<size_t> ScopeFrameIndices(const Scene& scene, size_t i0, size_t i1,
         take = options.scene_stride > 0 && usable % static_cast<size_t>(options.scene_stride) == 0;
         break;
     }
-    if (!scene.frames[i].usable) continue;
+    if (!scene.frames[i].usable) {
+      // A scene scope's stride counts usable frames: every unusable one is left out of it.
+      if (unusable != nullptr && (take || options.scope == FusionScope::kScene)) {
+        unusable->push_back(i);
+      }
+      continue;
+    }
     ++usable;
     if (take) out.push_back(i);
   }

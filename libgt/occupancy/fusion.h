@@ -85,8 +85,12 @@ void ParseFusionScope(const std::string& text, FusionOptions* options);
 // or i1; kScene every scene_stride-th usable frame (the usable frames numbered 0, S, 2S, ...
 // in scene order: never none when the scene has a usable frame; independent of the pair, so
 // the map is shared by all pairs of the scene, and it need not hold the pair's own frames).
+// `unusable`, when given, receives the frames of the scope left out as unusable, sorted:
+// kPair none beside the pair's own, kWindow those within `window` positions of i0 or i1,
+// kScene every unusable frame of the scene (the stride numbers the usable frames only).
 std::vector<size_t> ScopeFrameIndices(const Scene& scene, size_t i0, size_t i1,
-                                      const FusionOptions& options);
+                                      const FusionOptions& options,
+                                      std::vector<size_t>* unusable = nullptr);
 // Inverse of ParseFusionScope ("pair", "window:3", "scene:10").
 std::string FusionScopeName(const FusionOptions& options);
 

@@ -72,13 +72,13 @@ truth::WorkingFrame FrameOf(SceneData* d, size_t i) {
 }
 
 // The fused map of a window or scene scope; a frame of the scope that cannot be read fails
-// the sample (as a pair frame would).
+// the sample (as a pair frame would); its unusable frames are left out, counted by the scan
+// (scan.*).
 std::unique_ptr<truth::ScopeMap> FuseScopeOf(SceneData* d, size_t i0, size_t i1) {
   auto map = std::make_unique<truth::ScopeMap>(truth::FuseScope(
       d->scene, i0, i1, d->options.truth, [d](size_t i) { return FrameOf(d, i); }));
-  if (!map->skipped.empty()) {
-    throw InputError("scene " + d->scene.name + " frame " + map->skipped.front().frame_id,
-                     map->skipped.front().reason);
+  for (const truth::ScopeMap::Skipped& s : map->skipped) {
+    if (!s.unusable) throw InputError("scene " + d->scene.name + " frame " + s.frame_id, s.reason);
   }
   return map;
 }

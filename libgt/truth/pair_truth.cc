@@ -3,6 +3,7 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/task_group.h>
 
+#include <algorithm>
 #include <exception>
 #include <utility>
 
@@ -87,31 +88,43 @@ PairTruth ComputePairTruth(const WorkingFrame& frame0, const WorkingFrame& frame
 
 ScopeMap FuseScope(const Scene& scene, size_t i0, size_t i1, const PairTruthOptions& options,
                    const FrameLoader& load) {
-  const std::vector<size_t> indices =
-      options.fusion.scope == occupancy::FusionScope::kPair
-          ? std::vector<size_t>{i0, i1}
-          : occupancy::ScopeFrameIndices(scene, i0, i1, options.fusion);
+  std::vector<size_t> indices = {i0, i1}, unusable;
+  if (options.fusion.scope != occupancy::FusionScope::kPair) {
+    indices = occupancy::ScopeFrameIndices(scene, i0, i1, options.fusion, &unusable);
+    indices.insert(indices.end(), unusable.begin(), unusable.end());
+    std::sort(indices.begin(), indices.end());  // scene order
+  }
   ScopeMap out;
   std::vector<WorkingFrame> frames;
   frames.reserve(indices.size());
+  size_t unreadable = 0;
   for (size_t i : indices) {
+    const Frame& frame = scene.frames[i];
+    if (std::binary_search(unusable.begin(), unusable.end(), i)) {  // listed, never read
+      out.skipped.push_back({frame.id, "unusable: " + frame.UnusableMessage(), true});
+      continue;
+    }
     try {
       frames.push_back(load(i));
     } catch (const InputError& e) {
       if (i == i0 || i == i1) throw;
-      out.skipped.push_back({scene.frames[i].id, e.what()});
+      out.skipped.push_back({frame.id, e.what(), false});
+      ++unreadable;
       continue;
     }
-    out.fused_ids.push_back(scene.frames[i].id);
+    out.fused_ids.push_back(frame.id);
   }
   if (frames.empty()) {  // an empty map: every bin unknown
-    throw InputError(scene.name,
-                     "occupancy scope " + occupancy::FusionScopeName(options.fusion) +
-                         ": no frame to fuse" +
-                         (out.skipped.empty()
-                              ? std::string(" (the scene has no usable frame)")
-                              : ": none of its " + std::to_string(out.skipped.size()) +
-                                    " frames could be read, the first: " + out.skipped[0].reason));
+    const auto first_unreadable =
+        std::find_if(out.skipped.begin(), out.skipped.end(),
+                     [](const ScopeMap::Skipped& s) { return !s.unusable; });
+    throw InputError(
+        scene.name,
+        "occupancy scope " + occupancy::FusionScopeName(options.fusion) + ": no frame to fuse" +
+            (unreadable == 0
+                 ? std::string(" (the scene has no usable frame)")
+                 : ": none of its " + std::to_string(unreadable) +
+                       " frames could be read, the first: " + first_unreadable->reason));
   }
   std::vector<occupancy::FusionInput> inputs;
   inputs.reserve(frames.size());

@@ -60,14 +60,19 @@ PairTruth ComputePairTruth(const WorkingFrame& frame0, const WorkingFrame& frame
 
 // The fused map of a window or scene scope (options.fusion.scope) for the pair (i0, i1) of
 // `scene`, its frames loaded with `load` (an index into scene.frames → the working frame).
-// A frame of the scope other than the pair that cannot be read is skipped and listed; an
-// error of the pair's own frames propagates; a scope with no frame left to fuse (no usable
-// frame, or none readable) is an InputError naming the scene, not an all-unknown map.
+// Every frame of the scope is fused or listed in `skipped`, in scene order: a frame the
+// reader marked unusable (occupancy::ScopeFrameIndices's `unusable`; not read), and a frame
+// other than the pair's that cannot be read; an error of the pair's own frames propagates;
+// a scope with no frame left to fuse (no usable frame, or none readable) is an InputError
+// naming the scene, not an all-unknown map.
 struct ScopeMap {
   occupancy::OccupancyMap map;
   std::vector<std::string> fused_ids;  // frame ids, in fusion order
   struct Skipped {
-    std::string frame_id, reason;
+    std::string frame_id;
+    // "unusable: <Frame::UnusableMessage()>", or the error reading the frame
+    std::string reason;
+    bool unusable = false;  // the reader's unusable frame (else: it could not be read)
   };
   std::vector<Skipped> skipped;
 };

@@ -1,6 +1,8 @@
 """occgt occupancy on the real TartanAir sample, read the way a trainer would: the packed
 words are unpacked with exactly the NumPy snippet of docs/OCCUPANCY.md, compared with
---dense, and occupancy.json is validated against schemas/occupancy.schema.json."""
+--dense, and occupancy.json is validated against schemas/occupancy.schema.json. A window or
+scene scope lists its unusable frames in fusion.skipped_frames (they were left out without
+a word), and a build of such a scope still builds."""
 import json
 import os
 import re
@@ -158,7 +160,64 @@ def main():
         assert r.returncode == 2 and r.stderr.startswith("occgt: error: " + message), (
             flags, r.returncode, r.stderr)
         assert os.listdir(out5) == []
+    scope_unusable_frames(schema)
     print("occupancy integration: ok")
+
+
+def scope_unusable_frames(schema):
+    """Frame 000003 of a synthetic scene gets a non-rigid pose (the reader marks it unusable):
+    a window:1 scope around 000002,000004 and a scene:1 scope leave it out of the fusion and
+    say so in fusion.skipped_frames, with the reader's reason; `occgt build` of a window scope
+    still builds every pair (the frame is counted under scan.* there)."""
+    tmp = common.scratch("occupancy_scope_unusable")
+    data = os.path.join(tmp, "data")
+    common.occgt("synth", "--out", data, "--scenes", "1", "--frames", "8", "--resolution",
+                 "64x48")
+    manifest = os.path.join(data, "synth_000", "scene.json")
+    doc = json.load(open(manifest))
+    doc["frames"][3]["world_from_cam"] = [[2, 0, 0, 0], [0, 2, 0, 0], [0, 0, 2, 0], [0, 0, 0, 1]]
+    json.dump(doc, open(manifest, "w"))
+    for scope, fused in (("window:1", ["000001", "000002", "000004", "000005"]),
+                         ("scene:1", ["000000", "000001", "000002", "000004", "000005", "000006",
+                                      "000007"])):
+        out = os.path.join(tmp, scope.replace(":", "_"))
+        r = common.occgt("occupancy", "--root", data, "--format", "generic", "--scene",
+                         "synth_000", "--frames", "000002,000004", "--scope", scope,
+                         "--resolution", "64x48", "--out", out)
+        meta = json.load(open(os.path.join(out, "occupancy.json")))
+        jsonschema.validate(meta, schema)
+        assert meta["fusion"]["fused_frames"] == fused, (scope, meta["fusion"]["fused_frames"])
+        skipped = meta["fusion"]["skipped_frames"]
+        assert [s["frame"] for s in skipped] == ["000003"], (scope, skipped)
+        assert skipped[0]["reason"].startswith(
+            "unusable: pose: rotation is not orthonormal"), (scope, skipped)
+        assert "scene.json: frames[3].world_from_cam" in skipped[0]["reason"], (scope, skipped)
+        assert "skipped 1 frame(s) of the scope" in r.stdout, (scope, r.stdout)
+    recipe = os.path.join(tmp, "recipe.yaml")
+    with open(recipe, "w") as f:
+        f.write(f"""name: scope-unusable
+split: scope
+resolution: [64, 48]
+dataset:
+  format: generic
+  root: {data}
+  min_valid_depth_fraction: 0.1
+selection:
+  max_frame_gap: 2
+  score_stride: 4
+  overlap: [0.0, 1.0]
+  pruning: {{frustum: false, max_distance_m: 100, max_view_angle_deg: 180}}
+occupancy: {{enabled: true, scope: window, window: 1}}
+sample: {{image: none, depth: false, labels: true, occupancy: true}}
+shards: {{samples_per_shard: 4}}
+""")
+    build = os.path.join(tmp, "build")
+    summary = json.loads(common.occgt("build", "--json", recipe, "--out", build).stdout)
+    assert summary["drops"] == {"scan.unusable": 1}, summary["drops"]
+    with open(os.path.join(build, "pairs.jsonl")) as f:
+        keys = [json.loads(line)["key"] for line in f]
+    assert "synth_000/000002_000004" in keys, keys  # its window holds 000003
+    assert summary["samples"] == len(keys), (summary["samples"], keys)
 
 
 if __name__ == "__main__":

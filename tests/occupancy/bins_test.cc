@@ -136,11 +136,18 @@ TEST(Options, ScopeFrameIndices) {
   EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{2, 7}));
   ParseFusionScope("window:1", &f);
   EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{1, 2, 3, 6, 7, 8}));
+  std::vector<size_t> unusable = {99};
+  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f, &unusable), (std::vector<size_t>{1, 2, 3, 6, 7, 8}));
+  EXPECT_TRUE(unusable.empty());  // frame 4 is outside the window
   ParseFusionScope("window:2", &f);
-  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{0, 1, 2, 3, 5, 6, 7, 8, 9}));
-  // Every 4th usable frame: the usable ones are 0 1 2 3 5 6 7 8 9, so 0, 5 and 9.
+  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f, &unusable),
+            (std::vector<size_t>{0, 1, 2, 3, 5, 6, 7, 8, 9}));
+  EXPECT_EQ(unusable, (std::vector<size_t>{4}));  // left out, to be listed
+  // Every 4th usable frame: the usable ones are 0 1 2 3 5 6 7 8 9, so 0, 5 and 9; every
+  // unusable frame is left out of a scene scope.
   ParseFusionScope("scene:4", &f);
-  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f), (std::vector<size_t>{0, 5, 9}));
+  EXPECT_EQ(ScopeFrameIndices(scene, 2, 7, f, &unusable), (std::vector<size_t>{0, 5, 9}));
+  EXPECT_EQ(unusable, (std::vector<size_t>{4}));
   // Never none while a frame is usable: a first frame that is not (the frames at positions
   // 0, S, 2S, ... all unusable gave an empty map, every bin unknown, without a word).
   scene.frames[0].usable = false;

@@ -1,7 +1,7 @@
 // libgt/truth, the per-pair entry point: the frame loader (size check, resize, K rule, frame
 // lookup with its messages), ComputePairTruth against the functions it composes (labels of
 // geometry/pair.h and occupancy of occupancy/pair_occupancy.h, called directly here), and
-// FuseScope's skipping of unreadable scope frames.
+// FuseScope's skipping of unreadable scope frames and its list of unusable ones.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -249,9 +249,48 @@ TEST(FuseScope, SkipsUnreadableScopeFramesAndFailsOnThePairs) {
   ASSERT_EQ(m.skipped.size(), 1u);
   EXPECT_EQ(m.skipped[0].frame_id, scene.frames[4].id);
   EXPECT_NE(m.skipped[0].reason.find("frame4.npy"), std::string::npos);
+  EXPECT_FALSE(m.skipped[0].unusable);
   EXPECT_EQ(m.fused_ids,
             (std::vector<std::string>{scene.frames[1].id, scene.frames[2].id, scene.frames[3].id}));
   EXPECT_THROW(FuseScope(scene, 3, 4, o, load), InputError);  // a frame of the pair
+}
+
+// A window or scene scope lists the unusable frames it leaves out, with the reader's reason
+// (they were left out without a word): a window's within its positions, a scene's all of them
+// (the stride numbers the usable frames only).
+TEST(FuseScope, ListsTheUnusableFramesOfTheScope) {
+  Scene scene = SynthScene();
+  scene.frames[1].usable = false;
+  scene.frames[1].unusable_reason = "pose: non-finite pose entries";
+  scene.frames[1].unusable_detail = "poses.txt:2: non-finite value";
+  scene.frames[9].usable = false;  // outside the window
+  scene.frames[9].unusable_reason = "depth: missing file";
+  PairTruthOptions o;
+  o.labels.min_depth_m = scene.min_depth_m;
+  o.labels.max_depth_m = scene.max_depth_m;
+  o.fusion.voxel_m = 0.1;
+  o.fusion.scope = occupancy::FusionScope::kWindow;
+  o.fusion.window = 1;
+  const FrameLoader load = [&](size_t i) { return LoadWorkingFrame(scene.frames[i], {80, 60}); };
+  const ScopeMap m = FuseScope(scene, 2, 3, o, load);  // window frames 1..4
+  EXPECT_EQ(m.fused_ids,
+            (std::vector<std::string>{scene.frames[2].id, scene.frames[3].id, scene.frames[4].id}));
+  ASSERT_EQ(m.skipped.size(), 1u);
+  EXPECT_EQ(m.skipped[0].frame_id, scene.frames[1].id);
+  EXPECT_EQ(m.skipped[0].reason,
+            "unusable: pose: non-finite pose entries; poses.txt:2: non-finite value");
+  EXPECT_TRUE(m.skipped[0].unusable);  // the build fails a sample on the others only
+  o.fusion.scope = occupancy::FusionScope::kScene;
+  o.fusion.scene_stride = 30;
+  const ScopeMap s = FuseScope(scene, 2, 3, o, load);
+  EXPECT_EQ(s.fused_ids, (std::vector<std::string>{scene.frames[0].id}));
+  ASSERT_EQ(s.skipped.size(), 2u);
+  EXPECT_EQ(s.skipped[0].frame_id, scene.frames[1].id);
+  EXPECT_EQ(s.skipped[1].frame_id, scene.frames[9].id);
+  EXPECT_EQ(s.skipped[1].reason, "unusable: depth: missing file");
+  // The pair scope is the pair's two frames: nothing else is left out.
+  o.fusion.scope = occupancy::FusionScope::kPair;
+  EXPECT_TRUE(FuseScope(scene, 2, 3, o, load).skipped.empty());
 }
 
 // A scene scope fuses every S-th usable frame, and one with nothing left to fuse is refused
