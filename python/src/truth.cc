@@ -608,7 +608,9 @@ void BindTruth(py::module_& m) {
             for (const auto& k : s.fused->skipped) out.append(py::make_tuple(k.frame_id, k.reason));
             return out;
           },
-          "[(frame id, reason)] of the scope's frames that could not be read (not fused)")
+          "[(frame id, reason)] of the scope's frames left out of the fusion, in scene order: "
+          "those the reader marks unusable (reason 'unusable: ...') and those whose depth could "
+          "not be read")
       .def_property_readonly(
           "fusion_stats",
           [](const PyScopeMap& s) {
