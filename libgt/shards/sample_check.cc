@@ -34,7 +34,7 @@ std::string ShapeText(const std::vector<int64_t>& shape) {
   return s + "]";
 }
 
-std::string Number(double v) {
+std::string FullPrecision(double v) {
   std::ostringstream o;
   o.precision(17);
   o << v;
@@ -144,7 +144,8 @@ class PairSampleChecker {
         Problem("json",
                 "T_0to1 differs from cam1_from_cam0 = inverse(world_from_cam1) * "
                 "world_from_cam0 by " +
-                    Number(off) + " (expected within " + Number(kPoseTolerance * scale) + ")");
+                    FullPrecision(off) + " (expected within " +
+                    FullPrecision(kPoseTolerance * scale) + ")");
       }
     }
     const json& po = meta_.at("patch_options");
@@ -268,11 +269,12 @@ class PairSampleChecker {
         const std::string at =
             "pixel (" + std::to_string(p % width_) + ", " + std::to_string(p / width_) + ")";
         if (bad) {
-          Problem(fields[d], at + " holds " + Number(z) + "; expected metres >= 0 (0 = invalid)");
+          Problem(fields[d],
+                  at + " holds " + FullPrecision(z) + "; expected metres >= 0 (0 = invalid)");
         } else {
-          Problem(fields[d], at + " holds " + Number(z) + " m, " +
+          Problem(fields[d], at + " holds " + FullPrecision(z) + " m, " +
                                  (no_depth ? "invalid" : "valid") + " in label_options' range [" +
-                                 Number(min_depth_m_) + ", " + Number(max_depth_m_) +
+                                 FullPrecision(min_depth_m_) + ", " + FullPrecision(max_depth_m_) +
                                  "] m, while " + (d == 0 ? "label01" : "label10") + " says " +
                                  PixelLabelName(static_cast<PixelLabel>(labels[p])));
         }
@@ -377,8 +379,8 @@ class PairSampleChecker {
             TargetCell(pts[2 * k], pts[2 * k + 1], cells_w, cells_h, stride_, anchor_);
         const int64_t other = type[k] == 2 ? i : j;
         if (target != other) {
-          return Problem("match_xy.npy", row() + " (" + Number(pts[2 * k]) + ", " +
-                                             Number(pts[2 * k + 1]) + ") lies in cell " +
+          return Problem("match_xy.npy", row() + " (" + FullPrecision(pts[2 * k]) + ", " +
+                                             FullPrecision(pts[2 * k + 1]) + ") lies in cell " +
                                              std::to_string(target) + " of image " +
                                              (type[k] == 2 ? "0" : "1") + ", matches.npy says " +
                                              std::to_string(other));

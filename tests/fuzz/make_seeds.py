@@ -297,8 +297,88 @@ def main():
     put("gzip", "empty", gz.compress(b"", mtime=0))
     put("gzip", "two_members", gz.compress(b"x", mtime=0) + gz.compress(b"y", mtime=0))
 
+    # --- stored pair samples (sample_check_fuzz: records of name, size, bytes): a small
+    # sample consistent with its json (every check passes), with occupancy words and a PNG,
+    # and variants without images or occupancy.
+    for tag, sample in PairSamples():
+        put("sample_check", tag, b"".join(
+            bytes([len(name)]) + name.encode() + struct.pack("<I", len(data)) + data
+            for name, data in sample))
+
     for target, n in sorted(counts.items()):
         print(f"make_seeds.py: {target}: {n} seeds")
+
+
+def PairSamples():
+    """Small pair samples as `occgt build` stores them, consistent with their json: 16x12
+    pixels, stride 4, one vv match, occupancy words of 4 bins, a PNG of each image."""
+    import json
+
+    w, h, s, bins = 16, 12, 4, 4
+    names = ["NO_DEPTH", "OUT_OF_VIEW", "VISIBLE", "OCCLUDED", "INCONSISTENT", "UNKNOWN"]
+    label = np.ones((h, w), np.uint8)  # OUT_OF_VIEW
+    label[:, :8] = 2  # VISIBLE
+    label[0, 15] = 0  # NO_DEPTH where the depth is 0
+    depth = np.full((h, w), 2.0, np.float32)
+    depth[0, 15] = 0
+
+    def npy(a):
+        b = io.BytesIO()
+        np.save(b, a)
+        return b.getvalue()
+
+    def metrics(lab, stride):
+        g = lab[::stride, ::stride]
+        c = {n: int((g == k).sum()) for k, n in enumerate(names)}
+        sampled = int(g.size)
+        valid = sampled - c["NO_DEPTH"]
+        vis, occ = c["VISIBLE"], c["OCCLUDED"]
+        seen = vis + occ + c["INCONSISTENT"] + c["UNKNOWN"]
+        return {"sampled": sampled, "valid": valid, "counts": c,
+                "overlap": seen / valid if valid else 0.0,
+                "consistent_overlap": vis / sampled, "occlusion_ratio": occ / sampled,
+                "occlusion_ratio_visible": occ / (vis + occ) if vis + occ else 0.0}
+
+    cells = label[s // 2::s, s // 2::s][:h // s, :w // s].copy()
+    # One vv match: cell 0 of image 0 (anchor (2, 2), VISIBLE) to cell 0 of image 1.
+    matches = np.array([[0, 0]], np.int32)
+    match_type = np.zeros(1, np.uint8)
+    match_xy = np.array([[2.0, 2.0]], np.float32)
+    occ = np.zeros((h // 2, w // 2), np.uint64)
+    known = np.full((h // 2, w // 2), 0b0111, np.uint64)
+    occ[0, 0] = 0b0100
+    K = [[20.0, 0.0, 7.5], [0.0, 20.0, 5.5], [0.0, 0.0, 1.0]]
+    eye = np.eye(4).tolist()
+    png = io.BytesIO()
+    Image.fromarray(np.zeros((h, w, 3), np.uint8)).save(png, format="PNG")
+    occupied, known_bits = 1, 3 * (h // 2) * (w // 2)
+    meta = {
+        "key": "s/0_1", "scene": "s", "frame0": {"id": "0", "number": 0},
+        "frame1": {"id": "1", "number": 1}, "resolution": [w, h], "K0": K, "K1": K,
+        "world_from_cam0": eye, "world_from_cam1": eye, "T_0to1": eye,
+        "metrics": {"01": metrics(label, 1), "10": metrics(label, 1)},
+        "score_metrics": {"01": metrics(label, 2), "10": metrics(label, 2)},
+        "matches": {"total": 1, "vv": 1, "vo": 0, "ov": 0}, "score_stride": 2,
+        "label_options": {"min_depth_m": 0.1, "max_depth_m": 10.0},
+        "patch_options": {"stride": s, "anchor": "center", "mutual": True},
+        "occupancy": {"bins": {"edges_m": [0.1, 1.0, 2.0, 3.0, 4.0]}, "encoding": "packed",
+                      "grid": [w // 2, h // 2],
+                      "counts0": {"occupied": occupied, "free": known_bits - occupied,
+                                  "unknown": bins * (h // 2) * (w // 2) - known_bits},
+                      "counts1": {"occupied": occupied, "free": known_bits - occupied,
+                                  "unknown": bins * (h // 2) * (w // 2) - known_bits}},
+        "image": {"format": "png"}}
+    members = [("label01.npy", npy(label)), ("label10.npy", npy(label)),
+               ("matches.npy", npy(matches)), ("match_type.npy", npy(match_type)),
+               ("match_xy.npy", npy(match_xy)), ("cells0.npy", npy(cells)),
+               ("cells1.npy", npy(cells)), ("occ0.npy", npy(occ)), ("known0.npy", npy(known)),
+               ("occ1.npy", npy(occ)), ("known1.npy", npy(known)),
+               ("image0.png", png.getvalue()), ("image1.png", png.getvalue()),
+               ("depth0.npy", npy(depth)), ("depth1.npy", npy(depth))]
+    yield "full", [("json", json.dumps(meta).encode())] + members
+    bare = dict(meta, occupancy=None, image=None)
+    yield "bare", [("json", json.dumps(bare).encode())] + [
+        m for m in members if not m[0].startswith(("occ", "known", "image"))]
 
 
 def Exr(channels, width, height):
