@@ -8,9 +8,11 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -29,17 +31,24 @@
 namespace occgt {
 namespace {
 
+// Decimal numbers only: [+-]digits[.digits][e[+-]digits]. std::stod alone also takes a
+// leading space, hexadecimal ("0x10" is 16), "inf" and "nan".
+bool IsDecimalNumber(const std::string& item) {
+  static const std::regex decimal(R"([+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?)");
+  return std::regex_match(item, decimal);
+}
+
 std::vector<double> ParseList(const std::string& text, const std::string& flag) {
   std::vector<double> out;
   for (const std::string& item : SplitList(text, flag, "numbers")) {
     size_t used = 0;
     double v = 0;
     try {
-      v = std::stod(item, &used);
+      if (IsDecimalNumber(item)) v = std::stod(item, &used);
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used != item.size()) {
+    if (used != item.size() || !std::isfinite(v)) {
       throw gt::InputError(flag, "expected comma-separated numbers, got '" + text + "'");
     }
     for (const double earlier : out) {

@@ -384,6 +384,9 @@ def main():
                  ["--auc", "5,,10"], ["--occlusion", "image,"], ["--estimator", "ransac,"],
                  ["--ransac-px", "0.5,0.5"], ["--estimator", "ransac,ransac"],
                  ["--curve-step", "1e-9"], ["--auc", "5,200"],
+                 # Not decimal numbers (std::stod took them: 0x10 was 16, " 5" was 5).
+                 ["--auc", "0x10"], ["--auc", " 5"], ["--ransac-px", "0.5,inf"],
+                 ["--occlusion-bins", "nan"],
                  # A --predictions without a path, or a set name that is blank or breaks the
                  # summary's lines.
                  ["--predictions", "foo="], ["--predictions", " =" + gt_path],
