@@ -12,7 +12,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -34,8 +33,24 @@ namespace {
 // Decimal numbers only: [+-]digits[.digits][e[+-]digits]. std::stod alone also takes a
 // leading space, hexadecimal ("0x10" is 16), "inf" and "nan".
 bool IsDecimalNumber(const std::string& item) {
-  static const std::regex decimal(R"([+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?)");
-  return std::regex_match(item, decimal);
+  size_t i = item.empty() || (item[0] != '+' && item[0] != '-') ? 0 : 1;
+  auto digits = [&] {
+    const size_t from = i;
+    while (i < item.size() && item[i] >= '0' && item[i] <= '9') ++i;
+    return i - from;
+  };
+  size_t mantissa = digits();
+  if (i < item.size() && item[i] == '.') {
+    ++i;
+    mantissa += digits();
+  }
+  if (mantissa == 0) return false;
+  if (i < item.size() && (item[i] == 'e' || item[i] == 'E')) {
+    ++i;
+    if (i < item.size() && (item[i] == '+' || item[i] == '-')) ++i;
+    if (digits() == 0) return false;
+  }
+  return i == item.size();
 }
 
 std::vector<double> ParseList(const std::string& text, const std::string& flag) {
