@@ -20,6 +20,7 @@
 #include "libgt/io/npy.h"
 #include "libgt/shards/loftr_tree.h"
 #include "libgt/shards/sample.h"
+#include "libgt/shards/sample_check.h"
 #include "libgt/shards/split.h"
 #include "libgt/shards/tar_shard.h"
 
@@ -301,6 +302,19 @@ std::string SampleTruthArrays(const json& meta, const std::map<std::string, io::
   truth->matches = matches->As<int32_t>(where + ".matches.npy");
   truth->match_type = types->As<uint8_t>(where + ".match_type.npy");
   truth->num_matches = matches->shape[0];
+  // The members' values against the json and each other (label codes and counts, depth
+  // against NO_DEPTH, match rules; shards/sample_check.h, the rules of occgt validate): a
+  // damaged sample would otherwise score silently wrong.
+  std::map<std::string, shards::StoredArray> views;
+  for (const auto& [field, a] : arrays) {
+    views[field] = shards::StoredArray{a.descr, a.shape, a.data.data()};
+  }
+  const std::vector<std::string> problems = shards::CheckPairSampleValues(meta, views, {});
+  if (!problems.empty()) {
+    const std::string& p = problems.front();
+    const size_t colon = p.find(": ");
+    throw InputError(where + "." + p.substr(0, colon), p.substr(colon + 2));
+  }
   return "";
 }
 
