@@ -79,43 +79,28 @@ def main():
 def check_damaged_labels(split, gt):
     """A label code 9 in a sample's label01 (index.json's size and MD5 updated) stops eval
     with one line naming the member (shards::CheckPairSampleValues); it used to be scored."""
-    import gzip
-    import hashlib
     import io
     import json
     import shutil
-    import tarfile
 
     damaged = split + "_damaged_labels"
     shutil.rmtree(damaged, ignore_errors=True)
     shutil.copytree(split, damaged)
     with open(os.path.join(damaged, "index.json")) as f:
-        index = json.load(f)
-    tar_path = os.path.join(damaged, index["shardlist"][0]["url"])
-    with tarfile.open(tar_path) as t:
-        members = [(m, t.extractfile(m).read()) for m in t.getmembers()]
-    key = members[0][0].name.split(".", 1)[0]
-    out = io.BytesIO()
-    with tarfile.open(fileobj=out, mode="w", format=tarfile.USTAR_FORMAT) as t:
-        for m, data in members:
-            if m.name.startswith(key + ".label01.npy"):
-                gz = m.name.endswith(".gz")
-                labels = np.load(io.BytesIO(gzip.decompress(data) if gz else data))
-                labels[2, 3] = 9
-                b = io.BytesIO()
-                np.save(b, labels)
-                data = gzip.compress(b.getvalue(), mtime=0) if gz else b.getvalue()
-                m.size = len(data)
-            t.addfile(m, io.BytesIO(data))
-    with open(tar_path, "wb") as f:
-        f.write(out.getvalue())
-    index["shardlist"][0]["filesize"] = len(out.getvalue())
-    index["shardlist"][0]["md5sum"] = hashlib.md5(out.getvalue()).hexdigest()
-    with open(os.path.join(damaged, "index.json"), "w") as f:
-        json.dump(index, f)
+        tar_path = os.path.join(damaged, json.load(f)["shardlist"][0]["url"])
+
+    def label_9(plain):
+        labels = np.load(io.BytesIO(plain))
+        labels[2, 3] = 9
+        b = io.BytesIO()
+        np.save(b, labels)
+        return b.getvalue()
+
+    key = common.edit_first_sample_member(tar_path, "label01.npy", label_9)
     out_json = damaged + ".json"
     r = common.occgt("eval", damaged, "--predictions", "gt=" + gt, "--out", out_json, check=False)
-    want = f"occgt: error: eval: {tar_path}:{key}.label01.npy: pixel (3, 2) holds 9; expected a label code 0..5"
+    want = (f"occgt: error: eval: {tar_path}:{key}.label01.npy: pixel (3, 2) holds 9; "
+            f"expected a label code 0..5")
     assert r.returncode == 1 and r.stderr.strip() == want, (r.returncode, r.stderr)
     assert not os.path.exists(out_json)
 

@@ -111,3 +111,41 @@ def assert_same_outputs(ref, out, skip_dirs=()):
 def tmp_files(root):
     """Leftover temporary files (*.tmp) anywhere under root."""
     return [p for p in tree_files(root) if p.endswith(".tmp") or ".tmp." in os.path.basename(p)]
+
+
+def edit_first_sample_member(tar_path, field, edit):
+    """Rewrites member `field` (its plain name: "label01.npy", "json") of the first sample of
+    the shard `tar_path` as edit(bytes) -> bytes, keeping its compression (.gz or not), and
+    records the shard's new size and MD5 in the index.json beside it, so that only the values
+    are wrong. Returns the sample's key."""
+    import gzip
+    import hashlib
+    import io
+    import json
+    import tarfile
+
+    with tarfile.open(tar_path) as t:
+        members = [(m, t.extractfile(m).read()) for m in t.getmembers()]
+    key = members[0][0].name.split(".", 1)[0]
+    out = io.BytesIO()
+    with tarfile.open(fileobj=out, mode="w", format=tarfile.USTAR_FORMAT) as t:
+        for m, data in members:
+            name_key, name_field = m.name.split(".", 1)
+            if name_key == key and name_field.removesuffix(".gz") == field:
+                gz = name_field.endswith(".gz")
+                data = edit(gzip.decompress(data) if gz else data)
+                data = gzip.compress(data, mtime=0) if gz else data
+                m.size = len(data)
+            t.addfile(m, io.BytesIO(data))
+    with open(tar_path, "wb") as f:
+        f.write(out.getvalue())
+    index_path = os.path.join(os.path.dirname(tar_path), "index.json")
+    with open(index_path) as f:
+        index = json.load(f)
+    for e in index["shardlist"]:
+        if e["url"] == os.path.basename(tar_path):
+            e["filesize"] = len(out.getvalue())
+            e["md5sum"] = hashlib.md5(out.getvalue()).hexdigest()
+    with open(index_path, "w") as f:
+        json.dump(index, f)
+    return key
