@@ -16,6 +16,11 @@ Camera Camera::FromK(const Eigen::Matrix3d& K, int width, int height) {
   return c;
 }
 
+bool Camera::IsPinholeMatrix(const Eigen::Matrix3d& K) {
+  return K.allFinite() && K(0, 1) == 0 && K(1, 0) == 0 && K(2, 0) == 0 && K(2, 1) == 0 &&
+         K(2, 2) == 1;
+}
+
 Eigen::Matrix3d Camera::K() const {
   Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
   K(0, 0) = fx;

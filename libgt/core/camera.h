@@ -27,6 +27,9 @@ struct Camera {
   double fx = 0, fy = 0, cx = 0, cy = 0;
 
   static Camera FromK(const Eigen::Matrix3d& K, int width, int height);
+  // True when K is finite and of the layout FromK reads, [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]
+  // (no skew: a K that is not would lose entries in FromK; the signs of fx, fy are Check's).
+  static bool IsPinholeMatrix(const Eigen::Matrix3d& K);
   Eigen::Matrix3d K() const;
 
   // True when the size is positive, the entries of K finite and the focal lengths > 0.

@@ -7,6 +7,7 @@
 #include <regex>
 #include <set>
 
+#include "libgt/core/camera.h"
 #include "libgt/core/error.h"
 #include "libgt/datasets/json_input.h"
 #include "libgt/datasets/readers.h"
@@ -97,8 +98,7 @@ class Validator {
 
   Camera CameraOf(const json& K, const std::string& k_field, int width, int height) const {
     const Eigen::Matrix3d k = Matrix(K, k_field, 3, 3);
-    if (!k.allFinite() || k(0, 1) != 0 || k(1, 0) != 0 || k(2, 0) != 0 || k(2, 1) != 0 ||
-        k(2, 2) != 1) {
+    if (!Camera::IsPinholeMatrix(k)) {
       Fail(k_field, "expected K = [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]");
     }
     const Camera cam = Camera::FromK(k, width, height);

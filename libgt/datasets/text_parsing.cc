@@ -9,6 +9,7 @@
 #include <map>
 #include <sstream>
 
+#include "libgt/core/camera.h"
 #include "libgt/core/error.h"
 #include "libgt/io/file_read.h"
 
@@ -243,8 +244,7 @@ Eigen::Matrix3d ParseIntrinsicsText(std::string_view text, const std::string& na
 
 Eigen::Matrix3d CheckedIntrinsics(const Eigen::Matrix3d& K, const std::string& where) {
   // A skew (K(0,1)) or K(1,0) has no place in occgt's pinhole camera: refused, not dropped.
-  if (!K.allFinite() || !(K(0, 0) > 0) || !(K(1, 1) > 0) || K(0, 1) != 0 || K(1, 0) != 0 ||
-      K(2, 0) != 0 || K(2, 1) != 0 || K(2, 2) != 1) {
+  if (!Camera::IsPinholeMatrix(K) || !(K(0, 0) > 0) || !(K(1, 1) > 0)) {
     throw InputError(where, "expected K = [[fx 0 cx] [0 fy cy] [0 0 1]] with finite fx, fy > 0");
   }
   return K;

@@ -212,7 +212,7 @@ gt::Camera CameraFromArray(py::handle obj, int width, int height, const std::str
         << ", " << K(2, 2) << "]]";
     ThrowValue(argument, got.str());
   }
-  if (K(0, 1) != 0 || K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0 || K(2, 2) != 1) {
+  if (!gt::Camera::IsPinholeMatrix(K)) {
     std::ostringstream got;
     got << "expected " << expected << " (no skew, last row 0 0 1), got [[" << K(0, 0) << ", "
         << K(0, 1) << ", " << K(0, 2) << "], [" << K(1, 0) << ", " << K(1, 1) << ", " << K(1, 2)
