@@ -305,11 +305,7 @@ std::string SampleTruthArrays(const json& meta, const std::map<std::string, io::
   // The members' values against the json and each other (label codes and counts, depth
   // against NO_DEPTH, match rules; shards/sample_check.h, the rules of occgt validate): a
   // damaged sample would otherwise score silently wrong.
-  std::map<std::string, shards::StoredArray> views;
-  for (const auto& [field, a] : arrays) {
-    views[field] = shards::StoredArray{a.descr, a.shape, a.data.data()};
-  }
-  const std::vector<std::string> problems = shards::CheckPairSampleValues(meta, views, {});
+  const std::vector<std::string> problems = shards::CheckPairSampleValues(meta, arrays);
   if (!problems.empty()) {
     const std::string& p = problems.front();
     const size_t colon = p.find(": ");

@@ -118,8 +118,7 @@ class PairSampleChecker {
     for (const char* k : {"K0", "K1"}) {
       const Eigen::Matrix3d K = Matrix(meta_.at(k), 3, 3);
       std::string error;
-      if (!K.allFinite() || K(0, 1) != 0 || K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0 ||
-          K(2, 2) != 1) {
+      if (!Camera::IsPinholeMatrix(K)) {
         Problem("json", std::string(k) + ": expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]");
         ok = false;
       } else if (!Camera::FromK(K, width_, height_).Check(&error)) {
@@ -308,6 +307,7 @@ class PairSampleChecker {
                                         std::to_string(
                                             labels_[d][static_cast<size_t>(v) * width_ + u])));
             r = cells_h;
+            cells = nullptr;  // not used for the matches' rules
             break;
           }
         }
@@ -561,6 +561,14 @@ std::vector<std::string> CheckPairSampleValues(
     const std::map<std::string, std::string_view>& images) {
   if (!meta.is_object()) return {"json: expected a JSON object"};
   return PairSampleChecker(meta, arrays, images).Run();
+}
+
+std::vector<std::string> CheckPairSampleValues(
+    const nlohmann::json& meta, const std::map<std::string, io::NpyArray>& arrays,
+    const std::map<std::string, std::string_view>& images) {
+  std::map<std::string, StoredArray> views;
+  for (const auto& [field, a] : arrays) views[field] = StoredArray{a.descr, a.shape, a.data.data()};
+  return CheckPairSampleValues(meta, views, images);
 }
 
 std::vector<std::string> CheckPairSampleMembers(const nlohmann::json& meta,

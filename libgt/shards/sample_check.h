@@ -29,6 +29,8 @@
 #include <string_view>
 #include <vector>
 
+#include "libgt/io/npy.h"
+
 namespace gt::shards {
 
 // One .npy member as stored: its descr ("<f4", "|u1"), C-order shape and data (not owned;
@@ -47,6 +49,10 @@ struct StoredArray {
 std::vector<std::string> CheckPairSampleValues(
     const nlohmann::json& meta, const std::map<std::string, StoredArray>& arrays,
     const std::map<std::string, std::string_view>& images);
+// The same over .npy members parsed by io::ParseNpy (validate, eval), viewed, not copied.
+std::vector<std::string> CheckPairSampleValues(
+    const nlohmann::json& meta, const std::map<std::string, io::NpyArray>& arrays,
+    const std::map<std::string, std::string_view>& images = {});
 
 // The member set of a pair sample against its json: json, matches.npy, match_type.npy,
 // match_xy.npy; label01/label10/cells0/cells1 all or none; depth0/depth1 both or none;

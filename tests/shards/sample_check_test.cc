@@ -36,10 +36,8 @@ struct Decoded {
 
   std::vector<std::string> Problems() const {
     std::vector<std::string> p = CheckPairSampleMembers(meta, fields);
-    std::map<std::string, StoredArray> views;
-    for (const auto& [f, a] : arrays) views[f] = StoredArray{a.descr, a.shape, a.data.data()};
     const std::map<std::string, std::string_view> image_views(images.begin(), images.end());
-    for (std::string& q : CheckPairSampleValues(meta, views, image_views)) p.push_back(q);
+    for (std::string& q : CheckPairSampleValues(meta, arrays, image_views)) p.push_back(q);
     return p;
   }
   template <typename T>
