@@ -409,13 +409,12 @@ class ShardDataset(_ShardSplit):
         rows = member("matches.npy", "i4", (None, 2)).shape[0]
         member("match_type.npy", "u1", (rows,))
         member("match_xy.npy", "f4", (rows, 2))
-        if self.occupancy == "words" or (self.occupancy == "dense" and
-                                         not _has(members, "occ0_dense.npy")):
-            for name in ("occ0", "known0", "occ1", "known1"):
-                member(name + ".npy", "u8", grid)
-        elif self.occupancy == "dense":
-            for c in "01":
+        for c in "01":  # "dense": each camera's stored volume, else its words
+            if self.occupancy == "dense" and _has(members, f"occ{c}_dense.npy"):
                 member(f"occ{c}_dense.npy", "u1", (bins,) + grid)
+            elif self.occupancy != "none":
+                member(f"occ{c}.npy", "u8", grid)
+                member(f"known{c}.npy", "u8", grid)
         # The json and these arrays against each other, in C++ (shards::CheckPairSampleValues:
         # poses and K, label codes and counts, depth against NO_DEPTH, cells, matches by their
         # rules, occupancy), so that a damaged sample never reaches a trainer.
