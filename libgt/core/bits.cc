@@ -1,25 +1,45 @@
 #include "libgt/core/bits.h"
 
+#include <cstring>
+
 namespace gt {
 namespace {
 
-__attribute__((target("popcnt"))) int64_t CountSetBitsPopcnt(const uint64_t* words, size_t n) {
+template <typename Word>
+__attribute__((target("popcnt"))) int64_t CountSetBitsPopcnt(const Word* words, size_t n) {
   int64_t bits = 0;
   for (size_t i = 0; i < n; ++i) bits += __builtin_popcountll(words[i]);
   return bits;
 }
 
-int64_t CountSetBitsGeneric(const uint64_t* words, size_t n) {
+template <typename Word>
+int64_t CountSetBitsGeneric(const Word* words, size_t n) {
   int64_t bits = 0;
   for (size_t i = 0; i < n; ++i) bits += __builtin_popcountll(words[i]);
   return bits;
+}
+
+template <typename Word>
+int64_t CountSetBitsOf(const Word* words, size_t n) {
+  static const bool has_popcnt = __builtin_cpu_supports("popcnt");
+  return has_popcnt ? CountSetBitsPopcnt(words, n) : CountSetBitsGeneric(words, n);
 }
 
 }  // namespace
 
-int64_t CountSetBits(const uint64_t* words, size_t n) {
-  static const bool has_popcnt = __builtin_cpu_supports("popcnt");
-  return has_popcnt ? CountSetBitsPopcnt(words, n) : CountSetBitsGeneric(words, n);
+int64_t CountSetBits(const uint64_t* words, size_t n) { return CountSetBitsOf(words, n); }
+
+int64_t CountSetBits(const uint32_t* words, size_t n) {
+  // Two 32-bit words per 64-bit count (the sum is the same), in chunks of aligned copies.
+  constexpr size_t kChunk = 1024;
+  uint64_t wide[kChunk / 2];
+  int64_t bits = 0;
+  size_t i = 0;
+  for (; i + kChunk <= n; i += kChunk) {
+    std::memcpy(wide, words + i, sizeof(wide));
+    bits += CountSetBitsOf(wide, kChunk / 2);
+  }
+  return bits + CountSetBitsOf(words + i, n - i);
 }
 
 }  // namespace gt

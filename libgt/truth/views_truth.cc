@@ -164,14 +164,12 @@ bool ViewsTruthOptions::Check(std::string* error) const {
   return true;
 }
 
-std::vector<int32_t> SampleQueries(const DepthImage& depth, const LabelOptions& labels,
-                                   int num_tracks, uint64_t seed) {
-  std::vector<int32_t> valid;  // raster indices
-  for (size_t p = 0; p < depth.values_m.size(); ++p) {
-    if (IsValidDepth(depth.values_m[p], labels.min_depth_m, labels.max_depth_m)) {
-      valid.push_back(static_cast<int32_t>(p));
-    }
-  }
+namespace {
+
+// num_tracks of the raster indices `valid` (ascending) drawn by the rule of views_truth.h,
+// as (u, v) pairs.
+std::vector<int32_t> SampleOfValid(std::vector<int32_t> valid, int width, int num_tracks,
+                                   uint64_t seed) {
   const size_t k = std::min(valid.size(), static_cast<size_t>(std::max(num_tracks, 0)));
   if (k < valid.size()) {
     std::mt19937_64 rng(seed);
@@ -184,10 +182,33 @@ std::vector<int32_t> SampleQueries(const DepthImage& depth, const LabelOptions& 
   }
   std::vector<int32_t> uv(2 * k);
   for (size_t i = 0; i < k; ++i) {
-    uv[2 * i] = valid[i] % depth.width;
-    uv[2 * i + 1] = valid[i] / depth.width;
+    uv[2 * i] = valid[i] % width;
+    uv[2 * i + 1] = valid[i] / width;
   }
   return uv;
+}
+
+}  // namespace
+
+std::vector<int32_t> SampleQueries(const DepthImage& depth, const LabelOptions& labels,
+                                   int num_tracks, uint64_t seed) {
+  std::vector<int32_t> valid;  // raster indices
+  for (size_t p = 0; p < depth.values_m.size(); ++p) {
+    if (IsValidDepth(depth.values_m[p], labels.min_depth_m, labels.max_depth_m)) {
+      valid.push_back(static_cast<int32_t>(p));
+    }
+  }
+  return SampleOfValid(std::move(valid), depth.width, num_tracks, seed);
+}
+
+std::vector<int32_t> SampleQueries(const uint8_t* valid, int width, int height, int num_tracks,
+                                   uint64_t seed) {
+  std::vector<int32_t> indices;
+  const size_t n = static_cast<size_t>(width) * static_cast<size_t>(height);
+  for (size_t p = 0; p < n; ++p) {
+    if (valid[p] != 0) indices.push_back(static_cast<int32_t>(p));
+  }
+  return SampleOfValid(std::move(indices), width, num_tracks, seed);
 }
 
 SeenBy CountSeenBy(const uint32_t* visible_in, const uint8_t* valid, int num_views,
@@ -235,6 +256,15 @@ SeenBy CheckStoredViewsTruth(const uint32_t* visible_in, const uint32_t* occlude
   for (int i = 0; i < num_views; ++i) {
     const uint32_t self = 1u << i;
     const size_t p0 = pixels_per_view * static_cast<size_t>(i);
+    // A branch-free pass (vectorised) first; the element at fault is looked for only when
+    // there is one. valid is 0 or 1 here (CountSeenBy).
+    uint32_t fault = 0;
+    for (size_t p = p0; p < p0 + pixels_per_view; ++p) {
+      const uint32_t vis = visible_in[p], occ = occluded_in[p];
+      const uint32_t none = valid[p] - 1u;  // all ones where not valid, else 0
+      fault |= (occ & ~views_mask) | (vis & occ) | (none & (vis | occ)) | (~none & ~vis & self);
+    }
+    if (fault == 0) continue;
     for (size_t p = p0; p < p0 + pixels_per_view; ++p) {
       const uint32_t vis = visible_in[p], occ = occluded_in[p];
       if ((occ & ~views_mask) != 0) fail("occluded_in", beyond, p);

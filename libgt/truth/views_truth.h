@@ -100,6 +100,10 @@ ViewsTruth ComputeViewsTruth(const std::vector<WorkingFrame>& views,
 // The sampled queries alone (the rule above): [Q * 2] (u, v).
 std::vector<int32_t> SampleQueries(const DepthImage& depth, const LabelOptions& labels,
                                    int num_tracks, uint64_t seed);
+// The same rule over a view's valid mask (uint8 [height, width], nonzero = valid depth):
+// what a stored sample's `valid` gives (shards/views_sample_check.h).
+std::vector<int32_t> SampleQueries(const uint8_t* valid, int width, int height, int num_tracks,
+                                   uint64_t seed);
 
 // seen_by and seen_by_histogram of stored bitmasks (an N-view shard's visible_in and valid),
 // as ComputeViewsTruth returns them with those masks. visible_in uint32 and valid uint8, both
