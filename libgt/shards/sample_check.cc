@@ -6,7 +6,6 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <sstream>
 
 #include "libgt/core/bits.h"
 #include "libgt/core/camera.h"
@@ -15,8 +14,7 @@
 #include "libgt/core/pose.h"
 #include "libgt/geometry/labels.h"
 #include "libgt/geometry/patches.h"
-#include "libgt/io/codec.h"
-#include "libgt/io/depth_io.h"
+#include "libgt/shards/stored_checks.h"
 
 namespace gt::shards {
 
@@ -28,18 +26,7 @@ using json = nlohmann::json;
 // only rounding of the re-computation separates them.
 constexpr double kPoseTolerance = 1e-6;
 
-std::string ShapeText(const std::vector<int64_t>& shape) {
-  std::string s = "[";
-  for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
-  return s + "]";
-}
-
-std::string FullPrecision(double v) {
-  std::ostringstream o;
-  o.precision(17);
-  o << v;
-  return o.str();
-}
+using detail::FullPrecision;
 
 class PairSampleChecker {
  public:
@@ -72,37 +59,11 @@ class PairSampleChecker {
   // (absent) or a problem.
   const StoredArray* Array(const std::string& field, const char* descr,
                            const std::vector<int64_t>& shape, const std::string& shape_words) {
-    const auto it = arrays_.find(field);
-    if (it == arrays_.end()) return nullptr;
-    const StoredArray& a = it->second;
-    bool ok = a.descr == descr && a.shape.size() == shape.size();
-    for (size_t i = 0; ok && i < shape.size(); ++i) ok = shape[i] < 0 || a.shape[i] == shape[i];
-    if (!ok) {
-      std::vector<int64_t> want = shape;
-      for (size_t i = 0; i < want.size() && i < a.shape.size(); ++i) {
-        if (want[i] < 0) want[i] = a.shape[i];
-      }
-      Problem(field, std::string("expected ") + descr + " " + ShapeText(want) + " (" + shape_words +
-                         "), got " + a.descr + " " + ShapeText(a.shape));
-      return nullptr;
-    }
-    return &a;
+    return detail::FindArray(arrays_, field, descr, shape, shape_words, &problems_);
   }
 
   static Eigen::MatrixXd Matrix(const json& j, int rows, int cols) {
-    Eigen::MatrixXd m(rows, cols);
-    if (!j.is_array() || static_cast<int>(j.size()) != rows) {
-      throw json::type_error::create(
-          302, "expected a " + std::to_string(rows) + "x" + std::to_string(cols) + " matrix", &j);
-    }
-    for (int r = 0; r < rows; ++r) {
-      if (!j[r].is_array() || static_cast<int>(j[r].size()) != cols) {
-        throw json::type_error::create(
-            302, "expected a " + std::to_string(rows) + "x" + std::to_string(cols) + " matrix", &j);
-      }
-      for (int c = 0; c < cols; ++c) m(r, c) = j[r][c].get<double>();
-    }
-    return m;
+    return detail::JsonMatrix(j, rows, cols);
   }
 
   bool CheckJson() {
@@ -174,9 +135,9 @@ class PairSampleChecker {
       Problem("json", "matches " + m.dump() + ": expected counts >= 0 with vv + vo + ov = total");
       return false;
     }
-    const json& lo = meta_.at("label_options");
-    min_depth_m_ = lo.at("min_depth_m").get<double>();
-    max_depth_m_ = lo.at("max_depth_m").get<double>();
+    const detail::DepthRangeM range = detail::LabelDepthRange(meta_.at("label_options"));
+    min_depth_m_ = range.min_m;
+    max_depth_m_ = range.max_m;
     return ok;
   }
 
@@ -246,11 +207,7 @@ class PairSampleChecker {
       const auto no_depth_code = static_cast<uint8_t>(PixelLabel::kNoDepth);
       // A branch-free pass (vectorised) first; the first pixel at fault is found only when
       // there is one. Float bounds equal to IsValidDepth's double comparisons.
-      float lo = static_cast<float>(min_depth_m_), hi = static_cast<float>(max_depth_m_);
-      if (static_cast<double>(lo) < min_depth_m_) lo = std::nextafter(lo, kInf);
-      if (static_cast<double>(hi) > max_depth_m_) hi = std::nextafter(hi, -kInf);
-      lo = std::max(lo, kMinPositiveDepthM);
-      hi = std::min(hi, std::numeric_limits<float>::max());
+      const auto [lo, hi] = detail::FloatBoundsOf(min_depth_m_, max_depth_m_);
       uint8_t any = 0;
       for (size_t p = 0; p < n; ++p) {
         const float z = depth[p];
@@ -512,33 +469,14 @@ class PairSampleChecker {
 
   void CheckImages() {
     const json& image = meta_.at("image");
+    const std::string format = image.is_null() ? "" : image.at("format").get<std::string>();
     for (const auto& [field, bytes] : images_) {
-      const std::string format = field.substr(field.rfind('.') + 1);
-      if (image.is_null() || image.at("format").get<std::string>() != format) {
-        Problem(field, "the json's image.format is " +
-                           (image.is_null() ? std::string("null") : image.at("format").dump()));
-        continue;
-      }
-      std::string damage = format == "png" ? io::PngDamage(bytes) : io::JpegDamage(bytes);
-      if (!damage.empty()) {
-        Problem(field, damage);
-        continue;
-      }
-      try {
-        const io::ImageSize size = io::DecodeImageSize(bytes, field);
-        if (size.width != width_ || size.height != height_) {
-          Problem(field, "image is " + std::to_string(size.width) + "x" +
-                             std::to_string(size.height) + ", expected the json's resolution " +
-                             std::to_string(width_) + "x" + std::to_string(height_));
-        }
-      } catch (const InputError& e) {
-        Problem(field, e.what());
-      }
+      const std::string p = detail::ImageProblem(field, bytes, format, width_, height_);
+      if (!p.empty()) Problem(field, p);
     }
   }
 
   static constexpr const char* kTypeNames[3] = {"vv", "vo", "ov"};
-  static constexpr float kInf = std::numeric_limits<float>::infinity();
 
   const json& meta_;
   const std::map<std::string, StoredArray>& arrays_;
