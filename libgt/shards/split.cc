@@ -34,6 +34,7 @@
 #include "libgt/io/md5.h"
 #include "libgt/io/npy.h"
 #include "libgt/shards/sample_check.h"
+#include "libgt/shards/views_sample_check.h"
 
 namespace gt::shards {
 namespace {
@@ -258,12 +259,15 @@ struct SampleRead {
   std::map<std::string, std::string> images;
 };
 
-// The value problems of a pair sample read through, each "<key>.<field>: <problem>".
+// The value problems of a pair or N-view sample read through, each "<key>.<field>: <problem>".
 void CheckSampleValues(const SampleRead& s, std::vector<std::string>* problems) {
-  if (!s.doc || s.doc->value("kind", "") == "occgt-views-sample") return;
-  std::vector<std::string> found = CheckPairSampleMembers(*s.doc, s.fields);
+  if (!s.doc) return;
   const std::map<std::string, std::string_view> images(s.images.begin(), s.images.end());
-  for (std::string& p : CheckPairSampleValues(*s.doc, s.arrays, images)) {
+  const bool views = s.doc->value("kind", "") == "occgt-views-sample";
+  std::vector<std::string> found =
+      views ? CheckViewsSampleMembers(*s.doc, s.fields) : CheckPairSampleMembers(*s.doc, s.fields);
+  for (std::string& p : views ? CheckViewsSampleValues(*s.doc, s.arrays, images)
+                              : CheckPairSampleValues(*s.doc, s.arrays, images)) {
     found.push_back(std::move(p));
   }
   for (const std::string& p : found) problems->push_back(s.key + "." + p);
@@ -271,7 +275,7 @@ void CheckSampleValues(const SampleRead& s, std::vector<std::string>* problems) 
 
 // Checks that a tar holds exactly `expected_keys` (when given) with valid member names;
 // validates sample JSON with `sample_schema` (may be null), parses every .npy member and,
-// when `lines_out` is given, checks each pair sample's values against its json
+// when `lines_out` is given, checks each sample's values against its json
 // (CheckSampleValues) and gives the line digest of each sample (nullopt: its json is
 // unusable). Returns problems, each "<member>: <problem>"; `keys_out` gets the keys in order.
 std::vector<std::string> CheckTarContents(

@@ -184,8 +184,9 @@ struct ValidateOptions {
   std::string schemas_dir;  // the JSON Schemas' folder (index, sample, views_sample,
                             // pairs_line, views_line .schema.json, all required); "" = the
                             // copies of schemas/ built into the binary
-  // Each pair sample's members and values against its json and each other, and each
-  // pairs.jsonl line's values against its sample's json (sample_check.h); false: the
+  // Each sample's members and values against its json and each other (pair samples:
+  // sample_check.h; N-view samples: views_sample_check.h), and each pairs.jsonl line's
+  // values against its sample's json; false: the
   // structure only (tars, names, .npy headers, schemas, counts, keys), for a split whose
   // samples are not occgt build's.
   bool values = true;
@@ -195,8 +196,9 @@ struct ValidateOptions {
 // Re-checks a published split from DIR/index.json: schema of index.json, every shard's
 // size and MD5, sample counts and member names read back from the tars, every .npy
 // member's header, every .json member parses (and matches sample.schema.json), pairs.jsonl
-// has one line per sample naming an existing shard/key; with options.values, each pair
-// sample's values (sample_check.h) and each line's values against its sample's json. Reads every
+// has one line per sample naming an existing shard/key; with options.values, each sample's
+// values (sample_check.h, views_sample_check.h) and each line's values against its sample's
+// json. Reads every
 // byte of every shard; shards are checked in parallel (TBB, as many threads as tbb::global_control
 // allows) and their problems collected by shard index, so the lines and their order do not depend
 // on the thread count. Returns one line per problem ("<file>: <problem>"); empty = valid. Never

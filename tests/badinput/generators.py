@@ -234,6 +234,18 @@ def base_covis(case, occgt, cache):
     shutil.copytree(src, case, dirs_exist_ok=True, symlinks=True)
 
 
+def base_tuples(case, occgt, cache):
+    """`occgt tuples --shards` of TUPLES_RECIPE on the covis base: CASE/out/views holds the
+    N-view split (`occgt validate CASE/out/views`)."""
+    src = os.path.join(cache, "tuples")
+    if not os.path.exists(src):
+        os.makedirs(src)
+        base_covis(src, occgt, cache)
+        occgt("tuples", os.path.join(src, "recipe.yaml"), "--out", os.path.join(src, "out"),
+              "--shards")
+    shutil.copytree(src, case, dirs_exist_ok=True, symlinks=True)
+
+
 def base_pair(case, occgt, cache):
     """`occgt pair` and `occgt occupancy` of frames 000000,000001 of the generic base into
     CASE/pair (the folder `occgt inspect pair --pair-dir` reads)."""
@@ -261,6 +273,7 @@ BASES = {
     "generic": base_generic,
     "build": base_build,
     "covis": base_covis,
+    "tuples": base_tuples,
     "pair": base_pair,
     "empty": base_empty,
 }

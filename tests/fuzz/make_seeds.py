@@ -305,6 +305,13 @@ def main():
             bytes([len(name)]) + name.encode() + struct.pack("<I", len(data)) + data
             for name, data in sample))
 
+    # --- stored N-view samples, the same records (views_sample_check.h): a 2-view sample
+    # consistent with its json, with tracks in every state but NO_DEPTH, and one without images.
+    for tag, sample in ViewsSamples():
+        put("sample_check", tag, b"".join(
+            bytes([len(name)]) + name.encode() + struct.pack("<I", len(data)) + data
+            for name, data in sample))
+
     for target, n in sorted(counts.items()):
         print(f"make_seeds.py: {target}: {n} seeds")
 
@@ -379,6 +386,73 @@ def PairSamples():
     bare = dict(meta, occupancy=None, image=None)
     yield "bare", [("json", json.dumps(bare).encode())] + [
         m for m in members if not m[0].startswith(("occ", "known", "image"))]
+
+
+def ViewsSamples():
+    """Small N-view samples as `occgt tuples --shards` stores them, consistent with their json:
+    2 views of 8x6 pixels; view 0's left half VISIBLE in view 1, one pixel OCCLUDED there;
+    num_tracks above the valid pixels, so the queries are all of view 0's valid pixels."""
+    import json
+
+    w, h, n = 8, 6, 2
+    depth = np.full((h, w), 2.0, np.float32)
+    depth[0, 7] = 0  # invalid
+    valid = np.stack([(depth > 0).astype(np.uint8)] * n)
+    vis = np.zeros((n, h, w), np.uint32)
+    occ = np.zeros((n, h, w), np.uint32)
+    for i in range(n):
+        vis[i][valid[i] == 1] |= np.uint32(1 << i)
+    vis[0][:, :4] |= np.uint32(2)
+    occ[0][2, 5] = 2
+    queries = np.array([[u, v] for v in range(h) for u in range(w) if valid[0, v, u]], np.int32)
+    q = len(queries)
+    xy = np.full((n, q, 2), np.nan, np.float32)
+    track_depth = np.full((n, q), np.nan, np.float32)
+    state = np.full((n, q), 2, np.uint8)  # OUT_OF_VIEW
+    for k, (u, v) in enumerate(queries):
+        xy[0, k] = (u, v)
+        track_depth[0, k] = depth[v, u]
+        state[0, k] = 0
+        if vis[0, v, u] & 2 or occ[0, v, u] & 2:
+            xy[1, k] = (u + 0.5, v)
+            track_depth[1, k] = 2.0
+            state[1, k] = 0 if vis[0, v, u] & 2 else 1
+    visible = sum(bin(int(x) & ~(1 << i)).count("1") for i in range(n) for x in vis[i].ravel())
+    occluded = int(sum(bin(int(x)).count("1") for x in occ.ravel()))
+
+    def npy(a):
+        b = io.BytesIO()
+        np.save(b, a)
+        return b.getvalue()
+
+    K = [[10.0, 0.0, 3.5], [0.0, 10.0, 2.5], [0.0, 0.0, 1.0]]
+    poses = [np.eye(4).tolist(), np.eye(4).tolist()]
+    poses[1][0][3] = 0.25
+    png = io.BytesIO()
+    Image.fromarray(np.zeros((h, w, 3), np.uint8)).save(png, format="PNG")
+    meta = {
+        "kind": "occgt-views-sample", "key": "s/tuple_000000", "scene": "s", "tuple_index": 0,
+        "num_views": n, "frames": [{"id": "a", "number": 0}, {"id": "b", "number": 1}],
+        "resolution": [w, h], "K": [K, K], "world_from_cam": poses,
+        "covisibility": [[1.0, 0.5], [0.5, 1.0]],
+        "label_options": {"min_depth_m": 0.0, "max_depth_m": 10.0},
+        "tracks": {"num_tracks": 64, "query_view": 0, "seed": 0, "count": q},
+        "metrics": {"counts": {"VISIBLE": visible, "OCCLUDED": occluded},
+                    "valid": int(valid.sum()),
+                    "occlusion_ratio_visible": occluded / (visible + occluded)},
+        "image": {"format": "png", "K": [K, K]}, "compression": "none",
+        "options_digest": "0" * 32, "recipe": "r", "split": "s"}
+    members = [("depth0.npy", npy(depth)), ("depth1.npy", npy(depth)),
+               ("intrinsics.npy", npy(np.array([K, K]))),
+               ("world_from_cam.npy", npy(np.array(poses))), ("visible_in.npy", npy(vis)),
+               ("occluded_in.npy", npy(occ)), ("valid.npy", npy(valid)),
+               ("queries.npy", npy(queries)), ("track_xy.npy", npy(xy)),
+               ("track_depth.npy", npy(track_depth)), ("track_state.npy", npy(state)),
+               ("image0.png", png.getvalue()), ("image1.png", png.getvalue())]
+    yield "views", [("json", json.dumps(meta).encode())] + members
+    bare = dict(meta, image=None)
+    yield "views_bare", [("json", json.dumps(bare).encode())] + [
+        m for m in members if not m[0].startswith("image")]
 
 
 def Exr(channels, width, height):

@@ -1,10 +1,12 @@
-// A stored pair sample's members -> gt::shards::CheckPairSampleMembers and
-// CheckPairSampleValues (occgt validate and ShardDataset run them on a split's bytes).
+// A stored pair or N-view sample's members -> gt::shards::CheckPairSampleMembers and
+// CheckPairSampleValues, CheckViewsSampleMembers and CheckViewsSampleValues (occgt validate,
+// ShardDataset and TupleShardDataset run them on a split's bytes); both sets on every input.
 // Input: records [name length: 1 byte][name][size: 4 bytes, little-endian][bytes], one per
 // member ("json", "label01.npy", "image0.png", ...); a cut record ends the input. The json is
 // parsed without exceptions, a .npy member with io::ParseNpy (a bad one is left out, as
 // validate reports it before the value checks), every other member is an image. Both checks
 // must return problems, never throw, whatever the json's numbers and the arrays' shapes.
+// With OCCGT_FUZZ_PRINT set, the problems are printed (to check that a seed is consistent).
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -18,6 +20,7 @@
 #include "libgt/core/error.h"
 #include "libgt/io/npy.h"
 #include "libgt/shards/sample_check.h"
+#include "libgt/shards/views_sample_check.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   nlohmann::json meta;
@@ -54,8 +57,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     for (std::string& p : gt::shards::CheckPairSampleValues(meta, npy, images)) {
       problems.push_back(std::move(p));
     }
-    for (const std::string& p : problems) {
-      if (p.empty()) std::abort();
+    std::vector<std::string> views = gt::shards::CheckViewsSampleMembers(meta, fields);
+    for (std::string& p : gt::shards::CheckViewsSampleValues(meta, npy, images)) {
+      views.push_back(std::move(p));
+    }
+    static const bool print = std::getenv("OCCGT_FUZZ_PRINT") != nullptr;
+    for (const auto* set : {&problems, &views}) {
+      for (const std::string& p : *set) {
+        if (p.empty()) std::abort();
+        if (print) std::fprintf(stderr, "%s: %s\n", set == &problems ? "pair" : "views", p.c_str());
+      }
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "the sample checks threw: %s\n", e.what());

@@ -215,6 +215,11 @@ def check_bases(cache):
     r, _ = run(["tuples", "--json", os.path.join(d, "recipe.yaml"), "--out", os.path.join(d, "out")])
     if r.returncode != 0 or json.loads(r.stdout)["tuples"] < 1:
         fail("base covis", f"occgt tuples gives no tuple on the unmodified graph: {r.stdout}{r.stderr}")
+    d = common.scratch("badinput/_base_tuples")
+    generators.build_case(d, {"id": "tuples", "base": "tuples"}, common.occgt, cache)
+    r, _ = run(["validate", os.path.join(d, "out", "views")])
+    if r.returncode != 0:
+        fail("base tuples", f"validate failed on the unmodified N-view split: {r.stdout}{r.stderr}")
     d = common.scratch("badinput/_base_pair")
     generators.build_case(d, {"id": "pair", "base": "pair"}, common.occgt, cache)
     r, _ = run(["inspect", "pair", "--pair-dir", os.path.join(d, "pair"), "--out",
