@@ -7,6 +7,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -17,11 +18,46 @@
 #include "libgt/shards/sample_check.h"
 #include "libgt/shards/split.h"
 #include "libgt/shards/tar_shard.h"
+#include "libgt/shards/views_sample_check.h"
 
 namespace occgt_py {
 
 namespace py = pybind11;
 using namespace pybind11::literals;
+
+namespace {
+
+// A sample's json and its arrays as the C++ checks take them: views of the NumPy arrays
+// (little-endian, C order; kept alive here). ValueError naming `where` for bad JSON or a
+// value that is not an array.
+struct StoredSample {
+  StoredSample(const std::string& meta_text, const py::dict& given, const std::string& where)
+      : meta(nlohmann::json::parse(meta_text, nullptr, false)) {
+    if (meta.is_discarded()) throw py::value_error(where + ".json: not valid JSON");
+    for (const auto& [name, value] : given) {
+      py::array a = py::array::ensure(value, py::array::c_style);
+      if (!a) {
+        throw py::value_error(where + "." + py::str(name).cast<std::string>() +
+                              ": expected a NumPy array");
+      }
+      if (a.dtype().attr("byteorder").cast<std::string>() == ">") {  // as stored: either
+        a = py::array::ensure(a.attr("astype")(a.dtype().attr("newbyteorder")("<")),
+                              py::array::c_style);
+      }
+      gt::shards::StoredArray view;
+      view.descr = a.dtype().attr("str").cast<std::string>();  // "<f4", "|u1"
+      view.shape.assign(a.shape(), a.shape() + a.ndim());
+      view.data = a.data();
+      arrays[py::str(name).cast<std::string>()] = std::move(view);
+      kept.push_back(std::move(a));
+    }
+  }
+  nlohmann::json meta;
+  std::map<std::string, gt::shards::StoredArray> arrays;
+  std::vector<py::array> kept;  // alive while the checks read them
+};
+
+}  // namespace
 
 void BindShards(py::module_& m) {
   m.def(
@@ -93,30 +129,11 @@ void BindShards(py::module_& m) {
   m.def(
       "check_pair_sample",
       [](const std::string& meta_text, const py::dict& arrays, const std::string& where) {
-        const nlohmann::json meta = nlohmann::json::parse(meta_text, nullptr, false);
-        if (meta.is_discarded()) throw py::value_error(where + ".json: not valid JSON");
-        std::vector<py::array> kept;  // alive while the check reads them
-        std::map<std::string, gt::shards::StoredArray> views;
-        for (const auto& [name, value] : arrays) {
-          py::array a = py::array::ensure(value, py::array::c_style);
-          if (!a)
-            throw py::value_error(where + "." + py::str(name).cast<std::string>() +
-                                  ": expected a NumPy array");
-          if (a.dtype().attr("byteorder").cast<std::string>() == ">") {  // as stored: either
-            a = py::array::ensure(a.attr("astype")(a.dtype().attr("newbyteorder")("<")),
-                                  py::array::c_style);
-          }
-          gt::shards::StoredArray view;
-          view.descr = a.dtype().attr("str").cast<std::string>();  // "<f4", "|u1"
-          view.shape.assign(a.shape(), a.shape() + a.ndim());
-          view.data = a.data();
-          views[py::str(name).cast<std::string>()] = std::move(view);
-          kept.push_back(std::move(a));
-        }
+        const StoredSample sample(meta_text, arrays, where);
         std::vector<std::string> problems;
         {
           py::gil_scoped_release no_gil;
-          problems = gt::shards::CheckPairSampleValues(meta, views, {});
+          problems = gt::shards::CheckPairSampleValues(sample.meta, sample.arrays, {});
         }
         if (!problems.empty()) throw py::value_error(where + "." + problems.front());
       },
@@ -127,6 +144,32 @@ void BindShards(py::module_& m) {
       "depth against NO_DEPTH, cells, matches by their rules, occupancy words); else "
       "ValueError '<where>.<field>: <problem>' naming the first problem. Arrays not given are "
       "not checked (ShardDataset).");
+  m.def(
+      "check_views_sample",
+      [](const std::string& meta_text, const py::dict& arrays, const std::string& where) {
+        const StoredSample sample(meta_text, arrays, where);
+        std::vector<std::string> problems;
+        std::vector<uint8_t> seen_by;
+        {
+          py::gil_scoped_release no_gil;
+          problems = gt::shards::CheckViewsSampleValues(sample.meta, sample.arrays, {}, &seen_by);
+        }
+        if (!problems.empty()) throw py::value_error(where + "." + problems.front());
+        if (seen_by.empty()) {
+          throw py::value_error(where + ": visible_in.npy and valid.npy are needed for seen_by");
+        }
+        const auto& shape = sample.arrays.at("visible_in.npy").shape;
+        py::array_t<uint8_t> out({shape[0], shape[1], shape[2]});
+        std::copy(seen_by.begin(), seen_by.end(), out.mutable_data());
+        return out;
+      },
+      "meta"_a, "arrays"_a, "where"_a,
+      "seen_by uint8 [N, H, W] once a stored N-view sample's json (`meta`, its text) and the "
+      "arrays read from it (`arrays`: member field name -> array, e.g. 'visible_in.npy'; "
+      "visible_in and valid at least) agree (shards::CheckViewsSampleValues: cameras and "
+      "poses against the json, depth and valid, the bits, metrics, queries and tracks); else "
+      "ValueError '<where>.<field>: <problem>' naming the first problem. Arrays not given are "
+      "not checked (TupleShardDataset).");
 }
 
 }  // namespace occgt_py

@@ -483,81 +483,6 @@ py::dict ViewsSeenBy(py::handle visible_in, py::handle valid) {
   return out;
 }
 
-// `obj` as a C-ordered array of T (dtype kind/itemsize) whose shape is `shape` (-1: any).
-template <typename T>
-py::array_t<T, py::array::c_style> StoredArray(py::handle obj, const std::string& argument,
-                                               const char* dtype_name,
-                                               const std::vector<py::ssize_t>& shape) {
-  const py::array a = AsArray(obj, argument);
-  bool ok = a.dtype().kind() == (std::is_floating_point_v<T> ? 'f' : 'u') &&
-            a.itemsize() == static_cast<py::ssize_t>(sizeof(T)) &&
-            a.ndim() == static_cast<py::ssize_t>(shape.size());
-  for (size_t k = 0; ok && k < shape.size(); ++k) ok = shape[k] < 0 || a.shape(k) == shape[k];
-  if (!ok) {
-    std::string want = "(";
-    for (size_t k = 0; k < shape.size(); ++k) {
-      want += (k ? ", " : "") + (shape[k] < 0 ? std::string("any") : std::to_string(shape[k]));
-    }
-    ThrowValue(argument, std::string("expected ") + dtype_name + " " + want + "), got " +
-                             DtypeText(a) + " " + ShapeText(a));
-  }
-  auto c = py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(a);
-  if (!c) throw py::error_already_set();
-  return c;
-}
-
-// The checks of a stored N-view sample (an N-view shard's members, for TupleShardDataset):
-// each view's depth finite and >= 0, K a pinhole camera's, world_from_cam rigid (the checks
-// of views_ground_truth's arguments), then truth::CheckStoredViewsTruth; returns its seen_by
-// uint8 [N, H, W]. ValueError naming the argument.
-py::array_t<uint8_t> CheckViewsSample(py::handle depths, py::handle Ks, py::handle world_from_cams,
-                                      py::handle visible_in, py::handle occluded_in,
-                                      py::handle valid, py::handle track_xy,
-                                      py::handle track_state) {
-  const std::vector<py::object> d = Items(depths, "depths", 2);
-  const std::vector<py::object> k = Items(Ks, "Ks", 2);
-  const std::vector<py::object> p = Items(world_from_cams, "world_from_cams", 2);
-  const py::ssize_t n = static_cast<py::ssize_t>(d.size());
-  if (n < 1 || n > gt::truth::kMaxViews) {
-    ThrowValue("depths", "expected 1.." + std::to_string(gt::truth::kMaxViews) +
-                             " depth maps, got " + std::to_string(n));
-  }
-  if (static_cast<py::ssize_t>(k.size()) != n || static_cast<py::ssize_t>(p.size()) != n) {
-    ThrowValue("Ks", "expected one K and one world_from_cam per depth map (" + std::to_string(n) +
-                         "), got " + std::to_string(k.size()) + " and " + std::to_string(p.size()));
-  }
-  py::ssize_t h = 0, w = 0;
-  for (py::ssize_t i = 0; i < n; ++i) {
-    const std::string index = "[" + std::to_string(i) + "]";
-    const auto depth =
-        StoredArray<float>(d[i], "depths" + index, "float32", {h ? h : -1, w ? w : -1});
-    h = depth.shape(0), w = depth.shape(1);
-    const float* z = depth.data();
-    for (py::ssize_t q = 0; q < h * w; ++q) {
-      if (!(z[q] >= 0) || std::isinf(z[q])) {
-        ThrowValue("depths" + index, "expected finite depths >= 0 (0 = invalid), got " +
-                                         std::to_string(z[q]) + " at element " + std::to_string(q));
-      }
-    }
-    CameraFromArray(k[i], static_cast<int>(w), static_cast<int>(h), "Ks" + index);
-    PoseFromArray(p[i], "world_from_cams" + index);
-  }
-  const auto vis = StoredArray<uint32_t>(visible_in, "visible_in", "uint32", {n, h, w});
-  const auto occ = StoredArray<uint32_t>(occluded_in, "occluded_in", "uint32", {n, h, w});
-  const auto ok = StoredArray<uint8_t>(valid, "valid", "uint8", {n, h, w});
-  const auto xy = StoredArray<float>(track_xy, "track_xy", "float32", {n, -1, 2});
-  const py::ssize_t q = xy.shape(1);
-  const auto state = StoredArray<uint8_t>(track_state, "track_state", "uint8", {n, q});
-  gt::truth::SeenBy seen;
-  {
-    py::gil_scoped_release no_gil;
-    seen = gt::truth::CheckStoredViewsTruth(vis.data(), occ.data(), ok.data(), static_cast<int>(n),
-                                            static_cast<size_t>(h) * static_cast<size_t>(w),
-                                            xy.data(), state.data(), static_cast<size_t>(q));
-  }
-  return ToArray(std::move(seen.seen_by), {n, h, w});
-}
-
 // The value every keyword argument of pair_ground_truth takes when None: the defaults of the
 // C++ Options structs as truth::ResolvePairTruthOptions gives them (the Python signatures
 // show these values; none is written in Python).
@@ -722,11 +647,6 @@ void BindTruth(py::module_& m) {
   m.def("views_seen_by", &ViewsSeenBy, "visible_in"_a, "valid"_a,
         "seen_by uint8 [N, H, W] and seen_by_histogram int64 [N, N] of stored N-view bitmasks "
         "(truth::CountSeenBy), as views_ground_truth returns them; see occgt.views_seen_by.");
-  m.def("check_views_sample", &CheckViewsSample, "depths"_a, "Ks"_a, "world_from_cams"_a,
-        "visible_in"_a, "occluded_in"_a, "valid"_a, "track_xy"_a, "track_state"_a,
-        "seen_by uint8 [N, H, W] of a stored N-view sample (TupleShardDataset) once it passes "
-        "views_ground_truth's checks of depths, Ks and poses and truth::CheckStoredViewsTruth "
-        "of the bitmasks and tracks; else ValueError naming the argument at fault.");
   m.def("dense_volume", &DenseVolume, "occ"_a, "known"_a,
         "bins"_a = gt::occupancy::BinOptions().num_bins,
         "uint8 [bins, H/2, W/2] (0 free, 1 occupied, 255 unknown) of occupancy words "

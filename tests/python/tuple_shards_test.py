@@ -278,8 +278,25 @@ class TupleShards(unittest.TestCase):
         def set_array(field: str, at: Any, value: Any) -> Callable[[Dict[str, Any]], None]:
             return lambda m: m[field].__setitem__(at, value)
 
-        def scale_pose(m: Dict[str, Any]) -> None:
+        def scale_pose(m: Dict[str, Any]) -> None:  # in the json and the array alike
             m["world_from_cam.npy"][1, :3, :3] *= 1.03  # det 1.09: within the old 0.1
+            m["json"]["world_from_cam"] = m["world_from_cam.npy"].tolist()
+
+        def zero_focal(m: Dict[str, Any]) -> None:  # in the json and the array alike
+            m["intrinsics.npy"][0, 0, 0] = 0.0
+            m["json"]["K"] = m["intrinsics.npy"].tolist()
+
+        def add_json(field: str, value: int) -> Callable[[Dict[str, Any]], None]:
+            def change(m: Dict[str, Any]) -> None:
+                node = m["json"]
+                *path, last = field.split(".")
+                for k in path:
+                    node = node[k]
+                node[last] += value
+            return change
+
+        def swap_queries(m: Dict[str, Any]) -> None:
+            m["queries.npy"][[0, 1]] = m["queries.npy"][[1, 0]]
 
         def frame_number_text(m: Dict[str, Any]) -> None:
             m["json"]["frames"][0]["number"] = str(m["json"]["frames"][0]["number"])
@@ -313,24 +330,34 @@ class TupleShards(unittest.TestCase):
             (frame_number_text, r"\.json: .*frames: expected num_views \(\d+\) objects"),
             (set_json("key", "a/tuple_000009"), r"\.json: .*key 'a/tuple_000009', expected "
                                                 r"the sample's"),
-            (scale_pose, r": world_from_cam\.npy\[1\]: rotation is not orthonormal "
+            (scale_pose, r"\.json: world_from_cam\[1\]: rotation is not orthonormal "
                          r"\(\|R\^T R - I\| = 0\.0609 > 0\.001\)"),
-            (set_array("intrinsics.npy", (0, 0, 0), 0.0), r": intrinsics\.npy\[0\]: .*focal"),
+            (zero_focal, r"\.json: K\[0\]: .*focal"),
+            (set_array("intrinsics.npy", (0, 0, 0), 0.0), r"\.intrinsics\.npy: view 0 \(0, 0\) "
+                                                          r"holds 0, the json's K\[0\] says"),
+            (set_array("world_from_cam.npy", (2, 0, 3), 7.0),
+             r"\.world_from_cam\.npy: view 2 \(0, 3\) holds 7, the json's world_from_cam\[2\]"),
             (set_array("occluded_in.npy", (0, 0, 0), np.uint32(1 << 31)),
-             r": occluded_in\.npy: bit for a view >= \d"),
-            (set_array("track_state.npy", (0, 0), 9), r": track_state\.npy: expected 0\.\.4, "
+             r"\.occluded_in\.npy: bit for a view >= \d"),
+            (set_array("track_state.npy", (0, 0), 9), r"\.track_state\.npy: expected 0\.\.4, "
                                                       r"got 9 at element 0"),
-            (set_array("track_xy.npy", (0, 0, 0), np.inf), r": track_xy\.npy: expected \(x, y\) "
+            (set_array("track_xy.npy", (0, 0, 0), np.inf), r"\.track_xy\.npy: expected \(x, y\) "
                                                            r"both finite or both NaN"),
-            (at_valid_pixel(occlude_own_pixel), r": occluded_in\.npy: a pixel both VISIBLE "
+            (at_valid_pixel(occlude_own_pixel), r"\.occluded_in\.npy: a pixel both VISIBLE "
                                                 r"\(visible_in\) and OCCLUDED in one view"),
-            (at_valid_pixel(clear_diagonal), r": visible_in\.npy: view 0's own bit \(the "
+            (at_valid_pixel(clear_diagonal), r"\.visible_in\.npy: view 0's own bit \(the "
                                              r"diagonal\) not set for a valid pixel"),
-            (at_valid_pixel(invalidate), r": visible_in\.npy: a bit set for a pixel without "
-                                         r"valid depth"),
-            (lose_visible_track, r": track_xy\.npy: NaN for a track whose state is VISIBLE"),
-            (set_array("depth1.npy", (0, 0), np.nan), r": depth1\.npy: expected finite depths"),
-            (set_array("depth1.npy", (0, 0), -1.0), r": depth1\.npy: expected finite depths"),
+            (at_valid_pixel(invalidate), r"\.valid\.npy: view 0 pixel \(\d+, \d+\) holds 0; "
+                                         r"its depth [0-9.]+ m is valid"),
+            (lose_visible_track, r"\.track_xy\.npy: NaN for a track whose state is VISIBLE"),
+            (set_array("depth1.npy", (0, 0), np.nan), r"\.depth1\.npy: pixel \(0, 0\) holds "
+                                                      r"nan; expected metres >= 0"),
+            (set_array("depth1.npy", (0, 0), -1.0), r"\.depth1\.npy: pixel \(0, 0\) holds -1; "
+                                                    r"expected metres >= 0"),
+            (add_json("metrics.counts.VISIBLE", 1), r"\.visible_in\.npy: its counts\.VISIBLE is "
+                                                    r"\d+, the json's metrics\.counts\.VISIBLE"),
+            (swap_queries, r"\.queries\.npy: query 0 is \(\d+, \d+\); the sampling of view 0"),
+            (add_json("tracks.seed", 1), r"\.queries\.npy: query \d+ is .* with tracks\.seed"),
         ]
         for n, (change, message) in enumerate(cases):
             ds = TupleShardDataset(self.damaged("tuple_shards_damaged", change))

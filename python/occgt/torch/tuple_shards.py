@@ -4,14 +4,14 @@
 The shards are listed once by the C++ shard reader, as for ShardDataset (shards.py); a
 sample's members are read with one ``os.preadv``. The stored ground truth (``visible_in``,
 ``occluded_in``, ``valid``, the tracks) is the one ``occgt tuples --shards`` computed; only
-``seen_by`` is derived, by the C++ that checks each item (``truth::CheckStoredViewsTruth``,
-with the count of ``occgt.views_seen_by``). docs/MULTIVIEW.md.
+``seen_by`` is derived, by the C++ that checks each item against its json
+(``shards::CheckViewsSampleValues``, the rules ``occgt validate`` applies, with the count of
+``occgt.views_seen_by``). docs/MULTIVIEW.md.
 """
 from __future__ import annotations
 
 import json
 import os
-import re
 from typing import Any, Dict, List, Tuple, Union
 
 import numpy as np
@@ -26,27 +26,8 @@ __all__ = ["TupleShardDataset"]
 # The members every N-view sample holds (docs/FORMATS.md "N-view shards"); the images and
 # depth<i> per view are checked when an item is read (the json gives the number of views).
 _NEED = ("json", "intrinsics.npy", "world_from_cam.npy", "visible_in.npy", "occluded_in.npy",
-         "valid.npy", "track_xy.npy", "track_state.npy", "depth0.npy")
-
-# The sample member behind each argument of _occgt.check_views_sample
-# ("{}": the view index of "depths[i]", or "[i]" after the member of a stacked array).
-_MEMBERS = {"depths": "depth{}.npy", "Ks": "intrinsics.npy{}", "world_from_cams":
-            "world_from_cam.npy{}", "visible_in": "visible_in.npy", "occluded_in":
-            "occluded_in.npy", "valid": "valid.npy", "track_xy": "track_xy.npy",
-            "track_state": "track_state.npy"}
-
-
-def _member_message(message: str) -> str:
-    """A check's message "<argument>: ..." with the argument as the sample's member
-    ("depths[2]: ..." -> "depth2.npy: ...", "Ks[1]: ..." -> "intrinsics.npy[1]: ...")."""
-    argument, sep, rest = message.partition(": ")
-    match = re.fullmatch(r"(\w+)(?:\[(\d+)\])?", argument)
-    if not sep or not match or match.group(1) not in _MEMBERS:
-        return message
-    name, view = match.groups()
-    if name == "depths":
-        return f"{_MEMBERS[name].format(view or '')}: {rest}"
-    return f"{_MEMBERS[name].format(f'[{view}]' if view else '')}: {rest}"
+         "valid.npy", "queries.npy", "track_xy.npy", "track_depth.npy", "track_state.npy",
+         "depth0.npy")
 
 
 def _whole(field: str, value: Any, low: int, high: int) -> int:
@@ -113,13 +94,17 @@ class TupleShardDataset(_ShardSplit):
             damaged shard, a pair sample of ``occgt build`` (read by ShardDataset), a sample
             lacking a member, a member of another dtype or shape than its json's
             ``num_views`` and ``resolution`` say, a json field of another type or value
-            than views_sample.schema.json's or a ``key`` other than the sample's; and arrays
-            that no computed result has (C++ ``truth::CheckStoredViewsTruth`` and the checks
-            of views_ground_truth's arguments): a pose that is not rigid, a K that is not a
-            pinhole's, a depth that is negative or not finite, a bit for a view the tuple
-            does not have, a pixel both VISIBLE and OCCLUDED in a view, a bit where ``valid``
-            is 0, a diagonal bit that is not ``valid``, a track state other than 0..4, a
-            track without a position where its state is VISIBLE, OCCLUDED or INCONSISTENT.
+            than views_sample.schema.json's or a ``key`` other than the sample's; and, as
+            ``<shard>: <key>.<member>: <problem>``, arrays that disagree with the json or
+            with each other (C++ ``shards::CheckViewsSampleValues``, the rules of ``occgt
+            validate``, docs/CLI.md): a json pose that is not rigid or K that is not a
+            pinhole's, ``intrinsics`` / ``world_from_cam`` other than the json's, a depth
+            that is negative or not finite, ``valid`` other than the depth's mask, a bit for
+            a view the tuple does not have, a pixel both VISIBLE and OCCLUDED in a view, a
+            bit where ``valid`` is 0, a diagonal bit that is not ``valid``, bit counts other
+            than the json's ``metrics``, queries other than the sampling rule's, a track
+            state other than 0..4 or other than the bits at its query pixel, a track without
+            a position where its state is VISIBLE, OCCLUDED or INCONSISTENT.
     """
 
     def __init__(self, split_dir: Union[str, "os.PathLike[str]"], *, images: bool = True,
@@ -178,13 +163,19 @@ class TupleShardDataset(_ShardSplit):
             "valid": array("valid.npy", "u1", (n, H, W)),
         }
         truth["track_xy"] = array("track_xy.npy", "f4", (n, None, 2))
-        truth["track_state"] = array("track_state.npy", "u1", (n, truth["track_xy"].shape[1]))
-        try:  # the C++ checks of every stored array, with the C++ count of seen_by
-            truth["seen_by"] = _occgt.check_views_sample(
-                depths, Ks, poses, truth["visible_in"], truth["occluded_in"], truth["valid"],
-                truth["track_xy"], truth["track_state"])
-        except ValueError as e:
-            raise ValueError(f"{where}: {_member_message(str(e))}") from None
+        q = truth["track_xy"].shape[1]
+        truth["track_state"] = array("track_state.npy", "u1", (n, q))
+        # The json and every array against each other, in C++ (shards::CheckViewsSampleValues,
+        # as occgt validate: cameras, depth and valid, bits, metrics, queries, tracks), with
+        # the C++ count of seen_by; ValueError "<where>.<field>: <problem>".
+        checked = {f"depth{v}.npy": depths[v] for v in range(n)}
+        checked.update({"intrinsics.npy": Ks, "world_from_cam.npy": poses,
+                        "queries.npy": array("queries.npy", "i4", (q, 2)),
+                        "track_depth.npy": array("track_depth.npy", "f4", (n, q))})
+        checked.update({f"{k}.npy": truth[k] for k in ("visible_in", "occluded_in", "valid",
+                                                       "track_xy", "track_state")})
+        truth["seen_by"] = _occgt.check_views_sample(meta_bytes.decode("utf-8", "replace"),
+                                                     checked, where)
         colors = None
         if self.images:
             rgb = []
