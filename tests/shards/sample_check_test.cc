@@ -163,6 +163,18 @@ TEST(SampleCheck, DepthNotFiniteOrDisagreeingWithNoDepth) {
   ExpectProblem(d, "depth1.npy", "invalid in label_options' range");
 }
 
+// A recipe's labels.overrides.max_depth_m: .inf is stored as null (JSON has no infinity):
+// no upper limit, as the schemas say, not a json problem (10012e9 reported one).
+TEST(SampleCheck, AnUnboundedDepthRangeIsNullInTheJson) {
+  Decoded d = Rich();
+  d.meta["label_options"]["max_depth_m"] = nullptr;
+  EXPECT_EQ(d.Problems(), std::vector<std::string>{});
+  d.Data<float>("depth0.npy")[3] = 0;  // NO_DEPTH still checked against the range
+  const std::vector<std::string> p = d.Problems();
+  ASSERT_FALSE(p.empty());
+  EXPECT_NE(p.front().find("[0.05, inf] m"), std::string::npos) << p.front();
+}
+
 TEST(SampleCheck, CellsAreTheLabelsAtTheAnchors) {
   Decoded d = Rich();
   uint8_t* c = d.Data<uint8_t>("cells0.npy");

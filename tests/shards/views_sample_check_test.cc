@@ -186,6 +186,12 @@ TEST(ViewsSampleCheck, ValidIsTheDepthsMaskAndDepthIsFinite) {
   ExpectProblem(d, "valid.npy", "in label_options' range [");
 }
 
+TEST(ViewsSampleCheck, AnUnboundedDepthRangeIsNullInTheJson) {
+  Decoded d = Rich();
+  d.meta["label_options"]["max_depth_m"] = nullptr;
+  EXPECT_EQ(d.Problems(), std::vector<std::string>{});
+}
+
 TEST(ViewsSampleCheck, CamerasEqualTheJsons) {
   Decoded d = Rich();
   d.Data<double>("intrinsics.npy")[9 + 2] += 0.5;  // view 1's cx
