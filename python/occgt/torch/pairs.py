@@ -11,8 +11,7 @@ import dataclasses
 import json
 import operator
 import os
-from typing import (Any, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple, Union,
-                    overload)
+from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple, Union
 
 import cv2
 import numpy as np
@@ -21,6 +20,7 @@ import torch
 import occgt
 
 from .._occgt import check_resolution
+from ._columns import SceneColumns, int_column
 from ._convert import item_index, to_tensor
 from ._json import loads_strict
 
@@ -61,14 +61,7 @@ def _read_lines(path: str) -> List[str]:
 _NO_NUMBER = int(np.iinfo(np.int64).min)
 
 
-def _number_column(values: np.ndarray) -> np.ndarray:
-    """Frame numbers as int32 when they fit (8 bytes a pair, not 16), else int64."""
-    if values.size and int(values.min()) >= 0 and int(values.max()) < 2**31:
-        return values.astype(np.int32)
-    return values.astype(np.int64)
-
-
-class PairIndex(Sequence[PairRef]):
+class PairIndex(SceneColumns[PairRef]):
     """The pairs of an index as NumPy columns, in the index's order; item i is a PairRef, made
     when asked (a slice is a PairIndex).
 
@@ -77,7 +70,7 @@ class PairIndex(Sequence[PairRef]):
     reference counts; the columns take 16 to 20 bytes a pair for a LoFTR npz index (scene
     int32, two frame numbers int32 when they fit, the file's float score), 20 for pairs.jsonl
     (scene, two frame-id indices, two numbers; each frame id is stored once), and forked
-    workers share them. Columns (read-only arrays, one entry a pair):
+    workers share them (occgt/torch/_columns.py). Columns (read-only arrays, one entry a pair):
 
     - ``scenes``: the scene names, each once, in order of first appearance; ``scene``: int32
       index into ``scenes`` (a sampler that takes pairs scene by scene groups on it);
@@ -95,8 +88,7 @@ class PairIndex(Sequence[PairRef]):
                  id1: Optional[np.ndarray] = None, number0: Optional[np.ndarray] = None,
                  number1: Optional[np.ndarray] = None,
                  score: Optional[np.ndarray] = None) -> None:
-        self.scenes: List[str] = list(scenes)
-        self.scene = np.asarray(scene, dtype=np.int32)
+        super().__init__(scenes, scene)
         self.frame_ids = None if frame_ids is None else list(frame_ids)
         self.id0, self.id1 = id0, id1
         self.number0, self.number1, self.score = number0, number1, score
@@ -109,9 +101,7 @@ class PairIndex(Sequence[PairRef]):
             raise ValueError("PairIndex: frame_ids, id0 and id1 go together")
         if (number0 is None) != (number1 is None):
             raise ValueError("PairIndex: number0 and number1 go together")
-        for column in (self.scene, id0, id1, number0, number1, score):
-            if column is not None:
-                column.flags.writeable = False
+        self._freeze()
 
     @classmethod
     def from_refs(cls, refs: Iterable[PairRef]) -> "PairIndex":
@@ -137,7 +127,7 @@ class PairIndex(Sequence[PairRef]):
                 out.append(_NO_NUMBER if number is None else number)
             score.append(np.nan if ref.score is None else ref.score)
         any_ids = any(i >= 0 for i in id0) or any(i >= 0 for i in id1)
-        numbers = _number_column(np.array(number0 + number1, dtype=np.int64))
+        numbers = int_column(np.array(number0 + number1, dtype=np.int64))
         any_numbers = bool(numbers.size) and int(numbers.max()) != _NO_NUMBER
         return cls(list(scenes), np.array(scene, dtype=np.int32),
                    frame_ids=list(frames) if any_ids else None,
@@ -185,7 +175,7 @@ class PairIndex(Sequence[PairRef]):
                                else column.astype(np.int64))
             if any_score:
                 scores.append(np.full(n, np.nan) if p.score is None else p.score)
-        numbers = (_number_column(np.concatenate(numbers0 + numbers1)) if any_numbers
+        numbers = (int_column(np.concatenate(numbers0 + numbers1)) if any_numbers
                    else None)
         total = sum(len(p) for p in parts)
         return cls(list(scenes), np.concatenate(scene) if scene else np.zeros(0, np.int32),
@@ -196,23 +186,16 @@ class PairIndex(Sequence[PairRef]):
                    number1=None if numbers is None else numbers[total:],
                    score=np.concatenate(scores) if any_score else None)
 
-    def __len__(self) -> int:
-        return len(self.scene)
+    _noun = "pairs"
 
-    @overload
-    def __getitem__(self, i: int) -> PairRef: ...
+    def _slice(self, i: slice) -> "PairIndex":
+        def cut(column: Optional[np.ndarray]) -> Optional[np.ndarray]:
+            return None if column is None else column[i]
+        return PairIndex(self.scenes, self.scene[i], frame_ids=self.frame_ids,
+                         id0=cut(self.id0), id1=cut(self.id1), number0=cut(self.number0),
+                         number1=cut(self.number1), score=cut(self.score))
 
-    @overload
-    def __getitem__(self, i: slice) -> "PairIndex": ...
-
-    def __getitem__(self, i: Union[int, slice]) -> Union[PairRef, "PairIndex"]:
-        if isinstance(i, slice):
-            def cut(column: Optional[np.ndarray]) -> Optional[np.ndarray]:
-                return None if column is None else column[i]
-            return PairIndex(self.scenes, self.scene[i], frame_ids=self.frame_ids,
-                             id0=cut(self.id0), id1=cut(self.id1), number0=cut(self.number0),
-                             number1=cut(self.number1), score=cut(self.score))
-        k = item_index(i, len(self), "pairs")
+    def _item(self, k: int) -> PairRef:
         frames: List[Optional[str]] = [None, None]
         if self.frame_ids is not None and self.id0 is not None and self.id1 is not None:
             frames = [None if j < 0 else self.frame_ids[j]
@@ -224,12 +207,6 @@ class PairIndex(Sequence[PairRef]):
         score = None if self.score is None else float(self.score[k])
         return PairRef(self.scenes[int(self.scene[k])], frames[0], frames[1], numbers[0],
                        numbers[1], None if score is None or score != score else score)
-
-    def __iter__(self) -> Iterator[PairRef]:
-        return (self[k] for k in range(len(self)))
-
-    def __repr__(self) -> str:
-        return f"PairIndex({len(self)} pairs in {len(self.scenes)} scenes)"
 
 
 def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> PairIndex:
@@ -286,7 +263,7 @@ def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> PairIndex:
         else:
             scene = f"scene{s:04d}_{sub:02d}"
         scene_of_key[k] = scenes.setdefault(scene, len(scenes))
-    numbers = _number_column(name[:, 2:].astype(np.int64))
+    numbers = int_column(name[:, 2:].astype(np.int64))
     if score is not None and score.dtype.kind != "f":
         score = score.astype(np.float64)
     return PairIndex(list(scenes), scene_of_key[rank[inverse.reshape(-1)]],
