@@ -1,10 +1,12 @@
 """occgt.torch.TupleIndexDataset and collate_tuples (docs/MULTIVIEW.md): an item's ground truth
 is occgt.views_ground_truth of its frames (same seed rule), VGGT's keys have their layouts
 (extrinsics = inverse poses, images in [0, 1], track_vis_mask = VISIBLE), the DUSt3R list of
-views carries the same arrays, tuples.jsonl is read, and tuples of 3 and 5 views collate with
-padding and a view mask; bad arguments raise ValueError."""
+views carries the same arrays, tuples.jsonl is read into a TupleIndex whose columns give the
+lines' tuples (slices, errors naming file:line, a forked child's reads), and tuples of 3 and
+5 views collate with padding and a view mask; bad arguments raise ValueError."""
 from __future__ import annotations
 
+import gc
 import json
 import os
 import pickle
@@ -15,8 +17,8 @@ import torch
 
 import common
 import occgt
-from occgt.torch import (TRACK_STATE_PADDED, TupleIndexDataset, TupleRef, collate_tuples,
-                         read_tuples)
+from occgt.torch import (TRACK_STATE_PADDED, TupleIndex, TupleIndexDataset, TupleRef,
+                         collate_tuples, read_tuples)
 
 
 class TupleDataset(unittest.TestCase):
@@ -260,6 +262,162 @@ class TupleDataset(unittest.TestCase):
         ds = self.dataset()
         with self.assertRaisesRegex(TypeError, r"^index: expected an int, got float$"):
             ds[0.5]  # type: ignore[index]
+
+    def write_lines(self, name: str, lines: list) -> str:
+        """A tuples.jsonl of ``lines`` (dicts, or "" for a blank line), as occgt tuples writes
+        them (with a covisibility matrix)."""
+        path = os.path.join(common.scratch(name), "tuples.jsonl")
+        with open(path, "w") as f:
+            for t in lines:
+                if t:
+                    n = len(t["frame_ids"])
+                    t = {"covisibility": [[0.5] * n] * n, **t}
+                f.write((json.dumps(t) if t else "") + "\n")
+        return path
+
+    def test_index_columns_are_the_lines(self) -> None:
+        """read_tuples gives a TupleIndex: NumPy columns (no Python object per tuple) whose
+        items are the lines' TupleRefs in order, of every size 2..32, scenes and ids shared
+        between lines; slices (any step) are the list's slices and still name their lines;
+        from_refs of a list gives the same items, named tuples[k]; it pickles read-only."""
+        rng = np.random.default_rng(5)
+        pool = [f"{i:06d}" for i in range(40)]
+        lines: list = []
+        for k in range(300):
+            size = 2 + k % 31  # 2..32 views
+            ids = [pool[i] for i in rng.permutation(len(pool))[:size].tolist()]
+            lines.append({"scene": f"scene{int(rng.integers(0, 7)):02d}", "frame_ids": ids})
+            if k % 50 == 7:
+                lines.append("")  # blank lines are skipped, and line numbers count them
+        path = self.write_lines("tuple_index_columns", lines)
+        want = [TupleRef(t["scene"], tuple(t["frame_ids"])) for t in lines if t]
+        want_lines = [n for n, t in enumerate(lines, 1) if t]
+        index = read_tuples(path)
+        self.assertIsInstance(index, TupleIndex)
+        self.assertEqual(len(index), 300)
+        self.assertEqual(list(index), want)
+        self.assertEqual([index[k] for k in range(-300, 0)], want)
+        self.assertEqual(index.scenes, list(dict.fromkeys(t.scene for t in want)))
+        self.assertEqual(index.scene.dtype, np.int32)
+        self.assertEqual([index.scenes[s] for s in index.scene.tolist()], [t.scene for t in want])
+        self.assertEqual(sorted(index.frame_ids), pool)  # each id once
+        self.assertEqual(index.frame.dtype, np.int32)
+        self.assertEqual(index.offsets.dtype, np.int64)
+        self.assertEqual(index.sizes.tolist(), [len(t.frame_ids) for t in want])
+        self.assertEqual(index.offsets[-1], sum(len(t.frame_ids) for t in want))
+        self.assertEqual(index.line.tolist(), want_lines)
+        self.assertEqual([index.where(k) for k in (0, 299)],
+                         [f"{path}:{want_lines[0]}", f"{path}:{want_lines[-1]}"])
+        for column in (index.scene, index.frame, index.offsets, index.line):
+            self.assertFalse(column.flags.writeable)
+        self.assertEqual(repr(index), "TupleIndex(300 tuples in 7 scenes)")
+        with self.assertRaisesRegex(IndexError, r"^index 300 out of range for 300 tuples$"):
+            index[300]
+        for cut in (slice(None), slice(10, 20), slice(20, 10), slice(None, None, -1),
+                    slice(3, 250, 7), slice(-40, None), slice(290, 5, -13), slice(400, 500)):
+            part = index[cut]
+            with self.subTest(cut=cut):
+                self.assertIsInstance(part, TupleIndex)
+                self.assertEqual(list(part), want[cut])
+                self.assertEqual(part.sizes.tolist(), [len(t.frame_ids) for t in want[cut]])
+                self.assertEqual([part.where(k) for k in range(len(part))],
+                                 [f"{path}:{n}" for n in want_lines[cut]])
+                self.assertEqual(list(part[1::2]), want[cut][1::2])
+        listed = TupleIndex.from_refs([(t.scene, list(t.frame_ids)) for t in want])
+        self.assertEqual(list(listed), want)
+        self.assertIsNone(listed.line)
+        self.assertEqual(listed.where(5), "tuples[5]")
+        again = pickle.loads(pickle.dumps(index))
+        self.assertEqual(list(again), want)
+        self.assertEqual(again.where(1), index.where(1))
+        self.assertFalse(again.frame.flags.writeable)
+        # The dataset holds the index it is given, or one of a list or a path.
+        good = self.write_lines("tuple_index_dataset", [
+            {"scene": self.scene_name, "frame_ids": self.ids[0:3]},
+            {"scene": self.scene_name, "frame_ids": self.ids[3:5]}])
+        ds = TupleIndexDataset(read_tuples(good), self.root, "generic", width=96, height=72,
+                               num_tracks=40, seed=3)
+        self.assertIsInstance(ds.tuples, TupleIndex)
+        self.assertEqual(ds[1]["frame_ids"], tuple(self.ids[3:5]))
+        self.assertIsInstance(self.dataset().tuples, TupleIndex)
+
+    def test_index_holds_no_object_per_tuple(self) -> None:
+        """The index of 5000 tuples adds a handful of objects the garbage collector tracks,
+        not one or more per tuple (what a forked worker's reference counting would copy);
+        a forked child reads every item of the parent's columns right."""
+        lines = [{"scene": f"s{k % 13}", "frame_ids": [f"{(k + j) % 97:06d}" for j in range(8)]}
+                 for k in range(5000)]
+        path = self.write_lines("tuple_index_objects", lines)
+        want = [TupleRef(t["scene"], tuple(t["frame_ids"])) for t in lines]
+        gc.collect()
+        before = len(gc.get_objects())
+        index = read_tuples(path)
+        gc.collect()
+        self.assertLess(len(gc.get_objects()) - before, 50)
+        r, w = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # a DataLoader worker's view of the columns
+            try:
+                os.close(r)
+                ok = all(index[k] == want[k] for k in range(len(want)))
+                os.write(w, b"ok" if ok and list(index[::-1]) == want[::-1] else b"wrong")
+            finally:
+                os._exit(0)
+        os.close(w)
+        answer = os.read(r, 16)
+        os.close(r)
+        os.waitpid(pid, 0)
+        self.assertEqual(answer, b"ok")
+
+    def test_item_errors_name_the_line(self) -> None:
+        """Errors of an item name the tuple and its file:line, also through a slice of the
+        index; the query_view check over every tuple names the first short one, and the scene's
+        frames are read once per process (not a dict of the whole scene per item)."""
+        scene = self.scene_name
+        path = self.write_lines("tuple_index_errors", [
+            {"scene": scene, "frame_ids": self.ids[0:4]}, "",
+            {"scene": scene, "frame_ids": self.ids[2:6]},
+            {"scene": scene, "frame_ids": self.ids[6:8]},
+            {"scene": scene, "frame_ids": self.ids[1:5]}, "",
+            {"scene": scene, "frame_ids": [self.ids[0], "999999", self.ids[2]]},
+            {"scene": scene, "frame_ids": self.ids[6:9]},
+            {"scene": "nowhere", "frame_ids": self.ids[0:2]}])
+        index = read_tuples(path)
+        ds = TupleIndexDataset(index[3:], self.root, "generic", width=96, height=72)
+        with self.assertRaisesRegex(ValueError, "^tuple 1 \\(" + path + ":7\\): frame_ids: no "
+                                    "frame with id '999999' in scene " + scene + " under "):
+            ds[1]
+        with self.assertRaisesRegex(ValueError, "^tuple 1 \\(" + path + ":7\\): "):
+            pickle.loads(pickle.dumps(ds))[1]
+        with self.assertRaisesRegex(ValueError, "^tuple 0 \\(tuples\\[0\\]\\): frame_ids: no "
+                                    "frame with id '999999'"):
+            TupleIndexDataset(TupleIndex.from_refs([(scene, ["999999", self.ids[0]])]),
+                              self.root, "generic")[0]
+        with self.assertRaisesRegex(ValueError, "^tuple 3 \\(" + path + ":9\\): .*nowhere"):
+            ds[3]  # the scene's own error
+        for query_view, k, size in ((2, 2, 2), (3, 2, 2)):
+            with self.subTest(query_view=query_view), self.assertRaisesRegex(
+                    ValueError, f"^query_view: expected a view of every tuple, got {query_view}; "
+                    f"tuples\\[{k}\\] has {size} views \\({scene}: {self.ids[6]}, "
+                    f"{self.ids[7]}\\)$"):
+                TupleIndexDataset(path, self.root, "generic", query_view=query_view)
+        TupleIndexDataset(path, self.root, "generic", query_view=1)
+        # After the scene's first item, its frames are not listed again.
+        ds = TupleIndexDataset(index[:2], self.root, "generic", width=96, height=72,
+                               images=False)
+        first = ds[0]
+        opened, numbers = ds._scenes[scene]
+
+        class NoFrames:
+            def __getattr__(self, name: str) -> object:
+                if name == "frames":
+                    raise AssertionError("the scene's frames listed again")
+                return getattr(opened, name)
+
+        ds._scenes[scene] = (NoFrames(), numbers)  # type: ignore[assignment]
+        self.assertEqual(ds[1]["ids"].tolist(),
+                         [f.number for i in self.ids[2:6] for f in self.scene.frames if f.id == i])
+        self.assertTrue(torch.equal(ds[0]["depths"], first["depths"]))
 
     def test_pickle_after_use(self) -> None:
         """A dataset used in this process pickles (spawned DataLoader workers; it raised

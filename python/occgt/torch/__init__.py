@@ -37,7 +37,8 @@ from .pairs import PairIndex, PairIndexDataset, PairRef, read_pair_index
 from .shards import ShardDataset
 from .supervision import loftr_supervision
 from .tuple_shards import TupleShardDataset
-from .tuples import TRACK_STATE_PADDED, TupleIndexDataset, TupleRef, collate_tuples, read_tuples
+from .tuples import (TRACK_STATE_PADDED, TupleIndex, TupleIndexDataset, TupleRef, collate_tuples,
+                     read_tuples)
 
 __all__ = [
     "TRACK_STATE_PADDED",
@@ -47,6 +48,7 @@ __all__ = [
     "PairIndexDataset",
     "PairRef",
     "ShardDataset",
+    "TupleIndex",
     "TupleIndexDataset",
     "TupleShardDataset",
     "TupleRef",

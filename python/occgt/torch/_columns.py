@@ -1,4 +1,4 @@
-"""What the indices held as NumPy columns (``PairIndex``) share.
+"""What the indices held as NumPy columns (``PairIndex``, ``TupleIndex``) share.
 
 An index of millions of entries held as one Python object per entry takes hundreds of bytes
 an entry, and a forked DataLoader worker copies every page whose reference counts it touches.

@@ -9,10 +9,11 @@ docs/PYTHON.md.
 """
 from __future__ import annotations
 
+import array
 import dataclasses
 import operator
 import os
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import torch
@@ -20,6 +21,7 @@ import torch
 import occgt
 
 from .._occgt import check_resolution, views_options
+from ._columns import SceneColumns, int_column
 from ._convert import item_index, to_tensor
 from ._json import loads_strict
 
@@ -32,9 +34,9 @@ class TupleRef:
     frame_ids: Tuple[str, ...]
 
 
-def _tuple_ref(scene: Any, frame_ids: Any) -> TupleRef:
-    """A TupleRef of a scene name and a list of frame ids, all str (a str is not a list of
-    ids: "000001" would be six frames); ValueError saying what is wrong."""
+def _checked(scene: Any, frame_ids: Any) -> Tuple[str, Tuple[str, ...]]:
+    """A tuple's scene name and frame ids, all str (a str is not a list of ids: "000001" would
+    be six frames); ValueError saying what is wrong."""
     if not isinstance(scene, str) or not scene:
         raise ValueError(f"scene: expected a non-empty str, got {scene!r}")
     if isinstance(frame_ids, (str, bytes, dict)) or not hasattr(frame_ids, "__iter__"):
@@ -43,23 +45,138 @@ def _tuple_ref(scene: Any, frame_ids: Any) -> TupleRef:
     bad = [i for i in ids if not isinstance(i, str)]
     if bad:
         raise ValueError(f"frame_ids: expected a list of str, got {bad[0]!r}")
-    repeated = [i for n, i in enumerate(ids) if i in ids[:n]]
-    if repeated:  # schemas/tuples_line.schema.json: uniqueItems
+    if len(set(ids)) != len(ids):  # schemas/tuples_line.schema.json: uniqueItems
+        repeated = [i for n, i in enumerate(ids) if i in ids[:n]]
         raise ValueError(f"frame_ids: expected distinct frame ids, {repeated[0]!r} repeats")
     if not 2 <= len(ids) <= 32:  # schemas/tuples_line.schema.json: 2..32 views
         raise ValueError(f"frame_ids: expected 2..32 frame ids, got {len(ids)}")
-    return TupleRef(str(scene), tuple(str(i) for i in ids))
+    return str(scene), tuple(map(str, ids))
 
 
-def _read_tuple_lines(path: Union[str, os.PathLike]) -> Tuple[List[TupleRef], List[str]]:
-    """read_tuples' tuples and, for each, where it is: ``<path>:<line>``."""
-    refs, where = [], []
+TupleLike = Union[TupleRef, Tuple[str, Sequence[str]]]
+
+
+class TupleIndex(SceneColumns[TupleRef]):
+    """The tuples of an index as NumPy columns, in the index's order; item i is a TupleRef,
+    made when asked (a slice is a TupleIndex; equal items compare equal).
+
+    A million tuples of 8 views held as TupleRefs took about 700 bytes a tuple (the ids' str
+    objects of each line, the tuple, the dataclass, a ``"<path>:<line>"`` string) and a
+    forked DataLoader worker copied the pages whose reference counts it touched; the columns
+    take about 48 bytes a tuple of 8 views and forked workers share them (PairIndex's
+    layout, occgt/torch/_columns.py). Columns (read-only arrays):
+
+    - ``scenes``: the scene names, each once, in order of first appearance; ``scene``: int32
+      [N], index into ``scenes``;
+    - ``frame_ids``: the frame ids, each once (ids such as ``"000150"`` recur across scenes);
+      ``frame``: int32 indices into it, the tuples' views one tuple after the other;
+      ``offsets``: int64 [N + 1], tuple k's views are ``frame[offsets[k]:offsets[k + 1]]``
+      (``offsets[0]`` is 0, ``offsets[N]`` is ``len(frame)``); ``sizes``: the views of each
+      tuple (``np.diff(offsets)``);
+    - ``path`` and ``line``: the tuples.jsonl read and the line of each tuple (1-based, int32
+      when it fits), or None for tuples given as a list (``from_refs``); ``where(k)``.
+    """
+
+    _noun = "tuples"
+
+    def __init__(self, scenes: Sequence[str], scene: np.ndarray, frame_ids: Sequence[str],
+                 frame: np.ndarray, offsets: np.ndarray, *,
+                 path: Optional[str] = None, line: Optional[np.ndarray] = None) -> None:
+        super().__init__(scenes, scene)
+        self.frame_ids = list(frame_ids)
+        self.frame = np.asarray(frame, dtype=np.int32)
+        self.offsets = np.asarray(offsets, dtype=np.int64)
+        self.path, self.line = path, line
+        n = len(self.scene)
+        if (len(self.offsets) != n + 1 or self.offsets[0] != 0
+                or self.offsets[-1] != len(self.frame)):
+            raise ValueError(f"TupleIndex.offsets: expected {n + 1} entries from 0 to "
+                             f"len(frame) = {len(self.frame)}, got {len(self.offsets)}")
+        if line is not None and len(line) != n:
+            raise ValueError(f"TupleIndex.line: {len(line)} entries for {n} tuples")
+        if (path is None) != (line is None):
+            raise ValueError("TupleIndex: path and line go together")
+        self._freeze()
+
+    @classmethod
+    def from_refs(cls, refs: Iterable[TupleLike]) -> "TupleIndex":
+        """The columns of a sequence of TupleRef or (scene, [frame ids]): distinct str ids,
+        2..32 of them (ValueError naming the first other item, ``tuples[k]``)."""
+        columns = _Columns()
+        for k, t in enumerate(refs):
+            try:
+                scene, ids = (t.scene, t.frame_ids) if isinstance(t, TupleRef) else t
+                columns.add(*_checked(scene, ids))
+            except (TypeError, ValueError) as e:
+                raise ValueError(f"tuples[{k}]: expected a TupleRef or (scene, [frame ids]) "
+                                 f"({type(e).__name__}: {e})") from None
+        return columns.index()
+
+    @property
+    def sizes(self) -> np.ndarray:
+        """int64 [N]: the number of views of each tuple."""
+        return np.diff(self.offsets)
+
+    def where(self, k: int) -> str:
+        """Where tuple k comes from: ``"<path>:<line>"``, or ``"tuples[k]"`` (a list)."""
+        if self.line is None:
+            return f"tuples[{k}]"
+        return f"{self.path}:{int(self.line[k])}"
+
+    def _item(self, k: int) -> TupleRef:
+        begin, end = self.offsets[k:k + 2].tolist()
+        ids = self.frame_ids
+        return TupleRef(self.scenes[int(self.scene[k])],
+                        tuple([ids[j] for j in self.frame[begin:end].tolist()]))
+
+    def _slice(self, i: slice) -> "TupleIndex":
+        start, stop, step = i.indices(len(self))
+        if step == 1:  # a view of the frame column; the offsets moved to start at 0
+            offsets = self.offsets[start:max(start, stop) + 1]
+            frame = self.frame[offsets[0]:offsets[-1]]
+            offsets = offsets - offsets[0]
+        else:
+            rows = np.arange(start, stop, step)
+            begin, sizes = self.offsets[rows], self.sizes[rows]
+            offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+            frame = self.frame[np.repeat(begin - offsets[:-1], sizes) + np.arange(offsets[-1])]
+        return TupleIndex(self.scenes, self.scene[i], self.frame_ids, frame, offsets,
+                          path=self.path, line=None if self.line is None else self.line[i])
+
+
+class _Columns:
+    """A TupleIndex built tuple by tuple (compact arrays, names interned)."""
+
+    def __init__(self) -> None:
+        self.scenes: Dict[str, int] = {}
+        self.frame_ids: Dict[str, int] = {}
+        self.scene = array.array("i")
+        self.frame = array.array("i")
+        self.offsets = array.array("q", [0])
+
+    def add(self, scene: str, frame_ids: Tuple[str, ...]) -> None:
+        self.scene.append(self.scenes.setdefault(scene, len(self.scenes)))
+        frames = self.frame_ids
+        self.frame.extend([frames.setdefault(i, len(frames)) for i in frame_ids])
+        self.offsets.append(len(self.frame))
+
+    def index(self, path: Optional[str] = None,
+              line: Optional["array.array[int]"] = None) -> TupleIndex:
+        return TupleIndex(list(self.scenes), np.array(self.scene, dtype=np.int32),
+                          list(self.frame_ids), np.array(self.frame, dtype=np.int32),
+                          np.array(self.offsets, dtype=np.int64), path=path,
+                          line=None if line is None else int_column(line))
+
+
+def _read_tuple_lines(path: Union[str, os.PathLike]) -> TupleIndex:
+    """read_tuples' tuples, with the line of each."""
     p = os.fspath(path)
     if os.path.isdir(p):
         inside = os.path.join(p, "tuples.jsonl")
         raise ValueError(f"{p}: a folder, expected a tuples.jsonl file"
                          + (f" (pass {inside}: the tuples of occgt tuples --out {p})"
                             if os.path.isfile(inside) else ""))
+    columns, lines = _Columns(), array.array("q")
     with open(p, "rb") as f:
         for number, raw in enumerate(f, 1):
             try:
@@ -67,23 +184,21 @@ def _read_tuple_lines(path: Union[str, os.PathLike]) -> Tuple[List[TupleRef], Li
                 if not line.strip():
                     continue
                 t = loads_strict(line)
-                refs.append(_tuple_ref(t["scene"], t["frame_ids"]))
-                where.append(f"{p}:{number}")
+                columns.add(*_checked(t["scene"], t["frame_ids"]))
+                lines.append(number)
             except (ValueError, KeyError, TypeError) as e:
                 raise ValueError(f"{p}:{number}: expected a tuple line with scene and frame_ids "
                                  f"({type(e).__name__}: {e})") from None
-    return refs, where
+    return columns.index(f"{p}", lines)
 
 
-def read_tuples(path: Union[str, os.PathLike]) -> List[TupleRef]:
+def read_tuples(path: Union[str, os.PathLike]) -> TupleIndex:
     """The tuples of an ``occgt tuples`` tuples.jsonl (schemas/tuples_line.schema.json), in
-    order; ValueError naming the line of a bad one (scene a str, frame_ids a list of distinct
-    str), or saying so when ``path`` is a folder (``occgt tuples``' DIR: pass
-    DIR/tuples.jsonl)."""
-    return _read_tuple_lines(path)[0]
+    order, as a TupleIndex (NumPy columns; item i a TupleRef); ValueError naming the line of a
+    bad one (scene a str, frame_ids a list of 2..32 distinct str), or saying so when ``path``
+    is a folder (``occgt tuples``' DIR: pass DIR/tuples.jsonl)."""
+    return _read_tuple_lines(path)
 
-
-TupleLike = Union[TupleRef, Tuple[str, Sequence[str]]]
 
 #: ``track_state`` of the views and tracks that ``collate_tuples`` pads (0 would read as
 #: ``occgt.TRACK_VISIBLE``); not one of ``occgt.TRACK_STATE_NAMES``.
@@ -98,9 +213,10 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     """N-view samples of a tuple index, ground truth computed on the fly.
 
     Args:
-        tuples: a tuples.jsonl path (not occgt tuples' DIR: ValueError), or a list of
-            ``TupleRef`` / ``(scene, [frame ids])``; distinct frame ids. An item whose frame
-            the scene lacks raises ValueError naming the tuple and its line (or list entry).
+        tuples: a tuples.jsonl path (not occgt tuples' DIR: ValueError), a list of
+            ``TupleRef`` / ``(scene, [frame ids])`` (distinct frame ids), or a
+            ``TupleIndex``; held as a TupleIndex (``tuples``). An item whose frame the scene
+            lacks raises ValueError naming the tuple and its line (or list entry).
         root, format: the dataset (``occgt.open_dataset``).
         device: ScanNet++'s camera, ``"dslr"`` or ``"iphone"`` (``occgt.open_dataset``).
         tum_max_dt_s: TUM's association tolerance (``occgt.open_dataset``; None: the default,
@@ -141,8 +257,8 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     occluded_in}``.
     """
 
-    def __init__(self, tuples: Union[str, os.PathLike, Sequence[TupleLike]], root: str,
-                 format: str, *, width: int = occgt.PAIR_DEFAULTS["width"],
+    def __init__(self, tuples: Union[str, os.PathLike, TupleIndex, Sequence[TupleLike]],
+                 root: str, format: str, *, width: int = occgt.PAIR_DEFAULTS["width"],
                  height: int = occgt.PAIR_DEFAULTS["height"],
                  preset: str = occgt.PAIR_DEFAULTS["preset"], num_tracks: int = occgt.VIEWS_DEFAULTS["num_tracks"],
                  seed: int = occgt.VIEWS_DEFAULTS["seed"],
@@ -155,19 +271,9 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
                  fused_depth: Optional[Dict[str, float]] = None, **label_options: Any) -> None:
         if views not in ("vggt", "dust3r"):
             raise ValueError(f"views: expected 'vggt' or 'dust3r', got {views!r}")
-        self._where: List[str]  # per tuple: "<tuples.jsonl>:<line>" or "tuples[k]"
-        if isinstance(tuples, (str, os.PathLike)):
-            self.tuples, self._where = _read_tuple_lines(tuples)
-        else:
-            self.tuples, self._where = [], []
-            for k, t in enumerate(tuples):
-                try:
-                    scene, ids = (t.scene, t.frame_ids) if isinstance(t, TupleRef) else t
-                    self.tuples.append(_tuple_ref(scene, ids))
-                    self._where.append(f"tuples[{k}]")
-                except (TypeError, ValueError) as e:
-                    raise ValueError(f"tuples[{k}]: expected a TupleRef or (scene, [frame ids]) "
-                                     f"({type(e).__name__}: {e})") from None
+        self.tuples: TupleIndex = (read_tuples(tuples) if isinstance(tuples, (str, os.PathLike))
+                                   else tuples if isinstance(tuples, TupleIndex)
+                                   else TupleIndex.from_refs(tuples))
         if depth_source not in ("sensor", "mesh", "fused"):
             raise ValueError(f"depth_source: expected 'sensor', 'mesh' or 'fused', got {depth_source!r}")
         if not isinstance(images, (bool, np.bool_)):  # "no" is not a bool (it was truthy)
@@ -178,11 +284,13 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         views_options(preset, num_tracks=num_tracks, query_view=query_view, seed=seed,
                       **label_options)
         self.query_view = operator.index(query_view)
-        for k, t in enumerate(self.tuples):
-            if self.query_view >= len(t.frame_ids):
-                raise ValueError(f"query_view: expected a view of every tuple, got "
-                                 f"{self.query_view}; tuples[{k}] has {len(t.frame_ids)} "
-                                 f"views ({t.scene}: {', '.join(t.frame_ids)})")
+        short = np.flatnonzero(self.tuples.sizes <= self.query_view)
+        if short.size:
+            k = int(short[0])
+            t = self.tuples[k]
+            raise ValueError(f"query_view: expected a view of every tuple, got "
+                             f"{self.query_view}; tuples[{k}] has {len(t.frame_ids)} "
+                             f"views ({t.scene}: {', '.join(t.frame_ids)})")
         self.root, self.format, self.device = root, format, device
         self.tum_max_dt_s = tum_max_dt_s
         self.depth_source, self.mesh_path, self.fused_depth = depth_source, mesh_path, fused_depth
@@ -192,7 +300,8 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
         self.label_options = dict(label_options)
         self._dataset: Optional[occgt.Dataset] = None
         self._pid = -1
-        self._scenes: Dict[str, occgt.Scene] = {}
+        # Per scene opened in this process: the scene and its frames' numbers by id.
+        self._scenes: Dict[str, Tuple[occgt.Scene, Dict[str, int]]] = {}
         # Fail here, not in a worker, on a bad root, format or device (the readers open the
         # root lazily: test it here).
         occgt.open_dataset(root, format, device=device, tum_max_dt_s=tum_max_dt_s)
@@ -209,7 +318,7 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
     def __len__(self) -> int:
         return len(self.tuples)
 
-    def _scene(self, name: str) -> occgt.Scene:
+    def _scene(self, name: str) -> Tuple[occgt.Scene, Dict[str, int]]:
         if self._pid != os.getpid():  # a forked worker opens its own readers
             self._dataset = occgt.open_dataset(self.root, self.format, device=self.device,
                                                tum_max_dt_s=self.tum_max_dt_s)
@@ -219,21 +328,20 @@ class TupleIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             scene = self._dataset.scene(name)
             if self.mesh_path is not None:  # "{scene}" = the scene's name, as in a recipe
                 scene.mesh_path = self.mesh_path.replace("{scene}", name)
-            self._scenes[name] = scene
+            self._scenes[name] = (scene, {f.id: f.number for f in scene.frames})
         return self._scenes[name]
 
     def __getitem__(self, index: int) -> Any:
         index = item_index(index, len(self.tuples), "tuples")
         ref = self.tuples[index]
         try:
-            scene = self._scene(ref.scene)
-            numbers = {f.id: f.number for f in scene.frames}
+            scene, numbers = self._scene(ref.scene)
         except ValueError as e:
-            raise ValueError(f"tuple {index} ({self._where[index]}): {e}") from None
+            raise ValueError(f"tuple {index} ({self.tuples.where(index)}): {e}") from None
         unknown = [i for i in ref.frame_ids if i not in numbers]
         if unknown:
-            raise ValueError(f"tuple {index} ({self._where[index]}): frame_ids: no frame with id "
-                             f"{unknown[0]!r} in scene {ref.scene} under {self.root}")
+            raise ValueError(f"tuple {index} ({self.tuples.where(index)}): frame_ids: no frame "
+                             f"with id {unknown[0]!r} in scene {ref.scene} under {self.root}")
         loaded = [scene.load(i, self.width, self.height, depth_source=self.depth_source,
                              fused_depth=self.fused_depth) for i in ref.frame_ids]
         depths = np.stack([d for d, _, _ in loaded])
