@@ -18,7 +18,8 @@ older build's build/python), one after the other:
     calls (occgt.torch.tuples._read_tuple_lines: before the TupleIndex, a list of TupleRef
     and a list of "<path>:<line>" strings, both held) (time.process_time);
   - held: VmRSS after reading, less VmRSS before, after gc (/proc/self/status), in bytes
-    per pair or tuple;
+    per pair or tuple; and the same after malloc_trim(0) (at the end), without the freed
+    memory glibc's heap keeps (the reader's temporaries);
   - forked: a forked child (a DataLoader worker) reads every 16th entry of the index (a
     tuple's scene and each of its frame ids, as TupleIndexDataset's item does); the
     memory it copied from its parent (Private_Dirty of /proc/self/smaps_rollup, after less
@@ -38,7 +39,7 @@ import sys
 from typing import Dict, List
 
 CHILD = r"""
-import gc, json, os, sys, time
+import ctypes, gc, json, os, sys, time
 sys.path.insert(0, sys.argv[2])
 if sys.argv[3] == "pairs":
     from occgt.torch import read_pair_index as read
@@ -78,7 +79,10 @@ if pid == 0:
 os.close(w)
 copied, scenes = json.loads(os.read(r, 1000))
 os.waitpid(pid, 0)
-print(json.dumps({"entries": n, "read_s": read_s, "held_b": held / n, "forked_b": copied / n}))
+ctypes.CDLL(None).malloc_trim(0)
+trimmed = status("VmRSS") - before
+print(json.dumps({"entries": n, "read_s": read_s, "held_b": held / n, "forked_b": copied / n,
+                  "trimmed_b": trimmed / n}))
 """
 
 
@@ -157,15 +161,15 @@ def main() -> None:
             r = run(index, package, kind)
             runs[label].append(r)
             print(f"rep {rep} {label}: {r['entries']} {kind}, read {r['read_s']:.2f} CPU s, held "
-                  f"{r['held_b']:.1f} B/{kind[:-1]}, forked child copied {r['forked_b']:.1f} "
-                  f"B/{kind[:-1]}", flush=True)
-    medians = {label: {k: statistics.median(r[k] for r in rs) for k in ("read_s", "held_b",
-                                                                        "forked_b")}
+                  f"{r['held_b']:.1f} B/{kind[:-1]} ({r['trimmed_b']:.1f} after malloc_trim), "
+                  f"forked child copied {r['forked_b']:.1f} B/{kind[:-1]}", flush=True)
+    medians = {label: {k: statistics.median(r[k] for r in rs)
+                       for k in ("read_s", "held_b", "trimmed_b", "forked_b")}
                for label, rs in runs.items()}
     for label, m in medians.items():
         print(f"median {label} ({packages[label]}): read {m['read_s']:.2f} CPU s, held "
-              f"{m['held_b']:.1f} B/{kind[:-1]}, forked child copied {m['forked_b']:.1f} "
-              f"B/{kind[:-1]}")
+              f"{m['held_b']:.1f} B/{kind[:-1]} ({m['trimmed_b']:.1f} after malloc_trim), "
+              f"forked child copied {m['forked_b']:.1f} B/{kind[:-1]}")
     if args.against:
         a, b = medians["PYTHONPATH"], medians["against"]
         print("ratios PYTHONPATH/against: " + ", ".join(
