@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """A LoFTR-layout pair index of N rows read with occgt.torch.read_pair_index, the way
 PairIndexDataset holds it, or a tuples.jsonl of N tuples read the way TupleIndexDataset holds
-it (docs/PERFORMANCE.md, sections "Pair index at scale" and "N views").
+it (docs/PERFORMANCE.md, section "Pair and tuple indices at scale").
 
     PYTHONPATH=build/python /usr/bin/python3 tests/bench/pair_index_bench.py \\
         [--pairs 10000000 | --tuples 1000000 [--views 8]] [--reps 3] [--against DIR] \\

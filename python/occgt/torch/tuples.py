@@ -60,11 +60,11 @@ class TupleIndex(SceneColumns[TupleRef]):
     """The tuples of an index as NumPy columns, in the index's order; item i is a TupleRef,
     made when asked (a slice is a TupleIndex; equal items compare equal).
 
-    A million tuples of 8 views held as TupleRefs took about 700 bytes a tuple (the ids' str
+    A million tuples of 8 views held as TupleRefs took about 940 bytes a tuple (the ids' str
     objects of each line, the tuple, the dataclass, a ``"<path>:<line>"`` string) and a
     forked DataLoader worker copied the pages whose reference counts it touched; the columns
-    take about 48 bytes a tuple of 8 views and forked workers share them (PairIndex's
-    layout, occgt/torch/_columns.py). Columns (read-only arrays):
+    take 48 bytes a tuple of 8 views and forked workers share them (PairIndex's layout,
+    occgt/torch/_columns.py; docs/PERFORMANCE.md). Columns (read-only arrays):
 
     - ``scenes``: the scene names, each once, in order of first appearance; ``scene``: int32
       [N], index into ``scenes``;
