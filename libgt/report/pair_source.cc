@@ -5,7 +5,10 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <opencv2/imgproc.hpp>
+#include <set>
+#include <string_view>
 
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
@@ -16,6 +19,7 @@
 #include "libgt/io/npy.h"
 #include "libgt/render/depth_picture.h"
 #include "libgt/report/canvas.h"
+#include "libgt/shards/sample_check.h"
 #include "libgt/shards/tar_shard.h"
 #include "libgt/truth/pair_settings.h"
 #include "libgt/truth/pair_truth.h"
@@ -170,6 +174,49 @@ gt::occupancy::FrustumVolume VolumeFromFields(const std::map<std::string, std::s
                          FindEdges(meta, static_cast<size_t>(bins) + 1, source));
 }
 
+// The json member of a shard sample, or a discarded json when it has none or it does not
+// parse (PairFromFields says so). InputError for an N-view sample: not a pair.
+nlohmann::json PairSampleJson(const std::map<std::string, std::string>& fields,
+                              const std::string& where) {
+  const auto json_it = fields.find("json");
+  if (json_it == fields.end()) return nlohmann::json(nlohmann::json::value_t::discarded);
+  nlohmann::json meta = nlohmann::json::parse(json_it->second, nullptr, false);
+  if (meta.is_object() && meta.value("kind", "") == "occgt-views-sample") {
+    throw InputError(where,
+                     "an N-view sample of occgt tuples --shards; inspect pair draws the "
+                     "pair samples of occgt build (occgt.torch.TupleShardDataset reads "
+                     "N-view samples)");
+  }
+  return meta;
+}
+
+// A pair sample of a build's shard, checked by the rules of `occgt validate` before it is
+// drawn (shards/sample_check.h: its members, and their values against its json and each
+// other), so that a damaged sample is named rather than drawn. InputError("<where>.<field>",
+// ...) naming the first problem.
+void CheckStoredPair(const std::map<std::string, std::string>& fields, const nlohmann::json& meta,
+                     const std::string& where) {
+  if (meta.is_discarded()) return;  // PairFromFields said what is wrong
+  std::set<std::string> names;
+  std::map<std::string, gt::io::NpyArray> arrays;
+  std::map<std::string, std::string_view> images;
+  for (const auto& [name, bytes] : fields) {
+    names.insert(name);
+    if (EndsWith(name, ".npy")) {
+      arrays[name] = gt::io::ParseNpy(bytes, where + "." + name);
+    } else if (EndsWith(name, ".png") || EndsWith(name, ".jpg")) {
+      images[name] = bytes;
+    }
+  }
+  std::vector<std::string> problems = gt::shards::CheckPairSampleMembers(meta, names);
+  if (problems.empty()) problems = gt::shards::CheckPairSampleValues(meta, arrays, images);
+  if (!problems.empty()) {
+    const std::string& p = problems.front();
+    const size_t colon = p.find(": ");
+    throw InputError(where + "." + p.substr(0, colon), p.substr(colon + 2));
+  }
+}
+
 }  // namespace
 
 PairData PairFromFields(const std::map<std::string, std::string>& fields, const std::string& source,
@@ -295,7 +342,10 @@ PairData LoadPairFromShard(const std::string& tar_path, const std::string& key) 
   const gt::shards::Sample sample = gt::shards::ReadShardSample(tar_path, key);
   std::map<std::string, std::string> fields;
   for (const auto& f : sample.fields) fields[f.name] = f.bytes;
-  PairData pair = PairFromFields(fields, tar_path + ":" + key);
+  const std::string where = tar_path + ":" + key;
+  const nlohmann::json meta = PairSampleJson(fields, where);
+  PairData pair = PairFromFields(fields, where);  // its own messages first
+  CheckStoredPair(fields, meta, where);
   // The build's recipe.json beside its shards says where the depth came from.
   const std::string recipe_path = (fs::path(tar_path).parent_path() / "recipe.json").string();
   if (gt::io::FileExists(recipe_path)) {

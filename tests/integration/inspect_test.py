@@ -457,6 +457,30 @@ def main():
           "holds no label maps (label01.npy, label10.npy): a split built with sample.labels: "
           "false" in r.stderr, f"labels: false sample: exit {r.returncode}, {r.stderr!r}")
 
+    # --- a damaged sample (its first match moved 3 cells to the right, out of the cell that
+    # matches.npy names; the shard's size and MD5 updated) is named by the rules of occgt
+    # validate, not drawn with the match pointing elsewhere (10012e9 drew it).
+    damaged = os.path.join(tmp, "damaged_split")
+    shutil.rmtree(damaged, ignore_errors=True)
+    shutil.copytree(build, damaged)
+
+    def move_match(plain: bytes) -> bytes:
+        a = np.load(io.BytesIO(plain))
+        a[0, 0] += 24
+        out = io.BytesIO()
+        np.save(out, a)
+        return out.getvalue()
+
+    damaged_tar = sorted(glob.glob(os.path.join(damaged, "*.tar")))[0]
+    damaged_key = common.edit_first_sample_member(damaged_tar, "match_xy.npy", move_match)
+    r = common.occgt("inspect", "pair", "--shard", damaged_tar, "--key", damaged_key, "--out",
+                     os.path.join(tmp, "damaged_pictures"), check=False)
+    check(r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and
+          r.stderr.startswith(f"occgt: error: {damaged_tar}:{damaged_key}.match_xy.npy: row 0 ("),
+          f"damaged sample: exit {r.returncode}, {r.stderr!r}")
+    check(not os.path.exists(os.path.join(tmp, "damaged_pictures", "matches.png")),
+          "a damaged sample drawn")
+
     # --- split written by the test: no pairs at all, and a malformed line.
     empty = os.path.join(tmp, "empty_split")
     os.makedirs(empty)

@@ -253,6 +253,16 @@ def main():
         f'field "occlusion_ratio_visible" differs from the sample\'s json '
         f'({view_lines[2]["shard"]}, {view_lines[2]["key"]})'], f"validate of edited lines: {r.stdout}")
 
+    # inspect pair draws pair samples: an N-view sample is refused by name (it was "missing
+    # field label01.npy", as if a pair sample were damaged).
+    first = view_lines[0]
+    r = common.occgt("inspect", "pair", "--shard", os.path.join(views, first["shard"]), "--key",
+                     first["key"], "--out", os.path.join(tmp, "views_pictures"), check=False)
+    check(r.returncode == 1 and r.stderr.strip().endswith(
+        f'{first["key"]}: an N-view sample of occgt tuples --shards; inspect pair draws the pair '
+        f'samples of occgt build (occgt.torch.TupleShardDataset reads N-view samples)'),
+        f"inspect pair of an N-view sample: exit {r.returncode}, {r.stderr!r}")
+
     # --- a folder with pairs and tuples (and shards).
     report = os.path.join(tmp, "report")
     common.occgt("inspect", "split", out, "--out", report, "--bins", BINS, "--seed", SEED,
