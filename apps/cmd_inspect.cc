@@ -18,6 +18,7 @@
 #include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/datasets/reader.h"
+#include "libgt/io/folder_lock.h"
 #include "libgt/pipeline/split_depth.h"
 #include "libgt/report/pair_source.h"
 #include "libgt/report/split_report.h"
@@ -139,6 +140,9 @@ void RunInspectPair(const InspectPairArgs& a) {
   for (const auto& p : written) std::printf("  wrote %s\n", p.c_str());
 }
 
+// The lock file of a report folder (RunInspectSplit).
+constexpr const char* kInspectLock = ".inspect.lock";
+
 void RunInspectSplit(const InspectSplitArgs& a) {
   ExitOnInterrupt(
       "the report folder may hold some files of this run beside an earlier run's: re-run the "
@@ -172,13 +176,42 @@ void RunInspectSplit(const InspectSplitArgs& a) {
   }
   temporaries.folders = {gt::report::kSplitReportScratch};
   std::error_code ec;
-  temporaries.remove_dir_if_empty = !std::filesystem::exists(out, ec);
+  const bool created = !std::filesystem::exists(out, ec);
+  temporaries.remove_dir_if_empty = created;
+  // One report per folder at a time (a second run would take the first one's files for an
+  // earlier run's, and an interrupt of either would remove the other's temporaries): byte 0
+  // of OUT/.inspect.lock, released when the process ends. A folder this run created is left
+  // as it was found (absent) when the run fails or is interrupted before writing into it.
+  std::filesystem::create_directories(out, ec);
+  if (ec) throw gt::InputError(out, "cannot create the report folder: " + ec.message());
+  const std::string lock_path = out + "/" + kInspectLock;
+  std::unique_ptr<gt::io::FileLock> lock = gt::io::FileLock::TryAcquire(lock_path, 0);
+  const auto leave_as_found = [&] {
+    if (!created) return;
+    lock.reset();
+    std::filesystem::remove(lock_path, ec);
+    std::filesystem::remove(out, ec);  // only when empty
+  };
+  if (!lock) {
+    throw gt::InputError(out,
+                         "another occgt inspect split is writing this report folder now "
+                         "(it holds " +
+                             lock_path +
+                             "); wait for it to end or use "
+                             "another --out");
+  }
+  if (created) temporaries.names.push_back(kInspectLock);
   RemoveOnInterrupt(temporaries);
-  // A build with rendered depth (mesh or fused): the sensor-vs-mesh shares of its frames.
-  const std::optional<gt::report::SplitDepthShares> shares =
-      gt::pipeline::ComputeSplitDepthShares(a.dir, a.root);
-  const gt::report::SplitReportFiles files =
-      gt::report::WriteSplitReport(a.dir, out, o, shares ? &*shares : nullptr);
+  std::optional<gt::report::SplitDepthShares> shares;
+  gt::report::SplitReportFiles files;
+  try {
+    // A build with rendered depth (mesh or fused): the sensor-vs-mesh shares of its frames.
+    shares = gt::pipeline::ComputeSplitDepthShares(a.dir, a.root);
+    files = gt::report::WriteSplitReport(a.dir, out, o, shares ? &*shares : nullptr);
+  } catch (...) {
+    leave_as_found();
+    throw;
+  }
   std::printf("inspect split %s\n", a.dir.c_str());
   if (shares) {
     const double n = static_cast<double>(std::max<int64_t>(1, shares->total.Total()));

@@ -11,6 +11,7 @@
 - `inspect pair --root ... --frames` on the real TartanAir sample and `inspect split` on a
   folder written by this test (an empty split, a malformed line).
 """
+import fcntl
 import glob
 import gzip
 import io
@@ -456,6 +457,30 @@ def main():
     check(r.returncode == 1 and r.stderr.count("\n") == 1 and
           "holds no label maps (label01.npy, label10.npy): a split built with sample.labels: "
           "false" in r.stderr, f"labels: false sample: exit {r.returncode}, {r.stderr!r}")
+
+    # --- one report per folder at a time: while another inspect split holds the folder's
+    # lock (byte 0 of .inspect.lock, as occgt's FileLock), a second one is refused and
+    # touches nothing (it took the first one's files for an earlier run's).
+    held = os.path.join(report, ".inspect.lock")
+    check(os.path.exists(held), "inspect split holds no lock file in its report folder")
+    before = {n: os.path.getmtime(os.path.join(report, n)) for n in os.listdir(report)}
+    fd = os.open(held, os.O_RDWR)
+    try:
+        fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB, 1, 0)
+        r = common.occgt("inspect", "split", build, "--out", report, check=False)
+    finally:
+        os.close(fd)
+    check(r.returncode == 1 and r.stderr.strip() ==
+          f"occgt: error: {report}: another occgt inspect split is writing this report folder "
+          f"now (it holds {held}); wait for it to end or use another --out",
+          f"a second inspect split into a held folder: exit {r.returncode}, {r.stderr!r}")
+    check({n: os.path.getmtime(os.path.join(report, n)) for n in os.listdir(report)} == before,
+          "the refused run changed the report folder")
+    # A run that fails creates no folder (the lock file is not left behind).
+    r = common.occgt("inspect", "split", os.path.join(tmp, "no_such_split"), "--out",
+                     os.path.join(tmp, "no_report"), check=False)
+    check(r.returncode == 1 and not os.path.exists(os.path.join(tmp, "no_report")),
+          f"a failed inspect split left its report folder: exit {r.returncode}")
 
     # --- a damaged sample (its first match moved 3 cells to the right, out of the cell that
     # matches.npy names; the shard's size and MD5 updated) is named by the rules of occgt

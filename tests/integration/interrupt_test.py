@@ -105,9 +105,11 @@ def test_inspect_interrupted():
         assert err == [INSPECT_LINE], (sig, err)
         left = sorted(os.listdir(out))
         assert not [n for n in left if n.endswith(".tmp")], f"temporaries left after {sig}: {left}"
-        # What is at a final name is whole: this run's plots (each published atomically).
-        assert left == sorted(REPORT_PLOTS), (sig, left)
-        for name in left:
+        # What is at a final name is whole: this run's plots (each published atomically),
+        # beside the report folder's lock file (empty; kept, as the folder was there before).
+        assert left == sorted(REPORT_PLOTS + [".inspect.lock"]), (sig, left)
+        assert os.path.getsize(os.path.join(out, ".inspect.lock")) == 0
+        for name in REPORT_PLOTS:
             with open(os.path.join(out, name), "rb") as f:
                 assert f.read().endswith(b"IEND\xaeB`\x82"), f"{name}: not a whole PNG"
     # While gnuplot runs (a gnuplot that waits): occgt alone gets SIGTERM. The scratch folder
