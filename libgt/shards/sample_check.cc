@@ -28,53 +28,34 @@ constexpr double kPoseTolerance = 1e-6;
 
 using detail::FullPrecision;
 
-class PairSampleChecker {
+class PairSampleChecker : detail::StoredSampleChecker {
  public:
   PairSampleChecker(const json& meta, const std::map<std::string, StoredArray>& arrays,
                     const std::map<std::string, std::string_view>& images)
-      : meta_(meta), arrays_(arrays), images_(images) {}
+      : StoredSampleChecker(arrays, images), meta_(meta) {}
 
   std::vector<std::string> Run() {
-    try {
-      if (!CheckJson()) return problems_;
-      CheckLabels();
-      CheckDepth();
-      CheckCells();
-      CheckMatches();
-      CheckOccupancy();
-      CheckImages();
-    } catch (const json::exception& e) {
-      Problem("json",
-              std::string("expected the fields of schemas/sample.schema.json: ") + e.what());
-    }
-    return problems_;
+    return StoredSampleChecker::Run(
+        "sample.schema.json", [&] { return CheckJson(); },
+        [&] {
+          CheckLabels();
+          CheckDepth();
+          CheckCells();
+          CheckMatches();
+          CheckOccupancy();
+          const json& image = meta_.at("image");
+          CheckImages(image.is_null() ? "" : image.at("format").get<std::string>(), width_,
+                      height_);
+        });
   }
 
  private:
-  void Problem(const std::string& field, const std::string& what) {
-    problems_.push_back(field + ": " + what);
-  }
-
-  // The array `field` when stored with this descr and shape (-1: any extent), else nullptr
-  // (absent) or a problem.
-  const StoredArray* Array(const std::string& field, const char* descr,
-                           const std::vector<int64_t>& shape, const std::string& shape_words) {
-    return detail::FindArray(arrays_, field, descr, shape, shape_words, &problems_);
-  }
-
   static Eigen::MatrixXd Matrix(const json& j, int rows, int cols) {
     return detail::JsonMatrix(j, rows, cols);
   }
 
   bool CheckJson() {
-    const json& res = meta_.at("resolution");
-    width_ = res.at(0).get<int>();
-    height_ = res.at(1).get<int>();
-    if (width_ < 1 || height_ < 1 || width_ > kMaxImageSidePx || height_ > kMaxImageSidePx) {
-      Problem("json", "resolution " + res.dump() + ": expected [W, H] of 1.." +
-                          std::to_string(kMaxImageSidePx) + " pixels");
-      return false;
-    }
+    if (!ReadResolution(meta_, &width_, &height_)) return false;
     bool ok = true;
     for (const char* k : {"K0", "K1"}) {
       const Eigen::Matrix3d K = Matrix(meta_.at(k), 3, 3);
@@ -467,21 +448,9 @@ class PairSampleChecker {
     }
   }
 
-  void CheckImages() {
-    const json& image = meta_.at("image");
-    const std::string format = image.is_null() ? "" : image.at("format").get<std::string>();
-    for (const auto& [field, bytes] : images_) {
-      const std::string p = detail::ImageProblem(field, bytes, format, width_, height_);
-      if (!p.empty()) Problem(field, p);
-    }
-  }
-
   static constexpr const char* kTypeNames[3] = {"vv", "vo", "ov"};
 
   const json& meta_;
-  const std::map<std::string, StoredArray>& arrays_;
-  const std::map<std::string, std::string_view>& images_;
-  std::vector<std::string> problems_;
   int width_ = 0, height_ = 0, stride_ = 1, score_stride_ = 1;
   bool mutual_ = true;
   Anchor anchor_ = Anchor::kCenter;
@@ -504,9 +473,7 @@ std::vector<std::string> CheckPairSampleValues(
 std::vector<std::string> CheckPairSampleValues(
     const nlohmann::json& meta, const std::map<std::string, io::NpyArray>& arrays,
     const std::map<std::string, std::string_view>& images) {
-  std::map<std::string, StoredArray> views;
-  for (const auto& [field, a] : arrays) views[field] = StoredArray{a.descr, a.shape, a.data.data()};
-  return CheckPairSampleValues(meta, views, images);
+  return CheckPairSampleValues(meta, detail::ArrayViews(arrays), images);
 }
 
 std::vector<std::string> CheckPairSampleMembers(const nlohmann::json& meta,

@@ -60,6 +60,12 @@ const StoredArray* FindArray(const std::map<std::string, StoredArray>& arrays,
   return nullptr;
 }
 
+std::map<std::string, StoredArray> ArrayViews(const std::map<std::string, io::NpyArray>& arrays) {
+  std::map<std::string, StoredArray> views;
+  for (const auto& [field, a] : arrays) views[field] = StoredArray{a.descr, a.shape, a.data.data()};
+  return views;
+}
+
 Eigen::MatrixXd JsonMatrix(const nlohmann::json& j, int rows, int cols) {
   const auto fail = [&] {
     return nlohmann::json::type_error::create(

@@ -25,40 +25,28 @@ std::string Pixel(size_t p, int width) {
   return "pixel (" + std::to_string(p % width) + ", " + std::to_string(p / width) + ")";
 }
 
-class ViewsSampleChecker {
+class ViewsSampleChecker : detail::StoredSampleChecker {
  public:
   ViewsSampleChecker(const json& meta, const std::map<std::string, StoredArray>& arrays,
                      const std::map<std::string, std::string_view>& images,
                      std::vector<uint8_t>* seen_by)
-      : meta_(meta), arrays_(arrays), images_(images), seen_by_(seen_by) {}
+      : StoredSampleChecker(arrays, images), meta_(meta), seen_by_(seen_by) {}
 
   std::vector<std::string> Run() {
-    try {
-      if (!CheckJson()) return problems_;
-      CheckCameras();
-      CheckDepthAndValid();
-      CheckBits();
-      CheckMetrics();
-      CheckQueries();
-      CheckTracks();
-      CheckImages();
-    } catch (const json::exception& e) {
-      Problem("json",
-              std::string("expected the fields of schemas/views_sample.schema.json: ") + e.what());
-    }
-    return problems_;
+    return StoredSampleChecker::Run(
+        "views_sample.schema.json", [&] { return CheckJson(); },
+        [&] {
+          CheckCameras();
+          CheckDepthAndValid();
+          CheckBits();
+          CheckMetrics();
+          CheckQueries();
+          CheckTracks();
+          CheckImages(image_format_, width_, height_);
+        });
   }
 
  private:
-  void Problem(const std::string& field, const std::string& what) {
-    problems_.push_back(field + ": " + what);
-  }
-
-  const StoredArray* Array(const std::string& field, const char* descr,
-                           const std::vector<int64_t>& shape, const std::string& shape_words) {
-    return detail::FindArray(arrays_, field, descr, shape, shape_words, &problems_);
-  }
-
   size_t Plane() const { return static_cast<size_t>(width_) * static_cast<size_t>(height_); }
 
   bool CheckJson() {
@@ -68,14 +56,7 @@ class ViewsSampleChecker {
                           std::to_string(truth::kMaxViews));
       return false;
     }
-    const json& res = meta_.at("resolution");
-    width_ = res.at(0).get<int>();
-    height_ = res.at(1).get<int>();
-    if (width_ < 1 || height_ < 1 || width_ > kMaxImageSidePx || height_ > kMaxImageSidePx) {
-      Problem("json", "resolution " + res.dump() + ": expected [W, H] of 1.." +
-                          std::to_string(kMaxImageSidePx) + " pixels");
-      return false;
-    }
+    if (!ReadResolution(meta_, &width_, &height_)) return false;
     const std::string views = " (num_views)";
     const json& frames = meta_.at("frames");
     if (!frames.is_array() || static_cast<int>(frames.size()) != n_) {
@@ -381,18 +362,8 @@ class ViewsSampleChecker {
     }
   }
 
-  void CheckImages() {
-    for (const auto& [field, bytes] : images_) {
-      const std::string p = detail::ImageProblem(field, bytes, image_format_, width_, height_);
-      if (!p.empty()) Problem(field, p);
-    }
-  }
-
   const json& meta_;
-  const std::map<std::string, StoredArray>& arrays_;
-  const std::map<std::string, std::string_view>& images_;
   std::vector<uint8_t>* seen_by_;
-  std::vector<std::string> problems_;
   int n_ = 0, width_ = 0, height_ = 0, query_view_ = 0;
   int64_t num_tracks_ = 0, count_ = 0;
   uint64_t seed_ = 0;
@@ -422,10 +393,8 @@ std::vector<std::string> CheckViewsSampleValues(
 
 std::vector<std::string> CheckViewsSampleValues(
     const nlohmann::json& meta, const std::map<std::string, io::NpyArray>& arrays,
-    const std::map<std::string, std::string_view>& images) {
-  std::map<std::string, StoredArray> views;
-  for (const auto& [field, a] : arrays) views[field] = StoredArray{a.descr, a.shape, a.data.data()};
-  return CheckViewsSampleValues(meta, views, images);
+    const std::map<std::string, std::string_view>& images, std::vector<uint8_t>* seen_by) {
+  return CheckViewsSampleValues(meta, detail::ArrayViews(arrays), images, seen_by);
 }
 
 std::vector<std::string> CheckViewsSampleMembers(const nlohmann::json& meta,

@@ -48,7 +48,8 @@ std::vector<std::string> CheckViewsSampleValues(
 // The same over .npy members parsed by io::ParseNpy (validate), viewed, not copied.
 std::vector<std::string> CheckViewsSampleValues(
     const nlohmann::json& meta, const std::map<std::string, io::NpyArray>& arrays,
-    const std::map<std::string, std::string_view>& images = {});
+    const std::map<std::string, std::string_view>& images = {},
+    std::vector<uint8_t>* seen_by = nullptr);
 
 // The member set of an N-view sample against its json's num_views N: json, depth0..depth<N-1>,
 // intrinsics, world_from_cam, visible_in, occluded_in, valid, queries, track_xy, track_depth,

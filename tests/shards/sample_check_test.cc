@@ -19,6 +19,7 @@
 #include "libgt/shards/sample.h"
 #include "libgt/shards/split.h"
 #include "libgt/shards/tar_shard.h"
+#include "tests/support/decoded_sample.h"
 #include "tests/support/test_support.h"
 
 namespace gt::shards {
@@ -27,42 +28,15 @@ namespace {
 using nlohmann::json;
 
 // One sample as the checks take it: decoded members.
-struct Decoded {
-  std::string key;
-  json meta;
-  std::set<std::string> fields;
-  std::map<std::string, io::NpyArray> arrays;
-  std::map<std::string, std::string> images;
-
+struct Decoded : test::DecodedSample {
   std::vector<std::string> Problems() const {
     std::vector<std::string> p = CheckPairSampleMembers(meta, fields);
-    const std::map<std::string, std::string_view> image_views(images.begin(), images.end());
-    for (std::string& q : CheckPairSampleValues(meta, arrays, image_views)) p.push_back(q);
+    for (std::string& q : CheckPairSampleValues(meta, arrays, ImageViews())) p.push_back(q);
     return p;
-  }
-  template <typename T>
-  T* Data(const std::string& field) {
-    return reinterpret_cast<T*>(arrays.at(field).data.data());
   }
 };
 
-Decoded Decode(const Sample& s) {
-  Decoded d;
-  d.key = s.key;
-  for (const SampleField& f : s.fields) {
-    std::string field = f.name;
-    std::string plain = DecodeMember(&field, f.bytes, f.name);
-    d.fields.insert(field);
-    if (field == "json") {
-      d.meta = json::parse(plain);
-    } else if (field.size() > 4 && field.substr(field.size() - 4) == ".npy") {
-      d.arrays[field] = io::ParseNpy(plain, field);
-    } else {
-      d.images[field] = plain;
-    }
-  }
-  return d;
-}
+Decoded Decode(const Sample& s) { return {test::DecodeSample(s)}; }
 
 // Every sample of a build of the synthetic dataset with labels, depth, images and occupancy
 // in both encodings (gzip-compressed members).

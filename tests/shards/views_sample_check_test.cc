@@ -21,6 +21,7 @@
 #include "libgt/shards/split.h"
 #include "libgt/shards/tar_shard.h"
 #include "libgt/truth/views_truth.h"
+#include "tests/support/decoded_sample.h"
 #include "tests/support/test_support.h"
 
 namespace gt::shards {
@@ -29,26 +30,13 @@ namespace {
 using nlohmann::json;
 
 // One N-view sample as the checks take it: decoded members.
-struct Decoded {
-  std::string key;
-  json meta;
-  std::set<std::string> fields;
-  std::map<std::string, io::NpyArray> arrays;
-  std::map<std::string, std::string> images;
-
+struct Decoded : test::DecodedSample {
   std::vector<std::string> Problems(std::vector<uint8_t>* seen_by = nullptr) const {
     std::vector<std::string> p = CheckViewsSampleMembers(meta, fields);
-    const std::map<std::string, std::string_view> image_views(images.begin(), images.end());
-    std::map<std::string, StoredArray> views;
-    for (const auto& [f, a] : arrays) views[f] = StoredArray{a.descr, a.shape, a.data.data()};
-    for (std::string& q : CheckViewsSampleValues(meta, views, image_views, seen_by)) {
+    for (std::string& q : CheckViewsSampleValues(meta, arrays, ImageViews(), seen_by)) {
       p.push_back(q);
     }
     return p;
-  }
-  template <typename T>
-  T* Data(const std::string& field) {
-    return reinterpret_cast<T*>(arrays.at(field).data.data());
   }
   int Views() const { return meta.at("num_views").get<int>(); }
   int Width() const { return meta.at("resolution")[0].get<int>(); }
@@ -56,23 +44,7 @@ struct Decoded {
   int64_t Tracks() const { return meta.at("tracks").at("count").get<int64_t>(); }
 };
 
-Decoded Decode(const Sample& s) {
-  Decoded d;
-  d.key = s.key;
-  for (const SampleField& f : s.fields) {
-    std::string field = f.name;
-    std::string plain = DecodeMember(&field, f.bytes, f.name);
-    d.fields.insert(field);
-    if (field == "json") {
-      d.meta = json::parse(plain);
-    } else if (field.size() > 4 && field.substr(field.size() - 4) == ".npy") {
-      d.arrays[field] = io::ParseNpy(plain, field);
-    } else {
-      d.images[field] = plain;
-    }
-  }
-  return d;
-}
+Decoded Decode(const Sample& s) { return {test::DecodeSample(s)}; }
 
 // Every sample of `occgt covis` + `occgt tuples --shards` of the synthetic dataset: tuples of
 // 3 or 4 views with images and tracks, tracks queried in view 1, deflate members.
