@@ -354,6 +354,9 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
   summary["shards_planned"] = static_cast<int64_t>(shard_sizes.size());
   summary["estimated_bytes"] = static_cast<int64_t>(all.size()) * EstimatedSampleBytes(recipe);
   summary["complete"] = false;
+  // Every key must fit the tar's member paths: checked before the dry run's plan is shown and
+  // before any sample is computed.
+  const std::vector<std::string> keys = SampleKeys(all, recipe.sample.compression);
   if (options.dry_run || options.stage == Stage::kSelect) {
     summary["timings"]["total_s"] = Seconds(t_start);
     return summary;
@@ -379,7 +382,6 @@ json RunBuild(const Recipe& recipe_in, const BuildOptions& options, const Progre
   }
 
   const auto t_write = Clock::now();
-  const std::vector<std::string> keys = SampleKeys(all);
   CheckExportFolders(recipe, all);
   WritePlan(options, recipe.split, shard_sizes);
   const WriteResult written =

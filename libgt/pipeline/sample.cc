@@ -76,10 +76,26 @@ const char* VolumeEncodingName(VolumeEncoding encoding) {
   return "packed";
 }
 
+namespace {
+
+bool DeflatedField(const std::string& name, SampleCompression compression) {
+  const bool array = name.size() > 4 && name.compare(name.size() - 4, 4, ".npy") == 0;
+  return array && compression == SampleCompression::kDeflate;
+}
+
+}  // namespace
+
+std::string StoredFieldName(const std::string& name, SampleCompression compression) {
+  return DeflatedField(name, compression) ? name + ".gz" : name;
+}
+
+std::string LongestPairField(SampleCompression compression) {
+  return StoredFieldName("match_type.npy", compression);
+}
+
 void AddSampleField(shards::Sample* sample, const std::string& name, std::string bytes,
                     SampleCompression compression) {
-  const bool array = name.size() > 4 && name.compare(name.size() - 4, 4, ".npy") == 0;
-  if (array && compression == SampleCompression::kDeflate) {
+  if (DeflatedField(name, compression)) {
     sample->fields.push_back({name + ".gz", io::GzipBytes(bytes, 1)});
   } else {
     sample->fields.push_back({name, std::move(bytes)});

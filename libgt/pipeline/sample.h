@@ -76,6 +76,14 @@ struct EncodedSample {
   std::string pair_line;  // pairs.jsonl object (no shard/key), compact JSON
 };
 
+// The member name of field `name`: "<name>.gz" for a ".npy" name under kDeflate, else `name`.
+std::string StoredFieldName(const std::string& name, SampleCompression compression);
+
+// The longest member name of a pair sample: match_type.npy, always stored (occ0_dense.npy is
+// as long, the other fields shorter), under `compression`. A key whose member of this name
+// fits shards::kMaxMemberPathBytes fits with every field.
+std::string LongestPairField(SampleCompression compression);
+
 // Appends a member: "<name>.gz" (the gzip of `bytes`, level 1) for a ".npy" name under
 // kDeflate, else `name` as is (pair samples and N-view samples alike).
 void AddSampleField(shards::Sample* sample, const std::string& name, std::string bytes,

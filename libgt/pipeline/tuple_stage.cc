@@ -90,6 +90,7 @@ json RunTuples(const Recipe& recipe_in, const std::string& out_dir, bool write_s
   }
   // N-view shards of other tuples in DIR/views would no longer match tuples.jsonl: refused
   // before it is replaced.
+  if (write_shards) CheckViewsKeys(recipe, rows);
   CheckViewsShards(recipe, out_dir, rows);
   // The same tuples as the file holds (a re-run): left alone, no new inode or mtime.
   const std::string tuples_path = out_dir + "/tuples.jsonl";

@@ -255,6 +255,20 @@ void CheckViewsShards(const Recipe& recipe, const std::string& out_dir,
   }
 }
 
+void CheckViewsKeys(const Recipe& recipe, const std::vector<TupleLine>& lines) {
+  // world_from_cam.npy is the longest field of an N-view sample (the list in views_write.h).
+  const std::string longest = StoredFieldName("world_from_cam.npy", recipe.sample.compression);
+  for (size_t k = 0; k < lines.size(); ++k) {
+    const std::string key = SampleKey(lines[k].scene, static_cast<int64_t>(k));
+    std::string e = shards::CheckSampleKey(key);
+    if (e.empty()) e = shards::CheckMemberPath(key, longest);
+    if (!e.empty()) {
+      throw InputError("sample key " + key,
+                       e + " (scene " + lines[k].scene + "): shorten the scene name");
+    }
+  }
+}
+
 int64_t EstimatedViewsSampleBytes(const Recipe& r, int views) {
   const bool deflate = r.sample.compression == SampleCompression::kDeflate;
   const double sparse = deflate ? 0.06 : 1.0;

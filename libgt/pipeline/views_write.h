@@ -66,6 +66,11 @@ std::string ViewsShardDir(const std::string& out_dir);
 void CheckViewsShards(const Recipe& recipe, const std::string& out_dir,
                       const std::vector<TupleLine>& lines);
 
+// Refuses (InputError naming the sample key) tuples whose sample keys' longest member,
+// world_from_cam.npy (.gz under sample.compression: deflate), would not fit a tar member path
+// (shards::kMaxMemberPathBytes): `occgt tuples --shards` calls it before it writes anything.
+void CheckViewsKeys(const Recipe& recipe, const std::vector<TupleLine>& lines);
+
 // Writes the N-view shards of `lines` (recipe.split) into ViewsShardDir(out_dir) and publishes
 // index.json / pairs.jsonl there. `recipe` reads the frames (its dataset root resolved).
 // Returns {"dir", "shards", "shards_written", "shards_skipped", "samples"}.

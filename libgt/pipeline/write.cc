@@ -133,11 +133,18 @@ std::vector<int64_t> PlanShards(const Recipe& recipe, int64_t total) {
   return sizes;
 }
 
-std::vector<std::string> SampleKeys(const std::vector<const SelectedPair*>& all) {
+std::vector<std::string> SampleKeys(const std::vector<const SelectedPair*>& all,
+                                    SampleCompression compression) {
   std::vector<std::string> keys(all.size());
   std::map<std::string, size_t> seen;
+  const std::string longest = LongestPairField(compression);
   for (size_t k = 0; k < all.size(); ++k) {
     keys[k] = shards::MakeSampleKey(all[k]->scene, all[k]->frame0, all[k]->frame1);
+    if (std::string e = shards::CheckMemberPath(keys[k], longest); !e.empty()) {
+      throw InputError("sample key " + keys[k], e + " (scene " + all[k]->scene + ", frames " +
+                                                    all[k]->frame0 + " and " + all[k]->frame1 +
+                                                    "): shorten the scene name or the frame ids");
+    }
     auto [it, inserted] = seen.emplace(keys[k], k);
     if (!inserted) {
       throw InputError("sample key " + keys[k], "two pairs map to the same key after sanitising (" +

@@ -39,8 +39,11 @@ struct WriteResult {
 std::vector<int64_t> PlanShards(const Recipe& recipe, int64_t total);
 
 // The sample key of every pair (shards::MakeSampleKey); two pairs with one key after
-// sanitising are an InputError naming both scenes.
-std::vector<std::string> SampleKeys(const std::vector<const SelectedPair*>& all);
+// sanitising are an InputError naming both scenes, and so is a key whose longest member
+// (LongestPairField under `compression`) would not fit a tar member path, so that the build
+// stops before it computes any sample (and its dry run says so).
+std::vector<std::string> SampleKeys(const std::vector<const SelectedPair*>& all,
+                                    SampleCompression compression);
 
 // Refuses, before anything is written, an export the recipe asks for whose folders the
 // selected scenes cannot all have: two scenes mapping to one LoFTR folder

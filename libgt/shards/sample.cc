@@ -78,6 +78,13 @@ std::string CheckFieldName(std::string_view field) {
   return "";
 }
 
+std::string CheckMemberPath(std::string_view key, std::string_view field) {
+  const size_t len = key.size() + 1 + field.size();
+  if (len <= kMaxMemberPathBytes) return "";
+  return "member " + Quoted(std::string(key) + "." + std::string(field)) + " is " +
+         std::to_string(len) + " bytes, longer than " + std::to_string(kMaxMemberPathBytes);
+}
+
 std::string CheckSample(const Sample& sample) {
   if (std::string e = CheckSampleKey(sample.key); !e.empty()) return e;
   if (sample.fields.empty()) return "sample " + Quoted(sample.key) + " has no fields";
@@ -89,11 +96,7 @@ std::string CheckSample(const Sample& sample) {
     if (!seen.insert(f.name).second) {
       return "sample " + Quoted(sample.key) + ": duplicate field " + Quoted(f.name);
     }
-    const size_t len = sample.key.size() + 1 + f.name.size();
-    if (len > kMaxMemberPathBytes) {
-      return "member " + Quoted(sample.key + "." + f.name) + " is " + std::to_string(len) +
-             " bytes, longer than " + std::to_string(kMaxMemberPathBytes);
-    }
+    if (std::string e = CheckMemberPath(sample.key, f.name); !e.empty()) return e;
   }
   return "";
 }

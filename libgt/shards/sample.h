@@ -45,6 +45,10 @@ struct Sample {
 std::string CheckSampleKey(std::string_view key);
 // "" when `field` is a valid field name, else a reason.
 std::string CheckFieldName(std::string_view field);
+// "" when the member "<key>.<field>" fits kMaxMemberPathBytes, else the reason (`member
+// "<key>.<field>" is N bytes, longer than 100`): writers check a key against the longest field
+// their samples carry before computing any sample.
+std::string CheckMemberPath(std::string_view key, std::string_view field);
 // "" when the whole sample is writable: key, every field name, no duplicate fields, at
 // least one field, and every member path "<key>.<field>" <= kMaxMemberPathBytes.
 std::string CheckSample(const Sample& sample);

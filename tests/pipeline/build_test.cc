@@ -331,7 +331,7 @@ TEST(Pipeline, KeyCollisionIsAnErrorNamingBothScenes) {
   a.frame0 = b.frame0 = "000001";
   a.frame1 = b.frame1 = "000002";
   try {
-    SampleKeys({&a, &b});
+    SampleKeys({&a, &b}, SampleCompression::kDeflate);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     const std::string m = e.what();
@@ -340,7 +340,7 @@ TEST(Pipeline, KeyCollisionIsAnErrorNamingBothScenes) {
     EXPECT_NE(m.find("seq_01"), std::string::npos) << m;
   }
   b.frame1 = "000003";
-  EXPECT_EQ(SampleKeys({&a, &b}),
+  EXPECT_EQ(SampleKeys({&a, &b}, SampleCompression::kDeflate),
             (std::vector<std::string>{"seq_01/000001_000002", "seq_01/000001_000003"}));
 }
 
