@@ -280,8 +280,12 @@ py::object JsonToPython(const nlohmann::ordered_json& j) {
       return py::int_(j.get<int64_t>());
     case nlohmann::ordered_json::value_t::number_unsigned:
       return py::int_(j.get<uint64_t>());
-    case nlohmann::ordered_json::value_t::number_float:
-      return py::float_(j.get<double>());
+    case nlohmann::ordered_json::value_t::number_float: {
+      // JSON has no infinity or NaN: the files hold null for them (max_depth_m of a range
+      // without upper limit), and so does Python, so that a dict equals its file's.
+      const double v = j.get<double>();
+      return std::isfinite(v) ? py::object(py::float_(v)) : py::object(py::none());
+    }
     default:
       return py::none();
   }

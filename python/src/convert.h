@@ -115,7 +115,8 @@ py::array_t<T> ToArray(std::vector<T, A>&& values, const std::vector<py::ssize_t
 
 py::array_t<double> MatrixToArray(const Eigen::MatrixXd& m);  // [rows, cols] float64 (a copy)
 
-// A JSON value as Python objects (objects → dict in their order, arrays → list).
+// A JSON value as Python objects (objects → dict in their order, arrays → list; a number
+// that is not finite → None, as the JSON text writes it: null).
 py::object JsonToPython(const nlohmann::ordered_json& j);
 
 }  // namespace occgt_py

@@ -315,6 +315,25 @@ class ResolvedOptions(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, "^options: labels: max_depth_m"):
             occgt.pair_options(min_depth_m=5.0, max_depth_m=1.0)
 
+    def test_no_upper_depth_limit(self) -> None:
+        """max_depth_m inf (no upper limit): the options record null, as meta.json and a
+        sample's json do (JSON has no infinity), not inf; pair_ground_truth's dict equals the
+        file of `occgt pair --max-depth-m inf`."""
+        self.assertIsNone(occgt.pair_options(max_depth_m=float("inf"))["label_options"]
+                          ["max_depth_m"])
+        self.assertIsNone(occgt.pair_options(dataset_max_depth_m=float("inf"))["label_options"]
+                          ["max_depth_m"])
+        root = os.path.join(self.demo_split, "data")
+        out = common.scratch("pair_options_inf")
+        run("pair", "--root", root, "--format", "generic", "--scene", "synth_000", "--frames",
+            "000000,000001", "--resolution", "64x48", "--max-depth-m", "inf", "--out", out)
+        meta = common.read_json(os.path.join(out, "meta.json"))
+        scene = occgt.open_dataset(root, "generic").scene("synth_000")
+        got = occgt.pair_from_scene(scene, "000000", "000001", width=64, height=48,
+                                    max_depth_m=float("inf"))["options"]
+        self.assertEqual(got["label_options"], meta["label_options"])
+        self.assertIsNone(meta["label_options"]["max_depth_m"])
+
 
 if __name__ == "__main__":
     unittest.main()
