@@ -579,6 +579,15 @@ bool Recipe::Check(std::string* error) const {
   return true;
 }
 
+namespace {
+
+// A number of the normalised recipe. JSON has no infinity (nlohmann writes null, the value of
+// a key not given), so a YAML `.inf` — no upper limit, for a depth range or a camera distance —
+// is the string "inf": recipe.json keeps it, and the digest tells it from an unset key.
+json NumberJson(double v) { return std::isinf(v) && v > 0 ? json("inf") : json(v); }
+
+}  // namespace
+
 json Recipe::ToJson() const {
   json j;
   j["name"] = name;
@@ -597,8 +606,8 @@ json Recipe::ToJson() const {
   // Only when given, so that the digest of existing recipes is unchanged.
   if (dataset.tum_max_dt_s) d["tum_max_dt_s"] = *dataset.tum_max_dt_s;
   d["min_valid_depth_fraction"] = dataset.min_valid_depth_fraction;
-  d["min_depth_m"] = dataset.min_depth_m ? json(*dataset.min_depth_m) : json(nullptr);
-  d["max_depth_m"] = dataset.max_depth_m ? json(*dataset.max_depth_m) : json(nullptr);
+  d["min_depth_m"] = dataset.min_depth_m ? NumberJson(*dataset.min_depth_m) : json(nullptr);
+  d["max_depth_m"] = dataset.max_depth_m ? NumberJson(*dataset.max_depth_m) : json(nullptr);
   // The depth source only when not the default, so that the digest of existing recipes (and
   // every file that records it) is unchanged.
   if (dataset.depth_source != render::DepthSourceMode::kSensor) {
@@ -615,7 +624,7 @@ json Recipe::ToJson() const {
                       {"seed", dataset.synthetic.seed}};
   }
   j["dataset"] = d;
-  auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+  auto opt = [](const std::optional<double>& v) { return v ? NumberJson(*v) : json(nullptr); };
   j["labels"] = {{"preset", labels.preset},
                  {"overrides",
                   {{"abs_tol_m", opt(labels.abs_tol_m)},
@@ -628,7 +637,7 @@ json Recipe::ToJson() const {
   j["selection"] = {
       {"max_frame_gap", selection.max_frame_gap},
       {"pruning",
-       {{"max_distance_m", selection.pruning.max_distance_m},
+       {{"max_distance_m", NumberJson(selection.pruning.max_distance_m)},
         {"max_view_angle_deg", selection.pruning.max_view_angle_deg},
         {"frustum", selection.pruning.frustum}}},
       {"score_stride", selection.score_stride},

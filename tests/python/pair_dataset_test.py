@@ -234,6 +234,40 @@ class FromSplit(unittest.TestCase):
                                  for i in range(len(ds))), name)
 
 
+    def test_infinite_depth_limits(self) -> None:
+        """A recipe's max_depth_m: .inf (no upper limit; dataset's or labels') is "inf" in
+        recipe.json: from_split labels with no upper limit as the shards did (it read null as
+        not given and took the reader's 50 m), and its digest differs from the recipe without
+        it (they were equal, so a build into the other's folder reused its shards)."""
+        with open(os.path.join(common.SOURCE, "recipes", "demo.yaml")) as f:
+            text = f.read()
+        self.assertIn("  min_valid_depth_fraction: 0.3\n", text)
+        self.assertIn("labels:\n  preset: default\n", text)
+        text = text.replace("quota_per_scene: 12", "quota_per_scene: 2")
+        digests = {}
+        for name, edit in (("none", ("", "")),
+                           ("dataset", ("  min_valid_depth_fraction: 0.3\n",
+                                        "  min_valid_depth_fraction: 0.3\n  max_depth_m: .inf\n")),
+                           ("labels", ("labels:\n  preset: default\n",
+                                       "labels:\n  preset: default\n"
+                                       "  overrides: {max_depth_m: .inf}\n"))):
+            out = common.scratch("pair_dataset_inf_" + name)
+            recipe = os.path.join(out, "recipe.yaml")
+            with open(recipe, "w") as f:
+                f.write(text.replace(*edit))
+            split = os.path.join(out, "split")
+            common.occgt("build", "--json", recipe, "--out", split)
+            resolved = common.read_json(os.path.join(split, "recipe.json"))
+            digests[name] = resolved["options_digest"]
+            if name == "none":
+                continue
+            section = resolved["dataset"] if name == "dataset" else resolved["labels"]["overrides"]
+            self.assertEqual(section["max_depth_m"], "inf", name)
+            self.check_items(split, "demo max_depth_m .inf in " + name)
+            self.assertIsNone(PairIndexDataset.from_split(split).pair_options(0)
+                              ["label_options"]["max_depth_m"], name)
+        self.assertEqual(len(set(digests.values())), 3, digests)
+
     def test_overrides(self) -> None:
         """from_split's keyword arguments override any argument the recipe gives (preset,
         width and height raised "got multiple values for keyword argument")."""

@@ -486,12 +486,15 @@ class PairIndexDataset(torch.utils.data.Dataset):  # type: ignore[type-arg]
             "device": dataset.get("device", occgt.DATASET_DEFAULTS["device"]),
             "tum_max_dt_s": dataset.get("tum_max_dt_s")}
         # The recipe's keys under pair_ground_truth's names, as they are: the C++ resolves them
-        # (truth::ResolvePairTruthOptions), as for the build.
+        # (truth::ResolvePairTruthOptions), as for the build. recipe.json writes a recipe's
+        # .inf (no upper limit) as "inf": JSON has no infinity, and null is a key not given.
+        def number(v: Any) -> Any:
+            return float("inf") if v == "inf" else v
         options: Dict[str, Any] = {
             "stride": patches["stride"], "anchor": patches["anchor"], "mutual": patches["mutual"],
-            "dataset_min_depth_m": dataset.get("min_depth_m"),
-            "dataset_max_depth_m": dataset.get("max_depth_m")}
-        options.update({k: v for k, v in labels["overrides"].items() if v is not None})
+            "dataset_min_depth_m": number(dataset.get("min_depth_m")),
+            "dataset_max_depth_m": number(dataset.get("max_depth_m"))}
+        options.update({k: number(v) for k, v in labels["overrides"].items() if v is not None})
         with_occupancy = bool(occ["enabled"] and sample["occupancy"])
         if occupancy == "recipe":
             occupancy = ({"dense": "dense"}.get(occ["encoding"], "words")
