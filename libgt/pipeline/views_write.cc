@@ -291,8 +291,9 @@ std::vector<int64_t> PlanViewsShards(const Recipe& recipe, const std::vector<Tup
     }
     return sizes;
   }
-  // Integers, so that the plan cannot depend on a rounding order.
-  const auto target = static_cast<int64_t>(recipe.shards.target_mb * 1e6);
+  // Integers, so that the plan cannot depend on a rounding order; at most 1e18 bytes, so that
+  // the conversion cannot overflow (a target of 1e300 MB gave every sample its own shard).
+  const auto target = static_cast<int64_t>(std::min(recipe.shards.target_mb * 1e6, 1e18));
   int64_t bytes = 0;
   for (const TupleLine& line : lines) {
     const int64_t sample =

@@ -123,8 +123,12 @@ class ShardFinisher {
 std::vector<int64_t> PlanShards(const Recipe& recipe, int64_t total) {
   int64_t per_shard = recipe.shards.samples_per_shard;
   if (recipe.shards.target_mb > 0) {
-    per_shard = std::max<int64_t>(
-        1, static_cast<int64_t>(recipe.shards.target_mb * 1e6 / EstimatedSampleBytes(recipe)));
+    // In doubles until it is known to fit: a target of 1e300 MB overflowed the int64
+    // conversion, and every sample got a shard of its own. No shard holds more than all.
+    const double fit = recipe.shards.target_mb * 1e6 / EstimatedSampleBytes(recipe);
+    per_shard = fit >= static_cast<double>(std::max<int64_t>(total, 1))
+                    ? std::max<int64_t>(total, 1)
+                    : std::max<int64_t>(1, static_cast<int64_t>(fit));
   }
   std::vector<int64_t> sizes;
   for (int64_t start = 0; start < total; start += per_shard) {

@@ -324,6 +324,15 @@ TEST(Pipeline, MetadataIsPublishedBeforeTheFirstShardAndItsErrorsPropagate) {
   }
 }
 
+TEST(Pipeline, ShardPlanOfAHugeTargetHoldsEverySampleInOneShard) {
+  Recipe r = SmallRecipe(Dataset());
+  r.shards.target_mb = 1e300;  // legal (finite, >= 0); overflowed the int64 conversion
+  EXPECT_EQ(PlanShards(r, 60), (std::vector<int64_t>{60}));
+  EXPECT_EQ(PlanShards(r, 0), (std::vector<int64_t>{}));
+  r.shards.target_mb = 1e-300;  // below one sample: one sample a shard
+  EXPECT_EQ(PlanShards(r, 3), (std::vector<int64_t>{1, 1, 1}));
+}
+
 TEST(Pipeline, KeyCollisionIsAnErrorNamingBothScenes) {
   SelectedPair a, b;
   a.scene = "seq.01";

@@ -150,6 +150,9 @@ class ViewsTracks(unittest.TestCase):
         self.assertEqual(tiny["shards"]["shards"], n)  # one sample per shard, not 100
         large = self.tuples("large", self.write("large.yaml", recipe_text(target=", target_mb: 1000")))
         self.assertEqual(large["shards"]["shards"], 1)
+        # A target beyond int64 bytes (legal: finite) is one shard too, not one per sample.
+        huge = self.tuples("huge", self.write("huge.yaml", recipe_text(target=", target_mb: 1e300")))
+        self.assertEqual(huge["shards"]["shards"], 1)
         # Tuples of 3 to 5 views: each counts at its own N, so that a shard of small tuples
         # holds more of them than one of large tuples (a uniform count at the largest N left
         # shards of small tuples far below the target).
