@@ -151,9 +151,14 @@ std::vector<std::string> SampleKeys(const std::vector<const SelectedPair*>& all,
     }
     auto [it, inserted] = seen.emplace(keys[k], k);
     if (!inserted) {
+      // Named by scene and frames: frame ids joined by '_' collide as well as sanitised
+      // scene names ("0_1" and "2", "0" and "1_2").
+      auto pair = [](const SelectedPair& p) {
+        return "scene " + p.scene + ", frames " + p.frame0 + " and " + p.frame1;
+      };
       throw InputError("sample key " + keys[k], "two pairs map to the same key after sanitising (" +
-                                                    all[it->second]->scene + " and " +
-                                                    all[k]->scene + ")");
+                                                    pair(*all[it->second]) + "; " + pair(*all[k]) +
+                                                    ")");
     }
   }
   return keys;

@@ -348,6 +348,21 @@ TEST(Pipeline, KeyCollisionIsAnErrorNamingBothScenes) {
     EXPECT_NE(m.find("seq.01"), std::string::npos) << m;
     EXPECT_NE(m.find("seq_01"), std::string::npos) << m;
   }
+  // Frame ids joined by '_' collide too: both pairs are named with their frames.
+  SelectedPair c = a, d = a;
+  c.frame0 = "0_1";
+  c.frame1 = "2";
+  d.frame0 = "0";
+  d.frame1 = "1_2";
+  try {
+    SampleKeys({&c, &d}, SampleCompression::kDeflate);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("(scene seq.01, frames 0_1 and 2; scene seq.01, frames 0 "
+                                         "and 1_2)"),
+              std::string::npos)
+        << e.what();
+  }
   b.frame1 = "000003";
   EXPECT_EQ(SampleKeys({&a, &b}, SampleCompression::kDeflate),
             (std::vector<std::string>{"seq_01/000001_000002", "seq_01/000001_000003"}));
