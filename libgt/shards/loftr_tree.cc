@@ -116,6 +116,12 @@ std::map<std::string, std::string> LoftrSceneFolders(const std::set<std::string>
   for (const std::string& s : scenes) {
     std::string folder = s;
     if (!ParseScanNetSceneName(s)) {
+      // Its name is a line of scenes.txt (loftr_export.h), which a line break would split.
+      if (s.find_first_of("\r\n") != std::string::npos) {
+        throw InputError("loftr export", "scene " + s +
+                                             " has a line break in its name, which scenes.txt "
+                                             "(one scene name a line) cannot hold; rename it");
+      }
       char buf[32];
       std::snprintf(buf, sizeof(buf), "scene%04lld_00", static_cast<long long>(other++));
       folder = buf;

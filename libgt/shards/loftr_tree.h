@@ -39,7 +39,8 @@ namespace gt::shards {
 
 // Scene name -> the folder LoFTR opens for it: the name itself for "sceneXXXX_YY", else
 // "scene%04d_00" of the scene's index among the sorted non-ScanNet names (the numbers the
-// index's `name` rows hold, loftr_export.h). InputError when two scenes get one folder.
+// index's `name` rows hold, loftr_export.h). InputError when two scenes get one folder, or a
+// non-ScanNet name holds a line break (it is a line of scenes.txt).
 std::map<std::string, std::string> LoftrSceneFolders(const std::set<std::string>& scenes);
 
 struct LoftrTreeOptions {

@@ -321,6 +321,49 @@ class Indices(unittest.TestCase):
             self.assertTrue(torch.equal(a["label01"], b["label01"]))
             self.assertTrue(torch.equal(a["matches"], b["matches"]))
 
+    def test_loftr_export_scene_names_as_written(self) -> None:
+        """Scene folders ' pad ', '#hash' and 'a<tab>tab' (legal names) are lines of the export's
+        scenes.txt as they are: the index names each pair's scene as pairs.jsonl does (lines
+        were stripped and '#' lines skipped as comments, so rows named the next line's scene
+        or ScanNet's scene0002_00); a scene name with a line break is refused by the export
+        before anything is written."""
+        root = common.synth_dataset("pair_dataset_names_data", frames=5, resolution="64x48")
+        for old, new in (("synth_000", " pad "),):
+            os.rename(os.path.join(root, old), os.path.join(root, new))
+        for name in ("#hash", "a\ttab"):
+            shutil.copytree(os.path.join(root, " pad "), os.path.join(root, name))
+        out = common.scratch("pair_dataset_names")
+        recipe = os.path.join(out, "recipe.yaml")
+        with open(recipe, "w") as f:
+            f.write(f"""name: names
+resolution: [64, 48]
+dataset: {{format: generic, root: {root}}}
+selection: {{max_frame_gap: 1, score_stride: 4, pruning: {{frustum: false}}}}
+occupancy: {{enabled: false}}
+sample: {{image: none}}
+loftr_export: {{kind: train}}
+""")
+        split = os.path.join(out, "split")
+        common.occgt("build", recipe, "--out", split)
+        with open(os.path.join(split, "pairs.jsonl")) as f:
+            want = [json.loads(line)["scene"] for line in f]
+        self.assertEqual(sorted(set(want)), [" pad ", "#hash", "a\ttab"])
+        index = read_pair_index(os.path.join(split, "loftr", "scene_data", "train"))
+        self.assertEqual(sorted(r.scene for r in index), sorted(want))
+        names_file = os.path.join(split, "loftr", "scenes.txt")
+        self.assertEqual(sorted(r.scene for r in read_pair_index(
+            os.path.join(split, "loftr", "scene_data", "train"), names_file)), sorted(want))
+        # A line break in a scene name: refused, naming the scene, before any shard.
+        os.rename(os.path.join(root, "a\ttab"), os.path.join(root, "a\nb"))
+        r = subprocess.run([common.BINARY, "build", recipe, "--out", os.path.join(out, "nl")],
+                           capture_output=True, text=True)
+        self.assertEqual(r.returncode, 1, r.stderr)
+        errors = [line for line in r.stderr.splitlines() if not line.startswith("[")]
+        self.assertEqual(errors, ["occgt: error: loftr export: scene a\\x0ab has a line break in "
+                                  "its name, which scenes.txt (one scene name a line) cannot "
+                                  "hold; rename it"])
+        self.assertFalse(os.path.exists(os.path.join(out, "nl", "index.json")))
+
     def test_loftr_tree_with_loftr_folder_names(self) -> None:
         """occgt's own LoFTR tree (DIR/loftr/data: folders scene0000_00, ...) read with its
         test.npz: scene_names=[] names every row by LoFTR's folder, and the items are the

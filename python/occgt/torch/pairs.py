@@ -52,6 +52,16 @@ def _scene_names_file(npz_path: str) -> Optional[str]:
     return None
 
 
+def _read_scene_names(path: str) -> List[str]:
+    """Line i = scene i, as occgt's export writes scenes.txt: every line as it is but its line
+    ending (a scene folder may begin with '#' or a space, or end with one)."""
+    with open(path, encoding="utf-8", newline="\n") as f:  # only '\n' ends a line
+        lines = f.read().split("\n")
+    if lines[-1] == "":  # the last line's ending
+        lines.pop()
+    return [line[:-1] if line.endswith("\r") else line for line in lines]
+
+
 def _read_lines(path: str) -> List[str]:
     with open(path) as f:
         return [line.strip() for line in f if line.strip() and not line.startswith("#")]
@@ -242,7 +252,7 @@ def _read_npz(path: str, scene_names: Optional[Sequence[str]]) -> PairIndex:
         raise ValueError(f"{path}:name[{r}]: expected numbers below 2^63, got {name[r].tolist()}")
     if scene_names is None:
         names_file = _scene_names_file(path)
-        scene_names = _read_lines(names_file) if names_file else None
+        scene_names = _read_scene_names(names_file) if names_file else None
     # Each (s, sub) once, in order of first appearance.
     scene_sub = name[:, :2].astype(np.int64)
     if not name.size or int(scene_sub.max()) < 2**31:  # one int64 key a row: a faster unique
@@ -317,7 +327,7 @@ def read_pair_index(pairs: Union[str, os.PathLike],
     ``scene{s:04d}_{sub:02d}`` (occgt's export of ScanNet scenes mixed with others).
     """
     path = os.fspath(pairs)
-    names = _read_lines(scene_names) if isinstance(scene_names, str) else scene_names
+    names = _read_scene_names(scene_names) if isinstance(scene_names, str) else scene_names
     if os.path.isdir(path):
         jsonl = os.path.join(path, "pairs.jsonl")
         if os.path.isfile(jsonl):
