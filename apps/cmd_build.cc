@@ -22,6 +22,7 @@
 #include "apps/commands.h"
 #include "apps/interrupt.h"
 #include "apps/job_flags.h"
+#include "apps/usage.h"
 #include "libgt/core/error.h"
 #include "libgt/core/human.h"
 #include "libgt/pipeline/build.h"
@@ -207,7 +208,7 @@ std::string HumanSummary(const nlohmann::json& s, const std::string& out_dir) {
     text += "  out: " + out_dir +
             " (index.json, pairs.jsonl, summary.json); see it with: occgt "
             "inspect split " +
-            out_dir + "\n";
+            ShellWord(out_dir) + "\n";
   }
   return text;
 }

@@ -90,7 +90,7 @@ void RunSynth(SynthArgs& args) {
             << ", " << gt::Counted(summary.frames, "frame") << " (" << args.options.width << "x"
             << args.options.height << ", seed " << args.options.seed << ") written to " << args.out
             << " in " << std::fixed << std::setprecision(2) << seconds << " s\n"
-            << "  read it with --format generic " << args.out << "\n";
+            << "  read it with --format generic " << ShellWord(args.out) << "\n";
 }
 
 }  // namespace

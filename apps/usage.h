@@ -67,6 +67,11 @@ CLI::Option* NonNegative(CLI::Option* option);
 // A default value as help text shows it ("0.05", "10", "64").
 std::string Num(double value);
 
+// A path as a word of a suggested command line that a shell reads back as that path: as is
+// when it holds only [A-Za-z0-9_./:@%+,=-], else in single quotes; "./" before one that starts
+// with '-', which would read as a flag ("out/demo", "'my out'", "./-x").
+std::string ShellWord(const std::string& path);
+
 [[noreturn]] void ThrowOptionsError(const std::string& error, const std::string& what,
                                     const std::vector<FieldFlag>& fields);
 

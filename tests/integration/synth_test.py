@@ -128,6 +128,7 @@ def main():
     assert bad.returncode == 2 and bad.stderr.startswith("occgt: error: --resolution: "), bad.stderr
     assert bad.stderr.count("\n") == 1, bad.stderr
     cli_example()
+    printed_commands_run()
     print("ok")
 
 
@@ -154,6 +155,47 @@ def cli_example():
             assert time.search(got[0]) and time.search(want[0]), (got[0], want[0])
             got[0], want[0] = time.sub("", got[0]), time.sub("", want[0])
         assert got == want, (got, want)
+
+
+def printed_commands_run():
+    """The commands synth and build print to look at their output (`read it with --format
+    generic DIR`, `see it with: occgt inspect split DIR`) run as printed through a shell, for
+    an output folder whose name starts with '-' and holds a space, a quote and non-ASCII (they
+    printed the name as is: the shell split it, or occgt read it as a flag)."""
+    import shlex
+    import subprocess
+    cwd = common.scratch("synth_printed_commands")
+    name = "-a b'c \u00e9"
+
+    def printed(stdout, prefix):
+        line = next(ln for ln in stdout.splitlines() if prefix in ln)
+        return line.split(prefix, 1)[1]
+
+    def run_printed(command):
+        r = subprocess.run(["sh", "-c", command], cwd=cwd, capture_output=True, text=True,
+                           env=dict(os.environ, PATH=os.path.dirname(common.BINARY) + os.pathsep +
+                                    os.environ.get("PATH", "")))
+        assert r.returncode == 0, (command, r.stderr)
+        return r.stdout
+
+    r = subprocess.run([common.BINARY, "synth", "--out", name, "--scenes", "1", "--frames", "2",
+                        "--resolution", "16x16"], cwd=cwd, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    word = printed(r.stdout, "read it with --format generic ")
+    assert shlex.split(word) == ["./" + name], word
+    assert "total: 1 scene(s)" in run_printed("occgt scan " + word + " --format generic")
+    with open(os.path.join(cwd, "recipe.yaml"), "w") as f:
+        f.write("name: printed\nresolution: [16, 16]\n"
+                "dataset: {format: synthetic, synthetic: {scenes: 1, frames: 2, width: 16, "
+                "height: 16, seed: 0}, min_valid_depth_fraction: 0}\n"
+                "selection: {pruning: {frustum: false}}\noccupancy: {enabled: false}\n")
+    out = name + "-split"
+    r = subprocess.run([common.BINARY, "build", "recipe.yaml", "--out", out], cwd=cwd,
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    command = "occgt " + printed(r.stdout, "see it with: occgt ")
+    assert shlex.split(command)[-1] == "./" + out, command
+    assert "report.html" in run_printed(command)
 
 
 if __name__ == "__main__":
