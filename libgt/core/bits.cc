@@ -1,7 +1,5 @@
 #include "libgt/core/bits.h"
 
-#include <cstring>
-
 namespace gt {
 namespace {
 
@@ -29,17 +27,6 @@ int64_t CountSetBitsOf(const Word* words, size_t n) {
 
 int64_t CountSetBits(const uint64_t* words, size_t n) { return CountSetBitsOf(words, n); }
 
-int64_t CountSetBits(const uint32_t* words, size_t n) {
-  // Two 32-bit words per 64-bit count (the sum is the same), in chunks of aligned copies.
-  constexpr size_t kChunk = 1024;
-  uint64_t wide[kChunk / 2];
-  int64_t bits = 0;
-  size_t i = 0;
-  for (; i + kChunk <= n; i += kChunk) {
-    std::memcpy(wide, words + i, sizeof(wide));
-    bits += CountSetBitsOf(wide, kChunk / 2);
-  }
-  return bits + CountSetBitsOf(words + i, n - i);
-}
+int64_t CountSetBits(const uint32_t* words, size_t n) { return CountSetBitsOf(words, n); }
 
 }  // namespace gt

@@ -8,10 +8,8 @@
 #include <optional>
 
 #include "libgt/core/bits.h"
-#include "libgt/core/camera.h"
 #include "libgt/core/depth.h"
 #include "libgt/core/error.h"
-#include "libgt/core/pose.h"
 #include "libgt/geometry/labels.h"
 #include "libgt/geometry/patches.h"
 #include "libgt/shards/stored_checks.h"
@@ -50,33 +48,16 @@ class PairSampleChecker : detail::StoredSampleChecker {
   }
 
  private:
-  static Eigen::MatrixXd Matrix(const json& j, int rows, int cols) {
-    return detail::JsonMatrix(j, rows, cols);
-  }
-
   bool CheckJson() {
     if (!ReadResolution(meta_, &width_, &height_)) return false;
     bool ok = true;
     for (const char* k : {"K0", "K1"}) {
-      const Eigen::Matrix3d K = Matrix(meta_.at(k), 3, 3);
-      std::string error;
-      if (!Camera::IsPinholeMatrix(K)) {
-        Problem("json", std::string(k) + ": expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]");
-        ok = false;
-      } else if (!Camera::FromK(K, width_, height_).Check(&error)) {
-        Problem("json", std::string(k) + ": " + error);
-        ok = false;
-      }
+      Eigen::Matrix3d K;
+      ok &= JsonCamera(meta_.at(k), k, width_, height_, &K);
     }
     Eigen::Matrix4d pose[3];
     const char* pose_names[3] = {"world_from_cam0", "world_from_cam1", "T_0to1"};
-    for (int i = 0; i < 3; ++i) {
-      pose[i] = Matrix(meta_.at(pose_names[i]), 4, 4);
-      if (const auto p = PoseProblem(pose[i])) {
-        Problem("json", std::string(pose_names[i]) + ": " + *p);
-        ok = false;
-      }
-    }
+    for (int i = 0; i < 3; ++i) ok &= JsonPose(meta_.at(pose_names[i]), pose_names[i], &pose[i]);
     if (ok) {
       const Eigen::Matrix4d cam1_from_cam0 = pose[1].inverse() * pose[0];
       const double scale = 1 + pose[2].topRightCorner<3, 1>().cwiseAbs().maxCoeff();

@@ -7,18 +7,20 @@
 
 #include "libgt/core/depth.h"
 #include "libgt/core/error.h"
+#include "libgt/core/pose.h"
 #include "libgt/io/codec.h"
 #include "libgt/io/depth_io.h"
 
 namespace gt::shards::detail {
 
+namespace {
+
+// "[2, 480, 640]".
 std::string ShapeText(const std::vector<int64_t>& shape) {
   std::string s = "[";
   for (size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
   return s + "]";
 }
-
-namespace {
 
 template <typename T>
 std::string ShortestText(T v, int min_digits, int max_digits) {
@@ -100,6 +102,31 @@ std::string ImageProblem(const std::string& field, std::string_view bytes,
     return e.what();
   }
   return "";
+}
+
+bool StoredSampleChecker::JsonCamera(const nlohmann::json& j, const std::string& name, int width,
+                                     int height, Eigen::Matrix3d* K) {
+  *K = JsonMatrix(j, 3, 3);
+  std::string error;
+  if (!Camera::IsPinholeMatrix(*K)) {
+    Problem("json", name + ": expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]");
+    return false;
+  }
+  if (!Camera::FromK(*K, width, height).Check(&error)) {
+    Problem("json", name + ": " + error);
+    return false;
+  }
+  return true;
+}
+
+bool StoredSampleChecker::JsonPose(const nlohmann::json& j, const std::string& name,
+                                   Eigen::Matrix4d* T) {
+  *T = JsonMatrix(j, 4, 4);
+  if (const auto p = PoseProblem(*T)) {
+    Problem("json", name + ": " + *p);
+    return false;
+  }
+  return true;
 }
 
 DepthRangeM LabelDepthRange(const nlohmann::json& label_options) {

@@ -17,8 +17,6 @@
 
 namespace gt::shards::detail {
 
-// "[2, 480, 640]".
-std::string ShapeText(const std::vector<int64_t>& shape);
 // The shortest text (of 15 to 17 significant digits; 6 to 9 for a float) that reads back as
 // exactly `v`: every stored value told apart, 0.05 printed as 0.05.
 std::string FullPrecision(double v);
@@ -93,6 +91,13 @@ class StoredSampleChecker {
                         std::to_string(kMaxImageSidePx) + " pixels");
     return false;
   }
+  // The json matrix `j` (`name` in problems) as *K: a pinhole K (Camera::IsPinholeMatrix)
+  // proper at width x height (Camera::Check); false with a "json: <name>: ..." problem.
+  bool JsonCamera(const nlohmann::json& j, const std::string& name, int width, int height,
+                  Eigen::Matrix3d* K);
+  // The json matrix `j` as *T, a rigid pose (PoseProblem); false with a "json: <name>: ..."
+  // problem.
+  bool JsonPose(const nlohmann::json& j, const std::string& name, Eigen::Matrix4d* T);
   // ImageProblem of every image member.
   void CheckImages(const std::string& format, int width, int height) {
     for (const auto& [field, bytes] : images_) {

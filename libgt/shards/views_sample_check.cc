@@ -7,10 +7,8 @@
 #include <optional>
 
 #include "libgt/core/bits.h"
-#include "libgt/core/camera.h"
 #include "libgt/core/depth.h"
 #include "libgt/core/error.h"
-#include "libgt/core/pose.h"
 #include "libgt/shards/stored_checks.h"
 #include "libgt/truth/views_truth.h"
 
@@ -81,21 +79,11 @@ class ViewsSampleChecker : detail::StoredSampleChecker {
     }
     for (int i = 0; i < n_; ++i) {
       const std::string at = "[" + std::to_string(i) + "]";
-      const Eigen::Matrix3d K = detail::JsonMatrix(meta_["K"][i], 3, 3);
-      std::string error;
-      if (!Camera::IsPinholeMatrix(K)) {
-        Problem("json", "K" + at + ": expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]");
-        ok = false;
-      } else if (!Camera::FromK(K, width_, height_).Check(&error)) {
-        Problem("json", "K" + at + ": " + error);
-        ok = false;
-      }
+      Eigen::Matrix3d K;
+      Eigen::Matrix4d T;
+      ok &= JsonCamera(meta_["K"][i], "K" + at, width_, height_, &K);
+      ok &= JsonPose(meta_["world_from_cam"][i], "world_from_cam" + at, &T);
       K_.push_back(K);
-      const Eigen::Matrix4d T = detail::JsonMatrix(meta_["world_from_cam"][i], 4, 4);
-      if (const auto p = PoseProblem(T)) {
-        Problem("json", "world_from_cam" + at + ": " + *p);
-        ok = false;
-      }
       world_from_cam_.push_back(T);
       const json& row = meta_["covisibility"][i];
       if (!row.is_array() || static_cast<int>(row.size()) != n_) {
